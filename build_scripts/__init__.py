@@ -1,0 +1,1 @@
+"""Builds the FMUs (pythonfmu) and post-processes their modelDescription.xml."""

@@ -1,0 +1,109 @@
+"""Build the FMUs with pythonfmu and post-process their modelDescription.xml.
+
+Each FMU bundles the runtime core (``crane_fmu/model`` plus the slave support
+module) in its resources under a private package name that carries a hash of
+its sources, ``crane_core_<hash>``. pythonfmu FMUs run inside the host's Python
+interpreter and share ``sys.modules`` with it, so a bundle named ``crane_fmu``
+would silently use whatever ``crane_fmu`` the host imported first (another
+version, or the unrelated PyPI project of that name).
+"""
+
+import hashlib
+import os
+import shutil
+import sys
+import tempfile
+import zipfile
+from collections import namedtuple
+from pathlib import Path
+
+import crane_fmu.model
+import fmu_src
+from build_scripts.model_description import postprocess
+from crane_fmu.model import tables
+
+MODEL_DIR = Path(crane_fmu.model.__file__).parent
+SLAVE_DIR = Path(fmu_src.__file__).parent
+SUPPORT = SLAVE_DIR / "slave_support.py"
+
+Spec = namedtuple("Spec", "name script table feedthrough")
+CRANE_FMUS = (
+    Spec("CranePlant", "crane_plant.py", tables.PLANT, False),
+    Spec("BacksteppingController", "backstepping_controller.py", tables.CONTROLLER, True),
+)
+BENCH_FMUS = (
+    Spec("TrivialPlant", "trivial_plant.py", tables.TRIVIAL_PLANT, False),
+    Spec("TrivialController", "trivial_controller.py", tables.TRIVIAL_CONTROLLER, True),
+)
+
+
+def core_name():
+    """``crane_core_<hash>``: the bundled core's package name, unique per source."""
+    digest = hashlib.sha256()
+    for path in sorted(MODEL_DIR.glob("*.py")) + [SUPPORT]:
+        digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    return "crane_core_" + digest.hexdigest()[:12]
+
+
+def _stage(spec, stage_dir, core):
+    """Copy the slave and the core to ``stage_dir`` with imports renamed to the core."""
+    package = stage_dir / core
+    package.mkdir()
+    for path in MODEL_DIR.glob("*.py"):
+        shutil.copy2(path, package / path.name)
+    shutil.copy2(SUPPORT, package / SUPPORT.name)
+    source = (SLAVE_DIR / spec.script).read_text()
+    source = source.replace("fmu_src.slave_support", f"{core}.slave_support")
+    source = source.replace("crane_fmu.model", core)
+    if "crane_fmu" in source or "fmu_src" in source:
+        raise RuntimeError(f"{spec.script} imports a module that is not bundled")
+    script = stage_dir / spec.script
+    script.write_text(source)
+    return script, package
+
+
+def build_fmu(spec, out_dir):
+    """Build one FMU into ``out_dir`` and return its path.
+
+    The FMU is written under a temporary name and renamed, so an existing FMU
+    is never left half-written.
+    """
+    from pythonfmu import FmuBuilder  # the build needs pythonfmu, the runtime does not
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="crane_build_") as tmp:
+        tmp = Path(tmp)
+        stage = tmp / "stage"
+        stage.mkdir()
+        core = core_name()
+        script, package = _stage(spec, stage, core)
+        saved_path = list(sys.path)
+        try:
+            raw = FmuBuilder.build_FMU(script, dest=tmp / "raw", project_files=[package])
+        finally:
+            # pythonfmu imports the staged slave and core and leaves them (and
+            # the stage folder) in this process; forget them before the next build.
+            sys.path[:] = saved_path
+            for name in [m for m in sys.modules if m == script.stem or m.split(".")[0] == core]:
+                del sys.modules[name]
+        final = out_dir / f"{spec.name}.fmu"
+        partial = out_dir / f".{spec.name}.fmu.partial"
+        with zipfile.ZipFile(raw) as src, zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as dst:
+            for item in src.infolist():
+                data = src.read(item)
+                if item.filename == "modelDescription.xml":
+                    data = postprocess(data, spec.table, tables.DISPLAY_UNITS, spec.feedthrough)
+                dst.writestr(item.filename, data)
+        os.replace(partial, final)
+    return final
+
+
+def build_all(out_dir="build/fmus", specs=CRANE_FMUS):
+    """Build every FMU of ``specs`` into ``out_dir``; return their paths."""
+    return [build_fmu(spec, out_dir) for spec in specs]
+
+
+if __name__ == "__main__":
+    for path in build_all():
+        print(path)

@@ -1,0 +1,97 @@
+"""Post-processing of pythonfmu's modelDescription.xml from the variable tables.
+
+pythonfmu 0.7 writes no units and no InitialUnknowns and declares no output
+dependencies. This module adds them, so that ``fmpy validate`` passes, every
+Real carries an SI unit (angles with display unit deg), and a master can see
+which outputs are direct feedthrough.
+"""
+
+import math
+import xml.etree.ElementTree as ET
+
+# SI base-unit exponents of every unit the tables use.
+BASE_UNITS = {
+    "m": {"m": 1},
+    "m/s": {"m": 1, "s": -1},
+    "m/s2": {"m": 1, "s": -2},
+    "kg": {"kg": 1},
+    "s": {"s": 1},
+    "1/s": {"s": -1},
+    "rad": {"rad": 1},
+    "rad/s": {"rad": 1, "s": -1},
+    "J": {"kg": 1, "m": 2, "s": -2},
+    "1": {},
+}
+DEG_PER_RAD = 180.0 / math.pi
+
+
+def _unit_definitions(units, display_units):
+    node = ET.Element("UnitDefinitions")
+    for name in sorted(units):
+        unit = ET.SubElement(node, "Unit", name=name)
+        ET.SubElement(unit, "BaseUnit", {k: str(v) for k, v in BASE_UNITS[name].items()})
+        if name in display_units:
+            ET.SubElement(unit, "DisplayUnit", name=display_units[name], factor=repr(DEG_PER_RAD))
+    return node
+
+
+def postprocess(xml_bytes, table, display_units, feedthrough):
+    """Return modelDescription.xml with units, descriptions and model structure.
+
+    Parameters
+    ----------
+    xml_bytes : bytes
+        pythonfmu's modelDescription.xml.
+    table : list of crane_fmu.model.tables.Variable
+        The FMU's variable table, in registration order.
+    display_units : dict
+        ``{unit: display unit}``, e.g. ``{"rad": "deg"}``.
+    feedthrough : bool
+        True when the outputs are computed from the current inputs (the
+        controller); False when they are states (the plant).
+
+    Returns
+    -------
+    bytes
+        The new modelDescription.xml (UTF-8).
+    """
+    root = ET.fromstring(xml_bytes)
+    scalars = root.find("ModelVariables").findall("ScalarVariable")
+    names = [sv.get("name") for sv in scalars]
+    if names != [v.name for v in table]:
+        raise ValueError(f"modelDescription variables {names} differ from the table")
+
+    units = set()
+    for sv, v in zip(scalars, table):
+        sv.set("description", v.description)
+        real = sv.find("Real")
+        if real is not None and real.get("start") is not None:
+            real.set("start", repr(float(v.start)))  # pythonfmu's %.16g turns 9.8 into 9.800000000000001
+        if real is not None:
+            real.set("unit", v.unit)
+            units.add(v.unit)
+            if v.unit in display_units:
+                real.set("displayUnit", display_units[v.unit])
+
+    # Schema order: CoSimulation, UnitDefinitions, ..., LogCategories, ...
+    position = list(root).index(root.find("CoSimulation")) + 1
+    root.insert(position, _unit_definitions(units, display_units))
+
+    inputs = [str(i + 1) for i, v in enumerate(table) if v.causality == "input"]
+    structure = root.find("ModelStructure")
+    for child in list(structure):
+        structure.remove(child)
+    outputs = [(i + 1, v) for i, v in enumerate(table) if v.causality == "output"]
+    if outputs:
+        out_node = ET.SubElement(structure, "Outputs")
+        init_node = ET.SubElement(structure, "InitialUnknowns")
+        for index, v in outputs:
+            deps = inputs if feedthrough else []
+            attrs = {"index": str(index), "dependencies": " ".join(deps)}
+            if deps:
+                attrs["dependenciesKind"] = " ".join(["dependent"] * len(deps))
+            ET.SubElement(out_node, "Unknown", attrs)
+            ET.SubElement(init_node, "Unknown", index=str(index))
+    ET.indent(root)
+    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+

@@ -1,0 +1,81 @@
+"""Backstepping anti-swing law of the paper, eqs (10)-(21)."""
+
+import math
+
+
+def drift_and_input_gain(theta1, dtheta1, theta2, dtheta2, p, b3_form="derived"):
+    """The vectors f(x) and b(x) of eq (11), X3 = f(x) + b(x) u.
+
+    Parameters
+    ----------
+    theta1, dtheta1, theta2, dtheta2 : float
+        Swing angles [rad] and rates [rad/s].
+    p : PlantParameters
+        The controller's model of the plant.
+    b3_form : {"derived", "printed"}
+        ``"printed"`` uses b3 exactly as eq (14) prints it; ``"derived"`` uses
+        the sign obtained by solving eqs (8)-(9), which is the negative of it.
+
+    Returns
+    -------
+    (tuple, tuple)
+        ``(f1, f2, f3)`` and ``(b1, b2, b3)``.
+
+    Notes
+    -----
+    Eqs (12) and (14) with ``D = 2 m1 + m2 - m2 cos(2 (theta1 - theta2))``.
+    """
+    m1, m2, l1, l2, g = p.m1, p.m2, p.l1, p.l2, p.g
+    d = theta1 - theta2
+    sd, cd = math.sin(d), math.cos(d)
+    den = 2.0 * m1 + m2 - m2 * math.cos(2.0 * d)
+    w1s, w2s = dtheta1 * dtheta1, dtheta2 * dtheta2
+    f2 = (-g * (2.0 * m1 + m2) * math.sin(theta1) - g * m2 * math.sin(theta1 - 2.0 * theta2)
+          - 2.0 * m2 * (l1 * w1s * cd + l2 * w2s) * sd) / (l1 * den)
+    b2 = (-(2.0 * m1 + m2) * math.cos(theta1) + m2 * math.cos(theta1 - 2.0 * theta2)) / (l1 * den)
+    f3 = 2.0 * (l1 * w1s * (m1 + m2) + l2 * m2 * w2s * cd + (m1 + m2) * g * math.cos(theta1)) * sd / (
+        l2 * den)
+    b3 = 2.0 * (m1 + m2) * sd * math.sin(theta1) / (l2 * den)
+    if b3_form == "derived":
+        b3 = -b3
+    return (0.0, f2, f3), (1.0, b2, b3)
+
+
+def control(state, p, k):
+    """Trolley acceleration demanded by the backstepping law.
+
+    Parameters
+    ----------
+    state : sequence of float
+        Measured ``(x, dx, theta1, dtheta1, theta2, dtheta2)``.
+    p : PlantParameters
+        The controller's model of the plant.
+    k : ControllerGains
+        Gains K1, K2, targets, row weights and the b3 form.
+
+    Returns
+    -------
+    float
+        ``u`` [m/s2].
+
+    Notes
+    -----
+    Errors, eq (16): ``e1 = X1 - Xd``, ``e2 = X2``. Backstepping errors, eqs
+    (18)-(19): ``delta1 = e1``, ``delta2 = e2 + K1 e1``, so that ``delta1' = e2``
+    and the desired ``e3d = -K1 e2 - K2 delta2``. Eq (20), ``f + b u = e3d``, is
+    three equations in one unknown; eq (21) solves it by least squares. With row
+    weights W this is ``u = (b' W b)^-1 b' W (e3d - f)``, which is eq (21) for W = I.
+    """
+    x, dx, theta1, dtheta1, theta2, dtheta2 = state
+    f, b = drift_and_input_gain(theta1, dtheta1, theta2, dtheta2, p, k.b3_form)
+    e1 = (x - k.x_d, theta1 - k.theta1_d, theta2 - k.theta2_d)
+    e2 = (dx, dtheta1, dtheta2)
+    k1 = (k.K1_x, k.K1_theta1, k.K1_theta2)
+    k2 = (k.K2_x, k.K2_theta1, k.K2_theta2)
+    w = (k.w_x, k.w_theta1, k.w_theta2)
+    num = den = 0.0
+    for i in range(3):
+        e3d = -k1[i] * e2[i] - k2[i] * (e2[i] + k1[i] * e1[i])
+        num += w[i] * b[i] * (e3d - f[i])
+        den += w[i] * b[i] * b[i]
+    return num / den

@@ -1,0 +1,125 @@
+"""Double-pendulum payload under an accelerated trolley, eqs (4)-(9).
+
+The state is ``(x, dx, theta1, dtheta1, theta2, dtheta2)`` in SI units; the
+input is the trolley acceleration ``u = x''`` [m/s2]. Angles are measured from
+the downward vertical, positive in +x direction (Fig. 3).
+"""
+
+import math
+
+
+def angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p):
+    """Solve the Lagrange equations (8) and (9) for the angular accelerations.
+
+    Parameters
+    ----------
+    theta1, dtheta1, theta2, dtheta2 : float
+        Swing angles [rad] and rates [rad/s].
+    u : float
+        Trolley acceleration [m/s2].
+    p : PlantParameters
+        Masses, cable lengths and gravity.
+
+    Returns
+    -------
+    (float, float)
+        ``(ddtheta1, ddtheta2)`` [rad/s2].
+
+    Notes
+    -----
+    Eq (8) divided by l1 and eq (9) divided by ``l2 m2`` form the linear system::
+
+        (m1+m2) l1 dd1 + m2 l2 cos(d) dd2 = -(m1+m2)(u cos th1 + g sin th1) - m2 l2 w2^2 sin d
+        l1 cos(d) dd1  +    l2        dd2 = -u cos th2 - g sin th2 + l1 w1^2 sin d
+
+    with ``d = theta1 - theta2``. Its determinant ``l1 l2 (m1 + m2 sin^2 d)`` is
+    positive for m1 > 0, and dividing (9) by m2 keeps the case m2 = 0 regular.
+    """
+    m1m2 = p.m1 + p.m2
+    l1, l2, g = p.l1, p.l2, p.g
+    s1, c1 = math.sin(theta1), math.cos(theta1)
+    s2, c2 = math.sin(theta2), math.cos(theta2)
+    d = theta1 - theta2
+    sd, cd = math.sin(d), math.cos(d)
+    r1 = -m1m2 * (u * c1 + g * s1) - p.m2 * l2 * dtheta2 * dtheta2 * sd
+    r2 = -u * c2 - g * s2 + l1 * dtheta1 * dtheta1 * sd
+    a, b = m1m2 * l1, p.m2 * l2 * cd
+    c, e = l1 * cd, l2
+    det = a * e - b * c
+    return (e * r1 - b * r2) / det, (a * r2 - c * r1) / det
+
+
+def derivative(state, u, p):
+    """Time derivative of the plant state for a held trolley acceleration ``u``.
+
+    Notes
+    -----
+    ``x'' = u`` by definition of the input (eq 12: f1 = 0, b1 = 1); the angular
+    accelerations come from eqs (8)-(9), see :func:`angular_accelerations`.
+    """
+    _, dx, theta1, dtheta1, theta2, dtheta2 = state
+    dd1, dd2 = angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p)
+    return (dx, u, dtheta1, dd1, dtheta2, dd2)
+
+
+def rk4_step(state, u, dt, p):
+    """Advance ``state`` by ``dt`` with one classical Runge-Kutta 4 step, u held."""
+    x, v, a1, w1, a2, w2 = state
+    h2 = 0.5 * dt
+    k1 = angular_accelerations(a1, w1, a2, w2, u, p)
+    k2 = angular_accelerations(a1 + h2 * w1, w1 + h2 * k1[0], a2 + h2 * w2, w2 + h2 * k1[1], u, p)
+    w1b, w2b = w1 + h2 * k1[0], w2 + h2 * k1[1]
+    w1c, w2c = w1 + h2 * k2[0], w2 + h2 * k2[1]
+    k3 = angular_accelerations(a1 + h2 * w1b, w1c, a2 + h2 * w2b, w2c, u, p)
+    w1d, w2d = w1 + dt * k3[0], w2 + dt * k3[1]
+    k4 = angular_accelerations(a1 + dt * w1c, w1d, a2 + dt * w2c, w2d, u, p)
+    s = dt / 6.0
+    # x'' = u is constant over the step, so RK4 integrates x exactly.
+    return (
+        x + dt * v + h2 * dt * u,
+        v + dt * u,
+        a1 + s * (w1 + 2.0 * w1b + 2.0 * w1c + w1d),
+        w1 + s * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]),
+        a2 + s * (w2 + 2.0 * w2b + 2.0 * w2c + w2d),
+        w2 + s * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]),
+    )
+
+
+def substeps(step, max_substep):
+    """Number of equal RK4 sub-steps no longer than ``max_substep`` covering ``step``."""
+    # The 1e-9 slack keeps h = 1 ms with max_substep = 1 ms at one sub-step
+    # despite rounding in h.
+    return max(1, math.ceil(step / max_substep - 1e-9))
+
+
+def advance(state, u, step, max_substep, p):
+    """Integrate the plant over one communication step with u held (zero-order hold)."""
+    n = substeps(step, max_substep)
+    dt = step / n
+    for _ in range(n):
+        state = rk4_step(state, u, dt, p)
+    return state
+
+
+def positions(state, p):
+    """Hook and payload positions ``(x1, y1, x2, y2)`` [m], eqs (4)-(5)."""
+    x, _, theta1, _, theta2, _ = state
+    x1 = x + p.l1 * math.sin(theta1)
+    y1 = -p.l1 * math.cos(theta1)
+    return x1, y1, x1 + p.l2 * math.sin(theta2), y1 - p.l2 * math.cos(theta2)
+
+
+def energy(state, p):
+    """Kinetic plus potential energy of hook and payload [J], eqs (6)-(7).
+
+    The trolley's own mass is not part of the model, so with ``u = 0`` (constant
+    trolley velocity) this energy is conserved.
+    """
+    _, dx, theta1, dtheta1, theta2, dtheta2 = state
+    vx1 = dx + p.l1 * dtheta1 * math.cos(theta1)
+    vy1 = p.l1 * dtheta1 * math.sin(theta1)
+    vx2 = vx1 + p.l2 * dtheta2 * math.cos(theta2)
+    vy2 = vy1 + p.l2 * dtheta2 * math.sin(theta2)
+    kinetic = 0.5 * p.m1 * (vx1 * vx1 + vy1 * vy1) + 0.5 * p.m2 * (vx2 * vx2 + vy2 * vy2)
+    _, y1, _, y2 = positions(state, p)
+    return kinetic + p.g * (p.m1 * y1 + p.m2 * y2)

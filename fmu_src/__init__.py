@@ -1,0 +1,1 @@
+"""pythonfmu slaves: thin FMI wrappers around crane_fmu.model."""

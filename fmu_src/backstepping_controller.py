@@ -1,0 +1,36 @@
+"""BacksteppingController FMU: the anti-swing law of eqs (10)-(21)."""
+
+from pythonfmu import Fmi2Slave
+
+from crane_fmu.model import controller, tables
+from crane_fmu.model.parameters import ControllerGains, PlantParameters
+from fmu_src.slave_support import register_table, values
+
+_MODEL = ("m1", "m2", "l1", "l2", "g")
+
+
+class BacksteppingController(Fmi2Slave):
+    author = "crane anti-sway co-simulation toolkit"
+    description = ("Backstepping anti-swing controller for a double-pendulum crane payload "
+                   "(least-squares eq 21); output: trolley acceleration u, direct feedthrough")
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self._law = None  # (PlantParameters, ControllerGains) once initialisation ends
+        register_table(self, tables.CONTROLLER, self._output)
+
+    def _parameters(self):
+        params = values(self, tables.CONTROLLER, "parameter")
+        model = {name: params.pop(name) for name in _MODEL}
+        return PlantParameters(**model), ControllerGains(**params)
+
+    def _output(self, name):
+        p, k = self._law or self._parameters()
+        state = tuple(getattr(self, s) for s in tables.STATE)
+        return controller.control(state, p, k)  # direct feedthrough: the inputs as set now
+
+    def exit_initialization_mode(self):
+        self._law = self._parameters()
+
+    def do_step(self, current_time, step_size):
+        return True

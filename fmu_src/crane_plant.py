@@ -1,0 +1,51 @@
+"""CranePlant FMU: the double-pendulum payload under a trolley, eqs (4)-(9)."""
+
+from pythonfmu import Fmi2Slave
+from pythonfmu.default_experiment import DefaultExperiment
+
+from crane_fmu.model import plant, tables
+from crane_fmu.model.parameters import PlantParameters
+from fmu_src.slave_support import register_table, values
+
+_MODEL = ("m1", "m2", "l1", "l2", "g")
+
+
+class CranePlant(Fmi2Slave):
+    author = "crane anti-sway co-simulation toolkit"
+    description = ("Overhead crane with a double-pendulum payload (hook m1 on cable l1, payload m2 "
+                   "on cable l2); input: trolley acceleration u; fixed-step RK4 inside doStep")
+    default_experiment = DefaultExperiment(start_time=0.0, stop_time=20.0, step_size=0.01)
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self._state = None  # plant state while stepping; None before initialisation ends
+        self._outputs = None
+        register_table(self, tables.PLANT, self._output)
+
+    def _initial_state(self):
+        return (self.x0, self.dx0, self.theta1_0, self.dtheta1_0, self.theta2_0, self.dtheta2_0)
+
+    def _output(self, name):
+        if self._outputs is None:  # initialisation mode: outputs follow the parameters
+            return self._compute_outputs(self._initial_state(), PlantParameters(**values(
+                self, tables.PLANT, "parameter", _MODEL)))[name]
+        return self._outputs[name]
+
+    @staticmethod
+    def _compute_outputs(state, p):
+        out = dict(zip(tables.STATE, state))
+        out.update(zip(("x1", "y1", "x2", "y2"), plant.positions(state, p)))
+        out["energy"] = plant.energy(state, p)
+        return out
+
+    def exit_initialization_mode(self):
+        self._params = PlantParameters(**values(self, tables.PLANT, "parameter", _MODEL))
+        if not self.max_substep > 0:
+            raise ValueError(f"max_substep must be > 0, got {self.max_substep!r}")
+        self._state = self._initial_state()
+        self._outputs = self._compute_outputs(self._state, self._params)
+
+    def do_step(self, current_time, step_size):
+        self._state = plant.advance(self._state, self.u, step_size, self.max_substep, self._params)
+        self._outputs = self._compute_outputs(self._state, self._params)
+        return True

@@ -1,0 +1,30 @@
+"""Registers a variable table (crane_fmu.model.tables) on a pythonfmu slave."""
+
+from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Variability, Real, String
+
+
+def register_table(slave, table, outputs):
+    """Register every variable of ``table`` on ``slave``.
+
+    Parameters and inputs become attributes of the slave holding their start
+    value. Outputs are read through ``outputs(name)``, so a slave computes them
+    from its own state; they are ``initial=calculated`` (listed as
+    InitialUnknowns by the build's post-processing).
+    """
+    for v in table:
+        kind = String if v.type == "String" else Real
+        common = dict(causality=Fmi2Causality[v.causality],
+                      variability=Fmi2Variability[v.variability],
+                      description=v.description)
+        if v.causality == "output":
+            slave.register_variable(kind(v.name, initial=Fmi2Initial.calculated,
+                                         getter=lambda name=v.name: outputs(name), **common))
+        else:
+            setattr(slave, v.name, v.start)
+            slave.register_variable(kind(v.name, start=v.start, **common))
+
+
+def values(slave, table, causality, names=None):
+    """``{name: value}`` of the slave's variables of one causality."""
+    return {v.name: getattr(slave, v.name) for v in table
+            if v.causality == causality and (names is None or v.name in names)}
