@@ -17,17 +17,18 @@ class BacksteppingController(Fmi2Slave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self._law = None  # (PlantParameters, ControllerGains) once initialisation ends
-        register_table(self, tables.CONTROLLER, self._output)
+        register_table(self, tables.CONTROLLER, self._current_outputs)
 
     def _parameters(self):
         params = values(self, tables.CONTROLLER, "parameter")
         model = {name: params.pop(name) for name in _MODEL}
         return PlantParameters(**model), ControllerGains(**params)
 
-    def _output(self, name):
+    def _current_outputs(self):
         p, k = self._law or self._parameters()
-        state = tuple(getattr(self, s) for s in tables.STATE)
-        return controller.control(state, p, k)  # direct feedthrough: the inputs as set now
+        # Direct feedthrough: u from the inputs as they are set now.
+        state = (self.x, self.dx, self.theta1, self.dtheta1, self.theta2, self.dtheta2)
+        return (controller.control(state, p, k),)
 
     def exit_initialization_mode(self):
         self._law = self._parameters()

@@ -18,34 +18,27 @@ class CranePlant(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self._state = None  # plant state while stepping; None before initialisation ends
-        self._outputs = None
-        register_table(self, tables.PLANT, self._output)
+        self._state = None  # plant state once initialisation ends
+        self._outputs = None  # plant.outputs(state) after every step
+        register_table(self, tables.PLANT, self._current_outputs)
 
     def _initial_state(self):
         return (self.x0, self.dx0, self.theta1_0, self.dtheta1_0, self.theta2_0, self.dtheta2_0)
 
-    def _output(self, name):
+    def _current_outputs(self):
         if self._outputs is None:  # initialisation mode: outputs follow the parameters
-            return self._compute_outputs(self._initial_state(), PlantParameters(**values(
-                self, tables.PLANT, "parameter", _MODEL)))[name]
-        return self._outputs[name]
-
-    @staticmethod
-    def _compute_outputs(state, p):
-        out = dict(zip(tables.STATE, state))
-        out.update(zip(("x1", "y1", "x2", "y2"), plant.positions(state, p)))
-        out["energy"] = plant.energy(state, p)
-        return out
+            params = PlantParameters(**values(self, tables.PLANT, "parameter", _MODEL))
+            return plant.outputs(self._initial_state(), params)
+        return self._outputs
 
     def exit_initialization_mode(self):
         self._params = PlantParameters(**values(self, tables.PLANT, "parameter", _MODEL))
         if not self.max_substep > 0:
             raise ValueError(f"max_substep must be > 0, got {self.max_substep!r}")
         self._state = self._initial_state()
-        self._outputs = self._compute_outputs(self._state, self._params)
+        self._outputs = plant.outputs(self._state, self._params)
 
     def do_step(self, current_time, step_size):
         self._state = plant.advance(self._state, self.u, step_size, self.max_substep, self._params)
-        self._outputs = self._compute_outputs(self._state, self._params)
+        self._outputs = plant.outputs(self._state, self._params)
         return True

@@ -7,10 +7,11 @@ def register_table(slave, table, outputs):
     """Register every variable of ``table`` on ``slave``.
 
     Parameters and inputs become attributes of the slave holding their start
-    value. Outputs are read through ``outputs(name)``, so a slave computes them
-    from its own state; they are ``initial=calculated`` (listed as
-    InitialUnknowns by the build's post-processing).
+    value. ``outputs()`` returns the values of all outputs in table order, so a
+    slave computes them from its own state; they are ``initial=calculated``
+    (listed as InitialUnknowns by the build's post-processing).
     """
+    position = 0
     for v in table:
         kind = String if v.type == "String" else Real
         common = dict(causality=Fmi2Causality[v.causality],
@@ -18,7 +19,8 @@ def register_table(slave, table, outputs):
                       description=v.description)
         if v.causality == "output":
             slave.register_variable(kind(v.name, initial=Fmi2Initial.calculated,
-                                         getter=lambda name=v.name: outputs(name), **common))
+                                         getter=lambda i=position: outputs()[i], **common))
+            position += 1
         else:
             setattr(slave, v.name, v.start)
             slave.register_variable(kind(v.name, start=v.start, **common))

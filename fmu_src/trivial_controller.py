@@ -11,7 +11,7 @@ class TrivialController(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        register_table(self, tables.TRIVIAL_CONTROLLER, lambda name: -self.x)
+        register_table(self, tables.TRIVIAL_CONTROLLER, lambda: (-self.x,))
 
     def do_step(self, current_time, step_size):
         return True

@@ -3,3 +3,8 @@
 Standard library only, and no module-level mutable state: the built FMUs bundle
 this package and run inside whatever Python process hosts them.
 """
+
+# Import every submodule now. A host shares sys.modules with the FMUs it loads
+# and may delete an FMU's extracted folder after freeing it (fmpy's simulate
+# does); a submodule imported lazily later would then be looked for there.
+from . import controller, parameters, plant, tables  # noqa: F401

@@ -67,15 +67,11 @@ def control(state, p, k):
     weights W this is ``u = (b' W b)^-1 b' W (e3d - f)``, which is eq (21) for W = I.
     """
     x, dx, theta1, dtheta1, theta2, dtheta2 = state
-    f, b = drift_and_input_gain(theta1, dtheta1, theta2, dtheta2, p, k.b3_form)
-    e1 = (x - k.x_d, theta1 - k.theta1_d, theta2 - k.theta2_d)
-    e2 = (dx, dtheta1, dtheta2)
-    k1 = (k.K1_x, k.K1_theta1, k.K1_theta2)
-    k2 = (k.K2_x, k.K2_theta1, k.K2_theta2)
-    w = (k.w_x, k.w_theta1, k.w_theta2)
-    num = den = 0.0
-    for i in range(3):
-        e3d = -k1[i] * e2[i] - k2[i] * (e2[i] + k1[i] * e1[i])
-        num += w[i] * b[i] * (e3d - f[i])
-        den += w[i] * b[i] * b[i]
-    return num / den
+    (_, f2, f3), (_, b2, b3) = drift_and_input_gain(theta1, dtheta1, theta2, dtheta2, p, k.b3_form)
+    # e3d_i = -K1_i e2_i - K2_i (e2_i + K1_i e1_i), one row each of x, theta1, theta2
+    e3x = -k.K1_x * dx - k.K2_x * (dx + k.K1_x * (x - k.x_d))
+    e31 = -k.K1_theta1 * dtheta1 - k.K2_theta1 * (dtheta1 + k.K1_theta1 * (theta1 - k.theta1_d))
+    e32 = -k.K1_theta2 * dtheta2 - k.K2_theta2 * (dtheta2 + k.K1_theta2 * (theta2 - k.theta2_d))
+    # f1 = 0, b1 = 1 (eq 12)
+    num = k.w_x * e3x + k.w_theta1 * b2 * (e31 - f2) + k.w_theta2 * b3 * (e32 - f3)
+    return num / (k.w_x + k.w_theta1 * b2 * b2 + k.w_theta2 * b3 * b3)

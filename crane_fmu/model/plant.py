@@ -101,25 +101,29 @@ def advance(state, u, step, max_substep, p):
     return state
 
 
-def positions(state, p):
-    """Hook and payload positions ``(x1, y1, x2, y2)`` [m], eqs (4)-(5)."""
-    x, _, theta1, _, theta2, _ = state
-    x1 = x + p.l1 * math.sin(theta1)
-    y1 = -p.l1 * math.cos(theta1)
-    return x1, y1, x1 + p.l2 * math.sin(theta2), y1 - p.l2 * math.cos(theta2)
-
-
 def energy(state, p):
-    """Kinetic plus potential energy of hook and payload [J], eqs (6)-(7).
+    """Kinetic plus potential energy of hook and payload [J], eqs (6)-(7)."""
+    return outputs(state, p)[10]
 
-    The trolley's own mass is not part of the model, so with ``u = 0`` (constant
-    trolley velocity) this energy is conserved.
+
+OUTPUTS = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2", "x1", "y1", "x2", "y2", "energy")
+
+
+def outputs(state, p):
+    """The state, hook and payload positions and the energy, in the order of :data:`OUTPUTS`.
+
+    Notes
+    -----
+    Positions from eqs (4)-(5); kinetic energy eq (6) plus potential energy
+    eq (7). The trolley's own mass is not part of the model, so with ``u = 0``
+    (constant trolley velocity) this energy is conserved.
     """
-    _, dx, theta1, dtheta1, theta2, dtheta2 = state
-    vx1 = dx + p.l1 * dtheta1 * math.cos(theta1)
-    vy1 = p.l1 * dtheta1 * math.sin(theta1)
-    vx2 = vx1 + p.l2 * dtheta2 * math.cos(theta2)
-    vy2 = vy1 + p.l2 * dtheta2 * math.sin(theta2)
-    kinetic = 0.5 * p.m1 * (vx1 * vx1 + vy1 * vy1) + 0.5 * p.m2 * (vx2 * vx2 + vy2 * vy2)
-    _, y1, _, y2 = positions(state, p)
-    return kinetic + p.g * (p.m1 * y1 + p.m2 * y2)
+    x, dx, theta1, dtheta1, theta2, dtheta2 = state
+    s1, c1, s2, c2 = math.sin(theta1), math.cos(theta1), math.sin(theta2), math.cos(theta2)
+    x1, y1 = x + p.l1 * s1, -p.l1 * c1
+    x2, y2 = x1 + p.l2 * s2, y1 - p.l2 * c2
+    vx1, vy1 = dx + p.l1 * dtheta1 * c1, p.l1 * dtheta1 * s1
+    vx2, vy2 = vx1 + p.l2 * dtheta2 * c2, vy1 + p.l2 * dtheta2 * s2
+    kinetic = 0.5 * (p.m1 * (vx1 * vx1 + vy1 * vy1) + p.m2 * (vx2 * vx2 + vy2 * vy2))
+    return (x, dx, theta1, dtheta1, theta2, dtheta2, x1, y1, x2, y2,
+            kinetic + p.g * (p.m1 * y1 + p.m2 * y2))

@@ -1,0 +1,1 @@
+"""Analyses on top of the co-simulation: scipy references, metrics, plots, paper reproduction."""

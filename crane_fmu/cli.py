@@ -1,0 +1,212 @@
+"""The ``crane-fmu`` command: build the FMUs, co-simulate them, describe them, benchmark.
+
+User mistakes print one line and exit with status 2; an FMU failing during a
+run prints one line and exits with status 1.
+"""
+
+import argparse
+import math
+import os
+import sys
+from pathlib import Path
+
+EXAMPLES = {
+    "build": "examples:\n  crane-fmu build\n  crane-fmu build --out my/fmus --bench",
+    "simulate": (
+        "examples:\n"
+        "  crane-fmu simulate --out results/section5.csv --plot results/section5.png\n"
+        "  crane-fmu simulate --no-controller --stop-time 10 --out free.csv\n"
+        "  crane-fmu simulate --master jacobi --step 0.01 --set controller.w_theta2=0\n"
+        "  crane-fmu simulate --set plant.l1=1.5 --set controller.l1=1.5 --set plant.theta1_0=0.2"),
+    "info": "examples:\n  crane-fmu info\n  crane-fmu info --markdown",
+    "bench": "examples:\n  crane-fmu bench\n  crane-fmu bench --repeat 7 --stop-time 20",
+}
+
+
+class UsageError(Exception):
+    """A mistake in the command line: one line, exit status 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):
+        raise UsageError(message)
+
+
+def _number(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return value
+
+
+def _parser():
+    parser = _Parser(prog="crane-fmu", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    fmt = argparse.RawDescriptionHelpFormatter
+
+    p = sub.add_parser("build", help="build CranePlant.fmu and BacksteppingController.fmu",
+                       epilog=EXAMPLES["build"], formatter_class=fmt)
+    p.add_argument("--out", default="build/fmus", help="output folder (default: build/fmus)")
+    p.add_argument("--bench", action="store_true", help="also build the benchmark's trivial FMUs")
+
+    p = sub.add_parser("simulate", help="co-simulate the plant (and controller) FMUs",
+                       epilog=EXAMPLES["simulate"], formatter_class=fmt)
+    p.add_argument("--fmu-dir", default="build/fmus", help="folder of the built FMUs")
+    p.add_argument("--stop-time", type=_number, default=20.0, help="stop time [s] (default 20)")
+    p.add_argument("--step", type=_number, default=1e-3, help="communication step [s] (default 0.001)")
+    p.add_argument("--master", choices=("gauss-seidel", "jacobi"), default="gauss-seidel",
+                   help="master algorithm (default gauss-seidel)")
+    p.add_argument("--no-controller", action="store_true", help="free swing: the plant alone, u = 0")
+    p.add_argument("--set", action="append", default=[], metavar="INSTANCE.VARIABLE=VALUE",
+                   help="set a parameter before initialisation (repeatable); instances: plant, controller")
+    p.add_argument("--out", default="results/simulation.csv", help="result CSV (default results/simulation.csv)")
+    p.add_argument("--plot", help="also write a PNG plot of x, theta1, theta2 and u")
+
+    p = sub.add_parser("info", help="describe the FMUs' variables", epilog=EXAMPLES["info"],
+                       formatter_class=fmt)
+    p.add_argument("--markdown", action="store_true", help="print the variable tables as Markdown")
+
+    p = sub.add_parser("bench", help="microseconds per communication step, crane pair vs framework floor",
+                       epilog=EXAMPLES["bench"], formatter_class=fmt)
+    p.add_argument("--stop-time", type=_number, default=20.0, help="simulated time per run [s]")
+    p.add_argument("--step", type=_number, default=1e-3, help="communication step [s]")
+    p.add_argument("--repeat", type=int, default=5, help="runs per pair; the median is reported")
+    return parser
+
+
+def _parse_sets(items, fmus):
+    """``["plant.l1=1.5"]`` -> ``{"plant": {"l1": 1.5}}``, checked against the FMUs' variables."""
+    from fmpy import read_model_description
+
+    variables = {}
+    result = {}
+    for item in items:
+        target, sep, text = item.partition("=")
+        instance, dot, name = target.partition(".")
+        if not sep or not dot:
+            raise UsageError(f"--set {item!r}: expected INSTANCE.VARIABLE=VALUE")
+        if instance not in fmus:
+            raise UsageError(f"--set {item!r}: unknown instance {instance!r}; instances: {', '.join(fmus)}")
+        if instance not in variables:
+            md = read_model_description(str(fmus[instance]))
+            variables[instance] = {v.name: v for v in md.modelVariables
+                                   if v.causality in ("parameter", "input")}
+        var = variables[instance].get(name)
+        if var is None:
+            raise UsageError(f"--set {item!r}: {instance} has no parameter or input {name!r}; valid: "
+                             + ", ".join(variables[instance]))
+        if var.type == "Real":
+            try:
+                value = _number(text)
+            except argparse.ArgumentTypeError as exc:
+                raise UsageError(f"--set {item!r}: {exc}") from None
+        else:
+            value = text
+        result.setdefault(instance, {})[name] = value
+    return result
+
+
+def _writable_file(path, option):
+    folder = Path(path).resolve().parent
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UsageError(f"{option} {path}: cannot create folder {folder} ({exc.strerror})") from None
+    if not os.access(folder, os.W_OK):
+        raise UsageError(f"{option} {path}: folder {folder} is not writable")
+
+
+def _cmd_build(args):
+    from build_scripts.build_fmus import BENCH_FMUS, CRANE_FMUS, build_all
+
+    for path in build_all(args.out, CRANE_FMUS + (BENCH_FMUS if args.bench else ())):
+        print(path)
+    return 0
+
+
+def _cmd_simulate(args):
+    from crane_fmu.cosim import CsvRecorder, FmiError, crane_system, read_csv, simulate
+    from crane_fmu.cosim.master import communication_points
+
+    try:
+        communication_points(0.0, args.stop_time, args.step)
+        fmus, connections = crane_system(args.fmu_dir, controller=not args.no_controller)
+    except (ValueError, FileNotFoundError) as exc:
+        raise UsageError(str(exc)) from None
+    parameters = _parse_sets(args.set, fmus)
+    _writable_file(args.out, "--out")
+    if args.plot:
+        _writable_file(args.plot, "--plot")
+    recorder = CsvRecorder(args.out)
+    try:
+        simulate(fmus, connections, args.stop_time, args.step, args.master, parameters, recorder)
+    except FmiError as exc:
+        # Bad parameter values are refused when initialisation ends: the user's mistake.
+        if exc.function in ("fmi2ExitInitializationMode", "fmi2SetReal", "fmi2SetString"):
+            raise UsageError(str(exc)) from None
+        print(f"crane-fmu: simulation failed: {exc} (results up to t={exc.time} s in {args.out})",
+              file=sys.stderr)
+        return 1
+    finally:
+        recorder.close(reason="interrupted")  # no-op when the run finished
+    print(f"wrote {args.out}")
+    if args.plot:
+        from crane_fmu.analysis.plots import plot_run
+
+        title = "free swing" if args.no_controller else f"closed loop ({args.master}, h={args.step:g} s)"
+        partial = args.plot + ".partial.png"
+        plot_run(read_csv(args.out), partial, title)
+        os.replace(partial, args.plot)
+        print(f"wrote {args.plot}")
+    return 0
+
+
+def _cmd_info(args):
+    from crane_fmu.model.tables import DISPLAY_UNITS, TABLES
+
+    for fmu, table in TABLES.items():
+        if args.markdown:
+            print(f"#### {fmu}\n\n| name | causality | start | unit | description |\n|---|---|---|---|---|")
+        else:
+            print(f"{fmu}.fmu")
+        for v in table:
+            start = "" if v.start is None else f"{v.start:.6g}" if v.type == "Real" else v.start
+            unit = v.unit or ""
+            if unit in DISPLAY_UNITS:
+                unit += f" (display {DISPLAY_UNITS[unit]})"
+            if args.markdown:
+                print(f"| `{v.name}` | {v.causality} | {start} | {unit} | {v.description} |")
+            else:
+                print(f"  {v.name:<12} {v.causality:<10} {start:>10} {unit:<22} {v.description}")
+        print()
+    return 0
+
+
+def _cmd_bench(args):
+    from crane_fmu.bench import run_bench
+
+    if args.repeat < 1:
+        raise UsageError(f"--repeat must be >= 1, got {args.repeat}")
+    try:
+        run_bench(args.stop_time, args.step, args.repeat)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    return 0
+
+
+def main(argv=None):
+    """Run the command line; return the exit status."""
+    try:
+        args = _parser().parse_args(argv)
+        return {"build": _cmd_build, "simulate": _cmd_simulate, "info": _cmd_info,
+                "bench": _cmd_bench}[args.command](args)
+    except UsageError as exc:
+        print(f"crane-fmu: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
