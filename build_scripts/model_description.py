@@ -81,12 +81,12 @@ def postprocess(xml_bytes, table, display_units, feedthrough):
     structure = root.find("ModelStructure")
     for child in list(structure):
         structure.remove(child)
-    outputs = [(i + 1, v) for i, v in enumerate(table) if v.causality == "output"]
+    outputs = [i + 1 for i, v in enumerate(table) if v.causality == "output"]
     if outputs:
         out_node = ET.SubElement(structure, "Outputs")
         init_node = ET.SubElement(structure, "InitialUnknowns")
-        for index, v in outputs:
-            deps = inputs if feedthrough else []
+        deps = inputs if feedthrough else []
+        for index in outputs:
             attrs = {"index": str(index), "dependencies": " ".join(deps)}
             if deps:
                 attrs["dependenciesKind"] = " ".join(["dependent"] * len(deps))

@@ -62,7 +62,8 @@ def _parser():
     p.add_argument("--no-controller", action="store_true", help="free swing: the plant alone, u = 0")
     p.add_argument("--set", action="append", default=[], metavar="INSTANCE.VARIABLE=VALUE",
                    help="set a parameter before initialisation (repeatable); instances: plant, controller")
-    p.add_argument("--out", default="results/simulation.csv", help="result CSV (default results/simulation.csv)")
+    p.add_argument("--out", default="results/simulation.csv",
+                   help="result CSV (default results/simulation.csv)")
     p.add_argument("--plot", help="also write a PNG plot of x, theta1, theta2 and u")
 
     p = sub.add_parser("info", help="describe the FMUs' variables", epilog=EXAMPLES["info"],
@@ -75,6 +76,19 @@ def _parser():
     p.add_argument("--step", type=_number, default=1e-3, help="communication step [s]")
     p.add_argument("--repeat", type=int, default=5, help="runs per pair; the median is reported")
     return parser
+
+
+def _convert(text, fmi_type):
+    """A --set value as the variable's FMI type."""
+    if fmi_type == "Real":
+        return _number(text)
+    if fmi_type == "Integer":
+        return int(text)
+    if fmi_type == "Boolean":
+        if text.lower() not in ("true", "false", "1", "0"):
+            raise ValueError(f"{text!r} is not a Boolean (true, false, 1, 0)")
+        return text.lower() in ("true", "1")
+    return text
 
 
 def _parse_sets(items, fmus):
@@ -98,15 +112,31 @@ def _parse_sets(items, fmus):
         if var is None:
             raise UsageError(f"--set {item!r}: {instance} has no parameter or input {name!r}; valid: "
                              + ", ".join(variables[instance]))
-        if var.type == "Real":
-            try:
-                value = _number(text)
-            except argparse.ArgumentTypeError as exc:
-                raise UsageError(f"--set {item!r}: {exc}") from None
-        else:
-            value = text
+        try:
+            value = _convert(text, var.type)
+        except (argparse.ArgumentTypeError, ValueError) as exc:
+            raise UsageError(f"--set {item!r}: {exc}") from None
         result.setdefault(instance, {})[name] = value
     return result
+
+
+def _check_parameters(parameters, fmus):
+    """Check the crane FMUs' parameters with the model's own rules before loading anything.
+
+    The FMUs apply the same rules when initialisation ends, but pythonfmu FMUs
+    cannot report why they failed; checking here gives the user the reason.
+    """
+    from crane_fmu.model import tables
+    from crane_fmu.model.parameters import controller_setup, plant_setup
+
+    checks = {"plant": (tables.PLANT, plant_setup), "controller": (tables.CONTROLLER, controller_setup)}
+    for instance in fmus:
+        table, setup = checks[instance]
+        values = {**tables.defaults(table), **parameters.get(instance, {})}
+        try:
+            setup(values)
+        except ValueError as exc:
+            raise UsageError(f"{instance}: {exc}") from None
 
 
 def _writable_file(path, option):
@@ -137,6 +167,7 @@ def _cmd_simulate(args):
     except (ValueError, FileNotFoundError) as exc:
         raise UsageError(str(exc)) from None
     parameters = _parse_sets(args.set, fmus)
+    _check_parameters(parameters, fmus)
     _writable_file(args.out, "--out")
     if args.plot:
         _writable_file(args.plot, "--plot")

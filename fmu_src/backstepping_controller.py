@@ -3,10 +3,8 @@
 from pythonfmu import Fmi2Slave
 
 from crane_fmu.model import controller, tables
-from crane_fmu.model.parameters import ControllerGains, PlantParameters
+from crane_fmu.model.parameters import controller_setup
 from fmu_src.slave_support import register_table, values
-
-_MODEL = ("m1", "m2", "l1", "l2", "g")
 
 
 class BacksteppingController(Fmi2Slave):
@@ -20,9 +18,7 @@ class BacksteppingController(Fmi2Slave):
         register_table(self, tables.CONTROLLER, self._current_outputs)
 
     def _parameters(self):
-        params = values(self, tables.CONTROLLER, "parameter")
-        model = {name: params.pop(name) for name in _MODEL}
-        return PlantParameters(**model), ControllerGains(**params)
+        return controller_setup(values(self, tables.CONTROLLER, "parameter"))
 
     def _current_outputs(self):
         p, k = self._law or self._parameters()

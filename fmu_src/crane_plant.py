@@ -1,13 +1,14 @@
 """CranePlant FMU: the double-pendulum payload under a trolley, eqs (4)-(9)."""
 
+import math
+
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
+from pythonfmu.enums import Fmi2Status
 
 from crane_fmu.model import plant, tables
-from crane_fmu.model.parameters import PlantParameters
+from crane_fmu.model.parameters import plant_setup
 from fmu_src.slave_support import register_table, values
-
-_MODEL = ("m1", "m2", "l1", "l2", "g")
 
 
 class CranePlant(Fmi2Slave):
@@ -27,18 +28,25 @@ class CranePlant(Fmi2Slave):
 
     def _current_outputs(self):
         if self._outputs is None:  # initialisation mode: outputs follow the parameters
-            params = PlantParameters(**values(self, tables.PLANT, "parameter", _MODEL))
+            params, _ = plant_setup(values(self, tables.PLANT, "parameter"))
             return plant.outputs(self._initial_state(), params)
         return self._outputs
 
     def exit_initialization_mode(self):
-        self._params = PlantParameters(**values(self, tables.PLANT, "parameter", _MODEL))
-        if not self.max_substep > 0:
-            raise ValueError(f"max_substep must be > 0, got {self.max_substep!r}")
+        self._params, self._max_substep = plant_setup(values(self, tables.PLANT, "parameter"))
         self._state = self._initial_state()
         self._outputs = plant.outputs(self._state, self._params)
 
     def do_step(self, current_time, step_size):
-        self._state = plant.advance(self._state, self.u, step_size, self.max_substep, self._params)
-        self._outputs = plant.outputs(self._state, self._params)
+        try:
+            state = plant.advance(self._state, self.u, step_size, self._max_substep, self._params)
+            finite = all(map(math.isfinite, state))
+        except (ArithmeticError, ValueError):  # overflow, or sin/cos of inf
+            finite = False
+        if not finite:
+            self.log(f"plant state became non-finite in the step from t={current_time!r} s "
+                     f"(u={self.u!r} m/s2); the step is discarded", Fmi2Status.error)
+            return False
+        self._state = state
+        self._outputs = plant.outputs(state, self._params)
         return True

@@ -26,7 +26,6 @@ def register_table(slave, table, outputs):
             slave.register_variable(kind(v.name, start=v.start, **common))
 
 
-def values(slave, table, causality, names=None):
+def values(slave, table, causality):
     """``{name: value}`` of the slave's variables of one causality."""
-    return {v.name: getattr(slave, v.name) for v in table
-            if v.causality == causality and (names is None or v.name in names)}
+    return {v.name: getattr(slave, v.name) for v in table if v.causality == causality}

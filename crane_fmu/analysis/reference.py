@@ -45,7 +45,7 @@ def sampled_closed_loop(state0, p, gains, step, n_steps, mode="gauss-seidel"):
     for k in range(n_steps):
         measured = states[k] if mode == "gauss-seidel" else previous
         u = controller.control(tuple(measured), p, gains)
-        sol = solve_ivp(lambda t, s: plant.derivative(s, u, p), (0.0, step), states[k],
+        sol = solve_ivp(lambda t, s, u=u: plant.derivative(s, u, p), (0.0, step), states[k],
                         method="DOP853", rtol=RTOL, atol=ATOL)
         previous = states[k]
         states[k + 1] = sol.y[:, -1]

@@ -83,8 +83,11 @@ class FmuInstance:
         self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_libc.free)
         addLoggerProxy(ctypes.byref(self._callbacks))
         self._instantiated = False
-        self._call("fmi2Instantiate", self._fmu.instantiate, callbacks=self._callbacks, loggingOn=False)
+        self._call("fmi2Instantiate", self._fmu.instantiate, callbacks=self._callbacks, loggingOn=True)
         self._instantiated = True
+        # Ask for every log message. (pythonfmu 0.7 FMUs ignore this and loggingOn
+        # alike and never call the logger, so their errors arrive without a reason.)
+        self._call("fmi2SetDebugLogging", self._fmu.setDebugLogging, True, [])
 
     def _log(self, env, instance, status, category, message):
         self.messages.append(message.decode("utf-8", "replace"))
@@ -120,8 +123,7 @@ class FmuInstance:
             raise KeyError(f"{self.name} has no variable {name!r}; valid names: " + ", ".join(self.variables))
         setter = {"Real": self._fmu.setReal, "Integer": self._fmu.setInteger,
                   "Boolean": self._fmu.setBoolean, "String": self._fmu.setString}[v.type]
-        if v.type == "String":
-            value = str(value).encode("utf-8")
+        value = {"Real": float, "Integer": int, "Boolean": bool, "String": str}[v.type](value)
         self._call(f"fmi2Set{v.type}", setter, [v.valueReference], [value])
 
     def get(self, name):

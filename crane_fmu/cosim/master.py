@@ -28,7 +28,8 @@ def communication_points(start_time, stop_time, step):
         raise ValueError(f"stop time must be > start time {start_time!r}, got {stop_time!r}")
     n = round((stop_time - start_time) / step)
     if n < 1 or abs(start_time + n * step - stop_time) > 1e-9 * max(1.0, abs(stop_time)):
-        raise ValueError(f"step {step!r} must divide the interval {stop_time - start_time!r} into whole steps")
+        raise ValueError(
+            f"step {step!r} must divide the interval {stop_time - start_time!r} into whole steps")
     return n
 
 

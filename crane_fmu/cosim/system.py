@@ -19,7 +19,7 @@ def crane_system(fmu_dir=DEFAULT_FMU_DIR, controller=True):
     fmu_dir = Path(fmu_dir)
     names = ["plant", "controller"] if controller else ["plant"]
     fmus = {name: fmu_dir / FMU_FILES[name] for name in names}
-    for name, path in fmus.items():
+    for path in fmus.values():
         if not path.is_file():
             raise FileNotFoundError(f"{path} not found: build the FMUs first (crane-fmu build)")
     return fmus, (CRANE_CONNECTIONS if controller else [])

@@ -105,3 +105,19 @@ class ControllerGains:
             raise ValueError(f"w_x must be > 0 (b'Wb must not vanish), got {self.w_x!r}")
         if self.b3_form not in B3_FORMS:
             raise ValueError(f"b3_form must be one of {', '.join(B3_FORMS)}, got {self.b3_form!r}")
+
+
+PLANT_FIELDS = ("m1", "m2", "l1", "l2", "g")
+
+
+def plant_setup(values):
+    """Validated ``(PlantParameters, max_substep)`` from the CranePlant parameter values."""
+    max_substep = values["max_substep"]
+    _positive("max_substep", max_substep)
+    return PlantParameters(**{name: values[name] for name in PLANT_FIELDS}), max_substep
+
+
+def controller_setup(values):
+    """Validated ``(PlantParameters, ControllerGains)`` from the BacksteppingController parameter values."""
+    gains = {name: value for name, value in values.items() if name not in PLANT_FIELDS}
+    return PlantParameters(**{name: values[name] for name in PLANT_FIELDS}), ControllerGains(**gains)

@@ -1,0 +1,112 @@
+"""The crane-fmu command line, run in-process through main(argv)."""
+
+import math
+
+import pytest
+
+from crane_fmu.cli import main
+from crane_fmu.cosim import read_csv
+
+
+def _run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_build_writes_both_fmus(tmp_path, capsys):
+    code, out, _ = _run(capsys, "build", "--out", str(tmp_path))
+    assert code == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["BacksteppingController.fmu", "CranePlant.fmu"]
+
+
+def test_simulate_writes_csv_and_plot(fmu_dir, tmp_path, capsys):
+    csv, png = tmp_path / "run.csv", tmp_path / "run.png"
+    code, out, err = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--stop-time", "1", "--step", "0.01",
+                          "--out", str(csv), "--plot", str(png))
+    assert (code, err) == (0, "")
+    data = read_csv(csv)
+    assert list(data)[:3] == ["time", "plant.x", "plant.dx"] and "controller.u" in data
+    assert len(data["time"]) == 101 and data["time"][-1] == 1.0
+    assert data["plant.theta1"][0] == pytest.approx(math.pi / 18, rel=1e-15)
+    assert png.stat().st_size > 10_000
+    assert not list(tmp_path.glob("*.partial*"))
+
+
+def test_simulate_free_swing_and_settings(fmu_dir, tmp_path, capsys):
+    csv = tmp_path / "free.csv"
+    code, _, _ = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--no-controller", "--stop-time", "0.5",
+                      "--step", "0.05", "--set", "plant.theta1_0=0.2", "--set", "plant.l2=0.25",
+                      "--master", "jacobi", "--out", str(csv))
+    assert code == 0
+    data = read_csv(csv)
+    assert "controller.u" not in data
+    assert data["plant.theta1"][0] == 0.2
+    assert data["plant.y2"][0] == pytest.approx(-math.cos(0.2) - 0.25, rel=1e-15)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--set", "crane.l1=1"], "unknown instance 'crane'; instances: plant, controller"),
+    (["--set", "plant.l3=1"], "plant has no parameter or input 'l3'; valid: m1, m2, l1"),
+    (["--set", "plant.x=1"], "plant has no parameter or input 'x'"),
+    (["--set", "plant.l1=abc"], "'abc' is not a number"),
+    (["--set", "plant.l1"], "expected INSTANCE.VARIABLE=VALUE"),
+    (["--set", "plant.l1=-1"], "plant: l1 must be > 0 and finite, got -1.0"),
+    (["--set", "controller.w_theta2=nan"], "'nan' is not a finite number"),
+    (["--set", "controller.b3_form=guessed"], "b3_form must be one of derived, printed, got 'guessed'"),
+    (["--set", "plant.max_substep=0"], "max_substep must be > 0 and finite, got 0.0"),
+    (["--step", "0.003"], "step 0.003 must divide the interval 20.0 into whole steps"),
+    (["--step", "0"], "step must be > 0, got 0.0"),
+    (["--stop-time", "-1"], "stop time must be > start time 0.0, got -1.0"),
+    (["--step", "x"], "argument --step: 'x' is not a number"),
+    (["--master", "euler"], "argument --master: invalid choice: 'euler'"),
+])
+def test_simulate_user_errors_give_one_line_and_status_2(fmu_dir, tmp_path, capsys, argv, message):
+    out_file = tmp_path / "keep.csv"
+    out_file.write_text("previous result\n")
+    code, out, err = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--out", str(out_file), *argv)
+    assert code == 2
+    assert err.count("\n") == 1 and err.startswith("crane-fmu: error: ") and message in err
+    assert out_file.read_text() == "previous result\n"  # nothing the user had is lost
+
+
+def test_missing_fmus_and_unwritable_output(tmp_path, fmu_dir, capsys):
+    code, _, err = _run(capsys, "simulate", "--fmu-dir", str(tmp_path / "nowhere"))
+    assert code == 2 and "CranePlant.fmu not found: build the FMUs first (crane-fmu build)" in err
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    code, _, err = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--out", str(blocker / "r.csv"))
+    assert code == 2 and "cannot create folder" in err
+
+
+def test_fmu_failure_keeps_results_and_exits_1(fmu_dir, tmp_path, capsys):
+    """The paper's law at h = 10 ms diverges; the plant discards the step where its state overflows."""
+    csv = tmp_path / "diverged.csv"
+    code, _, err = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--step", "0.01", "--out", str(csv))
+    assert code == 1
+    assert err.count("\n") == 1 and "plant: fmi2DoStep returned discard at t=" in err
+    lines = csv.read_text().splitlines()
+    assert lines[-1].startswith("# run cut short: plant: fmi2DoStep returned discard")
+    data = read_csv(csv)
+    assert 0 < data["time"][-1] < 20 and all(math.isfinite(v) for v in data["plant.x"])
+
+
+def test_info_lists_every_variable_with_units(capsys):
+    code, out, _ = _run(capsys, "info")
+    assert code == 0
+    assert "theta1_0" in out and "rad (display deg)" in out and "BacksteppingController.fmu" in out
+    code, out, _ = _run(capsys, "info", "--markdown")
+    assert "| `K2_theta2` | parameter | 310 | 1/s |" in out
+
+
+@pytest.mark.parametrize("command", ["build", "simulate", "info", "bench"])
+def test_help_shows_examples(capsys, command):
+    with pytest.raises(SystemExit) as exit_:
+        main([command, "--help"])
+    assert exit_.value.code == 0
+    assert "examples:" in capsys.readouterr().out
+
+
+def test_unknown_command_is_one_line(capsys):
+    code, _, err = _run(capsys, "fly")
+    assert code == 2 and err.count("\n") == 1

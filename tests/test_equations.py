@@ -1,0 +1,97 @@
+"""The model's equations against a symbolic Lagrangian derivation of eqs (4)-(7)."""
+
+import math
+import random
+
+import pytest
+
+sympy = pytest.importorskip("sympy")
+
+from crane_fmu.model import controller, plant  # noqa: E402
+from crane_fmu.model.parameters import PlantParameters  # noqa: E402
+
+t = sympy.symbols("t")
+m1, m2, l1, l2, g, u = sympy.symbols("m1 m2 l1 l2 g u", positive=True)
+xt = sympy.Function("x")(t)
+th1 = sympy.Function("theta1")(t)
+th2 = sympy.Function("theta2")(t)
+
+
+def _lagrange_equations():
+    """Euler-Lagrange equations for theta1, theta2 with the trolley motion x(t) prescribed."""
+    x1, y1 = xt + l1 * sympy.sin(th1), -l1 * sympy.cos(th1)  # eq (4)
+    x2, y2 = x1 + l2 * sympy.sin(th2), y1 - l2 * sympy.cos(th2)  # eq (5)
+    T = (m1 * (x1.diff(t) ** 2 + y1.diff(t) ** 2) + m2 * (x2.diff(t) ** 2 + y2.diff(t) ** 2)) / 2  # eq (6)
+    V = g * (m1 * y1 + m2 * y2)  # eq (7)
+    L = T - V
+    eqs = [sympy.simplify(L.diff(q.diff(t)).diff(t) - L.diff(q)) for q in (th1, th2)]
+    return [e.subs(xt.diff(t, 2), u) for e in eqs]
+
+
+EQS = _lagrange_equations()
+a1, a2, w1, w2, dd1, dd2 = sympy.symbols("a1 a2 w1 w2 dd1 dd2")
+
+
+def _plain(expr):
+    """Replace theta(t) and its derivatives by plain symbols."""
+    return expr.subs({th1.diff(t, 2): dd1, th2.diff(t, 2): dd2}).subs(
+        {th1.diff(t): w1, th2.diff(t): w2}).subs({th1: a1, th2: a2})
+
+
+SOLUTION = sympy.solve([_plain(e) for e in EQS], [dd1, dd2], dict=True)[0]
+ACCEL = sympy.lambdify((a1, w1, a2, w2, u, m1, m2, l1, l2, g), (SOLUTION[dd1], SOLUTION[dd2]))
+
+
+def _random_cases(n=40, seed=1):
+    rng = random.Random(seed)
+    for _ in range(n):
+        p = PlantParameters(m1=rng.uniform(0.5, 10), m2=rng.uniform(0.1, 10), l1=rng.uniform(0.2, 3),
+                            l2=rng.uniform(0.1, 2), g=rng.uniform(1, 20))
+        yield p, [rng.uniform(-1.5, 1.5) for _ in range(4)], rng.uniform(-20, 20)
+
+
+def test_paper_eqs_8_9_are_the_lagrange_equations():
+    """Eqs (8) and (9) as printed equal l1 resp. l2 times the Euler-Lagrange expressions."""
+    eq8 = (l1 * (m1 + m2) * (u * sympy.cos(a1) + g * sympy.sin(a1) + l1 * dd1)
+           + l1 * l2 * m2 * dd2 * sympy.cos(a1 - a2) + l1 * l2 * m2 * w2 ** 2 * sympy.sin(a1 - a2))
+    eq9 = (l2 * m2 * u * sympy.cos(a2) + l1 * l2 * m2 * dd1 * sympy.cos(a1 - a2) + l2 ** 2 * m2 * dd2
+           - l1 * l2 * m2 * w1 ** 2 * sympy.sin(a1 - a2) + l2 * m2 * g * sympy.sin(a2))
+    assert sympy.simplify(eq8 - _plain(EQS[0])) == 0
+    assert sympy.simplify(eq9 - _plain(EQS[1])) == 0
+
+
+def test_code_accelerations_equal_symbolic_solution():
+    # Both sides are double-precision evaluations of the same closed form: 1e-9 relative.
+    for p, (q1, r1, q2, r2), acc in _random_cases():
+        expected = ACCEL(q1, r1, q2, r2, acc, p.m1, p.m2, p.l1, p.l2, p.g)
+        got = plant.angular_accelerations(q1, r1, q2, r2, acc, p)
+        assert got == pytest.approx(expected, rel=1e-9, abs=1e-9)
+
+
+@pytest.mark.parametrize("form", ["derived", "printed"])
+def test_f_and_b_of_eq_14_against_the_derivation(form):
+    """f = accelerations at u = 0 and b = d(accel)/du; only the printed b3 disagrees (sign)."""
+    b_sym = [sympy.diff(SOLUTION[d], u) for d in (dd1, dd2)]
+    b_fn = sympy.lambdify((a1, w1, a2, w2, m1, m2, l1, l2, g), b_sym)
+    for p, (q1, r1, q2, r2), _ in _random_cases():
+        (f1, f2, f3), (b1, b2, b3) = controller.drift_and_input_gain(q1, r1, q2, r2, p, form)
+        f_expected = ACCEL(q1, r1, q2, r2, 0.0, p.m1, p.m2, p.l1, p.l2, p.g)
+        b_expected = b_fn(q1, r1, q2, r2, p.m1, p.m2, p.l1, p.l2, p.g)
+        assert (f1, b1) == (0.0, 1.0)
+        assert (f2, f3) == pytest.approx(f_expected, rel=1e-9, abs=1e-9)
+        assert b2 == pytest.approx(b_expected[0], rel=1e-9, abs=1e-12)
+        if form == "derived":
+            assert b3 == pytest.approx(b_expected[1], rel=1e-9, abs=1e-12)
+        elif abs(b_expected[1]) > 1e-6:
+            assert b3 == pytest.approx(-b_expected[1], rel=1e-9)
+
+
+def test_energy_is_that_of_eqs_6_7():
+    p = PlantParameters()
+    state = (0.3, 0.7, 0.2, -0.4, -0.1, 0.9)
+    x, dx, q1, r1, q2, r2 = state
+    vx1, vy1 = dx + p.l1 * r1 * math.cos(q1), p.l1 * r1 * math.sin(q1)
+    vx2, vy2 = vx1 + p.l2 * r2 * math.cos(q2), vy1 + p.l2 * r2 * math.sin(q2)
+    T = 0.5 * p.m1 * (vx1 ** 2 + vy1 ** 2) + 0.5 * p.m2 * (vx2 ** 2 + vy2 ** 2)
+    V = -p.g * p.l1 * p.m1 * math.cos(q1) + p.g * p.m2 * (-p.l1 * math.cos(q1) - p.l2 * math.cos(q2))
+    assert plant.energy(state, p) == pytest.approx(T + V, rel=1e-12)

@@ -1,0 +1,130 @@
+"""The stepping algorithm with fake FMU instances: ordering, delays, time, errors."""
+
+import ctypes
+
+import pytest
+
+from crane_fmu.cosim.master import Connection, Master, communication_points
+from crane_fmu.cosim.recorder import ArrayRecorder
+
+
+class FakeInstance:
+    """Python stand-in for FmuInstance: ``outputs(values)`` computes outputs from inputs and state."""
+
+    def __init__(self, name, inputs, outputs, feedthrough, step=None, compute=None):
+        self.name, self.inputs, self.outputs, self.feedthrough = name, inputs, outputs, feedthrough
+        self.values = {n: 0.0 for n in inputs + outputs}
+        self._step, self._compute = step, compute
+        self.calls = []
+
+    def vr_array(self, names):
+        index = self.inputs + self.outputs
+        return (ctypes.c_uint * len(names))(*(index.index(n) for n in names))
+
+    def _names(self, vrs):
+        index = self.inputs + self.outputs
+        return [index[v] for v in vrs]
+
+    def get_reals(self, vrs, values):
+        if self._compute:
+            self.values.update(self._compute(self.values))
+        for i, n in enumerate(self._names(vrs)):
+            values[i] = self.values[n]
+
+    def set_reals(self, vrs, values):
+        for i, n in enumerate(self._names(vrs)):
+            self.values[n] = values[i]
+
+    def do_step(self, t, h):
+        self.calls.append(t)
+        if self._step:
+            self.values.update(self._step(self.values, h))
+
+    def setup(self, t0, stop=None):
+        pass
+
+    def set(self, name, value):
+        self.values[name] = value
+
+    enter_initialization = exit_initialization = terminate = free = lambda self: None
+
+
+def _loop(gain=1.0):
+    """Integrator y' = u (no feedthrough) closed by u = -gain*y (feedthrough)."""
+    integ = FakeInstance("integ", ["u"], ["y"], False,
+                         step=lambda v, h: {"y": v["y"] + h * v["u"]})
+    ctrl = FakeInstance("ctrl", ["y"], ["u"], True, compute=lambda v: {"u": -gain * v["y"]})
+    conns = [Connection("integ", "y", "ctrl", "y"), Connection("ctrl", "u", "integ", "u")]
+    return {"ctrl": ctrl, "integ": integ}, conns
+
+
+@pytest.mark.parametrize("mode", ["gauss-seidel", "jacobi"])
+def test_exchange_order_and_delay(mode):
+    instances, conns = _loop()
+    instances["integ"].values["y"] = 1.0
+    rec = ArrayRecorder()
+    Master(instances, conns, mode).run(0.0, 0.5, 0.1, [rec])
+    y = rec.columns()["integ.y"]
+    h, expected = 0.1, [1.0]
+    previous = 1.0
+    for _ in range(5):
+        current = expected[-1]
+        u = -(current if mode == "gauss-seidel" else previous)  # jacobi: one step late
+        previous = current
+        expected.append(current + h * u)
+    assert list(y) == pytest.approx(expected, rel=1e-15)
+    assert mode == "jacobi" or list(rec.columns()["ctrl.u"]) == pytest.approx([-v for v in expected])
+
+
+def test_time_is_start_plus_k_times_step():
+    instances, conns = _loop()
+    rec = ArrayRecorder()
+    Master(instances, conns).run(0.3, 1.3, 0.1, [rec])
+    assert list(rec.columns()["time"]) == [0.3 + k * 0.1 for k in range(10)] + [1.3]
+    assert instances["integ"].calls == [0.3 + k * 0.1 for k in range(10)]
+
+
+def test_feedthrough_instance_is_ordered_after_its_source():
+    instances, conns = _loop()
+    assert [p.instance.name for p in Master(instances, conns).order] == ["integ", "ctrl"]
+
+
+def test_algebraic_loop_is_refused():
+    a = FakeInstance("a", ["i"], ["o"], True, compute=lambda v: {"o": v["i"]})
+    b = FakeInstance("b", ["i"], ["o"], True, compute=lambda v: {"o": v["i"]})
+    conns = [Connection("a", "o", "b", "i"), Connection("b", "o", "a", "i")]
+    with pytest.raises(ValueError, match="algebraic loop"):
+        Master({"a": a, "b": b}, conns)
+
+
+@pytest.mark.parametrize("conn, message", [
+    (Connection("nope", "y", "ctrl", "y"), "unknown instance 'nope'"),
+    (Connection("integ", "u", "ctrl", "y"), "integ.u is not an output"),
+    (Connection("integ", "y", "ctrl", "u"), "ctrl.u is not an input"),
+])
+def test_bad_connections_are_named(conn, message):
+    instances, _ = _loop()
+    with pytest.raises(KeyError, match=message):
+        Master(instances, [conn])
+
+
+def test_unknown_mode_is_refused():
+    instances, conns = _loop()
+    with pytest.raises(ValueError, match="master mode must be one of gauss-seidel, jacobi, got 'euler'"):
+        Master(instances, conns, "euler")
+
+
+@pytest.mark.parametrize("start, stop, step, message", [
+    (0.0, 1.0, 0.0, "step must be > 0, got 0.0"),
+    (0.0, 1.0, -0.1, "step must be > 0"),
+    (0.0, 1.0, 0.3, "must divide the interval"),
+    (1.0, 1.0, 0.1, "stop time must be > start time"),
+])
+def test_communication_points_reject_bad_grids(start, stop, step, message):
+    with pytest.raises(ValueError, match=message):
+        communication_points(start, stop, step)
+
+
+def test_communication_points_tolerate_rounding():
+    assert communication_points(0.0, 20.0, 1e-3) == 20000
+    assert communication_points(0.0, 0.3, 0.1) == 3

@@ -1,0 +1,104 @@
+"""The runtime core: parameters, integrator, control law (no FMUs)."""
+
+import math
+import random
+
+import numpy as np
+import pytest
+
+from crane_fmu.model import controller, plant, tables
+from crane_fmu.model.parameters import ControllerGains, PlantParameters
+
+
+@pytest.mark.parametrize("field, value, rule", [
+    ("l1", -1.0, "l1 must be > 0 and finite, got -1.0"),
+    ("m1", 0.0, "m1 must be > 0 and finite, got 0.0"),
+    ("m2", -0.5, "m2 must be >= 0 and finite, got -0.5"),
+    ("g", math.inf, "g must be > 0 and finite, got inf"),
+    ("l2", math.nan, "l2 must be > 0 and finite, got nan"),
+])
+def test_plant_parameters_name_the_field_and_the_rule(field, value, rule):
+    with pytest.raises(ValueError) as err:
+        PlantParameters(**{field: value})
+    assert str(err.value) == rule
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"K1_x": math.nan}, "K1_x must be finite, got nan"),
+    ({"w_theta2": -1.0}, "w_theta2 must be >= 0 and finite, got -1.0"),
+    ({"w_x": 0.0}, "w_x must be > 0"),
+    ({"b3_form": "guessed"}, "b3_form must be one of derived, printed, got 'guessed'"),
+])
+def test_controller_gains_reject_bad_values(kwargs, message):
+    with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        ControllerGains(**kwargs)
+
+
+def test_defaults_are_the_papers_section_v_values():
+    assert PlantParameters() == PlantParameters(m1=3.0, m2=7.0, l1=1.0, l2=0.5, g=9.8)
+    k = ControllerGains()
+    assert (k.K1_x, k.K1_theta1, k.K1_theta2) == (0.92, 4.0, 122.0)
+    assert (k.K2_x, k.K2_theta1, k.K2_theta2) == (0.84, 2.0, 310.0)
+    assert tables.defaults(tables.PLANT)["theta1_0"] == math.pi / 18
+
+
+def test_plant_output_names_match_the_model_order():
+    assert [v.name for v in tables.PLANT if v.causality == "output"] == list(plant.OUTPUTS)
+    assert plant.OUTPUTS[:6] == tables.STATE
+
+
+@pytest.mark.parametrize("step, max_substep, n", [(1e-3, 1e-3, 1), (0.01, 1e-3, 10), (0.0105, 1e-3, 11),
+                                                  (1e-4, 1e-3, 1), (0.1, 0.03, 4)])
+def test_substeps_never_exceed_max_substep(step, max_substep, n):
+    assert plant.substeps(step, max_substep) == n
+    assert step / n <= max_substep * (1 + 1e-9)
+
+
+def test_rk4_is_fourth_order():
+    """Halving dt divides the one-step error by about 2^5 = 32 (local error O(dt^5))."""
+    p = PlantParameters()
+    s0 = (0.0, 0.0, 0.6, 0.5, -0.3, 1.0)
+
+    def error(dt):
+        fine = s0
+        for _ in range(64):
+            fine = plant.rk4_step(fine, 2.0, dt / 64, p)
+        return max(abs(a - b) for a, b in zip(plant.rk4_step(s0, 2.0, dt, p), fine))
+
+    ratio = error(0.02) / error(0.01)
+    assert 25 < ratio < 40
+
+
+def test_trolley_motion_is_exact_under_held_acceleration():
+    p = PlantParameters()
+    s = plant.advance((0.5, 0.2, 0.1, 0.0, 0.0, 0.0), 3.0, 0.5, 1e-3, p)
+    assert s[0] == pytest.approx(0.5 + 0.2 * 0.5 + 0.5 * 3.0 * 0.25, rel=1e-12)
+    assert s[1] == pytest.approx(0.2 + 3.0 * 0.5, rel=1e-12)
+
+
+def test_control_law_equals_least_squares_of_eq_20():
+    """u of eq (21) (and its weighted form) solved independently with numpy."""
+    rng = random.Random(7)
+    p = PlantParameters()
+    for _ in range(50):
+        k = ControllerGains(w_x=rng.uniform(0.1, 2), w_theta1=rng.uniform(0, 2), w_theta2=rng.uniform(0, 2),
+                            x_d=rng.uniform(-1, 1), b3_form=rng.choice(["derived", "printed"]))
+        state = [rng.uniform(-1, 1) for _ in range(6)]
+        f, b = (np.array(v) for v in controller.drift_and_input_gain(*state[2:], p, k.b3_form))
+        e1 = np.array([state[0] - k.x_d, state[2] - k.theta1_d, state[4] - k.theta2_d])
+        e2 = np.array([state[1], state[3], state[5]])
+        K1 = np.diag([k.K1_x, k.K1_theta1, k.K1_theta2])
+        K2 = np.diag([k.K2_x, k.K2_theta1, k.K2_theta2])
+        e3d = -K1 @ e2 - K2 @ (e2 + K1 @ e1)  # eqs (18)-(20)
+        sw = np.sqrt([k.w_x, k.w_theta1, k.w_theta2])
+        expected = np.linalg.lstsq((sw * b)[:, None], sw * (e3d - f), rcond=None)[0][0]
+        assert controller.control(state, p, k) == pytest.approx(expected, rel=1e-10, abs=1e-10)
+
+
+def test_only_the_trolley_row_gives_a_pd_law_on_x():
+    """With the swing rows weighted 0, eq (21) reduces to u = e3d_x (a PD law on x)."""
+    p = PlantParameters()
+    k = ControllerGains(w_theta1=0.0, w_theta2=0.0)
+    state = (0.3, -0.2, 0.1, 0.4, -0.2, 0.3)
+    expected = -k.K1_x * -0.2 - k.K2_x * (-0.2 + k.K1_x * 0.3)
+    assert controller.control(state, p, k) == pytest.approx(expected, rel=1e-12)
