@@ -7,6 +7,7 @@ and the simulation time, with the FMU's own log messages attached.
 
 import ctypes
 import shutil
+from collections import deque
 
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import (
@@ -69,7 +70,7 @@ class FmuInstance:
         self.inputs = [v.name for v in self.md.modelVariables if v.causality == "input"]
         # Direct feedthrough: some output depends on an input (ModelStructure).
         self.feedthrough = any(u.dependencies for u in self.md.outputs)
-        self.messages = []
+        self.messages = deque(maxlen=20)  # the FMU's latest log messages
         self.time = None
         self._unzip = extract(str(path))
         self._fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self._unzip,
@@ -101,10 +102,10 @@ class FmuInstance:
             status = STATUS[exc.status] if hasattr(exc, "status") and exc.status < 6 else "error"
             raise FmiError(self.name, function, self.time, status, self.messages) from None
 
-    def _check(self, function, status):
-        if status > 1:  # worse than warning
-            raise FmiError(self.name, function, self.time,
-                           STATUS[status] if status < 6 else str(status), self.messages)
+    def _raise(self, function, status):
+        """Raise the FmiError of a hot-path call that returned worse than warning."""
+        raise FmiError(self.name, function, self.time, STATUS[status] if 0 <= status < 6 else str(status),
+                       self.messages)
 
     # --- setup -----------------------------------------------------------------
 
@@ -148,18 +149,21 @@ class FmuInstance:
 
     def get_reals(self, vrs, values):
         """fmi2GetReal into the preallocated ctypes array ``values``."""
-        self.messages.clear()
-        self._check("fmi2GetReal", self._get_real(self._fmu.component, vrs, len(vrs), values))
+        status = self._get_real(self._fmu.component, vrs, len(vrs), values)
+        if status > 1:  # worse than warning
+            self._raise("fmi2GetReal", status)
 
     def set_reals(self, vrs, values):
         """fmi2SetReal from the preallocated ctypes array ``values``."""
-        self.messages.clear()
-        self._check("fmi2SetReal", self._set_real(self._fmu.component, vrs, len(vrs), values))
+        status = self._set_real(self._fmu.component, vrs, len(vrs), values)
+        if status > 1:  # worse than warning
+            self._raise("fmi2SetReal", status)
 
     def do_step(self, time, step):
         self.time = time
-        self.messages.clear()
-        self._check("fmi2DoStep", self._do_step(self._fmu.component, time, step, 1))
+        status = self._do_step(self._fmu.component, time, step, 1)
+        if status > 1:  # worse than warning
+            self._raise("fmi2DoStep", status)
         self.time = time + step
 
     # --- teardown -------------------------------------------------------------

@@ -40,6 +40,7 @@ class _Port:
         self.instance = instance
         self.out_vrs = instance.vr_array(instance.outputs)
         self.out = (ctypes.c_double * len(instance.outputs))()
+        self.out_bytes = memoryview(self.out).cast("B")  # for recorders: copy without boxing floats
         self.links = []  # (input position, source _Port, source output position)
         self.in_vrs = None
         self.inp = None
@@ -99,6 +100,17 @@ class Master:
         for name, links in wiring.items():
             self.ports[name].connect(links)
         self.order = self._dependency_order(connections)
+        # The exchange before each step as a flat list of calls. Gauss-Seidel: a
+        # feedthrough instance gets its inputs before its outputs are read; the
+        # others' inputs are set once every output is known.
+        gauss_seidel = []
+        for p in self.order:
+            gauss_seidel += [p.write, p.read] if p.instance.feedthrough else [p.read]
+        gauss_seidel += [p.write for p in self.order if not p.instance.feedthrough]
+        self._plans = {
+            "gauss-seidel": gauss_seidel,
+            "jacobi": [p.read for p in self.order] + [p.write for p in self.order],
+        }
 
     def _dependency_order(self, connections):
         """Instances ordered so that every feedthrough instance follows its sources."""
@@ -117,21 +129,9 @@ class Master:
                 del after[n]
         return [self.ports[n] for n in order]
 
-    def _propagate(self):
-        """Gauss-Seidel exchange: read and write in dependency order."""
-        for port in self.order:
-            if port.instance.feedthrough:
-                port.write()
-            port.read()
-        for port in self.order:
-            if not port.instance.feedthrough:
-                port.write()
-
-    def _exchange_jacobi(self):
-        for port in self.order:
-            port.read()
-        for port in self.order:
-            port.write()
+    def _exchange(self, mode):
+        for call in self._plans[mode]:
+            call()
 
     def initialize(self, start_time, stop_time, parameters=None):
         """Set parameters, run initialisation mode and settle the inputs at ``start_time``.
@@ -146,7 +146,7 @@ class Master:
             for var, value in (parameters or {}).get(name, {}).items():
                 inst.set(var, value)
             inst.enter_initialization()
-        self._propagate()  # consistent inputs at t0 in both modes
+        self._exchange("gauss-seidel")  # consistent inputs at t0 in both modes
         for inst in self.instances.values():
             inst.exit_initialization()
 
@@ -164,18 +164,20 @@ class Master:
         """
         n = communication_points(start_time, stop_time, step)
         self.initialize(start_time, stop_time, parameters)
-        exchange = self._propagate if self.mode == "gauss-seidel" else self._exchange_jacobi
-        instances = [p.instance for p in self.order]
+        exchange = self._plans[self.mode]
+        steps = [p.instance.do_step for p in self.order]
         observe = [o.observe for o in observers]
         ports = self.order
         for k in range(n):
             t = start_time + k * step
-            exchange()
+            for call in exchange:
+                call()
             for f in observe:
                 f(t, ports)
-            for inst in instances:
-                inst.do_step(t, step)
-        exchange()
+            for do_step in steps:
+                do_step(t, step)
+        for call in exchange:
+            call()
         for f in observe:
             f(stop_time, ports)
         return n

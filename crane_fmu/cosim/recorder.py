@@ -23,7 +23,7 @@ class ArrayRecorder:
         rows = self._rows
         rows.append(time)
         for p in ports:
-            rows.extend(p.out)
+            rows.frombytes(p.out_bytes)  # memcpy of the outputs just read
 
     def columns(self):
         """``{name: numpy array}`` of everything recorded."""
