@@ -20,6 +20,7 @@ EXAMPLES = {
         "  crane-fmu simulate --set plant.l1=1.5 --set controller.l1=1.5 --set plant.theta1_0=0.2"),
     "info": "examples:\n  crane-fmu info\n  crane-fmu info --markdown",
     "bench": "examples:\n  crane-fmu bench\n  crane-fmu bench --repeat 7 --stop-time 20",
+    "reproduce": "examples:\n  crane-fmu reproduce --out results/paper\n  crane-fmu reproduce --quick --out /tmp/q",
 }
 
 
@@ -69,6 +70,13 @@ def _parser():
     p = sub.add_parser("info", help="describe the FMUs' variables", epilog=EXAMPLES["info"],
                        formatter_class=fmt)
     p.add_argument("--markdown", action="store_true", help="print the variable tables as Markdown")
+
+    p = sub.add_parser("reproduce", help="reproduce the paper's Figures 4, 5, 7, 8 and write REPORT.md",
+                       epilog=EXAMPLES["reproduce"], formatter_class=fmt)
+    p.add_argument("--out", default="results/paper", help="output folder (default results/paper)")
+    p.add_argument("--fmu-dir", default="build/fmus", help="folder of the built FMUs")
+    p.add_argument("--quick", action="store_true", help="fewer cases and shorter runs (every figure still)")
+    p.add_argument("--workers", type=int, default=None, help="worker processes (default: one per core)")
 
     p = sub.add_parser("bench", help="microseconds per communication step, crane pair vs framework floor",
                        epilog=EXAMPLES["bench"], formatter_class=fmt)
@@ -216,6 +224,21 @@ def _cmd_info(args):
     return 0
 
 
+def _cmd_reproduce(args):
+    from crane_fmu.analysis.reproduce import reproduce
+    from crane_fmu.cosim import crane_system
+
+    if args.workers is not None and args.workers < 1:
+        raise UsageError(f"--workers must be >= 1, got {args.workers}")
+    try:
+        crane_system(args.fmu_dir)
+    except FileNotFoundError as exc:
+        raise UsageError(str(exc)) from None
+    _writable_file(Path(args.out) / "REPORT.md", "--out")
+    reproduce(args.out, args.fmu_dir, quick=args.quick, workers=args.workers)
+    return 0
+
+
 def _cmd_bench(args):
     from crane_fmu.bench import run_bench
 
@@ -233,7 +256,7 @@ def main(argv=None):
     try:
         args = _parser().parse_args(argv)
         return {"build": _cmd_build, "simulate": _cmd_simulate, "info": _cmd_info,
-                "bench": _cmd_bench}[args.command](args)
+                "reproduce": _cmd_reproduce, "bench": _cmd_bench}[args.command](args)
     except UsageError as exc:
         print(f"crane-fmu: error: {exc}", file=sys.stderr)
         return 2

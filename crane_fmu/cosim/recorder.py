@@ -93,3 +93,15 @@ def read_csv(path):
         names = f.readline().strip().split(",")
         data = np.loadtxt(f, delimiter=",", comments="#", ndmin=2)
     return {name: data[:, i] for i, name in enumerate(names)}
+
+
+def write_csv(path, columns, every=1):
+    """Write ``{name: array}`` as a result CSV (every ``every``-th row), atomically."""
+    names = list(columns)
+    rows = zip(*(columns[n][::every] for n in names))
+    partial = os.fspath(path) + ".partial"
+    row_format = ",".join(["%.17g"] * len(names))
+    with open(partial, "w") as f:
+        f.write(",".join(names) + "\n")
+        f.writelines(row_format % row + "\n" for row in rows)
+    os.replace(partial, path)

@@ -1,0 +1,112 @@
+"""The reproduced Figures 4, 5, 7 and 8 (PNG), drawn from the runs' signals."""
+
+import math
+from pathlib import Path
+
+from .reproduce import FORM_KEYS, FORMS
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _deg(values):
+    return [math.degrees(v) for v in values]
+
+
+def _angle_figure(runs, label, title, path):
+    """Two panels, theta1 and theta2 [deg] against time, one line per run (Figures 4 and 5)."""
+    plt = _plt()
+    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 5.5))
+    for r in runs:
+        s = r["signals"]
+        axes[0].plot(s["time"], _deg(s["plant.theta1"]), lw=1, label=label(r))
+        axes[1].plot(s["time"], _deg(s["plant.theta2"]), lw=1, label=label(r))
+    axes[0].set_ylabel("first-order angle theta1 [deg]")
+    axes[1].set_ylabel("second-order angle theta2 [deg]")
+    axes[1].set_xlabel("time [s]")
+    axes[0].legend(fontsize=8, ncol=4)
+    axes[0].set_title(title)
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+    return _save(plt, fig, path)
+
+
+def _loop_panels(axes, s, label, **style):
+    axes[0].plot(s["time"], s["plant.x"], label=label, **style)
+    axes[1].plot(s["time"], _deg(s["plant.theta1"]), label=label, **style)
+    axes[2].plot(s["time"], _deg(s["plant.theta2"]), label=label, **style)
+
+
+def _limit_to(axes, runs, keys=("plant.x", "plant.theta1", "plant.theta2", "controller.u")):
+    """Y limits from the runs that completed, so a diverged run does not flatten the rest."""
+    for ax, key in zip(axes, keys):
+        values = [v for r in runs if r["completed"] for v in r["signals"].get(key, [])]
+        if values:
+            scale = (lambda v: math.degrees(v)) if "theta" in key else (lambda v: v)
+            low, high = scale(min(values)), scale(max(values))
+            pad = 0.1 * (high - low) or 1.0
+            ax.set_ylim(low - pad, high + pad)
+
+
+def _style(axes, labels=("trolley x [m]", "theta1 [deg]", "theta2 [deg]")):
+    for ax, label in zip(axes, labels):
+        ax.set_ylabel(label)
+        ax.grid(True, alpha=0.3)
+
+
+def _save(plt, fig, path):
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def draw_all(results, out_dir):
+    """Write figure4.png, figure5.png, figure7.png and figure8.png; return their paths."""
+    plt = _plt()
+    out_dir = Path(out_dir)
+    group = {g: [r for r in results.values() if r["case"]["group"] == g] for g in ("fig4", "fig5", "fig7", "fig8")}
+    paths = [
+        _angle_figure(sorted(group["fig4"], key=lambda r: r["case"]["plant"]["theta1_0"]),
+                      lambda r: f"theta1(0) = {math.degrees(r['case']['plant']['theta1_0']):.0f} deg",
+                      "Fig. 4: free swing, l1 = 1 m, l2 = 0.25 m", out_dir / "figure4.png"),
+        _angle_figure(sorted(group["fig5"], key=lambda r: r["case"]["plant"]["l2"]),
+                      lambda r: f"l2 = {r['case']['plant']['l2']:g} m",
+                      "Fig. 5: free swing, l1 = 1 m, theta1(0) = 10 deg", out_dir / "figure5.png"),
+    ]
+
+    fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 9))
+    by_name = {r["case"]["name"]: r for r in group["fig7"]}
+    _loop_panels(axes, by_name["fig7_open_loop"]["signals"], "without controller", color="0.6", lw=1)
+    for form in FORMS:
+        r = by_name[f"fig7_{FORM_KEYS[form]}"]
+        end = "" if r["completed"] else f" (diverged, stopped at {r['signals']['time'][-1]:.2f} s)"
+        _loop_panels(axes, r["signals"], form + end, lw=1)
+        axes[3].plot(r["signals"]["time"], r["signals"]["controller.u"], lw=1, label=form)
+    axes[0].set_title("Fig. 7: with and without the backstepping controller (Section V)")
+    axes[0].legend(fontsize=8)
+    axes[3].set_xlabel("time [s]")
+    _limit_to(axes, group["fig7"])
+    _style(axes, ("trolley x [m]", "theta1 [deg]", "theta2 [deg]", "u [m/s2]"))
+    paths.append(_save(plt, fig, out_dir / "figure7.png"))
+
+    fig, axes = plt.subplots(3, len(FORMS), sharex=True, figsize=(13, 8), squeeze=False)
+    for col, form in enumerate(FORMS):
+        runs = sorted((r for r in group["fig8"] if r["case"]["name"].startswith(f"fig8_{FORM_KEYS[form]}_")),
+                      key=lambda r: r["case"]["plant"]["l1"])
+        for r in runs:
+            end = "" if r["completed"] else " (diverged)"
+            _loop_panels(axes[:, col], r["signals"], f"l1 = {r['case']['plant']['l1']:g} m{end}", lw=1)
+        axes[0, col].set_title(f"Fig. 8, {form}")
+        axes[0, col].legend(fontsize=8)
+        axes[2, col].set_xlabel("time [s]")
+        _limit_to(axes[:, col], runs)
+        _style(axes[:, col])
+    paths.append(_save(plt, fig, out_dir / "figure8.png"))
+    return paths

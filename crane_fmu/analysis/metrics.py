@@ -1,0 +1,127 @@
+"""Metrics of recorded runs: peaks, frequencies, settling, classification.
+
+All functions take numpy arrays sampled on a uniform time grid, in SI units.
+"""
+
+import math
+
+import numpy as np
+
+DIVERGED_ANGLE = math.pi / 2  # a swing beyond 90 degrees counts as divergence
+SETTLED_BAND = math.radians(0.1)  # a swing below 0.1 degree counts as settled
+
+
+def peak_abs(values):
+    """Largest absolute value."""
+    return float(np.max(np.abs(values)))
+
+
+def rms(values):
+    """Root mean square."""
+    return float(np.sqrt(np.mean(np.square(values))))
+
+
+def dominant_frequencies(t, signal, count=2, min_relative_power=0.05):
+    """The strongest spectral peaks of ``signal`` [Hz], strongest first.
+
+    Uses a Hann-windowed FFT with 8x zero padding and parabolic interpolation
+    of each peak; peaks weaker than ``min_relative_power`` times the strongest
+    are dropped.
+    """
+    x = np.asarray(signal, float) - np.mean(signal)
+    dt = float(t[1] - t[0])
+    n = len(x)
+    nfft = 8 * int(2 ** math.ceil(math.log2(n)))
+    power = np.abs(np.fft.rfft(x * np.hanning(n), nfft)) ** 2
+    freqs = np.fft.rfftfreq(nfft, dt)
+    is_peak = (power[1:-1] > power[:-2]) & (power[1:-1] >= power[2:])
+    idx = np.nonzero(is_peak)[0] + 1
+    idx = idx[np.argsort(power[idx])[::-1]]
+    if len(idx) == 0:
+        return []
+    found = []
+    for i in idx:
+        if power[i] < min_relative_power * power[idx[0]] or len(found) == count:
+            break
+        a, b, c = np.log(power[i - 1:i + 2] + 1e-300)
+        shift = 0.5 * (a - c) / (a - 2 * b + c) if a - 2 * b + c != 0 else 0.0
+        found.append(float(freqs[i] + shift * (freqs[1] - freqs[0])))
+    return found
+
+
+def settling_time(t, signals, band):
+    """Earliest time after which every signal stays within ``[-band, band]``.
+
+    Returns None when some signal is outside the band at the last sample.
+    """
+    inside = np.all([np.abs(s) <= band for s in signals], axis=0)
+    if not inside[-1]:
+        return None
+    outside = np.nonzero(~inside)[0]
+    return float(t[0]) if len(outside) == 0 else float(t[outside[-1] + 1])
+
+
+def classify(t, theta1, theta2, completed, band=SETTLED_BAND):
+    """``"converges"``, ``"sustained oscillation"`` or ``"diverges"``.
+
+    Parameters
+    ----------
+    completed : bool
+        False when the run stopped early (an FMU refused a non-finite state).
+    band : float
+        Swing below this [rad] over the last quarter counts as settled.
+
+    Notes
+    -----
+    With ``A3`` and ``A4`` the largest swing (either angle) over the third
+    and the last quarter of the run:
+
+    - diverges: the run stopped early, a swing angle passed 90 degrees, or
+      the swing grows (``A4 > 1.2 A3``);
+    - converges: settled (``A4 < band``) or still decaying (``A4 < 0.9 A3``);
+    - otherwise (``0.9 A3 <= A4 <= 1.2 A3``) a sustained oscillation.
+    """
+    if not completed or peak_abs(theta1) > DIVERGED_ANGLE or peak_abs(theta2) > DIVERGED_ANGLE:
+        return "diverges"
+    span = t[-1] - t[0]
+    third = (t >= t[0] + 0.5 * span) & (t < t[0] + 0.75 * span)
+    last = t >= t[0] + 0.75 * span
+    a3 = max(peak_abs(theta1[third]), peak_abs(theta2[third]))
+    a4 = max(peak_abs(theta1[last]), peak_abs(theta2[last]))
+    if a4 > 1.2 * a3:
+        return "diverges"
+    if a4 < band or a4 < 0.9 * a3:
+        return "converges"
+    return "sustained oscillation"
+
+
+def closed_loop_metrics(t, x, theta1, theta2, u, completed):
+    """The metrics the report gives for every closed-loop run (angles in degrees)."""
+    def deg(value):
+        return math.degrees(value) if math.isfinite(value) else None
+
+    settle_05 = settling_time(t, [theta1, theta2], math.radians(0.5))
+    settle_01 = settling_time(t, [theta1, theta2], math.radians(0.1))
+    finite = np.isfinite(theta1) & np.isfinite(theta2)
+    corr = (float(np.corrcoef(theta1, theta2)[0, 1])
+            if completed and finite.all() and np.std(theta1) > 0 and np.std(theta2) > 0 else None)
+    return {
+        "outcome": classify(t, theta1, theta2, completed),
+        "completed": completed,
+        "end_time_s": float(t[-1]),
+        "settling_0.5deg_s": settle_05,
+        "settling_0.1deg_s": settle_01,
+        "max_theta1_deg": deg(peak_abs(theta1)),
+        "max_theta2_deg": deg(peak_abs(theta2)),
+        "rms_theta1_deg": deg(rms(theta1)),
+        "corr_theta1_theta2": corr,
+        "residual_after_15s_deg": (deg(max(peak_abs(theta1[t >= 15]), peak_abs(theta2[t >= 15])))
+                                   if t[-1] >= 15 else None),
+        "trolley_excursion_m": _finite(peak_abs(x - x[0])),
+        "trolley_final_m": _finite(float(x[-1])),
+        "peak_abs_u": _finite(peak_abs(u)),
+    }
+
+
+def _finite(value):
+    return value if math.isfinite(value) else None
