@@ -186,7 +186,7 @@ def _cmd_simulate(args):
         # Bad parameter values are refused when initialisation ends: the user's mistake.
         if exc.function in ("fmi2ExitInitializationMode", "fmi2SetReal", "fmi2SetString"):
             raise UsageError(str(exc)) from None
-        print(f"crane-fmu: simulation failed: {exc} (results up to t={exc.time} s in {args.out})",
+        print(f"crane-fmu: simulation failed: {exc} (results up to t={exc.time:.9g} s in {args.out})",
               file=sys.stderr)
         return 1
     finally:

@@ -72,20 +72,23 @@ class FmuInstance:
         self.feedthrough = any(u.dependencies for u in self.md.outputs)
         self.messages = deque(maxlen=20)  # the FMU's latest log messages
         self.time = None
+        self._instantiated = False
         self._unzip = extract(str(path))
-        self._fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self._unzip,
-                              modelIdentifier=self.md.coSimulation.modelIdentifier,
-                              instanceName=name)
+        try:
+            self._fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self._unzip,
+                                  modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+            self._callbacks = fmi2CallbackFunctions()
+            self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+            self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_libc.calloc)
+            self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_libc.free)
+            addLoggerProxy(ctypes.byref(self._callbacks))
+            self._call("fmi2Instantiate", self._fmu.instantiate, callbacks=self._callbacks, loggingOn=True)
+        except BaseException:
+            shutil.rmtree(self._unzip, ignore_errors=True)
+            raise
+        self._instantiated = True
         dll = self._fmu.dll
         self._get_real, self._set_real, self._do_step = dll.fmi2GetReal, dll.fmi2SetReal, dll.fmi2DoStep
-        self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
-        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_libc.calloc)
-        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_libc.free)
-        addLoggerProxy(ctypes.byref(self._callbacks))
-        self._instantiated = False
-        self._call("fmi2Instantiate", self._fmu.instantiate, callbacks=self._callbacks, loggingOn=True)
-        self._instantiated = True
         # Ask for every log message. (pythonfmu 0.7 FMUs ignore this and loggingOn
         # alike and never call the logger, so their errors arrive without a reason.)
         self._call("fmi2SetDebugLogging", self._fmu.setDebugLogging, True, [])
