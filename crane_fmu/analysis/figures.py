@@ -43,15 +43,24 @@ def _loop_panels(axes, s, label, **style):
     axes[2].plot(s["time"], _deg(s["plant.theta2"]), label=label, **style)
 
 
+FALLBACK_LIMITS = {"plant.x": 5.0, "plant.theta1": 180.0, "plant.theta2": 180.0, "controller.u": 1000.0}
+
+
+def _diverged(r):
+    return r["metrics"].get("outcome") == "diverges"
+
+
 def _limit_to(axes, runs, keys=("plant.x", "plant.theta1", "plant.theta2", "controller.u")):
-    """Y limits from the runs that completed, so a diverged run does not flatten the rest."""
+    """Y limits from the runs that did not diverge, so a blow-up does not flatten the rest."""
     for ax, key in zip(axes, keys):
-        values = [v for r in runs if r["completed"] for v in r["signals"].get(key, [])]
-        if values:
-            scale = (lambda v: math.degrees(v)) if "theta" in key else (lambda v: v)
-            low, high = scale(min(values)), scale(max(values))
-            pad = 0.1 * (high - low) or 1.0
-            ax.set_ylim(low - pad, high + pad)
+        values = [v for r in runs if not _diverged(r) for v in r["signals"].get(key, [])]
+        if not values:
+            ax.set_ylim(-FALLBACK_LIMITS[key], FALLBACK_LIMITS[key])
+            continue
+        scale = math.degrees if "theta" in key else float
+        low, high = scale(min(values)), scale(max(values))
+        pad = 0.1 * (high - low) or 1.0
+        ax.set_ylim(low - pad, high + pad)
 
 
 def _style(axes, labels=("trolley x [m]", "theta1 [deg]", "theta2 [deg]")):
@@ -86,7 +95,8 @@ def draw_all(results, out_dir):
     _loop_panels(axes, by_name["fig7_open_loop"]["signals"], "without controller", color="0.6", lw=1)
     for form in FORMS:
         r = by_name[f"fig7_{FORM_KEYS[form]}"]
-        end = "" if r["completed"] else f" (diverged, stopped at {r['signals']['time'][-1]:.2f} s)"
+        end = (f" (diverged, stopped at {r['signals']['time'][-1]:.2f} s)" if not r["completed"]
+               else " (diverged)" if _diverged(r) else "")
         _loop_panels(axes, r["signals"], form + end, lw=1)
         axes[3].plot(r["signals"]["time"], r["signals"]["controller.u"], lw=1, label=form)
     axes[0].set_title("Fig. 7: with and without the backstepping controller (Section V)")
@@ -101,7 +111,7 @@ def draw_all(results, out_dir):
         runs = sorted((r for r in group["fig8"] if r["case"]["name"].startswith(f"fig8_{FORM_KEYS[form]}_")),
                       key=lambda r: r["case"]["plant"]["l1"])
         for r in runs:
-            end = "" if r["completed"] else " (diverged)"
+            end = " (diverged)" if _diverged(r) else ""
             _loop_panels(axes[:, col], r["signals"], f"l1 = {r['case']['plant']['l1']:g} m{end}", lw=1)
         axes[0, col].set_title(f"Fig. 8, {form}")
         axes[0, col].legend(fontsize=8)

@@ -128,7 +128,7 @@ def reproduce(out_dir, fmu_dir="build/fmus", quick=False, workers=None, log=prin
     dict
         The metrics written to ``metrics.json``.
     """
-    from . import figures, report, studies
+    from . import figures, paper_summary, report
 
     out_dir = Path(out_dir)
     csv_dir = out_dir / "runs"
@@ -137,7 +137,7 @@ def reproduce(out_dir, fmu_dir="build/fmus", quick=False, workers=None, log=prin
     workers = workers or os.cpu_count() or 1
     log(f"running {len(cases)} co-simulations on {workers} worker(s)")
     results = _run_all(cases, fmu_dir, csv_dir, workers, log)
-    summary = studies.summarise(results, quick)
+    summary = paper_summary.summarise(results, quick)
     (out_dir / "metrics.json").write_text(json.dumps(summary, indent=2, default=_jsonable))
     for path in figures.draw_all(results, out_dir):
         log(f"wrote {path}")
