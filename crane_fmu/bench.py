@@ -63,3 +63,51 @@ def run_bench(stop_time=20.0, step=1e-3, repeat=5, out=print):
     out(f"paper scenario ({stop_time:g} s): {med['crane']:.3f} s wall, "
         f"{figures['realtime_factor']:.1f}x faster than real time  (target >= 25)")
     return figures
+
+
+def run_sweep_bench(n_cases=16, stop_time=10.0, step=1e-3, out=print):
+    """Cases per second of a sweep on a local Dask cluster with 1 and with 2 workers.
+
+    Each cluster is started and warmed up (one case per worker) before the
+    clock starts. The per-case overhead is the wall time per case with one
+    worker minus the mean time the case itself took inside the worker.
+    """
+    from distributed import Client, LocalCluster
+
+    from crane_fmu.sweep.runner import fmu_blobs, run_case
+
+    communication_points(0.0, stop_time, step)
+    settings = {"stop_time": stop_time, "step": step, "master": "gauss-seidel", "controller": True}
+    cases = [{"plant.theta1_0": 0.01 * (1 + i % 8), "controller.w_theta2": 0.0} for i in range(n_cases)]
+    metrics = ("outcome", "max_theta1_deg")
+    figures = {}
+    with tempfile.TemporaryDirectory(prefix="crane_bench_") as tmp:
+        build_all(Path(tmp) / "fmus", CRANE_FMUS)
+        blobs = fmu_blobs(Path(tmp) / "fmus")
+        for workers in (1, 2):
+            with LocalCluster(n_workers=workers, threads_per_worker=1, dashboard_address=None,
+                              silence_logs=50) as cluster, Client(cluster) as client:
+                shipped = client.scatter([blobs], broadcast=True)[0]
+                client.gather(client.map(run_case, cases[:workers], settings=settings, blobs=shipped,
+                                         metric_names=metrics, pure=False))
+                start = time.perf_counter()
+                rows = client.gather(client.map(run_case, cases, settings=settings, blobs=shipped,
+                                                metric_names=metrics, pure=False))
+                figures[workers] = (time.perf_counter() - start, rows)
+    wall1, rows1 = figures[1]
+    wall2, _ = figures[2]
+    case_time = statistics.mean(r["duration_s"] for r in rows1)
+    result = {
+        "cases_per_s_1": n_cases / wall1,
+        "cases_per_s_2": n_cases / wall2,
+        "efficiency": wall1 / (2 * wall2),
+        "case_s": case_time,
+        "overhead_fraction": (wall1 / n_cases - case_time) / case_time,
+    }
+    out(f"{n_cases} cases of {stop_time:g} s at h = {step:g} s (crane pair), local Dask cluster")
+    out(f"1 worker:  {result['cases_per_s_1']:.2f} cases/s")
+    out(f"2 workers: {result['cases_per_s_2']:.2f} cases/s")
+    out(f"parallel efficiency on 2 workers: {100 * result['efficiency']:.0f} %  (target >= 85 %)")
+    out(f"per-case overhead of shipping work to a worker: {1e3 * (wall1 / n_cases - case_time):.1f} ms "
+        f"= {100 * result['overhead_fraction']:.1f} % of a case's {case_time:.3f} s  (target < 10 %)")
+    return result

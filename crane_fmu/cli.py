@@ -19,8 +19,15 @@ EXAMPLES = {
         "  crane-fmu simulate --master jacobi --step 0.01 --set controller.w_theta2=0\n"
         "  crane-fmu simulate --set plant.l1=1.5 --set controller.l1=1.5 --set plant.theta1_0=0.2"),
     "info": "examples:\n  crane-fmu info\n  crane-fmu info --markdown",
-    "bench": "examples:\n  crane-fmu bench\n  crane-fmu bench --repeat 7 --stop-time 20",
+    "bench": "examples:\n  crane-fmu bench\n  crane-fmu bench --repeat 7 --stop-time 20\n  crane-fmu bench --sweep",
     "reproduce": "examples:\n  crane-fmu reproduce --out results/paper\n  crane-fmu reproduce --quick --out /tmp/q",
+    "sweep": (
+        "examples:\n"
+        "  crane-fmu sweep study.toml --out results/study --workers 2\n"
+        "  crane-fmu sweep builtin:region-of-attraction --out results/roa\n"
+        "  crane-fmu sweep builtin:theta2-gain-sensitivity --out results/gains --csv\n"
+        "  crane-fmu sweep study.toml --out results/study --scheduler tcp://10.0.0.5:8786\n"
+        "Re-running the same command resumes: finished cases are skipped."),
 }
 
 
@@ -78,11 +85,25 @@ def _parser():
     p.add_argument("--quick", action="store_true", help="fewer cases and shorter runs (every figure still)")
     p.add_argument("--workers", type=int, default=None, help="worker processes (default: one per core)")
 
+    p = sub.add_parser("sweep", help="run a parameter study of the FMUs on Dask", epilog=EXAMPLES["sweep"],
+                       formatter_class=fmt)
+    p.add_argument("study", help="study file (TOML, or YAML with PyYAML) or builtin:NAME")
+    p.add_argument("--out", required=True, help="output folder: results.parquet, cases.jsonl, plot.png")
+    p.add_argument("--fmu-dir", default="build/fmus", help="folder of the built FMUs")
+    p.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
+    p.add_argument("--scheduler", help="address of an existing Dask scheduler (no local cluster)")
+    p.add_argument("--csv", action="store_true", help="also write results.csv")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
     p = sub.add_parser("bench", help="microseconds per communication step, crane pair vs framework floor",
                        epilog=EXAMPLES["bench"], formatter_class=fmt)
-    p.add_argument("--stop-time", type=_number, default=20.0, help="simulated time per run [s]")
+    p.add_argument("--stop-time", type=_number, default=None,
+                   help="simulated time per run [s] (default 20, with --sweep 10)")
     p.add_argument("--step", type=_number, default=1e-3, help="communication step [s]")
     p.add_argument("--repeat", type=int, default=5, help="runs per pair; the median is reported")
+    p.add_argument("--sweep", action="store_true",
+                   help="instead: cases per second of a Dask sweep with 1 and 2 workers")
+    p.add_argument("--cases", type=int, default=16, help="with --sweep: cases per measurement")
     return parser
 
 
@@ -101,7 +122,7 @@ def _convert(text, fmi_type):
 
 def _parse_sets(items, fmus):
     """``["plant.l1=1.5"]`` -> ``{"plant": {"l1": 1.5}}``, checked against the FMUs' variables."""
-    from fmpy import read_model_description
+    from crane_fmu.cosim.system import settable_variables
 
     variables = {}
     result = {}
@@ -113,38 +134,16 @@ def _parse_sets(items, fmus):
         if instance not in fmus:
             raise UsageError(f"--set {item!r}: unknown instance {instance!r}; instances: {', '.join(fmus)}")
         if instance not in variables:
-            md = read_model_description(str(fmus[instance]))
-            variables[instance] = {v.name: v for v in md.modelVariables
-                                   if v.causality in ("parameter", "input")}
-        var = variables[instance].get(name)
-        if var is None:
+            variables[instance] = settable_variables(fmus[instance])
+        if name not in variables[instance]:
             raise UsageError(f"--set {item!r}: {instance} has no parameter or input {name!r}; valid: "
                              + ", ".join(variables[instance]))
         try:
-            value = _convert(text, var.type)
+            value = _convert(text, variables[instance][name])
         except (argparse.ArgumentTypeError, ValueError) as exc:
             raise UsageError(f"--set {item!r}: {exc}") from None
         result.setdefault(instance, {})[name] = value
     return result
-
-
-def _check_parameters(parameters, fmus):
-    """Check the crane FMUs' parameters with the model's own rules before loading anything.
-
-    The FMUs apply the same rules when initialisation ends, but pythonfmu FMUs
-    cannot report why they failed; checking here gives the user the reason.
-    """
-    from crane_fmu.model import tables
-    from crane_fmu.model.parameters import controller_setup, plant_setup
-
-    checks = {"plant": (tables.PLANT, plant_setup), "controller": (tables.CONTROLLER, controller_setup)}
-    for instance in fmus:
-        table, setup = checks[instance]
-        values = {**tables.defaults(table), **parameters.get(instance, {})}
-        try:
-            setup(values)
-        except ValueError as exc:
-            raise UsageError(f"{instance}: {exc}") from None
 
 
 def _writable_file(path, option):
@@ -168,6 +167,7 @@ def _cmd_build(args):
 def _cmd_simulate(args):
     from crane_fmu.cosim import CsvRecorder, FmiError, crane_system, read_csv, simulate
     from crane_fmu.cosim.master import communication_points
+    from crane_fmu.cosim.system import check_crane_parameters
 
     try:
         communication_points(0.0, args.stop_time, args.step)
@@ -175,7 +175,10 @@ def _cmd_simulate(args):
     except (ValueError, FileNotFoundError) as exc:
         raise UsageError(str(exc)) from None
     parameters = _parse_sets(args.set, fmus)
-    _check_parameters(parameters, fmus)
+    try:
+        check_crane_parameters(parameters, fmus)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
     _writable_file(args.out, "--out")
     if args.plot:
         _writable_file(args.plot, "--plot")
@@ -239,13 +242,41 @@ def _cmd_reproduce(args):
     return 0
 
 
+def _cmd_sweep(args):
+    from crane_fmu.sweep import spec
+    from crane_fmu.sweep.runner import run_study
+
+    if args.workers is not None and args.workers < 1:
+        raise UsageError(f"--workers must be >= 1, got {args.workers}")
+    if args.workers is not None and args.scheduler:
+        raise UsageError("--workers and --scheduler exclude each other: the scheduler's cluster has its workers")
+    try:
+        study = spec.load(args.study)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    _writable_file(Path(args.out) / "results.parquet", "--out")
+    try:
+        summary = run_study(study, args.out, args.fmu_dir, args.workers, args.scheduler, args.csv,
+                            progress=not args.no_progress)
+    except (ValueError, FileNotFoundError) as exc:
+        raise UsageError(str(exc)) from None
+    print(f"{summary['cases']} cases: {summary['ran']} run now, {summary['skipped']} already done, "
+          f"{summary['not_ok']} not ok; results in {Path(args.out) / 'results.parquet'}")
+    return 0
+
+
 def _cmd_bench(args):
-    from crane_fmu.bench import run_bench
+    from crane_fmu.bench import run_bench, run_sweep_bench
 
     if args.repeat < 1:
         raise UsageError(f"--repeat must be >= 1, got {args.repeat}")
+    if args.cases < 2:
+        raise UsageError(f"--cases must be >= 2, got {args.cases}")
     try:
-        run_bench(args.stop_time, args.step, args.repeat)
+        if args.sweep:
+            run_sweep_bench(args.cases, args.stop_time or 10.0, args.step)
+        else:
+            run_bench(args.stop_time or 20.0, args.step, args.repeat)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     return 0
@@ -256,7 +287,7 @@ def main(argv=None):
     try:
         args = _parser().parse_args(argv)
         return {"build": _cmd_build, "simulate": _cmd_simulate, "info": _cmd_info,
-                "reproduce": _cmd_reproduce, "bench": _cmd_bench}[args.command](args)
+                "reproduce": _cmd_reproduce, "sweep": _cmd_sweep, "bench": _cmd_bench}[args.command](args)
     except UsageError as exc:
         print(f"crane-fmu: error: {exc}", file=sys.stderr)
         return 2

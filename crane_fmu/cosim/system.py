@@ -25,6 +25,37 @@ def crane_system(fmu_dir=DEFAULT_FMU_DIR, controller=True):
     return fmus, (CRANE_CONNECTIONS if controller else [])
 
 
+def settable_variables(fmu_path):
+    """``{name: FMI type}`` of the parameters and inputs of an FMU, from its modelDescription.xml."""
+    from fmpy import read_model_description
+
+    md = read_model_description(str(fmu_path))
+    return {v.name: v.type for v in md.modelVariables if v.causality in ("parameter", "input")}
+
+
+def check_crane_parameters(parameters, instances=("plant", "controller")):
+    """Apply the model's rules to the crane FMUs' parameters (defaults overridden by ``parameters``).
+
+    The FMUs apply the same rules when initialisation ends, but pythonfmu FMUs
+    cannot tell their host why they failed; checking first gives the reason.
+
+    Raises
+    ------
+    ValueError
+        ``"plant: l1 must be > 0 and finite, got -1.0"``.
+    """
+    from crane_fmu.model import tables
+    from crane_fmu.model.parameters import controller_setup, plant_setup
+
+    checks = {"plant": (tables.PLANT, plant_setup), "controller": (tables.CONTROLLER, controller_setup)}
+    for instance in instances:
+        table, setup = checks[instance]
+        try:
+            setup({**tables.defaults(table), **parameters.get(instance, {})})
+        except ValueError as exc:
+            raise ValueError(f"{instance}: {exc}") from None
+
+
 def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters=None,
              recorder=None, start_time=0.0):
     """Co-simulate FMUs with the fixed-step master.

@@ -1,0 +1,1 @@
+"""Parameter sweeps of the co-simulated FMUs on Dask (``crane-fmu sweep``)."""

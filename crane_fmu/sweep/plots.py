@@ -1,0 +1,72 @@
+"""A study's chosen metric over two varied parameters: heat maps, one panel per value of the other axes."""
+
+import math
+
+OUTCOME_CODES = {"converges": 0, "sustained oscillation": 1, "diverges": 2}
+
+
+def _value(row, metric):
+    value = row.get(metric)
+    if metric == "outcome":
+        return OUTCOME_CODES.get(value, math.nan)
+    return math.nan if value is None else float(value)
+
+
+def _label(value):
+    return f"{value:.4g}" if isinstance(value, float) else str(value)
+
+
+def plot_study(rows, study, path, max_panels=12):
+    """Plot ``study.plot`` (default: outcome over the first two varied parameters) to a PNG.
+
+    Each combination of the other grid axes gets its own panel. On a grid the
+    panel is a heat map; with sampled parameters it is a scatter.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    axes_names = [names[0] for names, *_ in list(study.grid.values()) + list(study.sampled.values())]
+    metric = study.plot.get("metric", "outcome")
+    x_name, y_name = study.plot.get("x", axes_names[0]), study.plot.get("y", axes_names[1])
+    others = [n for n in (names[0] for names, _ in study.grid.values()) if n not in (x_name, y_name)]
+    panels = {}
+    for row in rows:
+        panels.setdefault(tuple(row[n] for n in others), []).append(row)
+    keys = list(panels)[:max_panels]
+    cols = min(len(keys), 3)
+    fig, axs = plt.subplots((len(keys) + cols - 1) // cols, cols, figsize=(5 * cols, 4 * math.ceil(len(keys) / cols)),
+                            squeeze=False)
+    norm = dict(vmin=0, vmax=2) if metric == "outcome" else dict(
+        vmin=np.nanmin([_value(r, metric) for r in rows] + [np.inf]),
+        vmax=np.nanmax([_value(r, metric) for r in rows] + [-np.inf]))
+    if not all(map(math.isfinite, norm.values())):
+        norm = {}
+    image = None
+    for ax, key in zip(axs.flat, keys):
+        part = panels[key]
+        xs, ys, zs = [r[x_name] for r in part], [r[y_name] for r in part], [_value(r, metric) for r in part]
+        ux, uy = sorted(set(xs), key=str), sorted(set(ys), key=str)
+        if study.sampled:
+            image = ax.scatter(xs, ys, c=zs, cmap="viridis", s=40, **norm)
+        else:
+            grid = np.full((len(uy), len(ux)), np.nan)
+            for x, y, z in zip(xs, ys, zs):
+                grid[uy.index(y), ux.index(x)] = z
+            image = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis", **norm)
+            ax.set_xticks(range(len(ux)), [_label(v) for v in ux], rotation=60, fontsize=7)
+            ax.set_yticks(range(len(uy)), [_label(v) for v in uy], fontsize=7)
+        ax.set_xlabel(x_name)
+        ax.set_ylabel(y_name)
+        ax.set_title(", ".join(f"{n} = {_label(v)}" for n, v in zip(others, key)) or metric, fontsize=8)
+    for ax in list(axs.flat)[len(keys):]:
+        ax.set_visible(False)
+    bar = fig.colorbar(image, ax=axs, shrink=0.8)
+    if metric == "outcome":
+        bar.set_ticks(list(OUTCOME_CODES.values()), labels=list(OUTCOME_CODES))
+    bar.set_label(f"{metric} (blank: not available)")
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return path

@@ -1,0 +1,244 @@
+"""Runs a study's cases on Dask: a local cluster by default, or any existing scheduler.
+
+The FMU files travel to the workers once (scattered, then cached on each
+worker's disk by content hash), so workers need no shared file system. Every
+finished case is appended to ``cases.jsonl`` in the output folder at once; a
+re-run reads it back and skips the cases already done. A case that fails is a
+row with its status and message, never the end of the study; a worker that
+dies has its running cases rescheduled by Dask on the others.
+"""
+
+import hashlib
+import json
+import math
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from .spec import case_id
+
+JOURNAL = "cases.jsonl"
+
+
+def fmu_blobs(fmu_dir, controller=True):
+    """``{instance: (sha256, bytes)}`` of the crane FMUs, to ship to the workers."""
+    from crane_fmu.cosim import crane_system
+
+    fmus, _ = crane_system(fmu_dir, controller)
+    blobs = {}
+    for name, path in fmus.items():
+        data = Path(path).read_bytes()
+        blobs[name] = (hashlib.sha256(data).hexdigest()[:20], data)
+    return blobs
+
+
+def _local_fmus(blobs):
+    """Write each FMU once into this machine's cache; return ``{instance: path}``."""
+    cache = Path(tempfile.gettempdir()) / "crane_fmu_sweep_cache"
+    cache.mkdir(exist_ok=True)
+    paths = {}
+    for name, (digest, data) in blobs.items():
+        path = cache / f"{digest}.fmu"
+        if not path.exists():
+            partial = cache / f".{digest}.{os.getpid()}.partial"
+            partial.write_bytes(data)
+            os.replace(partial, path)
+        paths[name] = path
+    return paths
+
+
+def _by_instance(case):
+    parameters = {}
+    for key, value in case.items():
+        instance, _, variable = key.partition(".")
+        parameters.setdefault(instance, {})[variable] = value
+    return parameters
+
+
+def run_case(case, settings, blobs, metric_names):
+    """Co-simulate one case; return its row: parameters, metrics, status, error, duration.
+
+    Status is ``ok`` (ran to the stop time), ``failed`` (an FMU stopped the
+    run; the metrics cover the run up to there) or ``invalid`` (parameters
+    refused by the model's rules; not run).
+    """
+    from crane_fmu.analysis import metrics
+    from crane_fmu.cosim import CRANE_CONNECTIONS, ArrayRecorder, FmiError, simulate
+    from crane_fmu.cosim.system import check_crane_parameters
+
+    row = {"case_id": case_id(case, settings), **case, "status": "ok", "error": None}
+    parameters = _by_instance(case)
+    start = time.perf_counter()
+    try:
+        check_crane_parameters(parameters, list(blobs))
+    except ValueError as exc:
+        return {**row, "status": "invalid", "error": str(exc), **dict.fromkeys(metric_names), "duration_s": 0.0}
+    connections = CRANE_CONNECTIONS if settings["controller"] else []
+    recorder = ArrayRecorder()
+    try:
+        simulate(_local_fmus(blobs), connections, settings["stop_time"], settings["step"], settings["master"],
+                 parameters, recorder)
+    except FmiError as exc:
+        row.update(status="failed", error=str(exc))
+    columns = recorder.columns() if recorder.names else None
+    if columns is None:  # failed before the first communication point
+        values = dict.fromkeys(metric_names)
+    else:
+        u = columns.get("controller.u", columns["plant.x"] * 0.0)
+        values = metrics.closed_loop_metrics(columns["time"], columns["plant.x"], columns["plant.theta1"],
+                                             columns["plant.theta2"], u, row["status"] == "ok")
+    row.update({name: values.get(name) for name in metric_names})
+    row["duration_s"] = time.perf_counter() - start
+    return row
+
+
+def read_journal(out_dir):
+    """Rows already finished in ``out_dir``, by case id (a torn last line is ignored)."""
+    rows = {}
+    path = Path(out_dir) / JOURNAL
+    if path.exists():
+        for line in path.read_text().splitlines():
+            try:
+                row = json.loads(line)
+            except json.JSONDecodeError:
+                continue
+            rows[row["case_id"]] = row
+    return rows
+
+
+class Progress:
+    """A one-line progress bar on stderr (a line per 10 % when stderr is not a terminal)."""
+
+    def __init__(self, total, done, stream=sys.stderr):
+        self.total, self.done, self.failed, self.stream = total, done, 0, stream
+        self.start, self.tty = time.perf_counter(), stream.isatty()
+        self._shown = -1
+
+    def update(self, row):
+        self.done += 1
+        self.failed += row["status"] != "ok"
+        tenth = 10 * self.done // max(self.total, 1)
+        if not self.tty and tenth == self._shown:
+            return
+        self._shown = tenth
+        filled = 30 * self.done // max(self.total, 1)
+        rate = self.done / max(time.perf_counter() - self.start, 1e-9)
+        text = (f"[{'#' * filled}{'.' * (30 - filled)}] {self.done}/{self.total} cases, "
+                f"{self.failed} not ok, {rate:.1f}/s")
+        self.stream.write(("\r" + text) if self.tty else text + "\n")
+        if self.tty and self.done == self.total:
+            self.stream.write("\n")
+        self.stream.flush()
+
+
+def _client(workers, scheduler):
+    from distributed import Client, LocalCluster
+
+    if scheduler:
+        return Client(scheduler), None
+    cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
+                           dashboard_address=None, silence_logs=50)
+    return Client(cluster), cluster
+
+
+def run_study(study, out_dir, fmu_dir="build/fmus", workers=None, scheduler=None, csv=False, progress=True):
+    """Run every case of ``study`` not yet in ``out_dir``; write the results table and plot.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Worker processes of the local cluster (default: one per core).
+    scheduler : str, optional
+        Address of an existing Dask scheduler; no local cluster is started.
+
+    Returns
+    -------
+    dict
+        ``cases``, ``skipped`` (done before), ``ran``, ``not_ok`` and ``seconds``.
+    """
+    from distributed import as_completed
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    settings = study.settings()
+    cases = study.cases()
+    _check_names(study, fmu_dir)
+    done = read_journal(out_dir)
+    pending = [c for c in cases if case_id(c, settings) not in done]
+    bar = Progress(len(cases), len(cases) - len(pending)) if progress else None
+    start = time.perf_counter()
+    rows_ran = []
+    if pending:
+        blobs = fmu_blobs(fmu_dir, study.controller)
+        client, cluster = _client(workers, scheduler)
+        try:
+            shipped = client.scatter([blobs], broadcast=True)[0]
+            futures = client.map(run_case, pending, settings=settings, blobs=shipped,
+                                 metric_names=study.metrics, pure=False)
+            with open(out_dir / JOURNAL, "a") as journal:
+                for future in as_completed(futures):
+                    row = future.result()
+                    journal.write(json.dumps(row, default=_plain) + "\n")
+                    journal.flush()
+                    rows_ran.append(row)
+                    if bar:
+                        bar.update(row)
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    done.update({r["case_id"]: r for r in rows_ran})
+    rows = [done[case_id(c, settings)] for c in cases]
+    write_table(rows, out_dir / "results.parquet")
+    if csv:
+        write_table(rows, out_dir / "results.csv")
+    if study.plot or len(study.grid) + len(study.sampled) >= 2:
+        from .plots import plot_study
+
+        plot_study(rows, study, out_dir / "plot.png")
+    return {"cases": len(cases), "skipped": len(cases) - len(pending), "ran": len(rows_ran),
+            "not_ok": sum(r["status"] != "ok" for r in rows), "seconds": time.perf_counter() - start}
+
+
+def _check_names(study, fmu_dir):
+    """Every varied or fixed variable must be a parameter or input of its FMU."""
+    from crane_fmu.cosim import crane_system
+    from crane_fmu.cosim.system import settable_variables
+
+    fmus, _ = crane_system(fmu_dir, study.controller)
+    known = {name: settable_variables(path) for name, path in fmus.items()}
+    names = list(study.fixed) + [n for names, *_ in list(study.grid.values()) + list(study.sampled.values())
+                                 for n in names]
+    for name in names:
+        instance, _, variable = name.partition(".")
+        if variable not in known[instance]:
+            raise ValueError(f"parameter {name!r}: {instance} has no parameter or input {variable!r}; valid: "
+                             + ", ".join(known[instance]))
+
+
+def _plain(value):
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if hasattr(value, "item"):
+        return value.item()
+    raise TypeError(f"cannot write {type(value).__name__}")
+
+
+def write_table(rows, path):
+    """Write the rows as Parquet (``.parquet``) or CSV, under a temporary name then renamed."""
+    import pyarrow as pa
+
+    path = Path(path)
+    table = pa.Table.from_pylist(rows)
+    partial = path.with_name(f".{path.name}.partial")
+    if path.suffix == ".parquet":
+        import pyarrow.parquet as pq
+
+        pq.write_table(table, partial)
+    else:
+        import pyarrow.csv as pcsv
+
+        pcsv.write_csv(table, partial)
+    os.replace(partial, path)

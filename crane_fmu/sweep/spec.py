@@ -1,0 +1,236 @@
+"""Study files: what to vary, how long to simulate, what to keep.
+
+A study is a TOML (or, with PyYAML installed, YAML) file::
+
+    stop_time = 10.0                 # [s], required
+    step = 0.002                     # communication step [s], required
+    master = "gauss-seidel"          # or "jacobi"
+    controller = true                # false: the plant alone (free swing)
+    metrics = ["outcome", "settling_0.5deg_s"]   # default: every metric
+
+    [parameters]                     # the grid: every combination of the listed values
+    "plant.theta1_0" = [0.0349, 0.0873, 0.1745]
+    "plant.l1, controller.l1" = {start = 0.5, stop = 1.5, num = 3}   # one axis, both variables
+    "controller.K2_theta2" = {low = 100.0, high = 400.0}             # sampled, see [sampling]
+
+    [sampling]                       # only when a parameter is sampled
+    method = "latin-hypercube"       # or "random"
+    samples = 20
+    seed = 1
+
+    [fixed]                          # set in every case
+    "controller.w_theta2" = 0.0
+
+    [plot]                           # optional: metric over two parameters
+    metric = "settling_0.5deg_s"
+    x = "plant.theta1_0"
+    y = "plant.l1"
+
+Every mistake raises ``ValueError`` with one line naming the key and the rule.
+"""
+
+import hashlib
+import itertools
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+METRICS = ("outcome", "settling_0.5deg_s", "settling_0.1deg_s", "max_theta1_deg", "max_theta2_deg",
+           "rms_theta1_deg", "residual_after_15s_deg", "trolley_excursion_m", "trolley_final_m", "peak_abs_u",
+           "end_time_s")
+INSTANCES = ("plant", "controller")
+SAMPLING = ("latin-hypercube", "random")
+BUILTIN_DIR = Path(__file__).parent / "builtin"
+
+
+@dataclass(frozen=True)
+class Study:
+    """A parsed study file."""
+
+    stop_time: float
+    step: float
+    master: str = "gauss-seidel"
+    controller: bool = True
+    metrics: tuple = METRICS
+    grid: dict = field(default_factory=dict)  # axis name -> (variable names, values)
+    sampled: dict = field(default_factory=dict)  # axis name -> (variable names, low, high)
+    sampling: str = "latin-hypercube"
+    samples: int = 0
+    seed: int = 0
+    fixed: dict = field(default_factory=dict)  # variable -> value
+    plot: dict = field(default_factory=dict)
+
+    def cases(self):
+        """Every case as ``{"instance.variable": value}``, in a reproducible order."""
+        grid_axes = list(self.grid.values())
+        grid_points = itertools.product(*(values for _, values in grid_axes))
+        sample_points = self._samples() or [()]
+        cases = []
+        for point in grid_points:
+            for sample in sample_points:
+                case = dict(self.fixed)
+                for (names, _), value in zip(grid_axes, point):
+                    case.update(dict.fromkeys(names, value))
+                for (names, _, _), value in zip(self.sampled.values(), sample):
+                    case.update(dict.fromkeys(names, value))
+                cases.append(case)
+        return cases
+
+    def _samples(self):
+        if not self.sampled:
+            return []
+        import numpy as np
+        from scipy.stats import qmc
+
+        bounds = list(self.sampled.values())
+        if self.sampling == "random":
+            unit = np.random.default_rng(self.seed).random((self.samples, len(bounds)))
+        else:
+            unit = qmc.LatinHypercube(d=len(bounds), seed=self.seed).random(self.samples)
+        return [tuple(float(lo + u * (hi - lo)) for u, (_, lo, hi) in zip(row, bounds)) for row in unit]
+
+    def settings(self):
+        return {"stop_time": self.stop_time, "step": self.step, "master": self.master,
+                "controller": self.controller}
+
+
+def case_id(case, settings):
+    """A stable identifier of one case: its values and the run settings."""
+    text = json.dumps({"case": case, "settings": settings}, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _number(key, value, rule="a finite number"):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f"{key} must be {rule}, got {value!r}")
+    return float(value)
+
+
+def _names(key):
+    names = [n.strip() for n in key.split(",")]
+    for name in names:
+        instance, dot, variable = name.partition(".")
+        if not dot or not variable or instance not in INSTANCES:
+            raise ValueError(f"parameter {name!r} must be INSTANCE.VARIABLE with INSTANCE one of "
+                             f"{', '.join(INSTANCES)}")
+    return tuple(names)
+
+
+def _axis(key, value):
+    """A [parameters] entry: ("grid", values) or ("sampled", (low, high))."""
+    if isinstance(value, list):
+        if not value:
+            raise ValueError(f"parameters.{key!r} must list at least one value")
+        return "grid", [v if isinstance(v, str) else _number(f"parameters.{key!r} value", v) for v in value]
+    if isinstance(value, dict) and set(value) == {"start", "stop", "num"}:
+        num = value["num"]
+        if isinstance(num, bool) or not isinstance(num, int) or num < 1:
+            raise ValueError(f"parameters.{key!r}.num must be a whole number >= 1, got {num!r}")
+        start = _number(f"parameters.{key!r}.start", value["start"])
+        stop = _number(f"parameters.{key!r}.stop", value["stop"])
+        return "grid", [start + (stop - start) * i / (num - 1) for i in range(num)] if num > 1 else [start]
+    if isinstance(value, dict) and set(value) == {"low", "high"}:
+        low = _number(f"parameters.{key!r}.low", value["low"])
+        high = _number(f"parameters.{key!r}.high", value["high"])
+        if not high > low:
+            raise ValueError(f"parameters.{key!r}.high must be > low {low!r}, got {high!r}")
+        return "sampled", (low, high)
+    raise ValueError(f"parameters.{key!r} must be a list of values, {{start, stop, num}} or {{low, high}}, "
+                     f"got {value!r}")
+
+
+def parse(data, source="study"):
+    """Build a :class:`Study` from the loaded file contents (a dict)."""
+    known = {"stop_time", "step", "master", "controller", "metrics", "parameters", "sampling", "fixed", "plot"}
+    unknown = sorted(set(data) - known)
+    if unknown:
+        raise ValueError(f"{source}: unknown key {unknown[0]!r}; known keys: {', '.join(sorted(known))}")
+    for key in ("stop_time", "step"):
+        if key not in data:
+            raise ValueError(f"{source}: {key} is required")
+    stop_time = _number("stop_time", data["stop_time"], "a number > 0")
+    step = _number("step", data["step"], "a number > 0")
+    from crane_fmu.cosim.master import MODES, communication_points
+
+    communication_points(0.0, stop_time, step)
+    master = data.get("master", "gauss-seidel")
+    if master not in MODES:
+        raise ValueError(f"master must be one of {', '.join(MODES)}, got {master!r}")
+    controller = data.get("controller", True)
+    if not isinstance(controller, bool):
+        raise ValueError(f"controller must be true or false, got {controller!r}")
+    metrics = tuple(data.get("metrics", METRICS))
+    for m in metrics:
+        if m not in METRICS:
+            raise ValueError(f"metrics: unknown metric {m!r}; known: {', '.join(METRICS)}")
+
+    grid, sampled = {}, {}
+    for key, value in data.get("parameters", {}).items():
+        names = _names(key)
+        if not controller and any(n.startswith("controller.") for n in names):
+            raise ValueError(f"parameters.{key!r}: there is no controller in a study with controller = false")
+        kind, spec = _axis(key, value)
+        if kind == "grid":
+            grid[key] = (names, spec)
+        else:
+            sampled[key] = (names, *spec)
+    sampling = data.get("sampling", {})
+    method = sampling.get("method", "latin-hypercube")
+    if method not in SAMPLING:
+        raise ValueError(f"sampling.method must be one of {', '.join(SAMPLING)}, got {method!r}")
+    samples = sampling.get("samples", 0)
+    if sampled and (isinstance(samples, bool) or not isinstance(samples, int) or samples < 1):
+        raise ValueError(f"sampling.samples must be a whole number >= 1 when a parameter is sampled, got {samples!r}")
+    seed = sampling.get("seed", 0)
+    fixed = {}
+    for key, value in data.get("fixed", {}).items():
+        for name in _names(key):
+            fixed[name] = value if isinstance(value, str) else _number(f"fixed.{key!r}", value)
+    plot = dict(data.get("plot", {}))
+    if plot:
+        if plot.get("metric") not in METRICS:
+            raise ValueError(f"plot.metric must be one of {', '.join(METRICS)}, got {plot.get('metric')!r}")
+        axes = {n for names, *_ in list(grid.values()) + list(sampled.values()) for n in names}
+        for axis in ("x", "y"):
+            if plot.get(axis) not in axes:
+                raise ValueError(f"plot.{axis} must be a varied parameter ({', '.join(sorted(axes))}), "
+                                 f"got {plot.get(axis)!r}")
+    return Study(stop_time, step, master, controller, metrics, grid, sampled, method, samples, seed, fixed, plot)
+
+
+def load(path):
+    """Read a study file (TOML, or YAML when PyYAML is installed); ``builtin:NAME`` for a shipped study."""
+    text_path = str(path)
+    if text_path.startswith("builtin:"):
+        name = text_path.split(":", 1)[1]
+        path = BUILTIN_DIR / f"{name.replace('-', '_')}.toml"
+        if not path.is_file():
+            names = ", ".join(p.stem.replace("_", "-") for p in sorted(BUILTIN_DIR.glob("*.toml")))
+            raise ValueError(f"no built-in study {name!r}; built-in studies: {names}")
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise ValueError(f"cannot read study file {path}: {exc.strerror}") from None
+    if path.suffix in (".yaml", ".yml"):
+        try:
+            import yaml
+        except ImportError:
+            raise ValueError(f"{path}: YAML study files need PyYAML (pip install pyyaml)") from None
+        try:
+            data = yaml.safe_load(raw)
+        except yaml.YAMLError as exc:
+            raise ValueError(f"{path}: not valid YAML ({str(exc).splitlines()[0]})") from None
+    else:
+        try:
+            import tomllib
+        except ImportError:  # Python 3.10
+            import tomli as tomllib
+        try:
+            data = tomllib.loads(raw.decode("utf-8"))
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+            raise ValueError(f"{path}: not valid TOML ({exc})") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: a study file holds keys and values, got {type(data).__name__}")
+    return parse(data, str(path))

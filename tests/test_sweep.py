@@ -1,0 +1,191 @@
+"""Parameter sweeps: study files, and studies on a real local Dask cluster of 2 workers."""
+
+import json
+import math
+import os
+import threading
+import time
+
+import pyarrow.parquet as pq
+import pytest
+
+from crane_fmu.cli import main
+from crane_fmu.sweep import spec
+from crane_fmu.sweep.runner import JOURNAL, fmu_blobs, run_case, run_study
+
+MINIMAL = """
+stop_time = 10.0
+step = 0.002
+[parameters]
+"plant.theta1_0" = [0.0349, 0.0873, 0.1745]
+"controller.w_theta2" = [0.0, 1.0]
+"plant.l1" = [1.0, -1.0]
+"""
+
+SMALL = """
+stop_time = 2.0
+step = 0.01
+[parameters]
+"plant.theta1_0" = [0.05, 0.1]
+"controller.b3_form" = ["printed", "derived"]
+"plant.l1, controller.l1" = [0.8, -1.0]
+[fixed]
+"controller.K1_x" = 1.0
+"""
+
+
+def _study(tmp_path, text, name="study.toml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return spec.load(path)
+
+
+def test_minimal_study_is_a_full_grid(tmp_path):
+    cases = _study(tmp_path, MINIMAL).cases()
+    assert len(cases) == 12
+    assert {(c["plant.theta1_0"], c["controller.w_theta2"], c["plant.l1"]) for c in cases} == {
+        (a, w, l1) for a in (0.0349, 0.0873, 0.1745) for w in (0.0, 1.0) for l1 in (1.0, -1.0)}
+
+
+def test_ranges_linked_axes_and_fixed_values(tmp_path):
+    study = _study(tmp_path, SMALL.replace('[0.8, -1.0]', '{start = 0.5, stop = 1.5, num = 3}'))
+    cases = study.cases()
+    assert len(cases) == 2 * 2 * 3
+    assert sorted({c["plant.l1"] for c in cases}) == [0.5, 1.0, 1.5]
+    assert all(c["plant.l1"] == c["controller.l1"] and c["controller.K1_x"] == 1.0 for c in cases)
+
+
+@pytest.mark.parametrize("method", ["latin-hypercube", "random"])
+def test_sampling_is_seeded_and_within_bounds(tmp_path, method):
+    text = (f'stop_time = 1.0\nstep = 0.01\n[parameters]\n"plant.l1" = [1.0, 2.0]\n'
+            f'"controller.K2_theta2" = {{low = 100.0, high = 400.0}}\n'
+            f'[sampling]\nmethod = "{method}"\nsamples = 8\nseed = 4\n')
+    first, again = _study(tmp_path, text).cases(), _study(tmp_path, text).cases()
+    assert first == again and len(first) == 16
+    values = sorted({c["controller.K2_theta2"] for c in first})
+    assert len(values) == 8 and all(100 <= v <= 400 for v in values)
+    if method == "latin-hypercube":  # one sample in each eighth of the range
+        assert sorted(int((v - 100) / 300 * 8) for v in values) == list(range(8))
+
+
+@pytest.mark.parametrize("text, message", [
+    ("step = 0.01", "stop_time is required"),
+    ("stop_time = 1.0\nstep = 0.3", "must divide the interval"),
+    ("stop_time = 1.0\nstep = 0.01\ncolour = 1", "unknown key 'colour'"),
+    ("stop_time = 1.0\nstep = 0.01\nmetrics = ['speed']", "unknown metric 'speed'"),
+    ("stop_time = 1.0\nstep = 0.01\n[parameters]\n'crane.l1' = [1.0]", "INSTANCE.VARIABLE"),
+    ("stop_time = 1.0\nstep = 0.01\n[parameters]\n'plant.l1' = {low = 1.0, high = 2.0}", "sampling.samples"),
+    ("stop_time = 1.0\nstep = 0.01\n[parameters]\n'plant.l1' = {low = 2.0, high = 1.0}", "high must be > low"),
+    ("stop_time = 1.0\nstep = 0.01\n[parameters]\n'plant.l1' = 'long'", "must be a list of values"),
+    ("stop_time = 1.0\nstep = 0.01\n[parameters]\n'plant.l1' = [1.0]\n[plot]\nmetric = 'outcome'\nx = 'plant.l2'\n"
+     "y = 'plant.l1'", "plot.x must be a varied parameter"),
+    ("stop_time = [", "not valid TOML"),
+])
+def test_study_mistakes_are_one_line_errors(tmp_path, text, message):
+    with pytest.raises(ValueError, match=message) as err:
+        _study(tmp_path, text)
+    assert "\n" not in str(err.value)
+
+
+def test_builtin_studies_load():
+    assert len(spec.load("builtin:region-of-attraction").cases()) == 20 * 3 * 2 * 2
+    assert len(spec.load("builtin:theta2-gain-sensitivity").cases()) == 25
+
+
+@pytest.fixture(scope="module")
+def small_run(fmu_dir, tmp_path_factory):
+    out = tmp_path_factory.mktemp("sweep")
+    study = _study(out, SMALL)
+    summary = run_study(study, out / "results", fmu_dir, workers=2, progress=False)
+    return study, out / "results", summary
+
+
+def test_cluster_results_equal_a_serial_run(small_run, fmu_dir):
+    study, out, summary = small_run
+    assert summary["ran"] == summary["cases"] == 8
+    rows = pq.read_table(out / "results.parquet").to_pylist()
+    blobs = fmu_blobs(fmu_dir)
+    for case, row in zip(study.cases(), rows):
+        serial = run_case(case, study.settings(), blobs, study.metrics)
+        for key in ("status", "error", *study.metrics):
+            assert row[key] == serial[key], key
+
+
+def test_failing_cases_are_rows_with_their_message(small_run):
+    _, out, _ = small_run
+    rows = pq.read_table(out / "results.parquet").to_pylist()
+    invalid = [r for r in rows if r["plant.l1"] == -1.0]
+    assert len(invalid) == 4 and all(r["status"] == "invalid" for r in invalid)
+    assert invalid[0]["error"] == "plant: l1 must be > 0 and finite, got -1.0"
+    # the printed b3 diverges at h = 10 ms: the plant stops the run, the row says where
+    failed = [r for r in rows if r["controller.b3_form"] == "printed" and r["plant.l1"] == 0.8]
+    assert failed and all(r["status"] == "failed" and "plant: fmi2DoStep returned discard at t=" in r["error"]
+                          for r in failed)
+    assert all(r["end_time_s"] < 2.0 and r["outcome"] == "diverges" for r in failed)
+
+
+def test_rerun_resumes_and_skips_finished_cases(small_run, fmu_dir):
+    study, out, _ = small_run
+    before = pq.read_table(out / "results.parquet").to_pylist()
+    journal = out / JOURNAL
+    lines = journal.read_text().splitlines()
+    journal.write_text("\n".join(lines[:5]) + "\n" + lines[5][:20])  # 3 cases lost, one line torn
+    summary = run_study(study, out, fmu_dir, workers=2, progress=False)
+    assert (summary["skipped"], summary["ran"]) == (5, 3)
+    after = pq.read_table(out / "results.parquet").to_pylist()
+    strip = [{k: v for k, v in r.items() if k != "duration_s"} for r in before]
+    assert [{k: v for k, v in r.items() if k != "duration_s"} for r in after] == strip
+
+
+def test_study_completes_when_a_worker_dies(fmu_dir, tmp_path):
+    from distributed import Client, LocalCluster
+
+    study = _study(tmp_path, 'stop_time = 20.0\nstep = 0.001\n[parameters]\n"plant.theta1_0" = '
+                   '[0.01, 0.02, 0.03, 0.04, 0.05, 0.06]\n[fixed]\n"controller.w_theta2" = 0.0\n')
+    killed_while_running = []
+    with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None, silence_logs=50) as cluster, \
+            Client(cluster) as client:
+        def kill_a_busy_worker():
+            deadline = time.monotonic() + 60
+            while time.monotonic() < deadline:
+                busy = [w for w, keys in client.processing().items() if any("run_case" in str(k) for k in keys)]
+                if busy:
+                    killed_while_running.append(busy[0])
+                    try:
+                        client.run(os._exit, 1, workers=[busy[0]], on_error="ignore")
+                    except Exception:  # the worker died mid-call, as intended
+                        pass
+                    return
+                time.sleep(0.05)
+
+        killer = threading.Thread(target=kill_a_busy_worker)
+        killer.start()
+        summary = run_study(study, tmp_path / "out", fmu_dir, scheduler=cluster.scheduler_address, progress=False)
+        killer.join()
+    rows = pq.read_table(tmp_path / "out" / "results.parquet").to_pylist()
+    assert killed_while_running, "no worker was killed while running a case"
+    assert summary["ran"] == 6 and [r["status"] for r in rows] == ["ok"] * 6
+    assert all(math.isfinite(r["max_theta1_deg"]) for r in rows)
+
+
+def test_cli_runs_the_minimal_study(fmu_dir, tmp_path, capsys):
+    (tmp_path / "study.toml").write_text(MINIMAL)
+    code = main(["sweep", str(tmp_path / "study.toml"), "--out", str(tmp_path / "out"), "--workers", "2",
+                 "--fmu-dir", str(fmu_dir), "--csv", "--no-progress"])
+    out, err = capsys.readouterr()
+    assert code == 0 and "12 cases: 12 run now, 0 already done, 6 not ok" in out
+    rows = pq.read_table(tmp_path / "out" / "results.parquet").to_pylist()
+    assert len(rows) == 12 and (tmp_path / "out" / "results.csv").exists() and (tmp_path / "out" / "plot.png").exists()
+    assert len((tmp_path / "out" / JOURNAL).read_text().splitlines()) == 12
+    assert all(json.loads(line)["case_id"] for line in (tmp_path / "out" / JOURNAL).read_text().splitlines())
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["sweep", "missing.toml", "--out", "o"], "cannot read study file missing.toml"),
+    (["sweep", "builtin:nothing", "--out", "o"], "no built-in study 'nothing'"),
+    (["sweep", "builtin:region-of-attraction", "--out", "o", "--workers", "0"], "--workers must be >= 1"),
+])
+def test_cli_sweep_mistakes(capsys, argv, message):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err
