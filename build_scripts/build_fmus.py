@@ -1,5 +1,10 @@
 """Build the FMUs with pythonfmu and post-process their modelDescription.xml.
 
+On Linux the FMU's binary is our own FMI wrapper (``fmu_src/fmi2_wrapper.c``,
+compiled here against this Python's libpython) instead of pythonfmu's: it
+reports the reason of every error to the host's logger and loads in non-Python
+hosts. Where it cannot be compiled, pythonfmu's binary stays (with a warning).
+
 Each FMU bundles the runtime core (``crane_fmu/model`` plus the slave support
 module) in its resources under a private package name that carries a hash of
 its sources, ``crane_core_<hash>``. pythonfmu FMUs run inside the host's Python
@@ -20,6 +25,7 @@ from pathlib import Path
 import crane_fmu.model
 import fmu_src
 from build_scripts.model_description import postprocess
+from build_scripts.wrapper import WrapperUnavailable, compile_wrapper
 from crane_fmu.model import tables
 
 MODEL_DIR = Path(crane_fmu.model.__file__).parent
@@ -62,11 +68,12 @@ def _stage(spec, stage_dir, core):
     return script, package
 
 
-def build_fmu(spec, out_dir):
+def build_fmu(spec, out_dir, wrapper=None):
     """Build one FMU into ``out_dir`` and return its path.
 
-    The FMU is written under a temporary name and renamed, so an existing FMU
-    is never left half-written.
+    ``wrapper`` is the compiled FMI wrapper library to use as the Linux binary
+    (None keeps pythonfmu's). The FMU is written under a temporary name and
+    renamed, so an existing FMU is never left half-written.
     """
     from pythonfmu import FmuBuilder  # the build needs pythonfmu, the runtime does not
 
@@ -94,14 +101,24 @@ def build_fmu(spec, out_dir):
                 data = src.read(item)
                 if item.filename == "modelDescription.xml":
                     data = postprocess(data, spec.table, tables.DISPLAY_UNITS, spec.feedthrough)
+                elif item.filename == f"binaries/linux64/{spec.name}.so" and wrapper is not None:
+                    data = Path(wrapper).read_bytes()
                 dst.writestr(item.filename, data)
+            dst.writestr("resources/slaveclass.txt", spec.name)  # read by the wrapper
         os.replace(partial, final)
     return final
 
 
-def build_all(out_dir="build/fmus", specs=CRANE_FMUS):
+def build_all(out_dir="build/fmus", specs=CRANE_FMUS, log=print):
     """Build every FMU of ``specs`` into ``out_dir``; return their paths."""
-    return [build_fmu(spec, out_dir) for spec in specs]
+    with tempfile.TemporaryDirectory(prefix="crane_wrapper_") as tmp:
+        try:
+            wrapper = compile_wrapper(tmp)
+        except WrapperUnavailable as exc:
+            log(f"warning: {exc}; the FMUs keep pythonfmu's binary, which loads only in Python hosts "
+                "and reports no error messages")
+            wrapper = None
+        return [build_fmu(spec, out_dir, wrapper) for spec in specs]
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""The ``crane-fmu`` command: build the FMUs, co-simulate them, describe them, benchmark.
+"""The ``crane-fmu`` command: build, simulate, describe, reproduce the paper, sweep, benchmark.
 
 User mistakes print one line and exit with status 2; an FMU failing during a
 run prints one line and exits with status 1.
@@ -26,7 +26,7 @@ EXAMPLES = {
         "  crane-fmu sweep study.toml --out results/study --workers 2\n"
         "  crane-fmu sweep builtin:region-of-attraction --out results/roa\n"
         "  crane-fmu sweep builtin:theta2-gain-sensitivity --out results/gains --csv\n"
-        "  crane-fmu sweep study.toml --out results/study --scheduler tcp://10.0.0.5:8786\n"
+        "  crane-fmu sweep study.toml --out results/study --scheduler tcp://scheduler-host:8786\n"
         "Re-running the same command resumes: finished cases are skipped."),
 }
 

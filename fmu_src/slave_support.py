@@ -1,5 +1,7 @@
 """Registers a variable table (crane_fmu.model.tables) on a pythonfmu slave."""
 
+import math
+
 from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Variability, Real, String
 
 
@@ -7,7 +9,8 @@ def register_table(slave, table, outputs):
     """Register every variable of ``table`` on ``slave``.
 
     Parameters and inputs become attributes of the slave holding their start
-    value. ``outputs()`` returns the values of all outputs in table order, so a
+    value; a Real input refuses a value that is not finite (the FMI call
+    returns an error naming the input and the value). ``outputs()`` returns the values of all outputs in table order, so a
     slave computes them from its own state; they are ``initial=calculated``
     (listed as InitialUnknowns by the build's post-processing).
     """
@@ -23,7 +26,15 @@ def register_table(slave, table, outputs):
             position += 1
         else:
             setattr(slave, v.name, v.start)
+            if v.causality == "input" and kind is Real:
+                common["setter"] = lambda value, name=v.name: _set_finite(slave, name, value)
             slave.register_variable(kind(v.name, start=v.start, **common))
+
+
+def _set_finite(slave, name, value):
+    if not math.isfinite(value):
+        raise ValueError(f"input {name} must be finite, got {value!r}")
+    setattr(slave, name, value)
 
 
 def values(slave, table, causality):

@@ -6,7 +6,9 @@ and the simulation time, with the FMU's own log messages attached.
 """
 
 import ctypes
+import itertools
 import shutil
+import weakref
 from collections import deque
 
 from fmpy import extract, read_model_description
@@ -24,6 +26,21 @@ _libc = ctypes.CDLL(None)
 _libc.calloc.restype = ctypes.c_void_p
 _libc.calloc.argtypes = [ctypes.c_size_t, ctypes.c_size_t]
 _libc.free.argtypes = [ctypes.c_void_p]
+
+# fmpy's logger proxy (which formats the FMU's printf-style messages) keeps ONE
+# Python logger for the whole process, so every instance shares this one and
+# its messages are told apart by the componentEnvironment each instance passes.
+_instances = weakref.WeakValueDictionary()
+_keys = itertools.count(1)
+
+
+def _dispatch(environment, instance_name, status, category, message):
+    instance = _instances.get(environment or 0)
+    if instance is not None:
+        instance.messages.append(message.decode("utf-8", "replace"))
+
+
+_LOGGER = fmi2CallbackLoggerTYPE(_dispatch)
 
 
 class FmiError(RuntimeError):
@@ -45,7 +62,8 @@ class FmiError(RuntimeError):
         self.instance, self.function, self.time = instance, function, time
         self.status, self.messages = status, list(messages)
         when = "" if time is None else f" at t={time:.9g} s"
-        detail = f": {self.messages[-1]}" if self.messages else ""
+        detail = self.messages[-1].removeprefix(function + ": ") if self.messages else ""
+        detail = f": {detail}" if detail else ""
         super().__init__(f"{instance}: {function} returned {status}{when}{detail}")
 
 
@@ -77,8 +95,11 @@ class FmuInstance:
         try:
             self._fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self._unzip,
                                   modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+            key = next(_keys)
+            _instances[key] = self
             self._callbacks = fmi2CallbackFunctions()
-            self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+            self._callbacks.logger = _LOGGER
+            self._callbacks.componentEnvironment = key
             self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_libc.calloc)
             self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_libc.free)
             addLoggerProxy(ctypes.byref(self._callbacks))
@@ -92,9 +113,6 @@ class FmuInstance:
         # Ask for every log message. (pythonfmu 0.7 FMUs ignore this and loggingOn
         # alike and never call the logger, so their errors arrive without a reason.)
         self._call("fmi2SetDebugLogging", self._fmu.setDebugLogging, True, [])
-
-    def _log(self, env, instance, status, category, message):
-        self.messages.append(message.decode("utf-8", "replace"))
 
     def _call(self, function, call, *args, **kwargs):
         """Run an fmpy call, turning its exceptions into FmiError."""
