@@ -49,6 +49,7 @@ typedef struct {
 typedef struct {
     PyObject *cls;     /* the slave class */
     PyObject *slave;   /* the slave instance */
+    PyObject *queue;   /* slave.log_queue */
     PyObject *strings; /* bytes returned by the last fmi2GetString, kept alive until the next call */
     char *name;
     char *resources;
@@ -86,12 +87,8 @@ static fmi2Status python_error(const Instance *c, const char *function) {
 
 /* Pass on and clear the messages the slave queued with Fmi2Slave.log(). */
 static void flush_log(const Instance *c) {
-    PyObject *queue = PyObject_GetAttrString(c->slave, "log_queue");
-    if (!queue || !PyList_Check(queue)) {
-        PyErr_Clear();
-        Py_XDECREF(queue);
-        return;
-    }
+    PyObject *queue = c->queue;
+    if (!queue || PyList_GET_SIZE(queue) == 0) return;
     for (Py_ssize_t i = 0; i < PyList_GET_SIZE(queue); i++) {
         PyObject *item = PyList_GET_ITEM(queue, i);
         PyObject *status = PyObject_GetAttrString(item, "status");
@@ -108,7 +105,6 @@ static void flush_log(const Instance *c) {
         Py_XDECREF(msg);
     }
     PyList_SetSlice(queue, 0, PyList_GET_SIZE(queue), NULL);
-    Py_DECREF(queue);
 }
 
 /* Call slave.method(*args) (args stolen); on success keep the result in *result if given. */
@@ -186,14 +182,21 @@ static void ensure_python(void) {
     PyEval_SaveThread();
 }
 
-static PyObject *new_slave(Instance *c, int visible) {
+/* A new slave instance (replacing any previous one); 0 on a Python error. */
+static int new_slave(Instance *c, int visible) {
     PyObject *kwargs = Py_BuildValue("{s:s,s:s,s:O}", "instance_name", c->name, "resources", c->resources,
                                      "visible", visible ? Py_True : Py_False);
     PyObject *args = PyTuple_New(0);
     PyObject *slave = kwargs && args ? PyObject_Call(c->cls, args, kwargs) : NULL;
     Py_XDECREF(args);
     Py_XDECREF(kwargs);
-    return slave;
+    if (!slave) return 0;
+    PyObject *queue = PyObject_GetAttrString(slave, "log_queue");
+    if (queue && !PyList_Check(queue)) Py_CLEAR(queue);
+    PyErr_Clear();
+    Py_XSETREF(c->slave, slave);
+    Py_XSETREF(c->queue, queue);
+    return 1;
 }
 
 static void free_instance(Instance *c) {
@@ -243,8 +246,7 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
     PyObject *module = PyImport_ImportModule(module_name);
     c->cls = module ? PyObject_GetAttrString(module, class_name) : NULL;
     Py_XDECREF(module);
-    c->slave = c->cls ? new_slave(c, visible) : NULL;
-    if (!c->slave) {
+    if (!c->cls || !new_slave(c, visible)) {
         python_error(c, "fmi2Instantiate");
         Py_XDECREF(c->cls);
         PyGILState_Release(gil);
@@ -265,6 +267,7 @@ EXPORT void fmi2FreeInstance(fmi2Component component) {
     if (!c) return;
     PyGILState_STATE gil = PyGILState_Ensure();
     Py_XDECREF(c->slave);
+    Py_XDECREF(c->queue);
     Py_XDECREF(c->cls);
     Py_XDECREF(c->strings);
     PyGILState_Release(gil);
@@ -307,13 +310,7 @@ EXPORT fmi2Status fmi2Reset(fmi2Component component) {
     Instance *c = component;
     if (!c) return fmi2Error;
     PyGILState_STATE gil = PyGILState_Ensure();
-    PyObject *fresh = new_slave(c, 0);
-    fmi2Status status = fmi2OK;
-    if (fresh) {
-        Py_XSETREF(c->slave, fresh);
-    } else {
-        status = python_error(c, "fmi2Reset");
-    }
+    fmi2Status status = new_slave(c, 0) ? fmi2OK : python_error(c, "fmi2Reset");
     PyGILState_Release(gil);
     return status;
 }

@@ -10,9 +10,10 @@ def register_table(slave, table, outputs):
 
     Parameters and inputs become attributes of the slave holding their start
     value; a Real input refuses a value that is not finite (the FMI call
-    returns an error naming the input and the value). ``outputs()`` returns the values of all outputs in table order, so a
-    slave computes them from its own state; they are ``initial=calculated``
-    (listed as InitialUnknowns by the build's post-processing).
+    returns an error naming the input and the value). ``outputs()`` returns
+    the values of all outputs in table order, so a slave computes them from its
+    own state; they are ``initial=calculated`` (listed as InitialUnknowns by
+    the build's post-processing).
     """
     position = 0
     for v in table:
