@@ -6,6 +6,7 @@ fresh, run alternately in the same process, record every step to a CSV file,
 and are timed from initialisation to the last step (loading excluded).
 """
 
+import os
 import statistics
 import tempfile
 import time
@@ -111,3 +112,50 @@ def run_sweep_bench(n_cases=16, stop_time=10.0, step=1e-3, out=print):
     out(f"per-case overhead of shipping work to a worker: {1e3 * (wall1 / n_cases - case_time):.1f} ms "
         f"= {100 * result['overhead_fraction']:.1f} % of a case's {case_time:.3f} s  (target < 10 %)")
     return result
+
+
+def _rss_mb():
+    """Resident memory of this process [MB] (Linux /proc)."""
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 1e6
+
+
+class _MemoryProbe:
+    """Observer sampling the process's resident memory every ``every`` communication points."""
+
+    def __init__(self, every):
+        self.every, self.count, self.samples = every, 0, []
+
+    def observe(self, time, ports):
+        if self.count % self.every == 0:
+            self.samples.append((time, _rss_mb()))
+        self.count += 1
+
+
+def run_endurance(stop_time=3600.0, step=1e-3, out=print):
+    """One long closed-loop run recorded to CSV, sampling memory every simulated minute."""
+    n = communication_points(0.0, stop_time, step)
+    with tempfile.TemporaryDirectory(prefix="crane_endurance_") as tmp:
+        built = build_all(Path(tmp) / "fmus", CRANE_FMUS, log=lambda _: None)
+        fmus = {"plant": built[0], "controller": built[1]}
+        instances = {name: FmuInstance(path, name) for name, path in fmus.items()}
+        probe = _MemoryProbe(max(1, round(60.0 / step)))
+        csv_path = Path(tmp) / "endurance.csv"
+        try:
+            recorder = CsvRecorder(csv_path)
+            master = Master(instances, CRANE_CONNECTIONS)
+            # the weighted law (1, 1, 0) converges, so the run stays finite for the whole hour
+            start = time.perf_counter()
+            master.run(0.0, stop_time, step, [recorder, probe], {"controller": {"w_theta2": 0.0}})
+            recorder.close()
+            wall = time.perf_counter() - start
+        finally:
+            for inst in instances.values():
+                inst.free()
+        size = csv_path.stat().st_size
+    rss = [m for _, m in probe.samples]
+    steady = rss[1:] or rss  # after the first simulated minute
+    out(f"{n} steps ({stop_time:g} s at h = {step:g} s) in {wall:.1f} s wall, CSV of {size / 1e6:.0f} MB")
+    out(f"resident memory: {rss[0]:.1f} MB at t = 0, {steady[0]:.1f} MB after 1 min, {rss[-1]:.1f} MB at the end, "
+        f"largest {max(rss):.1f} MB: growth after the first minute {max(steady) - steady[0]:.1f} MB")
+    return {"wall_s": wall, "rss_mb": probe.samples, "csv_mb": size / 1e6}

@@ -19,7 +19,8 @@ EXAMPLES = {
         "  crane-fmu simulate --master jacobi --step 0.01 --set controller.w_theta2=0\n"
         "  crane-fmu simulate --set plant.l1=1.5 --set controller.l1=1.5 --set plant.theta1_0=0.2"),
     "info": "examples:\n  crane-fmu info\n  crane-fmu info --markdown",
-    "bench": "examples:\n  crane-fmu bench\n  crane-fmu bench --repeat 7 --stop-time 20\n  crane-fmu bench --sweep",
+    "bench": ("examples:\n  crane-fmu bench\n  crane-fmu bench --repeat 7 --stop-time 20\n  crane-fmu bench --sweep\n"
+              "  crane-fmu bench --endurance            # one simulated hour at 1 ms"),
     "reproduce": "examples:\n  crane-fmu reproduce --out results/paper\n  crane-fmu reproduce --quick --out /tmp/q",
     "sweep": (
         "examples:\n"
@@ -104,6 +105,8 @@ def _parser():
     p.add_argument("--sweep", action="store_true",
                    help="instead: cases per second of a Dask sweep with 1 and 2 workers")
     p.add_argument("--cases", type=int, default=16, help="with --sweep: cases per measurement")
+    p.add_argument("--endurance", action="store_true",
+                   help="instead: one long run (default one simulated hour) recorded to CSV, memory sampled")
     return parser
 
 
@@ -266,14 +269,18 @@ def _cmd_sweep(args):
 
 
 def _cmd_bench(args):
-    from crane_fmu.bench import run_bench, run_sweep_bench
+    from crane_fmu.bench import run_bench, run_endurance, run_sweep_bench
 
     if args.repeat < 1:
         raise UsageError(f"--repeat must be >= 1, got {args.repeat}")
     if args.cases < 2:
         raise UsageError(f"--cases must be >= 2, got {args.cases}")
     try:
-        if args.sweep:
+        if args.sweep and args.endurance:
+            raise UsageError("--sweep and --endurance are separate benchmarks: choose one")
+        if args.endurance:
+            run_endurance(args.stop_time or 3600.0, args.step)
+        elif args.sweep:
             run_sweep_bench(args.cases, args.stop_time or 10.0, args.step)
         else:
             run_bench(args.stop_time or 20.0, args.step, args.repeat)

@@ -1,5 +1,7 @@
 """BacksteppingController FMU: the anti-swing law of eqs (10)-(21)."""
 
+import math
+
 from pythonfmu import Fmi2Slave
 
 from crane_fmu.model import controller, tables
@@ -30,4 +32,6 @@ class BacksteppingController(Fmi2Slave):
         self._law = self._parameters()
 
     def do_step(self, current_time, step_size):
+        if not (step_size > 0 and math.isfinite(step_size)):
+            raise ValueError(f"communication step must be > 0 and finite, got {step_size!r}")
         return True

@@ -38,6 +38,9 @@ class CranePlant(Fmi2Slave):
         self._outputs = plant.outputs(self._state, self._params)
 
     def do_step(self, current_time, step_size):
+        if self._state is None:
+            raise RuntimeError("doStep before initialisation ended (fmi2ExitInitializationMode)")
+        plant.substeps(step_size, self._max_substep)  # raises ValueError for an unusable step size
         try:
             state = plant.advance(self._state, self.u, step_size, self._max_substep, self._params)
             finite = all(map(math.isfinite, state))

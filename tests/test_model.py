@@ -102,3 +102,15 @@ def test_only_the_trolley_row_gives_a_pd_law_on_x():
     state = (0.3, -0.2, 0.1, 0.4, -0.2, 0.3)
     expected = -k.K1_x * -0.2 - k.K2_x * (-0.2 + k.K1_x * 0.3)
     assert controller.control(state, p, k) == pytest.approx(expected, rel=1e-12)
+
+
+@pytest.mark.parametrize("step, max_substep, message", [
+    (0.0, 1e-3, "communication step must be > 0 and finite, got 0.0"),
+    (-0.1, 1e-3, "communication step must be > 0 and finite, got -0.1"),
+    (math.nan, 1e-3, "communication step must be > 0 and finite, got nan"),
+    (1e300, 1e-3, "needs more than 10000000 RK4 sub-steps"),
+    (1.0, 1e-300, "needs more than 10000000 RK4 sub-steps"),
+])
+def test_unusable_step_sizes_are_refused(step, max_substep, message):
+    with pytest.raises(ValueError, match=message):
+        plant.substeps(step, max_substep)

@@ -85,11 +85,27 @@ def rk4_step(state, u, dt, p):
     )
 
 
+MAX_SUBSTEPS = 10_000_000  # per communication step: about a minute of computing
+
+
 def substeps(step, max_substep):
-    """Number of equal RK4 sub-steps no longer than ``max_substep`` covering ``step``."""
+    """Number of equal RK4 sub-steps no longer than ``max_substep`` covering ``step``.
+
+    Raises
+    ------
+    ValueError
+        If the step is not positive and finite, or needs more than
+        :data:`MAX_SUBSTEPS` sub-steps (a host must never hang in doStep).
+    """
+    if not (step > 0 and math.isfinite(step)):
+        raise ValueError(f"communication step must be > 0 and finite, got {step!r}")
     # The 1e-9 slack keeps h = 1 ms with max_substep = 1 ms at one sub-step
     # despite rounding in h.
-    return max(1, math.ceil(step / max_substep - 1e-9))
+    n = step / max_substep - 1e-9
+    if not n <= MAX_SUBSTEPS:
+        raise ValueError(f"communication step {step!r} s needs more than {MAX_SUBSTEPS} RK4 sub-steps of at most "
+                         f"max_substep = {max_substep!r} s")
+    return max(1, math.ceil(n))
 
 
 def advance(state, u, step, max_substep, p):
