@@ -238,7 +238,7 @@ def _cmd_reproduce(args):
         raise UsageError(f"--workers must be >= 1, got {args.workers}")
     try:
         crane_system(args.fmu_dir)
-    except FileNotFoundError as exc:
+    except (FileNotFoundError, ValueError) as exc:
         raise UsageError(str(exc)) from None
     _writable_file(Path(args.out) / "REPORT.md", "--out")
     reproduce(args.out, args.fmu_dir, quick=args.quick, workers=args.workers)

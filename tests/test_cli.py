@@ -110,3 +110,11 @@ def test_help_shows_examples(capsys, command):
 def test_unknown_command_is_one_line(capsys):
     code, _, err = _run(capsys, "fly")
     assert code == 2 and err.count("\n") == 1
+
+
+def test_unreadable_fmu_is_one_line(tmp_path, fmu_dir, capsys):
+    for name in ("CranePlant.fmu", "BacksteppingController.fmu"):
+        (tmp_path / name).write_bytes(b"not a zip file")
+    code, _, err = _run(capsys, "simulate", "--fmu-dir", str(tmp_path), "--out", str(tmp_path / "r.csv"))
+    assert code == 2 and err.count("\n") == 1
+    assert "CranePlant.fmu is not a readable FMU" in err

@@ -22,7 +22,21 @@ def crane_system(fmu_dir=DEFAULT_FMU_DIR, controller=True):
     for path in fmus.values():
         if not path.is_file():
             raise FileNotFoundError(f"{path} not found: build the FMUs first (crane-fmu build)")
+        check_fmu(path)
     return fmus, (CRANE_CONNECTIONS if controller else [])
+
+
+def check_fmu(path):
+    """Raise ValueError (one line) unless ``path`` is a readable FMI 2.0 co-simulation FMU."""
+    from fmpy import read_model_description
+
+    try:
+        md = read_model_description(str(path))
+    except Exception as exc:  # zip, XML and schema errors alike
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ValueError(f"{path} is not a readable FMU ({reason})") from None
+    if md.fmiVersion != "2.0" or md.coSimulation is None:
+        raise ValueError(f"{path} is not an FMI 2.0 co-simulation FMU")
 
 
 def settable_variables(fmu_path):
