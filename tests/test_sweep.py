@@ -189,3 +189,11 @@ def test_cli_sweep_mistakes(capsys, argv, message):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err
+
+
+def test_settling_band_is_chosen_by_the_study(small_run, fmu_dir, tmp_path):
+    study = _study(tmp_path, SMALL.replace("step = 0.01", "step = 0.01\nsettling_band_deg = 20.0"))
+    case = {"plant.theta1_0": 0.1, "controller.w_theta2": 0.0}
+    row = run_case(case, study.settings(), fmu_blobs(fmu_dir), study.metrics)
+    assert row["settling_band_s"] == 0.0  # a 20-degree band holds from the start
+    assert row["settling_0.5deg_s"] is None or row["settling_0.5deg_s"] > 0.0

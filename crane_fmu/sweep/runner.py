@@ -89,6 +89,9 @@ def run_case(case, settings, blobs, metric_names):
         u = columns.get("controller.u", columns["plant.x"] * 0.0)
         values = metrics.closed_loop_metrics(columns["time"], columns["plant.x"], columns["plant.theta1"],
                                              columns["plant.theta2"], u, row["status"] == "ok")
+        values["settling_band_s"] = metrics.settling_time(
+            columns["time"], [columns["plant.theta1"], columns["plant.theta2"]],
+            math.radians(settings["settling_band_deg"]))
     row.update({name: values.get(name) for name in metric_names})
     row["duration_s"] = time.perf_counter() - start
     return row

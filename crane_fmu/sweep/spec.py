@@ -7,6 +7,7 @@ A study is a TOML (or, with PyYAML installed, YAML) file::
     master = "gauss-seidel"          # or "jacobi"
     controller = true                # false: the plant alone (free swing)
     metrics = ["outcome", "settling_0.5deg_s"]   # default: every metric
+    settling_band_deg = 0.25         # band of the metric "settling_band_s" (default 0.5)
 
     [parameters]                     # the grid: every combination of the listed values
     "plant.theta1_0" = [0.0349, 0.0873, 0.1745]
@@ -36,7 +37,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-METRICS = ("outcome", "settling_0.5deg_s", "settling_0.1deg_s", "max_theta1_deg", "max_theta2_deg",
+METRICS = ("outcome", "settling_band_s", "settling_0.5deg_s", "settling_0.1deg_s", "max_theta1_deg", "max_theta2_deg",
            "rms_theta1_deg", "residual_after_15s_deg", "trolley_excursion_m", "trolley_final_m", "peak_abs_u",
            "end_time_s")
 INSTANCES = ("plant", "controller")
@@ -53,6 +54,7 @@ class Study:
     master: str = "gauss-seidel"
     controller: bool = True
     metrics: tuple = METRICS
+    settling_band_deg: float = 0.5
     grid: dict = field(default_factory=dict)  # axis name -> (variable names, values)
     sampled: dict = field(default_factory=dict)  # axis name -> (variable names, low, high)
     sampling: str = "latin-hypercube"
@@ -92,7 +94,7 @@ class Study:
 
     def settings(self):
         return {"stop_time": self.stop_time, "step": self.step, "master": self.master,
-                "controller": self.controller}
+                "controller": self.controller, "settling_band_deg": self.settling_band_deg}
 
 
 def case_id(case, settings):
@@ -142,7 +144,8 @@ def _axis(key, value):
 
 def parse(data, source="study"):
     """Build a :class:`Study` from the loaded file contents (a dict)."""
-    known = {"stop_time", "step", "master", "controller", "metrics", "parameters", "sampling", "fixed", "plot"}
+    known = {"stop_time", "step", "master", "controller", "metrics", "parameters", "sampling", "fixed", "plot",
+             "settling_band_deg"}
     unknown = sorted(set(data) - known)
     if unknown:
         raise ValueError(f"{source}: unknown key {unknown[0]!r}; known keys: {', '.join(sorted(known))}")
@@ -164,6 +167,10 @@ def parse(data, source="study"):
     for m in metrics:
         if m not in METRICS:
             raise ValueError(f"metrics: unknown metric {m!r}; known: {', '.join(METRICS)}")
+
+    band = _number("settling_band_deg", data.get("settling_band_deg", 0.5), "a number > 0")
+    if not band > 0:
+        raise ValueError(f"settling_band_deg must be a number > 0, got {band!r}")
 
     grid, sampled = {}, {}
     for key, value in data.get("parameters", {}).items():
@@ -196,7 +203,8 @@ def parse(data, source="study"):
             if plot.get(axis) not in axes:
                 raise ValueError(f"plot.{axis} must be a varied parameter ({', '.join(sorted(axes))}), "
                                  f"got {plot.get(axis)!r}")
-    return Study(stop_time, step, master, controller, metrics, grid, sampled, method, samples, seed, fixed, plot)
+    return Study(stop_time, step, master, controller, metrics, band, grid, sampled, method, samples, seed, fixed,
+                 plot)
 
 
 def load(path):
