@@ -32,14 +32,14 @@ MODEL_DIR = Path(crane_fmu.model.__file__).parent
 SLAVE_DIR = Path(fmu_src.__file__).parent
 SUPPORT = SLAVE_DIR / "slave_support.py"
 
-Spec = namedtuple("Spec", "name script table feedthrough")
+Spec = namedtuple("Spec", "name script table feedthrough saves_state")
 CRANE_FMUS = (
-    Spec("CranePlant", "crane_plant.py", tables.PLANT, False),
-    Spec("BacksteppingController", "backstepping_controller.py", tables.CONTROLLER, True),
+    Spec("CranePlant", "crane_plant.py", tables.PLANT, False, True),
+    Spec("BacksteppingController", "backstepping_controller.py", tables.CONTROLLER, True, True),
 )
 BENCH_FMUS = (
-    Spec("TrivialPlant", "trivial_plant.py", tables.TRIVIAL_PLANT, False),
-    Spec("TrivialController", "trivial_controller.py", tables.TRIVIAL_CONTROLLER, True),
+    Spec("TrivialPlant", "trivial_plant.py", tables.TRIVIAL_PLANT, False, False),
+    Spec("TrivialController", "trivial_controller.py", tables.TRIVIAL_CONTROLLER, True, False),
 )
 
 
@@ -87,7 +87,9 @@ def build_fmu(spec, out_dir, wrapper=None):
         script, package = _stage(spec, stage, core)
         saved_path = list(sys.path)
         try:
-            raw = FmuBuilder.build_FMU(script, dest=tmp / "raw", project_files=[package])
+            # The FMUs need a Python runtime, not an external tool that runs the model.
+            raw = FmuBuilder.build_FMU(script, dest=tmp / "raw", project_files=[package], needsExecutionTool=False,
+                                       canGetAndSetFMUstate=spec.saves_state, canSerializeFMUstate=spec.saves_state)
         finally:
             # pythonfmu imports the staged slave and core and leaves them (and
             # the stage folder) in this process; forget them before the next build.

@@ -6,7 +6,7 @@ from pythonfmu import Fmi2Slave
 
 from crane_fmu.model import controller, tables
 from crane_fmu.model.parameters import controller_setup
-from fmu_src.slave_support import register_table, values
+from fmu_src.slave_support import register_table, restore_variables, saved_state, values
 
 
 class BacksteppingController(Fmi2Slave):
@@ -35,3 +35,11 @@ class BacksteppingController(Fmi2Slave):
         if not (step_size > 0 and math.isfinite(step_size)):
             raise ValueError(f"communication step must be > 0 and finite, got {step_size!r}")
         return True
+
+    # fmi2GetFMUstate / fmi2SetFMUstate: the law has no memory beyond its variables.
+    def _get_fmu_state(self):
+        return saved_state(self, tables.CONTROLLER, initialised=self._law is not None)
+
+    def _set_fmu_state(self, saved):
+        restore_variables(self, tables.CONTROLLER, saved)
+        self._law = self._parameters() if saved["initialised"] else None

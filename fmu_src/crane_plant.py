@@ -8,7 +8,7 @@ from pythonfmu.enums import Fmi2Status
 
 from crane_fmu.model import plant, tables
 from crane_fmu.model.parameters import plant_setup
-from fmu_src.slave_support import register_table, values
+from fmu_src.slave_support import register_table, restore_variables, saved_state, values
 
 
 class CranePlant(Fmi2Slave):
@@ -53,3 +53,16 @@ class CranePlant(Fmi2Slave):
         self._state = state
         self._outputs = plant.outputs(state, self._params)
         return True
+
+    # fmi2GetFMUstate / fmi2SetFMUstate: the variables and the integrator state.
+    def _get_fmu_state(self):
+        return saved_state(self, tables.PLANT, state=None if self._state is None else list(self._state))
+
+    def _set_fmu_state(self, saved):
+        restore_variables(self, tables.PLANT, saved)
+        if saved["state"] is None:
+            self._state = self._outputs = None
+        else:
+            self._params, self._max_substep = plant_setup(values(self, tables.PLANT, "parameter"))
+            self._state = tuple(saved["state"])
+            self._outputs = plant.outputs(self._state, self._params)

@@ -437,40 +437,94 @@ EXPORT fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, f
     return unsupported(c, "fmi2GetStringStatus");
 }
 
-EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
-    (void)state;
-    return unsupported(c, "fmi2GetFMUstate");
+/* FMU states are the Python objects of the slave's _get_fmu_state(); serialised with its
+   _fmu_state_to_bytes() and read back with _fmu_state_from_bytes(). */
+EXPORT fmi2Status fmi2GetFMUstate(fmi2Component component, fmi2FMUstate *state) {
+    Instance *c = component;
+    if (!c || !state) return fmi2Error;
+    PyGILState_STATE gil = PyGILState_Ensure();
+    PyObject *result = NULL;
+    fmi2Status status = call(c, "fmi2GetFMUstate", "_get_fmu_state", PyTuple_New(0), &result);
+    if (status == fmi2OK) {
+        Py_XDECREF((PyObject *)*state); /* an existing state is overwritten */
+        *state = result;
+    }
+    PyGILState_Release(gil);
+    return status;
 }
 
-EXPORT fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
-    (void)state;
-    return unsupported(c, "fmi2SetFMUstate");
+EXPORT fmi2Status fmi2SetFMUstate(fmi2Component component, fmi2FMUstate state) {
+    if (!component || !state) return fmi2Error;
+    PyGILState_STATE gil = PyGILState_Ensure();
+    fmi2Status status = call(component, "fmi2SetFMUstate", "_set_fmu_state",
+                             Py_BuildValue("(O)", (PyObject *)state), NULL);
+    PyGILState_Release(gil);
+    return status;
 }
 
-EXPORT fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state) {
-    (void)state;
-    return unsupported(c, "fmi2FreeFMUstate");
+EXPORT fmi2Status fmi2FreeFMUstate(fmi2Component component, fmi2FMUstate *state) {
+    if (!component || !state) return fmi2Error;
+    PyGILState_STATE gil = PyGILState_Ensure();
+    Py_XDECREF((PyObject *)*state);
+    *state = NULL;
+    PyGILState_Release(gil);
+    return fmi2OK;
 }
 
-EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t *size) {
-    (void)state;
-    (void)size;
-    return unsupported(c, "fmi2SerializedFMUstateSize");
+static fmi2Status state_bytes(Instance *c, const char *function, fmi2FMUstate state, PyObject **bytes) {
+    if (!c || !state) return fmi2Error;
+    fmi2Status status = call(c, function, "_fmu_state_to_bytes", Py_BuildValue("(O)", (PyObject *)state), bytes);
+    if (status == fmi2OK && !PyBytes_Check(*bytes)) {
+        Py_CLEAR(*bytes);
+        PyErr_SetString(PyExc_TypeError, "_fmu_state_to_bytes must return bytes");
+        status = python_error(c, function);
+    }
+    return status;
 }
 
-EXPORT fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[], size_t size) {
-    (void)state;
-    (void)bytes;
-    (void)size;
-    return unsupported(c, "fmi2SerializeFMUstate");
+EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component component, fmi2FMUstate state, size_t *size) {
+    PyGILState_STATE gil = PyGILState_Ensure();
+    PyObject *bytes = NULL;
+    fmi2Status status = state_bytes(component, "fmi2SerializedFMUstateSize", state, &bytes);
+    if (status == fmi2OK) {
+        *size = (size_t)PyBytes_GET_SIZE(bytes);
+        Py_DECREF(bytes);
+    }
+    PyGILState_Release(gil);
+    return status;
 }
 
-EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size,
+EXPORT fmi2Status fmi2SerializeFMUstate(fmi2Component component, fmi2FMUstate state, fmi2Byte out[], size_t size) {
+    PyGILState_STATE gil = PyGILState_Ensure();
+    PyObject *bytes = NULL;
+    fmi2Status status = state_bytes(component, "fmi2SerializeFMUstate", state, &bytes);
+    if (status == fmi2OK) {
+        if ((size_t)PyBytes_GET_SIZE(bytes) > size) {
+            log_text(component, fmi2Error, "logStatusError", "fmi2SerializeFMUstate: the buffer is too small");
+            status = fmi2Error;
+        } else {
+            memcpy(out, PyBytes_AS_STRING(bytes), (size_t)PyBytes_GET_SIZE(bytes));
+        }
+        Py_DECREF(bytes);
+    }
+    PyGILState_Release(gil);
+    return status;
+}
+
+EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component component, const fmi2Byte data[], size_t size,
                                           fmi2FMUstate *state) {
-    (void)bytes;
-    (void)size;
-    (void)state;
-    return unsupported(c, "fmi2DeSerializeFMUstate");
+    Instance *c = component;
+    if (!c || !state || !data) return fmi2Error;
+    PyGILState_STATE gil = PyGILState_Ensure();
+    PyObject *result = NULL;
+    fmi2Status status = call(c, "fmi2DeSerializeFMUstate", "_fmu_state_from_bytes",
+                             Py_BuildValue("(y#)", data, (Py_ssize_t)size), &result);
+    if (status == fmi2OK) {
+        Py_XDECREF((PyObject *)*state);
+        *state = result;
+    }
+    PyGILState_Release(gil);
+    return status;
 }
 
 EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[], size_t nu,

@@ -175,9 +175,15 @@ FUZZ = textwrap.dedent("""
                     check(dll.fmi2Reset(c))
                 elif kind == "terminate":
                     check(dll.fmi2Terminate(c))
-                elif kind == "get_state":
+                elif kind == "get_state":  # get, serialise, set back and free a state
                     state = ctypes.c_void_p()
-                    check(dll.fmi2GetFMUstate(c, ctypes.byref(state)))
+                    status = dll.fmi2GetFMUstate(c, ctypes.byref(state))
+                    check(status)
+                    if status == 0:
+                        size = ctypes.c_size_t()
+                        check(dll.fmi2SerializedFMUstateSize(c, state, ctypes.byref(size)))
+                        check(dll.fmi2SetFMUstate(c, state))
+                        check(dll.fmi2FreeFMUstate(c, ctypes.byref(state)))
                 elif kind == "status":
                     value = ctypes.c_double()
                     check(dll.fmi2GetRealStatus(c, 2, ctypes.byref(value)))

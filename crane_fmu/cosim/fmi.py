@@ -166,6 +166,25 @@ class FmuInstance:
     def exit_initialization(self):
         self._call("fmi2ExitInitializationMode", self._fmu.exitInitializationMode)
 
+    # --- saved state (FMUs with canGetAndSetFMUstate / canSerializeFMUstate) ---
+
+    def get_state(self):
+        """An FMU state (fmi2GetFMUstate); free it with :meth:`free_state`."""
+        return self._call("fmi2GetFMUstate", self._fmu.getFMUstate)
+
+    def set_state(self, state):
+        self._call("fmi2SetFMUstate", self._fmu.setFMUstate, state)
+
+    def free_state(self, state):
+        self._call("fmi2FreeFMUstate", self._fmu.freeFMUstate, state)
+
+    def serialize_state(self, state):
+        """The state as bytes (fmi2SerializeFMUstate), to restore in this or another instance."""
+        return bytes(self._call("fmi2SerializeFMUstate", self._fmu.serializeFMUstate, state))
+
+    def deserialize_state(self, data):
+        return self._call("fmi2DeSerializeFMUstate", self._fmu.deSerializeFMUstate, data)
+
     # --- hot path: preallocated arrays, raw ctypes calls ----------------------
 
     def get_reals(self, vrs, values):

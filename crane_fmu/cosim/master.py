@@ -164,11 +164,20 @@ class Master:
         """
         n = communication_points(start_time, stop_time, step)
         self.initialize(start_time, stop_time, parameters)
+        self.advance(start_time, step, 0, n, observers)
+        self.finish(stop_time, observers)
+        return n
+
+    def advance(self, start_time, step, first, last, observers=()):
+        """Take the steps ``first`` to ``last - 1`` of the grid ``start_time + k*step``.
+
+        At each communication point: exchange, observe, then step every instance.
+        """
         exchange = self._plans[self.mode]
         steps = [p.instance.do_step for p in self.order]
         observe = [o.observe for o in observers]
         ports = self.order
-        for k in range(n):
+        for k in range(first, last):
             t = start_time + k * step
             for call in exchange:
                 call()
@@ -176,11 +185,21 @@ class Master:
                 f(t, ports)
             for do_step in steps:
                 do_step(t, step)
-        for call in exchange:
-            call()
-        for f in observe:
-            f(stop_time, ports)
-        return n
+
+    def finish(self, stop_time, observers=()):
+        """The exchange and observation at the last communication point."""
+        self._exchange(self.mode)
+        for o in observers:
+            o.observe(stop_time, self.order)
+
+    def save_state(self):
+        """``{instance: FMU state}`` of every instance (fmi2GetFMUstate), for :meth:`restore_state`."""
+        return {name: inst.get_state() for name, inst in self.instances.items()}
+
+    def restore_state(self, saved):
+        """Roll every instance back to a :meth:`save_state` (fmi2SetFMUstate), e.g. to retry steps."""
+        for name, state in saved.items():
+            self.instances[name].set_state(state)
 
     def terminate(self):
         for inst in self.instances.values():
