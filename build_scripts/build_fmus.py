@@ -112,7 +112,12 @@ def build_fmu(spec, out_dir, wrapper=None):
 
 
 def build_all(out_dir="build/fmus", specs=CRANE_FMUS, log=print):
-    """Build every FMU of ``specs`` into ``out_dir``; return their paths."""
+    """Build every FMU of ``specs`` into ``out_dir``; return their paths.
+
+    With the crane pair, also write the system for other tools: the SSP package
+    ``CraneSystem.ssp`` in the parent of ``out_dir`` and ``OspSystemStructure.xml``
+    beside the FMUs.
+    """
     with tempfile.TemporaryDirectory(prefix="crane_wrapper_") as tmp:
         try:
             wrapper = compile_wrapper(tmp)
@@ -120,7 +125,12 @@ def build_all(out_dir="build/fmus", specs=CRANE_FMUS, log=print):
             log(f"warning: {exc}; the FMUs keep pythonfmu's binary, which loads only in Python hosts "
                 "and reports no error messages")
             wrapper = None
-        return [build_fmu(spec, out_dir, wrapper) for spec in specs]
+        paths = [build_fmu(spec, out_dir, wrapper) for spec in specs]
+    if all(spec in specs for spec in CRANE_FMUS):
+        from build_scripts.system_files import write_osp, write_ssp
+
+        paths += [write_ssp(out_dir, Path(out_dir).parent / "CraneSystem.ssp"), write_osp(out_dir)]
+    return paths
 
 
 if __name__ == "__main__":

@@ -64,6 +64,7 @@ def _parser():
     p = sub.add_parser("simulate", help="co-simulate the plant (and controller) FMUs",
                        epilog=EXAMPLES["simulate"], formatter_class=fmt)
     p.add_argument("--fmu-dir", default="build/fmus", help="folder of the built FMUs")
+    p.add_argument("--system", help="run the system of an SSP file (.ssp or .ssd) instead, e.g. build/CraneSystem.ssp")
     p.add_argument("--stop-time", type=_number, default=20.0, help="stop time [s] (default 20)")
     p.add_argument("--step", type=_number, default=1e-3, help="communication step [s] (default 0.001)")
     p.add_argument("--master", choices=("gauss-seidel", "jacobi"), default="gauss-seidel",
@@ -168,18 +169,34 @@ def _cmd_build(args):
 
 
 def _cmd_simulate(args):
-    from crane_fmu.cosim import CsvRecorder, FmiError, crane_system, read_csv, simulate
+    from crane_fmu.cosim import crane_system
     from crane_fmu.cosim.master import communication_points
-    from crane_fmu.cosim.system import check_crane_parameters
+    from crane_fmu.cosim.ssp import load_system
 
     try:
         communication_points(0.0, args.stop_time, args.step)
+        if args.system:
+            if args.no_controller:
+                raise ValueError("--no-controller applies to the built-in system, not to --system")
+            with load_system(args.system) as system:
+                return _simulate(args, system.fmus, system.connections, system.parameters)
         fmus, connections = crane_system(args.fmu_dir, controller=not args.no_controller)
     except (ValueError, FileNotFoundError) as exc:
         raise UsageError(str(exc)) from None
-    parameters = _parse_sets(args.set, fmus)
+    return _simulate(args, fmus, connections, {})
+
+
+def _simulate(args, fmus, connections, system_parameters):
+    """Run a system, writing the CSV (and plot) of ``args``; ``--set`` overrides the system's values."""
+    from crane_fmu.analysis.plots import plot_run
+    from crane_fmu.cosim import CsvRecorder, FmiError, read_csv, simulate
+    from crane_fmu.cosim.system import check_crane_parameters
+
+    parameters = {name: dict(values) for name, values in system_parameters.items()}
+    for name, values in _parse_sets(args.set, fmus).items():
+        parameters.setdefault(name, {}).update(values)
     try:
-        check_crane_parameters(parameters, fmus)
+        check_crane_parameters(parameters, [name for name in fmus if name in ("plant", "controller")])
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     _writable_file(args.out, "--out")
@@ -199,8 +216,6 @@ def _cmd_simulate(args):
         recorder.close(reason="interrupted")  # no-op when the run finished
     print(f"wrote {args.out}")
     if args.plot:
-        from crane_fmu.analysis.plots import plot_run
-
         title = "free swing" if args.no_controller else f"closed loop ({args.master}, h={args.step:g} s)"
         partial = args.plot + ".partial.png"
         plot_run(read_csv(args.out), partial, title)

@@ -14,10 +14,12 @@ def _run(capsys, *argv):
     return code, out, err
 
 
-def test_build_writes_both_fmus(tmp_path, capsys):
-    code, out, _ = _run(capsys, "build", "--out", str(tmp_path))
+def test_build_writes_both_fmus_and_the_system_files(tmp_path, capsys):
+    code, out, _ = _run(capsys, "build", "--out", str(tmp_path / "fmus"))
     assert code == 0
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["BacksteppingController.fmu", "CranePlant.fmu"]
+    assert sorted(p.name for p in (tmp_path / "fmus").iterdir()) == [
+        "BacksteppingController.fmu", "CranePlant.fmu", "OspSystemStructure.xml"]
+    assert (tmp_path / "CraneSystem.ssp").is_file()
 
 
 def test_simulate_writes_csv_and_plot(fmu_dir, tmp_path, capsys):
