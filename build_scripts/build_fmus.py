@@ -30,7 +30,7 @@ from crane_fmu.model import tables
 
 MODEL_DIR = Path(crane_fmu.model.__file__).parent
 SLAVE_DIR = Path(fmu_src.__file__).parent
-SUPPORT = SLAVE_DIR / "slave_support.py"
+SUPPORT = [SLAVE_DIR / "slave_support.py", SLAVE_DIR / "crane_logic.py"]  # bundled with the core
 
 Spec = namedtuple("Spec", "name script table feedthrough saves_state")
 CRANE_FMUS = (
@@ -46,7 +46,7 @@ BENCH_FMUS = (
 def core_name():
     """``crane_core_<hash>``: the bundled core's package name, unique per source."""
     digest = hashlib.sha256()
-    for path in sorted(MODEL_DIR.glob("*.py")) + [SUPPORT]:
+    for path in sorted(MODEL_DIR.glob("*.py")) + SUPPORT:
         digest.update(path.name.encode() + b"\0" + path.read_bytes())
     return "crane_core_" + digest.hexdigest()[:12]
 
@@ -57,15 +57,20 @@ def _stage(spec, stage_dir, core):
     package.mkdir()
     for path in MODEL_DIR.glob("*.py"):
         shutil.copy2(path, package / path.name)
-    shutil.copy2(SUPPORT, package / SUPPORT.name)
-    source = (SLAVE_DIR / spec.script).read_text()
-    source = source.replace("fmu_src.slave_support", f"{core}.slave_support")
-    source = source.replace("crane_fmu.model", core)
-    if "crane_fmu" in source or "fmu_src" in source:
-        raise RuntimeError(f"{spec.script} imports a module that is not bundled")
+    for path in SUPPORT:
+        (package / path.name).write_text(_bundled(path.read_text(), core, path.name))
     script = stage_dir / spec.script
-    script.write_text(source)
+    script.write_text(_bundled((SLAVE_DIR / spec.script).read_text(), core, spec.script))
     return script, package
+
+
+def _bundled(source, core, name):
+    """``source`` with this project's imports renamed to the bundled core package."""
+    source = source.replace("from fmu_src import", f"from {core} import")
+    source = source.replace("fmu_src.", f"{core}.").replace("crane_fmu.model", core)
+    if "crane_fmu" in source or "fmu_src" in source:
+        raise RuntimeError(f"{name} imports a module that is not bundled")
+    return source
 
 
 def build_fmu(spec, out_dir, wrapper=None):

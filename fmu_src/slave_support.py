@@ -1,8 +1,8 @@
-"""Registers a variable table (crane_fmu.model.tables) on a pythonfmu slave."""
-
-import math
+"""Registers a variable table (crane_fmu.model.tables) on a pythonfmu (FMI 2.0) slave."""
 
 from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Variability, Real, String
+
+from fmu_src.crane_logic import checked_input
 
 
 def register_table(slave, table, outputs):
@@ -28,32 +28,5 @@ def register_table(slave, table, outputs):
         else:
             setattr(slave, v.name, v.start)
             if v.causality == "input" and kind is Real:
-                common["setter"] = lambda value, name=v.name: _set_finite(slave, name, value)
+                common["setter"] = lambda value, name=v.name: setattr(slave, name, checked_input(name, value))
             slave.register_variable(kind(v.name, start=v.start, **common))
-
-
-def _set_finite(slave, name, value):
-    if not math.isfinite(value):
-        raise ValueError(f"input {name} must be finite, got {value!r}")
-    setattr(slave, name, value)
-
-
-def saved_state(slave, table, **internal):
-    """The slave's full state for fmi2GetFMUstate: every parameter and input, plus ``internal``.
-
-    JSON-able (pythonfmu serialises it with json), and exact: floats survive
-    the JSON round trip bit for bit.
-    """
-    return {"variables": {v.name: getattr(slave, v.name) for v in table if v.causality != "output"}, **internal}
-
-
-def restore_variables(slave, table, saved):
-    """Set every parameter and input back from :func:`saved_state`."""
-    for v in table:
-        if v.causality != "output":
-            setattr(slave, v.name, saved["variables"][v.name])
-
-
-def values(slave, table, causality):
-    """``{name: value}`` of the slave's variables of one causality."""
-    return {v.name: getattr(slave, v.name) for v in table if v.causality == causality}
