@@ -24,18 +24,25 @@ from pathlib import Path
 
 import crane_fmu.model
 import fmu_src
-from build_scripts.model_description import postprocess
+from build_scripts.model_description import postprocess, postprocess3
 from build_scripts.wrapper import WrapperUnavailable, compile_wrapper
 from crane_fmu.model import tables
 
 MODEL_DIR = Path(crane_fmu.model.__file__).parent
 SLAVE_DIR = Path(fmu_src.__file__).parent
-SUPPORT = [SLAVE_DIR / "slave_support.py", SLAVE_DIR / "crane_logic.py"]  # bundled with the core
+# bundled with the core, by FMI version: each version's FMUs import all of theirs, so a host
+# that loaded one FMU has the whole package in sys.modules even after that FMU's folder is gone
+SUPPORT = {2: [SLAVE_DIR / "slave_support.py", SLAVE_DIR / "crane_logic.py"],
+           3: [SLAVE_DIR / "slave_support3.py", SLAVE_DIR / "crane_logic.py"]}
 
 Spec = namedtuple("Spec", "name script table feedthrough saves_state")
 CRANE_FMUS = (
     Spec("CranePlant", "crane_plant.py", tables.PLANT, False, True),
     Spec("BacksteppingController", "backstepping_controller.py", tables.CONTROLLER, True, True),
+)
+FMI3_FMUS = (  # the same pair as FMI 3.0 co-simulation FMUs (pythonfmu3)
+    Spec("CranePlant", "crane_plant3.py", tables.PLANT, False, True),
+    Spec("BacksteppingController", "backstepping_controller3.py", tables.CONTROLLER, True, True),
 )
 BENCH_FMUS = (
     Spec("TrivialPlant", "trivial_plant.py", tables.TRIVIAL_PLANT, False, False),
@@ -43,21 +50,21 @@ BENCH_FMUS = (
 )
 
 
-def core_name():
-    """``crane_core_<hash>``: the bundled core's package name, unique per source."""
+def core_name(fmi_version=2):
+    """``crane_core<version>_<hash>``: the bundled core's package name, unique per source and FMI version."""
     digest = hashlib.sha256()
-    for path in sorted(MODEL_DIR.glob("*.py")) + SUPPORT:
+    for path in sorted(MODEL_DIR.glob("*.py")) + SUPPORT[fmi_version]:
         digest.update(path.name.encode() + b"\0" + path.read_bytes())
-    return "crane_core_" + digest.hexdigest()[:12]
+    return f"crane_core{fmi_version}_" + digest.hexdigest()[:12]
 
 
-def _stage(spec, stage_dir, core):
+def _stage(spec, stage_dir, core, fmi_version=2):
     """Copy the slave and the core to ``stage_dir`` with imports renamed to the core."""
     package = stage_dir / core
     package.mkdir()
     for path in MODEL_DIR.glob("*.py"):
         shutil.copy2(path, package / path.name)
-    for path in SUPPORT:
+    for path in SUPPORT[fmi_version]:
         (package / path.name).write_text(_bundled(path.read_text(), core, path.name))
     script = stage_dir / spec.script
     script.write_text(_bundled((SLAVE_DIR / spec.script).read_text(), core, spec.script))
@@ -73,14 +80,17 @@ def _bundled(source, core, name):
     return source
 
 
-def build_fmu(spec, out_dir, wrapper=None):
+def build_fmu(spec, out_dir, wrapper=None, fmi3=False):
     """Build one FMU into ``out_dir`` and return its path.
 
     ``wrapper`` is the compiled FMI wrapper library to use as the Linux binary
-    (None keeps pythonfmu's). The FMU is written under a temporary name and
+    (None keeps pythonfmu's); ``fmi3`` builds an FMI 3.0 FMU with pythonfmu3
+    (with pythonfmu3's binary). The FMU is written under a temporary name and
     renamed, so an existing FMU is never left half-written.
     """
-    from pythonfmu import FmuBuilder  # the build needs pythonfmu, the runtime does not
+    # the build needs pythonfmu (or pythonfmu3), the runtime does not
+    from pythonfmu import FmuBuilder
+    from pythonfmu3 import FmuBuilder as FmuBuilder3
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -88,13 +98,21 @@ def build_fmu(spec, out_dir, wrapper=None):
         tmp = Path(tmp)
         stage = tmp / "stage"
         stage.mkdir()
-        core = core_name()
-        script, package = _stage(spec, stage, core)
+        version = 3 if fmi3 else 2
+        core = core_name(version)
+        script, package = _stage(spec, stage, core, version)
         saved_path = list(sys.path)
         try:
             # The FMUs need a Python runtime, not an external tool that runs the model.
-            raw = FmuBuilder.build_FMU(script, dest=tmp / "raw", project_files=[package], needsExecutionTool=False,
-                                       canGetAndSetFMUstate=spec.saves_state, canSerializeFMUstate=spec.saves_state)
+            if fmi3:
+                raw = FmuBuilder3.build_FMU(script, dest=tmp / "raw", project_files=[package],
+                                            needsExecutionTool=False, canHandleVariableCommunicationStepSize=True,
+                                            canGetAndSetFMUState=spec.saves_state,
+                                            canSerializeFMUState=spec.saves_state)
+            else:
+                raw = FmuBuilder.build_FMU(script, dest=tmp / "raw", project_files=[package],
+                                           needsExecutionTool=False, canGetAndSetFMUstate=spec.saves_state,
+                                           canSerializeFMUstate=spec.saves_state)
         finally:
             # pythonfmu imports the staged slave and core and leaves them (and
             # the stage folder) in this process; forget them before the next build.
@@ -107,8 +125,9 @@ def build_fmu(spec, out_dir, wrapper=None):
             for item in src.infolist():
                 data = src.read(item)
                 if item.filename == "modelDescription.xml":
-                    data = postprocess(data, spec.table, tables.DISPLAY_UNITS, spec.feedthrough)
-                elif item.filename == f"binaries/linux64/{spec.name}.so" and wrapper is not None:
+                    process = postprocess3 if fmi3 else postprocess
+                    data = process(data, spec.table, tables.DISPLAY_UNITS, spec.feedthrough)
+                elif item.filename == f"binaries/linux64/{spec.name}.so" and wrapper is not None and not fmi3:
                     data = Path(wrapper).read_bytes()
                 dst.writestr(item.filename, data)
             dst.writestr("resources/slaveclass.txt", spec.name)  # read by the wrapper
@@ -119,9 +138,9 @@ def build_fmu(spec, out_dir, wrapper=None):
 def build_all(out_dir="build/fmus", specs=CRANE_FMUS, log=print):
     """Build every FMU of ``specs`` into ``out_dir``; return their paths.
 
-    With the crane pair, also write the system for other tools: the SSP package
+    With the crane pair, also write the system for other tools (the SSP package
     ``CraneSystem.ssp`` in the parent of ``out_dir`` and ``OspSystemStructure.xml``
-    beside the FMUs.
+    beside the FMUs) and the FMI 3.0 pair into :func:`fmi3_dir`.
     """
     with tempfile.TemporaryDirectory(prefix="crane_wrapper_") as tmp:
         try:
@@ -135,7 +154,13 @@ def build_all(out_dir="build/fmus", specs=CRANE_FMUS, log=print):
         from build_scripts.system_files import write_osp, write_ssp
 
         paths += [write_ssp(out_dir, Path(out_dir).parent / "CraneSystem.ssp"), write_osp(out_dir)]
+        paths += [build_fmu(spec, fmi3_dir(out_dir), fmi3=True) for spec in FMI3_FMUS]
     return paths
+
+
+def fmi3_dir(out_dir):
+    """Where the FMI 3.0 pair goes: ``build/fmi3`` next to ``build/fmus``."""
+    return Path(out_dir).parent / "fmi3"
 
 
 if __name__ == "__main__":

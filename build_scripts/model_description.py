@@ -6,23 +6,9 @@ Real carries an SI unit (angles with display unit deg), and a master can see
 which outputs are direct feedthrough.
 """
 
-import math
 import xml.etree.ElementTree as ET
 
-# SI base-unit exponents of every unit the tables use.
-BASE_UNITS = {
-    "m": {"m": 1},
-    "m/s": {"m": 1, "s": -1},
-    "m/s2": {"m": 1, "s": -2},
-    "kg": {"kg": 1},
-    "s": {"s": 1},
-    "1/s": {"s": -1},
-    "rad": {"rad": 1},
-    "rad/s": {"rad": 1, "s": -1},
-    "J": {"kg": 1, "m": 2, "s": -2},
-    "1": {},
-}
-DEG_PER_RAD = 180.0 / math.pi
+from crane_fmu.model.tables import BASE_UNITS, DEG_PER_RAD
 
 
 def _unit_definitions(units, display_units):
@@ -95,3 +81,33 @@ def postprocess(xml_bytes, table, display_units, feedthrough):
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
+
+
+def postprocess3(xml_bytes, table, display_units, feedthrough):
+    """The FMI 3.0 counterpart of :func:`postprocess` for pythonfmu3's modelDescription.xml.
+
+    pythonfmu3 already declares units natively; this adds display units, exact
+    start values and the outputs' dependencies on the inputs.
+    """
+    root = ET.fromstring(xml_bytes)
+    by_name = {v.name: v for v in table}
+    inputs = []
+    for node in root.find("ModelVariables"):
+        v = by_name.get(node.get("name"))
+        if v is None:
+            continue
+        if node.get("start") is not None and v.type == "Real":
+            node.set("start", repr(float(v.start)))
+        if v.unit in display_units:
+            node.set("displayUnit", display_units[v.unit])
+        if v.causality == "input":
+            inputs.append(node.get("valueReference"))
+    for unit in root.find("UnitDefinitions"):
+        if unit.get("name") in display_units:
+            ET.SubElement(unit, "DisplayUnit", name=display_units[unit.get("name")], factor=repr(DEG_PER_RAD))
+    for output in root.find("ModelStructure").iter("Output"):
+        output.set("dependencies", " ".join(inputs) if feedthrough else "")
+        if feedthrough:
+            output.set("dependenciesKind", " ".join(["dependent"] * len(inputs)))
+    ET.indent(root)
+    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)

@@ -10,9 +10,9 @@ import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
-from build_scripts.model_description import BASE_UNITS
 from crane_fmu.cosim.system import CRANE_CONNECTIONS, FMU_FILES
 from crane_fmu.model import tables
+from crane_fmu.model.tables import BASE_UNITS
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"

@@ -79,19 +79,7 @@ class FmuInstance:
     """
 
     def __init__(self, path, name):
-        self.name = name
-        self.md = read_model_description(str(path))
-        if self.md.coSimulation is None:
-            raise ValueError(f"{path} is not a co-simulation FMU")
-        self.variables = {v.name: v for v in self.md.modelVariables}
-        self.outputs = [v.name for v in self.md.modelVariables if v.causality == "output"]
-        self.inputs = [v.name for v in self.md.modelVariables if v.causality == "input"]
-        # Direct feedthrough: some output depends on an input (ModelStructure).
-        self.feedthrough = any(u.dependencies for u in self.md.outputs)
-        self.messages = deque(maxlen=20)  # the FMU's latest log messages
-        self.time = None
-        self._instantiated = False
-        self._unzip = extract(str(path))
+        self._describe(path, name)
         try:
             self._fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self._unzip,
                                   modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
@@ -113,6 +101,22 @@ class FmuInstance:
         # Ask for every log message. (pythonfmu 0.7 FMUs ignore this and loggingOn
         # alike and never call the logger, so their errors arrive without a reason.)
         self._call("fmi2SetDebugLogging", self._fmu.setDebugLogging, True, [])
+
+    def _describe(self, path, name):
+        """What both FMI versions share: the model description and the variable lists."""
+        self.name = name
+        self.md = read_model_description(str(path))
+        if self.md.coSimulation is None:
+            raise ValueError(f"{path} is not a co-simulation FMU")
+        self.variables = {v.name: v for v in self.md.modelVariables}
+        self.outputs = [v.name for v in self.md.modelVariables if v.causality == "output"]
+        self.inputs = [v.name for v in self.md.modelVariables if v.causality == "input"]
+        # Direct feedthrough: some output depends on an input (ModelStructure).
+        self.feedthrough = any(u.dependencies for u in self.md.outputs)
+        self.messages = deque(maxlen=20)  # the FMU's latest log messages
+        self.time = None
+        self._instantiated = False
+        self._unzip = extract(str(path))
 
     def _call(self, function, call, *args, **kwargs):
         """Run an fmpy call, turning its exceptions into FmiError."""

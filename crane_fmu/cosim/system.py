@@ -4,7 +4,8 @@ from pathlib import Path
 
 from crane_fmu.model.tables import STATE
 
-from .fmi import FmiError, FmuInstance
+from .fmi import FmiError
+from .fmi3 import open_instance
 from .master import Connection, Master, communication_points
 from .recorder import ArrayRecorder
 
@@ -27,7 +28,7 @@ def crane_system(fmu_dir=DEFAULT_FMU_DIR, controller=True):
 
 
 def check_fmu(path):
-    """Raise ValueError (one line) unless ``path`` is a readable FMI 2.0 co-simulation FMU."""
+    """Raise ValueError (one line) unless ``path`` is a readable FMI 2.0 or 3.0 co-simulation FMU."""
     from fmpy import read_model_description
 
     try:
@@ -35,8 +36,8 @@ def check_fmu(path):
     except Exception as exc:  # zip, XML and schema errors alike
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise ValueError(f"{path} is not a readable FMU ({reason})") from None
-    if md.fmiVersion != "2.0" or md.coSimulation is None:
-        raise ValueError(f"{path} is not an FMI 2.0 co-simulation FMU")
+    if md.fmiVersion not in ("2.0", "3.0") or md.coSimulation is None:
+        raise ValueError(f"{path} is not an FMI 2.0 or 3.0 co-simulation FMU")
 
 
 def settable_variables(fmu_path):
@@ -102,7 +103,7 @@ def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters
     instances = {}
     try:
         for name, path in fmus.items():
-            instances[name] = FmuInstance(path, name)
+            instances[name] = open_instance(path, name)
         master = Master(instances, connections, mode)
         master.run(start_time, stop_time, step, [recorder], parameters)
         master.terminate()

@@ -15,6 +15,21 @@ Variable.__new__.__defaults__ = ("Real",)
 
 # Display units for the SI units that users prefer to read in other units.
 DISPLAY_UNITS = {"rad": "deg", "rad/s": "deg/s"}
+DEG_PER_RAD = 180.0 / math.pi
+
+# SI base-unit exponents of every unit the tables use.
+BASE_UNITS = {
+    "m": {"m": 1},
+    "m/s": {"m": 1, "s": -1},
+    "m/s2": {"m": 1, "s": -2},
+    "kg": {"kg": 1},
+    "s": {"s": 1},
+    "1/s": {"s": -1},
+    "rad": {"rad": 1},
+    "rad/s": {"rad": 1, "s": -1},
+    "J": {"kg": 1, "m": 2, "s": -2},
+    "1": {},
+}
 
 _P, _IN, _OUT = "parameter", "input", "output"
 _FIXED, _CONT = "fixed", "continuous"

@@ -1,0 +1,100 @@
+"""FMI 3.0 co-simulation instances with the same interface as :class:`FmuInstance` (FMI 2.0)."""
+
+import ctypes
+import shutil
+
+from fmpy import read_model_description
+from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64
+
+from .fmi import FmuInstance
+
+
+class Fmu3Instance(FmuInstance):
+    """One instance of an FMI 3.0 co-simulation FMU, driven like an FMI 2.0 one by the master."""
+
+    def __init__(self, path, name):
+        self._describe(path, name)
+        self._start = self._stop = None
+        try:
+            self._fmu = FMU3Slave(guid=self.md.guid, unzipDirectory=self._unzip,
+                                  modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+            self._call("fmi3InstantiateCoSimulation", self._fmu.instantiate, loggingOn=True,
+                       logMessage=self._log)
+        except BaseException:
+            shutil.rmtree(self._unzip, ignore_errors=True)
+            raise
+        self._instantiated = True
+        dll = self._fmu.dll
+        self._get_f64, self._set_f64, self._step = dll.fmi3GetFloat64, dll.fmi3SetFloat64, dll.fmi3DoStep
+        self._flags = [fmi3Boolean() for _ in range(3)]
+        self._last = fmi3Float64()
+        self._step_refs = [ctypes.byref(f) for f in self._flags] + [ctypes.byref(self._last)]
+
+    def _log(self, environment, status, category, message):
+        self.messages.append(message.decode("utf-8", "replace") if message else "")
+
+    def set(self, name, value):
+        v = self._variable(name)
+        kind = {"Float64": "Float64", "Float32": "Float32", "String": "String", "Boolean": "Boolean"}.get(
+            v.type, "Int32")
+        convert = {"String": str, "Boolean": bool}.get(kind, float if kind.startswith("Float") else int)
+        self._call(f"fmi3Set{kind}", getattr(self._fmu, f"set{kind}"), [v.valueReference], [convert(value)])
+
+    def get(self, name):
+        v = self._variable(name)
+        kind = v.type if v.type in ("Float64", "Float32", "String", "Boolean") else "Int32"
+        return self._call(f"fmi3Get{kind}", getattr(self._fmu, f"get{kind}"), [v.valueReference])[0]
+
+    def _variable(self, name):
+        v = self.variables.get(name)
+        if v is None:
+            raise KeyError(f"{self.name} has no variable {name!r}; valid names: " + ", ".join(self.variables))
+        return v
+
+    def setup(self, start_time, stop_time=None):
+        self.time, self._start, self._stop = start_time, start_time, stop_time
+
+    def enter_initialization(self):
+        self._call("fmi3EnterInitializationMode", self._fmu.enterInitializationMode, startTime=self._start,
+                   stopTime=self._stop)
+
+    def exit_initialization(self):
+        self._call("fmi3ExitInitializationMode", self._fmu.exitInitializationMode)
+
+    def get_state(self):
+        return self._call("fmi3GetFMUState", self._fmu.getFMUState)
+
+    def set_state(self, state):
+        self._call("fmi3SetFMUState", self._fmu.setFMUState, state)
+
+    def free_state(self, state):
+        self._call("fmi3FreeFMUState", self._fmu.freeFMUState, state)
+
+    def serialize_state(self, state):
+        return bytes(self._call("fmi3SerializeFMUState", self._fmu.serializeFMUState, state))
+
+    def deserialize_state(self, data):
+        return self._call("fmi3DeserializeFMUState", self._fmu.deserializeFMUState, data)
+
+    def get_reals(self, vrs, values):
+        status = self._get_f64(self._fmu.component, vrs, len(vrs), values, len(values))
+        if status > 1:
+            self._raise("fmi3GetFloat64", status)
+
+    def set_reals(self, vrs, values):
+        status = self._set_f64(self._fmu.component, vrs, len(vrs), values, len(values))
+        if status > 1:
+            self._raise("fmi3SetFloat64", status)
+
+    def do_step(self, time, step):
+        self.time = time
+        status = self._step(self._fmu.component, time, step, True, *self._step_refs)
+        if status > 1:
+            self._raise("fmi3DoStep", status)
+        self.time = time + step
+
+
+def open_instance(path, name):
+    """An :class:`FmuInstance` or :class:`Fmu3Instance`, by the FMU's FMI version."""
+    version = read_model_description(str(path)).fmiVersion
+    return Fmu3Instance(path, name) if version.startswith("3") else FmuInstance(path, name)
