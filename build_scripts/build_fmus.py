@@ -25,7 +25,7 @@ from pathlib import Path
 import crane_fmu.model
 import fmu_src
 from build_scripts.model_description import postprocess, postprocess3
-from build_scripts.wrapper import WrapperUnavailable, compile_wrapper
+from build_scripts.wrapper import WrapperUnavailable, compile_binaries
 from crane_fmu.model import tables
 
 MODEL_DIR = Path(crane_fmu.model.__file__).parent
@@ -80,11 +80,11 @@ def _bundled(source, core, name):
     return source
 
 
-def build_fmu(spec, out_dir, wrapper=None, fmi3=False):
+def build_fmu(spec, out_dir, binaries=None, fmi3=False):
     """Build one FMU into ``out_dir`` and return its path.
 
-    ``wrapper`` is the compiled FMI wrapper library to use as the Linux binary
-    (None keeps pythonfmu's); ``fmi3`` builds an FMI 3.0 FMU with pythonfmu3
+    ``binaries`` are the compiled ``(loader, wrapper)`` to use as the Linux
+    binary (None keeps pythonfmu's); ``fmi3`` builds an FMI 3.0 FMU with pythonfmu3
     (with pythonfmu3's binary). The FMU is written under a temporary name and
     renamed, so an existing FMU is never left half-written.
     """
@@ -127,8 +127,9 @@ def build_fmu(spec, out_dir, wrapper=None, fmi3=False):
                 if item.filename == "modelDescription.xml":
                     process = postprocess3 if fmi3 else postprocess
                     data = process(data, spec.table, tables.DISPLAY_UNITS, spec.feedthrough)
-                elif item.filename == f"binaries/linux64/{spec.name}.so" and wrapper is not None and not fmi3:
-                    data = Path(wrapper).read_bytes()
+                elif item.filename == f"binaries/linux64/{spec.name}.so" and binaries is not None and not fmi3:
+                    data = Path(binaries[0]).read_bytes()
+                    dst.write(binaries[1], "binaries/linux64/PythonWrapper.so")
                 dst.writestr(item.filename, data)
             dst.writestr("resources/slaveclass.txt", spec.name)  # read by the wrapper
         os.replace(partial, final)
@@ -144,12 +145,12 @@ def build_all(out_dir="build/fmus", specs=CRANE_FMUS, log=print):
     """
     with tempfile.TemporaryDirectory(prefix="crane_wrapper_") as tmp:
         try:
-            wrapper = compile_wrapper(tmp)
+            binaries = compile_binaries(tmp)
         except WrapperUnavailable as exc:
             log(f"warning: {exc}; the FMUs keep pythonfmu's binary, which loads only in Python hosts "
                 "and reports no error messages")
-            wrapper = None
-        paths = [build_fmu(spec, out_dir, wrapper) for spec in specs]
+            binaries = None
+        paths = [build_fmu(spec, out_dir, binaries) for spec in specs]
     if all(spec in specs for spec in CRANE_FMUS):
         from build_scripts.system_files import write_osp, write_ssp
 

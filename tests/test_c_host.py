@@ -104,3 +104,50 @@ def test_c_host_runs_the_closed_loop_like_our_master(crane_fmus, tmp_path):
     expected = np.column_stack([ours["time"]] + [ours["plant." + s] for s in STATE] + [ours["controller.u"]])
     assert c_rows.shape == expected.shape == (501, 8)
     assert np.array_equal(c_rows, expected)  # same Python code, same inputs: bit for bit
+
+
+MISSING = r"""
+#include <dlfcn.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+typedef struct {
+    void (*logger)(void *, const char *, int, const char *, const char *, ...);
+    void *(*alloc)(size_t, size_t); void (*release)(void *); void *step_finished; void *env;
+} Callbacks;
+static void logger(void *env, const char *name, int status, const char *category, const char *format, ...) {
+    va_list args; va_start(args, format);
+    printf("[%d] ", status); vprintf(format, args); putchar('\n');
+    va_end(args);
+}
+typedef void *(*Instantiate)(const char *, int, const char *, const char *, const Callbacks *, int, int);
+int main(int argc, char **argv) {
+    void *so = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+    if (!so) { printf("dlopen failed: %s\n", dlerror()); return 3; }
+    Callbacks cb = {logger, calloc, free, NULL, NULL};
+    void *c = ((Instantiate)dlsym(so, "fmi2Instantiate"))("plant", 1, "", argv[2], &cb, 0, 0);
+    printf("instance %s\n", c ? "created" : "NULL");
+    return 0;
+}
+"""
+
+
+def test_missing_python_is_a_message_from_fmi2instantiate(tmp_path):
+    """An FMU whose Python is absent still loads; fmi2Instantiate says what is missing and returns NULL."""
+    from build_scripts.build_fmus import CRANE_FMUS, build_fmu
+    from build_scripts.wrapper import compile_binaries
+
+    compiler = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
+    if compiler is None:
+        pytest.skip("no C compiler")
+    binaries = compile_binaries(tmp_path, libpython="/nonexistent/libpython9.9.so.1.0")
+    fmu = build_fmu(CRANE_FMUS[0], tmp_path / "fmus", binaries)
+    md, library, resources = _unpack(fmu, tmp_path / "plant")
+    (tmp_path / "missing.c").write_text(MISSING)
+    subprocess.run([compiler, str(tmp_path / "missing.c"), "-o", str(tmp_path / "missing"), "-ldl"], check=True)
+    proc = subprocess.run([str(tmp_path / "missing"), str(library), resources], capture_output=True, text=True,
+                          timeout=60)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "instance NULL" in proc.stdout
+    assert ("[3] fmi2Instantiate: this FMU runs Python models and needs the CPython it was built with "
+            "(libpython9.9.so.1.0, at /nonexistent/libpython9.9.so.1.0)") in proc.stdout
