@@ -12,8 +12,8 @@ from fmpy import read_model_description
 from crane_fmu.cosim import CRANE_CONNECTIONS, simulate
 from crane_fmu.model.tables import STATE
 
-# Gauss-Seidel closed loop: read plant states, set controller inputs, read u, set plant u, step both.
-HOST = r"""
+# What both C hosts share: the FMI 2.0 callbacks and a logger printing "[status] message" to stdout.
+PRELUDE = r"""
 #include <dlfcn.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -24,10 +24,14 @@ typedef struct {
 } Callbacks;
 static void logger(void *env, const char *name, int status, const char *category, const char *format, ...) {
     va_list args; va_start(args, format);
-    fprintf(stderr, "%s [%d]: ", name, status); vfprintf(stderr, format, args); fputc('\n', stderr);
+    fprintf(stderr, "[%d] ", status); vfprintf(stderr, format, args); fputc('\n', stderr);
     va_end(args);
 }
 typedef void *(*Instantiate)(const char *, int, const char *, const char *, const Callbacks *, int, int);
+"""
+
+# Gauss-Seidel closed loop: read plant states, set controller inputs, read u, set plant u, step both.
+HOST = PRELUDE + r"""
 typedef int (*Call)(void *);
 typedef int (*Setup)(void *, int, double, double, int, double);
 typedef int (*Reals)(void *, const unsigned *, size_t, double *);
@@ -106,21 +110,7 @@ def test_c_host_runs_the_closed_loop_like_our_master(crane_fmus, tmp_path):
     assert np.array_equal(c_rows, expected)  # same Python code, same inputs: bit for bit
 
 
-MISSING = r"""
-#include <dlfcn.h>
-#include <stdarg.h>
-#include <stdio.h>
-#include <stdlib.h>
-typedef struct {
-    void (*logger)(void *, const char *, int, const char *, const char *, ...);
-    void *(*alloc)(size_t, size_t); void (*release)(void *); void *step_finished; void *env;
-} Callbacks;
-static void logger(void *env, const char *name, int status, const char *category, const char *format, ...) {
-    va_list args; va_start(args, format);
-    printf("[%d] ", status); vprintf(format, args); putchar('\n');
-    va_end(args);
-}
-typedef void *(*Instantiate)(const char *, int, const char *, const char *, const Callbacks *, int, int);
+MISSING = PRELUDE + r"""
 int main(int argc, char **argv) {
     void *so = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
     if (!so) { printf("dlopen failed: %s\n", dlerror()); return 3; }
@@ -150,4 +140,4 @@ def test_missing_python_is_a_message_from_fmi2instantiate(tmp_path):
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "instance NULL" in proc.stdout
     assert ("[3] fmi2Instantiate: this FMU runs Python models and needs the CPython it was built with "
-            "(libpython9.9.so.1.0, at /nonexistent/libpython9.9.so.1.0)") in proc.stdout
+            "(libpython9.9.so.1.0, at /nonexistent/libpython9.9.so.1.0)") in proc.stderr
