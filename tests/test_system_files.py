@@ -109,6 +109,6 @@ def test_libcosim_runs_the_system_like_our_jacobi_master(system_files, crane_fmu
         times, values = np.array(theirs[name][0]), np.array(theirs[name][1])
         assert len(times) > 900
         index = np.rint(times / 1e-3).astype(int)
-        # libcosim steps the same FMUs in the same Jacobi pattern; the paper's stiff loop
-        # (K1_theta2 K2_theta2 = 37820 1/s2) amplifies rounding differences to ~1e-15 over 1 s.
-        assert np.abs(values - ours["plant." + name][index]).max() < 1e-9
+        # libcosim steps the same FMUs in the same Jacobi pattern, yet not bit for bit (measured
+        # 3e-15 rad on theta1 after 2 s, the paper's stiff loop amplifying rounding); bound 1e-12.
+        assert np.abs(values - ours["plant." + name][index]).max() < 1e-12
