@@ -38,10 +38,11 @@ def run_bench(stop_time=20.0, step=1e-3, repeat=5, out=print):
     communication_points(0.0, stop_time, step)
     with tempfile.TemporaryDirectory(prefix="crane_bench_") as tmp:
         tmp = Path(tmp)
-        built = {p.stem: p for p in build_all(tmp / "fmus", CRANE_FMUS + BENCH_FMUS)}
+        built = tmp / "fmus"
+        build_all(built, CRANE_FMUS + BENCH_FMUS, log=lambda _: None)
         pairs = {
-            "crane": {"plant": built["CranePlant"], "controller": built["BacksteppingController"]},
-            "floor": {"plant": built["TrivialPlant"], "controller": built["TrivialController"]},
+            "crane": {"plant": built / "CranePlant.fmu", "controller": built / "BacksteppingController.fmu"},
+            "floor": {"plant": built / "TrivialPlant.fmu", "controller": built / "TrivialController.fmu"},
         }
         times = {name: [] for name in pairs}
         for _ in range(repeat):  # alternate, so drifts in machine load hit both
@@ -75,12 +76,12 @@ def run_sweep_bench(n_cases=16, stop_time=10.0, step=1e-3, out=print):
     """
     from distributed import Client, LocalCluster
 
+    from crane_fmu.sweep import spec
     from crane_fmu.sweep.runner import fmu_blobs, run_case
 
-    communication_points(0.0, stop_time, step)
-    settings = {"stop_time": stop_time, "step": step, "master": "gauss-seidel", "controller": True}
+    study = spec.parse({"stop_time": stop_time, "step": step, "metrics": ["outcome", "max_theta1_deg"]})
+    settings, metrics = study.settings(), study.metrics
     cases = [{"plant.theta1_0": 0.01 * (1 + i % 8), "controller.w_theta2": 0.0} for i in range(n_cases)]
-    metrics = ("outcome", "max_theta1_deg")
     figures = {}
     with tempfile.TemporaryDirectory(prefix="crane_bench_") as tmp:
         build_all(Path(tmp) / "fmus", CRANE_FMUS)
@@ -136,8 +137,9 @@ def run_endurance(stop_time=3600.0, step=1e-3, out=print):
     """One long closed-loop run recorded to CSV, sampling memory every simulated minute."""
     n = communication_points(0.0, stop_time, step)
     with tempfile.TemporaryDirectory(prefix="crane_endurance_") as tmp:
-        built = build_all(Path(tmp) / "fmus", CRANE_FMUS, log=lambda _: None)
-        fmus = {"plant": built[0], "controller": built[1]}
+        built = Path(tmp) / "fmus"
+        build_all(built, CRANE_FMUS, log=lambda _: None)
+        fmus = {"plant": built / "CranePlant.fmu", "controller": built / "BacksteppingController.fmu"}
         instances = {name: FmuInstance(path, name) for name, path in fmus.items()}
         probe = _MemoryProbe(max(1, round(60.0 / step)))
         csv_path = Path(tmp) / "endurance.csv"

@@ -120,3 +120,14 @@ def test_unreadable_fmu_is_one_line(tmp_path, fmu_dir, capsys):
     code, _, err = _run(capsys, "simulate", "--fmu-dir", str(tmp_path), "--out", str(tmp_path / "r.csv"))
     assert code == 2 and err.count("\n") == 1
     assert "CranePlant.fmu is not a readable FMU" in err
+
+
+@pytest.mark.parametrize("argv, expect", [
+    (["bench", "--stop-time", "0.2", "--repeat", "1"], "ratio crane / floor:"),
+    (["bench", "--endurance", "--stop-time", "2"], "resident memory:"),
+    (["bench", "--sweep", "--cases", "2", "--stop-time", "0.2"], "parallel efficiency on 2 workers:"),
+])
+def test_benchmarks_run_and_print_their_figures(capsys, argv, expect):
+    """A smoke test only: the figures themselves are measured with crane-fmu bench, not asserted here."""
+    assert main(argv) == 0
+    assert expect in capsys.readouterr().out
