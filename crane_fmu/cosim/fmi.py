@@ -55,7 +55,7 @@ class FmiError(RuntimeError):
     status : str
         ``"error"``, ``"fatal"``, ...
     messages : list of str
-        What the FMU logged during the call.
+        The FMU's latest log messages; the last one is normally the reason.
     """
 
     def __init__(self, instance, function, time, status, messages=()):
