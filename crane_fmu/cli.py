@@ -63,8 +63,8 @@ def _parser():
 
     p = sub.add_parser("simulate", help="co-simulate the plant (and controller) FMUs",
                        epilog=EXAMPLES["simulate"], formatter_class=fmt)
-    p.add_argument("--fmu-dir", default="build/fmus", help="folder of the built FMUs")
-    p.add_argument("--system", help="run the system of an SSP file (.ssp or .ssd) instead, e.g. build/CraneSystem.ssp")
+    p.add_argument("--system", help="SSP file (.ssp or .ssd) of the system to run (default: build/CraneSystem.ssp)")
+    p.add_argument("--fmu-dir", help="instead: the crane pair in this folder, connected as in CraneSystem.ssp")
     p.add_argument("--stop-time", type=_number, default=20.0, help="stop time [s] (default 20)")
     p.add_argument("--step", type=_number, default=1e-3, help="communication step [s] (default 0.001)")
     p.add_argument("--master", choices=("gauss-seidel", "jacobi"), default="gauss-seidel",
@@ -172,15 +172,20 @@ def _cmd_simulate(args):
     from crane_fmu.cosim import crane_system
     from crane_fmu.cosim.master import communication_points
     from crane_fmu.cosim.ssp import load_system
+    from crane_fmu.cosim.system import DEFAULT_FMU_DIR, DEFAULT_SYSTEM
 
     try:
         communication_points(0.0, args.stop_time, args.step)
-        if args.system:
-            if args.no_controller:
-                raise ValueError("--no-controller applies to the built-in system, not to --system")
-            with load_system(args.system) as system:
+        if args.system and (args.fmu_dir or args.no_controller):
+            raise ValueError("--system runs the file's system: it excludes --fmu-dir and --no-controller")
+        if args.fmu_dir or args.no_controller:  # the crane pair (or the plant alone) from a folder
+            fmus, connections = crane_system(args.fmu_dir or DEFAULT_FMU_DIR, controller=not args.no_controller)
+        else:
+            system_file = args.system or DEFAULT_SYSTEM
+            if not args.system and not system_file.is_file():
+                raise ValueError(f"{system_file} not found: build the FMUs first (crane-fmu build)")
+            with load_system(system_file) as system:
                 return _simulate(args, system.fmus, system.connections, system.parameters)
-        fmus, connections = crane_system(args.fmu_dir, controller=not args.no_controller)
     except (ValueError, FileNotFoundError) as exc:
         raise UsageError(str(exc)) from None
     return _simulate(args, fmus, connections, {})

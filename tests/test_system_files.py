@@ -112,3 +112,16 @@ def test_libcosim_runs_the_system_like_our_jacobi_master(system_files, crane_fmu
         # libcosim steps the same FMUs in the same Jacobi pattern, yet not bit for bit (measured
         # 3e-15 rad on theta1 after 2 s, the paper's stiff loop amplifying rounding); bound 1e-12.
         assert np.abs(values - ours["plant." + name][index]).max() < 1e-12
+
+
+def test_the_default_system_is_build_crane_system_ssp(system_files, fmu_dir, tmp_path, monkeypatch, capsys):
+    ssp, _ = system_files
+    (tmp_path / "build").mkdir()
+    (tmp_path / "build" / "CraneSystem.ssp").write_bytes(ssp.read_bytes())
+    monkeypatch.chdir(tmp_path)
+    assert main(["simulate", "--stop-time", "1", "--out", "default.csv"]) == 0
+    assert main(["simulate", "--fmu-dir", str(fmu_dir), "--stop-time", "1", "--out", "dir.csv"]) == 0
+    assert (tmp_path / "default.csv").read_bytes() == (tmp_path / "dir.csv").read_bytes()
+    (tmp_path / "build" / "CraneSystem.ssp").unlink()
+    assert main(["simulate", "--stop-time", "1", "--out", "x.csv"]) == 2
+    assert "build/CraneSystem.ssp not found: build the FMUs first" in capsys.readouterr().err

@@ -10,6 +10,7 @@ from .master import Connection, Master, communication_points
 from .recorder import ArrayRecorder
 
 DEFAULT_FMU_DIR = Path("build/fmus")
+DEFAULT_SYSTEM = Path("build/CraneSystem.ssp")  # written by crane-fmu build beside build/fmus
 FMU_FILES = {"plant": "CranePlant.fmu", "controller": "BacksteppingController.fmu"}
 CRANE_CONNECTIONS = [Connection("plant", s, "controller", s) for s in STATE] + [
     Connection("controller", "u", "plant", "u")]
