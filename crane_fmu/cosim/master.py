@@ -204,14 +204,3 @@ class Master:
     def terminate(self):
         for inst in self.instances.values():
             inst.terminate()
-
-    def free(self):
-        """Free every instance, even if some fail to free."""
-        errors = []
-        for inst in self.instances.values():
-            try:
-                inst.free()
-            except Exception as exc:  # keep freeing the others
-                errors.append(exc)
-        if errors:
-            raise errors[0]
