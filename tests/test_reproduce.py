@@ -76,8 +76,9 @@ def test_figure4_metrics_recomputed_with_scipy(quick):
     # RK4 at 1 ms vs DOP853 at 1e-12: the peaks agree to ~1e-9 rad.
     assert row["ratio_max_theta2_to_theta1_0"] == pytest.approx(np.abs(theta2).max() / math.radians(10), rel=1e-6)
     freqs, power = periodogram(theta1 - theta1.mean(), fs=1 / (times[1] - times[0]), nfft=2 ** 18)
-    # the metric interpolates between FFT bins; the periodogram's bin spacing is 0.0004 Hz
-    assert row["freqs_theta1_hz"][0] == pytest.approx(freqs[np.argmax(power)], abs=0.01)
+    # the metric interpolates a Hann-windowed spectrum; the periodogram's bins are 0.0004 Hz apart.
+    # Measured: within 1.5e-4 Hz on every Figure 4 case; bound 1e-3 Hz.
+    assert row["freqs_theta1_hz"][0] == pytest.approx(freqs[np.argmax(power)], abs=1e-3)
 
 
 def test_figure7_weighted_law_metrics_recomputed_with_scipy(quick):
