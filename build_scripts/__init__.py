@@ -1,1 +1,1 @@
-"""Builds the FMUs (pythonfmu) and post-processes their modelDescription.xml."""
+"""Builds the FMUs of registered components and the system files (installed as crane_fmu.build_scripts)."""

@@ -13,7 +13,7 @@ import sys
 import sysconfig
 from pathlib import Path
 
-import fmu_src
+import crane_fmu.fmu_src as fmu_src
 
 WRAPPER = Path(fmu_src.__file__).parent / "fmi2_wrapper.c"
 LOADER = Path(fmu_src.__file__).parent / "fmi2_loader.c"

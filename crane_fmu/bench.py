@@ -1,9 +1,9 @@
 """Benchmark: microseconds per communication step, crane pair against the framework floor.
 
 The floor is the same master driving two trivial pythonfmu FMUs with the crane
-pair's 6+1 connected signals (``fmu_src/trivial_*.py``). Both pairs are built
-fresh, run alternately in the same process, record every step to a CSV file,
-and are timed from initialisation to the last step (loading excluded).
+pair's 6+1 connected signals (``crane_fmu/model/benchmark.py``). Both pairs are
+built fresh, run alternately in the same process, record every step to a CSV
+file, and are timed from initialisation to the last step (loading excluded).
 """
 
 import os
@@ -12,16 +12,26 @@ import tempfile
 import time
 from pathlib import Path
 
-from build_scripts.build_fmus import BENCH_FMUS, CRANE_FMUS, build_all
-from crane_fmu.cosim import CRANE_CONNECTIONS, CsvRecorder, FmuInstance, Master
+from crane_fmu import systems
+from crane_fmu.build_scripts.build_fmus import build_all
+from crane_fmu.cosim import CsvRecorder, Master, System, open_instance
 from crane_fmu.cosim.master import communication_points
 
+FLOOR = System("floor", {"plant": "TrivialPlant", "controller": "TrivialController"},
+               description="the benchmark floor: the crane pair's signals, next to no computation")
 
-def _timed_run(fmus, stop_time, step, csv_path):
-    instances = {name: FmuInstance(path, name) for name, path in fmus.items()}
+
+def _open(system, fmu_dir):
+    """``(instances, connections)`` of a system, instantiated."""
+    fmus, connections = system.resolve(fmu_dir)
+    return {name: open_instance(path, name) for name, path in fmus.items()}, connections
+
+
+def _timed_run(system, fmu_dir, stop_time, step, csv_path):
+    instances, connections = _open(system, fmu_dir)
     try:
         recorder = CsvRecorder(csv_path)
-        master = Master(instances, CRANE_CONNECTIONS)
+        master = Master(instances, connections)
         start = time.perf_counter()
         n = master.run(0.0, stop_time, step, [recorder])
         recorder.close()
@@ -39,15 +49,14 @@ def run_bench(stop_time=20.0, step=1e-3, repeat=5, out=print):
     with tempfile.TemporaryDirectory(prefix="crane_bench_") as tmp:
         tmp = Path(tmp)
         built = tmp / "fmus"
-        build_all(built, CRANE_FMUS + BENCH_FMUS, log=lambda _: None)
-        pairs = {
-            "crane": {"plant": built / "CranePlant.fmu", "controller": built / "BacksteppingController.fmu"},
-            "floor": {"plant": built / "TrivialPlant.fmu", "controller": built / "TrivialController.fmu"},
-        }
+        paper = systems.get("paper")
+        build_all(built, set(paper.instances.values()) | set(FLOOR.instances.values()), systems=(), fmi3=False,
+                  log=lambda _: None)
+        pairs = {"crane": paper, "floor": FLOOR}
         times = {name: [] for name in pairs}
         for _ in range(repeat):  # alternate, so drifts in machine load hit both
-            for name, fmus in pairs.items():
-                elapsed, n = _timed_run(fmus, stop_time, step, tmp / f"{name}.csv")
+            for name, system in pairs.items():
+                elapsed, n = _timed_run(system, built, stop_time, step, tmp / f"{name}.csv")
                 times[name].append(elapsed)
     med = {name: statistics.median(t) for name, t in times.items()}
     us = {name: 1e6 * m / n for name, m in med.items()}
@@ -77,23 +86,24 @@ def run_sweep_bench(n_cases=16, stop_time=10.0, step=1e-3, out=print):
     from distributed import Client, LocalCluster
 
     from crane_fmu.sweep import spec
-    from crane_fmu.sweep.runner import fmu_blobs, run_case
+    from crane_fmu.sweep.runner import run_case, shippable
 
     study = spec.parse({"stop_time": stop_time, "step": step, "metrics": ["outcome", "max_theta1_deg"]})
     settings, metrics = study.settings(), study.metrics
     cases = [{"plant.theta1_0": 0.01 * (1 + i % 8), "controller.w_theta2": 0.0} for i in range(n_cases)]
     figures = {}
     with tempfile.TemporaryDirectory(prefix="crane_bench_") as tmp:
-        build_all(Path(tmp) / "fmus", CRANE_FMUS)
-        blobs = fmu_blobs(Path(tmp) / "fmus")
+        paper = systems.get("paper")
+        build_all(Path(tmp) / "fmus", paper.instances.values(), systems=(), fmi3=False, log=lambda _: None)
+        system = shippable(paper, Path(tmp) / "fmus")
         for workers in (1, 2):
             with LocalCluster(n_workers=workers, threads_per_worker=1, dashboard_address=None,
                               silence_logs=50) as cluster, Client(cluster) as client:
-                shipped = client.scatter([blobs], broadcast=True)[0]
-                client.gather(client.map(run_case, cases[:workers], settings=settings, blobs=shipped,
+                shipped = client.scatter([system], broadcast=True)[0]
+                client.gather(client.map(run_case, cases[:workers], settings=settings, system=shipped,
                                          metric_names=metrics, pure=False))
                 start = time.perf_counter()
-                rows = client.gather(client.map(run_case, cases, settings=settings, blobs=shipped,
+                rows = client.gather(client.map(run_case, cases, settings=settings, system=shipped,
                                                 metric_names=metrics, pure=False))
                 figures[workers] = (time.perf_counter() - start, rows)
     wall1, rows1 = figures[1]
@@ -127,7 +137,10 @@ class _MemoryProbe:
     def __init__(self, every):
         self.every, self.count, self.samples = every, 0, []
 
-    def observe(self, time, ports):
+    def start(self, names):
+        pass
+
+    def observe(self, time, values):
         if self.count % self.every == 0:
             self.samples.append((time, _rss_mb()))
         self.count += 1
@@ -138,14 +151,14 @@ def run_endurance(stop_time=3600.0, step=1e-3, out=print):
     n = communication_points(0.0, stop_time, step)
     with tempfile.TemporaryDirectory(prefix="crane_endurance_") as tmp:
         built = Path(tmp) / "fmus"
-        build_all(built, CRANE_FMUS, log=lambda _: None)
-        fmus = {"plant": built / "CranePlant.fmu", "controller": built / "BacksteppingController.fmu"}
-        instances = {name: FmuInstance(path, name) for name, path in fmus.items()}
+        paper = systems.get("paper")
+        build_all(built, paper.instances.values(), systems=(), fmi3=False, log=lambda _: None)
+        instances, connections = _open(paper, built)
         probe = _MemoryProbe(max(1, round(60.0 / step)))
         csv_path = Path(tmp) / "endurance.csv"
         try:
             recorder = CsvRecorder(csv_path)
-            master = Master(instances, CRANE_CONNECTIONS)
+            master = Master(instances, connections)
             # the weighted law (1, 1, 0) converges, so the run stays finite for the whole hour
             start = time.perf_counter()
             master.run(0.0, stop_time, step, [recorder, probe], {"controller": {"w_theta2": 0.0}})

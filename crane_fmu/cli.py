@@ -1,5 +1,6 @@
 """The ``crane-fmu`` command: build, simulate, describe, reproduce the paper, sweep, benchmark.
 
+Every command that runs something takes a system by name or as an SSP file.
 User mistakes print one line and exit with status 2; an FMU failing during a
 run prints one line and exits with status 1.
 """
@@ -15,7 +16,8 @@ EXAMPLES = {
     "simulate": (
         "examples:\n"
         "  crane-fmu simulate --out results/section5.csv --plot results/section5.png\n"
-        "  crane-fmu simulate --no-controller --stop-time 10 --out free.csv\n"
+        "  crane-fmu simulate --system free --stop-time 10 --out free.csv\n"
+        "  crane-fmu simulate --system build/systems/paper.ssp --parameters my.ssv\n"
         "  crane-fmu simulate --master jacobi --step 0.01 --set controller.w_theta2=0\n"
         "  crane-fmu simulate --set plant.l1=1.5 --set controller.l1=1.5 --set plant.theta1_0=0.2"),
     "info": "examples:\n  crane-fmu info\n  crane-fmu info --markdown",
@@ -56,28 +58,32 @@ def _parser():
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     fmt = argparse.RawDescriptionHelpFormatter
 
-    p = sub.add_parser("build", help="build CranePlant.fmu and BacksteppingController.fmu",
+    p = sub.add_parser("build", help="build the FMUs of every component and the files of every built-in system",
                        epilog=EXAMPLES["build"], formatter_class=fmt)
-    p.add_argument("--out", default="build/fmus", help="output folder (default: build/fmus)")
+    p.add_argument("--out", default="build/fmus",
+                   help="FMI 2.0 FMUs (default: build/fmus); FMI 3.0 ones and systems/ go beside it")
     p.add_argument("--bench", action="store_true", help="also build the benchmark's trivial FMUs")
 
-    p = sub.add_parser("simulate", help="co-simulate the plant (and controller) FMUs",
+    p = sub.add_parser("simulate", help="co-simulate a system of FMUs",
                        epilog=EXAMPLES["simulate"], formatter_class=fmt)
-    p.add_argument("--system", help="SSP file (.ssp or .ssd) of the system to run (default: build/CraneSystem.ssp)")
-    p.add_argument("--fmu-dir", help="instead: the crane pair in this folder, connected as in CraneSystem.ssp")
-    p.add_argument("--stop-time", type=_number, default=20.0, help="stop time [s] (default 20)")
-    p.add_argument("--step", type=_number, default=1e-3, help="communication step [s] (default 0.001)")
+    p.add_argument("--system", default="paper",
+                   help="a built-in system's name (crane-fmu info lists them) or an SSP file (default: paper)")
+    p.add_argument("--fmu-dir", default="build/fmus", help="folder of the built FMUs (default: build/fmus)")
+    p.add_argument("--stop-time", type=_number, help="stop time [s] (default: the system's, 20 s built in)")
+    p.add_argument("--step", type=_number, help="communication step [s] (default: the system's, 1 ms built in)")
     p.add_argument("--master", choices=("gauss-seidel", "jacobi"), default="gauss-seidel",
                    help="master algorithm (default gauss-seidel)")
-    p.add_argument("--no-controller", action="store_true", help="free swing: the plant alone, u = 0")
+    p.add_argument("--no-controller", action="store_true", help=argparse.SUPPRESS)  # replaced by --system free
+    p.add_argument("--parameters", metavar="FILE.ssv",
+                   help="SSP parameter set with names INSTANCE.VARIABLE, applied before --set")
     p.add_argument("--set", action="append", default=[], metavar="INSTANCE.VARIABLE=VALUE",
-                   help="set a parameter before initialisation (repeatable); instances: plant, controller")
+                   help="set a parameter before initialisation (repeatable)")
     p.add_argument("--out", default="results/simulation.csv",
                    help="result CSV (default results/simulation.csv)")
-    p.add_argument("--plot", help="also write a PNG plot of x, theta1, theta2 and u")
+    p.add_argument("--plot", help="also write a PNG plot of x, theta1, theta2 and u (or of every output)")
 
-    p = sub.add_parser("info", help="describe the FMUs' variables", epilog=EXAMPLES["info"],
-                       formatter_class=fmt)
+    p = sub.add_parser("info", help="list the built-in systems and the components' variables",
+                       epilog=EXAMPLES["info"], formatter_class=fmt)
     p.add_argument("--markdown", action="store_true", help="print the variable tables as Markdown")
 
     p = sub.add_parser("reproduce", help="reproduce the paper's Figures 4, 5, 7, 8 and write REPORT.md",
@@ -161,58 +167,53 @@ def _writable_file(path, option):
 
 
 def _cmd_build(args):
-    from build_scripts.build_fmus import BENCH_FMUS, CRANE_FMUS, build_all
+    from crane_fmu import components
+    from crane_fmu.build_scripts.build_fmus import build_all
 
-    for path in build_all(args.out, CRANE_FMUS + (BENCH_FMUS if args.bench else ())):
+    kinds = [c.model_identifier for c in components.all() if args.bench or c.role != "benchmark"]
+    for path in build_all(args.out, kinds):
         print(path)
     return 0
 
 
 def _cmd_simulate(args):
-    from crane_fmu.cosim import crane_system
-    from crane_fmu.cosim.master import communication_points
-    from crane_fmu.cosim.ssp import load_system
-    from crane_fmu.cosim.system import DEFAULT_FMU_DIR, DEFAULT_SYSTEM
+    from crane_fmu import systems
 
+    if args.no_controller:
+        raise UsageError("--no-controller is gone: run the plant alone with --system free")
     try:
-        communication_points(0.0, args.stop_time, args.step)
-        if args.system and (args.fmu_dir or args.no_controller):
-            raise ValueError("--system runs the file's system: it excludes --fmu-dir and --no-controller")
-        if args.fmu_dir or args.no_controller:  # the crane pair (or the plant alone) from a folder
-            fmus, connections = crane_system(args.fmu_dir or DEFAULT_FMU_DIR, controller=not args.no_controller)
-        else:
-            system_file = args.system or DEFAULT_SYSTEM
-            if not args.system and not system_file.is_file():
-                raise ValueError(f"{system_file} not found: build the FMUs first (crane-fmu build)")
-            with load_system(system_file) as system:
-                return _simulate(args, system.fmus, system.connections, system.parameters)
-    except (ValueError, FileNotFoundError) as exc:
-        raise UsageError(str(exc)) from None
-    return _simulate(args, fmus, connections, {})
-
-
-def _simulate(args, fmus, connections, system_parameters):
-    """Run a system, writing the CSV (and plot) of ``args``; ``--set`` overrides the system's values."""
-    from crane_fmu.analysis.plots import plot_run
-    from crane_fmu.cosim import CsvRecorder, FmiError, read_csv, simulate
-    from crane_fmu.cosim.system import check_crane_parameters
-
-    parameters = {name: dict(values) for name, values in system_parameters.items()}
-    for name, values in _parse_sets(args.set, fmus).items():
-        parameters.setdefault(name, {}).update(values)
-    try:
-        check_crane_parameters(parameters, [name for name in fmus if name in ("plant", "controller")])
+        with systems.open_system(args.system) as system:
+            return _simulate(args, system)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+
+
+def _simulate(args, system):
+    """Run a system, writing the CSV (and plot) of ``args``; ``--parameters`` and ``--set`` override its values."""
+    from crane_fmu import systems
+    from crane_fmu.analysis.plots import plot_run
+    from crane_fmu.cosim import CsvRecorder, FmiError, read_csv, simulate
+    from crane_fmu.cosim.master import communication_points
+    from crane_fmu.cosim.ssp import load_parameters
+
+    stop_time = system.stop_time if args.stop_time is None else args.stop_time
+    step = system.step if args.step is None else args.step
+    communication_points(system.start_time, stop_time, step)
+    fmus, connections = system.resolve(args.fmu_dir)
+    if args.parameters:
+        system = system.with_parameters(load_parameters(args.parameters))
+    system = system.with_parameters(_parse_sets(args.set, fmus))
+    systems.check_parameters(system, args.fmu_dir)
     _writable_file(args.out, "--out")
     if args.plot:
         _writable_file(args.plot, "--plot")
     recorder = CsvRecorder(args.out)
     try:
-        simulate(fmus, connections, args.stop_time, args.step, args.master, parameters, recorder)
+        simulate(fmus, connections, stop_time, step, args.master, system.parameters, recorder, system.start_time)
     except FmiError as exc:
         # Bad parameter values are refused when initialisation ends: the user's mistake.
-        if exc.function in ("fmi2ExitInitializationMode", "fmi2SetReal", "fmi2SetString"):
+        if exc.time is None or exc.function.endswith(("ExitInitializationMode", "SetReal", "SetFloat64",
+                                                       "SetString")):
             raise UsageError(str(exc)) from None
         print(f"crane-fmu: simulation failed: {exc} (results up to t={exc.time:.9g} s in {args.out})",
               file=sys.stderr)
@@ -221,44 +222,55 @@ def _simulate(args, fmus, connections, system_parameters):
         recorder.close(reason="interrupted")  # no-op when the run finished
     print(f"wrote {args.out}")
     if args.plot:
-        title = "free swing" if args.no_controller else f"closed loop ({args.master}, h={args.step:g} s)"
         partial = args.plot + ".partial.png"
-        plot_run(read_csv(args.out), partial, title)
+        plot_run(read_csv(args.out), partial, f"{system.name} ({args.master}, h={step:g} s)")
         os.replace(partial, args.plot)
         print(f"wrote {args.plot}")
     return 0
 
 
-def _cmd_info(args):
-    from crane_fmu.model.tables import DISPLAY_UNITS, TABLES
+def _variable_table(component, markdown):
+    from crane_fmu.model.tables import DISPLAY_UNITS
 
-    for fmu, table in TABLES.items():
-        if args.markdown:
-            print(f"#### {fmu}\n\n| name | causality | start | unit | description |\n|---|---|---|---|---|")
-        else:
-            print(f"{fmu}.fmu")
-        for v in table:
-            start = "" if v.start is None else f"{v.start:.6g}" if v.type == "Real" else v.start
-            unit = v.unit or ""
-            if unit in DISPLAY_UNITS:
-                unit += f" (display {DISPLAY_UNITS[unit]})"
-            if args.markdown:
-                print(f"| `{v.name}` | {v.causality} | {start} | {unit} | {v.description} |")
-            else:
-                print(f"  {v.name:<12} {v.causality:<10} {start:>10} {unit:<22} {v.description}")
-        print()
+    lines = ([f"#### {component.model_identifier}", "", "| name | causality | start | unit | description |",
+              "|---|---|---|---|---|"] if markdown else
+             [f"{component.model_identifier}.fmu ({component.role}): {component.description}"])
+    for v in component.variables:
+        start = "" if v.start is None else f"{v.start:.6g}" if v.type == "Real" else v.start
+        unit = v.unit or ""
+        if unit in DISPLAY_UNITS:
+            unit += f" (display {DISPLAY_UNITS[unit]})"
+        lines.append(f"| `{v.name}` | {v.causality} | {start} | {unit} | {v.description} |" if markdown else
+                     f"  {v.name:<12} {v.causality:<10} {start:>10} {unit:<22} {v.description}")
+    return "\n".join(lines) + "\n"
+
+
+def _cmd_info(args):
+    from crane_fmu import components, systems
+
+    chosen = [c for c in components.all() if c.role != "benchmark"]
+    if args.markdown:
+        print("\n".join(_variable_table(c, True) for c in chosen), end="")
+        return 0
+    print("systems (crane-fmu simulate --system NAME):")
+    for system in systems.all():
+        instances = ", ".join(f"{name} = {kind}" for name, kind in system.instances.items())
+        print(f"  {system.name:<10} {instances}: {system.description}")
+    print()
+    for c in chosen:
+        print(_variable_table(c, False))
     return 0
 
 
 def _cmd_reproduce(args):
+    from crane_fmu import systems
     from crane_fmu.analysis.reproduce import reproduce
-    from crane_fmu.cosim import crane_system
 
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers must be >= 1, got {args.workers}")
     try:
-        crane_system(args.fmu_dir)
-    except (FileNotFoundError, ValueError) as exc:
+        systems.get("paper").resolve(args.fmu_dir)
+    except ValueError as exc:
         raise UsageError(str(exc)) from None
     _writable_file(Path(args.out) / "REPORT.md", "--out")
     reproduce(args.out, args.fmu_dir, quick=args.quick, workers=args.workers)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 
-from crane_fmu.cosim import CRANE_CONNECTIONS, simulate
+from crane_fmu.cosim import simulate
 from crane_fmu.model.tables import STATE
 
 # What both C hosts share: the FMI 2.0 callbacks and a logger printing "[status] message" to stdout.
@@ -85,7 +85,7 @@ def _unpack(fmu, folder):
     return md, library, (folder / "resources").as_uri()
 
 
-def test_c_host_runs_the_closed_loop_like_our_master(crane_fmus, tmp_path):
+def test_c_host_runs_the_closed_loop_like_our_master(crane_fmus, connections, tmp_path):
     compiler = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
     if compiler is None:
         pytest.skip("no C compiler")
@@ -104,7 +104,7 @@ def test_c_host_runs_the_closed_loop_like_our_master(crane_fmus, tmp_path):
                           capture_output=True, text=True, timeout=120, env=env, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     c_rows = np.array([[float(x) for x in line.split(",")] for line in proc.stdout.splitlines()])
-    ours = simulate(crane_fmus, CRANE_CONNECTIONS, 1.0, 0.002).columns()
+    ours = simulate(crane_fmus, connections, 1.0, 0.002).columns()
     expected = np.column_stack([ours["time"]] + [ours["plant." + s] for s in STATE] + [ours["controller.u"]])
     assert c_rows.shape == expected.shape == (501, 8)
     assert np.array_equal(c_rows, expected)  # same Python code, same inputs: bit for bit
@@ -124,14 +124,15 @@ int main(int argc, char **argv) {
 
 def test_missing_python_is_a_message_from_fmi2instantiate(tmp_path):
     """An FMU whose Python is absent still loads; fmi2Instantiate says what is missing and returns NULL."""
-    from build_scripts.build_fmus import CRANE_FMUS, build_fmu
-    from build_scripts.wrapper import compile_binaries
+    from crane_fmu.build_scripts.build_fmus import build_fmu
+    from crane_fmu.build_scripts.wrapper import compile_binaries
+    from crane_fmu.model import plant
 
     compiler = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
     if compiler is None:
         pytest.skip("no C compiler")
     binaries = compile_binaries(tmp_path, libpython="/nonexistent/libpython9.9.so.1.0")
-    fmu = build_fmu(CRANE_FMUS[0], tmp_path / "fmus", binaries)
+    fmu = build_fmu(plant.COMPONENT, tmp_path / "fmus", binaries)
     md, library, resources = _unpack(fmu, tmp_path / "plant")
     (tmp_path / "missing.c").write_text(MISSING)
     subprocess.run([compiler, str(tmp_path / "missing.c"), "-o", str(tmp_path / "missing"), "-ldl"], check=True)

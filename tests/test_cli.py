@@ -14,12 +14,13 @@ def _run(capsys, *argv):
     return code, out, err
 
 
-def test_build_writes_both_fmus_and_the_system_files(tmp_path, capsys):
+def test_build_writes_every_component_and_every_builtin_system(tmp_path, capsys):
     code, out, _ = _run(capsys, "build", "--out", str(tmp_path / "fmus"))
     assert code == 0
     assert sorted(p.name for p in (tmp_path / "fmus").iterdir()) == [
-        "BacksteppingController.fmu", "CranePlant.fmu", "OspSystemStructure.xml"]
-    assert (tmp_path / "CraneSystem.ssp").is_file()
+        "BacksteppingController.fmu", "CranePlant.fmu", "free.OspSystemStructure.xml", "paper.OspSystemStructure.xml"]
+    assert sorted(p.name for p in (tmp_path / "fmi3").iterdir()) == ["BacksteppingController.fmu", "CranePlant.fmu"]
+    assert sorted(p.name for p in (tmp_path / "systems").iterdir()) == ["free.ssp", "paper.ssp"]
 
 
 def test_simulate_writes_csv_and_plot(fmu_dir, tmp_path, capsys):
@@ -37,7 +38,7 @@ def test_simulate_writes_csv_and_plot(fmu_dir, tmp_path, capsys):
 
 def test_simulate_free_swing_and_settings(fmu_dir, tmp_path, capsys):
     csv = tmp_path / "free.csv"
-    code, _, _ = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--no-controller", "--stop-time", "0.5",
+    code, _, _ = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--system", "free", "--stop-time", "0.5",
                       "--step", "0.05", "--set", "plant.theta1_0=0.2", "--set", "plant.l2=0.25",
                       "--master", "jacobi", "--out", str(csv))
     assert code == 0
@@ -49,6 +50,9 @@ def test_simulate_free_swing_and_settings(fmu_dir, tmp_path, capsys):
 
 @pytest.mark.parametrize("argv, message", [
     (["--set", "crane.l1=1"], "unknown instance 'crane'; instances: plant, controller"),
+    (["--system", "nowhere"], "no system 'nowhere'; systems: paper, free (or an .ssp/.ssd file)"),
+    (["--no-controller"], "--no-controller is gone: run the plant alone with --system free"),
+    (["--system", "free", "--set", "controller.l1=1"], "unknown instance 'controller'; instances: plant"),
     (["--set", "plant.l3=1"], "plant has no parameter or input 'l3'; valid: m1, m2, l1"),
     (["--set", "plant.x=1"], "plant has no parameter or input 'x'"),
     (["--set", "plant.l1=abc"], "'abc' is not a number"),
@@ -75,6 +79,8 @@ def test_simulate_user_errors_give_one_line_and_status_2(fmu_dir, tmp_path, caps
 def test_missing_fmus_and_unwritable_output(tmp_path, fmu_dir, capsys):
     code, _, err = _run(capsys, "simulate", "--fmu-dir", str(tmp_path / "nowhere"))
     assert code == 2 and "CranePlant.fmu not found: build the FMUs first (crane-fmu build)" in err
+    code, _, err = _run(capsys, "simulate", "--system", str(tmp_path / "nowhere.ssp"))
+    assert code == 2 and "nowhere.ssp not found" in err
     blocker = tmp_path / "file"
     blocker.write_text("")
     code, _, err = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--out", str(blocker / "r.csv"))
@@ -97,6 +103,8 @@ def test_info_lists_every_variable_with_units(capsys):
     code, out, _ = _run(capsys, "info")
     assert code == 0
     assert "theta1_0" in out and "rad (display deg)" in out and "BacksteppingController.fmu" in out
+    assert "  paper      plant = CranePlant, controller = BacksteppingController" in out
+    assert "  free       plant = CranePlant:" in out
     code, out, _ = _run(capsys, "info", "--markdown")
     assert "| `K2_theta2` | parameter | 310 | 1/s |" in out
 

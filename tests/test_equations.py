@@ -7,7 +7,8 @@ import pytest
 
 sympy = pytest.importorskip("sympy")
 
-from crane_fmu.model import controller, plant  # noqa: E402
+from crane_fmu.model import backstepping as controller  # noqa: E402
+from crane_fmu.model import plant  # noqa: E402
 from crane_fmu.model.parameters import PlantParameters  # noqa: E402
 
 t = sympy.symbols("t")

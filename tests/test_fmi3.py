@@ -7,10 +7,10 @@ import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
-from build_scripts.build_fmus import fmi3_dir
-from crane_fmu.cosim import CRANE_CONNECTIONS, simulate
-from crane_fmu.cosim.fmi3 import Fmu3Instance
-from crane_fmu.model import tables
+from crane_fmu.build_scripts.build_fmus import fmi3_dir
+from crane_fmu.cosim import simulate
+from crane_fmu.cosim.fmi3 import Fmi3Instance
+from crane_fmu.model import backstepping, plant, tables
 
 
 @pytest.fixture(scope="session")
@@ -19,7 +19,7 @@ def fmi3_fmus(fmu_dir):
     return {"plant": folder / "CranePlant.fmu", "controller": folder / "BacksteppingController.fmu"}
 
 
-@pytest.mark.parametrize("instance, table", [("plant", tables.PLANT), ("controller", tables.CONTROLLER)])
+@pytest.mark.parametrize("instance, table", [("plant", plant.VARIABLES), ("controller", backstepping.VARIABLES)])
 def test_fmi3_fmus_validate_and_declare_units(fmi3_fmus, instance, table):
     path = fmi3_fmus[instance]
     assert validate_fmu(str(path)) == []
@@ -38,16 +38,16 @@ def test_fmi3_fmus_validate_and_declare_units(fmi3_fmus, instance, table):
 
 
 @pytest.mark.parametrize("mode", ["gauss-seidel", "jacobi"])
-def test_fmi3_pair_gives_the_fmi2_results(crane_fmus, fmi3_fmus, mode):
-    fmi2 = simulate(crane_fmus, CRANE_CONNECTIONS, 2.0, 1e-3, mode).columns()
-    fmi3 = simulate(fmi3_fmus, CRANE_CONNECTIONS, 2.0, 1e-3, mode).columns()
+def test_fmi3_pair_gives_the_fmi2_results(crane_fmus, fmi3_fmus, connections, mode):
+    fmi2 = simulate(crane_fmus, connections, 2.0, 1e-3, mode).columns()
+    fmi3 = simulate(fmi3_fmus, connections, 2.0, 1e-3, mode).columns()
     assert list(fmi2) == list(fmi3)
     for name in fmi2:
         assert np.array_equal(fmi2[name], fmi3[name]), name  # same Python code: bit for bit
 
 
 def test_fmi3_state_round_trip(fmi3_fmus):
-    inst = Fmu3Instance(fmi3_fmus["plant"], "plant3")
+    inst = Fmi3Instance(fmi3_fmus["plant"], "plant3")
     try:
         inst.setup(0.0)
         inst.enter_initialization()

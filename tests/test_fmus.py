@@ -9,9 +9,10 @@ from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
 from crane_fmu.analysis.reference import free_swing, sampled_closed_loop
-from crane_fmu.cosim import FmuInstance, simulate
-from crane_fmu.cosim.system import CRANE_CONNECTIONS
-from crane_fmu.model import controller, plant, tables
+from crane_fmu import components
+from crane_fmu.cosim import open_instance, simulate
+from crane_fmu.model import backstepping as controller
+from crane_fmu.model import plant, tables
 from crane_fmu.model.parameters import ControllerGains, PlantParameters
 
 STATE = list(tables.STATE)
@@ -31,7 +32,7 @@ def test_fmpy_validate_finds_no_problem(fmu_dir, name):
 @pytest.mark.parametrize("name", ["CranePlant", "BacksteppingController"])
 def test_model_description_matches_the_table(fmu_dir, name):
     md = read_model_description(str(fmu_dir / f"{name}.fmu"))
-    table = tables.TABLES[name]
+    table = components.get(name).variables
     assert [v.name for v in md.modelVariables] == [v.name for v in table]
     units = {u.name: u for u in md.unitDefinitions}
     for var, row in zip(md.modelVariables, table):
@@ -87,7 +88,7 @@ def test_controller_fmu_equals_the_law_at_random_states(crane_fmus):
     """Same Python code inside and outside the FMU: the values must be identical."""
     rng = random.Random(3)
     for trial in range(20):
-        inst = FmuInstance(crane_fmus["controller"], f"c{trial}")
+        inst = open_instance(crane_fmus["controller"], f"c{trial}")
         try:
             params = {"m1": rng.uniform(1, 5), "l1": rng.uniform(0.5, 2), "K1_theta2": rng.uniform(1, 200),
                       "w_theta2": rng.choice([0.0, 1.0]), "b3_form": rng.choice(["derived", "printed"]),
@@ -109,14 +110,14 @@ def test_controller_fmu_equals_the_law_at_random_states(crane_fmus):
 
 
 @pytest.mark.parametrize("mode", ["gauss-seidel", "jacobi"])
-def test_closed_loop_equals_sampled_data_reference(crane_fmus, mode):
+def test_closed_loop_equals_sampled_data_reference(crane_fmus, connections, mode):
     """Plant and controller FMUs through the master vs u held per step, plant by DOP853.
 
     With the theta2 row weighted 0 the loop is well damped: measured 1.7e-10 rad
     on the angles, 1.5e-9 rad/s on the rates over 20 s at h = 10 ms.
     """
     params = {"controller": {"w_theta2": 0.0}}
-    result = simulate(crane_fmus, CRANE_CONNECTIONS, 20.0, 0.01, mode, params).columns()
+    result = simulate(crane_fmus, connections, 20.0, 0.01, mode, params).columns()
     gains = ControllerGains(w_theta2=0.0)
     ref, u = sampled_closed_loop(PAPER_X0, PlantParameters(), gains, 0.01, 2000, mode)
     got = _states(result)
@@ -129,13 +130,13 @@ def test_closed_loop_equals_sampled_data_reference(crane_fmus, mode):
 
 
 @pytest.mark.parametrize("mode", ["gauss-seidel", "jacobi"])
-def test_papers_law_closed_loop_equals_reference(crane_fmus, mode):
+def test_papers_law_closed_loop_equals_reference(crane_fmus, connections, mode):
     """The paper's law (W = I, K2_theta2 = 310) at h = 1 ms over 2 s.
 
     Its high loop gain amplifies the RK4 error: measured 1.0e-7 m on x, 9.5e-8
     rad on the angles, 4.8e-6 on the rates; bounds 1e-6 and 5e-5.
     """
-    result = simulate(crane_fmus, CRANE_CONNECTIONS, 2.0, 0.001, mode).columns()
+    result = simulate(crane_fmus, connections, 2.0, 0.001, mode).columns()
     ref, _ = sampled_closed_loop(PAPER_X0, PlantParameters(), ControllerGains(), 0.001, 2000, mode)
     got = _states(result)
     assert np.abs(got[:, [0, 2, 4]] - ref[:, [0, 2, 4]]).max() < 1e-6
@@ -143,7 +144,7 @@ def test_papers_law_closed_loop_equals_reference(crane_fmus, mode):
 
 
 def test_instances_of_one_fmu_are_independent(crane_fmus):
-    a, b = FmuInstance(crane_fmus["plant"], "a"), FmuInstance(crane_fmus["plant"], "b")
+    a, b = open_instance(crane_fmus["plant"], "a"), open_instance(crane_fmus["plant"], "b")
     try:
         for inst, angle in ((a, 0.1), (b, -0.3)):
             inst.setup(0.0)

@@ -6,7 +6,8 @@ import random
 import numpy as np
 import pytest
 
-from crane_fmu.model import controller, plant, tables
+from crane_fmu.model import backstepping as controller
+from crane_fmu.model import plant, tables
 from crane_fmu.model.parameters import ControllerGains, PlantParameters
 
 
@@ -39,11 +40,11 @@ def test_defaults_are_the_papers_section_v_values():
     k = ControllerGains()
     assert (k.K1_x, k.K1_theta1, k.K1_theta2) == (0.92, 4.0, 122.0)
     assert (k.K2_x, k.K2_theta1, k.K2_theta2) == (0.84, 2.0, 310.0)
-    assert tables.defaults(tables.PLANT)["theta1_0"] == math.pi / 18
+    assert plant.COMPONENT.defaults()["theta1_0"] == math.pi / 18
 
 
 def test_plant_output_names_match_the_model_order():
-    assert [v.name for v in tables.PLANT if v.causality == "output"] == list(plant.OUTPUTS)
+    assert list(plant.COMPONENT.names("output")) == list(plant.OUTPUTS)
     assert plant.OUTPUTS[:6] == tables.STATE
 
 

@@ -8,12 +8,12 @@ import textwrap
 import pytest
 
 from crane_fmu.cli import main
-from crane_fmu.cosim import FmiError, FmuInstance, simulate
-from crane_fmu.cosim.system import CRANE_CONNECTIONS
+from crane_fmu.cosim import FmiError, open_instance, simulate
+from crane_fmu.cosim.fmi2 import Fmi2Instance
 
 
 def _initialise(path, values):
-    inst = FmuInstance(path, "fmu")
+    inst = open_instance(path, "fmu")
     inst.setup(0.0)
     for name, value in values.items():
         inst.set(name, value)
@@ -77,19 +77,19 @@ def test_unusable_step_sizes_are_errors_not_hangs(crane_fmus, step, message):
         inst.free()
 
 
-def test_a_diverging_plant_discards_the_step_with_its_reason(crane_fmus):
+def test_a_diverging_plant_discards_the_step_with_its_reason(crane_fmus, connections):
     with pytest.raises(FmiError) as err:
-        simulate(crane_fmus, CRANE_CONNECTIONS, 5.0, 0.01)  # the paper's law diverges at h = 10 ms
+        simulate(crane_fmus, connections, 5.0, 0.01)  # the paper's law diverges at h = 10 ms
     assert (err.value.instance, err.value.function, err.value.status) == ("plant", "fmi2DoStep", "discard")
     assert "plant state became non-finite in the step from t=" in str(err.value)
 
 
-def test_every_instance_is_freed_after_a_failure(crane_fmus, monkeypatch):
+def test_every_instance_is_freed_after_a_failure(crane_fmus, connections, monkeypatch):
     freed = []
-    original = FmuInstance.free
-    monkeypatch.setattr(FmuInstance, "free", lambda self: (freed.append(self.name), original(self)))
+    original = Fmi2Instance.free
+    monkeypatch.setattr(Fmi2Instance, "free", lambda self: (freed.append(self.name), original(self)))
     with pytest.raises(FmiError):
-        simulate(crane_fmus, CRANE_CONNECTIONS, 5.0, 0.01)
+        simulate(crane_fmus, connections, 5.0, 0.01)
     assert sorted(freed) == ["controller", "plant"]
 
 

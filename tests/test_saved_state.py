@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 
-from crane_fmu.cosim import ArrayRecorder, FmuInstance, Master
-from crane_fmu.cosim.system import CRANE_CONNECTIONS
+from crane_fmu.cosim import ArrayRecorder, Master, open_instance
 
 H = 0.01
 
@@ -16,15 +15,16 @@ def test_state_capabilities_are_declared(fmu_dir, name):
     assert cs.canGetAndSetFMUstate and cs.canSerializeFMUstate and not cs.needsExecutionTool
 
 
-def _master(crane_fmus, tag=""):
-    instances = {name: FmuInstance(path, name + tag) for name, path in crane_fmus.items()}
-    master = Master(instances, CRANE_CONNECTIONS)
+def _master(crane_fmus, connections, tag=""):
+    instances = {name: open_instance(path, name + tag) for name, path in crane_fmus.items()}
+    master = Master(instances, connections)
     master.initialize(0.0, 10.0, {"controller": {"w_theta2": 0.0}})
     return master
 
 
 def _run(master, first, last):
     recorder = ArrayRecorder()
+    recorder.start(master.output_names)
     master.advance(0.0, H, first, last, [recorder])
     master.finish(last * H, [recorder])
     return np.frombuffer(recorder._rows, dtype=float).copy()
@@ -35,8 +35,8 @@ def _free(master):
         inst.free()
 
 
-def test_restoring_a_saved_state_repeats_the_run_bit_for_bit(crane_fmus):
-    master = _master(crane_fmus)
+def test_restoring_a_saved_state_repeats_the_run_bit_for_bit(crane_fmus, connections):
+    master = _master(crane_fmus, connections)
     try:
         master.advance(0.0, H, 0, 500)  # to t = 5 s
         saved = master.save_state()
@@ -50,8 +50,8 @@ def test_restoring_a_saved_state_repeats_the_run_bit_for_bit(crane_fmus):
         _free(master)
 
 
-def test_serialised_state_continues_identically_in_another_instance(crane_fmus):
-    source, target = _master(crane_fmus, "_a"), _master(crane_fmus, "_b")
+def test_serialised_state_continues_identically_in_another_instance(crane_fmus, connections):
+    source, target = _master(crane_fmus, connections, "_a"), _master(crane_fmus, connections, "_b")
     try:
         source.advance(0.0, H, 0, 500)
         blobs = {}
@@ -70,9 +70,9 @@ def test_serialised_state_continues_identically_in_another_instance(crane_fmus):
         _free(target)
 
 
-def test_state_covers_the_integrator_not_only_the_variables(crane_fmus):
+def test_state_covers_the_integrator_not_only_the_variables(crane_fmus, connections):
     """Restoring must bring back the plant's motion, which no FMU variable holds but the outputs."""
-    master = _master(crane_fmus)
+    master = _master(crane_fmus, connections)
     try:
         plant = master.instances["plant"]
         saved = plant.get_state()

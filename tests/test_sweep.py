@@ -9,9 +9,10 @@ import time
 import pyarrow.parquet as pq
 import pytest
 
+from crane_fmu import systems
 from crane_fmu.cli import main
 from crane_fmu.sweep import spec
-from crane_fmu.sweep.runner import JOURNAL, fmu_blobs, run_case, run_study
+from crane_fmu.sweep.runner import JOURNAL, run_case, run_study, shippable
 
 MINIMAL = """
 stop_time = 10.0
@@ -73,7 +74,10 @@ def test_sampling_is_seeded_and_within_bounds(tmp_path, method):
     ("stop_time = 1.0\nstep = 0.3", "must divide the interval"),
     ("stop_time = 1.0\nstep = 0.01\ncolour = 1", "unknown key 'colour'"),
     ("stop_time = 1.0\nstep = 0.01\nmetrics = ['speed']", "unknown metric 'speed'"),
-    ("stop_time = 1.0\nstep = 0.01\n[parameters]\n'crane.l1' = [1.0]", "INSTANCE.VARIABLE"),
+    ("stop_time = 1.0\nstep = 0.01\n[parameters]\n'l1' = [1.0]", "INSTANCE.VARIABLE"),
+    ("stop_time = 1.0\nstep = 0.01\ncontroller = false", 'the key controller is gone: name the system instead, '
+                                                         'system = "free"'),
+    ("stop_time = 1.0\nstep = 0.01\nsystem = 3", "system must be a system's name or an SSP file"),
     ("stop_time = 1.0\nstep = 0.01\n[parameters]\n'plant.l1' = {low = 1.0, high = 2.0}", "sampling.samples"),
     ("stop_time = 1.0\nstep = 0.01\n[parameters]\n'plant.l1' = {low = 2.0, high = 1.0}", "high must be > low"),
     ("stop_time = 1.0\nstep = 0.01\n[parameters]\n'plant.l1' = 'long'", "must be a list of values"),
@@ -104,9 +108,11 @@ def test_cluster_results_equal_a_serial_run(small_run, fmu_dir):
     study, out, summary = small_run
     assert summary["ran"] == summary["cases"] == 8
     rows = pq.read_table(out / "results.parquet").to_pylist()
-    blobs = fmu_blobs(fmu_dir)
+    system = shippable(systems.get("paper"), fmu_dir)
     for case, row in zip(study.cases(), rows):
-        serial = run_case(case, study.settings(), blobs, study.metrics)
+        if row["status"] == "invalid":  # refused by the parameter rules before anything was shipped
+            continue
+        serial = run_case(case, study.settings(), system, study.metrics)
         for key in ("status", "error", *study.metrics):
             assert row[key] == serial[key], key
 
@@ -180,6 +186,18 @@ def test_cli_runs_the_minimal_study(fmu_dir, tmp_path, capsys):
     assert all(json.loads(line)["case_id"] for line in (tmp_path / "out" / JOURNAL).read_text().splitlines())
 
 
+@pytest.mark.parametrize("study, message", [
+    ('system = "nowhere"', "no system 'nowhere'; systems: paper, free"),
+    ('[parameters]\n"crane.l1" = [1.0]', "parameter 'crane.l1': system paper has no instance 'crane'"),
+    ('system = "free"\n[parameters]\n"controller.l1" = [1.0]', "system free has no instance 'controller'"),
+])
+def test_cli_sweep_names_are_checked_against_the_system(fmu_dir, tmp_path, capsys, study, message):
+    (tmp_path / "s.toml").write_text("stop_time = 1.0\nstep = 0.01\n" + study)
+    assert main(["sweep", str(tmp_path / "s.toml"), "--out", str(tmp_path / "o"), "--fmu-dir", str(fmu_dir)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err
+
+
 @pytest.mark.parametrize("argv, message", [
     (["sweep", "missing.toml", "--out", "o"], "cannot read study file missing.toml"),
     (["sweep", "builtin:nothing", "--out", "o"], "no built-in study 'nothing'"),
@@ -194,6 +212,6 @@ def test_cli_sweep_mistakes(capsys, argv, message):
 def test_settling_band_is_chosen_by_the_study(small_run, fmu_dir, tmp_path):
     study = _study(tmp_path, SMALL.replace("step = 0.01", "step = 0.01\nsettling_band_deg = 20.0"))
     case = {"plant.theta1_0": 0.1, "controller.w_theta2": 0.0}
-    row = run_case(case, study.settings(), fmu_blobs(fmu_dir), study.metrics)
+    row = run_case(case, study.settings(), shippable(systems.get("paper"), fmu_dir), study.metrics)
     assert row["settling_band_s"] == 0.0  # a 20-degree band holds from the start
     assert row["settling_0.5deg_s"] is None or row["settling_0.5deg_s"] > 0.0

@@ -3,7 +3,7 @@
 import math
 from pathlib import Path
 
-from .reproduce import FORM_KEYS, FORMS
+from .paper_cases import FORMS
 
 
 def _plt():
@@ -80,25 +80,25 @@ def draw_all(results, out_dir):
     """Write figure4.png, figure5.png, figure7.png and figure8.png; return their paths."""
     plt = _plt()
     out_dir = Path(out_dir)
-    group = {g: [r for r in results.values() if r["case"]["group"] == g] for g in ("fig4", "fig5", "fig7", "fig8")}
+    group = {g: [r for r in results.values() if r["case"].figure == g] for g in ("fig4", "fig5", "fig7", "fig8")}
     paths = [
-        _angle_figure(sorted(group["fig4"], key=lambda r: r["case"]["plant"]["theta1_0"]),
-                      lambda r: f"theta1(0) = {math.degrees(r['case']['plant']['theta1_0']):.0f} deg",
+        _angle_figure(sorted(group["fig4"], key=lambda r: r["case"].plant["theta1_0"]),
+                      lambda r: f"theta1(0) = {math.degrees(r['case'].plant['theta1_0']):.0f} deg",
                       "Fig. 4: free swing, l1 = 1 m, l2 = 0.25 m", out_dir / "figure4.png"),
-        _angle_figure(sorted(group["fig5"], key=lambda r: r["case"]["plant"]["l2"]),
-                      lambda r: f"l2 = {r['case']['plant']['l2']:g} m",
+        _angle_figure(sorted(group["fig5"], key=lambda r: r["case"].plant["l2"]),
+                      lambda r: f"l2 = {r['case'].plant['l2']:g} m",
                       "Fig. 5: free swing, l1 = 1 m, theta1(0) = 10 deg", out_dir / "figure5.png"),
     ]
 
     fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 9))
-    by_name = {r["case"]["name"]: r for r in group["fig7"]}
-    _loop_panels(axes, by_name["fig7_open_loop"]["signals"], "without controller", color="0.6", lw=1)
+    by_form = {r["case"].form.key if r["case"].form else None: r for r in group["fig7"]}
+    _loop_panels(axes, by_form[None]["signals"], "without controller", color="0.6", lw=1)
     for form in FORMS:
-        r = by_name[f"fig7_{FORM_KEYS[form]}"]
+        r = by_form[form.key]
         end = (f" (diverged, stopped at {r['signals']['time'][-1]:.2f} s)" if not r["completed"]
                else " (diverged)" if _diverged(r) else "")
-        _loop_panels(axes, r["signals"], form + end, lw=1)
-        axes[3].plot(r["signals"]["time"], r["signals"]["controller.u"], lw=1, label=form)
+        _loop_panels(axes, r["signals"], form.label + end, lw=1)
+        axes[3].plot(r["signals"]["time"], r["signals"]["controller.u"], lw=1, label=form.label)
     axes[0].set_title("Fig. 7: with and without the backstepping controller (Section V)")
     axes[0].legend(fontsize=8)
     axes[3].set_xlabel("time [s]")
@@ -108,12 +108,11 @@ def draw_all(results, out_dir):
 
     fig, axes = plt.subplots(3, len(FORMS), sharex=True, figsize=(13, 8), squeeze=False)
     for col, form in enumerate(FORMS):
-        runs = sorted((r for r in group["fig8"] if r["case"]["name"].startswith(f"fig8_{FORM_KEYS[form]}_")),
-                      key=lambda r: r["case"]["plant"]["l1"])
+        runs = sorted((r for r in group["fig8"] if r["case"].form == form), key=lambda r: r["case"].plant["l1"])
         for r in runs:
             end = " (diverged)" if _diverged(r) else ""
-            _loop_panels(axes[:, col], r["signals"], f"l1 = {r['case']['plant']['l1']:g} m{end}", lw=1)
-        axes[0, col].set_title(f"Fig. 8, {form}")
+            _loop_panels(axes[:, col], r["signals"], f"l1 = {r['case'].plant['l1']:g} m{end}", lw=1)
+        axes[0, col].set_title(f"Fig. 8, {form.label}")
         axes[0, col].legend(fontsize=8)
         axes[2, col].set_xlabel("time [s]")
         _limit_to(axes[:, col], runs)

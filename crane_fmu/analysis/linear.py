@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 
-from crane_fmu.model import controller, plant
+from crane_fmu.model import backstepping, plant
 
 
 def natural_frequencies(p):
@@ -32,7 +32,7 @@ def closed_loop_jacobian(p, gains, eps=1e-6):
     target = np.array([gains.x_d, 0.0, gains.theta1_d, 0.0, gains.theta2_d, 0.0])
 
     def field(s):
-        return np.array(plant.derivative(tuple(s), controller.control(tuple(s), p, gains), p))
+        return np.array(plant.derivative(tuple(s), backstepping.control(tuple(s), p, gains), p))
 
     jac = np.empty((6, 6))
     for j in range(6):

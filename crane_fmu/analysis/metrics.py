@@ -7,8 +7,32 @@ import math
 
 import numpy as np
 
+CRANE_OUTPUTS = ("x", "theta1", "theta2")  # what the crane metrics need from some instance
 DIVERGED_ANGLE = math.pi / 2  # a swing beyond 90 degrees counts as divergence
 SETTLED_BAND = math.radians(0.1)  # a swing below 0.1 degree counts as settled
+
+
+def crane_signals(columns):
+    """``time``, ``x``, ``theta1``, ``theta2`` and ``u`` of a recorded run of any system.
+
+    The crane signals are the outputs ``x``, ``theta1``, ``theta2`` of the first
+    instance that has all three, and ``u`` of the first other instance that
+    outputs ``u`` (zero when none does).
+
+    Raises
+    ------
+    ValueError
+        When no instance outputs ``x``, ``theta1`` and ``theta2``.
+    """
+    instances = list(dict.fromkeys(name.rpartition(".")[0] for name in columns if "." in name))
+    plant = next((i for i in instances if all(f"{i}.{n}" in columns for n in CRANE_OUTPUTS)), None)
+    if plant is None:
+        raise ValueError(f"these results have no instance with outputs {', '.join(CRANE_OUTPUTS)}; columns: "
+                         + ", ".join(columns))
+    signals = {"time": columns["time"], **{n: columns[f"{plant}.{n}"] for n in CRANE_OUTPUTS}}
+    source = next((i for i in instances if i != plant and f"{i}.u" in columns), None)
+    signals["u"] = columns[f"{source}.u"] if source else np.zeros_like(columns["time"])
+    return signals
 
 
 def peak_abs(values):

@@ -2,38 +2,48 @@
 
 import math
 
+MAX_PANELS = 8
+
 
 def plot_run(columns, path, title=""):
-    """Trolley position, both swing angles and the control input against time, to a PNG.
+    """Plot a run of any system to a PNG.
+
+    A run with a crane (some instance outputs ``x``, ``theta1``, ``theta2``)
+    shows trolley position, both swing angles and ``u`` if some other instance
+    gives it; any other run shows its outputs, one panel each (the first
+    :data:`MAX_PANELS`).
 
     Parameters
     ----------
     columns : dict
-        Result columns (``time``, ``plant.x``, ``plant.theta1``, ... and
-        optionally ``controller.u``), as from ``read_csv``.
+        Result columns (``time``, then ``instance.variable``), as from ``read_csv``.
     """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from .metrics import crane_signals
+
     t = columns["time"]
-    has_u = "controller.u" in columns
-    fig, axes = plt.subplots(3 + has_u, 1, sharex=True, figsize=(8, 2.2 * (3 + has_u)))
-    axes[0].plot(t, columns["plant.x"])
-    axes[0].set_ylabel("trolley x [m]")
-    axes[1].plot(t, [math.degrees(v) for v in columns["plant.theta1"]])
-    axes[1].set_ylabel("theta1 [deg]")
-    axes[2].plot(t, [math.degrees(v) for v in columns["plant.theta2"]], color="tab:orange")
-    axes[2].set_ylabel("theta2 [deg]")
-    if has_u:
-        axes[3].plot(t, columns["controller.u"], color="tab:red")
-        axes[3].set_ylabel("u [m/s2]")
-    for ax in axes:
+    try:
+        s = crane_signals(columns)
+        panels = [("trolley x [m]", s["x"], None), ("theta1 [deg]", [math.degrees(v) for v in s["theta1"]], None),
+                  ("theta2 [deg]", [math.degrees(v) for v in s["theta2"]], "tab:orange")]
+        if any(name.endswith(".u") for name in columns):
+            panels.append(("u [m/s2]", s["u"], "tab:red"))
+    except ValueError:
+        panels = [(name, values, None) for name, values in columns.items() if name != "time"][:MAX_PANELS]
+    if not panels:
+        raise ValueError("nothing to plot: the run recorded no outputs")
+    fig, axes = plt.subplots(len(panels), 1, sharex=True, figsize=(8, 2.2 * len(panels)), squeeze=False)
+    for ax, (label, values, color) in zip(axes[:, 0], panels):
+        ax.plot(t, values, color=color)
+        ax.set_ylabel(label)
         ax.grid(True, alpha=0.3)
-    axes[-1].set_xlabel("time [s]")
+    axes[-1, 0].set_xlabel("time [s]")
     if title:
-        axes[0].set_title(title)
+        axes[0, 0].set_title(title)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -8,7 +8,7 @@ co-simulation, never a second copy of the equations.
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from crane_fmu.model import controller, plant
+from crane_fmu.model import backstepping, plant
 
 RTOL = ATOL = 1e-12
 
@@ -44,7 +44,7 @@ def sampled_closed_loop(state0, p, gains, step, n_steps, mode="gauss-seidel"):
     previous = state0
     for k in range(n_steps):
         measured = states[k] if mode == "gauss-seidel" else previous
-        u = controller.control(tuple(measured), p, gains)
+        u = backstepping.control(tuple(measured), p, gains)
         sol = solve_ivp(lambda t, s, u=u: plant.derivative(s, u, p), (0.0, step), states[k],
                         method="DOP853", rtol=RTOL, atol=ATOL)
         previous = states[k]

@@ -1,9 +1,9 @@
-"""Co-simulation master on fmpy: FMU instances, connections, stepping, recorders."""
+"""A crane-free co-simulation library on fmpy: instances, systems as data, master, recorders, SSP/OSP."""
 
-from .fmi import FmiError, FmuInstance
+from .instance import FmiError, open_instance
 from .master import MODES, Connection, Master
 from .recorder import ArrayRecorder, CsvRecorder, read_csv, write_csv
-from .system import CRANE_CONNECTIONS, crane_system, simulate
+from .system import System, connect, run, simulate
 
-__all__ = ["FmiError", "FmuInstance", "MODES", "Connection", "Master", "ArrayRecorder",
-           "CsvRecorder", "read_csv", "write_csv", "CRANE_CONNECTIONS", "crane_system", "simulate"]
+__all__ = ["FmiError", "open_instance", "MODES", "Connection", "Master", "ArrayRecorder", "CsvRecorder",
+           "read_csv", "write_csv", "System", "connect", "run", "simulate"]

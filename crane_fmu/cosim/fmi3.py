@@ -1,15 +1,14 @@
-"""FMI 3.0 co-simulation instances with the same interface as :class:`FmuInstance` (FMI 2.0)."""
+"""The FMI 3.0 co-simulation adapter of :class:`~crane_fmu.cosim.instance.Instance`, on fmpy."""
 
 import ctypes
 import shutil
 
-from fmpy import read_model_description
 from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64
 
-from .fmi import FmuInstance
+from .instance import Instance
 
 
-class Fmu3Instance(FmuInstance):
+class Fmi3Instance(Instance):
     """One instance of an FMI 3.0 co-simulation FMU, driven like an FMI 2.0 one by the master."""
 
     def __init__(self, path, name):
@@ -44,12 +43,6 @@ class Fmu3Instance(FmuInstance):
         v = self._variable(name)
         kind = v.type if v.type in ("Float64", "Float32", "String", "Boolean") else "Int32"
         return self._call(f"fmi3Get{kind}", getattr(self._fmu, f"get{kind}"), [v.valueReference])[0]
-
-    def _variable(self, name):
-        v = self.variables.get(name)
-        if v is None:
-            raise KeyError(f"{self.name} has no variable {name!r}; valid names: " + ", ".join(self.variables))
-        return v
 
     def setup(self, start_time, stop_time=None):
         self.time, self._start, self._stop = start_time, start_time, stop_time
@@ -93,8 +86,5 @@ class Fmu3Instance(FmuInstance):
             self._raise("fmi3DoStep", status)
         self.time = time + step
 
-
-def open_instance(path, name):
-    """An :class:`FmuInstance` or :class:`Fmu3Instance`, by the FMU's FMI version."""
-    version = read_model_description(str(path)).fmiVersion
-    return Fmu3Instance(path, name) if version.startswith("3") else FmuInstance(path, name)
+    def terminate(self):
+        self._call("fmi3Terminate", self._fmu.terminate)

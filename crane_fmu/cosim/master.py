@@ -1,8 +1,12 @@
-"""Fixed-step co-simulation master over FMI 2.0 instances.
+"""Fixed-step co-simulation master over FMU instances of any FMI version.
 
 As in libcosim, the stepping algorithm (:class:`Master`), the connections
 (:class:`Connection`) and the observers (``crane_fmu.cosim.recorder``) are
-separate objects.
+separate objects. An observer has ``start(names)``, called once with the
+``instance.variable`` name of every output, and ``observe(time, values)``,
+called at every communication point with the values in the same order
+(``values[i]`` is the value of ``names[i]``; a read-only memoryview of doubles
+that the next exchange overwrites: copy what you keep).
 """
 
 import ctypes
@@ -34,13 +38,12 @@ def communication_points(start_time, stop_time, step):
 
 
 class _Port:
-    """The preallocated arrays of one instance: all its outputs, and its connected inputs."""
+    """The preallocated arrays of one instance: its outputs (a slice of the master's buffer) and connected inputs."""
 
-    def __init__(self, instance):
+    def __init__(self, instance, buffer, offset):
         self.instance = instance
         self.out_vrs = instance.vr_array(instance.outputs)
-        self.out = (ctypes.c_double * len(instance.outputs))()
-        self.out_bytes = memoryview(self.out).cast("B")  # for recorders: copy without boxing floats
+        self.out = (ctypes.c_double * len(instance.outputs)).from_buffer(buffer, offset * ctypes.sizeof(ctypes.c_double))
         self.links = []  # (input position, source _Port, source output position)
         self.in_vrs = None
         self.inp = None
@@ -68,7 +71,7 @@ class Master:
     Parameters
     ----------
     instances : dict
-        ``{name: FmuInstance}``, already instantiated.
+        ``{name: Instance}`` (FMI 2.0 or 3.0), already instantiated.
     connections : list of Connection
     mode : {"gauss-seidel", "jacobi"}
         ``gauss-seidel``: before every step, values propagate along the
@@ -82,7 +85,14 @@ class Master:
         if mode not in MODES:
             raise ValueError(f"master mode must be one of {', '.join(MODES)}, got {mode!r}")
         self.instances, self.mode = instances, mode
-        self.ports = {name: _Port(inst) for name, inst in instances.items()}
+        self.output_names = [f"{name}.{v}" for name, inst in instances.items() for v in inst.outputs]
+        buffer = (ctypes.c_double * len(self.output_names))()  # every output, in output_names order
+        # what observers get: the outputs as floats (values[i] is output_names[i]), read-only
+        self.values = memoryview(buffer).cast("B").cast("d").toreadonly()
+        self.ports, offset = {}, 0
+        for name, inst in instances.items():
+            self.ports[name] = _Port(inst, buffer, offset)
+            offset += len(inst.outputs)
         wiring = {name: [] for name in instances}
         for c in connections:
             for inst in (c.source, c.target):
@@ -154,8 +164,9 @@ class Master:
         """Initialise and step from ``start_time`` to ``stop_time``.
 
         Time is ``start_time + k*step`` from the integer step count ``k``.
-        Each observer's ``observe(time, ports)`` is called at every
-        communication point after the exchange, with the outputs read there.
+        Each observer is started with :attr:`output_names`, then its
+        ``observe(time, values)`` is called at every communication point after
+        the exchange, with the outputs read there.
 
         Returns
         -------
@@ -164,6 +175,8 @@ class Master:
         """
         n = communication_points(start_time, stop_time, step)
         self.initialize(start_time, stop_time, parameters)
+        for o in observers:
+            o.start(self.output_names)
         self.advance(start_time, step, 0, n, observers)
         self.finish(stop_time, observers)
         return n
@@ -172,17 +185,18 @@ class Master:
         """Take the steps ``first`` to ``last - 1`` of the grid ``start_time + k*step``.
 
         At each communication point: exchange, observe, then step every instance.
+        Observers must have been started with :attr:`output_names`.
         """
         exchange = self._plans[self.mode]
         steps = [p.instance.do_step for p in self.order]
         observe = [o.observe for o in observers]
-        ports = self.order
+        values = self.values
         for k in range(first, last):
             t = start_time + k * step
             for call in exchange:
                 call()
             for f in observe:
-                f(t, ports)
+                f(t, values)
             for do_step in steps:
                 do_step(t, step)
 
@@ -190,14 +204,14 @@ class Master:
         """The exchange and observation at the last communication point."""
         self._exchange(self.mode)
         for o in observers:
-            o.observe(stop_time, self.order)
+            o.observe(stop_time, self.values)
 
     def save_state(self):
-        """``{instance: FMU state}`` of every instance (fmi2GetFMUstate), for :meth:`restore_state`."""
+        """``{instance: FMU state}`` of every instance (get-FMU-state), for :meth:`restore_state`."""
         return {name: inst.get_state() for name, inst in self.instances.items()}
 
     def restore_state(self, saved):
-        """Roll every instance back to a :meth:`save_state` (fmi2SetFMUstate), e.g. to retry steps."""
+        """Roll every instance back to a :meth:`save_state` (set-FMU-state), e.g. to retry steps."""
         for name, state in saved.items():
             self.instances[name].set_state(state)
 

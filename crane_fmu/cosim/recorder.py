@@ -14,16 +14,13 @@ class ArrayRecorder:
         self.names = None
         self._rows = array("d")
 
-    def _header(self, ports):
-        return ["time"] + [f"{p.instance.name}.{v}" for p in ports for v in p.instance.outputs]
+    def start(self, names):
+        self.names = ["time"] + list(names)
 
-    def observe(self, time, ports):
-        if self.names is None:
-            self.names = self._header(ports)
+    def observe(self, time, values):
         rows = self._rows
         rows.append(time)
-        for p in ports:
-            rows.frombytes(p.out_bytes)  # memcpy of the outputs just read
+        rows.frombytes(values.cast("B"))  # memcpy of the outputs just read
 
     def columns(self):
         """``{name: numpy array}`` of everything recorded."""
@@ -50,11 +47,12 @@ class CsvRecorder(ArrayRecorder):
         self._partial = self.path + ".partial"
         self._file = open(self._partial, "w", newline="")
 
-    def observe(self, time, ports):
-        if self.names is None:
-            self.names = self._header(ports)
-            self._file.write(",".join(self.names) + "\n")
-        super().observe(time, ports)
+    def start(self, names):
+        super().start(names)
+        self._file.write(",".join(self.names) + "\n")
+
+    def observe(self, time, values):
+        super().observe(time, values)
         if len(self._rows) >= self.CHUNK_ROWS * len(self.names):
             self._flush()
 

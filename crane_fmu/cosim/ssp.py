@@ -1,22 +1,33 @@
-"""Reads an SSP 1.0 system (``.ssp`` package or ``.ssd`` file): FMUs, connections, parameter values."""
+"""SSP 1.0 in and out: a :class:`~crane_fmu.cosim.system.System` as an ``.ssp`` package, ``.ssd`` or ``.ssv`` file.
+
+Written packages hold SystemStructure.ssd (components with their connectors and
+units, every connection written out, every parameter value) and the FMUs under
+``resources/``. Read are packages and ``.ssd`` files with parameter values inline
+or in ``.ssv`` files, bound to a component (names ``variable``) or to the system
+(names ``instance.variable``).
+"""
 
 import contextlib
+import os
 import shutil
 import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
-from collections import namedtuple
 from pathlib import Path
 
 from .master import Connection
-from .system import check_fmu
+from .system import System, read_fmu
 
-SSD = "{http://ssp-standard.org/SSP1/SystemStructureDescription}"
-SSV = "{http://ssp-standard.org/SSP1/SystemStructureParameterValues}"
-System = namedtuple("System", "fmus connections parameters")
-System.__doc__ = "``fmus`` {instance: path}, ``connections`` [Connection], ``parameters`` {instance: {name: value}}."
-_CONVERT = {"Real": float, "Integer": int, "Boolean": lambda v: v.lower() in ("true", "1"), "String": str}
+SSD_NS = "http://ssp-standard.org/SSP1/SystemStructureDescription"
+SSC_NS = "http://ssp-standard.org/SSP1/SystemStructureCommon"
+SSV_NS = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
+SSD, SSC, SSV = (f"{{{ns}}}" for ns in (SSD_NS, SSC_NS, SSV_NS))
+_CONVERT = {"Real": float, "Float64": float, "Integer": int, "Int32": int,
+            "Boolean": lambda v: v.lower() in ("true", "1"), "String": str}
+_BASE_UNITS = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
 
+
+# --- reading ------------------------------------------------------------------------
 
 @contextlib.contextmanager
 def load_system(path):
@@ -50,32 +61,188 @@ def load_system(path):
             shutil.rmtree(workdir, ignore_errors=True)
 
 
-def _parse(ssd, origin):
+def _xml(path, origin):
     try:
-        root = ET.parse(ssd).getroot()
-    except ET.ParseError as exc:
-        raise ValueError(f"{origin}: SystemStructure.ssd is not valid XML ({exc})") from None
+        return ET.parse(path).getroot()
+    except (ET.ParseError, OSError) as exc:
+        raise ValueError(f"{origin}: {Path(path).name} is not readable XML ({exc})") from None
+
+
+def _parameter_set(node, origin):
+    """``{name: value}`` of an ssv:ParameterSet element."""
+    values = {}
+    for parameter in node.iter(f"{SSV}Parameter"):
+        for kind, convert in _CONVERT.items():
+            value = parameter.find(f"{SSV}{kind}")
+            if value is not None:
+                try:
+                    values[parameter.get("name")] = convert(value.get("value"))
+                except (TypeError, ValueError):
+                    raise ValueError(f"{origin}: parameter {parameter.get('name')!r} has no valid {kind} value "
+                                     f"({value.get('value')!r})") from None
+    return values
+
+
+def _bindings(element, base, origin):
+    """``{name: value}`` of every ParameterBinding of ``element`` (inline or from an .ssv file)."""
+    values = {}
+    for binding in element.findall(f"{SSD}ParameterBindings/{SSD}ParameterBinding"):
+        prefix = binding.get("prefix", "")
+        if binding.get("source"):
+            found = _parameter_set(_xml(base / binding.get("source"), origin), origin)
+        else:
+            found = _parameter_set(binding, origin)
+        values.update({name.removeprefix(prefix): value for name, value in found.items()})
+    return values
+
+
+def _parse(ssd, origin):
+    root = _xml(ssd, origin)
     system = root.find(f"{SSD}System")
     if root.tag != f"{SSD}SystemStructureDescription" or system is None:
         raise ValueError(f"{origin}: not an SSP 1.0 SystemStructureDescription")
-    fmus, parameters = {}, {}
+    instances, parameters = {}, {}
     for component in system.iter(f"{SSD}Component"):
         name, source = component.get("name"), component.get("source")
         fmu = (ssd.parent / source) if source else None
         if fmu is None or not fmu.is_file():
             raise ValueError(f"{origin}: component {name!r} has no FMU at {source!r}")
-        check_fmu(fmu)
-        fmus[name] = fmu
-        values = parameters.setdefault(name, {})
-        for parameter in component.iter(f"{SSV}Parameter"):
-            for kind, convert in _CONVERT.items():
-                node = parameter.find(f"{SSV}{kind}")
-                if node is not None:
-                    values[parameter.get("name")] = convert(node.get("value"))
-    connections = [Connection(c.get("startElement"), c.get("startConnector"), c.get("endElement"),
-                              c.get("endConnector")) for c in system.iter(f"{SSD}Connection")]
+        read_fmu(fmu)
+        instances[name] = str(fmu)
+        parameters[name] = _bindings(component, ssd.parent, origin)
+    for key, value in _bindings(system, ssd.parent, origin).items():
+        instance, _, variable = key.partition(".")
+        if instance not in instances or not variable:
+            raise ValueError(f"{origin}: system parameter {key!r} must be INSTANCE.VARIABLE with an instance of "
+                             f"{', '.join(instances)}")
+        parameters[instance][variable] = value
+    connections = tuple(Connection(c.get("startElement"), c.get("startConnector"), c.get("endElement"),
+                                   c.get("endConnector")) for c in system.iter(f"{SSD}Connection"))
     for c in connections:
         for instance in (c.source, c.target):
-            if instance not in fmus:
+            if instance not in instances:
                 raise ValueError(f"{origin}: a connection names the unknown component {instance!r}")
-    return System(fmus, connections, parameters)
+    times = {}
+    experiment = root.find(f"{SSD}DefaultExperiment")
+    if experiment is not None:
+        for attr, key in (("startTime", "start_time"), ("stopTime", "stop_time")):
+            if experiment.get(attr) is not None:
+                times[key] = float(experiment.get(attr))
+    return System(system.get("name") or Path(origin).stem, instances, connections, match_names=False,
+                  parameters=parameters, **times)
+
+
+def load_parameters(path):
+    """``{instance: {variable: value}}`` from an ``.ssv`` file whose names are ``instance.variable``."""
+    values = {}
+    for key, value in _parameter_set(_xml(path, path), path).items():
+        instance, dot, variable = key.partition(".")
+        if not dot or not variable:
+            raise ValueError(f"{path}: parameter {key!r} must be named INSTANCE.VARIABLE")
+        values.setdefault(instance, {})[variable] = value
+    return values
+
+
+# --- writing ------------------------------------------------------------------------
+
+def _write_xml(root, path):
+    ET.indent(root)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    partial = path.with_name(f".{path.name}.partial")
+    ET.ElementTree(root).write(partial, encoding="UTF-8", xml_declaration=True)
+    os.replace(partial, path)
+    return path
+
+
+def _typed(parent, ns, kind, **attrs):
+    """An ssc/ssv typed element: Real (units) or String, Integer, Boolean."""
+    kind = {"Float64": "Real", "Int32": "Integer"}.get(kind, kind)
+    return ET.SubElement(parent, f"{ns}{kind}", {k: v for k, v in attrs.items() if v is not None})
+
+
+def value_text(value):
+    return repr(float(value)) if isinstance(value, float) else str(value).lower() if isinstance(value, bool) \
+        else str(value)
+
+
+def parameter_values(md, overrides):
+    """``{name: (variable, value)}`` of every parameter of an FMU: its start values with ``overrides`` applied."""
+    values = {}
+    for v in md.modelVariables:
+        if v.causality == "parameter":
+            value = overrides.get(v.name, v.start)
+            values[v.name] = (v, _CONVERT.get(v.type, str)(value) if value is not None else None)
+    return values
+
+
+def system_structure(system, fmus, connections, sources):
+    """The SystemStructure.ssd element of a resolved system; ``sources`` maps instances to package paths."""
+    for prefix, ns in (("ssd", SSD_NS), ("ssc", SSC_NS), ("ssv", SSV_NS)):
+        ET.register_namespace(prefix, ns)
+    root = ET.Element(f"{SSD}SystemStructureDescription", version="1.0", name=system.name)
+    node = ET.SubElement(root, f"{SSD}System", name=system.name)
+    elements = ET.SubElement(node, f"{SSD}Elements")
+    units = {}
+    for name, path in fmus.items():
+        md = read_fmu(path)
+        units.update({u.name: u for u in md.unitDefinitions})
+        component = ET.SubElement(elements, f"{SSD}Component", name=name, type="application/x-fmu-sharedlibrary",
+                                  source=sources[name])
+        connectors = ET.SubElement(component, f"{SSD}Connectors")
+        for v in md.modelVariables:
+            if v.causality in ("parameter", "input", "output"):
+                connector = ET.SubElement(connectors, f"{SSD}Connector", name=v.name, kind=v.causality)
+                _typed(connector, SSC, v.type, unit=v.unit if v.type in ("Real", "Float64") else None)
+        binding = ET.SubElement(ET.SubElement(component, f"{SSD}ParameterBindings"), f"{SSD}ParameterBinding")
+        parameter_set = ET.SubElement(ET.SubElement(binding, f"{SSD}ParameterValues"), f"{SSV}ParameterSet",
+                                      version="1.0", name=f"{name}_parameters")
+        parameters = ET.SubElement(parameter_set, f"{SSV}Parameters")
+        for pname, (v, value) in parameter_values(md, system.parameters.get(name, {})).items():
+            if value is not None:
+                _typed(ET.SubElement(parameters, f"{SSV}Parameter", name=pname), SSV, v.type,
+                       value=value_text(value), unit=v.unit if v.type in ("Real", "Float64") else None)
+    links = ET.SubElement(node, f"{SSD}Connections")
+    for c in connections:
+        ET.SubElement(links, f"{SSD}Connection", startElement=c.source, startConnector=c.output,
+                      endElement=c.target, endConnector=c.input)
+    if units:
+        unit_node = ET.SubElement(root, f"{SSD}Units")
+        for name in sorted(units):
+            unit = ET.SubElement(unit_node, f"{SSC}Unit", name=name)
+            base = units[name].baseUnit
+            exponents = {k: str(getattr(base, k)) for k in _BASE_UNITS if base is not None and getattr(base, k)}
+            ET.SubElement(unit, f"{SSC}BaseUnit", exponents)
+    ET.SubElement(root, f"{SSD}DefaultExperiment", startTime=repr(float(system.start_time)),
+                  stopTime=repr(float(system.stop_time)))
+    return root
+
+
+def write_ssp(system, fmu_dir, path):
+    """Write ``system`` (FMUs in ``fmu_dir`` or named by path) as an SSP package at ``path``; return it."""
+    fmus, connections = system.resolve(fmu_dir)
+    sources = {name: f"resources/{Path(p).name}" for name, p in fmus.items()}
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="crane_ssp_") as staging:
+        ssd = _write_xml(system_structure(system, fmus, connections, sources), Path(staging) / "SystemStructure.ssd")
+        partial = path.with_name(f".{path.name}.partial")
+        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as ssp:
+            ssp.write(ssd, "SystemStructure.ssd")
+            for name in sorted(set(sources.values())):
+                ssp.write(next(fmus[n] for n in fmus if sources[n] == name), name)
+        os.replace(partial, path)
+    return path
+
+
+def write_ssv(parameters, path):
+    """Write ``{instance: {variable: value}}`` as an ``.ssv`` parameter set named ``instance.variable``."""
+    ET.register_namespace("ssv", SSV_NS)
+    root = ET.Element(f"{SSV}ParameterSet", version="1.0", name=Path(path).stem)
+    node = ET.SubElement(root, f"{SSV}Parameters")
+    for instance, values in parameters.items():
+        for name, value in values.items():
+            kind = "String" if isinstance(value, str) else "Boolean" if isinstance(value, bool) else "Real"
+            _typed(ET.SubElement(node, f"{SSV}Parameter", name=f"{instance}.{name}"), SSV, kind,
+                   value=value_text(float(value) if kind == "Real" else value))
+    return _write_xml(root, path)

@@ -1,37 +1,135 @@
-"""The crane system (plant + controller) and the high-level run function."""
+"""A system as data: instances, connections, parameter values, times; and the run function.
 
+Nothing here knows what the instances are: a system names each instance's FMU
+either by a model identifier (the file ``<identifier>.fmu`` in a folder of built
+FMUs) or by the path of an ``.fmu`` file.
+"""
+
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from crane_fmu.model.tables import STATE
-
-from .fmi import FmiError
-from .fmi3 import open_instance
+from .instance import FmiError, open_instance
 from .master import Connection, Master, communication_points
 from .recorder import ArrayRecorder
 
-DEFAULT_FMU_DIR = Path("build/fmus")
-DEFAULT_SYSTEM = Path("build/CraneSystem.ssp")  # written by crane-fmu build beside build/fmus
-FMU_FILES = {"plant": "CranePlant.fmu", "controller": "BacksteppingController.fmu"}
-CRANE_CONNECTIONS = [Connection("plant", s, "controller", s) for s in STATE] + [
-    Connection("controller", "u", "plant", "u")]
+
+@dataclass(frozen=True)
+class System:
+    """A co-simulation system.
+
+    Attributes
+    ----------
+    name : str
+    instances : dict
+        ``{instance name: model identifier or .fmu path}``.
+    connections : tuple of Connection
+        Written-out connections.
+    match_names : bool
+        Also connect every input that no written-out connection feeds to the
+        output of the same name of another instance, where exactly one has it
+        (python-control's ``interconnect`` habit).
+    parameters : dict
+        ``{instance: {variable: value}}`` set before initialisation.
+    stop_time, step, start_time : float
+        The default experiment [s].
+    description : str
+    """
+
+    name: str
+    instances: dict
+    connections: tuple = ()
+    match_names: bool = True
+    parameters: dict = field(default_factory=dict)
+    stop_time: float = 20.0
+    step: float = 1e-3
+    start_time: float = 0.0
+    description: str = ""
+
+    def fmus(self, fmu_dir):
+        """``{instance: Path}`` of the FMU files; a model identifier names ``fmu_dir/<identifier>.fmu``."""
+        return {name: Path(source) if str(source).endswith(".fmu") else Path(fmu_dir) / f"{source}.fmu"
+                for name, source in self.instances.items()}
+
+    def with_parameters(self, overrides):
+        """A copy with ``{instance: {variable: value}}`` set over the system's own values."""
+        merged = {name: dict(values) for name, values in self.parameters.items()}
+        for name, values in overrides.items():
+            if name not in self.instances:
+                raise ValueError(f"unknown instance {name!r}; instances: {', '.join(self.instances)}")
+            merged.setdefault(name, {}).update(values)
+        return replace(self, parameters=merged)
+
+    def resolve(self, fmu_dir):
+        """``(fmus, connections)``: the checked FMU paths and every connection, matched ones included.
+
+        Raises
+        ------
+        ValueError
+            One line: a missing or unreadable FMU, an unknown variable, an ambiguous match.
+        """
+        fmus = self.fmus(fmu_dir)
+        interfaces = {}
+        for name, path in fmus.items():
+            md = read_fmu(path)
+            interfaces[name] = ([v.name for v in md.modelVariables if v.causality == "input"],
+                                [v.name for v in md.modelVariables if v.causality == "output"])
+        return fmus, connect(interfaces, self.connections, self.match_names)
 
 
-def crane_system(fmu_dir=DEFAULT_FMU_DIR, controller=True):
-    """``({instance: fmu path}, connections)`` of the closed loop, or of the plant alone."""
-    fmu_dir = Path(fmu_dir)
-    names = ["plant", "controller"] if controller else ["plant"]
-    fmus = {name: fmu_dir / FMU_FILES[name] for name in names}
-    for path in fmus.values():
-        if not path.is_file():
-            raise FileNotFoundError(f"{path} not found: build the FMUs first (crane-fmu build)")
-        check_fmu(path)
-    return fmus, (CRANE_CONNECTIONS if controller else [])
+def connect(interfaces, connections=(), match_names=True):
+    """Every connection of a system: the written-out ones, then inputs matched to outputs by name.
+
+    Parameters
+    ----------
+    interfaces : dict
+        ``{instance: (input names, output names)}``.
+    connections : iterable of Connection
+    match_names : bool
+        Connect each input that no written-out connection feeds to the one
+        other instance's output of the same name.
+
+    Raises
+    ------
+    ValueError
+        For a connection naming an unknown instance or variable, an input fed
+        twice, or an input that matches outputs of several instances.
+    """
+    result, fed = [], set()
+    for c in connections:
+        for instance in (c.source, c.target):
+            if instance not in interfaces:
+                raise ValueError(f"connection {c.source}.{c.output} -> {c.target}.{c.input}: unknown instance "
+                                 f"{instance!r}; instances: {', '.join(interfaces)}")
+        if c.output not in interfaces[c.source][1]:
+            raise ValueError(f"connection: {c.source}.{c.output} is not an output; outputs: "
+                             + ", ".join(interfaces[c.source][1]))
+        if c.input not in interfaces[c.target][0]:
+            raise ValueError(f"connection: {c.target}.{c.input} is not an input; inputs: "
+                             + ", ".join(interfaces[c.target][0]))
+        if (c.target, c.input) in fed:
+            raise ValueError(f"connection: {c.target}.{c.input} is fed twice")
+        fed.add((c.target, c.input))
+        result.append(Connection(*c))
+    if match_names:
+        for target, (inputs, _) in interfaces.items():
+            for name in inputs:
+                if (target, name) in fed:
+                    continue
+                sources = [s for s, (_, outputs) in interfaces.items() if s != target and name in outputs]
+                if len(sources) > 1:
+                    raise ValueError(f"input {target}.{name} matches the outputs of {', '.join(sources)}: "
+                                     "connect it explicitly")
+                if sources:
+                    result.append(Connection(sources[0], name, target, name))
+    return result
 
 
-def check_fmu(path):
-    """Raise ValueError (one line) unless ``path`` is a readable FMI 2.0 or 3.0 co-simulation FMU."""
+def read_fmu(path):
+    """The model description of a readable FMI 2.0 or 3.0 co-simulation FMU, else ValueError (one line)."""
     from fmpy import read_model_description
 
+    if not Path(path).is_file():
+        raise ValueError(f"{path} not found: build the FMUs first (crane-fmu build)")
     try:
         md = read_model_description(str(path))
     except Exception as exc:  # zip, XML and schema errors alike
@@ -39,37 +137,13 @@ def check_fmu(path):
         raise ValueError(f"{path} is not a readable FMU ({reason})") from None
     if md.fmiVersion not in ("2.0", "3.0") or md.coSimulation is None:
         raise ValueError(f"{path} is not an FMI 2.0 or 3.0 co-simulation FMU")
+    return md
 
 
 def settable_variables(fmu_path):
     """``{name: FMI type}`` of the parameters and inputs of an FMU, from its modelDescription.xml."""
-    from fmpy import read_model_description
-
-    md = read_model_description(str(fmu_path))
+    md = read_fmu(fmu_path)
     return {v.name: v.type for v in md.modelVariables if v.causality in ("parameter", "input")}
-
-
-def check_crane_parameters(parameters, instances=("plant", "controller")):
-    """Apply the model's rules to the crane FMUs' parameters (defaults overridden by ``parameters``).
-
-    The FMUs apply the same rules when initialisation ends, but pythonfmu FMUs
-    cannot tell their host why they failed; checking first gives the reason.
-
-    Raises
-    ------
-    ValueError
-        ``"plant: l1 must be > 0 and finite, got -1.0"``.
-    """
-    from crane_fmu.model import tables
-    from crane_fmu.model.parameters import controller_setup, plant_setup
-
-    checks = {"plant": (tables.PLANT, plant_setup), "controller": (tables.CONTROLLER, controller_setup)}
-    for instance in instances:
-        table, setup = checks[instance]
-        try:
-            setup({**tables.defaults(table), **parameters.get(instance, {})})
-        except ValueError as exc:
-            raise ValueError(f"{instance}: {exc}") from None
 
 
 def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters=None,
@@ -118,3 +192,10 @@ def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters
     if hasattr(recorder, "close"):
         recorder.close()
     return recorder
+
+
+def run(system, fmu_dir, mode="gauss-seidel", recorder=None, stop_time=None, step=None):
+    """Co-simulate a :class:`System` whose FMUs are in ``fmu_dir`` (or named by path); return the recorder."""
+    fmus, connections = system.resolve(fmu_dir)
+    return simulate(fmus, connections, system.stop_time if stop_time is None else stop_time,
+                    system.step if step is None else step, mode, system.parameters, recorder, system.start_time)

@@ -1,4 +1,4 @@
-"""Runtime core: parameters, equations of motion, control law, FMU variable tables.
+"""Runtime core: component descriptors, parameters, equations of motion, control laws.
 
 Standard library only, and no module-level mutable state: the built FMUs bundle
 this package and run inside whatever Python process hosts them.
@@ -7,4 +7,4 @@ this package and run inside whatever Python process hosts them.
 # Import every submodule now. A host shares sys.modules with the FMUs it loads
 # and may delete an FMU's extracted folder after freeing it (fmpy's simulate
 # does); a submodule imported lazily later would then be looked for there.
-from . import controller, parameters, plant, tables  # noqa: F401
+from . import backstepping, benchmark, component, parameters, plant, tables  # noqa: F401

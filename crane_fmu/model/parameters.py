@@ -17,7 +17,8 @@ def _check(name, value, rule, ok):
         raise ValueError(f"{name} must be {rule}, got {value!r}")
 
 
-def _positive(name, value):
+def positive(name, value):
+    """Raise ValueError naming ``name`` unless ``value`` is a finite number > 0."""
     _check(name, value, "> 0 and finite", lambda v: v > 0)
 
 
@@ -50,11 +51,11 @@ class PlantParameters:
     g: float = 9.8
 
     def __post_init__(self):
-        _positive("m1", self.m1)
+        positive("m1", self.m1)
         _check("m2", self.m2, ">= 0 and finite", lambda v: v >= 0)
-        _positive("l1", self.l1)
-        _positive("l2", self.l2)
-        _positive("g", self.g)
+        positive("l1", self.l1)
+        positive("l2", self.l2)
+        positive("g", self.g)
 
 
 @dataclass(frozen=True)
@@ -110,14 +111,6 @@ class ControllerGains:
 PLANT_FIELDS = ("m1", "m2", "l1", "l2", "g")
 
 
-def plant_setup(values):
-    """Validated ``(PlantParameters, max_substep)`` from the CranePlant parameter values."""
-    max_substep = values["max_substep"]
-    _positive("max_substep", max_substep)
-    return PlantParameters(**{name: values[name] for name in PLANT_FIELDS}), max_substep
-
-
-def controller_setup(values):
-    """Validated ``(PlantParameters, ControllerGains)`` from the BacksteppingController parameter values."""
-    gains = {name: value for name, value in values.items() if name not in PLANT_FIELDS}
-    return PlantParameters(**{name: values[name] for name in PLANT_FIELDS}), ControllerGains(**gains)
+def plant_parameters(values):
+    """Validated :class:`PlantParameters` from the m1, m2, l1, l2, g entries of ``values``."""
+    return PlantParameters(**{name: values[name] for name in PLANT_FIELDS})

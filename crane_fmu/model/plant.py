@@ -6,6 +6,11 @@ the downward vertical, positive in +x direction (Fig. 3).
 """
 
 import math
+from collections import namedtuple
+
+from .component import Component, Discard
+from .parameters import plant_parameters, positive
+from .tables import PLANT_MODEL, input_, output, parameter
 
 
 def angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p):
@@ -143,3 +148,62 @@ def outputs(state, p):
     kinetic = 0.5 * (p.m1 * (vx1 * vx1 + vy1 * vy1) + p.m2 * (vx2 * vx2 + vy2 * vy2))
     return (x, dx, theta1, dtheta1, theta2, dtheta2, x1, y1, x2, y2,
             kinetic + p.g * (p.m1 * y1 + p.m2 * y2))
+
+
+# --- the CranePlant component -------------------------------------------------------
+
+VARIABLES = PLANT_MODEL + (
+    parameter("x0", 0.0, "m", "initial trolley position"),
+    parameter("dx0", 0.0, "m/s", "initial trolley velocity"),
+    parameter("theta1_0", math.pi / 18, "rad", "initial hook swing angle"),
+    parameter("dtheta1_0", 0.0, "rad/s", "initial hook swing rate"),
+    parameter("theta2_0", 0.0, "rad", "initial payload swing angle"),
+    parameter("dtheta2_0", 0.0, "rad/s", "initial payload swing rate"),
+    parameter("max_substep", 1e-3, "s", "longest RK4 sub-step inside doStep"),
+    input_("u", "m/s2", "trolley acceleration (held over each step)"),
+    output("x", "m", "trolley position"),
+    output("dx", "m/s", "trolley velocity"),
+    output("theta1", "rad", "hook swing angle from vertical"),
+    output("dtheta1", "rad/s", "hook swing rate"),
+    output("theta2", "rad", "payload swing angle from vertical"),
+    output("dtheta2", "rad/s", "payload swing rate"),
+    output("x1", "m", "hook horizontal position, eq (4)"),
+    output("y1", "m", "hook vertical position (up positive), eq (4)"),
+    output("x2", "m", "payload horizontal position, eq (5)"),
+    output("y2", "m", "payload vertical position (up positive), eq (5)"),
+    output("energy", "J", "kinetic + potential energy of hook and payload, eqs (6)-(7)"),
+)
+
+Config = namedtuple("Config", "params max_substep state0")
+
+
+def setup(values):
+    """Validated :class:`Config` from the CranePlant parameter values."""
+    positive("max_substep", values["max_substep"])
+    state0 = tuple(values[name] for name in ("x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0"))
+    return Config(plant_parameters(values), values["max_substep"], state0)
+
+
+def update(config, state, inputs, time, step):
+    """The state after one communication step with ``u`` held; :class:`Discard` if it becomes non-finite."""
+    (u,) = inputs
+    n = substeps(step, config.max_substep)  # ValueError for an unusable step
+    dt, p = step / n, config.params
+    try:
+        for _ in range(n):
+            state = rk4_step(state, u, dt, p)
+        finite = all(map(math.isfinite, state))
+    except (ArithmeticError, ValueError):  # overflow, or sin/cos of inf
+        finite = False
+    if not finite:
+        raise Discard(f"plant state became non-finite in the step from t={time!r} s (u={u!r} m/s2); "
+                      "the step is discarded")
+    return state
+
+
+COMPONENT = Component(
+    "CranePlant", "plant",
+    "Overhead crane with a double-pendulum payload (hook m1 on cable l1, payload m2 on cable l2); "
+    "input: trolley acceleration u; fixed-step RK4 inside doStep",
+    VARIABLES, setup, lambda config, state, inputs: outputs(state, config.params),
+    initial_state=lambda config: config.state0, update=update, default_experiment=(0.0, 20.0, 0.01))

@@ -22,16 +22,17 @@ from .spec import case_id
 JOURNAL = "cases.jsonl"
 
 
-def fmu_blobs(fmu_dir, controller=True):
-    """``{instance: (sha256, bytes)}`` of the crane FMUs, to ship to the workers."""
-    from crane_fmu.cosim import crane_system
+def shippable(system, fmu_dir):
+    """What a worker needs to run cases of ``system``: FMU bytes by instance, connections, parameter values.
 
-    fmus, _ = crane_system(fmu_dir, controller)
+    ``blobs`` is ``{instance: (sha256, bytes)}``; workers cache each FMU once by its hash.
+    """
+    fmus, connections = system.resolve(fmu_dir)
     blobs = {}
     for name, path in fmus.items():
         data = Path(path).read_bytes()
         blobs[name] = (hashlib.sha256(data).hexdigest()[:20], data)
-    return blobs
+    return {"blobs": blobs, "connections": connections, "parameters": system.parameters}
 
 
 def _local_fmus(blobs):
@@ -49,49 +50,45 @@ def _local_fmus(blobs):
     return paths
 
 
-def _by_instance(case):
-    parameters = {}
+def case_parameters(case, base=None):
+    """``{"plant.l1": 1.5}`` -> ``{"plant": {"l1": 1.5}}``, over the system's own values ``base``."""
+    parameters = {name: dict(values) for name, values in (base or {}).items()}
     for key, value in case.items():
         instance, _, variable = key.partition(".")
         parameters.setdefault(instance, {})[variable] = value
     return parameters
 
 
-def run_case(case, settings, blobs, metric_names):
-    """Co-simulate one case; return its row: parameters, metrics, status, error, duration.
+def _invalid_row(case, settings, error, metric_names):
+    return {"case_id": case_id(case, settings), **case, "status": "invalid", "error": error,
+            **dict.fromkeys(metric_names), "duration_s": 0.0}
 
-    Status is ``ok`` (ran to the stop time), ``failed`` (an FMU stopped the
-    run; the metrics cover the run up to there) or ``invalid`` (parameters
-    refused by the model's rules; not run).
+
+def run_case(case, settings, system, metric_names):
+    """Co-simulate one case of a :func:`shippable` system; return its row: parameters, metrics, status, error.
+
+    Status is ``ok`` (ran to the stop time) or ``failed`` (an FMU stopped the
+    run; the metrics cover the run up to there).
     """
     from crane_fmu.analysis import metrics
-    from crane_fmu.cosim import CRANE_CONNECTIONS, ArrayRecorder, FmiError, simulate
-    from crane_fmu.cosim.system import check_crane_parameters
+    from crane_fmu.cosim import ArrayRecorder, FmiError, simulate
 
     row = {"case_id": case_id(case, settings), **case, "status": "ok", "error": None}
-    parameters = _by_instance(case)
     start = time.perf_counter()
-    try:
-        check_crane_parameters(parameters, list(blobs))
-    except ValueError as exc:
-        return {**row, "status": "invalid", "error": str(exc), **dict.fromkeys(metric_names), "duration_s": 0.0}
-    connections = CRANE_CONNECTIONS if settings["controller"] else []
     recorder = ArrayRecorder()
     try:
-        simulate(_local_fmus(blobs), connections, settings["stop_time"], settings["step"], settings["master"],
-                 parameters, recorder)
+        simulate(_local_fmus(system["blobs"]), system["connections"], settings["stop_time"], settings["step"],
+                 settings["master"], case_parameters(case, system["parameters"]), recorder)
     except FmiError as exc:
         row.update(status="failed", error=str(exc))
+    values = dict.fromkeys(metric_names)
     columns = recorder.columns() if recorder.names else None
-    if columns is None:  # failed before the first communication point
-        values = dict.fromkeys(metric_names)
-    else:
-        u = columns.get("controller.u", columns["plant.x"] * 0.0)
-        values = metrics.closed_loop_metrics(columns["time"], columns["plant.x"], columns["plant.theta1"],
-                                             columns["plant.theta2"], u, row["status"] == "ok")
-        values["settling_band_s"] = metrics.settling_time(
-            columns["time"], [columns["plant.theta1"], columns["plant.theta2"]],
-            math.radians(settings["settling_band_deg"]))
+    if columns and len(columns["time"]):  # else: failed before the first communication point
+        s = metrics.crane_signals(columns)
+        values = metrics.closed_loop_metrics(s["time"], s["x"], s["theta1"], s["theta2"], s["u"],
+                                             row["status"] == "ok")
+        values["settling_band_s"] = metrics.settling_time(s["time"], [s["theta1"], s["theta2"]],
+                                                          math.radians(settings["settling_band_deg"]))
     row.update({name: values.get(name) for name in metric_names})
     row["duration_s"] = time.perf_counter() - start
     return row
@@ -161,37 +158,29 @@ def run_study(study, out_dir, fmu_dir="build/fmus", workers=None, scheduler=None
     dict
         ``cases``, ``skipped`` (done before), ``ran``, ``not_ok`` and ``seconds``.
     """
-    from distributed import as_completed
+    from crane_fmu import systems
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     settings = study.settings()
     cases = study.cases()
-    _check_names(study, fmu_dir)
     done = read_journal(out_dir)
     pending = [c for c in cases if case_id(c, settings) not in done]
     bar = Progress(len(cases), len(cases) - len(pending)) if progress else None
     start = time.perf_counter()
     rows_ran = []
-    if pending:
-        blobs = fmu_blobs(fmu_dir, study.controller)
-        client, cluster = _client(workers, scheduler)
-        try:
-            shipped = client.scatter([blobs], broadcast=True)[0]
-            futures = client.map(run_case, pending, settings=settings, blobs=shipped,
-                                 metric_names=study.metrics, pure=False)
-            with open(out_dir / JOURNAL, "a") as journal:
-                for future in as_completed(futures):
-                    row = future.result()
-                    journal.write(json.dumps(row, default=_plain) + "\n")
-                    journal.flush()
-                    rows_ran.append(row)
-                    if bar:
-                        bar.update(row)
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
+    with systems.open_system(study.system) as system:
+        _check_names(study, system, fmu_dir)
+        if pending:
+            shipped = shippable(system, fmu_dir)
+            to_run = []
+            for case in pending:  # the model's parameter rules, before anything is shipped
+                try:
+                    systems.check_parameters(system.with_parameters(case_parameters(case)), fmu_dir)
+                    to_run.append(case)
+                except ValueError as exc:
+                    rows_ran.append(_invalid_row(case, settings, str(exc), study.metrics))
+            _run_on_dask(to_run, settings, shipped, study.metrics, workers, scheduler, out_dir, rows_ran, bar)
     done.update({r["case_id"]: r for r in rows_ran})
     rows = [done[case_id(c, settings)] for c in cases]
     write_table(rows, out_dir / "results.parquet")
@@ -205,20 +194,58 @@ def run_study(study, out_dir, fmu_dir="build/fmus", workers=None, scheduler=None
             "not_ok": sum(r["status"] != "ok" for r in rows), "seconds": time.perf_counter() - start}
 
 
-def _check_names(study, fmu_dir):
-    """Every varied or fixed variable must be a parameter or input of its FMU."""
-    from crane_fmu.cosim import crane_system
-    from crane_fmu.cosim.system import settable_variables
+def _run_on_dask(cases, settings, shipped, metric_names, workers, scheduler, out_dir, rows, bar):
+    """Run ``cases`` on Dask, appending each finished row (and the rows already in ``rows``) to the journal."""
+    from distributed import as_completed
 
-    fmus, _ = crane_system(fmu_dir, study.controller)
+    with open(out_dir / JOURNAL, "a") as journal:
+        def keep(row, new=True):
+            journal.write(json.dumps(row, default=_plain) + "\n")
+            journal.flush()
+            if new:
+                rows.append(row)
+            if bar:
+                bar.update(row)
+
+        for row in list(rows):
+            keep(row, new=False)
+        if not cases:
+            return
+        client, cluster = _client(workers, scheduler)
+        try:
+            system = client.scatter([shipped], broadcast=True)[0]
+            futures = client.map(run_case, cases, settings=settings, system=system, metric_names=metric_names,
+                                 pure=False)
+            for future in as_completed(futures):
+                keep(future.result())
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+
+
+def _check_names(study, system, fmu_dir):
+    """Every varied or fixed variable must be a parameter or input of its instance, and the runs crane runs."""
+    from crane_fmu.analysis.metrics import CRANE_OUTPUTS
+    from crane_fmu.cosim.system import read_fmu, settable_variables
+
+    fmus = system.fmus(fmu_dir)
     known = {name: settable_variables(path) for name, path in fmus.items()}
     names = list(study.fixed) + [n for names, *_ in list(study.grid.values()) + list(study.sampled.values())
                                  for n in names]
     for name in names:
         instance, _, variable = name.partition(".")
+        if instance not in known:
+            raise ValueError(f"parameter {name!r}: system {system.name} has no instance {instance!r}; instances: "
+                             + ", ".join(known))
         if variable not in known[instance]:
             raise ValueError(f"parameter {name!r}: {instance} has no parameter or input {variable!r}; valid: "
                              + ", ".join(known[instance]))
+    outputs = {name: {v.name for v in read_fmu(path).modelVariables if v.causality == "output"}
+               for name, path in fmus.items()}
+    if not any(set(CRANE_OUTPUTS) <= names for names in outputs.values()):
+        raise ValueError(f"the sweep's metrics need an instance with outputs {', '.join(CRANE_OUTPUTS)}; system "
+                         f"{system.name} has none")
 
 
 def _plain(value):

@@ -2,10 +2,10 @@
 
 A study is a TOML (or, with PyYAML installed, YAML) file::
 
+    system = "paper"                 # a built-in system's name or an SSP file (default paper)
     stop_time = 10.0                 # [s], required
     step = 0.002                     # communication step [s], required
     master = "gauss-seidel"          # or "jacobi"
-    controller = true                # false: the plant alone (free swing)
     metrics = ["outcome", "settling_0.5deg_s"]   # default: every metric
     settling_band_deg = 0.25         # band of the metric "settling_band_s" (default 0.5)
 
@@ -27,6 +27,7 @@ A study is a TOML (or, with PyYAML installed, YAML) file::
     x = "plant.theta1_0"
     y = "plant.l1"
 
+Parameter names are ``INSTANCE.VARIABLE`` with an instance of the system.
 Every mistake raises ``ValueError`` with one line naming the key and the rule.
 """
 
@@ -40,7 +41,6 @@ from pathlib import Path
 METRICS = ("outcome", "settling_band_s", "settling_0.5deg_s", "settling_0.1deg_s", "max_theta1_deg", "max_theta2_deg",
            "rms_theta1_deg", "residual_after_15s_deg", "trolley_excursion_m", "trolley_final_m", "peak_abs_u",
            "end_time_s")
-INSTANCES = ("plant", "controller")
 SAMPLING = ("latin-hypercube", "random")
 BUILTIN_DIR = Path(__file__).parent / "builtin"
 
@@ -52,7 +52,7 @@ class Study:
     stop_time: float
     step: float
     master: str = "gauss-seidel"
-    controller: bool = True
+    system: str = "paper"
     metrics: tuple = METRICS
     settling_band_deg: float = 0.5
     grid: dict = field(default_factory=dict)  # axis name -> (variable names, values)
@@ -93,8 +93,8 @@ class Study:
         return [tuple(float(lo + u * (hi - lo)) for u, (_, lo, hi) in zip(row, bounds)) for row in unit]
 
     def settings(self):
-        return {"stop_time": self.stop_time, "step": self.step, "master": self.master,
-                "controller": self.controller, "settling_band_deg": self.settling_band_deg}
+        return {"system": self.system, "stop_time": self.stop_time, "step": self.step, "master": self.master,
+                "settling_band_deg": self.settling_band_deg}
 
 
 def case_id(case, settings):
@@ -113,9 +113,8 @@ def _names(key):
     names = [n.strip() for n in key.split(",")]
     for name in names:
         instance, dot, variable = name.partition(".")
-        if not dot or not variable or instance not in INSTANCES:
-            raise ValueError(f"parameter {name!r} must be INSTANCE.VARIABLE with INSTANCE one of "
-                             f"{', '.join(INSTANCES)}")
+        if not dot or not variable or not instance:
+            raise ValueError(f"parameter {name!r} must be INSTANCE.VARIABLE")
     return tuple(names)
 
 
@@ -144,8 +143,11 @@ def _axis(key, value):
 
 def parse(data, source="study"):
     """Build a :class:`Study` from the loaded file contents (a dict)."""
-    known = {"stop_time", "step", "master", "controller", "metrics", "parameters", "sampling", "fixed", "plot",
+    known = {"system", "stop_time", "step", "master", "metrics", "parameters", "sampling", "fixed", "plot",
              "settling_band_deg"}
+    if "controller" in data:
+        raise ValueError(f"{source}: the key controller is gone: name the system instead, system = \"free\" for the "
+                         "plant alone (controller = false) or system = \"paper\" (controller = true)")
     unknown = sorted(set(data) - known)
     if unknown:
         raise ValueError(f"{source}: unknown key {unknown[0]!r}; known keys: {', '.join(sorted(known))}")
@@ -160,9 +162,9 @@ def parse(data, source="study"):
     master = data.get("master", "gauss-seidel")
     if master not in MODES:
         raise ValueError(f"master must be one of {', '.join(MODES)}, got {master!r}")
-    controller = data.get("controller", True)
-    if not isinstance(controller, bool):
-        raise ValueError(f"controller must be true or false, got {controller!r}")
+    system = data.get("system", "paper")
+    if not isinstance(system, str) or not system:
+        raise ValueError(f"system must be a system's name or an SSP file, got {system!r}")
     metrics = tuple(data.get("metrics", METRICS))
     for m in metrics:
         if m not in METRICS:
@@ -175,8 +177,6 @@ def parse(data, source="study"):
     grid, sampled = {}, {}
     for key, value in data.get("parameters", {}).items():
         names = _names(key)
-        if not controller and any(n.startswith("controller.") for n in names):
-            raise ValueError(f"parameters.{key!r}: there is no controller in a study with controller = false")
         kind, spec = _axis(key, value)
         if kind == "grid":
             grid[key] = (names, spec)
@@ -203,7 +203,7 @@ def parse(data, source="study"):
             if plot.get(axis) not in axes:
                 raise ValueError(f"plot.{axis} must be a varied parameter ({', '.join(sorted(axes))}), "
                                  f"got {plot.get(axis)!r}")
-    return Study(stop_time, step, master, controller, metrics, band, grid, sampled, method, samples, seed, fixed,
+    return Study(stop_time, step, master, system, metrics, band, grid, sampled, method, samples, seed, fixed,
                  plot)
 
 

@@ -1,6 +1,10 @@
-"""Backstepping anti-swing law of the paper, eqs (10)-(21)."""
+"""Backstepping anti-swing law of the paper, eqs (10)-(21): the BacksteppingController component."""
 
 import math
+
+from .component import Component
+from .parameters import PLANT_FIELDS, ControllerGains, plant_parameters
+from .tables import MEASURED_STATE, controller_model, output, parameter
 
 
 def drift_and_input_gain(theta1, dtheta1, theta2, dtheta2, p, b3_form="derived"):
@@ -75,3 +79,40 @@ def control(state, p, k):
     # f1 = 0, b1 = 1 (eq 12)
     num = k.w_x * e3x + k.w_theta1 * b2 * (e31 - f2) + k.w_theta2 * b3 * (e32 - f3)
     return num / (k.w_x + k.w_theta1 * b2 * b2 + k.w_theta2 * b3 * b3)
+
+
+# --- the BacksteppingController component -------------------------------------------
+
+_K = ControllerGains()  # defaults live in the dataclass
+
+VARIABLES = controller_model() + (
+    parameter("K1_x", _K.K1_x, "1/s", "K1 gain on trolley position error, eq (18)"),
+    parameter("K1_theta1", _K.K1_theta1, "1/s", "K1 gain on hook angle error, eq (18)"),
+    parameter("K1_theta2", _K.K1_theta2, "1/s", "K1 gain on payload angle error, eq (18)"),
+    parameter("K2_x", _K.K2_x, "1/s", "K2 gain on trolley delta2, eq (19)"),
+    parameter("K2_theta1", _K.K2_theta1, "1/s", "K2 gain on hook delta2, eq (19)"),
+    parameter("K2_theta2", _K.K2_theta2, "1/s", "K2 gain on payload delta2, eq (19)"),
+    parameter("x_d", _K.x_d, "m", "target trolley position"),
+    parameter("theta1_d", _K.theta1_d, "rad", "target hook angle"),
+    parameter("theta2_d", _K.theta2_d, "rad", "target payload angle"),
+    parameter("w_x", _K.w_x, "1", "least-squares weight of the trolley row of eq (20)"),
+    parameter("w_theta1", _K.w_theta1, "1", "least-squares weight of the hook row of eq (20)"),
+    parameter("w_theta2", _K.w_theta2, "1", "least-squares weight of the payload row of eq (20)"),
+    parameter("b3_form", _K.b3_form, None,
+              "b3 of eq (14): 'derived' (corrected sign) or 'printed' (as in the paper)", "String"),
+) + MEASURED_STATE + (
+    output("u", "m/s2", "demanded trolley acceleration, eq (21)"),
+)
+
+
+def setup(values):
+    """Validated ``(PlantParameters, ControllerGains)`` from the BacksteppingController parameter values."""
+    gains = {name: value for name, value in values.items() if name not in PLANT_FIELDS}
+    return plant_parameters(values), ControllerGains(**gains)
+
+
+COMPONENT = Component(
+    "BacksteppingController", "controller",
+    "Backstepping anti-swing controller for a double-pendulum crane payload "
+    "(least-squares eq 21); output: trolley acceleration u, direct feedthrough",
+    VARIABLES, setup, lambda config, state, inputs: (control(inputs, *config),), feedthrough=True)

@@ -1,0 +1,137 @@
+"""The FMI 2.0 co-simulation adapter of :class:`~crane_fmu.cosim.instance.Instance`, on fmpy."""
+
+import ctypes
+import itertools
+import shutil
+import weakref
+
+from fmpy import calloc, free
+from fmpy.fmi2 import (
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+)
+from fmpy.logging import addLoggerProxy
+
+from .instance import Instance
+
+# fmpy's logger proxy (which formats the FMU's printf-style messages) keeps ONE
+# Python logger for the whole process, so every instance shares this one and
+# its messages are told apart by the componentEnvironment each instance passes.
+_instances = weakref.WeakValueDictionary()
+_keys = itertools.count(1)
+
+
+def _dispatch(environment, instance_name, status, category, message):
+    instance = _instances.get(environment or 0)
+    if instance is not None:
+        instance.messages.append(message.decode("utf-8", "replace"))
+
+
+_LOGGER = fmi2CallbackLoggerTYPE(_dispatch)
+_CONVERT = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
+
+
+class Fmi2Instance(Instance):
+    """One instance of an FMI 2.0 co-simulation FMU.
+
+    Parameters
+    ----------
+    path : str or Path
+        The .fmu file.
+    name : str
+        Instance name, used in errors and result columns.
+    """
+
+    def __init__(self, path, name):
+        self._describe(path, name)
+        try:
+            self._fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self._unzip,
+                                  modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+            key = next(_keys)
+            _instances[key] = self
+            self._callbacks = fmi2CallbackFunctions()
+            self._callbacks.logger = _LOGGER
+            self._callbacks.componentEnvironment = key
+            self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+            self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+            addLoggerProxy(ctypes.byref(self._callbacks))
+            self._call("fmi2Instantiate", self._fmu.instantiate, callbacks=self._callbacks, loggingOn=True)
+        except BaseException:
+            shutil.rmtree(self._unzip, ignore_errors=True)
+            raise
+        self._instantiated = True
+        dll = self._fmu.dll
+        self._get_real, self._set_real, self._do_step = dll.fmi2GetReal, dll.fmi2SetReal, dll.fmi2DoStep
+        # Ask for every log message. (pythonfmu 0.7's own binary ignores this and loggingOn
+        # alike and never calls the logger, so its errors arrive without a reason.)
+        self._call("fmi2SetDebugLogging", self._fmu.setDebugLogging, True, [])
+
+    # --- setup -----------------------------------------------------------------
+
+    def set(self, name, value):
+        """Set one variable by name, converting ``value`` to the variable's type."""
+        v = self._variable(name)
+        setter = getattr(self._fmu, f"set{v.type}")
+        self._call(f"fmi2Set{v.type}", setter, [v.valueReference], [_CONVERT[v.type](value)])
+
+    def get(self, name):
+        """Get one variable by name."""
+        v = self._variable(name)
+        value = self._call(f"fmi2Get{v.type}", getattr(self._fmu, f"get{v.type}"), [v.valueReference])[0]
+        return value.decode("utf-8") if isinstance(value, bytes) else value
+
+    def setup(self, start_time, stop_time=None):
+        self.time = start_time
+        self._call("fmi2SetupExperiment", self._fmu.setupExperiment, startTime=start_time, stopTime=stop_time)
+
+    def enter_initialization(self):
+        self._call("fmi2EnterInitializationMode", self._fmu.enterInitializationMode)
+
+    def exit_initialization(self):
+        self._call("fmi2ExitInitializationMode", self._fmu.exitInitializationMode)
+
+    # --- saved state (FMUs with canGetAndSetFMUstate / canSerializeFMUstate) ---
+
+    def get_state(self):
+        """An FMU state (fmi2GetFMUstate); free it with :meth:`free_state`."""
+        return self._call("fmi2GetFMUstate", self._fmu.getFMUstate)
+
+    def set_state(self, state):
+        self._call("fmi2SetFMUstate", self._fmu.setFMUstate, state)
+
+    def free_state(self, state):
+        self._call("fmi2FreeFMUstate", self._fmu.freeFMUstate, state)
+
+    def serialize_state(self, state):
+        """The state as bytes (fmi2SerializeFMUstate), to restore in this or another instance."""
+        return bytes(self._call("fmi2SerializeFMUstate", self._fmu.serializeFMUstate, state))
+
+    def deserialize_state(self, data):
+        return self._call("fmi2DeSerializeFMUstate", self._fmu.deSerializeFMUstate, data)
+
+    # --- hot path: preallocated arrays, raw ctypes calls ----------------------
+
+    def get_reals(self, vrs, values):
+        """fmi2GetReal into the preallocated ctypes array ``values``."""
+        status = self._get_real(self._fmu.component, vrs, len(vrs), values)
+        if status > 1:  # worse than warning
+            self._raise("fmi2GetReal", status)
+
+    def set_reals(self, vrs, values):
+        """fmi2SetReal from the preallocated ctypes array ``values``."""
+        status = self._set_real(self._fmu.component, vrs, len(vrs), values)
+        if status > 1:  # worse than warning
+            self._raise("fmi2SetReal", status)
+
+    def do_step(self, time, step):
+        self.time = time
+        status = self._do_step(self._fmu.component, time, step, 1)
+        if status > 1:  # worse than warning
+            self._raise("fmi2DoStep", status)
+        self.time = time + step
+
+    def terminate(self):
+        self._call("fmi2Terminate", self._fmu.terminate)

@@ -1,0 +1,121 @@
+"""One protocol for FMU instances, whatever their FMI version; the FMI 2.0 and 3.0 adapters implement it.
+
+Value references come from modelDescription.xml. Every FMI status above
+warning becomes one :class:`FmiError` that names the instance, the FMI function
+and the simulation time, with the FMU's own log messages attached.
+"""
+
+import shutil
+from collections import deque
+
+STATUS = ("ok", "warning", "discard", "error", "fatal", "pending")
+
+
+class FmiError(RuntimeError):
+    """An FMI call failed.
+
+    Attributes
+    ----------
+    instance, function : str
+        The instance name and the FMI function, e.g. ``"plant"``, ``"fmi2DoStep"``.
+    time : float or None
+        Simulation time of the call (None before the experiment starts).
+    status : str
+        ``"error"``, ``"fatal"``, ...
+    messages : list of str
+        The FMU's latest log messages; the last one is normally the reason.
+    """
+
+    def __init__(self, instance, function, time, status, messages=()):
+        self.instance, self.function, self.time = instance, function, time
+        self.status, self.messages = status, list(messages)
+        when = "" if time is None else f" at t={time:.9g} s"
+        detail = self.messages[-1].removeprefix(function + ": ") if self.messages else ""
+        detail = f": {detail}" if detail else ""
+        super().__init__(f"{instance}: {function} returned {status}{when}{detail}")
+
+
+class Instance:
+    """What every instance offers the master, whatever its FMI version.
+
+    Attributes
+    ----------
+    name : str
+        Instance name, used in errors and result columns.
+    md : fmpy model description
+    variables : dict
+        ``{name: fmpy ScalarVariable}``.
+    inputs, outputs : list of str
+        Names of the inputs and outputs, in modelDescription order.
+    feedthrough : bool
+        Some output depends on an input of the same instant (ModelStructure).
+
+    Subclasses implement ``set``, ``get``, ``setup``, ``enter_initialization``,
+    ``exit_initialization``, the saved-state calls, the hot-path calls
+    ``get_reals``, ``set_reals``, ``do_step``, and ``terminate``.
+    """
+
+    def _describe(self, path, name):
+        from fmpy import extract, read_model_description
+
+        self.name = name
+        self.md = read_model_description(str(path))
+        if self.md.coSimulation is None:
+            raise ValueError(f"{path} is not a co-simulation FMU")
+        self.variables = {v.name: v for v in self.md.modelVariables}
+        self.outputs = [v.name for v in self.md.modelVariables if v.causality == "output"]
+        self.inputs = [v.name for v in self.md.modelVariables if v.causality == "input"]
+        self.feedthrough = any(u.dependencies for u in self.md.outputs)
+        self.messages = deque(maxlen=20)  # the FMU's latest log messages
+        self.time = None
+        self._instantiated = False
+        self._unzip = extract(str(path))
+
+    def _call(self, function, call, *args, **kwargs):
+        """Run an fmpy call, turning its exceptions into FmiError (with the exception as cause)."""
+        self.messages.clear()
+        try:
+            return call(*args, **kwargs)
+        except Exception as exc:
+            status = STATUS[exc.status] if hasattr(exc, "status") and exc.status < 6 else "error"
+            raise FmiError(self.name, function, self.time, status, self.messages) from exc
+
+    def _raise(self, function, status):
+        """Raise the FmiError of a hot-path call that returned worse than warning."""
+        raise FmiError(self.name, function, self.time, STATUS[status] if 0 <= status < 6 else str(status),
+                       self.messages)
+
+    def _variable(self, name):
+        v = self.variables.get(name)
+        if v is None:
+            raise KeyError(f"{self.name} has no variable {name!r}; valid names: " + ", ".join(self.variables))
+        return v
+
+    def vr_array(self, names):
+        """A ctypes array of the value references of ``names`` (checked)."""
+        import ctypes
+
+        return (ctypes.c_uint * len(names))(*(self._variable(n).valueReference for n in names))
+
+    def free(self):
+        """Free the instance and unload the library; safe to call twice."""
+        if self._instantiated:
+            self._instantiated = False
+            try:
+                self._fmu.freeInstance()
+            finally:
+                shutil.rmtree(self._unzip, ignore_errors=True)
+
+
+def open_instance(path, name):
+    """An instance of the FMU at ``path``: the one place where the FMI version chooses the adapter."""
+    from fmpy import read_model_description
+
+    version = read_model_description(str(path)).fmiVersion
+    if version.startswith("3"):
+        from .fmi3 import Fmi3Instance
+
+        return Fmi3Instance(path, name)
+    from .fmi2 import Fmi2Instance
+
+    return Fmi2Instance(path, name)

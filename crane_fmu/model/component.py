@@ -1,0 +1,115 @@
+"""Component descriptors: what one FMU kind is, independent of FMI.
+
+A component is a model module (plain functions of configuration, state and
+inputs, python-control's ``updfcn(t, x, u, params)`` habit) plus one
+:class:`Component` that names its variables and functions. The FMI slaves
+(``fmu_src``), the build, the systems and the command line work from the
+descriptor alone and never name a component.
+"""
+
+from dataclasses import dataclass
+from typing import Callable, Optional
+
+from .tables import BASE_UNITS
+
+ROLES = ("plant", "controller", "planner", "benchmark")
+CAUSALITIES = ("parameter", "input", "output")
+
+
+class Discard(Exception):
+    """Raised by a component's ``update`` when a step cannot be taken; the FMU discards the step.
+
+    The message says why and is passed to the host's logger.
+    """
+
+
+@dataclass(frozen=True)
+class Component:
+    """One FMU kind.
+
+    Attributes
+    ----------
+    model_identifier : str
+        The FMU's model identifier and file name (``CranePlant`` -> ``CranePlant.fmu``).
+    role : str
+        One of :data:`ROLES`. Built-in systems and the harness choose components by role.
+    description : str
+        One line, written into modelDescription.xml.
+    variables : tuple of tables.Variable
+        Every parameter, input and output, in value-reference order.
+    setup : callable
+        ``setup({parameter: value}) -> config``: validates the parameter values
+        (``ValueError`` naming the field, the rule and the value) and returns
+        what ``output`` and ``update`` need.
+    output : callable
+        ``output(config, state, inputs) -> tuple`` of the outputs in table order;
+        ``inputs`` is the tuple of input values in table order.
+    feedthrough : bool
+        True when ``output`` depends on the inputs of the same instant.
+    initial_state : callable, optional
+        ``initial_state(config) -> state`` for a component with a state.
+    update : callable, optional
+        ``update(config, state, inputs, time, step) -> state``: the state after
+        one communication step with the inputs held; raises :class:`Discard`
+        when the step cannot be taken and ``ValueError`` for an unusable step.
+    default_experiment : tuple, optional
+        ``(start, stop, step)`` [s] written into modelDescription.xml.
+    """
+
+    model_identifier: str
+    role: str
+    description: str
+    variables: tuple
+    setup: Callable
+    output: Callable
+    feedthrough: bool = False
+    initial_state: Optional[Callable] = None
+    update: Optional[Callable] = None
+    default_experiment: Optional[tuple] = None
+
+    def __post_init__(self):
+        if not self.model_identifier.isidentifier():
+            raise ValueError(f"model_identifier must be a Python identifier, got {self.model_identifier!r}")
+        if self.role not in ROLES:
+            raise ValueError(f"role must be one of {', '.join(ROLES)}, got {self.role!r}")
+        names = [v.name for v in self.variables]
+        for v in self.variables:
+            if names.count(v.name) > 1:
+                raise ValueError(f"{self.model_identifier}: variable {v.name!r} is listed twice")
+            if v.causality not in CAUSALITIES:
+                raise ValueError(f"{self.model_identifier}.{v.name}: causality must be one of "
+                                 f"{', '.join(CAUSALITIES)}, got {v.causality!r}")
+            if v.type == "Real" and v.unit not in BASE_UNITS:
+                raise ValueError(f"{self.model_identifier}.{v.name}: unit must be one of tables.BASE_UNITS "
+                                 f"({', '.join(BASE_UNITS)}), got {v.unit!r}")
+        if (self.initial_state is None) != (self.update is None):
+            raise ValueError(f"{self.model_identifier}: a state needs both initial_state and update")
+
+    @property
+    def stateful(self):
+        return self.update is not None
+
+    @property
+    def module(self):
+        """The name of the model module that defines the component's functions."""
+        return self.output.__module__
+
+    def names(self, causality):
+        """Names of the variables of one causality, in table order."""
+        return tuple(v.name for v in self.variables if v.causality == causality)
+
+    def defaults(self, causality="parameter"):
+        """``{name: start}`` of the variables of one causality."""
+        return {v.name: v.start for v in self.variables if v.causality == causality}
+
+    def check(self, values):
+        """``setup`` of the defaults overridden by ``values``: the validated configuration."""
+        return self.setup({**self.defaults(), **values})
+
+
+def find(module, model_identifier):
+    """The :class:`Component` named ``model_identifier`` among a module's globals."""
+    for value in vars(module).values():
+        if isinstance(value, Component) and value.model_identifier == model_identifier:
+            return value
+    raise LookupError(f"module {module.__name__} defines no component {model_identifier!r}")

@@ -1,0 +1,74 @@
+"""The built-in systems by name, and where a command finds the system it is given.
+
+A system is data (``crane_fmu.cosim.System``): instances named by component
+model identifiers, connections matched by signal name, parameter values, times.
+Every command takes a system by name or as an SSP file; nothing else knows
+which instances exist.
+"""
+
+import contextlib
+from pathlib import Path
+
+from crane_fmu import components
+from crane_fmu.cosim.system import System, read_fmu
+
+DEFAULT_FMU_DIR = Path("build/fmus")
+DEFAULT = "paper"
+
+_SYSTEMS = {}
+
+
+def register(system):
+    """Add a :class:`System` under its name; return it."""
+    known = _SYSTEMS.get(system.name)
+    if known is not None and known is not system:
+        raise ValueError(f"a system {system.name!r} is already registered")
+    _SYSTEMS[system.name] = system
+    return system
+
+
+def get(name):
+    """The registered system ``name``, or ValueError listing the names."""
+    try:
+        return _SYSTEMS[name]
+    except KeyError:
+        raise ValueError(f"no system {name!r}; systems: {', '.join(_SYSTEMS)} (or an .ssp/.ssd file)") from None
+
+
+def all():
+    return list(_SYSTEMS.values())
+
+
+@contextlib.contextmanager
+def open_system(name_or_file):
+    """Yield the system of a registered name or of an SSP file (``.ssp`` or ``.ssd``)."""
+    text = str(name_or_file)
+    if text.endswith((".ssp", ".ssd")):
+        from crane_fmu.cosim.ssp import load_system
+
+        with load_system(text) as system:
+            yield system
+    else:
+        yield get(text)
+
+
+def check_parameters(system, fmu_dir):
+    """Apply each instance's component rules (by model identifier, never by instance name).
+
+    Raises
+    ------
+    ValueError
+        ``"plant: l1 must be > 0 and finite, got -1.0"``.
+    """
+    for name, path in system.fmus(fmu_dir).items():
+        identifier = read_fmu(path).coSimulation.modelIdentifier
+        try:
+            components.check_parameters(identifier, system.parameters.get(name, {}))
+        except ValueError as exc:
+            raise ValueError(f"{name}: {exc}") from None
+
+
+register(System("paper", {"plant": "CranePlant", "controller": "BacksteppingController"},
+                description="Section V: the plant and the paper's backstepping controller (eq 21, derived b3), "
+                            "theta1(0) = 10 deg"))
+register(System("free", {"plant": "CranePlant"}, description="the plant alone, u = 0: free swing from 10 deg"))

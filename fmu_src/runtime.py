@@ -1,0 +1,96 @@
+"""What every slave does, from its component descriptor alone: values, outputs, steps, saved states.
+
+Shared by the FMI 2.0 (pythonfmu) and FMI 3.0 (pythonfmu3) slave factories,
+which only register the variables and delegate here. Standard library only: it
+is bundled into every FMU with the model core.
+"""
+
+import math
+
+from crane_fmu.model.component import Discard
+
+AUTHOR = "crane anti-sway co-simulation toolkit"
+
+
+def check_step(step):
+    if not (step > 0 and math.isfinite(step)):
+        raise ValueError(f"communication step must be > 0 and finite, got {step!r}")
+
+
+class Runtime:
+    """The values, configuration and state of one FMU instance of ``component``.
+
+    Parameters and inputs live in :attr:`values`. The configuration is set up
+    (and the parameters validated) when initialisation ends; until then the
+    outputs follow the parameters. Outputs are computed once per change and
+    read from a cache.
+    """
+
+    def __init__(self, component):
+        self.component = component
+        self.values = {v.name: v.start for v in component.variables if v.causality != "output"}
+        self._parameters = component.names("parameter")
+        self._inputs = component.names("input")
+        self.initialised = False
+        self.config = self.state = None  # set when initialisation ends
+        self.time = 0.0
+        self._outputs = None
+
+    def inputs(self):
+        return tuple(self.values[name] for name in self._inputs)
+
+    def set_parameter(self, name, value):
+        self.values[name] = value
+        self._outputs = None
+
+    def set_input(self, name, value):
+        """Set a Real input; a value that is not finite is refused (ValueError naming the input)."""
+        if not math.isfinite(value):
+            raise ValueError(f"input {name} must be finite, got {value!r}")
+        self.values[name] = value
+        if self.component.feedthrough:
+            self._outputs = None
+
+    def output(self, index):
+        """The output at ``index`` (in table order of the outputs)."""
+        if self._outputs is None:
+            config, state = self.config, self.state
+            if not self.initialised:  # outputs follow the parameters
+                config = self.component.setup({name: self.values[name] for name in self._parameters})
+                state = self.component.initial_state(config) if self.component.stateful else None
+            self._outputs = self.component.output(config, state, self.inputs())
+        return self._outputs[index]
+
+    def initialise(self, state=None):
+        """End of initialisation (or a restored state): validate the parameters, set the state."""
+        self.config = self.component.setup({name: self.values[name] for name in self._parameters})
+        self.initialised = True
+        if self.component.stateful:
+            self.state = self.component.initial_state(self.config) if state is None else tuple(state)
+        self._outputs = None
+
+    def step(self, time, step):
+        """Advance one communication step; return None, or the reason the step is discarded."""
+        check_step(step)
+        if not self.initialised:
+            raise RuntimeError("doStep before initialisation ended")
+        if self.component.stateful:
+            try:
+                self.state = self.component.update(self.config, self.state, self.inputs(), time, step)
+            except Discard as exc:
+                return str(exc)
+        self.time = time + step
+        self._outputs = None
+        return None
+
+    def saved(self):
+        """The full state for get-FMU-state: JSON-able and exact (floats survive JSON bit for bit)."""
+        return {"values": dict(self.values), "initialised": self.initialised, "time": self.time,
+                "state": None if self.state is None else list(self.state)}
+
+    def restore(self, saved):
+        self.values = dict(saved["values"])
+        self.time = saved["time"]
+        self.initialised, self.config, self.state, self._outputs = False, None, None, None
+        if saved["initialised"]:
+            self.initialise(saved["state"])

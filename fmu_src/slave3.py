@@ -1,0 +1,66 @@
+"""The FMI 3.0 slave class of any component (pythonfmu3), with its units declared natively.
+
+``crane-fmu build`` generates, per component, a script whose only class is
+``class <ModelIdentifier>(Fmi3Slave)`` with ``Fmi3Slave = slave_base(COMPONENT)``.
+"""
+
+from pythonfmu3 import Float64, Fmi3Causality, Fmi3Initial, Fmi3Slave, Fmi3Status, Fmi3Variability, String
+from pythonfmu3.default_experiment import DefaultExperiment
+from pythonfmu3.unit import Unit
+
+from crane_fmu.fmu_src.runtime import AUTHOR, Runtime
+from crane_fmu.model.tables import BASE_UNITS
+
+
+def register(slave, runtime):
+    """Like the FMI 2.0 ``register``, plus the independent variable ``time`` and every unit."""
+    slave.register_variable(Float64("time", causality=Fmi3Causality.independent,
+                                    variability=Fmi3Variability.continuous, description="simulation time",
+                                    getter=lambda: runtime.time))
+    table = runtime.component.variables
+    slave.register_units([Unit(name, **BASE_UNITS[name]) for name in sorted({v.unit for v in table if v.unit})])
+    position = 0
+    for v in table:
+        kind = String if v.type == "String" else Float64
+        common = dict(causality=Fmi3Causality[v.causality], variability=Fmi3Variability[v.variability],
+                      description=v.description)
+        if v.unit:
+            common["unit"] = v.unit
+        if v.causality == "output":
+            slave.register_variable(kind(v.name, initial=Fmi3Initial.calculated,
+                                         getter=lambda i=position: runtime.output(i), **common))
+            position += 1
+            continue
+        setter = runtime.set_input if v.causality == "input" and kind is Float64 else runtime.set_parameter
+        slave.register_variable(kind(v.name, start=v.start, getter=lambda n=v.name: runtime.values[n],
+                                     setter=lambda value, n=v.name, f=setter: f(n, value), **common))
+
+
+def slave_base(component):
+    """An ``Fmi3Slave`` subclass that runs ``component``."""
+
+    class Base(Fmi3Slave):
+        def __init__(self, **kwargs):
+            super().__init__(**kwargs)
+            self.author, self.description = AUTHOR, component.description
+            if component.default_experiment:
+                self.default_experiment = DefaultExperiment(*component.default_experiment)
+            self.runtime = Runtime(component)
+            register(self, self.runtime)
+
+        def exit_initialization_mode(self):
+            self.runtime.initialise()
+
+        def do_step(self, current_time, step_size):
+            reason = self.runtime.step(current_time, step_size)
+            if reason:
+                self.log(reason, Fmi3Status.error)
+            return reason is None
+
+        def _get_fmu_state(self):
+            return self.runtime.saved()
+
+        def _set_fmu_state(self, saved):
+            self.runtime.restore(saved)
+
+    return Base

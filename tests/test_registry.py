@@ -1,0 +1,100 @@
+"""The component registry: a controller kind that lives only in the tests works everywhere.
+
+``pd_controller.py`` (one model module with one descriptor) is registered here,
+with a system that uses it; then it is built, simulated by name, written into an
+SSP file, run by libcosim and swept on Dask, and no other file of the project
+names it.
+"""
+
+import math
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+import pd_controller
+from crane_fmu import components, systems
+from crane_fmu.build_scripts.build_fmus import build_all, systems_dir
+from crane_fmu.cli import main
+from crane_fmu.cosim import ArrayRecorder, System, read_csv, run
+from crane_fmu.model import plant
+from crane_fmu.model.component import Component
+from crane_fmu.sweep import spec
+from crane_fmu.sweep.runner import run_study
+from test_system_files import assert_libcosim_matches, libcosim_run
+
+PD = System("pd", {"plant": "CranePlant", "controller": "PdController"},
+            parameters={"controller": {"x_d": 0.5}}, stop_time=5.0, description="test: PD on the trolley")
+
+
+@pytest.fixture(scope="module")
+def pd_build(tmp_path_factory):
+    components.register(pd_controller.COMPONENT)
+    systems.register(PD)
+    try:
+        out = tmp_path_factory.mktemp("pd") / "fmus"
+        build_all(out, ["CranePlant", "PdController"], systems=["pd"], log=lambda _: None)
+        yield out
+    finally:
+        del components._REGISTRY["PdController"], systems._SYSTEMS["pd"]
+
+
+def _python_loop(stop_time, step, k_x=4.0, k_v=3.0, x_d=0.5):
+    """The same loop without FMI: the plant's update and the law, Gauss-Seidel order."""
+    config = plant.setup(plant.COMPONENT.defaults())
+    state, rows = config.state0, []
+    for k in range(round(stop_time / step)):
+        u = pd_controller.law(state, k_x, k_v, x_d)
+        rows.append(state)
+        state = plant.update(config, state, (u,), k * step, step)
+    return np.array(rows + [state])
+
+
+def test_the_new_kind_is_built_in_both_fmi_versions(pd_build):
+    assert (pd_build / "PdController.fmu").is_file() and (pd_build.parent / "fmi3" / "PdController.fmu").is_file()
+    assert (systems_dir(pd_build) / "pd.ssp").is_file() and (pd_build / "pd.OspSystemStructure.xml").is_file()
+
+
+def test_simulated_by_name_equals_the_python_loop(pd_build, tmp_path, capsys):
+    assert main(["simulate", "--system", "pd", "--fmu-dir", str(pd_build), "--step", "0.01",
+                 "--out", str(tmp_path / "pd.csv"), "--plot", str(tmp_path / "pd.png")]) == 0
+    result = read_csv(tmp_path / "pd.csv")
+    expected = _python_loop(5.0, 0.01)
+    got = np.column_stack([result[f"plant.{n}"] for n in ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2")])
+    assert np.array_equal(got, expected)  # the same Python code on both sides: bit for bit
+    assert abs(result["plant.x"][-1] - 0.5) < 0.02  # the PD law moves the trolley to x_d
+    fmi3 = run(PD, pd_build.parent / "fmi3", recorder=ArrayRecorder(), step=0.01).columns()
+    assert np.array_equal(fmi3["plant.x"], result["plant.x"])
+
+
+def test_its_parameter_rules_apply_by_model_identifier(pd_build, tmp_path, capsys):
+    assert main(["simulate", "--system", "pd", "--fmu-dir", str(pd_build), "--set", "controller.k_v=-1",
+                 "--out", str(tmp_path / "bad.csv")]) == 2
+    assert "controller: k_v must be > 0 and finite, got -1.0" in capsys.readouterr().err
+
+
+def test_the_ssp_file_runs_in_libcosim_like_our_jacobi_master(pd_build):
+    theirs = libcosim_run("ssp", systems_dir(pd_build) / "pd.ssp")
+    ours = run(PD, pd_build, mode="jacobi", recorder=ArrayRecorder(), stop_time=1.0).columns()
+    assert_libcosim_matches(theirs, ours)
+
+
+def test_swept_on_dask(pd_build, tmp_path):
+    study = spec.parse({"system": "pd", "stop_time": 2.0, "step": 0.01,
+                        "parameters": {"controller.k_x": [2.0, 8.0], "controller.k_v": [3.0, -1.0]}})
+    summary = run_study(study, tmp_path / "out", pd_build, workers=2, progress=False)
+    rows = pq.read_table(tmp_path / "out" / "results.parquet").to_pylist()
+    assert summary["cases"] == 4 and [r["status"] for r in rows] == ["ok", "invalid", "ok", "invalid"]
+    expected = _python_loop(2.0, 0.01, k_x=2.0)
+    assert rows[0]["max_theta1_deg"] == pytest.approx(math.degrees(np.abs(expected[:, 2]).max()), rel=1e-12)
+    assert rows[1]["error"] == "controller: k_v must be > 0 and finite, got -1.0"
+
+
+def test_descriptors_are_checked():
+    table = pd_controller.COMPONENT.variables
+    with pytest.raises(ValueError, match="role must be one of plant, controller, planner, benchmark"):
+        Component("X", "observer", "", table, pd_controller.setup, lambda *a: ())
+    with pytest.raises(ValueError, match="X.k_x: unit must be one of"):
+        Component("X", "controller", "", (table[0]._replace(unit="furlong"),), pd_controller.setup, lambda *a: ())
+    with pytest.raises(ValueError, match="a component 'CranePlant' is already registered"):
+        components.register(Component("CranePlant", "plant", "", table, pd_controller.setup, lambda *a: ()))
