@@ -22,7 +22,6 @@ project of that name).
 
 import hashlib
 import os
-import shutil
 import sys
 import tempfile
 import zipfile

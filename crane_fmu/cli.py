@@ -199,7 +199,7 @@ def _simulate(args, system):
     stop_time = system.stop_time if args.stop_time is None else args.stop_time
     step = system.step if args.step is None else args.step
     communication_points(system.start_time, stop_time, step)
-    fmus, connections = system.resolve(args.fmu_dir)
+    fmus, connections = systems.resolve(system, args.fmu_dir)
     if args.parameters:
         system = system.with_parameters(load_parameters(args.parameters))
     system = system.with_parameters(_parse_sets(args.set, fmus))
@@ -269,7 +269,7 @@ def _cmd_reproduce(args):
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers must be >= 1, got {args.workers}")
     try:
-        systems.get("paper").resolve(args.fmu_dir)
+        systems.resolve(systems.get("paper"), args.fmu_dir)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     _writable_file(Path(args.out) / "REPORT.md", "--out")

@@ -52,6 +52,14 @@ def open_system(name_or_file):
         yield get(text)
 
 
+def resolve(system, fmu_dir):
+    """``system.resolve(fmu_dir)``, with a hint where a built FMU is missing."""
+    for path in system.fmus(fmu_dir).values():
+        if not path.is_file():
+            raise ValueError(f"{path} not found: build the FMUs first (crane-fmu build)")
+    return system.resolve(fmu_dir)
+
+
 def check_parameters(system, fmu_dir):
     """Apply each instance's component rules (by model identifier, never by instance name).
 

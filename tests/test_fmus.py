@@ -8,8 +8,8 @@ import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
-from crane_fmu.analysis.reference import free_swing, sampled_closed_loop
 from crane_fmu import components
+from crane_fmu.analysis.reference import free_swing, sampled_closed_loop
 from crane_fmu.cosim import open_instance, simulate
 from crane_fmu.model import backstepping as controller
 from crane_fmu.model import plant, tables

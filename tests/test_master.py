@@ -128,3 +128,16 @@ def test_communication_points_reject_bad_grids(start, stop, step, message):
 def test_communication_points_tolerate_rounding():
     assert communication_points(0.0, 20.0, 1e-3) == 20000
     assert communication_points(0.0, 0.3, 0.1) == 3
+
+
+def test_cosim_names_nothing_of_the_crane():
+    """crane_fmu.cosim is a general co-simulation library: no crane instance, variable or FMU in it."""
+    import re
+    from pathlib import Path
+
+    import crane_fmu.cosim
+
+    words = re.compile(r"plant|controller|crane(?!_fmu)|trolley|theta|payload|hook|backstepping", re.I)
+    for path in Path(crane_fmu.cosim.__file__).parent.glob("*.py"):
+        found = words.findall(path.read_text())
+        assert not found, f"{path.name} names {found}"

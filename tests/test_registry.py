@@ -9,10 +9,11 @@ names it.
 import math
 
 import numpy as np
+import pd_controller
 import pyarrow.parquet as pq
 import pytest
+from test_system_files import assert_libcosim_matches, libcosim_run
 
-import pd_controller
 from crane_fmu import components, systems
 from crane_fmu.build_scripts.build_fmus import build_all, systems_dir
 from crane_fmu.cli import main
@@ -21,7 +22,6 @@ from crane_fmu.model import plant
 from crane_fmu.model.component import Component
 from crane_fmu.sweep import spec
 from crane_fmu.sweep.runner import run_study
-from test_system_files import assert_libcosim_matches, libcosim_run
 
 PD = System("pd", {"plant": "CranePlant", "controller": "PdController"},
             parameters={"controller": {"x_d": 0.5}}, stop_time=5.0, description="test: PD on the trolley")

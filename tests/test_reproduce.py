@@ -9,8 +9,8 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.signal import periodogram
 
-from crane_fmu.analysis.reference import sampled_closed_loop
 from crane_fmu.analysis.paper_cases import plan
+from crane_fmu.analysis.reference import sampled_closed_loop
 from crane_fmu.cli import main
 from crane_fmu.cosim import read_csv
 from crane_fmu.model.parameters import ControllerGains, PlantParameters

@@ -42,6 +42,7 @@ def test_invalid_parameters_fail_initialisation_with_the_rule(crane_fmus, fmu, v
         assert (err.value.function, err.value.status) == ("fmi2ExitInitializationMode", "error")
         assert err.value.messages[-1] == f"fmi2ExitInitializationMode: {message}"
         assert str(err.value) == f"fmu: fmi2ExitInitializationMode returned error at t=0 s: {message}"
+        assert "fmi2ExitInitializationMode" in str(err.value.__cause__)  # fmpy's exception is kept as the cause
     finally:
         inst.free()
 

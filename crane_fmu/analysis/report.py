@@ -5,12 +5,13 @@ results were looked at; they are not adjusted to make a claim pass or fail.
 """
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
 from .paper_cases import ALTERNATIVE, PAPER_LAW
+
 
 def _f(value, digits=2, unit=""):
     if value is None:

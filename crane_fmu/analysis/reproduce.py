@@ -20,6 +20,7 @@ from crane_fmu.cosim import ArrayRecorder, FmiError, run, write_csv
 from . import figures, metrics, paper_summary, report
 from .paper_cases import plan
 
+
 def run_case(case, fmu_dir, csv_dir):
     """Co-simulate one case through the FMUs; write its CSV; return its metrics and coarse signals."""
     system = systems.get(case.system)

@@ -1,4 +1,4 @@
-"""A crane-free co-simulation library on fmpy: instances, systems as data, master, recorders, SSP/OSP."""
+"""A general co-simulation library on fmpy: instances, systems as data, master, recorders, SSP/OSP."""
 
 from .instance import FmiError, open_instance
 from .master import MODES, Connection, Master

@@ -17,7 +17,7 @@ class FmiError(RuntimeError):
     Attributes
     ----------
     instance, function : str
-        The instance name and the FMI function, e.g. ``"plant"``, ``"fmi2DoStep"``.
+        The instance name and the FMI function, e.g. ``"pump"``, ``"fmi2DoStep"``.
     time : float or None
         Simulation time of the call (None before the experiment starts).
     status : str

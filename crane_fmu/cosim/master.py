@@ -43,7 +43,8 @@ class _Port:
     def __init__(self, instance, buffer, offset):
         self.instance = instance
         self.out_vrs = instance.vr_array(instance.outputs)
-        self.out = (ctypes.c_double * len(instance.outputs)).from_buffer(buffer, offset * ctypes.sizeof(ctypes.c_double))
+        size = len(instance.outputs)
+        self.out = (ctypes.c_double * size).from_buffer(buffer, offset * ctypes.sizeof(ctypes.c_double))
         self.links = []  # (input position, source _Port, source output position)
         self.in_vrs = None
         self.inp = None
@@ -75,10 +76,10 @@ class Master:
     connections : list of Connection
     mode : {"gauss-seidel", "jacobi"}
         ``gauss-seidel``: before every step, values propagate along the
-        connections in dependency order, so a direct-feedthrough output (the
-        controller's u) sees the inputs of the same instant. ``jacobi``: all
-        outputs are read, then all inputs set, then every instance steps; a
-        feedthrough path lags one step.
+        connections in dependency order, so a direct-feedthrough output sees
+        the inputs of the same instant. ``jacobi``: all outputs are read, then
+        all inputs set, then every instance steps; a feedthrough path lags one
+        step.
     """
 
     def __init__(self, instances, connections, mode="gauss-seidel"):

@@ -4,7 +4,7 @@ import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from .ssp import value_text, parameter_values
+from .ssp import parameter_values, value_text
 from .system import read_fmu
 
 OSP_NS = "http://opensimulationplatform.com/MSMI/OSPSystemStructure"

@@ -44,7 +44,7 @@ def load_system(path):
     workdir = None
     try:
         if path.suffix == ".ssp":
-            workdir = Path(tempfile.mkdtemp(prefix="crane_ssp_"))
+            workdir = Path(tempfile.mkdtemp(prefix="cosim_ssp_"))
             try:
                 with zipfile.ZipFile(path) as package:
                     package.extractall(workdir)
@@ -224,7 +224,7 @@ def write_ssp(system, fmu_dir, path):
     sources = {name: f"resources/{Path(p).name}" for name, p in fmus.items()}
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="crane_ssp_") as staging:
+    with tempfile.TemporaryDirectory(prefix="cosim_ssp_") as staging:
         ssd = _write_xml(system_structure(system, fmus, connections, sources), Path(staging) / "SystemStructure.ssd")
         partial = path.with_name(f".{path.name}.partial")
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as ssp:

@@ -129,7 +129,7 @@ def read_fmu(path):
     from fmpy import read_model_description
 
     if not Path(path).is_file():
-        raise ValueError(f"{path} not found: build the FMUs first (crane-fmu build)")
+        raise ValueError(f"{path} not found")
     try:
         md = read_model_description(str(path))
     except Exception as exc:  # zip, XML and schema errors alike

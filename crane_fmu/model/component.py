@@ -7,8 +7,8 @@ inputs, python-control's ``updfcn(t, x, u, params)`` habit) plus one
 descriptor alone and never name a component.
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, Optional
 
 from .tables import BASE_UNITS
 
@@ -63,9 +63,9 @@ class Component:
     setup: Callable
     output: Callable
     feedthrough: bool = False
-    initial_state: Optional[Callable] = None
-    update: Optional[Callable] = None
-    default_experiment: Optional[tuple] = None
+    initial_state: Callable | None = None
+    update: Callable | None = None
+    default_experiment: tuple | None = None
 
     def __post_init__(self):
         if not self.model_identifier.isidentifier():

@@ -170,6 +170,7 @@ def run_study(study, out_dir, fmu_dir="build/fmus", workers=None, scheduler=None
     start = time.perf_counter()
     rows_ran = []
     with systems.open_system(study.system) as system:
+        systems.resolve(system, fmu_dir)
         _check_names(study, system, fmu_dir)
         if pending:
             shipped = shippable(system, fmu_dir)
