@@ -8,7 +8,7 @@ which outputs are direct feedthrough.
 
 import xml.etree.ElementTree as ET
 
-from crane_fmu.model.tables import BASE_UNITS, DEG_PER_RAD
+from crane_fmu.model.tables import BASE_UNITS, DEG_PER_RAD, xml_double
 
 
 def _unit_definitions(units, display_units):
@@ -52,7 +52,7 @@ def postprocess(xml_bytes, table, display_units, feedthrough):
         sv.set("description", v.description)
         real = sv.find("Real")
         if real is not None and real.get("start") is not None:
-            real.set("start", repr(float(v.start)))  # pythonfmu's %.16g turns 9.8 into 9.800000000000001
+            real.set("start", xml_double(v.start))  # pythonfmu's %.16g turns 9.8 into 9.800000000000001
         if real is not None:
             real.set("unit", v.unit)
             units.add(v.unit)
@@ -97,7 +97,7 @@ def postprocess3(xml_bytes, table, display_units, feedthrough):
         if v is None:
             continue
         if node.get("start") is not None and v.type == "Real":
-            node.set("start", repr(float(v.start)))
+            node.set("start", xml_double(v.start))
         if v.unit in display_units:
             node.set("displayUnit", display_units[v.unit])
         if v.causality == "input":

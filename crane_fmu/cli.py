@@ -20,9 +20,11 @@ EXAMPLES = {
         "  crane-fmu simulate --system build/systems/paper.ssp --parameters my.ssv\n"
         "  crane-fmu simulate --master jacobi --step 0.01 --set controller.w_theta2=0\n"
         "  crane-fmu simulate --set plant.l1=1.5 --set controller.l1=1.5 --set plant.theta1_0=0.2"),
-    "info": "examples:\n  crane-fmu info\n  crane-fmu info --markdown",
+    "info": ("examples:\n  crane-fmu info\n  crane-fmu info --markdown\n  crane-fmu info --system lqr\n"
+             "  crane-fmu info --system lqr --set controller.l1=1.5 --set controller.h=0.01  # the LQR's gains"),
     "bench": ("examples:\n  crane-fmu bench\n  crane-fmu bench --repeat 7 --stop-time 20\n  crane-fmu bench --sweep\n"
-              "  crane-fmu bench --endurance            # one simulated hour at 1 ms"),
+              "  crane-fmu bench --endurance            # one simulated hour at 1 ms\n"
+              "  crane-fmu bench --controllers          # every controller against its targets"),
     "reproduce": "examples:\n  crane-fmu reproduce --out results/paper\n  crane-fmu reproduce --quick --out /tmp/q",
     "sweep": (
         "examples:\n"
@@ -85,6 +87,10 @@ def _parser():
     p = sub.add_parser("info", help="list the built-in systems and the components' variables",
                        epilog=EXAMPLES["info"], formatter_class=fmt)
     p.add_argument("--markdown", action="store_true", help="print the variable tables as Markdown")
+    p.add_argument("--system", help="instead: a built-in system's instances and what their components derive from "
+                                    "the parameters (gains, shaper impulses)")
+    p.add_argument("--set", action="append", default=[], metavar="INSTANCE.VARIABLE=VALUE",
+                   help="with --system: parameter values to derive from (repeatable)")
 
     p = sub.add_parser("reproduce", help="reproduce the paper's Figures 4, 5, 7, 8 and write REPORT.md",
                        epilog=EXAMPLES["reproduce"], formatter_class=fmt)
@@ -114,6 +120,10 @@ def _parser():
     p.add_argument("--cases", type=int, default=16, help="with --sweep: cases per measurement")
     p.add_argument("--endurance", action="store_true",
                    help="instead: one long run (default one simulated hour) recorded to CSV, memory sampled")
+    p.add_argument("--controllers", action="store_true",
+                   help="instead: regulation, transport, robustness, region of attraction and coarse steps of every "
+                        "controller against its targets")
+    p.add_argument("--quick", action="store_true", help="with --controllers: fewer cases")
     return parser
 
 
@@ -200,6 +210,7 @@ def _simulate(args, system):
     step = system.step if args.step is None else args.step
     communication_points(system.start_time, stop_time, step)
     fmus, connections = systems.resolve(system, args.fmu_dir)
+    system = systems.at_step(system, args.fmu_dir, step)
     if args.parameters:
         system = system.with_parameters(load_parameters(args.parameters))
     system = system.with_parameters(_parse_sets(args.set, fmus))
@@ -245,9 +256,50 @@ def _variable_table(component, markdown):
     return "\n".join(lines) + "\n"
 
 
+def _derived(system, sets):
+    """Lines describing each instance of a built-in system and what its component derives from the parameters."""
+    from crane_fmu import components
+
+    parameters = {}
+    for item in sets:
+        target, sep, text = item.partition("=")
+        instance, dot, name = target.partition(".")
+        if not sep or not dot or instance not in system.instances:
+            raise UsageError(f"--set {item!r}: expected INSTANCE.VARIABLE=VALUE with an instance of "
+                             f"{', '.join(system.instances)}")
+        kind = components.find(system.instances[instance])
+        types = {v.name: v.type for v in kind.variables if v.causality != "output"} if kind else {}
+        if name not in types:
+            raise UsageError(f"--set {item!r}: {instance} has no parameter or input {name!r}")
+        try:
+            parameters.setdefault(instance, {})[name] = _convert(text, types[name])
+        except (argparse.ArgumentTypeError, ValueError) as exc:
+            raise UsageError(f"--set {item!r}: {exc}") from None
+    system = system.with_parameters(parameters)
+    lines = [f"{system.name}: {system.description}"]
+    for name, kind in system.instances.items():
+        component = components.find(kind)
+        lines.append(f"  {name} = {kind}" + ("" if component else " (not a registered component)"))
+        if component and component.report:
+            try:
+                derived = component.report(component.check(system.parameters.get(name, {})))
+            except (ValueError, ArithmeticError) as exc:
+                raise UsageError(f"{name}: {exc}") from None
+            lines += [f"    {key} = {value:.6g}" if isinstance(value, float) else f"    {key} = {value}"
+                      for key, value in derived.items()]
+    return lines
+
+
 def _cmd_info(args):
     from crane_fmu import components, systems
 
+    if args.system:
+        try:
+            system = systems.get(args.system)
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+        print("\n".join(_derived(system, args.set)))
+        return 0
     chosen = [c for c in components.all() if c.role != "benchmark"]
     if args.markdown:
         print("\n".join(_variable_table(c, True) for c in chosen), end="")
@@ -301,16 +353,18 @@ def _cmd_sweep(args):
 
 
 def _cmd_bench(args):
-    from crane_fmu.bench import run_bench, run_endurance, run_sweep_bench
+    from crane_fmu.bench import run_bench, run_controllers, run_endurance, run_sweep_bench
 
     if args.repeat < 1:
         raise UsageError(f"--repeat must be >= 1, got {args.repeat}")
     if args.cases < 2:
         raise UsageError(f"--cases must be >= 2, got {args.cases}")
     try:
-        if args.sweep and args.endurance:
-            raise UsageError("--sweep and --endurance are separate benchmarks: choose one")
-        if args.endurance:
+        if args.sweep + args.endurance + args.controllers > 1:
+            raise UsageError("--sweep, --endurance and --controllers are separate benchmarks: choose one")
+        if args.controllers:
+            run_controllers(args.quick)
+        elif args.endurance:
             run_endurance(args.stop_time or 3600.0, args.step)
         elif args.sweep:
             run_sweep_bench(args.cases, args.stop_time or 10.0, args.step)
@@ -330,6 +384,9 @@ def main(argv=None):
     except UsageError as exc:
         print(f"crane-fmu: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # the reader (e.g. head) has gone: not an error
+        sys.stdout = open(os.devnull, "w")
+        return 0
 
 
 if __name__ == "__main__":

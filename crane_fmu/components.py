@@ -6,7 +6,7 @@ parameter rules are applied before a run. Nothing else in the toolkit names a
 component.
 """
 
-from crane_fmu.model import backstepping, benchmark, plant
+from crane_fmu.model import backstepping, benchmark, energy, lqr, planner, plant
 
 _REGISTRY = {}
 
@@ -26,6 +26,11 @@ def get(model_identifier):
         return _REGISTRY[model_identifier]
     except KeyError:
         raise ValueError(f"no component {model_identifier!r}; components: {', '.join(_REGISTRY)}") from None
+
+
+def find(model_identifier):
+    """The registered component, or None."""
+    return _REGISTRY.get(model_identifier)
 
 
 def all(role=None):
@@ -48,5 +53,6 @@ def check_parameters(model_identifier, values):
         component.check(values)
 
 
-for _component in (plant.COMPONENT, backstepping.COMPONENT, benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
+for _component in (plant.COMPONENT, backstepping.COMPONENT, lqr.COMPONENT, energy.COMPONENT, planner.COMPONENT,
+                   benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
     register(_component)

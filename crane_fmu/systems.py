@@ -60,6 +60,21 @@ def resolve(system, fmu_dir):
     return system.resolve(fmu_dir)
 
 
+def at_step(system, fmu_dir, step):
+    """``system`` with ``h`` set to ``step`` on every instance whose component has that parameter, unless set.
+
+    A component's parameter ``h`` is the communication step it is designed for
+    (the LQR's discrete design, the speed guards); a run at another step gets a
+    design for its own step.
+    """
+    overrides = {}
+    for name, path in system.fmus(fmu_dir).items():
+        component = components.find(read_fmu(path).coSimulation.modelIdentifier)
+        if component and "h" in component.names("parameter") and "h" not in system.parameters.get(name, {}):
+            overrides[name] = {"h": step}
+    return system.with_parameters(overrides)
+
+
 def check_parameters(system, fmu_dir):
     """Apply each instance's component rules (by model identifier, never by instance name).
 
@@ -80,3 +95,12 @@ register(System("paper", {"plant": "CranePlant", "controller": "BacksteppingCont
                 description="Section V: the plant and the paper's backstepping controller (eq 21, derived b3), "
                             "theta1(0) = 10 deg"))
 register(System("free", {"plant": "CranePlant"}, description="the plant alone, u = 0: free swing from 10 deg"))
+register(System("lqr", {"plant": "CranePlant", "controller": "LqrController"},
+                description="Section V regulation from theta1(0) = 10 deg by the discrete LQR, |u| <= 2 m/s2, "
+                            "|v| <= 1 m/s"))
+register(System("energy", {"plant": "CranePlant", "controller": "EnergyController"},
+                description="Section V regulation from theta1(0) = 10 deg by the energy-coupling law (proof in "
+                            "crane_fmu/model/energy.py)"))
+register(System("transport", {"plant": "CranePlant", "planner": "TrajectoryPlanner", "controller": "LqrController"},
+                parameters={"plant": {"theta1_0": 0.0}, "planner": {"x_d": 2.0}}, stop_time=10.0,
+                description="a 2 m move from rest: ZV-shaped reference (planner.x_d) tracked by the LQR"))

@@ -17,10 +17,13 @@ def _run(capsys, *argv):
 def test_build_writes_every_component_and_every_builtin_system(tmp_path, capsys):
     code, out, _ = _run(capsys, "build", "--out", str(tmp_path / "fmus"))
     assert code == 0
-    assert sorted(p.name for p in (tmp_path / "fmus").iterdir()) == [
-        "BacksteppingController.fmu", "CranePlant.fmu", "free.OspSystemStructure.xml", "paper.OspSystemStructure.xml"]
-    assert sorted(p.name for p in (tmp_path / "fmi3").iterdir()) == ["BacksteppingController.fmu", "CranePlant.fmu"]
-    assert sorted(p.name for p in (tmp_path / "systems").iterdir()) == ["free.ssp", "paper.ssp"]
+    fmus = ["BacksteppingController.fmu", "CranePlant.fmu", "EnergyController.fmu", "LqrController.fmu",
+            "TrajectoryPlanner.fmu"]
+    names = ["energy", "free", "lqr", "paper", "transport"]
+    assert sorted(p.name for p in (tmp_path / "fmus").iterdir()) == sorted(
+        fmus + [f"{n}.OspSystemStructure.xml" for n in names])
+    assert sorted(p.name for p in (tmp_path / "fmi3").iterdir()) == fmus
+    assert sorted(p.name for p in (tmp_path / "systems").iterdir()) == [f"{n}.ssp" for n in names]
 
 
 def test_simulate_writes_csv_and_plot(fmu_dir, tmp_path, capsys):
@@ -50,7 +53,7 @@ def test_simulate_free_swing_and_settings(fmu_dir, tmp_path, capsys):
 
 @pytest.mark.parametrize("argv, message", [
     (["--set", "crane.l1=1"], "unknown instance 'crane'; instances: plant, controller"),
-    (["--system", "nowhere"], "no system 'nowhere'; systems: paper, free (or an .ssp/.ssd file)"),
+    (["--system", "nowhere"], "no system 'nowhere'; systems: paper, free, lqr, energy, transport (or an .ssp/.ssd file)"),
     (["--no-controller"], "--no-controller is gone: run the plant alone with --system free"),
     (["--system", "free", "--set", "controller.l1=1"], "unknown instance 'controller'; instances: plant"),
     (["--set", "plant.l3=1"], "plant has no parameter or input 'l3'; valid: m1, m2, l1"),

@@ -10,6 +10,7 @@ import numpy as np
 CRANE_OUTPUTS = ("x", "theta1", "theta2")  # what the crane metrics need from some instance
 DIVERGED_ANGLE = math.pi / 2  # a swing beyond 90 degrees counts as divergence
 SETTLED_BAND = math.radians(0.1)  # a swing below 0.1 degree counts as settled
+ARRIVAL_ANGLE = math.radians(0.5)  # an arrival leaves both angles within 0.5 degree
 
 
 def crane_signals(columns):
@@ -144,6 +145,41 @@ def closed_loop_metrics(t, x, theta1, theta2, u, completed):
         "trolley_excursion_m": _finite(peak_abs(x - x[0])),
         "trolley_final_m": _finite(float(x[-1])),
         "peak_abs_u": _finite(peak_abs(u)),
+    }
+
+
+def move_metrics(t, x, dx, theta1, theta2, u, x_d, move_end=0.0, position_band=0.005,
+                 angle_band=ARRIVAL_ANGLE):
+    """The figures of a move to (or regulation at) ``x_d``, angles in degrees.
+
+    Returns
+    -------
+    dict
+        ``arrival_s``: from when on the trolley stays within ``position_band`` of
+        ``x_d`` and both angles within ``angle_band`` (None: never);
+        ``residual_deg``: the largest swing from ``max(arrival, move_end)`` on;
+        ``settling_0.5deg_s``, ``settling_0.1deg_s``: the angles alone;
+        ``position_1cm_s``: the trolley alone, within 1 cm; ``overshoot_m``: the
+        farthest the trolley went past ``x_d`` (in the direction of the move);
+        ``final_error_m``; ``peak_abs_u``, ``peak_abs_v``; ``effort``: the
+        integral of u^2 with u held over each step [m2/s3].
+    """
+    arrival = settling_time(t, [x - x_d, theta1 / angle_band * position_band, theta2 / angle_band * position_band],
+                            position_band)
+    since = max(arrival if arrival is not None else t[-1], move_end)
+    after = t >= since
+    direction = 1.0 if x_d >= x[0] else -1.0
+    return {
+        "arrival_s": arrival,
+        "residual_deg": math.degrees(max(peak_abs(theta1[after]), peak_abs(theta2[after]))) if after.any() else None,
+        "settling_0.5deg_s": settling_time(t, [theta1, theta2], math.radians(0.5)),
+        "settling_0.1deg_s": settling_time(t, [theta1, theta2], math.radians(0.1)),
+        "position_1cm_s": settling_time(t, [x - x_d], 0.01),
+        "overshoot_m": max(0.0, float(np.max(direction * (x - x_d)))),
+        "final_error_m": abs(float(x[-1]) - x_d),
+        "peak_abs_u": peak_abs(u),
+        "peak_abs_v": peak_abs(dx),
+        "effort": float(np.sum(np.square(u[:-1]) * np.diff(t))),
     }
 
 

@@ -248,8 +248,8 @@ def render(s):
         "# Reproduction report: double-pendulum crane and backstepping anti-swing control",
         "",
         "Every number below comes from co-simulating `CranePlant.fmu` (and `BacksteppingController.fmu`) "
-        f"with this project's fmpy master ({s['settings']['master'].title()}; plant RK4 sub-steps of at most 1 ms; closed "
-        f"loop at a {1e3 * s['settings']['step_s']:g} ms communication step unless stated). Paper parameters: "
+        f"with this project's fmpy master ({s['settings']['master'].title()}; plant RK4 sub-steps of at most 1 ms; "
+        f"closed loop at a {1e3 * s['settings']['step_s']:g} ms communication step unless stated). Paper parameters: "
         f"m1 = {p['m1']:g} kg, m2 = {p['m2']:g} kg, l1 = {p['l1']:g} m, l2 = {p['l2']:g} m, g = {p['g']:g} m/s2, "
         f"theta1(0) = {s['settings']['theta1_0_deg']:g} deg, "
         f"K1 = diag({k['K1_x']:g}, {k['K1_theta1']:g}, {k['K1_theta2']:g}), "

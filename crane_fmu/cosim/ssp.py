@@ -8,6 +8,7 @@ or in ``.ssv`` files, bound to a component (names ``variable``) or to the system
 """
 
 import contextlib
+import math
 import os
 import shutil
 import tempfile
@@ -162,17 +163,28 @@ def _typed(parent, ns, kind, **attrs):
 
 
 def value_text(value):
-    return repr(float(value)) if isinstance(value, float) else str(value).lower() if isinstance(value, bool) \
-        else str(value)
+    """A parameter value as SSP/OSP text: floats exactly (``INF`` for infinity), booleans lower case."""
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, float):
+        return repr(value) if abs(value) != float("inf") else ("INF" if value > 0 else "-INF")
+    return str(value)
 
 
 def parameter_values(md, overrides):
-    """``{name: (variable, value)}`` of every parameter of an FMU: its start values with ``overrides`` applied."""
+    """``{name: (variable, value)}`` of the parameters to write for an FMU: its start values with ``overrides``.
+
+    A start value that is not finite (``INF``: no limit) and not overridden is
+    left to the FMU: libcosim (0.10) refuses such values in system files.
+    """
     values = {}
     for v in md.modelVariables:
         if v.causality == "parameter":
             value = overrides.get(v.name, v.start)
-            values[v.name] = (v, _CONVERT.get(v.type, str)(value) if value is not None else None)
+            value = _CONVERT.get(v.type, str)(value) if value is not None else None
+            if v.name not in overrides and isinstance(value, float) and not math.isfinite(value):
+                continue
+            values[v.name] = (v, value)
     return values
 
 

@@ -2,8 +2,9 @@
 
 import math
 
+from . import limits
 from .component import Component
-from .parameters import PLANT_FIELDS, ControllerGains, plant_parameters
+from .parameters import PLANT_FIELDS, ControllerGains, plant_parameters, positive
 from .tables import MEASURED_STATE, controller_model, output, parameter
 
 
@@ -100,19 +101,28 @@ VARIABLES = controller_model() + (
     parameter("w_theta2", _K.w_theta2, "1", "least-squares weight of the payload row of eq (20)"),
     parameter("b3_form", _K.b3_form, None,
               "b3 of eq (14): 'derived' (corrected sign) or 'printed' (as in the paper)", "String"),
+    *limits.parameters(u_max=math.inf, v_max=math.inf),  # the paper's law has none
+    parameter("h", 1e-3, "s", "communication step (for the speed guard when v_max is finite)"),
 ) + MEASURED_STATE + (
     output("u", "m/s2", "demanded trolley acceleration, eq (21)"),
 )
 
 
 def setup(values):
-    """Validated ``(PlantParameters, ControllerGains)`` from the BacksteppingController parameter values."""
-    gains = {name: value for name, value in values.items() if name not in PLANT_FIELDS}
-    return plant_parameters(values), ControllerGains(**gains)
+    """Validated ``(PlantParameters, ControllerGains, (u_max, v_max, h))`` from the parameter values."""
+    positive("h", values["h"])
+    bounds = (*limits.check(values), values["h"])
+    gains = {name: value for name, value in values.items() if name not in PLANT_FIELDS + ("u_max", "v_max", "h")}
+    return plant_parameters(values), ControllerGains(**gains), bounds
+
+
+def _output(config, state, inputs):
+    p, k, (u_max, v_max, h) = config
+    return (limits.limited(control(inputs, p, k), inputs[1], u_max, v_max, h),)
 
 
 COMPONENT = Component(
     "BacksteppingController", "controller",
     "Backstepping anti-swing controller for a double-pendulum crane payload "
     "(least-squares eq 21); output: trolley acceleration u, direct feedthrough",
-    VARIABLES, setup, lambda config, state, inputs: (control(inputs, *config),), feedthrough=True)
+    VARIABLES, setup, _output, feedthrough=True)

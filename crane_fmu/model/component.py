@@ -54,6 +54,9 @@ class Component:
         when the step cannot be taken and ``ValueError`` for an unusable step.
     default_experiment : tuple, optional
         ``(start, stop, step)`` [s] written into modelDescription.xml.
+    report : callable, optional
+        ``report(config) -> {name: value}``: what ``setup`` derived from the
+        parameters (gains, shaper impulses), shown by ``crane-fmu info``.
     """
 
     model_identifier: str
@@ -66,6 +69,7 @@ class Component:
     initial_state: Callable | None = None
     update: Callable | None = None
     default_experiment: tuple | None = None
+    report: Callable | None = None
 
     def __post_init__(self):
         if not self.model_identifier.isidentifier():

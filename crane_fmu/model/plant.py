@@ -90,6 +90,30 @@ def rk4_step(state, u, dt, p):
     )
 
 
+def linearisation(p):
+    """The swing dynamics linearised about the hanging equilibrium: ``q'' = -W q - w u``, ``q = (theta1, theta2)``.
+
+    Returns
+    -------
+    (W, w)
+        ``W`` (2x2, lists of rows) [1/s2] and ``w`` (2) [rad/m].
+
+    Notes
+    -----
+    Eqs (8)-(9) divided as in :func:`angular_accelerations`, with ``sin q = q``,
+    ``cos q = 1`` and the quadratic rate terms dropped, give ``N q'' + K q = -n u`` with
+    ``N = [[(m1+m2) l1, m2 l2], [l1, l2]]``, ``K = diag((m1+m2) g, g)``,
+    ``n = (m1+m2, 1)``; ``det N = m1 l1 l2 > 0``.
+    """
+    m12 = p.m1 + p.m2
+    a, b, c, d = m12 * p.l1, p.m2 * p.l2, p.l1, p.l2
+    det = a * d - b * c
+    inv = ((d / det, -b / det), (-c / det, a / det))  # N^-1
+    big_w = [[inv[i][0] * m12 * p.g, inv[i][1] * p.g] for i in range(2)]
+    small_w = [inv[i][0] * m12 + inv[i][1] for i in range(2)]
+    return big_w, small_w
+
+
 MAX_SUBSTEPS = 10_000_000  # per communication step: about a minute of computing
 
 

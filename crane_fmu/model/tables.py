@@ -34,6 +34,14 @@ BASE_UNITS = {
 }
 
 
+def xml_double(value):
+    """``value`` as an xs:double: the shortest text that reads back exactly, ``INF`` for infinity."""
+    value = float(value)
+    if value != value:
+        return "NaN"
+    return repr(value) if abs(value) != float("inf") else ("INF" if value > 0 else "-INF")
+
+
 def parameter(name, start, unit, description, type="Real"):
     return Variable(name, "parameter", "fixed", start, unit, description, type)
 

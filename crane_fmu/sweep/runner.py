@@ -173,7 +173,7 @@ def run_study(study, out_dir, fmu_dir="build/fmus", workers=None, scheduler=None
         systems.resolve(system, fmu_dir)
         _check_names(study, system, fmu_dir)
         if pending:
-            shipped = shippable(system, fmu_dir)
+            shipped = shippable(systems.at_step(system, fmu_dir, study.step), fmu_dir)
             to_run = []
             for case in pending:  # the model's parameter rules, before anything is shipped
                 try:

@@ -1,0 +1,112 @@
+"""Discrete-time LQR of the crane linearised about the hanging equilibrium: the LqrController component.
+
+The gains are designed when initialisation ends, from the controller's own
+parameters (its model of the plant, the weights and the communication step),
+so they always follow what the user set. The same law tracks a reference
+(``x_ref``, ``dx_ref``, ``ddx_ref`` and the swing it induces, from a
+``TrajectoryPlanner``): feedforward plus feedback on the error.
+"""
+
+from collections import namedtuple
+
+from . import limits, linalg
+from .component import Component
+from .parameters import plant_parameters, positive
+from .plant import linearisation
+from .tables import MEASURED_STATE, STATE, controller_model, input_, output, parameter
+
+WEIGHTS = tuple("q_" + name for name in STATE)
+REFERENCE = ("x_ref", "dx_ref", "theta1_ref", "dtheta1_ref", "theta2_ref", "dtheta2_ref")
+
+
+def continuous_model(p):
+    """``(A, B)`` of ``s' = A s + B u`` for ``s = (x, dx, theta1, dtheta1, theta2, dtheta2)`` about rest.
+
+    Notes
+    -----
+    ``x'' = u`` (eq 12) and the linearised eqs (8)-(9) of
+    :func:`crane_fmu.model.plant.linearisation`.
+    """
+    big_w, small_w = linearisation(p)
+    a = linalg.zeros(6, 6)
+    a[0][1] = a[2][3] = a[4][5] = 1.0
+    for row, i in ((3, 0), (5, 1)):
+        a[row][2], a[row][4] = -big_w[i][0], -big_w[i][1]
+    b = [[0.0], [1.0], [0.0], [-small_w[0]], [0.0], [-small_w[1]]]
+    return a, b
+
+
+def design(p, weights, r, h):
+    """The state-feedback gains ``K`` (6) of the discrete LQR for the communication step ``h``.
+
+    Minimises ``sum_k s_k' Q s_k + r u_k^2`` for the zero-order-hold
+    discretisation of :func:`continuous_model`, ``Q = diag(weights)``:
+    ``K = (r + Bd' P Bd)^-1 Bd' P Ad`` with ``P`` from the discrete algebraic Riccati equation.
+    """
+    ad, bd = linalg.zoh(*continuous_model(p), h)
+    q = [[weights[i] if i == j else 0.0 for j in range(6)] for i in range(6)]
+    big_p = linalg.dare(ad, bd, q, [[r]])
+    pb = linalg.matmul(big_p, bd)
+    bt_p_b = sum(bd[i][0] * pb[i][0] for i in range(6))
+    bt_p_a = linalg.matmul(linalg.transpose(pb), ad)[0]
+    return tuple(v / (r + bt_p_b) for v in bt_p_a)
+
+
+Config = namedtuple("Config", "gains x_d u_max v_max h")
+
+
+def setup(values):
+    """Validated parameters and the gains designed from them."""
+    p = plant_parameters(values)
+    for name in WEIGHTS:
+        value = values[name]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < float("inf"):
+            raise ValueError(f"{name} must be >= 0 and finite, got {value!r}")
+    positive("r", values["r"])
+    positive("h", values["h"])
+    u_max, v_max = limits.check(values)
+    gains = design(p, [values[name] for name in WEIGHTS], values["r"], values["h"])
+    return Config(gains, values["x_d"], u_max, v_max, values["h"])
+
+
+def control(config, measured, reference=(0.0,) * 6, ddx_ref=0.0):
+    """``u = ddx_ref - K (s - s_ref)`` within the limits, with ``s_ref = reference + (x_d, 0, ...)``."""
+    error = [s - r for s, r in zip(measured, reference)]
+    error[0] -= config.x_d
+    u = ddx_ref - sum(k * e for k, e in zip(config.gains, error))
+    return limits.limited(u, measured[1], config.u_max, config.v_max, config.h)
+
+
+def _output(config, state, inputs):
+    return (control(config, inputs[:6], inputs[6:12], inputs[12]),)
+
+
+def report(config):
+    """The designed gains, for ``crane-fmu info``."""
+    return {"K_" + name: k for name, k in zip(STATE, config.gains)}
+
+
+DEFAULT_WEIGHTS = dict(zip(WEIGHTS, (50.0, 0.0, 400.0, 10.0, 50.0, 5.0)))
+
+VARIABLES = controller_model() + tuple(
+    parameter(name, value, "1", f"LQR state weight on {name[2:]} (Q diagonal, SI units)")
+    for name, value in DEFAULT_WEIGHTS.items()) + (
+    parameter("r", 0.05, "1", "LQR input weight on u"),
+    parameter("h", 1e-3, "s", "communication step the discrete design is for"),
+    parameter("x_d", 0.0, "m", "target trolley position (added to x_ref)"),
+    *limits.parameters(),
+) + MEASURED_STATE + tuple(
+    input_(name, unit, f"reference {text}") for name, unit, text in zip(
+        REFERENCE, ("m", "m/s", "rad", "rad/s", "rad", "rad/s"),
+        ("trolley position (plus x_d)", "trolley velocity", "hook swing angle", "hook swing rate",
+         "payload swing angle", "payload swing rate"))) + (
+    input_("ddx_ref", "m/s2", "reference trolley acceleration (feedforward)"),
+    output("u", "m/s2", "demanded trolley acceleration, ddx_ref - K (s - s_ref), limited"),
+)
+
+
+COMPONENT = Component(
+    "LqrController", "controller",
+    "Discrete-time LQR of the double-pendulum crane about the hanging equilibrium, designed from its parameters "
+    "at initialisation; tracks x_ref, dx_ref, ddx_ref; output: trolley acceleration u, direct feedthrough",
+    VARIABLES, setup, _output, feedthrough=True, report=report)
