@@ -53,7 +53,7 @@ def test_simulate_free_swing_and_settings(fmu_dir, tmp_path, capsys):
 
 @pytest.mark.parametrize("argv, message", [
     (["--set", "crane.l1=1"], "unknown instance 'crane'; instances: plant, controller"),
-    (["--system", "nowhere"], "no system 'nowhere'; systems: paper, free, lqr, energy, transport (or an .ssp/.ssd file)"),
+    (["--system", "nowhere"], "no system 'nowhere'; systems: paper, free, lqr, energy, transport (or an .ssp"),
     (["--no-controller"], "--no-controller is gone: run the plant alone with --system free"),
     (["--system", "free", "--set", "controller.l1=1"], "unknown instance 'controller'; instances: plant"),
     (["--set", "plant.l3=1"], "plant has no parameter or input 'l3'; valid: m1, m2, l1"),
