@@ -112,7 +112,7 @@ def test_info_lists_every_variable_with_units(capsys):
     assert "| `K2_theta2` | parameter | 310 | 1/s |" in out
 
 
-@pytest.mark.parametrize("command", ["build", "simulate", "info", "reproduce", "bench"])
+@pytest.mark.parametrize("command", ["build", "simulate", "info", "reproduce", "sweep", "bench"])
 def test_help_shows_examples(capsys, command):
     with pytest.raises(SystemExit) as exit_:
         main([command, "--help"])
@@ -137,6 +137,7 @@ def test_unreadable_fmu_is_one_line(tmp_path, fmu_dir, capsys):
     (["bench", "--stop-time", "0.2", "--repeat", "1"], "ratio crane / floor:"),
     (["bench", "--endurance", "--stop-time", "2"], "resident memory:"),
     (["bench", "--sweep", "--cases", "2", "--stop-time", "0.2"], "parallel efficiency on 2 workers:"),
+    (["bench", "--controllers", "--quick"], "Region of attraction, energy: converges from every theta1(0)"),
 ])
 def test_benchmarks_run_and_print_their_figures(capsys, argv, expect):
     """A smoke test only: the figures themselves are measured with crane-fmu bench, not asserted here."""

@@ -1,0 +1,218 @@
+"""The controllers and the planner: designs against scipy, limits, the energy law's proof, through the FMUs."""
+
+import math
+import re
+
+import numpy as np
+import pytest
+import scipy.linalg
+from scipy.integrate import solve_ivp
+from scipy.signal import cont2discrete
+
+from crane_fmu import systems
+from crane_fmu.cosim import ArrayRecorder, open_instance, run
+from crane_fmu.model import energy, limits, lqr, plant, planner
+from crane_fmu.model.parameters import PlantParameters
+
+WEIGHTS = list(lqr.DEFAULT_WEIGHTS.values())
+
+
+def _jacobian(p):
+    """``(A, B)`` of the plant by central differences of eqs (8)-(9) (plant.derivative) about rest."""
+    def f(s, u):
+        return np.array(plant.derivative(tuple(s), u, p))
+
+    eps, a = 1e-6, np.empty((6, 6))
+    for j in range(6):
+        d = np.zeros(6)
+        d[j] = eps
+        a[:, j] = (f(d, 0.0) - f(-d, 0.0)) / (2 * eps)
+    b = (f(np.zeros(6), eps) - f(np.zeros(6), -eps)) / (2 * eps)
+    return a, b[:, None]
+
+
+@pytest.mark.parametrize("p", [PlantParameters(), PlantParameters(l1=1.5, m2=3.0), PlantParameters(m2=0.0)])
+def test_linearisation_is_the_jacobian_of_eqs_8_9(p):
+    a, b = _jacobian(p)
+    got_a, got_b = map(np.array, lqr.continuous_model(p))
+    assert np.abs(got_a - a).max() < 1e-7 * np.abs(a).max()  # central differences: ~1e-10 relative
+    assert np.abs(got_b - b).max() < 1e-7
+
+
+@pytest.mark.parametrize("p, weights, r, h", [
+    (PlantParameters(), WEIGHTS, 0.05, 1e-3),
+    (PlantParameters(l1=1.5), WEIGHTS, 0.05, 1e-3),
+    (PlantParameters(m2=10.5, l2=0.6), [1, 2, 3, 4, 5, 6], 1.0, 1e-2),
+    (PlantParameters(), [10, 0, 100, 0, 100, 0], 0.5, 5e-2),
+])
+def test_lqr_gains_equal_scipy_riccati(p, weights, r, h):
+    """Our pure-Python ZOH and doubling DARE against scipy's cont2discrete and solve_discrete_are.
+
+    Measured: 3e-12 relative at h = 1 ms, where the DARE is worst conditioned; bound 1e-9.
+    """
+    # (A, B) themselves are checked against the Jacobian above
+    ad, bd, *_ = cont2discrete((*map(np.array, lqr.continuous_model(p)), np.eye(6), np.zeros((6, 1))), h)
+    big_p = scipy.linalg.solve_discrete_are(ad, bd, np.diag(weights), np.array([[r]]))
+    expected = np.linalg.solve(r + bd.T @ big_p @ bd, bd.T @ big_p @ ad)[0]
+    got = np.array(lqr.design(p, weights, r, h))
+    assert np.abs(got - expected).max() < 1e-9 * np.abs(expected).max()
+    assert np.abs(np.linalg.eigvals(ad - bd @ got[None, :])).max() < 1  # the loop it closes is stable
+
+
+def test_lqr_fmu_designs_from_the_parameters_it_is_given(fmu_dir):
+    """--set controller.l1=1.5 gives the LQR for 1.5 m: the FMU's u is -K s with scipy's K for 1.5 m."""
+    state = (0.01, -0.02, 0.003, 0.01, -0.002, 0.004)  # small: no limit acts
+
+    def u_of(values):
+        inst = open_instance(fmu_dir / "LqrController.fmu", "lqr")
+        try:
+            inst.setup(0.0)
+            for name, value in values.items():
+                inst.set(name, value)
+            inst.enter_initialization()
+            inst.exit_initialization()
+            for name, value in zip(("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2"), state):
+                inst.set(name, value)
+            return inst.get("u")
+        finally:
+            inst.free()
+
+    for values, p, h in (({}, PlantParameters(), 1e-3), ({"l1": 1.5, "h": 0.01}, PlantParameters(l1=1.5), 0.01)):
+        ad, bd, *_ = cont2discrete((*map(np.array, lqr.continuous_model(p)), np.eye(6), np.zeros((6, 1))), h)
+        big_p = scipy.linalg.solve_discrete_are(ad, bd, np.diag(WEIGHTS), np.array([[0.05]]))
+        k = np.linalg.solve(0.05 + bd.T @ big_p @ bd, bd.T @ big_p @ ad)[0]
+        assert u_of(values) == pytest.approx(-k @ np.array(state), rel=1e-9)
+
+
+@pytest.mark.parametrize("u, dx, expected", [
+    (5.0, 0.0, 2.0), (-5.0, 0.0, -2.0), (1.0, 0.0, 1.0),
+    (2.0, 0.999, 1.0),  # 1 ms from the speed limit: only what reaches it exactly
+    (2.0, 1.5, -2.0),  # faster than v_max: brake
+    (-2.0, -1.0, 0.0),
+])
+def test_limits(u, dx, expected):
+    assert limits.limited(u, dx, 2.0, 1.0, 1e-3) == pytest.approx(expected, rel=1e-12)
+    assert limits.limited(u, dx, math.inf, math.inf, 1e-3) == u
+
+
+@pytest.mark.parametrize("values, message", [
+    ({"u_max": 0.0}, "u_max must be > 0 (inf: no limit), got 0.0"),
+    ({"v_max": -1.0}, "v_max must be > 0 (inf: no limit), got -1.0"),
+    ({"r": 0.0}, "r must be > 0 and finite, got 0.0"),
+    ({"q_theta1": -1.0}, "q_theta1 must be >= 0 and finite, got -1.0"),
+    ({"h": 0.0}, "h must be > 0 and finite, got 0.0"),
+])
+def test_lqr_parameter_rules(values, message):
+    with pytest.raises(ValueError, match=re.escape(message)):
+        lqr.COMPONENT.check(values)
+
+
+def _linear_swing(p, accel, t_end):
+    """The linearised swing driven by a trolley acceleration, from the Jacobian (not from plant.linearisation)."""
+    a, b = _jacobian(p)
+    sol = solve_ivp(lambda t, s: a[[2, 3, 4, 5]][:, [2, 3, 4, 5]] @ s + b[[2, 3, 4, 5], 0] * accel(t),
+                    (0.0, t_end), np.zeros(4), method="DOP853", rtol=1e-11, atol=1e-13, max_step=0.005,
+                    dense_output=True)
+    return sol.sol
+
+
+@pytest.mark.parametrize("shaper", ["zv", "zvd", "ei", "none"])
+def test_planner_reference_is_a_consistent_move_within_the_limits(shaper):
+    c = planner.setup({**planner.COMPONENT.defaults(), "x_d": 2.0, "shaper": shaper})
+    t = np.arange(0.0, c.end + 1.0, 1e-3)
+    ref = np.array([planner.reference(c, ti) for ti in t])
+    assert np.abs(ref[:, 2]).max() <= 2.0 * (1 + 1e-12) and np.abs(ref[:, 1]).max() <= 1.0 * (1 + 1e-12)
+    assert ref[-1, 0] == 2.0 and ref[-1, 1] == 0.0
+    # x_ref and dx_ref integrate ddx_ref (trapezoid over 1 ms on piecewise-constant steps: ~1e-3 * 2 m/s2)
+    assert np.abs(np.diff(ref[:, 1]) - 0.5 * (ref[1:, 2] + ref[:-1, 2]) * 1e-3).max() < 2.1e-3
+    assert np.abs(np.diff(ref[:, 0]) - 0.5 * (ref[1:, 1] + ref[:-1, 1]) * 1e-3).max() < 2e-6
+
+
+def test_planner_swing_references_and_zero_residual_in_the_linear_model():
+    p = PlantParameters()
+    for shaper in ("zv", "zvd"):
+        c = planner.setup({**planner.COMPONENT.defaults(), "x_d": 2.0, "shaper": shaper})
+        swing = _linear_swing(p, lambda t: planner.reference(c, t)[2], c.end + 3.0)
+        during = np.arange(0.0, c.end, 0.01)
+        ref = np.array([planner.reference(c, ti)[3:] for ti in during])
+        assert np.abs(ref - swing(during).T).max() < 1e-6  # the analytic modal response equals DOP853
+        after = swing(np.arange(c.end, c.end + 3.0, 0.01))
+        assert np.abs(after[[0, 2]]).max() < 1e-6  # rad: the shaped move leaves no swing in the linear model
+
+
+def test_zvd_and_ei_are_more_robust_than_zv_to_a_wrong_cable_length():
+    """Planned for l2 = 0.5 m, run on a linear model with l2 = 0.6 m: residual swing by shaper."""
+    residual = {}
+    for shaper in ("zv", "zvd", "ei", "none"):
+        c = planner.setup({**planner.COMPONENT.defaults(), "x_d": 2.0, "shaper": shaper})
+        swing = _linear_swing(PlantParameters(l2=0.6), lambda t: planner.reference(c, t)[2], c.end + 4.0)
+        residual[shaper] = np.abs(swing(np.arange(c.end, c.end + 4.0, 0.01))[[0, 2]]).max()
+    assert residual["zvd"] < residual["zv"] < residual["none"] and residual["ei"] < residual["zv"]
+
+
+def _relative_energy(s, p):
+    """Kinetic energy of hook and payload relative to the trolley, plus their potential energy, eq (E1)."""
+    _, _, q1, w1, q2, w2 = s
+    v1 = np.array([p.l1 * w1 * math.cos(q1), p.l1 * w1 * math.sin(q1)])
+    v2 = v1 + np.array([p.l2 * w2 * math.cos(q2), p.l2 * w2 * math.sin(q2)])
+    potential = p.g * ((p.m1 + p.m2) * p.l1 * (1 - math.cos(q1)) + p.m2 * p.l2 * (1 - math.cos(q2)))
+    return 0.5 * (p.m1 * v1 @ v1 + p.m2 * v2 @ v2) + potential
+
+
+def test_energy_law_lyapunov_function_never_increases():
+    """Eq (E5): along the continuous-time closed loop from 40 deg, V(t) is non-increasing and |u| <= u_max."""
+    p = PlantParameters()
+    c = energy.setup({**energy.COMPONENT.defaults(), "v_max": math.inf})
+    a = c.u_max / 2
+    mu = p.m1 + p.m2
+
+    def law(s):
+        return energy.control(c, s)
+
+    def lyapunov(s):
+        x, v, q1, w1, q2, w2 = s
+        chi = x - c.x_d - (mu * p.l1 * math.sin(q1) + p.m2 * p.l2 * math.sin(q2)) / mu / c.k_c
+        phi = a * a / c.k_p * math.log(math.cosh(c.k_p * chi / a))
+        return _relative_energy(s, p) / mu + 0.5 * c.k_c * v * v + c.k_c * phi
+
+    sol = solve_ivp(lambda t, s: plant.derivative(tuple(s), law(s), p), (0.0, 30.0),
+                    [0.0, 0.0, math.radians(40), 0.0, 0.0, 0.0], method="DOP853", rtol=1e-10, atol=1e-12,
+                    t_eval=np.arange(0.0, 30.0, 0.01))
+    values = np.array([lyapunov(s) for s in sol.y.T])
+    assert np.diff(values).max() < 1e-9 * values[0]  # non-increasing up to the integrator's error
+    assert values[-1] < 0.1 * values[0]  # and it does decrease
+    assert max(abs(law(s)) for s in sol.y.T) <= c.u_max
+
+
+def test_every_controller_keeps_its_limits_through_the_fmus(fmu_dir):
+    for name in ("lqr", "energy"):
+        system = systems.get(name).with_parameters({"plant": {"theta1_0": math.radians(30)}})
+        c = run(system, fmu_dir, recorder=ArrayRecorder(), stop_time=5.0).columns()
+        assert np.abs(c["controller.u"]).max() <= 2.0
+        assert np.abs(c["plant.dx"]).max() <= 1.0 + 1e-9
+
+
+def test_lqr_system_through_the_fmus_equals_the_python_loop(fmu_dir):
+    """Same code in the FMUs and here: bit for bit; and the regulation converges."""
+    result = run(systems.get("lqr"), fmu_dir, recorder=ArrayRecorder(), stop_time=6.0).columns()
+    config = plant.setup(plant.COMPONENT.defaults())
+    law = lqr.setup(lqr.COMPONENT.defaults())
+    state = config.state0
+    for k in range(6000):
+        assert result["plant.x"][k] == state[0] and result["plant.theta1"][k] == state[2]
+        state = plant.update(config, state, (lqr.control(law, state),), k * 1e-3, 1e-3)
+    assert abs(result["plant.theta1"][-1]) < math.radians(0.1) and abs(result["plant.x"][-1]) < 0.01
+
+
+def test_transport_through_the_fmus_arrives(fmu_dir):
+    result = run(systems.get("transport"), fmu_dir, recorder=ArrayRecorder(), stop_time=8.0).columns()
+    assert result["plant.x"][-1] == pytest.approx(2.0, abs=1e-3)
+    assert np.abs(result["plant.dx"]).max() <= 1.0 + 1e-9
+    assert max(abs(result["plant.theta1"][-1]), abs(result["plant.theta2"][-1])) < math.radians(0.1)
+
+
+def test_runs_at_another_step_get_designs_for_it(fmu_dir):
+    adapted = systems.at_step(systems.get("transport"), fmu_dir, 0.01)
+    assert adapted.parameters["controller"]["h"] == 0.01 and "h" not in adapted.parameters.get("planner", {})
+    kept = systems.at_step(systems.get("lqr").with_parameters({"controller": {"h": 0.002}}), fmu_dir, 0.01)
+    assert kept.parameters["controller"]["h"] == 0.002  # what the user set stays
