@@ -10,6 +10,7 @@ import contextlib
 from pathlib import Path
 
 from crane_fmu import components
+from crane_fmu.cosim.master import Connection
 from crane_fmu.cosim.system import System, read_fmu
 
 DEFAULT_FMU_DIR = Path("build/fmus")
@@ -104,3 +105,16 @@ register(System("energy", {"plant": "CranePlant", "controller": "EnergyControlle
 register(System("transport", {"plant": "CranePlant", "planner": "TrajectoryPlanner", "controller": "LqrController"},
                 parameters={"plant": {"theta1_0": 0.0}, "planner": {"x_d": 2.0}}, stop_time=10.0,
                 description="a 2 m move from rest: ZV-shaped reference (planner.x_d) tracked by the LQR"))
+register(System("hoist-transport",
+                {"plant": "CranePlant", "planner": "TrajectoryPlanner", "hoist": "TrajectoryPlanner",
+                 "controller": "LqrController"},
+                connections=tuple(Connection("planner", name, "controller", name) for name in (
+                    "x_ref", "dx_ref", "ddx_ref", "theta1_ref", "dtheta1_ref", "theta2_ref", "dtheta2_ref"))
+                + (Connection("hoist", "ddx_ref", "plant", "hoist"),),
+                parameters={"plant": {"theta1_0": 0.0, "l1": 2.0, "l1_min": 1.0, "l1_max": 2.0},
+                            "planner": {"x_d": 2.0, "l1": 1.5, "shaper": "zvd"},
+                            "hoist": {"x0": 2.0, "x_d": 1.0, "shaper": "none", "u_max": 0.5, "v_max": 0.5},
+                            "controller": {"l1": 2.0, "l1_low": 1.0, "l1_high": 2.0}},
+                stop_time=12.0,
+                description="a 2 m move while the hoist lifts the load from l1 = 2 m to 1 m; the LQR's gains "
+                            "follow the measured cable length"))

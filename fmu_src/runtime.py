@@ -7,7 +7,7 @@ is bundled into every FMU with the model core.
 
 import math
 
-from crane_fmu.model.component import Discard
+from crane_fmu.model.component import Discard, Step
 
 AUTHOR = "crane anti-sway co-simulation toolkit"
 
@@ -35,6 +35,7 @@ class Runtime:
         self.config = self.state = None  # set when initialisation ends
         self.time = 0.0
         self._outputs = None
+        self.messages = []  # the last step's messages for the host's log
 
     def inputs(self):
         return tuple(self.values[name] for name in self._inputs)
@@ -70,15 +71,22 @@ class Runtime:
         self._outputs = None
 
     def step(self, time, step):
-        """Advance one communication step; return None, or the reason the step is discarded."""
+        """Advance one communication step; return None, or the reason the step is discarded.
+
+        Messages the component gives with the new state are kept in :attr:`messages` for the slave to log.
+        """
         check_step(step)
+        self.messages = []
         if not self.initialised:
             raise RuntimeError("doStep before initialisation ended")
         if self.component.stateful:
             try:
-                self.state = self.component.update(self.config, self.state, self.inputs(), time, step)
+                state = self.component.update(self.config, self.state, self.inputs(), time, step)
             except Discard as exc:
                 return str(exc)
+            if isinstance(state, Step):
+                state, self.messages = state
+            self.state = state
         self.time = time + step
         self._outputs = None
         return None

@@ -51,6 +51,8 @@ def slave_base(component):
 
         def do_step(self, current_time, step_size):
             reason = self.runtime.step(current_time, step_size)
+            for message in self.runtime.messages:
+                self.log(message, Fmi2Status.warning)
             if reason:
                 self.log(reason, Fmi2Status.error)
             return reason is None

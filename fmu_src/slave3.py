@@ -53,6 +53,8 @@ def slave_base(component):
 
         def do_step(self, current_time, step_size):
             reason = self.runtime.step(current_time, step_size)
+            for message in self.runtime.messages:
+                self.log(message, Fmi3Status.warning)
             if reason:
                 self.log(reason, Fmi3Status.error)
             return reason is None

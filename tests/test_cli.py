@@ -19,7 +19,7 @@ def test_build_writes_every_component_and_every_builtin_system(tmp_path, capsys)
     assert code == 0
     fmus = ["BacksteppingController.fmu", "CranePlant.fmu", "EnergyController.fmu", "LqrController.fmu",
             "TrajectoryPlanner.fmu"]
-    names = ["energy", "free", "lqr", "paper", "transport"]
+    names = ["energy", "free", "hoist-transport", "lqr", "paper", "transport"]
     assert sorted(p.name for p in (tmp_path / "fmus").iterdir()) == sorted(
         fmus + [f"{n}.OspSystemStructure.xml" for n in names])
     assert sorted(p.name for p in (tmp_path / "fmi3").iterdir()) == fmus
@@ -53,7 +53,7 @@ def test_simulate_free_swing_and_settings(fmu_dir, tmp_path, capsys):
 
 @pytest.mark.parametrize("argv, message", [
     (["--set", "crane.l1=1"], "unknown instance 'crane'; instances: plant, controller"),
-    (["--system", "nowhere"], "no system 'nowhere'; systems: paper, free, lqr, energy, transport (or an .ssp"),
+    (["--system", "nowhere"], "no system 'nowhere'; systems: paper, free, lqr, energy, transport, hoist-transport"),
     (["--no-controller"], "--no-controller is gone: run the plant alone with --system free"),
     (["--system", "free", "--set", "controller.l1=1"], "unknown instance 'controller'; instances: plant"),
     (["--set", "plant.l3=1"], "plant has no parameter or input 'l3'; valid: m1, m2, l1"),

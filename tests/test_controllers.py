@@ -11,7 +11,7 @@ from scipy.signal import cont2discrete
 
 from crane_fmu import systems
 from crane_fmu.cosim import ArrayRecorder, open_instance, run
-from crane_fmu.model import energy, limits, lqr, plant, planner
+from crane_fmu.model import energy, limits, lqr, planner, plant
 from crane_fmu.model.parameters import PlantParameters
 
 WEIGHTS = list(lqr.DEFAULT_WEIGHTS.values())
@@ -132,7 +132,7 @@ def test_planner_swing_references_and_zero_residual_in_the_linear_model():
     p = PlantParameters()
     for shaper in ("zv", "zvd"):
         c = planner.setup({**planner.COMPONENT.defaults(), "x_d": 2.0, "shaper": shaper})
-        swing = _linear_swing(p, lambda t: planner.reference(c, t)[2], c.end + 3.0)
+        swing = _linear_swing(p, lambda t, c=c: planner.reference(c, t)[2], c.end + 3.0)
         during = np.arange(0.0, c.end, 0.01)
         ref = np.array([planner.reference(c, ti)[3:] for ti in during])
         assert np.abs(ref - swing(during).T).max() < 1e-6  # the analytic modal response equals DOP853
@@ -145,7 +145,7 @@ def test_zvd_and_ei_are_more_robust_than_zv_to_a_wrong_cable_length():
     residual = {}
     for shaper in ("zv", "zvd", "ei", "none"):
         c = planner.setup({**planner.COMPONENT.defaults(), "x_d": 2.0, "shaper": shaper})
-        swing = _linear_swing(PlantParameters(l2=0.6), lambda t: planner.reference(c, t)[2], c.end + 4.0)
+        swing = _linear_swing(PlantParameters(l2=0.6), lambda t, c=c: planner.reference(c, t)[2], c.end + 4.0)
         residual[shaper] = np.abs(swing(np.arange(c.end, c.end + 4.0, 0.01))[[0, 2]]).max()
     assert residual["zvd"] < residual["zv"] < residual["none"] and residual["ei"] < residual["zv"]
 
@@ -200,7 +200,7 @@ def test_lqr_system_through_the_fmus_equals_the_python_loop(fmu_dir):
     state = config.state0
     for k in range(6000):
         assert result["plant.x"][k] == state[0] and result["plant.theta1"][k] == state[2]
-        state = plant.update(config, state, (lqr.control(law, state),), k * 1e-3, 1e-3)
+        state = plant.update(config, state, (lqr.control(law, state[:6]), 0.0, 0.0, 0.0), k * 1e-3, 1e-3)
     assert abs(result["plant.theta1"][-1]) < math.radians(0.1) and abs(result["plant.x"][-1]) < 0.01
 
 
@@ -216,3 +216,23 @@ def test_runs_at_another_step_get_designs_for_it(fmu_dir):
     assert adapted.parameters["controller"]["h"] == 0.01 and "h" not in adapted.parameters.get("planner", {})
     kept = systems.at_step(systems.get("lqr").with_parameters({"controller": {"h": 0.002}}), fmu_dir, 0.01)
     assert kept.parameters["controller"]["h"] == 0.002  # what the user set stays
+
+
+def test_lqr_gains_follow_the_measured_cable_length():
+    c = lqr.setup({**lqr.COMPONENT.defaults(), "l1_low": 1.0, "l1_high": 2.0})
+    at_1_5 = lqr.design(PlantParameters(l1=1.5), WEIGHTS, 0.05, 1e-3)
+    assert lqr.scheduled_gains(c, 1.5) == pytest.approx(at_1_5, rel=1e-12)  # a design point
+    between = lqr.scheduled_gains(c, 1.525)  # halfway to the next design point, 1.55 m
+    at_1_55 = lqr.design(PlantParameters(l1=1.55), WEIGHTS, 0.05, 1e-3)
+    assert between == pytest.approx([(a + b) / 2 for a, b in zip(at_1_5, at_1_55)], rel=1e-12)
+    assert lqr.scheduled_gains(c, 0.0) == c.gains  # not measured: the design for l1
+    assert lqr.scheduled_gains(c, 5.0) == pytest.approx(lqr.scheduled_gains(c, 2.0), rel=0)  # clamped
+
+
+def test_hoist_transport_through_the_fmus(fmu_dir):
+    """The 2 m move while lifting from 2 m to 1 m: the trolley and the hoist arrive and the swing dies out."""
+    result = run(systems.get("hoist-transport"), fmu_dir, recorder=ArrayRecorder()).columns()
+    assert result["plant.x"][-1] == pytest.approx(2.0, abs=1e-3)
+    assert result["plant.l1_now"][0] == 2.0 and result["plant.l1_now"][-1] == pytest.approx(1.0, abs=1e-9)
+    assert max(abs(result["plant.theta1"][-1]), abs(result["plant.theta2"][-1])) < math.radians(0.1)
+    assert np.abs(result["controller.u"]).max() <= 2.0

@@ -96,3 +96,59 @@ def test_energy_is_that_of_eqs_6_7():
     T = 0.5 * p.m1 * (vx1 ** 2 + vy1 ** 2) + 0.5 * p.m2 * (vx2 ** 2 + vy2 ** 2)
     V = -p.g * p.l1 * p.m1 * math.cos(q1) + p.g * p.m2 * (-p.l1 * math.cos(q1) - p.l2 * math.cos(q2))
     assert plant.energy(state, p) == pytest.approx(T + V, rel=1e-12)
+
+
+# --- the extended plant: hoisting l1(t), horizontal forces, joint damping --------------------
+
+F1, F2, c1, c2 = sympy.symbols("F1 F2 c1 c2", real=True)
+L = sympy.Function("L")(t)
+dL, ddL = sympy.symbols("dL ddL", real=True)
+
+
+def _extended_equations():
+    """Euler-Lagrange equations with l1 = L(t), the forces' virtual work and Rayleigh's dissipation function.
+
+    ``d/dt dT/dq' - dT/dq + dV/dq = Q_F - dD/dq'`` with ``Q_F = F1 dx1/dq + F2 dx2/dq`` and
+    ``D = (c1 theta1'^2 + c2 (theta2' - theta1')^2) / 2``.
+    """
+    x1, y1 = xt + L * sympy.sin(th1), -L * sympy.cos(th1)
+    x2, y2 = x1 + l2 * sympy.sin(th2), y1 - l2 * sympy.cos(th2)
+    T = (m1 * (x1.diff(t) ** 2 + y1.diff(t) ** 2) + m2 * (x2.diff(t) ** 2 + y2.diff(t) ** 2)) / 2
+    V = g * (m1 * y1 + m2 * y2)
+    D = (c1 * th1.diff(t) ** 2 + c2 * (th2.diff(t) - th1.diff(t)) ** 2) / 2
+    lagrangian = T - V
+    eqs = []
+    for q in (th1, th2):
+        forces = F1 * x1.diff(q) + F2 * x2.diff(q) - D.diff(q.diff(t))
+        eqs.append(lagrangian.diff(q.diff(t)).diff(t) - lagrangian.diff(q) - forces)
+    subs = {xt.diff(t, 2): u, L.diff(t, 2): ddL}
+    eqs = [_plain(e.subs(subs)).subs(L.diff(t), dL).subs(L, l1) for e in eqs]
+    return [sympy.expand(e) for e in eqs]  # the trolley's speed x'(t) cancels
+
+
+def _solve_linear(eqs):
+    """``(dd1, dd2)`` from the two equations, linear in them, by Cramer's rule."""
+    a, b = sympy.linear_eq_to_matrix(eqs, [dd1, dd2])
+    det = a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
+    return (b[0] * a[1, 1] - a[0, 1] * b[1]) / det, (a[0, 0] * b[1] - a[1, 0] * b[0]) / det
+
+
+EXT = _extended_equations()
+EXT_ACCEL = sympy.lambdify((a1, w1, a2, w2, u, m1, m2, l1, l2, g, dL, ddL, F1, F2, c1, c2), _solve_linear(EXT))
+
+
+def test_extended_equations_reduce_to_eqs_8_9_without_hoisting_forces_and_damping():
+    at_rest = {dL: 0, ddL: 0, F1: 0, F2: 0, c1: 0, c2: 0}
+    for extended, paper in zip(EXT, (_plain(e) for e in EQS)):
+        assert sympy.trigsimp(sympy.expand(sympy.expand_trig(extended.subs(at_rest) - paper))) == 0
+
+
+def test_code_accelerations_equal_the_extended_derivation():
+    rng = random.Random(7)
+    for p, (q1, r1, q2, r2), acc in _random_cases():
+        load = (rng.uniform(-1, 1), rng.uniform(-2, 2), rng.uniform(-50, 50), rng.uniform(-50, 50),
+                rng.uniform(0, 5), rng.uniform(0, 5))
+        length = rng.uniform(0.3, 3)
+        expected = EXT_ACCEL(q1, r1, q2, r2, acc, p.m1, p.m2, length, p.l2, p.g, *load)
+        got = plant.angular_accelerations(q1, r1, q2, r2, acc, p, length, load)
+        assert got == pytest.approx(expected, rel=1e-9, abs=1e-9)

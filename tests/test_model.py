@@ -44,7 +44,7 @@ def test_defaults_are_the_papers_section_v_values():
 
 
 def test_plant_output_names_match_the_model_order():
-    assert list(plant.COMPONENT.names("output")) == list(plant.OUTPUTS)
+    assert plant.COMPONENT.names("output")[:len(plant.OUTPUTS)] == plant.OUTPUTS
     assert plant.OUTPUTS[:6] == tables.STATE
 
 

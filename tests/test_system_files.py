@@ -65,11 +65,11 @@ def test_ssp_describes_the_paper_system(system_files, fmu_dir):
     with load_system(ssp) as system:
         assert sorted(system.instances) == sorted(fmus)
         assert sorted(system.connections) == sorted(connections) and len(connections) == 7
-        assert system.parameters["plant"] == plant.COMPONENT.defaults()
-        # every value but the unlimited u_max, v_max (INF, which libcosim refuses in system files)
-        defaults = backstepping.COMPONENT.defaults()
-        assert system.parameters["controller"] == {k: v for k, v in defaults.items() if v != math.inf}
-        assert defaults["u_max"] == defaults["v_max"] == math.inf
+        # every value but the unlimited ones (INF, which libcosim refuses in system files)
+        for instance, component in (("plant", plant.COMPONENT), ("controller", backstepping.COMPONENT)):
+            defaults = component.defaults()
+            assert system.parameters[instance] == {k: v for k, v in defaults.items() if v not in (math.inf, -math.inf)}
+            assert defaults["u_max"] == defaults["v_max"] == math.inf
         assert (system.start_time, system.stop_time) == (0.0, 20.0)
 
 

@@ -32,6 +32,10 @@ def plot_run(columns, path, title=""):
                   ("theta2 [deg]", [math.degrees(v) for v in s["theta2"]], "tab:orange")]
         if any(name.endswith(".u") for name in columns):
             panels.append(("u [m/s2]", s["u"], "tab:red"))
+        hoisted = [values for name, values in columns.items()
+                   if name.endswith(".l1_now") and values.min() < values.max()]
+        if hoisted:
+            panels.append(("l1 [m]", hoisted[0], "tab:green"))
     except ValueError:
         panels = [(name, values, None) for name, values in columns.items() if name != "time"][:MAX_PANELS]
     if not panels:

@@ -7,6 +7,7 @@ inputs, python-control's ``updfcn(t, x, u, params)`` habit) plus one
 descriptor alone and never name a component.
 """
 
+from collections import namedtuple
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -14,6 +15,10 @@ from .tables import BASE_UNITS
 
 ROLES = ("plant", "controller", "planner", "benchmark")
 CAUSALITIES = ("parameter", "input", "output")
+
+
+Step = namedtuple("Step", "state messages")
+Step.__doc__ = "What ``update`` may return instead of a bare state: the state and messages for the host's log."
 
 
 class Discard(Exception):
@@ -50,8 +55,9 @@ class Component:
         ``initial_state(config) -> state`` for a component with a state.
     update : callable, optional
         ``update(config, state, inputs, time, step) -> state``: the state after
-        one communication step with the inputs held; raises :class:`Discard`
-        when the step cannot be taken and ``ValueError`` for an unusable step.
+        one communication step with the inputs held (or a :class:`Step` with
+        messages for the log); raises :class:`Discard` when the step cannot be
+        taken and ``ValueError`` for an unusable step.
     default_experiment : tuple, optional
         ``(start, stop, step)`` [s] written into modelDescription.xml.
     report : callable, optional

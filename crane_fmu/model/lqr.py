@@ -7,6 +7,8 @@ so they always follow what the user set. The same law tracks a reference
 ``TrajectoryPlanner``): feedforward plus feedback on the error.
 """
 
+import dataclasses
+import math
 from collections import namedtuple
 
 from . import limits, linalg
@@ -52,11 +54,15 @@ def design(p, weights, r, h):
     return tuple(v / (r + bt_p_b) for v in bt_p_a)
 
 
-Config = namedtuple("Config", "gains x_d u_max v_max h")
+SCHEDULE_POINTS = 21
+
+Config = namedtuple("Config", "gains x_d u_max v_max h schedule")
+Config.__doc__ = ("The gains for l1, the limits, and the gain schedule: ``(l1 values, gains)`` of designs over "
+                  "[l1_low, l1_high], or None.")
 
 
 def setup(values):
-    """Validated parameters and the gains designed from them."""
+    """Validated parameters and the gains designed from them (and the schedule over the cable length)."""
     p = plant_parameters(values)
     for name in WEIGHTS:
         value = values[name]
@@ -65,25 +71,54 @@ def setup(values):
     positive("r", values["r"])
     positive("h", values["h"])
     u_max, v_max = limits.check(values)
-    gains = design(p, [values[name] for name in WEIGHTS], values["r"], values["h"])
-    return Config(gains, values["x_d"], u_max, v_max, values["h"])
+    weights = [values[name] for name in WEIGHTS]
+    schedule = None
+    low, high = values["l1_low"], values["l1_high"]
+    if (low, high) != (0.0, 0.0):
+        positive("l1_low", low)
+        if not high > low or not math.isfinite(high):
+            raise ValueError(f"l1_high must be finite and > l1_low = {low!r}, got {high!r}")
+        lengths = [low + (high - low) * i / (SCHEDULE_POINTS - 1) for i in range(SCHEDULE_POINTS)]
+        schedule = (lengths, [design(dataclasses.replace(p, l1=length), weights, values["r"], values["h"])
+                              for length in lengths])
+    gains = design(p, weights, values["r"], values["h"])
+    return Config(gains, values["x_d"], u_max, v_max, values["h"], schedule)
 
 
-def control(config, measured, reference=(0.0,) * 6, ddx_ref=0.0):
-    """``u = ddx_ref - K (s - s_ref)`` within the limits, with ``s_ref = reference + (x_d, 0, ...)``."""
+def scheduled_gains(config, l1):
+    """The gains for the measured cable length ``l1``: linear between the schedule's designs (clamped to its range)."""
+    if config.schedule is None or not l1 > 0:
+        return config.gains
+    lengths, table = config.schedule
+    position = (min(max(l1, lengths[0]), lengths[-1]) - lengths[0]) / (lengths[1] - lengths[0])
+    i = min(int(position), len(lengths) - 2)
+    f = position - i
+    return tuple(a + f * (b - a) for a, b in zip(table[i], table[i + 1]))
+
+
+def control(config, measured, reference=(0.0,) * 6, ddx_ref=0.0, l1=0.0):
+    """``u = ddx_ref - K (s - s_ref)`` within the limits, with ``s_ref = reference + (x_d, 0, ...)``.
+
+    ``l1`` is the measured main cable length; with a schedule, ``K`` follows it.
+    """
     error = [s - r for s, r in zip(measured, reference)]
     error[0] -= config.x_d
-    u = ddx_ref - sum(k * e for k, e in zip(config.gains, error))
+    u = ddx_ref - sum(k * e for k, e in zip(scheduled_gains(config, l1), error))
     return limits.limited(u, measured[1], config.u_max, config.v_max, config.h)
 
 
 def _output(config, state, inputs):
-    return (control(config, inputs[:6], inputs[6:12], inputs[12]),)
+    return (control(config, inputs[:6], inputs[6:12], inputs[12], inputs[13]),)
 
 
 def report(config):
-    """The designed gains, for ``crane-fmu info``."""
-    return {"K_" + name: k for name, k in zip(STATE, config.gains)}
+    """The designed gains (and the schedule's range), for ``crane-fmu info``."""
+    derived = {"K_" + name: k for name, k in zip(STATE, config.gains)}
+    if config.schedule:
+        lengths, table = config.schedule
+        derived["schedule"] = (f"{len(lengths)} designs for l1 from {lengths[0]:g} to {lengths[-1]:g} m; K_theta1 "
+                               f"from {table[0][2]:.6g} to {table[-1][2]:.6g}")
+    return derived
 
 
 DEFAULT_WEIGHTS = dict(zip(WEIGHTS, (50.0, 0.0, 400.0, 10.0, 50.0, 5.0)))
@@ -94,6 +129,8 @@ VARIABLES = controller_model() + tuple(
     parameter("r", 0.05, "1", "LQR input weight on u"),
     parameter("h", 1e-3, "s", "communication step the discrete design is for"),
     parameter("x_d", 0.0, "m", "target trolley position (added to x_ref)"),
+    parameter("l1_low", 0.0, "m", "gain schedule: shortest main cable designed for; 0 with l1_high = 0: none"),
+    parameter("l1_high", 0.0, "m", "gain schedule: longest main cable designed for"),
     *limits.parameters(),
 ) + MEASURED_STATE + tuple(
     input_(name, unit, f"reference {text}") for name, unit, text in zip(
@@ -101,6 +138,7 @@ VARIABLES = controller_model() + tuple(
         ("trolley position (plus x_d)", "trolley velocity", "hook swing angle", "hook swing rate",
          "payload swing angle", "payload swing rate"))) + (
     input_("ddx_ref", "m/s2", "reference trolley acceleration (feedforward)"),
+    input_("l1_now", "m", "measured main cable length, for the gain schedule; 0: not measured"),
     output("u", "m/s2", "demanded trolley acceleration, ddx_ref - K (s - s_ref), limited"),
 )
 

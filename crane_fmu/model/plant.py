@@ -1,20 +1,28 @@
-"""Double-pendulum payload under an accelerated trolley, eqs (4)-(9).
+"""Double-pendulum payload under an accelerated trolley, eqs (4)-(9), with hoisting, forces and damping.
 
-The state is ``(x, dx, theta1, dtheta1, theta2, dtheta2)`` in SI units; the
-input is the trolley acceleration ``u = x''`` [m/s2]. Angles are measured from
-the downward vertical, positive in +x direction (Fig. 3).
+The swing state is ``(x, dx, theta1, dtheta1, theta2, dtheta2)`` in SI units;
+with hoisting it continues with the main cable length and its rate ``(l1, dl1)``.
+The input is the trolley acceleration ``u = x''`` [m/s2]. Angles are measured
+from the downward vertical, positive in +x direction (Fig. 3).
+
+Beyond the paper (each term vanishes at its default, leaving eqs (8)-(9)):
+the hoist acceleration ``l1''`` (positive lowers the hook), horizontal forces
+``F1`` on the hook and ``F2`` on the payload, viscous damping ``c1`` at the
+trolley joint and ``c2`` at the hook joint, and the trolley drive's limits and lag.
 """
 
 import math
 from collections import namedtuple
 
-from .component import Component, Discard
+from .component import Component, Discard, Step
 from .parameters import plant_parameters, positive
 from .tables import PLANT_MODEL, input_, output, parameter
 
+NO_LOAD = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # (dl1, ddl1, F1, F2, c1, c2): the paper's model
 
-def angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p):
-    """Solve the Lagrange equations (8) and (9) for the angular accelerations.
+
+def angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p, l1=None, load=NO_LOAD):
+    """Solve the Lagrange equations (8) and (9), extended, for the angular accelerations.
 
     Parameters
     ----------
@@ -24,6 +32,12 @@ def angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p):
         Trolley acceleration [m/s2].
     p : PlantParameters
         Masses, cable lengths and gravity.
+    l1 : float, optional
+        The main cable's length now [m] (default ``p.l1``).
+    load : tuple
+        ``(dl1, ddl1, F1, F2, c1, c2)``: the main cable's rate [m/s] and
+        acceleration [m/s2], the horizontal forces on hook and payload [N], the
+        joint damping coefficients [N m s/rad]; :data:`NO_LOAD` is the paper's model.
 
     Returns
     -------
@@ -32,55 +46,88 @@ def angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p):
 
     Notes
     -----
-    Eq (8) divided by l1 and eq (9) divided by ``l2 m2`` form the linear system::
+    With ``d = theta1 - theta2``, ``L = l1(t)``, the damping torques
+    ``Q1 = -c1 w1 + c2 (w2 - w1)``, ``Q2 = -c2 (w2 - w1)`` and ``mu = m1 + m2``, the
+    Lagrange equations of eqs (4)-(7) with a time-varying ``L`` (derived symbolically
+    in ``tests/test_equations.py``), eq (8) divided by ``L`` and eq (9) by ``m2 l2``, are::
 
-        (m1+m2) l1 dd1 + m2 l2 cos(d) dd2 = -(m1+m2)(u cos th1 + g sin th1) - m2 l2 w2^2 sin d
-        l1 cos(d) dd1  +    l2        dd2 = -u cos th2 - g sin th2 + l1 w1^2 sin d
+        mu L dd1 + m2 l2 cos(d) dd2 = -mu (u cos th1 + g sin th1) - m2 l2 w2^2 sin d
+                                      - 2 mu L' w1 + (F1 + F2) cos th1 + Q1 / L
+        L cos(d) dd1 + l2 dd2 = -u cos th2 - g sin th2 + L w1^2 sin d
+                                - L'' sin d - 2 L' w1 cos d + (F2 cos th2 + Q2 / l2) / m2
 
-    with ``d = theta1 - theta2``. Its determinant ``l1 l2 (m1 + m2 sin^2 d)`` is
-    positive for m1 > 0, and dividing (9) by m2 keeps the case m2 = 0 regular.
+    With ``L' = L'' = F1 = F2 = c1 = c2 = 0`` these are eqs (8) and (9). The
+    determinant ``L l2 (m1 + m2 sin^2 d)`` is positive for m1 > 0, and dividing (9)
+    by m2 keeps the case m2 = 0 regular (then F2 and c2 must be 0).
     """
     m1m2 = p.m1 + p.m2
-    l1, l2, g = p.l1, p.l2, p.g
-    s1, c1 = math.sin(theta1), math.cos(theta1)
-    s2, c2 = math.sin(theta2), math.cos(theta2)
+    l2, g = p.l2, p.g
+    big_l = p.l1 if l1 is None else l1
+    dl1, ddl1, f1, f2, c1, c2 = load
+    s1, co1 = math.sin(theta1), math.cos(theta1)
+    s2, co2 = math.sin(theta2), math.cos(theta2)
     d = theta1 - theta2
     sd, cd = math.sin(d), math.cos(d)
-    r1 = -m1m2 * (u * c1 + g * s1) - p.m2 * l2 * dtheta2 * dtheta2 * sd
-    r2 = -u * c2 - g * s2 + l1 * dtheta1 * dtheta1 * sd
-    a, b = m1m2 * l1, p.m2 * l2 * cd
-    c, e = l1 * cd, l2
+    q1 = -c1 * dtheta1 + c2 * (dtheta2 - dtheta1)
+    r1 = (-m1m2 * (u * co1 + g * s1) - p.m2 * l2 * dtheta2 * dtheta2 * sd
+          + (-2.0 * m1m2 * dl1 * dtheta1 + (f1 + f2) * co1 + q1 / big_l))
+    r2 = -u * co2 - g * s2 + big_l * dtheta1 * dtheta1 * sd + (-ddl1 * sd - 2.0 * dl1 * dtheta1 * cd)
+    if p.m2 > 0:
+        r2 += (f2 * co2 - c2 * (dtheta2 - dtheta1) / l2) / p.m2
+    a, b = m1m2 * big_l, p.m2 * l2 * cd
+    c, e = big_l * cd, l2
     det = a * e - b * c
     return (e * r1 - b * r2) / det, (a * r2 - c * r1) / det
 
 
-def derivative(state, u, p):
-    """Time derivative of the plant state for a held trolley acceleration ``u``.
+def derivative(state, u, p, hoist=0.0, forces=(0.0, 0.0, 0.0, 0.0)):
+    """Time derivative of the state for a held trolley acceleration ``u`` (and hoist acceleration).
+
+    Parameters
+    ----------
+    state : tuple
+        ``(x, dx, theta1, dtheta1, theta2, dtheta2)``, or with ``(l1, dl1)`` appended.
+    hoist : float
+        ``l1''`` [m/s2]; needs the 8-element state.
+    forces : tuple
+        ``(F1, F2, c1, c2)``.
 
     Notes
     -----
     ``x'' = u`` by definition of the input (eq 12: f1 = 0, b1 = 1); the angular
     accelerations come from eqs (8)-(9), see :func:`angular_accelerations`.
     """
-    _, dx, theta1, dtheta1, theta2, dtheta2 = state
-    dd1, dd2 = angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p)
-    return (dx, u, dtheta1, dd1, dtheta2, dd2)
+    _, dx, theta1, dtheta1, theta2, dtheta2 = state[:6]
+    if len(state) == 6:
+        dd1, dd2 = angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p, None, (0.0, 0.0, *forces))
+        return (dx, u, dtheta1, dd1, dtheta2, dd2)
+    l1, dl1 = state[6:8]
+    dd1, dd2 = angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p, l1, (dl1, hoist, *forces))
+    return (dx, u, dtheta1, dd1, dtheta2, dd2, dl1, hoist)
 
 
-def rk4_step(state, u, dt, p):
-    """Advance ``state`` by ``dt`` with one classical Runge-Kutta 4 step, u held."""
-    x, v, a1, w1, a2, w2 = state
+def rk4_step(state, u, dt, p, hoist=0.0, forces=(0.0, 0.0, 0.0, 0.0)):
+    """Advance ``state`` (6 or 8 elements, see :func:`derivative`) by ``dt``: one classical RK4 step, inputs held."""
+    x, v, a1, w1, a2, w2 = state[:6]
     h2 = 0.5 * dt
-    k1 = angular_accelerations(a1, w1, a2, w2, u, p)
-    k2 = angular_accelerations(a1 + h2 * w1, w1 + h2 * k1[0], a2 + h2 * w2, w2 + h2 * k1[1], u, p)
+    if len(state) == 8:
+        big_l, dl = state[6:8]
+        # l1'' = hoist is constant over the step: l1 and its rate are exact at every stage
+        ls = (big_l, big_l + h2 * dl + 0.5 * hoist * h2 * h2, big_l + dt * dl + 0.5 * hoist * dt * dt)
+        dls = (dl, dl + h2 * hoist, dl + dt * hoist)
+    else:
+        ls, dls = (None, None, None), (0.0, 0.0, 0.0)
+    f = [(dls[i], hoist, *forces) for i in range(3)]
+    k1 = angular_accelerations(a1, w1, a2, w2, u, p, ls[0], f[0])
+    k2 = angular_accelerations(a1 + h2 * w1, w1 + h2 * k1[0], a2 + h2 * w2, w2 + h2 * k1[1], u, p, ls[1], f[1])
     w1b, w2b = w1 + h2 * k1[0], w2 + h2 * k1[1]
     w1c, w2c = w1 + h2 * k2[0], w2 + h2 * k2[1]
-    k3 = angular_accelerations(a1 + h2 * w1b, w1c, a2 + h2 * w2b, w2c, u, p)
+    k3 = angular_accelerations(a1 + h2 * w1b, w1c, a2 + h2 * w2b, w2c, u, p, ls[1], f[1])
     w1d, w2d = w1 + dt * k3[0], w2 + dt * k3[1]
-    k4 = angular_accelerations(a1 + dt * w1c, w1d, a2 + dt * w2c, w2d, u, p)
+    k4 = angular_accelerations(a1 + dt * w1c, w1d, a2 + dt * w2c, w2d, u, p, ls[2], f[2])
     s = dt / 6.0
     # x'' = u is constant over the step, so RK4 integrates x exactly.
-    return (
+    new = (
         x + dt * v + h2 * dt * u,
         v + dt * u,
         a1 + s * (w1 + 2.0 * w1b + 2.0 * w1c + w1d),
@@ -88,6 +135,7 @@ def rk4_step(state, u, dt, p):
         a2 + s * (w2 + 2.0 * w2b + 2.0 * w2c + w2d),
         w2 + s * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]),
     )
+    return new if len(state) == 6 else new + (ls[2], dls[2])
 
 
 def linearisation(p):
@@ -138,7 +186,7 @@ def substeps(step, max_substep):
 
 
 def advance(state, u, step, max_substep, p):
-    """Integrate the plant over one communication step with u held (zero-order hold)."""
+    """Integrate the paper's plant over one communication step with u held (zero-order hold)."""
     n = substeps(step, max_substep)
     dt = step / n
     for _ in range(n):
@@ -155,19 +203,22 @@ OUTPUTS = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2", "x1", "y1", "x2"
 
 
 def outputs(state, p):
-    """The state, hook and payload positions and the energy, in the order of :data:`OUTPUTS`.
+    """The swing state, hook and payload positions and the energy, in the order of :data:`OUTPUTS`.
 
     Notes
     -----
-    Positions from eqs (4)-(5); kinetic energy eq (6) plus potential energy
-    eq (7). The trolley's own mass is not part of the model, so with ``u = 0``
-    (constant trolley velocity) this energy is conserved.
+    Positions from eqs (4)-(5) with the main cable's length now (``state[6]``,
+    else ``p.l1``); kinetic energy eq (6), including the hoisting speed
+    ``state[7]``, plus potential energy eq (7). The trolley's own mass is not
+    part of the model, so with ``u = 0`` (constant trolley velocity), no
+    hoisting, no forces and no damping this energy is conserved.
     """
-    x, dx, theta1, dtheta1, theta2, dtheta2 = state
+    x, dx, theta1, dtheta1, theta2, dtheta2 = state[:6]
+    l1, dl1 = state[6:8] if len(state) > 6 else (p.l1, 0.0)
     s1, c1, s2, c2 = math.sin(theta1), math.cos(theta1), math.sin(theta2), math.cos(theta2)
-    x1, y1 = x + p.l1 * s1, -p.l1 * c1
+    x1, y1 = x + l1 * s1, -l1 * c1
     x2, y2 = x1 + p.l2 * s2, y1 - p.l2 * c2
-    vx1, vy1 = dx + p.l1 * dtheta1 * c1, p.l1 * dtheta1 * s1
+    vx1, vy1 = dx + l1 * dtheta1 * c1 + dl1 * s1, l1 * dtheta1 * s1 - dl1 * c1
     vx2, vy2 = vx1 + p.l2 * dtheta2 * c2, vy1 + p.l2 * dtheta2 * s2
     kinetic = 0.5 * (p.m1 * (vx1 * vx1 + vy1 * vy1) + p.m2 * (vx2 * vx2 + vy2 * vy2))
     return (x, dx, theta1, dtheta1, theta2, dtheta2, x1, y1, x2, y2,
@@ -175,6 +226,8 @@ def outputs(state, p):
 
 
 # --- the CranePlant component -------------------------------------------------------
+
+INF = math.inf
 
 VARIABLES = PLANT_MODEL + (
     parameter("x0", 0.0, "m", "initial trolley position"),
@@ -184,7 +237,20 @@ VARIABLES = PLANT_MODEL + (
     parameter("theta2_0", 0.0, "rad", "initial payload swing angle"),
     parameter("dtheta2_0", 0.0, "rad/s", "initial payload swing rate"),
     parameter("max_substep", 1e-3, "s", "longest RK4 sub-step inside doStep"),
-    input_("u", "m/s2", "trolley acceleration (held over each step)"),
+    parameter("c1", 0.0, "N.m.s/rad", "viscous damping at the trolley joint"),
+    parameter("c2", 0.0, "N.m.s/rad", "viscous damping at the hook joint"),
+    parameter("u_max", INF, "m/s2", "trolley drive: largest |acceleration|; INF: no limit"),
+    parameter("v_max", INF, "m/s", "trolley drive: largest speed; INF: no limit"),
+    parameter("tau", 0.0, "s", "trolley drive: first-order lag of the acceleration; 0: none"),
+    parameter("x_min", -INF, "m", "rail end: the trolley cannot pass below this position"),
+    parameter("x_max", INF, "m", "rail end: the trolley cannot pass above this position"),
+    parameter("l1_min", 0.0, "m", "hoist: shortest main cable; 0: no limit"),
+    parameter("l1_max", INF, "m", "hoist: longest main cable; INF: no limit"),
+    parameter("dl1_max", INF, "m/s", "hoist: largest |cable speed|; INF: no limit"),
+    input_("u", "m/s2", "trolley acceleration demanded (held over each step)"),
+    input_("hoist", "m/s2", "hoist acceleration l1'' (held over each step), positive lowers the hook"),
+    input_("F1", "N", "horizontal force on the hook (wind, a push)"),
+    input_("F2", "N", "horizontal force on the payload (wind, a push)"),
     output("x", "m", "trolley position"),
     output("dx", "m/s", "trolley velocity"),
     output("theta1", "rad", "hook swing angle from vertical"),
@@ -196,38 +262,110 @@ VARIABLES = PLANT_MODEL + (
     output("x2", "m", "payload horizontal position, eq (5)"),
     output("y2", "m", "payload vertical position (up positive), eq (5)"),
     output("energy", "J", "kinetic + potential energy of hook and payload, eqs (6)-(7)"),
+    output("l1_now", "m", "main cable length trolley to hook now (starts at l1)"),
+    output("dl1_now", "m/s", "main cable length rate, positive lowering"),
+    output("ddx", "m/s2", "trolley acceleration over the last step, after the drive's limits and lag"),
 )
 
-Config = namedtuple("Config", "params max_substep state0")
+Config = namedtuple("Config", "params max_substep state0 forces_c u_max v_max tau x_min x_max l1_min l1_max dl1_max")
+
+
+def _at_least(name, value, low, rule):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value >= low or value != value:
+        raise ValueError(f"{name} must be {rule}, got {value!r}")
 
 
 def setup(values):
-    """Validated :class:`Config` from the CranePlant parameter values."""
+    """Validated :class:`Config` from the CranePlant parameter values; the state starts at rest in the drive."""
     positive("max_substep", values["max_substep"])
+    p = plant_parameters(values)
+    for name in ("c1", "c2", "tau", "l1_min"):
+        _at_least(name, values[name], 0.0, ">= 0 and finite")
+        if not math.isfinite(values[name]):
+            raise ValueError(f"{name} must be >= 0 and finite, got {values[name]!r}")
+    for name in ("u_max", "v_max", "dl1_max"):
+        _at_least(name, values[name], 0.0, "> 0 (INF: no limit)")
+        if values[name] == 0:
+            raise ValueError(f"{name} must be > 0 (INF: no limit), got {values[name]!r}")
+    if p.m2 == 0 and values["c2"] != 0:
+        raise ValueError(f"c2 must be 0 when m2 = 0 (the hook joint then moves no mass), got {values['c2']!r}")
+    if not values["x_min"] < values["x_max"]:
+        raise ValueError(f"x_min must be < x_max, got {values['x_min']!r} and {values['x_max']!r}")
+    if not values["x_min"] <= values["x0"] <= values["x_max"]:
+        raise ValueError(f"x0 must lie on the rail [{values['x_min']!r}, {values['x_max']!r}], got {values['x0']!r}")
+    if not values["l1_min"] <= p.l1 <= values["l1_max"]:
+        raise ValueError(f"l1 must lie within [l1_min, l1_max] = [{values['l1_min']!r}, {values['l1_max']!r}], "
+                         f"got {p.l1!r}")
     state0 = tuple(values[name] for name in ("x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0"))
-    return Config(plant_parameters(values), values["max_substep"], state0)
+    return Config(p, values["max_substep"], state0 + (p.l1, 0.0, 0.0, 0.0), (values["c1"], values["c2"]),
+                  values["u_max"], values["v_max"], values["tau"], values["x_min"], values["x_max"],
+                  values["l1_min"], values["l1_max"], values["dl1_max"])
+
+
+def _clamp(value, low, high):
+    return min(max(value, low), high)
 
 
 def update(config, state, inputs, time, step):
-    """The state after one communication step with ``u`` held; :class:`Discard` if it becomes non-finite."""
-    (u,) = inputs
+    """The state after one communication step with the inputs held.
+
+    The state is the 8-element swing and hoist state, the drive's acceleration
+    and the trolley's mean acceleration over the last sub-step. Per RK4 sub-step
+    ``dt``: the demand is limited to ``u_max``;
+    the drive's acceleration follows it with the lag ``tau`` (exactly, and the
+    trolley takes its mean over the sub-step); the trolley's acceleration is then
+    limited so that the speed ends within ``v_max``; the hoist acceleration is
+    limited likewise by ``dl1_max``, and a cable reaching ``l1_min`` or ``l1_max``
+    is held there at rest (reported in the step's messages). A trolley that
+    would pass a rail end, or a state that becomes non-finite, discards the step.
+    """
+    u, hoist, f1, f2 = inputs
+    if config.params.m2 == 0 and f2 != 0:
+        raise Discard(f"F2 = {f2!r} N acts on a payload of mass m2 = 0: the step is discarded")
     n = substeps(step, config.max_substep)  # ValueError for an unusable step
-    dt, p = step / n, config.params
+    dt, p, c = step / n, config.params, config
+    forces = (f1, f2, *c.forces_c)
+    demand = _clamp(u, -c.u_max, c.u_max)
+    lag = math.exp(-dt / c.tau) if c.tau > 0 else 0.0
+    mean = c.tau / dt * (1.0 - lag) if c.tau > 0 else 0.0
+    messages = []
+    swing, drive = state[:8], state[8]
     try:
-        for _ in range(n):
-            state = rk4_step(state, u, dt, p)
-        finite = all(map(math.isfinite, state))
+        for k in range(n):
+            accel = demand + (drive - demand) * mean if c.tau > 0 else demand
+            drive = demand + (drive - demand) * lag
+            v, dl = swing[1], swing[7]
+            if c.v_max < INF:
+                accel = _clamp(accel, (-c.v_max - v) / dt, (c.v_max - v) / dt)
+            hoist_now = hoist if c.dl1_max == INF else _clamp(hoist, (-c.dl1_max - dl) / dt, (c.dl1_max - dl) / dt)
+            swing = rk4_step(swing, accel, dt, p, hoist_now, forces)
+            t = time + (k + 1) * dt
+            if not c.x_min <= swing[0] <= c.x_max:
+                end = "x_max" if swing[0] > c.x_max else "x_min"
+                raise Discard(f"the trolley would pass the rail end {end} = {getattr(c, end)!r} m (x = {swing[0]!r} m) "
+                              f"at t = {t!r} s: the step from t = {time!r} s is discarded")
+            if not c.l1_min <= swing[6] <= c.l1_max:
+                held = c.l1_max if swing[6] > c.l1_max else c.l1_min
+                if dl != 0.0:  # reached the limit in this sub-step (not already held there)
+                    messages.append(f"hoist: l1 reached {held!r} m at t = {t!r} s and is held there")
+                swing = swing[:6] + (held, 0.0)
+        finite = all(map(math.isfinite, swing))
     except (ArithmeticError, ValueError):  # overflow, or sin/cos of inf
         finite = False
     if not finite:
         raise Discard(f"plant state became non-finite in the step from t={time!r} s (u={u!r} m/s2); "
                       "the step is discarded")
-    return state
+    state = swing + (drive, accel)
+    return Step(state, messages) if messages else state
+
+
+def _outputs(config, state, inputs):
+    return outputs(state[:8], config.params) + (state[6], state[7], state[9])
 
 
 COMPONENT = Component(
     "CranePlant", "plant",
     "Overhead crane with a double-pendulum payload (hook m1 on cable l1, payload m2 on cable l2); "
-    "input: trolley acceleration u; fixed-step RK4 inside doStep",
-    VARIABLES, setup, lambda config, state, inputs: outputs(state, config.params),
+    "inputs: trolley and hoist accelerations, horizontal forces; fixed-step RK4 inside doStep",
+    VARIABLES, setup, _outputs,
     initial_state=lambda config: config.state0, update=update, default_experiment=(0.0, 20.0, 0.01))
