@@ -8,6 +8,7 @@ run prints one line and exits with status 1.
 import argparse
 import math
 import os
+import shutil
 import sys
 from pathlib import Path
 
@@ -26,6 +27,15 @@ EXAMPLES = {
               "  crane-fmu bench --endurance            # one simulated hour at 1 ms\n"
               "  crane-fmu bench --controllers          # every controller against its targets"),
     "reproduce": "examples:\n  crane-fmu reproduce --out results/paper\n  crane-fmu reproduce --quick --out /tmp/q",
+    "compare": (
+        "examples:\n"
+        "  crane-fmu compare --out results/compare                  # every built-in controller, every scenario\n"
+        "  crane-fmu compare --controller LqrController --controller my/MyController.fmu --out results/mine\n"
+        "  crane-fmu compare --out results/compare --scheduler tcp://scheduler-host:8786\n"
+        "Re-running the same command resumes: finished cases are skipped."),
+    "plot": ("examples:\n  crane-fmu plot results/paper.csv results/lqr.csv --out results/section5.png\n"
+             "  crane-fmu plot run.csv --out run.png --title 'my run'"),
+    "animate": "examples:\n  crane-fmu simulate --system transport --out move.csv && crane-fmu animate move.csv --out move.gif",
     "sweep": (
         "examples:\n"
         "  crane-fmu sweep study.toml --out results/study --workers 2\n"
@@ -108,6 +118,29 @@ def _parser():
     p.add_argument("--scheduler", help="address of an existing Dask scheduler (no local cluster)")
     p.add_argument("--csv", action="store_true", help="also write results.csv")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+    p = sub.add_parser("compare", help="score controller FMUs on the same scenarios (the scoreboard)",
+                       epilog=EXAMPLES["compare"], formatter_class=fmt)
+    p.add_argument("--controller", action="append", default=[], metavar="NAME|FILE.fmu",
+                   help="a built-in controller's name or a controller FMU (repeatable; default: every built-in one)")
+    p.add_argument("--out", required=True, help="output folder: scoreboard.md, scores.parquet, plots, animations")
+    p.add_argument("--fmu-dir", default="build/fmus", help="folder of the built FMUs")
+    p.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
+    p.add_argument("--scheduler", help="address of an existing Dask scheduler (no local cluster)")
+    p.add_argument("--quick", action="store_true", help="3 of the 27 mismatch plants in S3")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+    p = sub.add_parser("plot", help="plot one or more simulate results on shared axes",
+                       epilog=EXAMPLES["plot"], formatter_class=fmt)
+    p.add_argument("results", nargs="+", help="CSVs written by crane-fmu simulate (labelled by file name)")
+    p.add_argument("--out", required=True, help="the PNG to write")
+    p.add_argument("--title", default="", help="a title over the plot")
+
+    p = sub.add_parser("animate", help="an animation of the crane from a simulate result (GIF, or MP4 with ffmpeg)",
+                       epilog=EXAMPLES["animate"], formatter_class=fmt)
+    p.add_argument("result", help="a CSV written by crane-fmu simulate")
+    p.add_argument("--out", required=True, help="FILE.gif or FILE.mp4")
+    p.add_argument("--fps", type=int, default=25, help="frames per second (default 25)")
 
     p = sub.add_parser("bench", help="microseconds per communication step, crane pair vs framework floor",
                        epilog=EXAMPLES["bench"], formatter_class=fmt)
@@ -352,6 +385,68 @@ def _cmd_sweep(args):
     return 0
 
 
+def _cmd_compare(args):
+    from crane_fmu.compare import compare
+
+    if args.workers is not None and args.workers < 1:
+        raise UsageError(f"--workers must be >= 1, got {args.workers}")
+    if args.workers is not None and args.scheduler:
+        raise UsageError("--workers and --scheduler exclude each other: the scheduler's cluster has its workers")
+    _writable_file(Path(args.out) / "scoreboard.md", "--out")
+    try:
+        compare(args.out, args.controller, args.fmu_dir, args.workers, args.scheduler, args.quick,
+                progress=not args.no_progress)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    return 0
+
+
+def _cmd_plot(args):
+    from crane_fmu.analysis.plots import plot_overlay
+    from crane_fmu.cosim import read_csv
+
+    if Path(args.out).suffix != ".png":
+        raise UsageError(f"--out {args.out}: the plot is written as .png")
+    runs = {}
+    for path in args.results:
+        try:
+            runs[Path(path).stem] = read_csv(path)
+        except (OSError, ValueError) as exc:
+            raise UsageError(f"cannot read {path}: {exc}") from None
+    _writable_file(args.out, "--out")
+    partial = str(Path(args.out).with_name(f".{Path(args.out).stem}.partial.png"))
+    try:
+        plot_overlay(runs, partial, args.title)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    os.replace(partial, args.out)
+    print(f"wrote {args.out}")
+    return 0
+
+
+def _cmd_animate(args):
+    from crane_fmu.analysis.score_plots import animate
+    from crane_fmu.cosim import read_csv
+
+    if Path(args.out).suffix not in (".gif", ".mp4"):
+        raise UsageError(f"--out {args.out}: the animation is written as .gif or .mp4")
+    if Path(args.out).suffix == ".mp4" and not shutil.which("ffmpeg"):
+        raise UsageError(f"--out {args.out}: MP4 needs ffmpeg, which is not installed; write a .gif instead")
+    if args.fps < 1:
+        raise UsageError(f"--fps must be >= 1, got {args.fps}")
+    try:
+        columns = read_csv(args.result)
+    except (OSError, ValueError) as exc:
+        raise UsageError(f"cannot read {args.result}: {exc}") from None
+    needed = [n for n in ("x", "x1", "y1", "x2", "y2") if not any(k.endswith("." + n) for k in columns)]
+    if needed:
+        raise UsageError(f"{args.result} has no crane to animate: it needs the plant outputs "
+                         f"{', '.join(needed)}")
+    _writable_file(args.out, "--out")
+    print(f"wrote {animate(columns, args.out, Path(args.result).stem, args.fps)}")
+    return 0
+
+
 def _cmd_bench(args):
     from crane_fmu.bench import run_bench, run_controllers, run_endurance, run_sweep_bench
 
@@ -379,8 +474,9 @@ def main(argv=None):
     """Run the command line; return the exit status."""
     try:
         args = _parser().parse_args(argv)
-        return {"build": _cmd_build, "simulate": _cmd_simulate, "info": _cmd_info,
-                "reproduce": _cmd_reproduce, "sweep": _cmd_sweep, "bench": _cmd_bench}[args.command](args)
+        return {"build": _cmd_build, "simulate": _cmd_simulate, "info": _cmd_info, "reproduce": _cmd_reproduce,
+                "sweep": _cmd_sweep, "compare": _cmd_compare, "plot": _cmd_plot, "animate": _cmd_animate,
+                "bench": _cmd_bench}[args.command](args)
     except UsageError as exc:
         print(f"crane-fmu: error: {exc}", file=sys.stderr)
         return 2

@@ -6,7 +6,7 @@ parameter rules are applied before a run. Nothing else in the toolkit names a
 component.
 """
 
-from crane_fmu.model import backstepping, benchmark, energy, lqr, planner, plant
+from crane_fmu.model import backstepping, benchmark, disturbances, energy, lqr, planner, plant
 
 _REGISTRY = {}
 
@@ -54,5 +54,5 @@ def check_parameters(model_identifier, values):
 
 
 for _component in (plant.COMPONENT, backstepping.COMPONENT, lqr.COMPONENT, energy.COMPONENT, planner.COMPONENT,
-                   benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
+                   disturbances.GUST, disturbances.SENSOR, benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
     register(_component)

@@ -112,7 +112,7 @@ def test_cluster_results_equal_a_serial_run(small_run, fmu_dir):
     for case, row in zip(study.cases(), rows):
         if row["status"] == "invalid":  # refused by the parameter rules before anything was shipped
             continue
-        serial = run_case(case, study.settings(), system, study.metrics)
+        serial = run_case(case, system, study.settings(), study.metrics)
         for key in ("status", "error", *study.metrics):
             assert row[key] == serial[key], key
 
@@ -212,6 +212,6 @@ def test_cli_sweep_mistakes(capsys, argv, message):
 def test_settling_band_is_chosen_by_the_study(small_run, fmu_dir, tmp_path):
     study = _study(tmp_path, SMALL.replace("step = 0.01", "step = 0.01\nsettling_band_deg = 20.0"))
     case = {"plant.theta1_0": 0.1, "controller.w_theta2": 0.0}
-    row = run_case(case, study.settings(), shippable(systems.get("paper"), fmu_dir), study.metrics)
+    row = run_case(case, shippable(systems.get("paper"), fmu_dir), study.settings(), study.metrics)
     assert row["settling_band_s"] == 0.0  # a 20-degree band holds from the start
     assert row["settling_0.5deg_s"] is None or row["settling_0.5deg_s"] > 0.0

@@ -5,6 +5,38 @@ import math
 MAX_PANELS = 8
 
 
+def plot_overlay(runs, path, title=""):
+    """Trolley position, both swing angles and u of several crane runs on shared axes, to a PNG.
+
+    ``runs`` is ``{label: columns}``; each run needs an instance with outputs ``x``, ``theta1``, ``theta2``.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .metrics import crane_signals
+
+    fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 8.5))
+    for label, columns in runs.items():
+        s = crane_signals(columns)
+        axes[0].plot(s["time"], s["x"], lw=1.3, label=label)
+        axes[1].plot(s["time"], [math.degrees(v) for v in s["theta1"]], lw=1.3)
+        axes[2].plot(s["time"], [math.degrees(v) for v in s["theta2"]], lw=1.3)
+        axes[3].plot(s["time"], s["u"], lw=1.3)
+    for ax, label in zip(axes, ("trolley x [m]", "hook angle theta1 [deg]", "payload angle theta2 [deg]",
+                                "demanded u [m/s2]")):
+        ax.set_ylabel(label)
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(fontsize=9)
+    axes[-1].set_xlabel("time [s]")
+    if title:
+        axes[0].set_title(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def plot_run(columns, path, title=""):
     """Plot a run of any system to a PNG.
 

@@ -65,7 +65,8 @@ class Instance:
         self.variables = {v.name: v for v in self.md.modelVariables}
         self.outputs = [v.name for v in self.md.modelVariables if v.causality == "output"]
         self.inputs = [v.name for v in self.md.modelVariables if v.causality == "input"]
-        self.feedthrough = any(u.dependencies for u in self.md.outputs)
+        # FMI: an output without a dependencies attribute may depend on every input
+        self.feedthrough = bool(self.inputs) and any(u.dependencies is None or u.dependencies for u in self.md.outputs)
         self.messages = deque(maxlen=20)  # the FMU's latest log messages
         self.time = None
         self._instantiated = False

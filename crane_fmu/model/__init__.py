@@ -7,4 +7,17 @@ this package and run inside whatever Python process hosts them.
 # Import every submodule now. A host shares sys.modules with the FMUs it loads
 # and may delete an FMU's extracted folder after freeing it (fmpy's simulate
 # does); a submodule imported lazily later would then be looked for there.
-from . import backstepping, benchmark, component, energy, limits, linalg, lqr, parameters, planner, plant, tables  # noqa: F401
+from . import (  # noqa: F401
+    backstepping,
+    benchmark,
+    component,
+    disturbances,
+    energy,
+    limits,
+    linalg,
+    lqr,
+    parameters,
+    planner,
+    plant,
+    tables,
+)

@@ -64,7 +64,7 @@ def _invalid_row(case, settings, error, metric_names):
             **dict.fromkeys(metric_names), "duration_s": 0.0}
 
 
-def run_case(case, settings, system, metric_names):
+def run_case(case, system, settings, metric_names):
     """Co-simulate one case of a :func:`shippable` system; return its row: parameters, metrics, status, error.
 
     Status is ``ok`` (ran to the stop time) or ``failed`` (an FMU stopped the
@@ -181,7 +181,8 @@ def run_study(study, out_dir, fmu_dir="build/fmus", workers=None, scheduler=None
                     to_run.append(case)
                 except ValueError as exc:
                     rows_ran.append(_invalid_row(case, settings, str(exc), study.metrics))
-            _run_on_dask(to_run, settings, shipped, study.metrics, workers, scheduler, out_dir, rows_ran, bar)
+            rows_ran += run_on_dask(run_case, to_run, shipped, out_dir, workers, scheduler, rows_ran, bar,
+                                    settings=settings, metric_names=study.metrics)
     done.update({r["case_id"]: r for r in rows_ran})
     rows = [done[case_id(c, settings)] for c in cases]
     write_table(rows, out_dir / "results.parquet")
@@ -195,34 +196,38 @@ def run_study(study, out_dir, fmu_dir="build/fmus", workers=None, scheduler=None
             "not_ok": sum(r["status"] != "ok" for r in rows), "seconds": time.perf_counter() - start}
 
 
-def _run_on_dask(cases, settings, shipped, metric_names, workers, scheduler, out_dir, rows, bar):
-    """Run ``cases`` on Dask, appending each finished row (and the rows already in ``rows``) to the journal."""
+def run_on_dask(task, items, shared, out_dir, workers=None, scheduler=None, known=(), bar=None, **kwargs):
+    """Run ``task(item, shared, **kwargs)`` for every item on Dask; return the rows it gave.
+
+    ``shared`` travels to every worker once. Each finished row is appended to
+    the journal in ``out_dir`` at once, after the rows ``known`` without running
+    (e.g. cases refused before shipping), so an interrupted run resumes.
+    """
     from distributed import as_completed
 
-    with open(out_dir / JOURNAL, "a") as journal:
-        def keep(row, new=True):
+    rows = []
+    with open(Path(out_dir) / JOURNAL, "a") as journal:
+        def keep(row):
             journal.write(json.dumps(row, default=_plain) + "\n")
             journal.flush()
-            if new:
-                rows.append(row)
             if bar:
                 bar.update(row)
 
-        for row in list(rows):
-            keep(row, new=False)
-        if not cases:
-            return
+        for row in known:
+            keep(row)
+        if not items:
+            return rows
         client, cluster = _client(workers, scheduler)
         try:
-            system = client.scatter([shipped], broadcast=True)[0]
-            futures = client.map(run_case, cases, settings=settings, system=system, metric_names=metric_names,
-                                 pure=False)
-            for future in as_completed(futures):
-                keep(future.result())
+            scattered = client.scatter([shared], broadcast=True)[0]
+            for future in as_completed(client.map(task, items, [scattered] * len(items), pure=False, **kwargs)):
+                rows.append(future.result())
+                keep(rows[-1])
         finally:
             client.close()
             if cluster is not None:
                 cluster.close()
+    return rows
 
 
 def _check_names(study, system, fmu_dir):

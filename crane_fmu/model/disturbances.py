@@ -1,0 +1,107 @@
+"""What the test harness adds to a crane: a wind gust (the Gust component) and imperfect sensors (the Sensor component)."""
+
+import math
+from collections import namedtuple
+
+from .component import Component
+from .tables import MEASURED_STATE, STATE, input_, output, parameter
+
+# --- Gust: horizontal force pulses on hook and payload -------------------------------------
+
+GustConfig = namedtuple("GustConfig", "F1 F2 start duration")
+
+
+def _gust_setup(values):
+    for name in ("F1_peak", "F2_peak", "start"):
+        if not math.isfinite(values[name]):
+            raise ValueError(f"{name} must be finite, got {values[name]!r}")
+    if not (values["duration"] > 0 and math.isfinite(values["duration"])):
+        raise ValueError(f"duration must be > 0 and finite, got {values['duration']!r}")
+    return GustConfig(values["F1_peak"], values["F2_peak"], values["start"], values["duration"])
+
+
+def gust(c, t):
+    """``(F1, F2)`` at time ``t``: a half-sine pulse ``peak sin(pi (t - start) / duration)`` while it lasts."""
+    if not c.start <= t <= c.start + c.duration:
+        return 0.0, 0.0
+    shape = math.sin(math.pi * (t - c.start) / c.duration)
+    return c.F1 * shape, c.F2 * shape
+
+
+GUST = Component(
+    "Gust", "disturbance", "A gust: half-sine pulses of horizontal force on hook (F1) and payload (F2)",
+    (parameter("F1_peak", 0.0, "N", "peak force on the hook"),
+     parameter("F2_peak", 20.0, "N", "peak force on the payload"),
+     parameter("start", 1.5, "s", "when the gust begins"),
+     parameter("duration", 0.5, "s", "how long it lasts"),
+     output("F1", "N", "horizontal force on the hook"),
+     output("F2", "N", "horizontal force on the payload")),
+    _gust_setup, lambda config, state, inputs: gust(config, state[0]),
+    initial_state=lambda config: (0.0,), update=lambda config, state, inputs, time, step: (time + step,))
+
+
+# --- Sensor: noise and a one-step delay on the measured state ------------------------------
+
+SIGMAS = ("sigma_x", "sigma_dx", "sigma_theta", "sigma_dtheta")
+SensorConfig = namedtuple("SensorConfig", "sigmas seed delay")
+
+
+def _sensor_setup(values):
+    for name in SIGMAS:
+        if not (values[name] >= 0 and math.isfinite(values[name])):
+            raise ValueError(f"{name} must be >= 0 and finite, got {values[name]!r}")
+    seed = values["seed"]
+    if not (math.isfinite(seed) and seed == int(seed) and 0 <= seed < 2 ** 32):
+        raise ValueError(f"seed must be a whole number in [0, 2^32), got {seed!r}")
+    if values["delay"] not in (0.0, 1.0):
+        raise ValueError(f"delay must be 0 or 1 (communication steps), got {values['delay']!r}")
+    s = [values[n] for n in SIGMAS]
+    return SensorConfig((s[0], s[1], s[2], s[3], s[2], s[3]), int(seed), values["delay"] == 1.0)
+
+
+def _mix(z):
+    """splitmix64: a well-mixed 64-bit integer from ``z``."""
+    z = (z + 0x9E3779B97F4A7C15) & 0xFFFFFFFFFFFFFFFF
+    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & 0xFFFFFFFFFFFFFFFF
+    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & 0xFFFFFFFFFFFFFFFF
+    return z ^ (z >> 31)
+
+
+def noise(seed, k, channel):
+    """A standard normal sample, a pure function of ``(seed, k, channel)`` (Box-Muller on splitmix64)."""
+    a = _mix((seed << 40) ^ (k << 4) ^ channel)
+    b = _mix(a)
+    u1, u2 = ((a >> 11) + 0.5) / 2 ** 53, (b >> 11) / 2 ** 53
+    return math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
+
+
+def measure(c, k, true_state):
+    """The measured state at sample ``k``: the true state plus independent normal noise."""
+    return tuple(v + s * noise(c.seed, k, i) if s else v for i, (v, s) in enumerate(zip(true_state, c.sigmas)))
+
+
+def _sensor_output(c, state, inputs):
+    k, held = state
+    if not c.delay or held is None:  # no delay, or the first sample: measure what is there now
+        return measure(c, k, inputs)
+    return held
+
+
+def _sensor_update(c, state, inputs, time, step):
+    k, _ = state
+    return (k + 1, list(measure(c, k, inputs)))
+
+
+SENSOR = Component(
+    "Sensor", "sensor",
+    "Measures the crane state with normal noise (fixed seed) and, optionally, one communication step late",
+    (parameter("sigma_x", 1e-3, "m", "noise on the trolley position (standard deviation)"),
+     parameter("sigma_dx", 5e-3, "m/s", "noise on the trolley velocity"),
+     parameter("sigma_theta", math.radians(0.05), "rad", "noise on both swing angles"),
+     parameter("sigma_dtheta", math.radians(0.2), "rad/s", "noise on both swing rates"),
+     parameter("seed", 1.0, "1", "seed of the noise (a whole number): the same seed, the same noise"),
+     parameter("delay", 1.0, "1", "1: the measurement reaches the output one communication step late; 0: at once"),
+     ) + tuple(input_(v.name, v.unit, v.description.replace("measured ", "true ")) for v in MEASURED_STATE)
+    + tuple(output(name + "_m", v.unit, v.description) for name, v in zip(STATE, MEASURED_STATE)),
+    _sensor_setup, _sensor_output, feedthrough=True,
+    initial_state=lambda config: (0, None), update=_sensor_update)
