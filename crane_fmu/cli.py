@@ -35,7 +35,8 @@ EXAMPLES = {
         "Re-running the same command resumes: finished cases are skipped."),
     "plot": ("examples:\n  crane-fmu plot results/paper.csv results/lqr.csv --out results/section5.png\n"
              "  crane-fmu plot run.csv --out run.png --title 'my run'"),
-    "animate": "examples:\n  crane-fmu simulate --system transport --out move.csv && crane-fmu animate move.csv --out move.gif",
+    "animate": ("examples:\n  crane-fmu simulate --system transport --out move.csv\n"
+                "  crane-fmu animate move.csv --out move.gif"),
     "sweep": (
         "examples:\n"
         "  crane-fmu sweep study.toml --out results/study --workers 2\n"

@@ -1,4 +1,4 @@
-"""What the test harness adds to a crane: a wind gust (the Gust component) and imperfect sensors (the Sensor component)."""
+"""What the test harness adds to a crane: a wind gust (the Gust component) and imperfect sensors (Sensor)."""
 
 import math
 from collections import namedtuple
