@@ -172,6 +172,31 @@ def _cell(value, digits=2, unit=""):
     return f"{value:.{digits}f}{unit}"
 
 
+def render_summary(rows):
+    """One table: per scenario the controllers ranked, with their ranking figure and whether they met every target."""
+    units = {"residual_deg": " deg"}
+    lines = []
+    for sid, s in SCENARIOS.items():
+        ranked = summarise(rows, sid)
+        if not ranked:
+            continue
+        cells = []
+        for line in ranked:
+            value = line[s.rank_by]
+            figure = "failed" if line["failed"] else _cell(value, 3 if s.rank_by == "residual_deg" else 2,
+                                                           units.get(s.rank_by, " s"))
+            verdict = "all targets met" if all(line["targets"]) and not line["failed"] else (
+                f"{sum(line['targets'])} of {len(line['targets'])} targets met")
+            cells.append(f"`{line['controller']}`: {figure}, {verdict}")
+        lines.append((sid, s, cells))
+    width = max(len(cells) for _, _, cells in lines)
+    out = ["| scenario | ranked by | " + " | ".join(f"{i + 1}." for i in range(width)) + " |",
+           "|---|---|" + "---|" * width]
+    for sid, s, cells in lines:
+        out.append(f"| {sid}: {s.title} | {s.rank_by} | " + " | ".join(cells + [""] * (width - len(cells))) + " |")
+    return "\n".join(out)
+
+
 def render(rows, contenders):
     """scoreboard.md: per scenario a table ranked by its metric, with each target met or missed."""
     out = ["# Controller scoreboard", "",
@@ -179,7 +204,7 @@ def render(rows, contenders):
            "the same master, on the same scenarios (`crane_fmu/analysis/scoreboard.py` defines them and their "
            "targets). Times are from the start of the run; *never* means not within the run. A row's figure is the "
            "worst over the scenario's cases.", "",
-           "Controllers: " + ", ".join(f"`{c.name}`" for c in contenders), ""]
+           "Controllers: " + ", ".join(f"`{c.name}`" for c in contenders), "", render_summary(rows), ""]
     for sid, s in SCENARIOS.items():
         lines = summarise(rows, sid)
         if not lines:
