@@ -17,8 +17,8 @@ def _run(capsys, *argv):
 def test_build_writes_every_component_and_every_builtin_system(tmp_path, capsys):
     code, out, _ = _run(capsys, "build", "--out", str(tmp_path / "fmus"))
     assert code == 0
-    fmus = ["BacksteppingController.fmu", "CranePlant.fmu", "EnergyController.fmu", "LqrController.fmu",
-            "TrajectoryPlanner.fmu"]
+    fmus = ["BacksteppingController.fmu", "CranePlant.fmu", "EnergyController.fmu", "Gust.fmu", "LqrController.fmu",
+            "Sensor.fmu", "TrajectoryPlanner.fmu"]
     names = ["energy", "free", "hoist-transport", "lqr", "paper", "transport"]
     assert sorted(p.name for p in (tmp_path / "fmus").iterdir()) == sorted(
         fmus + [f"{n}.OspSystemStructure.xml" for n in names])

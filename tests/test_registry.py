@@ -92,7 +92,7 @@ def test_swept_on_dask(pd_build, tmp_path):
 
 def test_descriptors_are_checked():
     table = pd_controller.COMPONENT.variables
-    with pytest.raises(ValueError, match="role must be one of plant, controller, planner, benchmark"):
+    with pytest.raises(ValueError, match="role must be one of plant, controller, planner, disturbance, sensor, "):
         Component("X", "observer", "", table, pd_controller.setup, lambda *a: ())
     with pytest.raises(ValueError, match="X.k_x: unit must be one of"):
         Component("X", "controller", "", (table[0]._replace(unit="furlong"),), pd_controller.setup, lambda *a: ())
