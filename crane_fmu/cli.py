@@ -67,7 +67,10 @@ def _number(text):
 
 
 def _parser():
+    from crane_fmu import __version__
+
     parser = _Parser(prog="crane-fmu", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"crane-fmu {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     fmt = argparse.RawDescriptionHelpFormatter
 
@@ -77,8 +80,10 @@ def _parser():
                    help="FMI 2.0 FMUs (default: build/fmus); FMI 3.0 ones and systems/ go beside it")
     p.add_argument("--bench", action="store_true", help="also build the benchmark's trivial FMUs")
 
-    p = sub.add_parser("simulate", help="co-simulate a system of FMUs",
-                       epilog=EXAMPLES["simulate"], formatter_class=fmt)
+    p = sub.add_parser("simulate", help="co-simulate a system of FMUs", epilog=EXAMPLES["simulate"],
+                       formatter_class=fmt,
+                       description="Co-simulate a built-in system or an SSP file with the fixed-step master; write "
+                                   "every output of every instance to a CSV (and a plot).")
     p.add_argument("--system", default="paper",
                    help="a built-in system's name (crane-fmu info lists them) or an SSP file (default: paper)")
     p.add_argument("--fmu-dir", default="build/fmus", help="folder of the built FMUs (default: build/fmus)")
@@ -90,7 +95,8 @@ def _parser():
     p.add_argument("--parameters", metavar="FILE.ssv",
                    help="SSP parameter set with names INSTANCE.VARIABLE, applied before --set")
     p.add_argument("--set", action="append", default=[], metavar="INSTANCE.VARIABLE=VALUE",
-                   help="set a parameter before initialisation (repeatable)")
+                   help="set any parameter or input before initialisation (repeatable); angles in rad, or with a deg "
+                        "suffix: plant.theta1_0=10deg")
     p.add_argument("--out", default="results/simulation.csv",
                    help="result CSV (default results/simulation.csv)")
     p.add_argument("--plot", help="also write a PNG plot of x, theta1, theta2 and u (or of every output)")
@@ -161,11 +167,19 @@ def _parser():
     return parser
 
 
-def _convert(text, fmi_type):
-    """A --set value as the variable's FMI type."""
-    if fmi_type == "Real":
+LARGEST_SWING = math.pi / 2  # rad: no swing the model is meant for is larger
+
+
+def _convert(text, fmi_type, unit=None):
+    """A --set value as the variable's FMI type; an angle may be given in degrees (``10deg``, ``5deg/s``)."""
+    if fmi_type in ("Real", "Float64", "Float32"):
+        for suffix, si in (("deg/s", "rad/s"), ("deg", "rad")):
+            if text.endswith(suffix):
+                if unit != si:
+                    raise ValueError(f"{text!r}: a {suffix} value needs a variable in {si}, this one is in {unit}")
+                return math.radians(_number(text[:-len(suffix)]))
         return _number(text)
-    if fmi_type == "Integer":
+    if fmi_type in ("Integer", "Int32"):
         return int(text)
     if fmi_type == "Boolean":
         if text.lower() not in ("true", "false", "1", "0"):
@@ -175,8 +189,11 @@ def _convert(text, fmi_type):
 
 
 def _parse_sets(items, fmus):
-    """``["plant.l1=1.5"]`` -> ``{"plant": {"l1": 1.5}}``, checked against the FMUs' variables."""
-    from crane_fmu.cosim.system import settable_variables
+    """``["plant.l1=1.5"]`` -> ``{"plant": {"l1": 1.5}}``, checked against the FMUs' variables.
+
+    An angle given without a unit and larger than any swing the model is meant for gets a warning.
+    """
+    from crane_fmu.cosim.system import read_fmu
 
     variables = {}
     result = {}
@@ -188,19 +205,30 @@ def _parse_sets(items, fmus):
         if instance not in fmus:
             raise UsageError(f"--set {item!r}: unknown instance {instance!r}; instances: {', '.join(fmus)}")
         if instance not in variables:
-            variables[instance] = settable_variables(fmus[instance])
+            variables[instance] = {v.name: v for v in read_fmu(fmus[instance]).modelVariables
+                                   if v.causality in ("parameter", "input")}
         if name not in variables[instance]:
             raise UsageError(f"--set {item!r}: {instance} has no parameter or input {name!r}; valid: "
                              + ", ".join(variables[instance]))
+        v = variables[instance][name]
         try:
-            value = _convert(text, variables[instance][name])
+            value = _convert(text, v.type, v.unit)
         except (argparse.ArgumentTypeError, ValueError) as exc:
             raise UsageError(f"--set {item!r}: {exc}") from None
+        if v.unit == "rad" and not text.endswith("deg") and abs(value) > LARGEST_SWING:
+            print(f"crane-fmu: warning: {instance}.{name} = {value:g} rad ({math.degrees(value):.0f} deg); "
+                  f"for degrees write {text}deg", file=sys.stderr)
         result.setdefault(instance, {})[name] = value
     return result
 
 
-def _writable_file(path, option):
+def _writable_file(path, option, suffix=None):
+    """One line, exit 2, unless ``path`` can be written: not a folder, the right suffix, a writable folder."""
+    if Path(path).is_dir() or str(path).endswith(os.sep):
+        example = Path(path) / ("result" + (suffix or ""))
+        raise UsageError(f"{option} {path}: is a folder; give a file name, e.g. {example}")
+    if suffix and Path(path).suffix != suffix:
+        raise UsageError(f"{option} {path}: writes a {suffix} file; the name must end in {suffix}")
     folder = Path(path).resolve().parent
     try:
         folder.mkdir(parents=True, exist_ok=True)
@@ -249,10 +277,13 @@ def _simulate(args, system):
         system = system.with_parameters(load_parameters(args.parameters))
     system = system.with_parameters(_parse_sets(args.set, fmus))
     systems.check_parameters(system, args.fmu_dir)
-    _writable_file(args.out, "--out")
+    _writable_file(args.out, "--out", ".csv")
     if args.plot:
-        _writable_file(args.plot, "--plot")
-    recorder = CsvRecorder(args.out)
+        _writable_file(args.plot, "--plot", ".png")
+    try:
+        recorder = CsvRecorder(args.out)
+    except OSError as exc:
+        raise UsageError(f"--out {args.out}: cannot be written ({exc.strerror})") from None
     try:
         simulate(fmus, connections, stop_time, step, args.master, system.parameters, recorder, system.start_time)
     except FmiError as exc:
@@ -268,7 +299,9 @@ def _simulate(args, system):
     print(f"wrote {args.out}")
     if args.plot:
         partial = args.plot + ".partial.png"
-        plot_run(read_csv(args.out), partial, f"{system.name} ({args.master}, h={step:g} s)")
+        settings = ", ".join(item.split("=", 1)[0] + "=" + item.split("=", 1)[1] for item in args.set)
+        plot_run(read_csv(args.out), partial, f"{system.name} ({args.master}, h={step:g} s)"
+                 + (f"\n{settings}" if settings else ""))
         os.replace(partial, args.plot)
         print(f"wrote {args.plot}")
     return 0

@@ -143,3 +143,34 @@ def test_benchmarks_run_and_print_their_figures(capsys, argv, expect):
     """A smoke test only: the figures themselves are measured with crane-fmu bench, not asserted here."""
     assert main(argv) == 0
     assert expect in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--out", "{tmp}/"], "is a folder; give a file name"),
+    (["--out", "{tmp}/section5.png"], "writes a .csv file; the name must end in .csv"),
+    (["--plot", "{tmp}/section5.csv"], "writes a .png file; the name must end in .png"),
+    (["--out", "/proc/x.csv"], "--out /proc/x.csv: cannot be written"),
+    (["--set", "plant.l1=2deg"], "'2deg': a deg value needs a variable in rad, this one is in m"),
+])
+def test_output_mistakes_are_refused_before_running(fmu_dir, tmp_path, capsys, argv, message):
+    argv = [a.format(tmp=tmp_path) for a in argv]
+    code, _, err = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), *argv)
+    assert code == 2 and err.count("\n") == 1 and message in err and ".partial" not in err
+    assert not list(tmp_path.iterdir())  # nothing written, nothing left behind
+
+
+def test_angles_in_degrees_and_a_warning_for_radians_that_look_like_degrees(fmu_dir, tmp_path, capsys):
+    common = ["simulate", "--fmu-dir", str(fmu_dir), "--system", "free", "--stop-time", "0.01", "--step", "0.01"]
+    code, _, err = _run(capsys, *common, "--set", "plant.theta1_0=10deg", "--out", str(tmp_path / "deg.csv"))
+    assert code == 0 and err == "" and read_csv(tmp_path / "deg.csv")["plant.theta1"][0] == math.radians(10)
+    code, _, err = _run(capsys, *common, "--set", "plant.theta1_0=10", "--out", str(tmp_path / "rad.csv"))
+    assert code == 0 and "warning: plant.theta1_0 = 10 rad (573 deg); for degrees write 10deg" in err
+
+
+def test_version_and_time_column(fmu_dir, tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        main(["--version"])
+    assert capsys.readouterr().out.startswith("crane-fmu 0.")
+    _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--stop-time", "0.03", "--out", str(tmp_path / "t.csv"))
+    times = [line.split(",")[0] for line in (tmp_path / "t.csv").read_text().splitlines()[1:]]
+    assert times[:4] == ["0.0", "0.001", "0.002", "0.003"]  # the shortest text that reads back exactly

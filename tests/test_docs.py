@@ -20,3 +20,20 @@ def test_ci_runs_the_readme_test_command():
     readme = (ROOT / "README.md").read_text()
     command = re.search(r"## Run the tests\n\n```\n(.*?)\n```", readme, re.S).group(1)
     assert command in (ROOT / ".ci" / "run").read_text()
+
+
+def test_the_readme_python_example_runs(fmu_dir, tmp_path):
+    """The README's "From Python" block, as a user runs it: in a folder with build/fmus."""
+    import subprocess
+    import sys
+
+    readme = (ROOT / "README.md").read_text()
+    block = re.search(r"\*\*From Python\*\*.*?```python\n(.*?)```", readme, re.S).group(1)
+    (tmp_path / "build").mkdir()
+    (tmp_path / "build" / "fmus").symlink_to(fmu_dir)
+    (tmp_path / "example.py").write_text(block)
+    done = subprocess.run([sys.executable, "example.py"], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    lines = done.stdout.splitlines()
+    assert lines[0] == "paper: largest hook swing 63 deg" and lines[1] == "lqr from 15 deg: 0.0032 deg at 10 s"
+    assert (tmp_path / "lqr_15deg.png").stat().st_size > 10_000

@@ -12,11 +12,23 @@ def _value(row, metric):
     return math.nan if value is None else float(value)
 
 
-def _label(value):
+def _label(value, unit=None):
+    if isinstance(value, float) and unit in ("rad", "rad/s"):
+        value = math.degrees(value)
     return f"{value:.4g}" if isinstance(value, float) else str(value)
 
 
-def plot_study(rows, study, path, max_panels=12):
+def _name(name, unit):
+    """An axis name with its unit; angles are shown in degrees."""
+    return f"{name} [{unit.replace('rad', 'deg')}]" if unit else name
+
+
+def _order(values):
+    """Numbers in numeric order, other values as text."""
+    return sorted(set(values), key=lambda v: (0, v, "") if isinstance(v, (int, float)) else (1, 0, str(v)))
+
+
+def plot_study(rows, study, path, max_panels=12, units=None):
     """Plot ``study.plot`` (default: outcome over the first two varied parameters) to a PNG.
 
     Each combination of the other grid axes gets its own panel. On a grid the
@@ -28,6 +40,7 @@ def plot_study(rows, study, path, max_panels=12):
     import matplotlib.pyplot as plt
     import numpy as np
 
+    units = units or {}
     axes_names = [names[0] for names, *_ in list(study.grid.values()) + list(study.sampled.values())]
     metric = study.plot.get("metric", "outcome")
     x_name, y_name = study.plot.get("x", axes_names[0]), study.plot.get("y", axes_names[1])
@@ -37,8 +50,8 @@ def plot_study(rows, study, path, max_panels=12):
         panels.setdefault(tuple(row[n] for n in others), []).append(row)
     keys = list(panels)[:max_panels]
     cols = min(len(keys), 3)
-    fig, axs = plt.subplots((len(keys) + cols - 1) // cols, cols, figsize=(5 * cols, 4 * math.ceil(len(keys) / cols)),
-                            squeeze=False)
+    fig, axs = plt.subplots((len(keys) + cols - 1) // cols, cols, figsize=(5 * cols, 4.6 * math.ceil(len(keys) / cols)),
+                            squeeze=False, layout="constrained")
     norm = dict(vmin=0, vmax=2) if metric == "outcome" else dict(
         vmin=np.nanmin([_value(r, metric) for r in rows] + [np.inf]),
         vmax=np.nanmax([_value(r, metric) for r in rows] + [-np.inf]))
@@ -48,7 +61,7 @@ def plot_study(rows, study, path, max_panels=12):
     for ax, key in zip(axs.flat, keys):
         part = panels[key]
         xs, ys, zs = [r[x_name] for r in part], [r[y_name] for r in part], [_value(r, metric) for r in part]
-        ux, uy = sorted(set(xs), key=str), sorted(set(ys), key=str)
+        ux, uy = _order(xs), _order(ys)
         if study.sampled:
             image = ax.scatter(xs, ys, c=zs, cmap="viridis", s=40, **norm)
         else:
@@ -56,17 +69,17 @@ def plot_study(rows, study, path, max_panels=12):
             for x, y, z in zip(xs, ys, zs):
                 grid[uy.index(y), ux.index(x)] = z
             image = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis", **norm)
-            ax.set_xticks(range(len(ux)), [_label(v) for v in ux], rotation=60, fontsize=7)
-            ax.set_yticks(range(len(uy)), [_label(v) for v in uy], fontsize=7)
-        ax.set_xlabel(x_name)
-        ax.set_ylabel(y_name)
-        ax.set_title(", ".join(f"{n} = {_label(v)}" for n, v in zip(others, key)) or metric, fontsize=8)
+            ax.set_xticks(range(len(ux)), [_label(v, units.get(x_name)) for v in ux], rotation=60, fontsize=7)
+            ax.set_yticks(range(len(uy)), [_label(v, units.get(y_name)) for v in uy], fontsize=7)
+        ax.set_xlabel(_name(x_name, units.get(x_name)))
+        ax.set_ylabel(_name(y_name, units.get(y_name)))
+        ax.set_title(", ".join(f"{n} = {_label(v, units.get(n))}" for n, v in zip(others, key)) or metric, fontsize=8)
     for ax in list(axs.flat)[len(keys):]:
         ax.set_visible(False)
     bar = fig.colorbar(image, ax=axs, shrink=0.8)
     if metric == "outcome":
         bar.set_ticks(list(OUTCOME_CODES.values()), labels=list(OUTCOME_CODES))
     bar.set_label(f"{metric} (blank: not available)")
-    fig.savefig(path, dpi=110, bbox_inches="tight")
+    fig.savefig(path, dpi=110)
     plt.close(fig)
     return path

@@ -171,7 +171,7 @@ def run_study(study, out_dir, fmu_dir="build/fmus", workers=None, scheduler=None
     rows_ran = []
     with systems.open_system(study.system) as system:
         systems.resolve(system, fmu_dir)
-        _check_names(study, system, fmu_dir)
+        units = _check_names(study, system, fmu_dir)
         if pending:
             shipped = shippable(systems.at_step(system, fmu_dir, study.step), fmu_dir)
             to_run = []
@@ -191,7 +191,7 @@ def run_study(study, out_dir, fmu_dir="build/fmus", workers=None, scheduler=None
     if study.plot or len(study.grid) + len(study.sampled) >= 2:
         from .plots import plot_study
 
-        plot_study(rows, study, out_dir / "plot.png")
+        plot_study(rows, study, out_dir / "plot.png", units=units)
     return {"cases": len(cases), "skipped": len(cases) - len(pending), "ran": len(rows_ran),
             "not_ok": sum(r["status"] != "ok" for r in rows), "seconds": time.perf_counter() - start}
 
@@ -231,7 +231,8 @@ def run_on_dask(task, items, shared, out_dir, workers=None, scheduler=None, know
 
 
 def _check_names(study, system, fmu_dir):
-    """Every varied or fixed variable must be a parameter or input of its instance, and the runs crane runs."""
+    """Check that every varied or fixed variable is a parameter or input of its instance, and that the
+    system has a crane; return ``{"instance.variable": unit}`` of the varied and fixed variables."""
     from crane_fmu.analysis.metrics import CRANE_OUTPUTS
     from crane_fmu.cosim.system import read_fmu, settable_variables
 
@@ -252,6 +253,11 @@ def _check_names(study, system, fmu_dir):
     if not any(set(CRANE_OUTPUTS) <= names for names in outputs.values()):
         raise ValueError(f"the sweep's metrics need an instance with outputs {', '.join(CRANE_OUTPUTS)}; system "
                          f"{system.name} has none")
+    units = {}
+    for name in names:
+        instance, _, variable = name.partition(".")
+        units[name] = next(v.unit for v in read_fmu(fmus[instance]).modelVariables if v.name == variable)
+    return units
 
 
 def _plain(value):
