@@ -95,7 +95,7 @@ def draw_all(results, out_dir):
     _loop_panels(axes, by_form[None]["signals"], "without controller", color="0.6", lw=1)
     for form in FORMS:
         r = by_form[form.key]
-        end = (f" (diverged, stopped at {r['signals']['time'][-1]:.2f} s)" if not r["completed"]
+        end = (f" (diverged, stopped at {r['signals']['time'][-1]:.3f} s)" if not r["completed"]
                else " (diverged)" if _diverged(r) else "")
         _loop_panels(axes, r["signals"], form.label + end, lw=1)
         axes[3].plot(r["signals"]["time"], r["signals"]["controller.u"], lw=1, label=form.label)
@@ -106,13 +106,19 @@ def draw_all(results, out_dir):
     _style(axes, ("trolley x [m]", "theta1 [deg]", "theta2 [deg]", "u [m/s2]"))
     paths.append(_save(plt, fig, out_dir / "figure7.png"))
 
-    fig, axes = plt.subplots(3, len(FORMS), sharex=True, figsize=(13, 8), squeeze=False)
+    fig, axes = plt.subplots(3, len(FORMS), sharex="col", figsize=(13, 8), squeeze=False)
     for col, form in enumerate(FORMS):
         runs = sorted((r for r in group["fig8"] if r["case"].form == form), key=lambda r: r["case"].plant["l1"])
         for r in runs:
-            end = " (diverged)" if _diverged(r) else ""
-            _loop_panels(axes[:, col], r["signals"], f"l1 = {r['case'].plant['l1']:g} m{end}", lw=1)
-        axes[0, col].set_title(f"Fig. 8, {form.label}")
+            end = (f" (diverged at {r['signals']['time'][-1]:.3f} s)" if not r["completed"]
+                   else " (diverged)" if _diverged(r) else "")
+            _loop_panels(axes[:, col], r["signals"], f"l1 = {r['case'].plant['l1']:g} m{end}", lw=1,
+                         ls="--" if len(runs) > 1 and r is runs[-1] else "-")
+        stops = [r["signals"]["time"][-1] for r in runs]
+        early = all(not r["completed"] for r in runs) and max(stops) < 0.2 * runs[0]["case"].stop_time
+        if early:  # every run stopped within a fraction of the axis: a time axis of their own
+            axes[0, col].set_xlim(0, 1.25 * max(stops))
+        axes[0, col].set_title(f"Fig. 8, {form.label}" + (" (own time axis: every run diverged)" if early else ""))
         axes[0, col].legend(fontsize=8)
         axes[2, col].set_xlabel("time [s]")
         _limit_to(axes[:, col], runs)

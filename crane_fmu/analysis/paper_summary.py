@@ -53,7 +53,8 @@ def _freq_table(results, group, key):
         plant_values = r["case"].plant
         p = PlantParameters(l1=plant_values.get("l1", 1.0), l2=plant_values.get("l2", 0.5))
         rows.append({key: plant_values[key if key != "theta1_0_deg" else "theta1_0"],
-                     **r["metrics"], "linear_freqs_hz": linear.natural_frequencies(p)})
+                     **r["metrics"], "linear_freqs_hz": linear.natural_frequencies(p), "l1": p.l1, "l2": p.l2,
+                     "case_theta1_0_deg": round(math.degrees(plant_values.get("theta1_0", math.pi / 18)), 6)})
     if key == "theta1_0_deg":
         for row in rows:
             row[key] = round(math.degrees(row[key]), 6)
