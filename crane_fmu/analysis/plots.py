@@ -62,8 +62,11 @@ def plot_run(columns, path, title=""):
         s = crane_signals(columns)
         panels = [("trolley x [m]", s["x"], None), ("theta1 [deg]", [math.degrees(v) for v in s["theta1"]], None),
                   ("theta2 [deg]", [math.degrees(v) for v in s["theta2"]], "tab:orange")]
+        drive = [values for name, values in columns.items() if name.endswith(".ddx")]
         if any(name.endswith(".u") for name in columns):
             panels.append(("u [m/s2]", s["u"], "tab:red"))
+        elif drive and drive[0].any():  # no controller: the plant's own record of its acceleration
+            panels.append(("trolley acceleration [m/s2]", drive[0], "tab:red"))
         hoisted = [values for name, values in columns.items()
                    if name.endswith(".l1_now") and values.min() < values.max()]
         if hoisted:
@@ -78,6 +81,7 @@ def plot_run(columns, path, title=""):
         ax.set_ylabel(label)
         ax.grid(True, alpha=0.3)
     axes[-1, 0].set_xlabel("time [s]")
+    fig.align_ylabels(axes[:, 0])
     if title:
         axes[0, 0].set_title(title)
     fig.tight_layout()
