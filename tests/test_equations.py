@@ -41,6 +41,8 @@ def _plain(expr):
 
 SOLUTION = sympy.solve([_plain(e) for e in EQS], [dd1, dd2], dict=True)[0]
 ACCEL = sympy.lambdify((a1, w1, a2, w2, u, m1, m2, l1, l2, g), (SOLUTION[dd1], SOLUTION[dd2]))
+# d(accelerations)/du: the input gains b2, b3 of eq (11), from the derivation alone
+INPUT_GAIN = sympy.lambdify((a1, w1, a2, w2, m1, m2, l1, l2, g), [sympy.diff(SOLUTION[d], u) for d in (dd1, dd2)])
 
 
 def _random_cases(n=40, seed=1):

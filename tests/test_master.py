@@ -141,3 +141,26 @@ def test_cosim_names_nothing_of_the_crane():
     for path in Path(crane_fmu.cosim.__file__).parent.glob("*.py"):
         found = words.findall(path.read_text())
         assert not found, f"{path.name} names {found}"
+
+
+def test_csv_recorder_keeps_the_rows_of_a_run_cut_short(tmp_path):
+    from crane_fmu.cosim.recorder import CsvRecorder, read_csv
+
+    path = tmp_path / "cut.csv"
+    path.write_text("an earlier result\n")
+    recorder = CsvRecorder(path)
+    recorder.start(["a.y"])
+    for k in range(3):
+        recorder.observe(0.5 * k, _values([k + 0.25]))
+    assert path.read_text() == "an earlier result\n"  # nothing replaced before close
+    recorder.close(reason="a: fmi2DoStep returned discard at t=1 s")
+    lines = path.read_text().splitlines()
+    assert lines == ["time,a.y", "0.0,0.25", "0.5,1.25", "1.0,2.25",
+                     "# run cut short: a: fmi2DoStep returned discard at t=1 s"]
+    assert list(read_csv(path)["a.y"]) == [0.25, 1.25, 2.25]
+    assert not list(tmp_path.glob("*.partial"))
+
+
+def _values(values):
+    buffer = (ctypes.c_double * len(values))(*values)
+    return memoryview(buffer).cast("B").cast("d")

@@ -13,6 +13,7 @@ from crane_fmu.model.parameters import ControllerGains, PlantParameters
 
 @pytest.mark.parametrize("field, value, rule", [
     ("l1", -1.0, "l1 must be > 0 and finite, got -1.0"),
+    ("l1", 0.0, "l1 must be > 0 and finite, got 0.0"),
     ("m1", 0.0, "m1 must be > 0 and finite, got 0.0"),
     ("m2", -0.5, "m2 must be >= 0 and finite, got -0.5"),
     ("g", math.inf, "g must be > 0 and finite, got inf"),
@@ -78,7 +79,8 @@ def test_trolley_motion_is_exact_under_held_acceleration():
 
 
 def test_control_law_equals_least_squares_of_eq_20():
-    """u of eq (21) (and its weighted form) solved independently with numpy."""
+    """The least-squares step of eq (21) (and its weighted form), solved with numpy from the code's f and b
+    (which tests/test_equations.py checks against the symbolic derivation)."""
     rng = random.Random(7)
     p = PlantParameters()
     for _ in range(50):

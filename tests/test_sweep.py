@@ -156,11 +156,12 @@ def test_study_completes_when_a_worker_dies(fmu_dir, tmp_path):
             while time.monotonic() < deadline:
                 busy = [w for w, keys in client.processing().items() if any("run_case" in str(k) for k in keys)]
                 if busy:
-                    killed_while_running.append(busy[0])
-                    try:
-                        client.run(os._exit, 1, workers=[busy[0]], on_error="ignore")
-                    except Exception:  # the worker died mid-call, as intended
-                        pass
+                    # the call cannot answer: its worker exits; on_error="ignore" gives that worker no result
+                    client.run(os._exit, 1, workers=[busy[0]], on_error="ignore", wait=False)
+                    while time.monotonic() < deadline and busy[0] in client.scheduler_info()["workers"]:
+                        time.sleep(0.05)
+                    if busy[0] not in client.scheduler_info()["workers"]:  # the scheduler saw it die
+                        killed_while_running.append(busy[0])
                     return
                 time.sleep(0.05)
 
@@ -169,7 +170,7 @@ def test_study_completes_when_a_worker_dies(fmu_dir, tmp_path):
         summary = run_study(study, tmp_path / "out", fmu_dir, scheduler=cluster.scheduler_address, progress=False)
         killer.join()
     rows = pq.read_table(tmp_path / "out" / "results.parquet").to_pylist()
-    assert killed_while_running, "no worker was killed while running a case"
+    assert killed_while_running, "no worker died while running a case"
     assert summary["ran"] == 6 and [r["status"] for r in rows] == ["ok"] * 6
     assert all(math.isfinite(r["max_theta1_deg"]) for r in rows)
 
@@ -214,4 +215,4 @@ def test_settling_band_is_chosen_by_the_study(small_run, fmu_dir, tmp_path):
     case = {"plant.theta1_0": 0.1, "controller.w_theta2": 0.0}
     row = run_case(case, shippable(systems.get("paper"), fmu_dir), study.settings(), study.metrics)
     assert row["settling_band_s"] == 0.0  # a 20-degree band holds from the start
-    assert row["settling_0.5deg_s"] is None or row["settling_0.5deg_s"] > 0.0
+    assert row["settling_0.5deg_s"] is None  # the 0.5-degree band: not within the 2 s (this law takes ~17 s)
