@@ -133,3 +133,11 @@ def test_new_parameter_rules(values, message):
     with pytest.raises(ValueError) as err:
         plant.COMPONENT.check(values)
     assert message in str(err.value)
+
+
+@pytest.mark.parametrize("name", ["x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0"])
+def test_initial_state_must_be_finite(name):
+    """Found by the fuzz test: a NaN initial velocity was accepted when initialisation ended."""
+    with pytest.raises(ValueError) as err:
+        plant.COMPONENT.check({name: math.nan})
+    assert str(err.value) in (f"{name} must be finite, got nan", "x0 must lie on the rail [-inf, inf], got nan")

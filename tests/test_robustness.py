@@ -192,7 +192,59 @@ FUZZ = textwrap.dedent("""
             dll.fmi2FreeInstance(c)
 
     run()
-    print("survived", calls, "calls", len(messages), "messages")
+
+    # Sessions in a valid call order with bad values, long steps and diverging inputs: each kind of
+    # call has one expected status, and the counts show that every path was taken.
+    inputs = [v for v in reals if v.causality == "input"]
+    parameters = [v for v in reals if v.causality == "parameter"]
+    values = st.one_of(st.floats(-5, 5), st.sampled_from([1e6, -1e6, math.nan, math.inf, -math.inf]))
+    steps = st.lists(st.tuples(st.sampled_from(inputs), values, st.sampled_from([1e-3, 0.01, 0.1, 0.5, 1.0])),
+                     min_size=1, max_size=20)
+    counts = dict(bad_parameter_refused=0, non_finite_input_refused=0, discarded=0, long_step_ok=0)
+
+    def instantiate():
+        c = dll.fmi2Instantiate(b"fuzz", 1, md.guid.encode(), ("file://" + unzip + "/resources").encode(),
+                                ctypes.byref(cb), 0, 0)
+        assert c
+        return c
+
+    @settings(max_examples=examples, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
+    @given(st.one_of(st.none(), st.sampled_from(parameters)), steps)
+    def session(nan_parameter, ops):
+        c = instantiate()
+        try:
+            assert dll.fmi2SetupExperiment(c, 0, ctypes.c_double(0), ctypes.c_double(0), 0, ctypes.c_double(0)) == 0
+            if nan_parameter is not None:
+                vr = (ctypes.c_uint * 1)(nan_parameter.valueReference)
+                assert dll.fmi2SetReal(c, vr, 1, (ctypes.c_double * 1)(math.nan)) == 0  # judged when init ends
+            assert dll.fmi2EnterInitializationMode(c) == 0
+            status = dll.fmi2ExitInitializationMode(c)
+            if nan_parameter is not None:
+                assert status == 3, (nan_parameter.name, status)  # fmi2Error
+                counts["bad_parameter_refused"] += 1
+                return
+            assert status == 0
+            t = 0.0
+            for variable, value, step in ops:
+                vr = (ctypes.c_uint * 1)(variable.valueReference)
+                status = dll.fmi2SetReal(c, vr, 1, (ctypes.c_double * 1)(value))
+                if not math.isfinite(value):
+                    assert status == 3, (variable.name, value, status)
+                    counts["non_finite_input_refused"] += 1
+                else:
+                    assert status == 0, (variable.name, value, status)
+                status = dll.fmi2DoStep(c, ctypes.c_double(t), ctypes.c_double(step), 1)
+                assert status in (0, 2), status  # ok, or a diverged state discarded
+                if status == 2:
+                    counts["discarded"] += 1
+                    return
+                counts["long_step_ok"] += step >= 0.5
+                t += step
+        finally:
+            dll.fmi2FreeInstance(c)
+
+    session()
+    print("survived", calls, "calls", len(messages), "messages", " ".join(f"{k}={v}" for k, v in counts.items()))
 """)
 
 
@@ -205,3 +257,8 @@ def test_random_fmi_call_sequences_never_crash_or_hang_the_host(crane_fmus, fmu,
     survived = proc.stdout.split()
     assert survived[0] == "survived" and int(survived[1]) > 1000, proc.stdout
     assert int(survived[3]) > 0  # refusals came with messages
+    counts = dict(item.split("=") for item in survived[5:])
+    paths = ["bad_parameter_refused", "non_finite_input_refused", "long_step_ok"] + (["discarded"] if fmu == "plant"
+                                                                                      else [])
+    for path in paths:  # every path was taken
+        assert int(counts[path]) > 0, (path, proc.stdout)

@@ -57,7 +57,7 @@ from collections import namedtuple
 
 from . import limits
 from .component import Component
-from .parameters import plant_parameters, positive
+from .parameters import finite, plant_parameters, positive
 from .tables import MEASURED_STATE, controller_model, output, parameter
 
 Config = namedtuple("Config", "mu m2 l1 l2 k_c k_p k_d x_d u_max v_max h")
@@ -67,6 +67,7 @@ def setup(values):
     p = plant_parameters(values)
     for name in ("k_c", "k_p", "k_d", "h"):
         positive(name, values[name])
+    finite("x_d", values["x_d"])
     u_max, v_max = limits.check(values)
     if not math.isfinite(u_max):
         raise ValueError(f"u_max must be finite for the saturated law (E4), got {u_max!r}")

@@ -13,7 +13,7 @@ from collections import namedtuple
 
 from . import limits, linalg
 from .component import Component
-from .parameters import plant_parameters, positive
+from .parameters import finite, plant_parameters, positive
 from .plant import linearisation
 from .tables import MEASURED_STATE, STATE, controller_model, input_, output, parameter
 
@@ -70,6 +70,7 @@ def setup(values):
             raise ValueError(f"{name} must be >= 0 and finite, got {value!r}")
     positive("r", values["r"])
     positive("h", values["h"])
+    finite("x_d", values["x_d"])
     u_max, v_max = limits.check(values)
     weights = [values[name] for name in WEIGHTS]
     schedule = None

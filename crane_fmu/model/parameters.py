@@ -22,7 +22,8 @@ def positive(name, value):
     _check(name, value, "> 0 and finite", lambda v: v > 0)
 
 
-def _finite(name, value):
+def finite(name, value):
+    """Raise ValueError naming ``name`` unless ``value`` is a finite number."""
     _check(name, value, "finite", lambda v: True)
 
 
@@ -97,7 +98,7 @@ class ControllerGains:
     def __post_init__(self):
         for name in ("K1_x", "K1_theta1", "K1_theta2", "K2_x", "K2_theta1",
                      "K2_theta2", "x_d", "theta1_d", "theta2_d"):
-            _finite(name, getattr(self, name))
+            finite(name, getattr(self, name))
         for name in ("w_x", "w_theta1", "w_theta2"):
             _check(name, getattr(self, name), ">= 0 and finite", lambda v: v >= 0)
         if self.w_x == 0:

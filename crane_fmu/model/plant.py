@@ -15,7 +15,7 @@ import math
 from collections import namedtuple
 
 from .component import Component, Discard, Step
-from .parameters import plant_parameters, positive
+from .parameters import finite, plant_parameters, positive
 from .tables import PLANT_MODEL, input_, output, parameter
 
 NO_LOAD = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # (dl1, ddl1, F1, F2, c1, c2): the paper's model
@@ -297,6 +297,8 @@ def setup(values):
         raise ValueError(f"l1 must lie within [l1_min, l1_max] = [{values['l1_min']!r}, {values['l1_max']!r}], "
                          f"got {p.l1!r}")
     state0 = tuple(values[name] for name in ("x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0"))
+    for name, value in zip(("x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0"), state0):
+        finite(name, value)
     return Config(p, values["max_substep"], state0 + (p.l1, 0.0, 0.0, 0.0), (values["c1"], values["c2"]),
                   values["u_max"], values["v_max"], values["tau"], values["x_min"], values["x_max"],
                   values["l1_min"], values["l1_max"], values["dl1_max"])
