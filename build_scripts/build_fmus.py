@@ -167,7 +167,20 @@ def systems_dir(out_dir):
     return Path(out_dir).parent / "systems"
 
 
-def build_all(out_dir="build/fmus", kinds=None, systems=None, fmi3=True, log=print):
+CONTAINERS = ("paper", "lqr", "energy", "transport")  # the built-in closed loops packed as one FMU each
+
+
+def containers_dir(out_dir):
+    """Where the container FMUs go: ``build/containers`` next to ``build/fmus``."""
+    return Path(out_dir).parent / "containers"
+
+
+def container_name(system_name):
+    """``paper`` -> ``CranePaper``: the container FMU's file and model name."""
+    return "Crane" + "".join(part.capitalize() for part in system_name.replace("-", "_").split("_"))
+
+
+def build_all(out_dir="build/fmus", kinds=None, systems=None, fmi3=True, containers=None, log=print):
     """Build FMUs and system files; return their paths.
 
     Parameters
@@ -181,6 +194,9 @@ def build_all(out_dir="build/fmus", kinds=None, systems=None, fmi3=True, log=pri
     systems : iterable of str, optional
         Names of registered systems to write as SSP and OSP files (default:
         every registered system whose components are all built).
+    containers : iterable of str, optional
+        Registered systems to pack each into one container FMU in
+        :func:`containers_dir` (default: those of :data:`CONTAINERS` that are built).
     """
     from crane_fmu import systems as registry
     from crane_fmu.cosim.osp import write_osp
@@ -205,4 +221,9 @@ def build_all(out_dir="build/fmus", kinds=None, systems=None, fmi3=True, log=pri
         system = registry.get(name)
         paths.append(write_ssp(system, out_dir, systems_dir(out_dir) / f"{name}.ssp"))
         paths.append(write_osp(system, out_dir, Path(out_dir) / f"{name}.OspSystemStructure.xml"))
+    from crane_fmu.container import build_container
+
+    for name in containers if containers is not None else [n for n in CONTAINERS if n in names]:
+        system = registry.get(name)
+        paths.append(build_container(system, out_dir, containers_dir(out_dir) / f"{container_name(name)}.fmu"))
     return paths

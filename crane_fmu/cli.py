@@ -13,7 +13,9 @@ import sys
 from pathlib import Path
 
 EXAMPLES = {
-    "build": "examples:\n  crane-fmu build\n  crane-fmu build --out my/fmus --bench",
+    "build": ("examples:\n  crane-fmu build\n  crane-fmu build --out my/fmus --bench\n"
+              "  crane-fmu build --container transport       # build/containers/CraneTransport.fmu\n"
+              "  crane-fmu build --container my_system.ssp"),
     "simulate": (
         "examples:\n"
         "  crane-fmu simulate --out results/section5.csv --plot results/section5.png\n"
@@ -79,6 +81,8 @@ def _parser():
     p.add_argument("--out", default="build/fmus",
                    help="FMI 2.0 FMUs (default: build/fmus); FMI 3.0 ones and systems/ go beside it")
     p.add_argument("--bench", action="store_true", help="also build the benchmark's trivial FMUs")
+    p.add_argument("--container", metavar="SYSTEM|FILE.ssp",
+                   help="instead: pack one system (a built-in one, or an SSP file) into one FMU in build/containers")
 
     p = sub.add_parser("simulate", help="co-simulate a system of FMUs", epilog=EXAMPLES["simulate"],
                        formatter_class=fmt,
@@ -91,6 +95,8 @@ def _parser():
     p.add_argument("--step", type=_number, help="communication step [s] (default: the system's, 1 ms built in)")
     p.add_argument("--master", choices=("gauss-seidel", "jacobi"), default="gauss-seidel",
                    help="master algorithm (default gauss-seidel)")
+    p.add_argument("--no-initial-exchange", action="store_true",
+                   help="start with the inputs' start values, not the initial outputs (as fmpy's container FMU does)")
     p.add_argument("--no-controller", action="store_true", help=argparse.SUPPRESS)  # replaced by --system free
     p.add_argument("--parameters", metavar="FILE.ssv",
                    help="SSP parameter set with names INSTANCE.VARIABLE, applied before --set")
@@ -239,9 +245,20 @@ def _writable_file(path, option, suffix=None):
 
 
 def _cmd_build(args):
-    from crane_fmu import components
-    from crane_fmu.build_scripts.build_fmus import build_all
+    from crane_fmu import components, systems
+    from crane_fmu.build_scripts.build_fmus import build_all, container_name, containers_dir
+    from crane_fmu.container import build_container
 
+    if args.container:
+        try:
+            with systems.open_system(args.container) as system:
+                name = container_name(Path(args.container).stem if args.container.endswith((".ssp", ".ssd"))
+                                      else system.name)
+                path = build_container(system, args.out, containers_dir(args.out) / f"{name}.fmu")
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+        print(path)
+        return 0
     kinds = [c.model_identifier for c in components.all() if args.bench or c.role != "benchmark"]
     for path in build_all(args.out, kinds):
         print(path)
@@ -285,7 +302,8 @@ def _simulate(args, system):
     except OSError as exc:
         raise UsageError(f"--out {args.out}: cannot be written ({exc.strerror})") from None
     try:
-        simulate(fmus, connections, stop_time, step, args.master, system.parameters, recorder, system.start_time)
+        simulate(fmus, connections, stop_time, step, args.master, system.parameters, recorder, system.start_time,
+                 not args.no_initial_exchange)
     except FmiError as exc:
         # Bad parameter values are refused when initialisation ends: the user's mistake.
         if exc.time is None or exc.function.endswith(("ExitInitializationMode", "SetReal", "SetFloat64",
@@ -472,7 +490,7 @@ def _cmd_animate(args):
         columns = read_csv(args.result)
     except (OSError, ValueError) as exc:
         raise UsageError(f"cannot read {args.result}: {exc}") from None
-    needed = [n for n in ("x", "x1", "y1", "x2", "y2") if not any(k.endswith("." + n) for k in columns)]
+    needed = [n for n in ("x", "x1", "y1", "x2", "y2") if not any(k == n or k.endswith("." + n) for k in columns)]
     if needed:
         raise UsageError(f"{args.result} has no crane to animate: it needs the plant outputs "
                          f"{', '.join(needed)}")

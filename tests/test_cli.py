@@ -24,6 +24,8 @@ def test_build_writes_every_component_and_every_builtin_system(tmp_path, capsys)
         fmus + [f"{n}.OspSystemStructure.xml" for n in names])
     assert sorted(p.name for p in (tmp_path / "fmi3").iterdir()) == fmus
     assert sorted(p.name for p in (tmp_path / "systems").iterdir()) == [f"{n}.ssp" for n in names]
+    assert sorted(p.name for p in (tmp_path / "containers").iterdir()) == [
+        "CraneEnergy.fmu", "CraneLqr.fmu", "CranePaper.fmu", "CraneTransport.fmu"]
 
 
 def test_simulate_writes_csv_and_plot(fmu_dir, tmp_path, capsys):

@@ -25,14 +25,18 @@ def crane_signals(columns):
     ValueError
         When no instance outputs ``x``, ``theta1`` and ``theta2``.
     """
-    instances = list(dict.fromkeys(name.rpartition(".")[0] for name in columns if "." in name))
-    plant = next((i for i in instances if all(f"{i}.{n}" in columns for n in CRANE_OUTPUTS)), None)
+    def key(instance, name):  # columns without an instance prefix (one FMU, e.g. a container) have instance ""
+        return f"{instance}.{name}" if instance else name
+
+    instances = list(dict.fromkeys(name.rpartition(".")[0] for name in columns))
+    plant = next((i for i in instances if all(key(i, n) in columns for n in CRANE_OUTPUTS)), None)
     if plant is None:
         raise ValueError(f"these results have no instance with outputs {', '.join(CRANE_OUTPUTS)}; columns: "
                          + ", ".join(columns))
-    signals = {"time": columns["time"], **{n: columns[f"{plant}.{n}"] for n in CRANE_OUTPUTS}}
-    source = next((i for i in instances if i != plant and f"{i}.u" in columns), None)
-    signals["u"] = columns[f"{source}.u"] if source else np.zeros_like(columns["time"])
+    signals = {"time": columns["time"], **{n: columns[key(plant, n)] for n in CRANE_OUTPUTS}}
+    sources = [key(i, "u") for i in instances if i != plant] + (["u"] if plant == "" else [])
+    source = next((k for k in sources if k in columns), None)
+    signals["u"] = columns[source] if source else np.zeros_like(columns["time"])
     return signals
 
 

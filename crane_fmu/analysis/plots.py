@@ -63,7 +63,7 @@ def plot_run(columns, path, title=""):
         panels = [("trolley x [m]", s["x"], None), ("theta1 [deg]", [math.degrees(v) for v in s["theta1"]], None),
                   ("theta2 [deg]", [math.degrees(v) for v in s["theta2"]], "tab:orange")]
         drive = [values for name, values in columns.items() if name.endswith(".ddx")]
-        if any(name.endswith(".u") for name in columns):
+        if any(name == "u" or name.endswith(".u") for name in columns):
             panels.append(("u [m/s2]", s["u"], "tab:red"))
         elif drive and drive[0].any():  # no controller: the plant's own record of its acceleration
             panels.append(("trolley acceleration [m/s2]", drive[0], "tab:red"))

@@ -80,12 +80,16 @@ class Master:
         the inputs of the same instant. ``jacobi``: all outputs are read, then
         all inputs set, then every instance steps; a feedthrough path lags one
         step.
+    initial_exchange : bool
+        Settle the inputs at the start time by propagating the initial outputs
+        along the connections (default). Without it the first step runs with
+        the inputs' start values, as fmpy's container FMU does.
     """
 
-    def __init__(self, instances, connections, mode="gauss-seidel"):
+    def __init__(self, instances, connections, mode="gauss-seidel", initial_exchange=True):
         if mode not in MODES:
             raise ValueError(f"master mode must be one of {', '.join(MODES)}, got {mode!r}")
-        self.instances, self.mode = instances, mode
+        self.instances, self.mode, self.initial_exchange = instances, mode, initial_exchange
         self.output_names = [f"{name}.{v}" for name, inst in instances.items() for v in inst.outputs]
         buffer = (ctypes.c_double * len(self.output_names))()  # every output, in output_names order
         # what observers get: the outputs as floats (values[i] is output_names[i]), read-only
@@ -157,7 +161,8 @@ class Master:
             for var, value in (parameters or {}).get(name, {}).items():
                 inst.set(var, value)
             inst.enter_initialization()
-        self._exchange("gauss-seidel")  # consistent inputs at t0 in both modes
+        if self.initial_exchange:
+            self._exchange("gauss-seidel")  # consistent inputs at t0 in both modes
         for inst in self.instances.values():
             inst.exit_initialization()
 

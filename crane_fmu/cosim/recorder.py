@@ -89,7 +89,7 @@ def read_csv(path):
     import numpy as np
 
     with open(path) as f:
-        names = f.readline().strip().split(",")
+        names = [name.strip('"') for name in f.readline().strip().split(",")]  # fmpy quotes its names
         data = np.loadtxt(f, delimiter=",", comments="#", ndmin=2)
     return {name: data[:, i] for i, name in enumerate(names)}
 

@@ -147,7 +147,7 @@ def settable_variables(fmu_path):
 
 
 def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters=None,
-             recorder=None, start_time=0.0):
+             recorder=None, start_time=0.0, initial_exchange=True):
     """Co-simulate FMUs with the fixed-step master.
 
     Parameters
@@ -162,6 +162,8 @@ def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters
         ``{instance: {variable: value}}`` set before initialisation.
     recorder : observer, optional
         Defaults to an :class:`ArrayRecorder`.
+    initial_exchange : bool
+        See :class:`~crane_fmu.cosim.master.Master`.
 
     Returns
     -------
@@ -179,7 +181,7 @@ def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters
     try:
         for name, path in fmus.items():
             instances[name] = open_instance(path, name)
-        master = Master(instances, connections, mode)
+        master = Master(instances, connections, mode, initial_exchange)
         master.run(start_time, stop_time, step, [recorder], parameters)
         master.terminate()
     except FmiError as exc:
@@ -194,8 +196,9 @@ def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters
     return recorder
 
 
-def run(system, fmu_dir, mode="gauss-seidel", recorder=None, stop_time=None, step=None):
+def run(system, fmu_dir, mode="gauss-seidel", recorder=None, stop_time=None, step=None, initial_exchange=True):
     """Co-simulate a :class:`System` whose FMUs are in ``fmu_dir`` (or named by path); return the recorder."""
     fmus, connections = system.resolve(fmu_dir)
     return simulate(fmus, connections, system.stop_time if stop_time is None else stop_time,
-                    system.step if step is None else step, mode, system.parameters, recorder, system.start_time)
+                    system.step if step is None else step, mode, system.parameters, recorder, system.start_time,
+                    initial_exchange)
