@@ -102,3 +102,29 @@ class Runtime:
         self.initialised, self.config, self.state, self._outputs = False, None, None, None
         if saved["initialised"]:
             self.initialise(saved["state"])
+
+
+class SlaveCalls:
+    """The FMI calls that every slave delegates to its :class:`Runtime` (``self.runtime``).
+
+    A slave class sets ``WARNING`` and ``ERROR`` to its FMI version's log statuses.
+    """
+
+    WARNING = ERROR = None
+
+    def exit_initialization_mode(self):
+        self.runtime.initialise()
+
+    def do_step(self, current_time, step_size):
+        reason = self.runtime.step(current_time, step_size)
+        for message in self.runtime.messages:
+            self.log(message, self.WARNING)
+        if reason:
+            self.log(reason, self.ERROR)
+        return reason is None
+
+    def _get_fmu_state(self):
+        return self.runtime.saved()
+
+    def _set_fmu_state(self, saved):
+        self.runtime.restore(saved)

@@ -8,7 +8,7 @@ from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Slave, Fmi2Variability, Re
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
-from crane_fmu.fmu_src.runtime import AUTHOR, Runtime
+from crane_fmu.fmu_src.runtime import AUTHOR, Runtime, SlaveCalls
 
 
 def register(slave, runtime):
@@ -35,7 +35,8 @@ def register(slave, runtime):
 def slave_base(component):
     """An ``Fmi2Slave`` subclass that runs ``component``."""
 
-    class Base(Fmi2Slave):
+    class Base(SlaveCalls, Fmi2Slave):
+        WARNING, ERROR = Fmi2Status.warning, Fmi2Status.error
         author = AUTHOR
         description = component.description
         default_experiment = (DefaultExperiment(*component.default_experiment)
@@ -45,22 +46,5 @@ def slave_base(component):
             super().__init__(**kwargs)
             self.runtime = Runtime(component)
             register(self, self.runtime)
-
-        def exit_initialization_mode(self):
-            self.runtime.initialise()
-
-        def do_step(self, current_time, step_size):
-            reason = self.runtime.step(current_time, step_size)
-            for message in self.runtime.messages:
-                self.log(message, Fmi2Status.warning)
-            if reason:
-                self.log(reason, Fmi2Status.error)
-            return reason is None
-
-        def _get_fmu_state(self):
-            return self.runtime.saved()
-
-        def _set_fmu_state(self, saved):
-            self.runtime.restore(saved)
 
     return Base

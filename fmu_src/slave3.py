@@ -8,7 +8,7 @@ from pythonfmu3 import Float64, Fmi3Causality, Fmi3Initial, Fmi3Slave, Fmi3Statu
 from pythonfmu3.default_experiment import DefaultExperiment
 from pythonfmu3.unit import Unit
 
-from crane_fmu.fmu_src.runtime import AUTHOR, Runtime
+from crane_fmu.fmu_src.runtime import AUTHOR, Runtime, SlaveCalls
 from crane_fmu.model.tables import BASE_UNITS
 
 
@@ -39,7 +39,8 @@ def register(slave, runtime):
 def slave_base(component):
     """An ``Fmi3Slave`` subclass that runs ``component``."""
 
-    class Base(Fmi3Slave):
+    class Base(SlaveCalls, Fmi3Slave):
+        WARNING, ERROR = Fmi3Status.warning, Fmi3Status.error
         def __init__(self, **kwargs):
             super().__init__(**kwargs)
             self.author, self.description = AUTHOR, component.description
@@ -47,22 +48,5 @@ def slave_base(component):
                 self.default_experiment = DefaultExperiment(*component.default_experiment)
             self.runtime = Runtime(component)
             register(self, self.runtime)
-
-        def exit_initialization_mode(self):
-            self.runtime.initialise()
-
-        def do_step(self, current_time, step_size):
-            reason = self.runtime.step(current_time, step_size)
-            for message in self.runtime.messages:
-                self.log(message, Fmi3Status.warning)
-            if reason:
-                self.log(reason, Fmi3Status.error)
-            return reason is None
-
-        def _get_fmu_state(self):
-            return self.runtime.saved()
-
-        def _set_fmu_state(self, saved):
-            self.runtime.restore(saved)
 
     return Base

@@ -157,7 +157,7 @@ def test_study_completes_when_a_worker_dies(fmu_dir, tmp_path):
                 busy = [w for w, keys in client.processing().items() if any("run_case" in str(k) for k in keys)]
                 if busy:
                     # the call cannot answer: its worker exits; on_error="ignore" gives that worker no result
-                    client.run(os._exit, 1, workers=[busy[0]], on_error="ignore", wait=False)
+                    client.run(os._exit, 1, workers=[busy[0]], on_error="ignore")
                     while time.monotonic() < deadline and busy[0] in client.scheduler_info()["workers"]:
                         time.sleep(0.05)
                     if busy[0] not in client.scheduler_info()["workers"]:  # the scheduler saw it die
