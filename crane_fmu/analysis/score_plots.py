@@ -157,5 +157,5 @@ def animate_all(rows, scenario, out_dir):
             continue
         title = f"{scenario}, {r['controller']}" + ("" if r["status"] == "ok" else " (failed)")
         for suffix in (".gif", ".mp4") if shutil.which("ffmpeg") else (".gif",):
-            paths.append(animate(r["signals"], out_dir / f"{scenario}_{r['controller']}{suffix}", title))
+            paths.append(animate(r["signals"], out_dir / f"{scenario}_{r['controller']}{suffix}", title, fps=15))
     return paths
