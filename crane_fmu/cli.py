@@ -194,38 +194,42 @@ def _convert(text, fmi_type, unit=None):
     return text
 
 
-def _parse_sets(items, fmus):
-    """``["plant.l1=1.5"]`` -> ``{"plant": {"l1": 1.5}}``, checked against the FMUs' variables.
+def _parse_sets(items, instances, variables_of):
+    """``["plant.l1=1.5"]`` -> ``{"plant": {"l1": 1.5}}``, checked against the instances' variables.
 
-    An angle given without a unit and larger than any swing the model is meant for gets a warning.
+    ``variables_of(instance)`` gives ``{name: (FMI type, unit)}`` of its parameters and inputs. An
+    angle given without a unit and larger than any swing the model is meant for gets a warning.
     """
-    from crane_fmu.cosim.system import read_fmu
-
-    variables = {}
-    result = {}
+    known, result = {}, {}
     for item in items:
         target, sep, text = item.partition("=")
         instance, dot, name = target.partition(".")
         if not sep or not dot:
             raise UsageError(f"--set {item!r}: expected INSTANCE.VARIABLE=VALUE")
-        if instance not in fmus:
-            raise UsageError(f"--set {item!r}: unknown instance {instance!r}; instances: {', '.join(fmus)}")
-        if instance not in variables:
-            variables[instance] = {v.name: v for v in read_fmu(fmus[instance]).modelVariables
-                                   if v.causality in ("parameter", "input")}
-        if name not in variables[instance]:
+        if instance not in instances:
+            raise UsageError(f"--set {item!r}: unknown instance {instance!r}; instances: {', '.join(instances)}")
+        if instance not in known:
+            known[instance] = variables_of(instance)
+        if name not in known[instance]:
             raise UsageError(f"--set {item!r}: {instance} has no parameter or input {name!r}; valid: "
-                             + ", ".join(variables[instance]))
-        v = variables[instance][name]
+                             + ", ".join(known[instance]))
+        fmi_type, unit = known[instance][name]
         try:
-            value = _convert(text, v.type, v.unit)
+            value = _convert(text, fmi_type, unit)
         except (argparse.ArgumentTypeError, ValueError) as exc:
             raise UsageError(f"--set {item!r}: {exc}") from None
-        if v.unit == "rad" and not text.endswith("deg") and abs(value) > LARGEST_SWING:
+        if unit == "rad" and not text.endswith("deg") and abs(value) > LARGEST_SWING:
             print(f"crane-fmu: warning: {instance}.{name} = {value:g} rad ({math.degrees(value):.0f} deg); "
                   f"for degrees write {text}deg", file=sys.stderr)
         result.setdefault(instance, {})[name] = value
     return result
+
+
+def _fmu_variables(path):
+    """``{name: (FMI type, unit)}`` of an FMU's parameters and inputs."""
+    from crane_fmu.cosim.system import read_fmu
+
+    return {v.name: (v.type, v.unit) for v in read_fmu(path).modelVariables if v.causality in ("parameter", "input")}
 
 
 def _writable_file(path, option, suffix=None):
@@ -292,7 +296,7 @@ def _simulate(args, system):
     system = systems.at_step(system, args.fmu_dir, step)
     if args.parameters:
         system = system.with_parameters(load_parameters(args.parameters))
-    system = system.with_parameters(_parse_sets(args.set, fmus))
+    system = system.with_parameters(_parse_sets(args.set, list(fmus), lambda i: _fmu_variables(fmus[i])))
     systems.check_parameters(system, args.fmu_dir)
     _writable_file(args.out, "--out", ".csv")
     if args.plot:
@@ -345,21 +349,12 @@ def _derived(system, sets):
     """Lines describing each instance of a built-in system and what its component derives from the parameters."""
     from crane_fmu import components
 
-    parameters = {}
-    for item in sets:
-        target, sep, text = item.partition("=")
-        instance, dot, name = target.partition(".")
-        if not sep or not dot or instance not in system.instances:
-            raise UsageError(f"--set {item!r}: expected INSTANCE.VARIABLE=VALUE with an instance of "
-                             f"{', '.join(system.instances)}")
-        kind = components.find(system.instances[instance])
-        types = {v.name: v.type for v in kind.variables if v.causality != "output"} if kind else {}
-        if name not in types:
-            raise UsageError(f"--set {item!r}: {instance} has no parameter or input {name!r}")
-        try:
-            parameters.setdefault(instance, {})[name] = _convert(text, types[name])
-        except (argparse.ArgumentTypeError, ValueError) as exc:
-            raise UsageError(f"--set {item!r}: {exc}") from None
+    def variables_of(instance):
+        component = components.find(system.instances[instance])
+        rows = component.variables if component else ()
+        return {v.name: (v.type, v.unit) for v in rows if v.causality != "output"}
+
+    parameters = _parse_sets(sets, list(system.instances), variables_of)
     system = system.with_parameters(parameters)
     lines = [f"{system.name}: {system.description}"]
     for name, kind in system.instances.items():

@@ -88,11 +88,11 @@ def run_score_case(case, blobs):
     """Co-simulate one case on a worker; return its row: identity, status, error, metrics (and signals)."""
     from crane_fmu.analysis import metrics
     from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
-    from crane_fmu.sweep.runner import _local_fmus
+    from crane_fmu.sweep.runner import local_fmus
 
     row = {**_identity(case), "status": "ok", "error": None}
     start = time.perf_counter()
-    fmus = _local_fmus({name: (digest, blobs[digest]) for name, digest in case["fmus"].items()})
+    fmus = local_fmus({name: (digest, blobs[digest]) for name, digest in case["fmus"].items()})
     recorder = ArrayRecorder()
     try:
         simulate(fmus, [Connection(*c) for c in case["connections"]], case["stop_time"], case["step"],

@@ -82,15 +82,14 @@ def systems_for(contender, scenario, quick=False):
 
     c = contender
     tracking = all(n in c.inputs for n in REFERENCE[:3])
-    model = {n: v for n, v in (("l1", 1.0),) if n in c.parameters}
 
     def regulation(step):
         return System(f"{c.name}-regulation", {"plant": "CranePlant", "controller": c.source},
-                      parameters={"plant": dict(DRIVE), "controller": model}, stop_time=10.0, step=step)
+                      parameters={"plant": dict(DRIVE)}, stop_time=10.0, step=step)
 
     def transport(plant=None, extra=None, connections=(), l1=None, hoist=False):
         instances = {"plant": "CranePlant", "controller": c.source}
-        parameters = {"plant": {**DRIVE, "theta1_0": 0.0, **(plant or {})}, "controller": dict(model)}
+        parameters = {"plant": {**DRIVE, "theta1_0": 0.0, **(plant or {})}, "controller": {}}
         if l1 is not None and "l1" in c.parameters:
             parameters["controller"]["l1"] = l1
         if tracking:

@@ -35,7 +35,7 @@ def shippable(system, fmu_dir):
     return {"blobs": blobs, "connections": connections, "parameters": system.parameters}
 
 
-def _local_fmus(blobs):
+def local_fmus(blobs):
     """Write each FMU once into this machine's cache; return ``{instance: path}``."""
     cache = Path(tempfile.gettempdir()) / "crane_fmu_sweep_cache"
     cache.mkdir(exist_ok=True)
@@ -77,7 +77,7 @@ def run_case(case, system, settings, metric_names):
     start = time.perf_counter()
     recorder = ArrayRecorder()
     try:
-        simulate(_local_fmus(system["blobs"]), system["connections"], settings["stop_time"], settings["step"],
+        simulate(local_fmus(system["blobs"]), system["connections"], settings["stop_time"], settings["step"],
                  settings["master"], case_parameters(case, system["parameters"]), recorder)
     except FmiError as exc:
         row.update(status="failed", error=str(exc))
