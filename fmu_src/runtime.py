@@ -54,13 +54,17 @@ class Runtime:
 
     def output(self, index):
         """The output at ``index`` (in table order of the outputs)."""
+        return self.outputs()[index]
+
+    def outputs(self):
+        """Every output, in table order (computed once per change)."""
         if self._outputs is None:
             config, state = self.config, self.state
             if not self.initialised:  # outputs follow the parameters
                 config = self.component.setup({name: self.values[name] for name in self._parameters})
                 state = self.component.initial_state(config) if self.component.stateful else None
             self._outputs = self.component.output(config, state, self.inputs())
-        return self._outputs[index]
+        return self._outputs
 
     def initialise(self, state=None):
         """End of initialisation (or a restored state): validate the parameters, set the state."""

@@ -41,25 +41,36 @@ class _Port:
     """The preallocated arrays of one instance: its outputs (a slice of the master's buffer) and connected inputs."""
 
     def __init__(self, instance, buffer, offset):
-        self.instance = instance
+        self.instance, self.buffer, self.offset = instance, buffer, offset
         self.out_vrs = instance.vr_array(instance.outputs)
         size = len(instance.outputs)
         self.out = (ctypes.c_double * size).from_buffer(buffer, offset * ctypes.sizeof(ctypes.c_double))
-        self.links = []  # (input position, source _Port, source output position)
+        self.links = []  # (input position, source _Port, source output position), when copied
         self.in_vrs = None
         self.inp = None
 
     def connect(self, inputs_and_sources):
+        """Prepare the inputs: read in place from the source's outputs where they lie there in order, else copied."""
+        if not inputs_and_sources:
+            return
+        inputs_and_sources = sorted(inputs_and_sources, key=lambda link: link[2])
         names = [name for name, _, _ in inputs_and_sources]
         self.in_vrs = self.instance.vr_array(names)
-        self.inp = (ctypes.c_double * len(names))()
-        self.links = [(i, src, pos) for i, (_, src, pos) in enumerate(inputs_and_sources)]
+        sources = {id(src) for _, src, _ in inputs_and_sources}
+        positions = [pos for _, _, pos in inputs_and_sources]
+        if len(sources) == 1 and positions == list(range(positions[0], positions[0] + len(positions))):
+            src = inputs_and_sources[0][1]  # a slice of the source's outputs: no copy at all
+            self.inp = (ctypes.c_double * len(names)).from_buffer(
+                src.buffer, (src.offset + positions[0]) * ctypes.sizeof(ctypes.c_double))
+        else:
+            self.inp = (ctypes.c_double * len(names))()
+            self.links = [(i, src, pos) for i, (_, src, pos) in enumerate(inputs_and_sources)]
 
     def read(self):
         self.instance.get_reals(self.out_vrs, self.out)
 
     def write(self):
-        if self.links:
+        if self.in_vrs is not None:
             inp = self.inp
             for i, src, pos in self.links:
                 inp[i] = src.out[pos]
