@@ -43,13 +43,9 @@ def contenders(chosen=(), fmu_dir="build/fmus"):
     return result
 
 
-def _hash(path):
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()[:20]
-
-
 def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), quick=False):
     """``(cases, blobs, refused)``: the cases to run, the FMU bytes by hash, and rows of cases that cannot run."""
-    cases, blobs, refused = [], {}, []
+    cases, blobs, refused, digests = [], {}, [], {}
     for contender in chosen:
         for sid in scenarios:
             try:
@@ -63,9 +59,11 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), quick=False):
                 fmus, connections = systems.resolve(system, fmu_dir)
                 hashes = {}
                 for name, path in fmus.items():
-                    digest = _hash(path)
-                    blobs.setdefault(digest, Path(path).read_bytes())
-                    hashes[name] = digest
+                    if path not in digests:  # each FMU file read once
+                        data = Path(path).read_bytes()
+                        digests[path] = hashlib.sha256(data).hexdigest()[:20]
+                        blobs[digests[path]] = data
+                    hashes[name] = digests[path]
                 case = {"controller": contender.name, "scenario": sid, "case": label, "fmus": hashes,
                         "connections": [list(c) for c in connections], "parameters": system.parameters,
                         "step": step, "stop_time": stop_time, "x_d": x_d,

@@ -5,6 +5,7 @@ either by a model identifier (the file ``<identifier>.fmu`` in a folder of built
 FMUs) or by the path of an ``.fmu`` file.
 """
 
+import functools
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -125,11 +126,20 @@ def connect(interfaces, connections=(), match_names=True):
 
 
 def read_fmu(path):
-    """The model description of a readable FMI 2.0 or 3.0 co-simulation FMU, else ValueError (one line)."""
-    from fmpy import read_model_description
+    """The model description of a readable FMI 2.0 or 3.0 co-simulation FMU, else ValueError (one line).
 
+    Read once per file version (path, size, modification time): treat it as read-only.
+    """
     if not Path(path).is_file():
         raise ValueError(f"{path} not found")
+    stat = Path(path).stat()
+    return _read_fmu(str(Path(path).resolve()), stat.st_size, stat.st_mtime_ns, str(path))
+
+
+@functools.lru_cache(maxsize=64)
+def _read_fmu(resolved, size, mtime_ns, path):
+    from fmpy import read_model_description
+
     try:
         md = read_model_description(str(path))
     except Exception as exc:  # zip, XML and schema errors alike
