@@ -93,11 +93,15 @@ def _paper_accelerations(theta1, dtheta1, theta2, dtheta2, u, m1m2, m2l2, l1, l2
     return (l2 * r1 - b * r2) / det, (a * r2 - c * r1) / det
 
 
-def _paper_rk4_step(state, u, dt, p):
-    """:func:`rk4_step` of the 8-element state when l1 is at rest and nothing but u acts: the same numbers, faster."""
+def _paper_rk4_step(state, u, dt, constants):
+    """:func:`rk4_step` of the 8-element state when l1 is at rest and nothing but u acts: the same numbers, faster.
+
+    ``constants`` is ``(m1 + m2, m2 l2, l2, g)``.
+    """
     x, v, a1, w1, a2, w2, big_l, _ = state
     h2 = 0.5 * dt
-    k = (p.m1 + p.m2, p.m2 * p.l2, big_l, p.l2, p.g)
+    m1m2, m2l2, l2, g = constants
+    k = (m1m2, m2l2, big_l, l2, g)
     k1 = _paper_accelerations(a1, w1, a2, w2, u, *k)
     k2 = _paper_accelerations(a1 + h2 * w1, w1 + h2 * k1[0], a2 + h2 * w2, w2 + h2 * k1[1], u, *k)
     w1b, w2b = w1 + h2 * k1[0], w2 + h2 * k1[1]
@@ -299,7 +303,9 @@ VARIABLES = PLANT_MODEL + (
     output("ddx", "m/s2", "trolley acceleration over the last step, after the drive's limits and lag"),
 )
 
-Config = namedtuple("Config", "params max_substep state0 forces_c u_max v_max tau x_min x_max l1_min l1_max dl1_max")
+Config = namedtuple("Config", "params max_substep state0 forces_c u_max v_max tau x_min x_max l1_min l1_max dl1_max "
+                               "paper")
+Config.__doc__ = "The plant's validated parameters; ``paper`` holds the constants of :func:`_paper_rk4_step`."
 
 
 def _at_least(name, value, low, rule):
@@ -323,17 +329,17 @@ def setup(values):
         raise ValueError(f"c2 must be 0 when m2 = 0 (the hook joint then moves no mass), got {values['c2']!r}")
     if not values["x_min"] < values["x_max"]:
         raise ValueError(f"x_min must be < x_max, got {values['x_min']!r} and {values['x_max']!r}")
+    state0 = tuple(values[name] for name in ("x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0"))
+    for name, value in zip(("x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0"), state0):
+        finite(name, value)
     if not values["x_min"] <= values["x0"] <= values["x_max"]:
         raise ValueError(f"x0 must lie on the rail [{values['x_min']!r}, {values['x_max']!r}], got {values['x0']!r}")
     if not values["l1_min"] <= p.l1 <= values["l1_max"]:
         raise ValueError(f"l1 must lie within [l1_min, l1_max] = [{values['l1_min']!r}, {values['l1_max']!r}], "
                          f"got {p.l1!r}")
-    state0 = tuple(values[name] for name in ("x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0"))
-    for name, value in zip(("x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0"), state0):
-        finite(name, value)
     return Config(p, values["max_substep"], state0 + (p.l1, 0.0, 0.0, 0.0), (values["c1"], values["c2"]),
                   values["u_max"], values["v_max"], values["tau"], values["x_min"], values["x_max"],
-                  values["l1_min"], values["l1_max"], values["dl1_max"])
+                  values["l1_min"], values["l1_max"], values["dl1_max"], (p.m1 + p.m2, p.m2 * p.l2, p.l2, p.g))
 
 
 def _clamp(value, low, high):
@@ -373,7 +379,7 @@ def update(config, state, inputs, time, step):
                 accel = _clamp(accel, (-c.v_max - v) / dt, (c.v_max - v) / dt)
             hoist_now = hoist if c.dl1_max == INF else _clamp(hoist, (-c.dl1_max - dl) / dt, (c.dl1_max - dl) / dt)
             if hoist_now == 0.0 and swing[7] == 0.0 and not any(forces):
-                swing = _paper_rk4_step(swing, accel, dt, p)
+                swing = _paper_rk4_step(swing, accel, dt, c.paper)
             else:
                 swing = rk4_step(swing, accel, dt, p, hoist_now, forces)
             t = time + (k + 1) * dt
