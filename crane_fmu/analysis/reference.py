@@ -2,7 +2,8 @@
 
 These integrate :func:`crane_fmu.model.plant.derivative` with DOP853 at tight
 tolerances, so a difference from the FMUs measures the FMU's RK4 and the
-co-simulation, never a second copy of the equations.
+co-simulation, never a second copy of the equations (for that, the tests use
+the equations sympy derives, ``tests/test_equations.py``).
 """
 
 import numpy as np
@@ -11,15 +12,6 @@ from scipy.integrate import solve_ivp
 from crane_fmu.model import backstepping, plant
 
 RTOL = ATOL = 1e-12
-
-
-def free_swing(state0, p, times, u=0.0):
-    """Plant response to a constant trolley acceleration ``u`` at ``times``; shape (len(times), 6)."""
-    sol = solve_ivp(lambda t, s: plant.derivative(s, u, p), (times[0], times[-1]), state0,
-                    method="DOP853", t_eval=times, rtol=RTOL, atol=ATOL)
-    if not sol.success:
-        raise RuntimeError(sol.message)
-    return sol.y.T
 
 
 def sampled_closed_loop(state0, p, gains, step, n_steps, mode="gauss-seidel"):
