@@ -7,35 +7,15 @@ component.
 """
 
 from crane_fmu.model import backstepping, benchmark, disturbances, energy, lqr, planner, plant
+from crane_fmu.registry import Registry
 
-_REGISTRY = {}
-
-
-def register(component):
-    """Add ``component`` (a ``crane_fmu.model.component.Component``); return it."""
-    known = _REGISTRY.get(component.model_identifier)
-    if known is not None and known is not component:
-        raise ValueError(f"a component {component.model_identifier!r} is already registered")
-    _REGISTRY[component.model_identifier] = component
-    return component
-
-
-def get(model_identifier):
-    """The registered component, or ValueError listing the known ones."""
-    try:
-        return _REGISTRY[model_identifier]
-    except KeyError:
-        raise ValueError(f"no component {model_identifier!r}; components: {', '.join(_REGISTRY)}") from None
-
-
-def find(model_identifier):
-    """The registered component, or None."""
-    return _REGISTRY.get(model_identifier)
+_COMPONENTS = Registry("component", lambda c: c.model_identifier)
+register, unregister, get, find = _COMPONENTS.register, _COMPONENTS.unregister, _COMPONENTS.get, _COMPONENTS.find
 
 
 def all(role=None):
     """Every registered component (of one role), in registration order."""
-    return [c for c in _REGISTRY.values() if role is None or c.role == role]
+    return [c for c in _COMPONENTS.all() if role is None or c.role == role]
 
 
 def check_parameters(model_identifier, values):
@@ -48,7 +28,7 @@ def check_parameters(model_identifier, values):
     ValueError
         ``"l1 must be > 0 and finite, got -1.0"``.
     """
-    component = _REGISTRY.get(model_identifier)
+    component = find(model_identifier)
     if component is not None:
         component.check(values)
 

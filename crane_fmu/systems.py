@@ -12,32 +12,13 @@ from pathlib import Path
 from crane_fmu import components
 from crane_fmu.cosim.master import Connection
 from crane_fmu.cosim.system import System, read_fmu
+from crane_fmu.registry import Registry
 
 DEFAULT_FMU_DIR = Path("build/fmus")
 DEFAULT = "paper"
 
-_SYSTEMS = {}
-
-
-def register(system):
-    """Add a :class:`System` under its name; return it."""
-    known = _SYSTEMS.get(system.name)
-    if known is not None and known is not system:
-        raise ValueError(f"a system {system.name!r} is already registered")
-    _SYSTEMS[system.name] = system
-    return system
-
-
-def get(name):
-    """The registered system ``name``, or ValueError listing the names."""
-    try:
-        return _SYSTEMS[name]
-    except KeyError:
-        raise ValueError(f"no system {name!r}; systems: {', '.join(_SYSTEMS)} (or an .ssp/.ssd file)") from None
-
-
-def all():
-    return list(_SYSTEMS.values())
+_SYSTEMS = Registry("system", lambda s: s.name, " (or an .ssp/.ssd file)")
+register, unregister, get, all = _SYSTEMS.register, _SYSTEMS.unregister, _SYSTEMS.get, _SYSTEMS.all
 
 
 @contextlib.contextmanager

@@ -36,7 +36,8 @@ def pd_build(tmp_path_factory):
         build_all(out, ["CranePlant", "PdController"], systems=["pd"], log=lambda _: None)
         yield out
     finally:
-        del components._REGISTRY["PdController"], systems._SYSTEMS["pd"]
+        components.unregister("PdController")
+        systems.unregister("pd")
 
 
 def _python_loop(stop_time, step, k_x=4.0, k_v=3.0, x_d=0.5):
