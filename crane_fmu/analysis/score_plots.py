@@ -69,13 +69,14 @@ def plot_summary(rows, path):
 
     plt = _plt()
     scenarios = [s for s in SCENARIOS if summarise(rows, s)]
+    colours = _colours(rows)
     fig, axes = plt.subplots(1, len(scenarios), figsize=(2.6 * len(scenarios), 3.8), squeeze=False)
     for ax, sid in zip(axes[0], scenarios):
         lines = summarise(rows, sid)
         key = SCENARIOS[sid].rank_by
         names = [line["controller"] for line in lines]
         values = [line[key] if line[key] is not None and not line["failed"] else 0.0 for line in lines]
-        bars = ax.bar(range(len(names)), values, color=[_colours(rows)[n] for n in names])
+        bars = ax.bar(range(len(names)), values, color=[colours[n] for n in names])
         for bar, line in zip(bars, lines):
             if line["failed"] or line[key] is None:
                 ax.text(bar.get_x() + bar.get_width() / 2, 0, "failed" if line["failed"] else "never",
