@@ -6,10 +6,12 @@ is the generic slave of ``fmu_src/slave2.py`` (or ``slave3.py``) for that
 component, the bundled runtime core, and a modelDescription.xml post-processed
 from the component's variable table (units, display units, dependencies).
 
-On Linux the FMI 2.0 FMU's binary is our own FMI wrapper (``fmu_src/fmi2_wrapper.c``,
-compiled here against this Python's libpython) instead of pythonfmu's: it
-reports the reason of every error to the host's logger and loads in non-Python
-hosts. Where it cannot be compiled, pythonfmu's binary stays (with a warning).
+On Linux the FMUs' binaries are our own loader and FMI wrapper
+(``build_scripts/wrapper.py``) instead of pythonfmu's: they find a CPython
+3.10+ at instantiation, report the reason of every error to the host's logger
+and load in non-Python hosts. Where they cannot be compiled, pythonfmu's
+binaries stay (with a warning). pythonfmu's own run-time modules are bundled,
+so the Python that runs an FMU needs only its standard library.
 
 Each FMU bundles the runtime core (``crane_fmu/model``, the slave support and,
 for a component defined elsewhere, its model module) in its resources under a
@@ -105,10 +107,10 @@ def _stage(component, stage_dir, core, fmi_version):
 def build_fmu(component, out_dir, binaries=None, fmi_version=2):
     """Build one component's FMU into ``out_dir`` and return its path.
 
-    ``binaries`` are the compiled ``(loader, wrapper)`` to use as the FMI 2.0
-    Linux binary (None keeps pythonfmu's); FMI 3.0 FMUs keep pythonfmu3's. The
-    FMU is written under a temporary name and renamed, so an existing FMU is
-    never left half-written.
+    ``binaries`` are the compiled ``(loader, wrapper)`` of this FMI version to
+    use as the Linux binary (None keeps pythonfmu's, which loads only in Python
+    hosts). The FMU is written under a temporary name and renamed, so an
+    existing FMU is never left half-written.
     """
     # the build needs pythonfmu (or pythonfmu3), the runtime does not
     from pythonfmu import FmuBuilder
@@ -143,14 +145,15 @@ def build_fmu(component, out_dir, binaries=None, fmi_version=2):
         final = out_dir / f"{name}.fmu"
         partial = out_dir / f".{name}.fmu.partial"
         process = postprocess3 if fmi_version == 3 else postprocess
+        linux = "binaries/x86_64-linux" if fmi_version == 3 else "binaries/linux64"
         with zipfile.ZipFile(raw) as src, zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as dst:
             for item in src.infolist():
                 data = src.read(item)
                 if item.filename == "modelDescription.xml":
                     data = process(data, component.variables, DISPLAY_UNITS, component.feedthrough)
-                elif item.filename == f"binaries/linux64/{name}.so" and binaries is not None and fmi_version == 2:
+                elif item.filename == f"{linux}/{name}.so" and binaries is not None:
                     data = Path(binaries[0]).read_bytes()
-                    dst.write(binaries[1], "binaries/linux64/PythonWrapper.so")
+                    dst.write(binaries[1], f"{linux}/PythonWrapper.so")
                 dst.writestr(item.filename, data)
             dst.writestr("resources/slaveclass.txt", name)  # read by the wrapper
         os.replace(partial, final)
@@ -212,9 +215,9 @@ def build_all(out_dir="build/fmus", kinds=None, systems=None, fmi3=True, contain
             log(f"warning: {exc}; the FMUs keep pythonfmu's binary, which loads only in Python hosts "
                 "and reports no error messages")
             binaries = None
-        paths = [build_fmu(c, out_dir, binaries) for c in chosen]
-    if fmi3:
-        paths += [build_fmu(c, fmi3_dir(out_dir), fmi_version=3) for c in chosen]
+        paths = [build_fmu(c, out_dir, binaries and binaries[2]) for c in chosen]
+        if fmi3:
+            paths += [build_fmu(c, fmi3_dir(out_dir), binaries and binaries[3], fmi_version=3) for c in chosen]
     names = systems if systems is not None else [
         s.name for s in registry.all() if set(s.instances.values()) <= set(kinds)]
     for name in names:

@@ -1,9 +1,12 @@
-"""Compiles the FMUs' Linux binaries against this Python: the loader and the FMI wrapper.
+"""Compiles the FMUs' Linux binaries: per FMI version, a loader and the FMI wrapper.
 
-``fmu_src/fmi2_loader.c`` becomes ``binaries/linux64/<model>.so``: it has no dependency on
-Python, loads this Python's libpython when an FMU is instantiated (with a clear log message
-where it is missing) and forwards every call to ``fmu_src/fmi2_wrapper.c``, shipped next to
-it as ``PythonWrapper.so`` and linked against libpython.
+``fmu_src/fmi<N>_loader.c`` becomes ``binaries/<platform>/<model>.so``: it has no
+dependency on Python; when the FMU is instantiated it finds a CPython 3.10 or newer
+(``fmu_src/find_python.h``: the host's own, ``CRANE_FMU_PYTHON``, the one recorded
+here, the dynamic linker's search, python3 on PATH) and loads ``fmu_src/fmi<N>_wrapper.c``,
+shipped next to it as ``PythonWrapper.so``. The wrapper is compiled against Python's
+limited API (3.10) and not linked to any libpython, so one build runs with every CPython
+from 3.10 on. Both include the official FMI headers that fmpy ships.
 """
 
 import os
@@ -15,12 +18,23 @@ from pathlib import Path
 
 import crane_fmu.fmu_src as fmu_src
 
-WRAPPER = Path(fmu_src.__file__).parent / "fmi2_wrapper.c"
-LOADER = Path(fmu_src.__file__).parent / "fmi2_loader.c"
+SOURCES = Path(fmu_src.__file__).parent
+# the other CPythons' sonames, newest first, tried after the recorded one (find_python.h)
+FALLBACK_SONAMES = tuple(f"libpython3.{minor}.so.1.0" for minor in (13, 12, 11, 10))
 
 
 class WrapperUnavailable(RuntimeError):
     """The binaries cannot be compiled here (no C compiler, not Linux, or no shared libpython)."""
+
+
+def fmi_headers():
+    """The folder of the official FMI 2.0 and 3.0 headers, as shipped by fmpy."""
+    import fmpy
+
+    folder = Path(fmpy.__file__).parent / "c-code"
+    if not (folder / "fmi2Functions.h").exists() or not (folder / "fmi3Functions.h").exists():
+        raise WrapperUnavailable(f"fmpy's FMI headers are missing from {folder}")
+    return folder
 
 
 def _run(command, source):
@@ -29,11 +43,12 @@ def _run(command, source):
         raise RuntimeError(f"compiling {source.name} failed: {done.stderr.strip()}")
 
 
-def compile_binaries(out_dir, libpython=None):
-    """Build ``(loader, wrapper)`` into ``out_dir`` and return their paths.
+def compile_binaries(out_dir, libpython=None, fallback_sonames=FALLBACK_SONAMES):
+    """Build ``{fmi_version: (loader, wrapper)}`` for FMI 2.0 and 3.0 into ``out_dir``.
 
-    ``libpython`` overrides the Python library the loader looks for (the tests
-    use a missing one to see the loader's message).
+    ``libpython`` overrides the libpython recorded as the loader's guess (default:
+    this Python's); the tests use missing ones, and fewer ``fallback_sonames``, to see
+    each step of the search and its message.
     """
     if not sys.platform.startswith("linux"):
         raise WrapperUnavailable(f"the binaries are built for Linux only, this is {sys.platform}")
@@ -46,12 +61,20 @@ def compile_binaries(out_dir, libpython=None):
     if not library.endswith(".so") or not libdir or not Path(libdir, library).exists():
         raise WrapperUnavailable(f"this Python has no shared libpython ({library!r} in {libdir!r})")
     libpython = libpython or str(Path(libdir, soname))
-    soname = Path(libpython).name if libpython != str(Path(libdir, soname)) else soname
     out_dir = Path(out_dir)
-    loader, wrapper = out_dir / "loader.so", out_dir / "PythonWrapper.so"
-    flags = ["-shared", "-fPIC", "-O2", "-fvisibility=hidden", "-Wall"]
-    _run([compiler, *flags, f'-DLIBPYTHON="{libpython}"', f'-DLIBPYTHON_SONAME="{soname}"', str(LOADER),
-          "-o", str(loader), "-ldl"], LOADER)
-    _run([compiler, *flags, "-I", sysconfig.get_paths()["include"], str(WRAPPER), "-o", str(wrapper),
-          "-L", libdir, "-l" + library[3:-3], f"-Wl,-rpath,{libdir}", "-ldl"], WRAPPER)
-    return loader, wrapper
+    flags = ["-shared", "-fPIC", "-O2", "-fvisibility=hidden", "-Wall", "-Werror", "-I", str(SOURCES),
+             "-I", str(fmi_headers())]
+    binaries = {}
+    for version in (2, 3):
+        folder = out_dir / f"fmi{version}"
+        folder.mkdir(parents=True, exist_ok=True)
+        loader, wrapper = folder / "loader.so", folder / "PythonWrapper.so"
+        source = SOURCES / f"fmi{version}_loader.c"
+        _run([compiler, *flags, f'-DLIBPYTHON="{libpython}"', f'-DLIBPYTHON_SONAME="{Path(libpython).name}"',
+              f'-DFALLBACK_SONAMES="{":".join(fallback_sonames)}"', str(source), "-o", str(loader), "-ldl",
+              "-lpthread"], source)
+        source = SOURCES / f"fmi{version}_wrapper.c"
+        _run([compiler, *flags, "-I", sysconfig.get_paths()["include"], str(source), "-o", str(wrapper),
+              "-lpthread"], source)
+        binaries[version] = loader, wrapper
+    return binaries

@@ -116,6 +116,31 @@ class SlaveCalls:
 
     WARNING = ERROR = None
 
+    def _index_reals(self, real):
+        """Prepare the batched get and set of the variables of class ``real`` (Real or Float64)."""
+        outputs = self.runtime.component.names("output")
+        # value reference -> output position, or the variable's getter and setter
+        self._output_index = {vr: outputs.index(v.name) for vr, v in self.vars.items() if v.name in outputs}
+        self._getters = {vr: v.getter for vr, v in self.vars.items() if isinstance(v, real)}
+        self._setters = {vr: v.setter for vr, v in self.vars.items() if isinstance(v, real) and v.setter}
+        self._reads = {}
+
+    def get_reals(self, vrs):
+        """One Python call per FMI get: outputs come from one cached tuple."""
+        key = tuple(vrs)
+        indices = self._reads.get(key)
+        if indices is None:
+            if not all(vr in self._output_index for vr in key):
+                return [float(self._getters[vr]()) for vr in key]  # KeyError: not a Real
+            indices = self._reads[key] = [self._output_index[vr] for vr in key]
+        values = self.runtime.outputs()
+        return [values[i] for i in indices]
+
+    def set_reals(self, vrs, values):
+        setters = self._setters
+        for vr, value in zip(vrs, values):
+            setters[vr](value)
+
     def exit_initialization_mode(self):
         self.runtime.initialise()
 

@@ -46,27 +46,8 @@ def slave_base(component):
             super().__init__(**kwargs)
             self.runtime = Runtime(component)
             register(self, self.runtime)
-            outputs = component.names("output")
-            # value reference -> output position, or the variable's getter and setter
-            self._output_index = {vr: outputs.index(v.name) for vr, v in self.vars.items() if v.name in outputs}
-            self._getters = {vr: v.getter for vr, v in self.vars.items() if isinstance(v, Real)}
-            self._setters = {vr: v.setter for vr, v in self.vars.items() if isinstance(v, Real) and v.setter}
-            self._reads = {}
+            self._index_reals(Real)
 
-        def get_real(self, vrs):
-            """One Python call per fmi2GetReal: outputs come from one cached tuple."""
-            key = tuple(vrs)
-            indices = self._reads.get(key)
-            if indices is None:
-                if not all(vr in self._output_index for vr in key):
-                    return [float(self._getters[vr]()) for vr in key]  # KeyError: not a Real
-                indices = self._reads[key] = [self._output_index[vr] for vr in key]
-            values = self.runtime.outputs()
-            return [values[i] for i in indices]
-
-        def set_real(self, vrs, values):
-            setters = self._setters
-            for vr, value in zip(vrs, values):
-                setters[vr](value)
+        get_real, set_real = SlaveCalls.get_reals, SlaveCalls.set_reals
 
     return Base

@@ -48,5 +48,8 @@ def slave_base(component):
                 self.default_experiment = DefaultExperiment(*component.default_experiment)
             self.runtime = Runtime(component)
             register(self, self.runtime)
+            self._index_reals(Float64)
+
+        get_float64, set_float64 = SlaveCalls.get_reals, SlaveCalls.set_reals
 
     return Base

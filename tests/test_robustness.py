@@ -73,7 +73,9 @@ def test_unusable_step_sizes_are_errors_not_hangs(crane_fmus, step, message):
         inst.exit_initialization()
         with pytest.raises(FmiError, match=message):
             inst.do_step(0.0, step)
-        inst.do_step(0.0, 0.01)  # the instance is still usable
+        with pytest.raises(FmiError, match=r"fmi2DoStep must not be called when the instance is in error state "
+                                           r"\(after an fmi2Error; fmi2Reset or fmi2SetFMUstate recover it\)"):
+            inst.do_step(0.0, 0.01)  # FMI 2.0: after fmi2Error the instance is in its error state
     finally:
         inst.free()
 
@@ -231,6 +233,10 @@ FUZZ = textwrap.dedent("""
                 if not math.isfinite(value):
                     assert status == 3, (variable.name, value, status)
                     counts["non_finite_input_refused"] += 1
+                    # now in the error state: no more steps, but reset recovers
+                    assert dll.fmi2DoStep(c, ctypes.c_double(t), ctypes.c_double(step), 1) == 3
+                    assert dll.fmi2Reset(c) == 0
+                    return
                 else:
                     assert status == 0, (variable.name, value, status)
                 status = dll.fmi2DoStep(c, ctypes.c_double(t), ctypes.c_double(step), 1)
