@@ -104,7 +104,7 @@ def _parser():
                    help="set any parameter or input before initialisation (repeatable); angles in rad, or with a deg "
                         "suffix: plant.theta1_0=10deg")
     p.add_argument("--out", default="results/simulation.csv",
-                   help="result CSV (default results/simulation.csv)")
+                   help="result file: .csv (default results/simulation.csv) or .parquet (pyarrow, for long runs)")
     p.add_argument("--plot", help="also write a PNG plot of x, theta1, theta2 and u (or of every output)")
 
     p = sub.add_parser("info", help="list the built-in systems and the components' variables",
@@ -285,7 +285,7 @@ def _simulate(args, system):
     """Run a system, writing the CSV (and plot) of ``args``; ``--parameters`` and ``--set`` override its values."""
     from crane_fmu import systems
     from crane_fmu.analysis.plots import plot_run
-    from crane_fmu.cosim import CsvRecorder, FmiError, read_csv, simulate
+    from crane_fmu.cosim import FmiError, read_result, recorder_for, simulate
     from crane_fmu.cosim.master import communication_points
     from crane_fmu.cosim.ssp import load_parameters
 
@@ -298,13 +298,15 @@ def _simulate(args, system):
         system = system.with_parameters(load_parameters(args.parameters))
     system = system.with_parameters(_parse_sets(args.set, list(fmus), lambda i: _fmu_variables(fmus[i])))
     systems.check_parameters(system, args.fmu_dir)
-    _writable_file(args.out, "--out", ".csv")
+    _writable_file(args.out, "--out", ".parquet" if args.out.endswith(".parquet") else ".csv")
     if args.plot:
         _writable_file(args.plot, "--plot", ".png")
     try:
-        recorder = CsvRecorder(args.out)
+        recorder = recorder_for(args.out)
     except OSError as exc:
         raise UsageError(f"--out {args.out}: cannot be written ({exc.strerror})") from None
+    except ImportError:
+        raise UsageError(f"--out {args.out}: writing Parquet needs pyarrow (pip install pyarrow)") from None
     try:
         simulate(fmus, connections, stop_time, step, args.master, system.parameters, recorder, system.start_time,
                  not args.no_initial_exchange)
@@ -322,7 +324,7 @@ def _simulate(args, system):
     if args.plot:
         partial = args.plot + ".partial.png"
         settings = ", ".join(item.split("=", 1)[0] + "=" + item.split("=", 1)[1] for item in args.set)
-        plot_run(read_csv(args.out), partial, f"{system.name} ({args.master}, h={step:g} s)"
+        plot_run(read_result(args.out), partial, f"{system.name} ({args.master}, h={step:g} s)"
                  + (f"\n{settings}" if settings else ""))
         os.replace(partial, args.plot)
         print(f"wrote {args.plot}")
@@ -450,14 +452,14 @@ def _cmd_compare(args):
 
 def _cmd_plot(args):
     from crane_fmu.analysis.plots import plot_overlay
-    from crane_fmu.cosim import read_csv
+    from crane_fmu.cosim import read_result
 
     if Path(args.out).suffix != ".png":
         raise UsageError(f"--out {args.out}: the plot is written as .png")
     runs = {}
     for path in args.results:
         try:
-            runs[Path(path).stem] = read_csv(path)
+            runs[Path(path).stem] = read_result(path)
         except (OSError, ValueError) as exc:
             raise UsageError(f"cannot read {path}: {exc}") from None
     _writable_file(args.out, "--out")
@@ -473,7 +475,7 @@ def _cmd_plot(args):
 
 def _cmd_animate(args):
     from crane_fmu.analysis.score_plots import animate
-    from crane_fmu.cosim import read_csv
+    from crane_fmu.cosim import read_result
 
     if Path(args.out).suffix not in (".gif", ".mp4"):
         raise UsageError(f"--out {args.out}: the animation is written as .gif or .mp4")
@@ -482,7 +484,7 @@ def _cmd_animate(args):
     if args.fps < 1:
         raise UsageError(f"--fps must be >= 1, got {args.fps}")
     try:
-        columns = read_csv(args.result)
+        columns = read_result(args.result)
     except (OSError, ValueError) as exc:
         raise UsageError(f"cannot read {args.result}: {exc}") from None
     needed = [n for n in ("x", "x1", "y1", "x2", "y2") if not any(k == n or k.endswith("." + n) for k in columns)]

@@ -2,6 +2,7 @@
 
 import math
 
+import numpy as np
 import pytest
 
 from crane_fmu.cli import main
@@ -176,3 +177,18 @@ def test_version_and_time_column(fmu_dir, tmp_path, capsys):
     _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--stop-time", "0.03", "--out", str(tmp_path / "t.csv"))
     times = [line.split(",")[0] for line in (tmp_path / "t.csv").read_text().splitlines()[1:]]
     assert times[:4] == ["0.0", "0.001", "0.002", "0.003"]  # the shortest text that reads back exactly
+
+
+def test_simulate_writes_parquet_with_the_csv_numbers(fmu_dir, tmp_path, capsys):
+    """--out FILE.parquet (pyarrow) holds exactly the CSV's columns and values."""
+    pytest.importorskip("pyarrow")
+    from crane_fmu.cosim import read_result
+
+    for name in ("run.csv", "run.parquet"):
+        assert main(["simulate", "--fmu-dir", str(fmu_dir), "--stop-time", "2", "--out", str(tmp_path / name)]) == 0
+    csv, parquet = read_result(tmp_path / "run.csv"), read_result(tmp_path / "run.parquet")
+    assert list(csv) == list(parquet) and len(csv["time"]) == 2001
+    for column in csv:
+        assert np.array_equal(csv[column], parquet[column]), column
+    assert main(["simulate", "--fmu-dir", str(fmu_dir), "--out", str(tmp_path / "run.txt")]) == 2
+    assert "--out " + str(tmp_path / "run.txt") + ": writes a .csv file" in capsys.readouterr().err

@@ -84,6 +84,71 @@ class CsvRecorder(ArrayRecorder):
         os.replace(self._partial, self.path)
 
 
+class ParquetRecorder(ArrayRecorder):
+    """Streams the results to a Parquet file (pyarrow), one row group per chunk: for long runs.
+
+    Columns as in the CSV (``time``, then ``instance.variable``, float64). Written
+    under a temporary name and renamed by :meth:`close`; a run cut short keeps
+    its rows and says why in the file's metadata (``run cut short``).
+    """
+
+    CHUNK_ROWS = 65536
+
+    def __init__(self, path):
+        import pyarrow  # noqa: F401  (fail here, before the run, if it is missing)
+
+        super().__init__()
+        self.path = os.fspath(path)
+        self._partial = self.path + ".partial"
+        self._writer, self._closed = None, False
+
+    def observe(self, time, values):
+        super().observe(time, values)
+        if len(self._rows) >= self.CHUNK_ROWS * len(self.names):
+            self._flush()
+
+    def _flush(self):
+        import numpy as np
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        data = np.frombuffer(self._rows, dtype=float).reshape(-1, len(self.names))
+        table = pa.Table.from_arrays([pa.array(data[:, i]) for i in range(len(self.names))], names=self.names)
+        if self._writer is None:
+            self._writer = pq.ParquetWriter(self._partial, table.schema)
+        self._writer.write_table(table)
+        self._rows = array("d")
+
+    def columns(self):
+        raise TypeError("ParquetRecorder streams to disk; read the file with crane_fmu.cosim.read_result")
+
+    def close(self, reason=None):
+        """Finish the file; ``reason`` marks a run that was cut short."""
+        if self.names is None or self._closed:
+            return
+        self._closed = True
+        self._flush()
+        if reason:
+            self._writer.add_key_value_metadata({"run cut short": reason})
+        self._writer.close()
+        os.replace(self._partial, self.path)
+
+
+def recorder_for(path):
+    """The streaming recorder for a result file: Parquet for ``.parquet``, else CSV."""
+    return ParquetRecorder(path) if os.fspath(path).endswith(".parquet") else CsvRecorder(path)
+
+
+def read_result(path):
+    """Read a result file (CSV or Parquet) into ``{column: numpy array}``."""
+    if os.fspath(path).endswith(".parquet"):
+        import pyarrow.parquet as pq
+
+        table = pq.read_table(path)
+        return {name: table.column(name).to_numpy() for name in table.column_names}
+    return read_csv(path)
+
+
 def read_csv(path):
     """Read a result CSV into ``{column: numpy array}``; comment lines are skipped."""
     import numpy as np
