@@ -6,6 +6,7 @@ is bundled into every FMU with the model core.
 """
 
 import math
+import operator
 
 from crane_fmu.model.component import Discard, Step
 
@@ -126,15 +127,18 @@ class SlaveCalls:
         self._reads = {}
 
     def get_reals(self, vrs):
-        """One Python call per FMI get: outputs come from one cached tuple."""
+        """One Python call per FMI get: outputs are picked from one cached tuple, in C."""
         key = tuple(vrs)
-        indices = self._reads.get(key)
-        if indices is None:
+        pick = self._reads.get(key)
+        if pick is None:
             if not all(vr in self._output_index for vr in key):
                 return [float(self._getters[vr]()) for vr in key]  # KeyError: not a Real
-            indices = self._reads[key] = [self._output_index[vr] for vr in key]
-        values = self.runtime.outputs()
-        return [values[i] for i in indices]
+            indices = [self._output_index[vr] for vr in key]
+            n_outputs = len(self.runtime.component.names("output"))
+            pick = self._reads[key] = (tuple if indices == list(range(n_outputs))  # every output, in order
+                                       else operator.itemgetter(*indices) if len(indices) > 1
+                                       else lambda values, i=indices[0]: (values[i],))
+        return pick(self.runtime.outputs())
 
     def set_reals(self, vrs, values):
         setters = self._setters

@@ -155,7 +155,7 @@ def test_csv_recorder_keeps_the_rows_of_a_run_cut_short(tmp_path):
     assert path.read_text() == "an earlier result\n"  # nothing replaced before close
     recorder.close(reason="a: fmi2DoStep returned discard at t=1 s")
     lines = path.read_text().splitlines()
-    assert lines == ["time,a.y", "0.0,0.25", "0.5,1.25", "1.0,2.25",
+    assert lines == ["time,a.y", "0,0.25", "0.5,1.25", "1,2.25",
                      "# run cut short: a: fmi2DoStep returned discard at t=1 s"]
     assert list(read_csv(path)["a.y"]) == [0.25, 1.25, 2.25]
     assert not list(tmp_path.glob("*.partial"))
