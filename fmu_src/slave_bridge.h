@@ -20,9 +20,19 @@
 enum { SETUP, ENTER, EXIT, TERMINATE, DO_STEP, GET_STATE, SET_STATE, TO_BYTES, FROM_BYTES, GET_F64, SET_F64,
        GET_I32, SET_I32, GET_I64, SET_I64, GET_U64, SET_U64, GET_BOOL, SET_BOOL, GET_STR, SET_STR, N_METHODS };
 
-enum { LOG_OK, LOG_WARNING, LOG_DISCARD, LOG_ERROR, LOG_FATAL }; /* the same numbers in FMI 2.0 and 3.0 */
+/* Statuses: the same numbers in FMI 2.0 and 3.0. */
+enum { STATUS_OK = 0, STATUS_DISCARD = 2, STATUS_ERROR = 3 };
 
-typedef void (*Emit)(void *owner, int status, const char *category, const char *text);
+/* The modes of the state machine, the same in FMI 2.0 and 3.0 co-simulation without event mode (each
+   wrapper names them in its standard's words). After an error the instance is FAILED until it is
+   reset or a saved state is set back. */
+enum { INSTANTIATED = 1, INITIALIZATION = 2, STEPPING = 4, STEP_DISCARDED = 8, TERMINATED = 16, FAILED = 32 };
+#define ANY_MODE (INSTANTIATED | INITIALIZATION | STEPPING | STEP_DISCARDED | TERMINATED | FAILED)
+#define GETTABLE (INITIALIZATION | STEPPING | STEP_DISCARDED | TERMINATED | FAILED)
+#define SETTABLE (INSTANTIATED | INITIALIZATION | STEPPING)
+
+struct Slave;
+typedef void (*Emit)(struct Slave *s, int status, const char *category, const char *text);
 
 #define VR_CACHE 8
 typedef struct {
@@ -31,14 +41,17 @@ typedef struct {
     PyObject *args; /* (tuple of the value references,) */
 } VrArgs;
 
-typedef struct {
+/* One FMU instance: the first member of each wrapper's instance struct. */
+typedef struct Slave {
     PyObject *cls, *slave, *queue, *strings;
     PyObject *bound[N_METHODS];
-    const char *const *names; /* method names by the enum above, NULL where the slave has none */
+    const char *const *names;      /* method names by the enum above, NULL where the slave has none */
+    const char *const *mode_names; /* by the bit of each mode */
     VrArgs vrs[VR_CACHE];
     int next_vr;
-    Emit emit;
-    void *owner;
+    Emit emit; /* passes a message to the host's logger */
+    int logging_on, mode;
+    double time; /* the last successful communication point */
     char *name, *resources;
 } Slave;
 
@@ -55,7 +68,7 @@ static void start_python(void) {
 static void emit_text(const Slave *s, int status, const char *text) {
     static const char *const categories[] = {"logAll", "logStatusWarning", "logStatusDiscard", "logStatusError",
                                              "logStatusFatal"};
-    s->emit(s->owner, status, categories[status >= 0 && status <= 4 ? status : 0], text);
+    s->emit((Slave *)s, status, categories[status >= 0 && status <= 4 ? status : 0], text);
 }
 
 /* Log the pending Python exception as the reason of `function`'s error, and clear it. */
@@ -74,7 +87,7 @@ static void python_error(const Slave *s, const char *function) {
         snprintf(buffer, sizeof buffer, "%s: %s: %s", function, kind_text ? kind_text : "error",
                  message ? message : "(no message)");
     PyErr_Clear();
-    emit_text(s, LOG_ERROR, buffer);
+    emit_text(s, STATUS_ERROR, buffer);
     Py_XDECREF(text);
     Py_XDECREF(kind);
     Py_XDECREF(type);
@@ -94,7 +107,7 @@ static void flush_log(const Slave *s) {
         const char *cat = category && PyUnicode_Check(category) ? PyUnicode_AsUTF8AndSize(category, NULL) : NULL;
         const char *text = msg && PyUnicode_Check(msg) ? PyUnicode_AsUTF8AndSize(msg, NULL) : NULL;
         if (!PyErr_Occurred())
-            s->emit(s->owner, level >= 0 && level <= 4 ? (int)level : 0, cat ? cat : "logAll", text ? text : "");
+            s->emit((Slave *)s, level >= 0 && level <= 4 ? (int)level : 0, cat ? cat : "logAll", text ? text : "");
         PyErr_Clear();
         Py_XDECREF(status);
         Py_XDECREF(category);
@@ -284,15 +297,18 @@ static void release_slave(Slave *s) {
     Py_CLEAR(s->strings);
 }
 
-/* Set up `s` (owner, emit and names already set): import the slave class named in the resources
-   and create the slave. Returns 1, or 0 after logging why (as `function`). Takes the GIL itself. */
-static int open_slave(Slave *s, const char *function, const char *name, const char *location, int visible) {
+/* Set up the instance `s` (emit, names and mode names already set): import the slave class named
+   in the resources and create the slave. Returns 1, or 0 after logging why. Takes the GIL itself. */
+static int open_instance(Slave *s, const char *function, const char *name, const char *location, int visible,
+                         int logging_on) {
     char text[4400];
+    s->mode = INSTANTIATED;
+    s->logging_on = logging_on;
     s->name = strdup(name);
     s->resources = location ? resource_folder(location) : NULL;
     if (!s->name || !s->resources) {
         snprintf(text, sizeof text, "%s: %s", function, location ? "out of memory" : "no resource location given");
-        emit_text(s, LOG_ERROR, text);
+        emit_text(s, STATUS_ERROR, text);
         return 0;
     }
     char *module_name = read_line(s->resources, "slavemodule.txt");
@@ -300,7 +316,7 @@ static int open_slave(Slave *s, const char *function, const char *name, const ch
     if (!module_name || !class_name) {
         snprintf(text, sizeof text, "%s: cannot read slavemodule.txt and slaveclass.txt in %s", function,
                  s->resources);
-        emit_text(s, LOG_ERROR, text);
+        emit_text(s, STATUS_ERROR, text);
         free(module_name);
         free(class_name);
         return 0;
@@ -324,7 +340,137 @@ static int open_slave(Slave *s, const char *function, const char *name, const ch
     return ok;
 }
 
-/* FMU states: the slave's state object with the wrapper's mode and time when it was taken. */
+/* ---- The FMI instance, the same in both versions: the state machine, the calls, FMU states. ---- */
+
+static const char *mode_name(const Slave *s) { return s->mode_names[__builtin_ctz((unsigned)s->mode)]; }
+
+/* The state machine: may `function` be called in the instance's mode? If not, say so. */
+static int allowed(Slave *s, const char *function, int modes) {
+    if (!s) return 0;
+    if (s->mode & modes) return 1;
+    char text[256];
+    snprintf(text, sizeof text, "%s must not be called when the instance is %s", function, mode_name(s));
+    emit_text(s, STATUS_ERROR, text);
+    return 0;
+}
+
+/* Refuse a call with bad arguments: an error and the reason, the mode unchanged. */
+static int refuse(Slave *s, const char *function, const char *why) {
+    char text[512];
+    snprintf(text, sizeof text, "%s: %s", function, why);
+    if (s) emit_text(s, STATUS_ERROR, text);
+    return STATUS_ERROR;
+}
+
+/* The status of a Python call (ok: it succeeded); a failure is logged and puts the instance in error. */
+static int finish(Slave *s, const char *function, int ok) {
+    if (ok) {
+        flush_log(s);
+        return STATUS_OK;
+    }
+    log_failure(s, function);
+    s->mode = FAILED;
+    return STATUS_ERROR;
+}
+
+/* slave.<method>() in one of `modes`, the GIL taken once; on success the mode becomes `next`. */
+static int simple_call(Slave *s, const char *function, int modes, int method, int next) {
+    if (!allowed(s, function, modes)) return STATUS_ERROR;
+    PyGILState_STATE gil = PyGILState_Ensure();
+    PyObject *result = call_method(s, method, NULL);
+    int status = finish(s, function, result != NULL);
+    Py_XDECREF(result);
+    PyGILState_Release(gil);
+    if (status == STATUS_OK) s->mode = next;
+    return status;
+}
+
+static int set_logging(Slave *s, const char *function, int on) {
+    if (!allowed(s, function, ANY_MODE)) return STATUS_ERROR;
+    s->logging_on = on;
+    return STATUS_OK;
+}
+
+/* A fresh slave object: back to instantiated. */
+static int reset(Slave *s, const char *function) {
+    if (!allowed(s, function, ANY_MODE)) return STATUS_ERROR;
+    PyGILState_STATE gil = PyGILState_Ensure();
+    int status = finish(s, function, new_slave(s, 0));
+    PyGILState_Release(gil);
+    if (status == STATUS_OK) s->mode = INSTANTIATED;
+    return status;
+}
+
+/* slave.do_step(t, h): true is a step taken, false a step discarded (the slave logged why). */
+static int do_step(Slave *s, const char *function, double t, double h) {
+    if (!allowed(s, function, STEPPING)) return STATUS_ERROR;
+    PyGILState_STATE gil = PyGILState_Ensure();
+    PyObject *args = Py_BuildValue("(dd)", t, h);
+    PyObject *result = args ? call_method(s, DO_STEP, args) : NULL;
+    int done = result ? PyObject_IsTrue(result) : -1;
+    Py_XDECREF(args);
+    Py_XDECREF(result);
+    int status = finish(s, function, done >= 0);
+    PyGILState_Release(gil);
+    if (status == STATUS_OK && done) s->time = t + h;
+    else if (status == STATUS_OK) s->mode = STEP_DISCARDED, status = STATUS_DISCARD;
+    return status;
+}
+
+static void free_instance(Slave *s) {
+    if (!s) return;
+    PyGILState_STATE gil = PyGILState_Ensure();
+    release_slave(s);
+    PyGILState_Release(gil);
+    free_slave_memory(s);
+    free(s); /* the wrapper's instance, whose first member `s` is */
+}
+
+/* The body of an FMI get function: slave.<method>(value references), item x of the result
+   converted into v[i] by `convert`. Evaluates to the status. */
+#define GET_VALUES(instance, function, method, vr, n, v, convert)                                            \
+    ({                                                                                                       \
+        Slave *s = (instance);                                                                               \
+        int status_ = STATUS_ERROR;                                                                          \
+        if (!allowed(s, function, GETTABLE)) {                                                               \
+        } else if ((n) == 0) {                                                                               \
+            status_ = STATUS_OK;                                                                             \
+        } else if (!(vr) || !(v)) {                                                                          \
+            refuse(s, function, "NULL array");                                                               \
+        } else {                                                                                             \
+            PyGILState_STATE gil_ = PyGILState_Ensure();                                                     \
+            PyObject *values_ = get_values(s, method, vr, n);                                                \
+            for (size_t i = 0; values_ && i < (n); i++) {                                                    \
+                PyObject *x = item(values_, i);                                                              \
+                convert;                                                                                     \
+                if (PyErr_Occurred()) Py_CLEAR(values_);                                                     \
+            }                                                                                                \
+            status_ = finish(s, function, values_ != NULL);                                                  \
+            Py_XDECREF(values_);                                                                             \
+            PyGILState_Release(gil_);                                                                        \
+        }                                                                                                    \
+        status_;                                                                                             \
+    })
+
+/* The body of an FMI set function: slave.<method>(value references, the values made by `make`). */
+#define SET_VALUES(instance, function, method, vr, n, v, make)                                               \
+    ({                                                                                                       \
+        Slave *s = (instance);                                                                               \
+        int status_ = STATUS_ERROR;                                                                          \
+        if (!allowed(s, function, SETTABLE)) {                                                               \
+        } else if ((n) == 0) {                                                                               \
+            status_ = STATUS_OK;                                                                             \
+        } else if (!(vr) || !(v)) {                                                                          \
+            refuse(s, function, "NULL array");                                                               \
+        } else {                                                                                             \
+            PyGILState_STATE gil_ = PyGILState_Ensure();                                                     \
+            status_ = finish(s, function, set_values(s, method, vr, n, LIST_OF(n, make)));                   \
+            PyGILState_Release(gil_);                                                                        \
+        }                                                                                                    \
+        status_;                                                                                             \
+    })
+
+/* FMU states: the slave's state object with the instance's mode and time when it was taken. */
 typedef struct {
     PyObject *state;
     int mode;
@@ -338,41 +484,56 @@ typedef struct {
     double time;
 } StateHeader;
 
-/* The functions below return 1, or 0 with a Python exception set. */
-
-/* Store the slave's state (with mode and time) in *s, allocated if NULL, overwritten if not. */
-static int save_state(Slave *py, void **s, int mode, double time) {
-    SavedState *saved = *s ? *s : PyMem_Calloc(1, sizeof *saved);
-    PyObject *state = saved ? call_method(py, GET_STATE, NULL) : PyErr_NoMemory();
-    if (!state) {
-        if (saved != *s) PyMem_Free(saved);
-        return 0;
+/* Store the slave's state in *state, allocated if NULL, overwritten if not. */
+static int get_fmu_state(Slave *s, const char *function, void **state) {
+    if (!allowed(s, function, ANY_MODE)) return STATUS_ERROR;
+    if (!state) return refuse(s, function, "NULL state pointer");
+    PyGILState_STATE gil = PyGILState_Ensure();
+    SavedState *saved = *state ? *state : PyMem_Calloc(1, sizeof *saved);
+    PyObject *object = saved ? call_method(s, GET_STATE, NULL) : PyErr_NoMemory();
+    if (object) {
+        Py_XDECREF(saved->state);
+        *saved = (SavedState){object, s->mode, s->time};
+        *state = saved;
+    } else if (saved != *state) {
+        PyMem_Free(saved);
     }
-    Py_XDECREF(saved->state);
-    *saved = (SavedState){state, mode, time};
-    *s = saved;
-    return 1;
+    int status = finish(s, function, object != NULL);
+    PyGILState_Release(gil);
+    return status;
 }
 
-static int restore_state(Slave *py, SavedState *saved) {
+/* Set a saved state back, with the mode and time it was taken in. */
+static int set_fmu_state(Slave *s, const char *function, SavedState *saved) {
+    if (!allowed(s, function, ANY_MODE)) return STATUS_ERROR;
+    if (!saved) return refuse(s, function, "NULL state");
+    PyGILState_STATE gil = PyGILState_Ensure();
     PyObject *args = PyTuple_Pack(1, saved->state);
-    PyObject *result = args ? call_method(py, SET_STATE, args) : NULL;
+    PyObject *result = args ? call_method(s, SET_STATE, args) : NULL;
+    int status = finish(s, function, result != NULL);
     Py_XDECREF(args);
     Py_XDECREF(result);
-    return result != NULL;
+    PyGILState_Release(gil);
+    if (status == STATUS_OK) s->mode = saved->mode, s->time = saved->time;
+    return status;
 }
 
-static void free_state(void **s) {
-    SavedState *saved = *s;
+static int free_fmu_state(Slave *s, const char *function, void **state) {
+    if (!allowed(s, function, ANY_MODE)) return STATUS_ERROR;
+    if (!state || !*state) return STATUS_OK;
+    SavedState *saved = *state;
+    PyGILState_STATE gil = PyGILState_Ensure();
     Py_XDECREF(saved->state);
     PyMem_Free(saved);
-    *s = NULL;
+    PyGILState_Release(gil);
+    *state = NULL;
+    return STATUS_OK;
 }
 
-/* The serialised state (a new bytes object: header and the slave's bytes), or NULL. */
-static PyObject *serialized_state(Slave *py, SavedState *saved) {
+/* The serialised state (a new bytes object: header and the slave's bytes), or NULL. GIL held. */
+static PyObject *serialized_state(Slave *s, SavedState *saved) {
     PyObject *args = PyTuple_Pack(1, saved->state);
-    PyObject *bytes = args ? call_method(py, TO_BYTES, args) : NULL;
+    PyObject *bytes = args ? call_method(s, TO_BYTES, args) : NULL;
     Py_XDECREF(args);
     if (bytes && !PyBytes_Check(bytes)) {
         Py_CLEAR(bytes);
@@ -385,25 +546,43 @@ static PyObject *serialized_state(Slave *py, SavedState *saved) {
     return head;
 }
 
-/* A state read back from serialised bytes into *s (allocated if NULL); `modes` are the valid ones. */
-static int deserialize_state(Slave *py, const char *data, size_t size, void **s, int modes) {
+/* The serialised state's size into *size, and, with `out`, the state itself into out[0..size). */
+static int serialize_fmu_state(Slave *s, const char *function, SavedState *saved, char *out, size_t *size) {
+    if (!allowed(s, function, ANY_MODE)) return STATUS_ERROR;
+    if (!saved || !size) return refuse(s, function, "NULL state, size or buffer");
+    PyGILState_STATE gil = PyGILState_Ensure();
+    PyObject *bytes = serialized_state(s, saved);
+    int status = finish(s, function, bytes != NULL);
+    if (bytes && out && (size_t)PyBytes_Size(bytes) > *size) status = refuse(s, function, "the buffer is too small");
+    else if (bytes && out) memcpy(out, PyBytes_AsString(bytes), (size_t)PyBytes_Size(bytes));
+    else if (bytes) *size = (size_t)PyBytes_Size(bytes);
+    Py_XDECREF(bytes);
+    PyGILState_Release(gil);
+    return status;
+}
+
+/* A state read back from serialised bytes into *state (allocated if NULL). */
+static int deserialize_fmu_state(Slave *s, const char *function, const char *data, size_t size, void **state) {
     StateHeader header;
+    if (!allowed(s, function, ANY_MODE)) return STATUS_ERROR;
+    if (!state) return refuse(s, function, "NULL state pointer");
     if (!data || size < sizeof header || (memcpy(&header, data, sizeof header), memcmp(header.magic, "CRS1", 4)) ||
-        !(header.mode & modes)) {
-        PyErr_SetString(PyExc_ValueError, "not a serialised state of this FMU");
-        return 0;
-    }
-    SavedState *saved = *s ? *s : PyMem_Calloc(1, sizeof *saved);
+        !(header.mode & ANY_MODE) || __builtin_popcount((unsigned)header.mode) != 1)
+        return refuse(s, function, "not a serialised state of this FMU");
+    PyGILState_STATE gil = PyGILState_Ensure();
+    SavedState *saved = *state ? *state : PyMem_Calloc(1, sizeof *saved);
     PyObject *args = saved ? Py_BuildValue("(y#)", data + sizeof header, (Py_ssize_t)(size - sizeof header))
                            : PyErr_NoMemory();
-    PyObject *state = args ? call_method(py, FROM_BYTES, args) : NULL;
+    PyObject *object = args ? call_method(s, FROM_BYTES, args) : NULL;
     Py_XDECREF(args);
-    if (!state) {
-        if (saved != *s) PyMem_Free(saved);
-        return 0;
+    if (object) {
+        Py_XDECREF(saved->state);
+        *saved = (SavedState){object, header.mode, header.time};
+        *state = saved;
+    } else if (saved != *state) {
+        PyMem_Free(saved);
     }
-    Py_XDECREF(saved->state);
-    *saved = (SavedState){state, header.mode, header.time};
-    *s = saved;
-    return 1;
+    int status = finish(s, function, object != NULL);
+    PyGILState_Release(gil);
+    return status;
 }
