@@ -89,20 +89,19 @@ static void *try_executable(const char *exe, const char *place, Tried *t, char *
     return try_library(line, place, t, version, size);
 }
 
-/* The host process's own Python, its symbols made global; NULL if the host has none. */
-static void *host_python(Tried *t, char *version, size_t size, char *found, size_t found_size) {
-    void *symbol = dlsym(RTLD_DEFAULT, "Py_IsInitialized");
+/* The host process's own Python (`symbol` is its Py_IsInitialized), its symbols made global; NULL if
+   it is older than 3.10. */
+static void *host_python(void *symbol, Tried *t, char *version, size_t size, char *found, size_t found_size) {
     Dl_info info;
-    if (!symbol || !dladdr(symbol, &info) || !info.dli_fname) {
-        note(t, "the host process (no Python in it)");
-        return NULL;
+    void *lib = NULL;
+    if (dladdr(symbol, &info) && info.dli_fname) {
+        snprintf(found, found_size, "%s", info.dli_fname);
+        lib = dlopen(info.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_GLOBAL);
     }
-    snprintf(found, found_size, "%s", info.dli_fname);
-    void *lib = dlopen(info.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_GLOBAL);
     if (!lib) lib = dlopen(NULL, RTLD_NOW); /* the symbols are the executable's own */
     if (!recent_enough(lib, version, size)) {
         note(t, "the host process (its Python is %s, older than 3.10)", version);
-        return NULL; /* a second Python must not be loaded into a Python host */
+        return NULL;
     }
     return lib;
 }
@@ -111,35 +110,37 @@ static void *host_python(Tried *t, char *version, size_t size, char *found, size
    was found, or 0 and lists in `tried` every place tried. */
 static int find_python(Tried *tried, char *used, size_t used_size) {
     char version[64] = "", path[4096] = "", place[4300];
-    void *lib = host_python(tried, version, sizeof version, path, sizeof path);
-    if (lib) {
+    void *host = dlsym(RTLD_DEFAULT, "Py_IsInitialized");
+    if (host) { /* a Python host: its own interpreter or none, never a second one */
+        if (!host_python(host, tried, version, sizeof version, path, sizeof path)) return 0;
         snprintf(used, used_size, "using the host process's CPython %s (%s)", version, path);
         return 1;
     }
-    if (dlsym(RTLD_DEFAULT, "Py_IsInitialized")) return 0; /* too old a host Python: no second one */
+    note(tried, "the host process (no Python in it)");
+    void *lib = NULL;
     const char *variable = getenv(PYTHON_VARIABLE);
     if (variable && *variable) {
+        const char *file = strrchr(variable, '/') ? strrchr(variable, '/') + 1 : variable;
         snprintf(place, sizeof place, "%s=%s", PYTHON_VARIABLE, variable);
         snprintf(path, sizeof path, "%s", variable);
-        lib = strstr(basename(path), "libpython")
-                  ? try_library(variable, place, tried, version, sizeof version)
-                  : try_executable(variable, place, tried, version, sizeof version, path, sizeof path);
-        snprintf(path, sizeof path, "%s", variable);
+        lib = strstr(file, "libpython") ? try_library(variable, place, tried, version, sizeof version)
+                                        : try_executable(variable, place, tried, version, sizeof version, path,
+                                                         sizeof path);
     } else {
         note(tried, "%s (not set)", PYTHON_VARIABLE);
     }
     if (!lib) {
         snprintf(place, sizeof place, "the libpython recorded at build time, %s", LIBPYTHON);
-        lib = try_library(LIBPYTHON, place, tried, version, sizeof version);
         snprintf(path, sizeof path, "%s", LIBPYTHON);
+        lib = try_library(LIBPYTHON, place, tried, version, sizeof version);
     }
     char sonames[1024];
     snprintf(sonames, sizeof sonames, "%s:%s", LIBPYTHON_SONAME, FALLBACK_SONAMES);
     for (char *save = NULL, *soname = strtok_r(sonames, ":", &save); !lib && soname;
          soname = strtok_r(NULL, ":", &save)) {
         snprintf(place, sizeof place, "the dynamic linker's search for %s", soname);
-        lib = try_library(soname, place, tried, version, sizeof version);
         snprintf(path, sizeof path, "%s", soname);
+        lib = try_library(soname, place, tried, version, sizeof version);
     }
     static const char *const on_path[] = {"python3", "python"};
     for (int i = 0; !lib && i < 2; i++) {
