@@ -109,6 +109,32 @@ class Runtime:
             self.initialise(saved["state"])
 
 
+def register(slave, runtime, real, string, causality, variability, initial, units=False):
+    """Register every variable of the runtime's component on a pythonfmu or pythonfmu3 ``slave``.
+
+    ``real`` and ``string`` are the FMI version's variable classes, ``causality``,
+    ``variability`` and ``initial`` its enums; ``units`` declares each variable's
+    unit (FMI 3.0). Values live in ``runtime``. Outputs are ``initial=calculated``
+    (listed as InitialUnknowns by the build's post-processing); a Real input
+    refuses a value that is not finite.
+    """
+    position = 0
+    for v in runtime.component.variables:
+        kind = string if v.type == "String" else real
+        common = dict(causality=causality[v.causality], variability=variability[v.variability],
+                      description=v.description)
+        if units and v.unit:
+            common["unit"] = v.unit
+        if v.causality == "output":
+            slave.register_variable(kind(v.name, initial=initial.calculated,
+                                         getter=lambda i=position: runtime.output(i), **common))
+            position += 1
+            continue
+        setter = runtime.set_input if v.causality == "input" and kind is real else runtime.set_parameter
+        slave.register_variable(kind(v.name, start=v.start, getter=lambda n=v.name: runtime.values[n],
+                                     setter=lambda value, n=v.name, f=setter: f(n, value), **common))
+
+
 class SlaveCalls:
     """The FMI calls that every slave delegates to its :class:`Runtime` (``self.runtime``).
 

@@ -8,32 +8,18 @@ from pythonfmu3 import Float64, Fmi3Causality, Fmi3Initial, Fmi3Slave, Fmi3Statu
 from pythonfmu3.default_experiment import DefaultExperiment
 from pythonfmu3.unit import Unit
 
-from crane_fmu.fmu_src.runtime import AUTHOR, Runtime, SlaveCalls
+from crane_fmu.fmu_src.runtime import AUTHOR, Runtime, SlaveCalls, register
 from crane_fmu.model.tables import BASE_UNITS
 
 
-def register(slave, runtime):
-    """Like the FMI 2.0 ``register``, plus the independent variable ``time`` and every unit."""
+def register_with_time(slave, runtime):
+    """The component's variables with their units, and the independent variable ``time``."""
     slave.register_variable(Float64("time", causality=Fmi3Causality.independent,
                                     variability=Fmi3Variability.continuous, description="simulation time",
                                     getter=lambda: runtime.time))
     table = runtime.component.variables
     slave.register_units([Unit(name, **BASE_UNITS[name]) for name in sorted({v.unit for v in table if v.unit})])
-    position = 0
-    for v in table:
-        kind = String if v.type == "String" else Float64
-        common = dict(causality=Fmi3Causality[v.causality], variability=Fmi3Variability[v.variability],
-                      description=v.description)
-        if v.unit:
-            common["unit"] = v.unit
-        if v.causality == "output":
-            slave.register_variable(kind(v.name, initial=Fmi3Initial.calculated,
-                                         getter=lambda i=position: runtime.output(i), **common))
-            position += 1
-            continue
-        setter = runtime.set_input if v.causality == "input" and kind is Float64 else runtime.set_parameter
-        slave.register_variable(kind(v.name, start=v.start, getter=lambda n=v.name: runtime.values[n],
-                                     setter=lambda value, n=v.name, f=setter: f(n, value), **common))
+    register(slave, runtime, Float64, String, Fmi3Causality, Fmi3Variability, Fmi3Initial, units=True)
 
 
 def slave_base(component):
@@ -41,13 +27,14 @@ def slave_base(component):
 
     class Base(SlaveCalls, Fmi3Slave):
         WARNING, ERROR = Fmi3Status.warning, Fmi3Status.error
+
         def __init__(self, **kwargs):
             super().__init__(**kwargs)
             self.author, self.description = AUTHOR, component.description
             if component.default_experiment:
                 self.default_experiment = DefaultExperiment(*component.default_experiment)
             self.runtime = Runtime(component)
-            register(self, self.runtime)
+            register_with_time(self, self.runtime)
             self._index_reals(Float64)
 
         get_float64, set_float64 = SlaveCalls.get_reals, SlaveCalls.set_reals
