@@ -30,15 +30,13 @@ class ArrayRecorder:
         return {name: data[:, i].copy() for i, name in enumerate(self.names)}
 
 
-class CsvRecorder(ArrayRecorder):
-    """Streams the results to a CSV file in chunks, so memory stays flat on long runs.
+class _StreamingRecorder(ArrayRecorder):
+    """Streams the results to a file in chunks of rows, so memory stays flat on long runs.
 
-    Values are written as the shortest text that reads back as the same double
-    (pyarrow's CSV writer: about 1.5 us a row of 16 values, against 5.6 us for
-    Python's ``%.17g``). The file is written under a temporary name and renamed
-    by :meth:`close`, so an existing result is never replaced by a half-written
-    one. :meth:`close` with a ``reason`` keeps every row recorded so far and
-    ends the file with a ``# run cut short: ...`` line.
+    The file is written under a temporary name and renamed by :meth:`close`, so
+    an existing result is never replaced by a half-written one; :meth:`close`
+    with a ``reason`` keeps every row recorded so far and says why the run was
+    cut short. Subclasses write a chunk (a pyarrow table) and finish the file.
     """
 
     CHUNK_ROWS = 4096
@@ -47,11 +45,7 @@ class CsvRecorder(ArrayRecorder):
         super().__init__()
         self.path = os.fspath(path)
         self._partial = self.path + ".partial"
-        self._file = open(self._partial, "wb")
-
-    def start(self, names):
-        super().start(names)
-        self._file.write((",".join(self.names) + "\n").encode())
+        self._closed = False
 
     def observe(self, time, values):
         super().observe(time, values)
@@ -59,29 +53,85 @@ class CsvRecorder(ArrayRecorder):
             self._flush()
 
     def _flush(self):
-        if len(self._rows):
-            import pyarrow.csv
-
-            pyarrow.csv.write_csv(_table(self._rows, self.names), self._file,
-                                  pyarrow.csv.WriteOptions(include_header=False))
+        self._write(_table(self._rows, self.names))
         self._rows = array("d")
 
     def columns(self):
-        raise TypeError("CsvRecorder streams to disk; read the file with crane_fmu.cosim.read_csv")
+        raise TypeError(f"{type(self).__name__} streams to disk; read the file with crane_fmu.cosim.read_result")
 
     def close(self, reason=None):
         """Finish the file; ``reason`` marks a run that was cut short."""
-        if self._file.closed:
+        if self._closed:
             return
+        self._closed = True
         if self.names is None:  # nothing recorded: leave any existing result alone
-            self._file.close()
-            os.remove(self._partial)
+            self._discard()
             return
         self._flush()
+        self._finish(reason)
+        os.replace(self._partial, self.path)
+
+
+class CsvRecorder(_StreamingRecorder):
+    """Streams the results to a CSV file; a run cut short ends with a ``# run cut short: ...`` line.
+
+    Values are written as the shortest text that reads back as the same double
+    (pyarrow's CSV writer: about 1.5 us a row of 16 values, against 5.6 us for
+    Python's ``%.17g``).
+    """
+
+    def __init__(self, path):
+        super().__init__(path)
+        self._file = open(self._partial, "wb")
+
+    def start(self, names):
+        super().start(names)
+        self._file.write((",".join(self.names) + "\n").encode())
+
+    def _write(self, table):
+        import pyarrow.csv
+
+        pyarrow.csv.write_csv(table, self._file, pyarrow.csv.WriteOptions(include_header=False))
+
+    def _finish(self, reason):
         if reason:
             self._file.write(f"# run cut short: {reason}\n".encode())
         self._file.close()
-        os.replace(self._partial, self.path)
+
+    def _discard(self):
+        self._file.close()
+        os.remove(self._partial)
+
+
+class ParquetRecorder(_StreamingRecorder):
+    """Streams the results to a Parquet file, one row group per chunk; for long runs.
+
+    Columns as in the CSV (``time``, then ``instance.variable``, float64); a run
+    cut short says why in the file's metadata (``run cut short``).
+    """
+
+    CHUNK_ROWS = 65536
+
+    def __init__(self, path):
+        import pyarrow.parquet  # noqa: F401  (fail here, before the run, if it is missing)
+
+        super().__init__(path)
+        self._writer = None
+
+    def _write(self, table):
+        import pyarrow.parquet as pq
+
+        if self._writer is None:
+            self._writer = pq.ParquetWriter(self._partial, table.schema)
+        self._writer.write_table(table)
+
+    def _finish(self, reason):
+        if reason:
+            self._writer.add_key_value_metadata({"run cut short": reason})
+        self._writer.close()
+
+    def _discard(self):
+        pass  # nothing written yet
 
 
 def _table(rows, names):
@@ -91,53 +141,6 @@ def _table(rows, names):
 
     data = np.frombuffer(rows, dtype=float).reshape(-1, len(names))
     return pa.Table.from_arrays([pa.array(data[:, i]) for i in range(len(names))], names=names)
-
-
-class ParquetRecorder(ArrayRecorder):
-    """Streams the results to a Parquet file (pyarrow), one row group per chunk: for long runs.
-
-    Columns as in the CSV (``time``, then ``instance.variable``, float64). Written
-    under a temporary name and renamed by :meth:`close`; a run cut short keeps
-    its rows and says why in the file's metadata (``run cut short``).
-    """
-
-    CHUNK_ROWS = 65536
-
-    def __init__(self, path):
-        import pyarrow  # noqa: F401  (fail here, before the run, if it is missing)
-
-        super().__init__()
-        self.path = os.fspath(path)
-        self._partial = self.path + ".partial"
-        self._writer, self._closed = None, False
-
-    def observe(self, time, values):
-        super().observe(time, values)
-        if len(self._rows) >= self.CHUNK_ROWS * len(self.names):
-            self._flush()
-
-    def _flush(self):
-        import pyarrow.parquet as pq
-
-        table = _table(self._rows, self.names)
-        if self._writer is None:
-            self._writer = pq.ParquetWriter(self._partial, table.schema)
-        self._writer.write_table(table)
-        self._rows = array("d")
-
-    def columns(self):
-        raise TypeError("ParquetRecorder streams to disk; read the file with crane_fmu.cosim.read_result")
-
-    def close(self, reason=None):
-        """Finish the file; ``reason`` marks a run that was cut short."""
-        if self.names is None or self._closed:
-            return
-        self._closed = True
-        self._flush()
-        if reason:
-            self._writer.add_key_value_metadata({"run cut short": reason})
-        self._writer.close()
-        os.replace(self._partial, self.path)
 
 
 def recorder_for(path):
