@@ -68,6 +68,14 @@ def _number(text):
     return value
 
 
+def _dask_options(p):
+    """The options that sweep and compare share: the FMUs, the Dask workers, the progress bar."""
+    p.add_argument("--fmu-dir", default="build/fmus", help="folder of the built FMUs")
+    p.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
+    p.add_argument("--scheduler", help="address of an existing Dask scheduler (no local cluster)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
 def _parser():
     from crane_fmu import __version__
 
@@ -126,26 +134,21 @@ def _parser():
                        formatter_class=fmt)
     p.add_argument("study", help="study file (TOML, or YAML with PyYAML) or builtin:NAME")
     p.add_argument("--out", required=True, help="output folder: results.parquet, cases.jsonl, plot.png")
-    p.add_argument("--fmu-dir", default="build/fmus", help="folder of the built FMUs")
-    p.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
-    p.add_argument("--scheduler", help="address of an existing Dask scheduler (no local cluster)")
+    _dask_options(p)
     p.add_argument("--csv", action="store_true", help="also write results.csv")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
     p = sub.add_parser("compare", help="score controller FMUs on the same scenarios (the scoreboard)",
                        epilog=EXAMPLES["compare"], formatter_class=fmt)
     p.add_argument("--controller", action="append", default=[], metavar="NAME|FILE.fmu",
                    help="a built-in controller's name or a controller FMU (repeatable; default: every built-in one)")
     p.add_argument("--out", required=True, help="output folder: scoreboard.md, scores.parquet, plots, animations")
-    p.add_argument("--fmu-dir", default="build/fmus", help="folder of the built FMUs")
-    p.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
-    p.add_argument("--scheduler", help="address of an existing Dask scheduler (no local cluster)")
+    _dask_options(p)
     p.add_argument("--quick", action="store_true", help="3 of the 27 mismatch plants in S3")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
     p = sub.add_parser("plot", help="plot one or more simulate results on shared axes",
                        epilog=EXAMPLES["plot"], formatter_class=fmt)
-    p.add_argument("results", nargs="+", help="CSVs written by crane-fmu simulate (labelled by file name)")
+    p.add_argument("results", nargs="+",
+                   help="CSV or Parquet files written by crane-fmu simulate (labelled by file name)")
     p.add_argument("--out", required=True, help="the PNG to write")
     p.add_argument("--title", default="", help="a title over the plot")
 
