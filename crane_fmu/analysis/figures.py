@@ -4,15 +4,7 @@ import math
 from pathlib import Path
 
 from .paper_cases import FORMS
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+from .plots import pyplot, save
 
 
 def _deg(values):
@@ -21,7 +13,7 @@ def _deg(values):
 
 def _angle_figure(runs, label, title, path):
     """Two panels, theta1 and theta2 [deg] against time, one line per run (Figures 4 and 5)."""
-    plt = _plt()
+    plt = pyplot()
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 5.5))
     for r in runs:
         s = r["signals"]
@@ -34,7 +26,7 @@ def _angle_figure(runs, label, title, path):
     axes[0].set_title(title)
     for ax in axes:
         ax.grid(True, alpha=0.3)
-    return _save(plt, fig, path)
+    return save(fig, path)
 
 
 def _loop_panels(axes, s, label, **style):
@@ -69,16 +61,9 @@ def _style(axes, labels=("trolley x [m]", "theta1 [deg]", "theta2 [deg]")):
         ax.grid(True, alpha=0.3)
 
 
-def _save(plt, fig, path):
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
-
-
 def draw_all(results, out_dir):
     """Write figure4.png, figure5.png, figure7.png and figure8.png; return their paths."""
-    plt = _plt()
+    plt = pyplot()
     out_dir = Path(out_dir)
     group = {g: [r for r in results.values() if r["case"].figure == g] for g in ("fig4", "fig5", "fig7", "fig8")}
     paths = [
@@ -104,7 +89,7 @@ def draw_all(results, out_dir):
     axes[3].set_xlabel("time [s]")
     _limit_to(axes, group["fig7"])
     _style(axes, ("trolley x [m]", "theta1 [deg]", "theta2 [deg]", "u [m/s2]"))
-    paths.append(_save(plt, fig, out_dir / "figure7.png"))
+    paths.append(save(fig, out_dir / "figure7.png"))
 
     fig, axes = plt.subplots(3, len(FORMS), sharex="col", figsize=(13, 8), squeeze=False)
     for col, form in enumerate(FORMS):
@@ -123,5 +108,5 @@ def draw_all(results, out_dir):
         axes[2, col].set_xlabel("time [s]")
         _limit_to(axes[:, col], runs)
         _style(axes[:, col])
-    paths.append(_save(plt, fig, out_dir / "figure8.png"))
+    paths.append(save(fig, out_dir / "figure8.png"))
     return paths

@@ -5,15 +5,30 @@ import math
 MAX_PANELS = 8
 
 
+def pyplot():
+    """matplotlib's pyplot on the Agg backend (no screen), imported on first use."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save(fig, path, dpi=110):
+    """Lay out, write and close a figure; return ``path``."""
+    fig.tight_layout()
+    fig.savefig(path, dpi=dpi)
+    pyplot().close(fig)
+    return path
+
+
 def plot_overlay(runs, path, title=""):
     """Trolley position, both swing angles and u of several crane runs on shared axes, to a PNG.
 
     ``runs`` is ``{label: columns}``; each run needs an instance with outputs ``x``, ``theta1``, ``theta2``.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     from .metrics import crane_signals
 
@@ -32,9 +47,7 @@ def plot_overlay(runs, path, title=""):
     axes[-1].set_xlabel("time [s]")
     if title:
         axes[0].set_title(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save(fig, path)
 
 
 def plot_run(columns, path, title=""):
@@ -50,10 +63,7 @@ def plot_run(columns, path, title=""):
     columns : dict
         Result columns (``time``, then ``instance.variable``), as from ``read_csv``.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     from .metrics import crane_signals
 
@@ -84,6 +94,4 @@ def plot_run(columns, path, title=""):
     fig.align_ylabels(axes[:, 0])
     if title:
         axes[0, 0].set_title(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save(fig, path)

@@ -6,18 +6,10 @@ from pathlib import Path
 
 import numpy as np
 
+from .plots import pyplot, save
 from .scoreboard import SCENARIOS
 
 COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink", "tab:gray")
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def _colours(rows):
@@ -35,7 +27,7 @@ def plot_runs(rows, scenario, path):
     runs = _nominal(rows, scenario)
     if not runs:
         return None
-    plt = _plt()
+    plt = pyplot()
     fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 9))
     colours = _colours(rows)
     for r in runs:
@@ -57,17 +49,14 @@ def plot_runs(rows, scenario, path):
     axes[0].legend(fontsize=8, loc="best")
     axes[0].set_title(f"{scenario}: {SCENARIOS[scenario].title}")
     axes[-1].set_xlabel("time [s]")
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
+    return save(fig, path, dpi=100)
 
 
 def plot_summary(rows, path):
     """Per scenario, each controller's ranking metric (worst case), as bars; failures marked."""
     from .scoreboard import summarise
 
-    plt = _plt()
+    plt = pyplot()
     scenarios = [s for s in SCENARIOS if summarise(rows, s)]
     colours = _colours(rows)
     fig, axes = plt.subplots(1, len(scenarios), figsize=(2.6 * len(scenarios), 3.8), squeeze=False)
@@ -87,10 +76,7 @@ def plot_summary(rows, path):
         ax.set_xticks(range(len(names)), [n.replace("Controller", "") for n in names], rotation=45, ha="right",
                       fontsize=8)
         ax.set_title(f"{sid}: {key}", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
+    return save(fig, path, dpi=100)
 
 
 def plot_all(rows, out_dir):
@@ -104,7 +90,7 @@ def animate(signals, path, title="", fps=25):
     ``signals`` holds ``time`` and the plant's ``x``, ``x1``, ``y1``, ``x2``, ``y2`` (any
     instance prefix). Written as GIF (pillow), or MP4 when the path ends in .mp4 (needs ffmpeg).
     """
-    plt = _plt()
+    plt = pyplot()
     from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
 
     def column(name):
