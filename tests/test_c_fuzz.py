@@ -6,15 +6,12 @@ and instantiates again now and then. It exits non-zero if an FMU crashes it, ret
 outside 0-4, or returns an error status without logging an error message first.
 """
 
-import os
 import subprocess
-import zipfile
 
 import pytest
-from fmpy import read_model_description
+from test_c_host import compile_hosts, unpack_fmu
 
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
-from crane_fmu.build_scripts.wrapper import fmi_headers
 
 DRIVER = r"""
 #include <dlfcn.h>
@@ -127,30 +124,17 @@ int main(int argc, char **argv) {
 
 @pytest.fixture(scope="module")
 def drivers(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("fuzz")
-    (folder / "driver.c").write_text(DRIVER)
-    built = {}
-    for version in (2, 3):
-        built[version] = folder / f"driver{version}"
-        subprocess.run([os.environ.get("CC", "cc"), f"-DFMI={version}", "-I", str(fmi_headers()),
-                        str(folder / "driver.c"), "-o", str(built[version]), "-ldl", "-lm"], check=True)
-    return built
+    return compile_hosts(DRIVER, tmp_path_factory.mktemp("fuzz"))
 
 
 @pytest.mark.parametrize("name", ["CranePlant", "LqrController"])
 @pytest.mark.parametrize("version", [2, 3])
 def test_random_calls_from_a_c_host_never_crash_and_every_error_says_why(drivers, fmu_dir, name, version, tmp_path):
     fmu = (fmu_dir if version == 2 else fmi3_dir(fmu_dir)) / f"{name}.fmu"
-    with zipfile.ZipFile(fmu) as z:
-        z.extractall(tmp_path)
-    md = read_model_description(str(fmu))
-    platform = "linux64" if version == 2 else "x86_64-linux"
-    token = md.guid if version == 2 else md.instantiationToken
-    resources = (tmp_path / "resources").as_uri() if version == 2 else str(tmp_path / "resources") + "/"
+    md, library, token, resources = unpack_fmu(fmu, tmp_path)
     refs = [str(v.valueReference) for v in md.modelVariables if v.type in ("Real", "Float64")]
-    proc = subprocess.run([str(drivers[version]), str(tmp_path / "binaries" / platform / f"{name}.so"), token,
-                           resources, "12345", "6000", *refs], capture_output=True, text=True, timeout=900,
-                          cwd=tmp_path)
+    proc = subprocess.run([str(drivers[version]), library, token, resources, "12345", "6000", *refs],
+                          capture_output=True, text=True, timeout=900, cwd=tmp_path)
     assert proc.returncode == 0, f"status {proc.returncode}: {proc.stdout[-2000:]} {proc.stderr[-2000:]}"
     counts = dict(zip(proc.stdout.split()[::2], map(int, proc.stdout.split()[1::2])))
     assert counts["ok"] > 500 and counts["error"] > 500, counts  # both kinds of path were taken

@@ -136,20 +136,24 @@ def _compiler():
     return compiler
 
 
-@pytest.fixture(scope="module")
-def hosts(tmp_path_factory):
-    """``{2: FMI 2.0 host, 3: FMI 3.0 host}``, compiled once."""
-    folder = tmp_path_factory.mktemp("hosts")
-    (folder / "host.c").write_text(HOST)
+def compile_hosts(source, folder):
+    """``{2: program, 3: program}``: C ``source`` compiled for each FMI version against the official headers."""
+    (folder / "host.c").write_text(source)
     built = {}
     for version in (2, 3):
         built[version] = folder / f"host{version}"
         subprocess.run([_compiler(), f"-DFMI={version}", "-I", str(fmi_headers()), str(folder / "host.c"), "-o",
-                        str(built[version]), "-ldl"], check=True)
+                        str(built[version]), "-ldl", "-lm"], check=True)
     return built
 
 
-def _unpack(fmu, folder):
+@pytest.fixture(scope="module")
+def hosts(tmp_path_factory):
+    return compile_hosts(HOST, tmp_path_factory.mktemp("hosts"))
+
+
+def unpack_fmu(fmu, folder):
+    """Extract an FMU: ``(model description, its Linux library, instantiation token, resource location)``."""
     with zipfile.ZipFile(fmu) as z:
         z.extractall(folder)
     md = read_model_description(str(fmu))
@@ -168,8 +172,8 @@ def _environment(**extra):
 
 def _closed_loop(host, fmus, tmp_path, steps=500, h=0.002, **env):
     """The C host's rows ``[t, 6 plant states, u]`` and its log, or an assertion with its output."""
-    plant_md, plant_so, plant_token, plant_res = _unpack(fmus["plant"], tmp_path / "plant")
-    ctrl_md, ctrl_so, ctrl_token, ctrl_res = _unpack(fmus["controller"], tmp_path / "controller")
+    plant_md, plant_so, plant_token, plant_res = unpack_fmu(fmus["plant"], tmp_path / "plant")
+    ctrl_md, ctrl_so, ctrl_token, ctrl_res = unpack_fmu(fmus["controller"], tmp_path / "controller")
     vr = {("plant", v.name): v.valueReference for v in plant_md.modelVariables}
     vr.update({("controller", v.name): v.valueReference for v in ctrl_md.modelVariables})
     refs = ([vr["plant", s] for s in STATE] + [vr["controller", s] for s in STATE]
@@ -259,7 +263,7 @@ def lost_fmus(tmp_path_factory):
 
 
 def _probe(host, fmu, tmp_path, **env):
-    _, library, token, resources = _unpack(fmu, tmp_path / "probe")
+    _, library, token, resources = unpack_fmu(fmu, tmp_path / "probe")
     return subprocess.run([str(host), "probe", library, token, resources], capture_output=True, text=True,
                           timeout=120, env=_environment(**env), cwd=tmp_path)
 
