@@ -9,13 +9,14 @@ from crane_fmu.cosim.recorder import ArrayRecorder
 
 
 class FakeInstance:
-    """Python stand-in for FmuInstance: ``outputs(values)`` computes outputs from inputs and state."""
+    """Python stand-in for an FMU instance: ``outputs(values)`` computes outputs from inputs and state."""
 
     def __init__(self, name, inputs, outputs, feedthrough, step=None, compute=None):
         self.name, self.inputs, self.outputs, self.feedthrough = name, inputs, outputs, feedthrough
         self.values = {n: 0.0 for n in inputs + outputs}
-        self._step, self._compute = step, compute
+        self._step_function, self._compute = step, compute
         self.calls = []
+        self.set_status = 0
 
     def vr_array(self, names):
         index = self.inputs + self.outputs
@@ -25,20 +26,33 @@ class FakeInstance:
         index = self.inputs + self.outputs
         return [index[v] for v in vrs]
 
-    def get_reals(self, vrs, values):
-        if self._compute:
-            self.values.update(self._compute(self.values))
-        for i, n in enumerate(self._names(vrs)):
-            values[i] = self.values[n]
+    def reader(self, vrs, values):
+        def get():
+            if self._compute:
+                self.values.update(self._compute(self.values))
+            for i, n in enumerate(self._names(vrs)):
+                values[i] = self.values[n]
+            return 0
+        return get, "get"
 
-    def set_reals(self, vrs, values):
-        for i, n in enumerate(self._names(vrs)):
-            self.values[n] = values[i]
+    def writer(self, vrs, values):
+        def set_():
+            for i, n in enumerate(self._names(vrs)):
+                self.values[n] = values[i]
+            return self.set_status
+        return set_, "set"
 
-    def do_step(self, t, h):
-        self.calls.append(t)
-        if self._step:
-            self.values.update(self._step(self.values, h))
+    @property
+    def _step(self):
+        def do_step(t, h):
+            self.calls.append(t)
+            if self._step_function:
+                self.values.update(self._step_function(self.values, h))
+            return 0
+        return do_step, "step"
+
+    def fail(self, function, status, time):
+        raise RuntimeError(f"{self.name}: {function} returned {status} at t={time}")
 
     def setup(self, t0, stop=None):
         pass
@@ -82,6 +96,22 @@ def test_time_is_start_plus_k_times_step():
     Master(instances, conns).run(0.3, 1.3, 0.1, [rec])
     assert list(rec.columns()["time"]) == [0.3 + k * 0.1 for k in range(10)] + [1.3]
     assert instances["integ"].calls == [0.3 + k * 0.1 for k in range(10)]
+
+
+@pytest.mark.parametrize("mode", ["gauss-seidel", "jacobi"])
+def test_a_failing_call_stops_the_run_naming_instance_function_and_time(mode):
+    instances, conns = _loop()
+    integ, ctrl = instances["integ"], instances["ctrl"]
+
+    def step_then_fail(values, h):
+        if len(integ.calls) == 3:  # the exchange after the third step fails
+            ctrl.set_status = 3
+        return {"y": values["y"] + h * values["u"]}
+
+    integ._step_function = step_then_fail
+    with pytest.raises(RuntimeError, match=r"^ctrl: set returned 3 at t=0.30000000000000004$"):
+        Master(instances, conns, mode).run(0.0, 1.0, 0.1)
+    assert integ.calls == [0.0, 0.1, 0.2]
 
 
 def test_feedthrough_instance_is_ordered_after_its_source():

@@ -4,6 +4,7 @@ import ctypes
 import itertools
 import shutil
 import weakref
+from functools import partial
 
 from fmpy import calloc, free
 from fmpy.fmi2 import (
@@ -63,8 +64,7 @@ class Fmi2Instance(Instance):
             shutil.rmtree(self._unzip, ignore_errors=True)
             raise
         self._instantiated = True
-        dll = self._fmu.dll
-        self._get_real, self._set_real, self._do_step = dll.fmi2GetReal, dll.fmi2SetReal, dll.fmi2DoStep
+        self._step = self.stepper()
         # Ask for every log message. (pythonfmu 0.7's own binary ignores this and loggingOn
         # alike and never calls the logger, so its errors arrive without a reason.)
         self._call("fmi2SetDebugLogging", self._fmu.setDebugLogging, True, [])
@@ -112,26 +112,24 @@ class Fmi2Instance(Instance):
     def deserialize_state(self, data):
         return self._call("fmi2DeSerializeFMUstate", self._fmu.deSerializeFMUstate, data)
 
-    # --- hot path: preallocated arrays, raw ctypes calls ----------------------
+    # --- hot path: raw ctypes calls (no fmpy argument conversion) on preallocated arrays ---
 
-    def get_reals(self, vrs, values):
-        """fmi2GetReal into the preallocated ctypes array ``values``."""
-        status = self._get_real(self._fmu.component, vrs, len(vrs), values)
-        if status > 1:  # worse than warning
-            self._raise("fmi2GetReal", status)
+    def _raw(self, name, vrs, values):
+        # dll[name] is a fresh ctypes function without fmpy's argtypes: the arguments are ctypes objects already
+        call = partial(self._fmu.dll[name], ctypes.c_void_p(self._fmu.component), vrs, ctypes.c_size_t(len(vrs)),
+                       values)
+        return call, name
 
-    def set_reals(self, vrs, values):
-        """fmi2SetReal from the preallocated ctypes array ``values``."""
-        status = self._set_real(self._fmu.component, vrs, len(vrs), values)
-        if status > 1:  # worse than warning
-            self._raise("fmi2SetReal", status)
+    def reader(self, vrs, values):
+        return self._raw("fmi2GetReal", vrs, values)
 
-    def do_step(self, time, step):
-        self.time = time
-        status = self._do_step(self._fmu.component, time, step, 1)
-        if status > 1:  # worse than warning
-            self._raise("fmi2DoStep", status)
-        self.time = time + step
+    def writer(self, vrs, values):
+        return self._raw("fmi2SetReal", vrs, values)
+
+    def stepper(self):
+        do_step, component = self._fmu.dll["fmi2DoStep"], ctypes.c_void_p(self._fmu.component)
+        do_step.argtypes = (ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int)
+        return (lambda time, step: do_step(component, time, step, 1)), "fmi2DoStep"
 
     def terminate(self):
         self._call("fmi2Terminate", self._fmu.terminate)

@@ -2,6 +2,7 @@
 
 import ctypes
 import shutil
+from functools import partial
 
 from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64
 
@@ -23,11 +24,7 @@ class Fmi3Instance(Instance):
             shutil.rmtree(self._unzip, ignore_errors=True)
             raise
         self._instantiated = True
-        dll = self._fmu.dll
-        self._get_f64, self._set_f64, self._step = dll.fmi3GetFloat64, dll.fmi3SetFloat64, dll.fmi3DoStep
-        self._flags = [fmi3Boolean() for _ in range(3)]
-        self._last = fmi3Float64()
-        self._step_refs = [ctypes.byref(f) for f in self._flags] + [ctypes.byref(self._last)]
+        self._step = self.stepper()
 
     def _log(self, environment, status, category, message):
         self.messages.append(message.decode("utf-8", "replace") if message else "")
@@ -69,22 +66,27 @@ class Fmi3Instance(Instance):
     def deserialize_state(self, data):
         return self._call("fmi3DeserializeFMUState", self._fmu.deserializeFMUState, data)
 
-    def get_reals(self, vrs, values):
-        status = self._get_f64(self._fmu.component, vrs, len(vrs), values, len(values))
-        if status > 1:
-            self._raise("fmi3GetFloat64", status)
+    # --- hot path: raw ctypes calls (no fmpy argument conversion) on preallocated arrays ---
 
-    def set_reals(self, vrs, values):
-        status = self._set_f64(self._fmu.component, vrs, len(vrs), values, len(values))
-        if status > 1:
-            self._raise("fmi3SetFloat64", status)
+    def _raw(self, name, vrs, values):
+        size = ctypes.c_size_t(len(vrs))
+        return partial(self._fmu.dll[name], ctypes.c_void_p(self._fmu.component), vrs, size, values, size), name
 
-    def do_step(self, time, step):
-        self.time = time
-        status = self._step(self._fmu.component, time, step, True, *self._step_refs)
-        if status > 1:
-            self._raise("fmi3DoStep", status)
-        self.time = time + step
+    def reader(self, vrs, values):
+        return self._raw("fmi3GetFloat64", vrs, values)
+
+    def writer(self, vrs, values):
+        return self._raw("fmi3SetFloat64", vrs, values)
+
+    def stepper(self):
+        do_step, component = self._fmu.dll["fmi3DoStep"], ctypes.c_void_p(self._fmu.component)
+        flag = ctypes.POINTER(fmi3Boolean)
+        do_step.argtypes = (ctypes.c_void_p, ctypes.c_double, ctypes.c_double, fmi3Boolean, flag, flag, flag,
+                            ctypes.POINTER(fmi3Float64))
+        # eventHandlingNeeded, terminateSimulation, earlyReturn, lastSuccessfulTime: not used by this master
+        self._step_outputs = [fmi3Boolean(), fmi3Boolean(), fmi3Boolean(), fmi3Float64()]
+        out = [ctypes.byref(x) for x in self._step_outputs]
+        return (lambda time, step: do_step(component, time, step, True, *out)), "fmi3DoStep"
 
     def terminate(self):
         self._call("fmi3Terminate", self._fmu.terminate)

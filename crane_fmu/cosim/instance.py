@@ -51,8 +51,13 @@ class Instance:
         Some output depends on an input of the same instant (ModelStructure).
 
     Subclasses implement ``set``, ``get``, ``setup``, ``enter_initialization``,
-    ``exit_initialization``, the saved-state calls, the hot-path calls
-    ``get_reals``, ``set_reals``, ``do_step``, and ``terminate``.
+    ``exit_initialization``, the saved-state calls, ``terminate``, and the hot
+    path that the master prebuilds its steps from: ``reader(vrs, values)`` and
+    ``writer(vrs, values)``, each ``(call, function)`` with ``call()`` getting or
+    setting the Reals of the value references ``vrs`` from or into the ctypes
+    array ``values`` and returning the FMI status, and ``stepper()``, the same
+    with ``call(time, step)`` taking one step. They set ``self._step`` to their
+    ``stepper()`` once instantiated.
     """
 
     def _describe(self, path, name):
@@ -81,10 +86,18 @@ class Instance:
             status = STATUS[exc.status] if hasattr(exc, "status") and exc.status < 6 else "error"
             raise FmiError(self.name, function, self.time, status, self.messages) from exc
 
-    def _raise(self, function, status):
-        """Raise the FmiError of a hot-path call that returned worse than warning."""
-        raise FmiError(self.name, function, self.time, STATUS[status] if 0 <= status < 6 else str(status),
-                       self.messages)
+    def fail(self, function, status, time):
+        """Raise the FmiError of a hot-path call at ``time`` that returned ``status`` (worse than warning)."""
+        self.time = time
+        raise FmiError(self.name, function, time, STATUS[status] if 0 <= status < 6 else str(status), self.messages)
+
+    def do_step(self, time, step):
+        """One communication step from ``time``; FmiError if the FMU returns worse than warning."""
+        call, function = self._step
+        status = call(time, step)
+        if status > 1:
+            self.fail(function, status, time)
+        self.time = time + step
 
     def _variable(self, name):
         v = self.variables.get(name)

@@ -38,16 +38,17 @@ def communication_points(start_time, stop_time, step):
 
 
 class _Port:
-    """The preallocated arrays of one instance: its outputs (a slice of the master's buffer) and connected inputs."""
+    """The preallocated arrays of one instance, its outputs (a slice of the master's buffer) and connected
+    inputs, and its prebuilt hot-path calls: :attr:`read`, :attr:`write` and :attr:`step`, each
+    ``(call, function, instance)``."""
 
     def __init__(self, instance, buffer, offset):
         self.instance, self.buffer, self.offset = instance, buffer, offset
-        self.out_vrs = instance.vr_array(instance.outputs)
         size = len(instance.outputs)
         self.out = (ctypes.c_double * size).from_buffer(buffer, offset * ctypes.sizeof(ctypes.c_double))
-        self.links = []  # (input position, source _Port, source output position), when copied
-        self.in_vrs = None
-        self.inp = None
+        self.read = (*instance.reader(instance.vr_array(instance.outputs), self.out), instance)
+        self.step = (*instance._step, instance)
+        self.write = None  # set by connect() when some input is connected
 
     def connect(self, inputs_and_sources):
         """Prepare the inputs: read in place from the source's outputs where they lie there in order, else copied."""
@@ -55,26 +56,24 @@ class _Port:
             return
         inputs_and_sources = sorted(inputs_and_sources, key=lambda link: link[2])
         names = [name for name, _, _ in inputs_and_sources]
-        self.in_vrs = self.instance.vr_array(names)
         sources = {id(src) for _, src, _ in inputs_and_sources}
         positions = [pos for _, _, pos in inputs_and_sources]
         if len(sources) == 1 and positions == list(range(positions[0], positions[0] + len(positions))):
             src = inputs_and_sources[0][1]  # a slice of the source's outputs: no copy at all
-            self.inp = (ctypes.c_double * len(names)).from_buffer(
+            inp = (ctypes.c_double * len(names)).from_buffer(
                 src.buffer, (src.offset + positions[0]) * ctypes.sizeof(ctypes.c_double))
-        else:
-            self.inp = (ctypes.c_double * len(names))()
-            self.links = [(i, src, pos) for i, (_, src, pos) in enumerate(inputs_and_sources)]
+            self.write = (*self.instance.writer(self.instance.vr_array(names), inp), self.instance)
+            return
+        inp = (ctypes.c_double * len(names))()
+        set_inputs, function = self.instance.writer(self.instance.vr_array(names), inp)
+        links = [(i, src.out, pos) for i, (_, src, pos) in enumerate(inputs_and_sources)]
 
-    def read(self):
-        self.instance.get_reals(self.out_vrs, self.out)
+        def copy_and_set():
+            for i, out, pos in links:
+                inp[i] = out[pos]
+            return set_inputs()
 
-    def write(self):
-        if self.in_vrs is not None:
-            inp = self.inp
-            for i, src, pos in self.links:
-                inp[i] = src.out[pos]
-            self.instance.set_reals(self.in_vrs, inp)
+        self.write = (copy_and_set, function, self.instance)
 
 
 class Master:
@@ -134,9 +133,13 @@ class Master:
             gauss_seidel += [p.write, p.read] if p.instance.feedthrough else [p.read]
         gauss_seidel += [p.write for p in self.order if not p.instance.feedthrough]
         self._plans = {
-            "gauss-seidel": gauss_seidel,
-            "jacobi": [p.read for p in self.order] + [p.write for p in self.order],
+            "gauss-seidel": [c for c in gauss_seidel if c],
+            "jacobi": [p.read for p in self.order] + [p.write for p in self.order if p.write],
         }
+        self._steps = [p.step for p in self.order]
+        # who made a call, for the error of a call that fails
+        self._callers = {id(call): (instance, function)
+                         for call, function, instance in self._plans["jacobi"] + self._steps}
 
     def _dependency_order(self, connections):
         """Instances ordered so that every feedthrough instance follows its sources."""
@@ -155,9 +158,14 @@ class Master:
                 del after[n]
         return [self.ports[n] for n in order]
 
-    def _exchange(self, mode):
-        for call in self._plans[mode]:
-            call()
+    def _fail(self, call, status, time):
+        instance, function = self._callers[id(call)]
+        instance.fail(function, status, time)
+
+    def _exchange(self, mode, time):
+        for call, _, _ in self._plans[mode]:
+            if (status := call()) > 1:  # worse than warning
+                self._fail(call, status, time)
 
     def initialize(self, start_time, stop_time, parameters=None):
         """Set parameters, run initialisation mode and settle the inputs at ``start_time``.
@@ -173,7 +181,7 @@ class Master:
                 inst.set(var, value)
             inst.enter_initialization()
         if self.initial_exchange:
-            self._exchange("gauss-seidel")  # consistent inputs at t0 in both modes
+            self._exchange("gauss-seidel", start_time)  # consistent inputs at t0 in both modes
         for inst in self.instances.values():
             inst.exit_initialization()
 
@@ -204,22 +212,26 @@ class Master:
         At each communication point: exchange, observe, then step every instance.
         Observers must have been started with :attr:`output_names`.
         """
-        exchange = self._plans[self.mode]
-        steps = [p.instance.do_step for p in self.order]
+        exchange = [call for call, _, _ in self._plans[self.mode]]
+        steps = [call for call, _, _ in self._steps]
         observe = [o.observe for o in observers]
-        values = self.values
+        values, fail = self.values, self._fail
         for k in range(first, last):
             t = start_time + k * step
             for call in exchange:
-                call()
+                if (status := call()) > 1:  # worse than warning
+                    fail(call, status, t)
             for f in observe:
                 f(t, values)
             for do_step in steps:
-                do_step(t, step)
+                if (status := do_step(t, step)) > 1:
+                    fail(do_step, status, t)
+        for inst in self.instances.values():
+            inst.time = start_time + last * step
 
     def finish(self, stop_time, observers=()):
         """The exchange and observation at the last communication point."""
-        self._exchange(self.mode)
+        self._exchange(self.mode, stop_time)
         for o in observers:
             o.observe(stop_time, self.values)
 
