@@ -13,45 +13,51 @@ from crane_fmu.model.component import Discard, Step
 AUTHOR = "crane anti-sway co-simulation toolkit"
 
 
-def check_step(step):
-    if not (step > 0 and math.isfinite(step)):
-        raise ValueError(f"communication step must be > 0 and finite, got {step!r}")
-
-
 class Runtime:
     """The values, configuration and state of one FMU instance of ``component``.
 
-    Parameters and inputs live in :attr:`values`. The configuration is set up
-    (and the parameters validated) when initialisation ends; until then the
-    outputs follow the parameters. Outputs are computed once per change and
-    read from a cache.
+    Parameters live in :attr:`values`, inputs in the list :attr:`inputs` (table
+    order). The configuration is set up (and the parameters validated) when
+    initialisation ends; until then the outputs follow the parameters. Outputs
+    are computed once per change and read from a cache.
     """
 
     def __init__(self, component):
         self.component = component
-        self.values = {v.name: v.start for v in component.variables if v.causality != "output"}
-        self._parameters = component.names("parameter")
-        self._inputs = component.names("input")
+        self.values = {v.name: v.start for v in component.variables if v.causality == "parameter"}
+        self.inputs = [v.start for v in component.variables if v.causality == "input"]
+        self._input_names = component.names("input")
+        self._stateful, self._feedthrough = component.stateful, component.feedthrough
         self.initialised = False
         self.config = self.state = None  # set when initialisation ends
         self.time = 0.0
         self._outputs = None
-        self.messages = []  # the last step's messages for the host's log
-
-    def inputs(self):
-        return tuple(self.values[name] for name in self._inputs)
+        self.messages = ()  # the last step's messages for the host's log
 
     def set_parameter(self, name, value):
         self.values[name] = value
         self._outputs = None
 
-    def set_input(self, name, value):
-        """Set a Real input; a value that is not finite is refused (ValueError naming the input)."""
-        if not math.isfinite(value):
-            raise ValueError(f"input {name} must be finite, got {value!r}")
-        self.values[name] = value
-        if self.component.feedthrough:
+    def set_inputs(self, positions, values):
+        """Set the inputs at ``positions`` (table order; None: all, in order) to the Real ``values``.
+
+        A value that is not finite is refused (ValueError naming the input) and nothing is set.
+        """
+        if not all(map(math.isfinite, values)):
+            position, value = next((p, v) for p, v in zip(positions or range(len(values)), values)
+                                   if not math.isfinite(v))
+            raise ValueError(f"input {self._input_names[position]} must be finite, got {value!r}")
+        if positions is None:
+            self.inputs[:] = values
+        else:
+            inputs = self.inputs
+            for position, value in zip(positions, values):
+                inputs[position] = value
+        if self._feedthrough:
             self._outputs = None
+
+    def set_input(self, name, value):
+        self.set_inputs((self._input_names.index(name),), (value,))
 
     def output(self, index):
         """The output at ``index`` (in table order of the outputs)."""
@@ -62,16 +68,16 @@ class Runtime:
         if self._outputs is None:
             config, state = self.config, self.state
             if not self.initialised:  # outputs follow the parameters
-                config = self.component.setup({name: self.values[name] for name in self._parameters})
-                state = self.component.initial_state(config) if self.component.stateful else None
-            self._outputs = self.component.output(config, state, self.inputs())
+                config = self.component.setup(dict(self.values))
+                state = self.component.initial_state(config) if self._stateful else None
+            self._outputs = self.component.output(config, state, tuple(self.inputs))
         return self._outputs
 
     def initialise(self, state=None):
         """End of initialisation (or a restored state): validate the parameters, set the state."""
-        self.config = self.component.setup({name: self.values[name] for name in self._parameters})
+        self.config = self.component.setup(dict(self.values))
         self.initialised = True
-        if self.component.stateful:
+        if self._stateful:
             self.state = self.component.initial_state(self.config) if state is None else tuple(state)
         self._outputs = None
 
@@ -80,16 +86,17 @@ class Runtime:
 
         Messages the component gives with the new state are kept in :attr:`messages` for the slave to log.
         """
-        check_step(step)
-        self.messages = []
+        if not (step > 0 and step < math.inf):
+            raise ValueError(f"communication step must be > 0 and finite, got {step!r}")
         if not self.initialised:
             raise RuntimeError("doStep before initialisation ended")
-        if self.component.stateful:
+        self.messages = ()
+        if self._stateful:
             try:
-                state = self.component.update(self.config, self.state, self.inputs(), time, step)
+                state = self.component.update(self.config, self.state, tuple(self.inputs), time, step)
             except Discard as exc:
                 return str(exc)
-            if isinstance(state, Step):
+            if type(state) is Step:
                 state, self.messages = state
             self.state = state
         self.time = time + step
@@ -98,11 +105,11 @@ class Runtime:
 
     def saved(self):
         """The full state for get-FMU-state: JSON-able and exact (floats survive JSON bit for bit)."""
-        return {"values": dict(self.values), "initialised": self.initialised, "time": self.time,
-                "state": None if self.state is None else list(self.state)}
+        return {"values": dict(self.values), "inputs": list(self.inputs), "initialised": self.initialised,
+                "time": self.time, "state": None if self.state is None else list(self.state)}
 
     def restore(self, saved):
-        self.values = dict(saved["values"])
+        self.values, self.inputs = dict(saved["values"]), list(saved["inputs"])
         self.time = saved["time"]
         self.initialised, self.config, self.state, self._outputs = False, None, None, None
         if saved["initialised"]:
@@ -115,10 +122,10 @@ def register(slave, runtime, real, string, causality, variability, initial, unit
     ``real`` and ``string`` are the FMI version's variable classes, ``causality``,
     ``variability`` and ``initial`` its enums; ``units`` declares each variable's
     unit (FMI 3.0). Values live in ``runtime``. Outputs are ``initial=calculated``
-    (listed as InitialUnknowns by the build's post-processing); a Real input
-    refuses a value that is not finite.
+    (listed as InitialUnknowns by the build's post-processing); inputs are Real
+    and refuse a value that is not finite.
     """
-    position = 0
+    outputs, inputs = runtime.component.names("output"), runtime.component.names("input")
     for v in runtime.component.variables:
         kind = string if v.type == "String" else real
         common = dict(causality=causality[v.causality], variability=variability[v.variability],
@@ -126,13 +133,18 @@ def register(slave, runtime, real, string, causality, variability, initial, unit
         if units and v.unit:
             common["unit"] = v.unit
         if v.causality == "output":
+            i = outputs.index(v.name)
             slave.register_variable(kind(v.name, initial=initial.calculated,
-                                         getter=lambda i=position: runtime.output(i), **common))
-            position += 1
-            continue
-        setter = runtime.set_input if v.causality == "input" and kind is real else runtime.set_parameter
-        slave.register_variable(kind(v.name, start=v.start, getter=lambda n=v.name: runtime.values[n],
-                                     setter=lambda value, n=v.name, f=setter: f(n, value), **common))
+                                         getter=lambda i=i: runtime.output(i), **common))
+        elif v.causality == "input":
+            if kind is not real:
+                raise TypeError(f"{runtime.component.model_identifier}.{v.name}: an input must be Real")
+            i = inputs.index(v.name)
+            slave.register_variable(kind(v.name, start=v.start, getter=lambda i=i: runtime.inputs[i],
+                                         setter=lambda value, i=i: runtime.set_inputs((i,), (value,)), **common))
+        else:
+            slave.register_variable(kind(v.name, start=v.start, getter=lambda n=v.name: runtime.values[n],
+                                         setter=lambda value, n=v.name: runtime.set_parameter(n, value), **common))
 
 
 class SlaveCalls:
@@ -145,38 +157,50 @@ class SlaveCalls:
 
     def _index_reals(self, real):
         """Prepare the batched get and set of the variables of class ``real`` (Real or Float64)."""
-        outputs = self.runtime.component.names("output")
-        # value reference -> output position, or the variable's getter and setter
+        component = self.runtime.component
+        outputs, inputs = component.names("output"), component.names("input")
+        # value reference -> output or input position, or the variable's getter and setter
         self._output_index = {vr: outputs.index(v.name) for vr, v in self.vars.items() if v.name in outputs}
+        self._input_index = {vr: inputs.index(v.name) for vr, v in self.vars.items() if v.name in inputs}
         self._getters = {vr: v.getter for vr, v in self.vars.items() if isinstance(v, real)}
         self._setters = {vr: v.setter for vr, v in self.vars.items() if isinstance(v, real) and v.setter}
-        self._reads = {}
+        self._reads, self._writes = {}, {}
 
     def get_reals(self, vrs):
         """One Python call per FMI get: outputs are picked from one cached tuple, in C."""
-        key = tuple(vrs)
+        key = vrs if type(vrs) is tuple else tuple(vrs)
         pick = self._reads.get(key)
         if pick is None:
             if not all(vr in self._output_index for vr in key):
                 return [float(self._getters[vr]()) for vr in key]  # KeyError: not a Real
             indices = [self._output_index[vr] for vr in key]
-            n_outputs = len(self.runtime.component.names("output"))
-            pick = self._reads[key] = (tuple if indices == list(range(n_outputs))  # every output, in order
+            pick = self._reads[key] = (tuple if indices == list(range(len(self._output_index)))  # all, in order
                                        else operator.itemgetter(*indices) if len(indices) > 1
                                        else lambda values, i=indices[0]: (values[i],))
         return pick(self.runtime.outputs())
 
     def set_reals(self, vrs, values):
-        setters = self._setters
-        for vr, value in zip(vrs, values):
-            setters[vr](value)
+        """One Python call per FMI set: inputs are set together, checked first."""
+        key = vrs if type(vrs) is tuple else tuple(vrs)
+        positions = self._writes.get(key, False)
+        if positions is False:
+            if not all(vr in self._input_index for vr in key):
+                for vr, value in zip(key, values):
+                    self._setters[vr](value)  # KeyError: not a settable Real
+                return
+            positions = [self._input_index[vr] for vr in key]
+            if positions == list(range(len(self._input_index))):
+                positions = None  # every input, in order
+            self._writes[key] = positions
+        self.runtime.set_inputs(positions, values)
 
     def exit_initialization_mode(self):
         self.runtime.initialise()
 
     def do_step(self, current_time, step_size):
-        reason = self.runtime.step(current_time, step_size)
-        for message in self.runtime.messages:
+        runtime = self.runtime
+        reason = runtime.step(current_time, step_size)
+        for message in runtime.messages:
             self.log(message, self.WARNING)
         if reason:
             self.log(reason, self.ERROR)
@@ -187,3 +211,4 @@ class SlaveCalls:
 
     def _set_fmu_state(self, saved):
         self.runtime.restore(saved)
+
