@@ -117,3 +117,40 @@ def test_only_the_trolley_row_gives_a_pd_law_on_x():
 def test_unusable_step_sizes_are_refused(step, max_substep, message):
     with pytest.raises(ValueError, match=message):
         plant.substeps(step, max_substep)
+
+
+def _random_plant(rng):
+    return PlantParameters(m1=rng.uniform(0.1, 5), m2=rng.uniform(0, 5), l1=rng.uniform(0.2, 3),
+                           l2=rng.uniform(0.1, 2), g=rng.uniform(1, 20))
+
+
+def test_the_fast_paths_compute_the_same_numbers_as_the_equations():
+    """The FMUs' hot path (constants computed once) and the readable eqs (8)-(9), (12)-(21): bit for bit."""
+    rng = random.Random(7)
+    for _ in range(3000):
+        p = _random_plant(rng)
+        k = ControllerGains(**{name: rng.uniform(0, 5) for name in ("K1_x", "K2_x", "K1_theta1", "K2_theta1",
+                                                                    "K1_theta2", "K2_theta2", "w_x", "w_theta1",
+                                                                    "w_theta2")},
+                            x_d=rng.uniform(-2, 2), theta1_d=rng.uniform(-0.1, 0.1),
+                            b3_form=rng.choice(["derived", "printed"]))
+        state = tuple(rng.uniform(-1.5, 1.5) for _ in range(6))
+        assert controller.law(p, k)(state) == controller.control(state, p, k)
+        u, dt, big_l = rng.uniform(-3, 3), rng.choice([1e-3, 0.01, 0.05]), rng.uniform(0.2, 3)
+        swing = state + (big_l, 0.0)
+        constants = (p.m1 + p.m2, p.m2 * p.l2, p.l2, p.g)
+        assert plant._paper_rk4_step(swing, u, dt, constants) == plant.rk4_step(swing, u, dt, p)
+
+
+def test_the_plants_fast_step_equals_its_general_step():
+    """update() of the paper's model (no hoist, forces, damping, lag, limits) against the general path."""
+    values = {v.name: v.start for v in plant.VARIABLES if v.causality == "parameter"}
+    fast = plant.setup({**values, "theta1_0": 0.3, "dtheta2_0": -0.2, "u_max": 2.5})
+    general = fast._replace(plain_drive=False)
+    assert fast.plain_drive
+    state_fast = state_general = fast.state0
+    for k in range(300):
+        inputs = (3.0 * math.sin(0.05 * k), 0.0, 0.0, 0.0)
+        state_fast = plant.update(fast, state_fast, inputs, k * 0.01, 0.01)
+        state_general = plant.update(general, state_general, inputs, k * 0.01, 0.01)
+        assert state_fast == state_general

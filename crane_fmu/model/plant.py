@@ -80,39 +80,39 @@ def angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p, l1=None, load=
     return (e * r1 - b * r2) / det, (a * r2 - c * r1) / det
 
 
-def _paper_accelerations(theta1, dtheta1, theta2, dtheta2, u, m1m2, m2l2, l1, l2, g):
-    """Eqs (8)-(9) alone (no hoisting, forces or damping), the same arithmetic as :func:`angular_accelerations`
-    without its terms that vanish: the hot path of the paper's model."""
-    d = theta1 - theta2
-    sd, cd = math.sin(d), math.cos(d)
-    r1 = -m1m2 * (u * math.cos(theta1) + g * math.sin(theta1)) - m2l2 * dtheta2 * dtheta2 * sd
-    r2 = -u * math.cos(theta2) - g * math.sin(theta2) + l1 * dtheta1 * dtheta1 * sd
-    a, b = m1m2 * l1, m2l2 * cd
-    c = l1 * cd
-    det = a * l2 - b * c
-    return (l2 * r1 - b * r2) / det, (a * r2 - c * r1) / det
-
-
 def _paper_rk4_step(state, u, dt, constants):
     """:func:`rk4_step` of the 8-element state when l1 is at rest and nothing but u acts: the same numbers, faster.
 
-    ``constants`` is ``(m1 + m2, m2 l2, l2, g)``.
+    ``constants`` is ``(m1 + m2, m2 l2, l2, g)``. The accelerations are eqs (8)-(9) with the
+    arithmetic of :func:`angular_accelerations` less its terms that vanish here.
     """
     x, v, a1, w1, a2, w2, big_l, _ = state
-    h2 = 0.5 * dt
     m1m2, m2l2, l2, g = constants
-    k = (m1m2, m2l2, big_l, l2, g)
-    k1 = _paper_accelerations(a1, w1, a2, w2, u, *k)
-    k2 = _paper_accelerations(a1 + h2 * w1, w1 + h2 * k1[0], a2 + h2 * w2, w2 + h2 * k1[1], u, *k)
-    w1b, w2b = w1 + h2 * k1[0], w2 + h2 * k1[1]
-    w1c, w2c = w1 + h2 * k2[0], w2 + h2 * k2[1]
-    k3 = _paper_accelerations(a1 + h2 * w1b, w1c, a2 + h2 * w2b, w2c, u, *k)
-    w1d, w2d = w1 + dt * k3[0], w2 + dt * k3[1]
-    k4 = _paper_accelerations(a1 + dt * w1c, w1d, a2 + dt * w2c, w2d, u, *k)
+    a = m1m2 * big_l
+    al2 = a * l2
+    sin, cos = math.sin, math.cos
+
+    def accelerations(theta1, dtheta1, theta2, dtheta2):
+        d = theta1 - theta2
+        sd, cd = sin(d), cos(d)
+        r1 = -m1m2 * (u * cos(theta1) + g * sin(theta1)) - m2l2 * dtheta2 * dtheta2 * sd
+        r2 = -u * cos(theta2) - g * sin(theta2) + big_l * dtheta1 * dtheta1 * sd
+        b, c = m2l2 * cd, big_l * cd
+        det = al2 - b * c
+        return (l2 * r1 - b * r2) / det, (a * r2 - c * r1) / det
+
+    h2 = 0.5 * dt
+    k1a, k1b = accelerations(a1, w1, a2, w2)
+    w1b, w2b = w1 + h2 * k1a, w2 + h2 * k1b
+    k2a, k2b = accelerations(a1 + h2 * w1, w1b, a2 + h2 * w2, w2b)
+    w1c, w2c = w1 + h2 * k2a, w2 + h2 * k2b
+    k3a, k3b = accelerations(a1 + h2 * w1b, w1c, a2 + h2 * w2b, w2c)
+    w1d, w2d = w1 + dt * k3a, w2 + dt * k3b
+    k4a, k4b = accelerations(a1 + dt * w1c, w1d, a2 + dt * w2c, w2d)
     s = dt / 6.0
     return (x + dt * v + h2 * dt * u, v + dt * u,
-            a1 + s * (w1 + 2.0 * w1b + 2.0 * w1c + w1d), w1 + s * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]),
-            a2 + s * (w2 + 2.0 * w2b + 2.0 * w2c + w2d), w2 + s * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]),
+            a1 + s * (w1 + 2.0 * w1b + 2.0 * w1c + w1d), w1 + s * (k1a + 2.0 * k2a + 2.0 * k3a + k4a),
+            a2 + s * (w2 + 2.0 * w2b + 2.0 * w2c + w2d), w2 + s * (k1b + 2.0 * k2b + 2.0 * k3b + k4b),
             big_l, 0.0)
 
 
@@ -304,8 +304,9 @@ VARIABLES = PLANT_MODEL + (
 )
 
 Config = namedtuple("Config", "params max_substep state0 forces_c u_max v_max tau x_min x_max l1_min l1_max dl1_max "
-                               "paper")
-Config.__doc__ = "The plant's validated parameters; ``paper`` holds the constants of :func:`_paper_rk4_step`."
+                               "paper plain_drive")
+Config.__doc__ = ("The plant's validated parameters; ``paper`` holds the constants of :func:`_paper_rk4_step`, "
+                  "``plain_drive`` says the drive has no lag, speed limits or joint damping.")
 
 
 def _at_least(name, value, low, rule):
@@ -339,11 +340,45 @@ def setup(values):
                          f"got {p.l1!r}")
     return Config(p, values["max_substep"], state0 + (p.l1, 0.0, 0.0, 0.0), (values["c1"], values["c2"]),
                   values["u_max"], values["v_max"], values["tau"], values["x_min"], values["x_max"],
-                  values["l1_min"], values["l1_max"], values["dl1_max"], (p.m1 + p.m2, p.m2 * p.l2, p.l2, p.g))
+                  values["l1_min"], values["l1_max"], values["dl1_max"], (p.m1 + p.m2, p.m2 * p.l2, p.l2, p.g),
+                  values["tau"] == 0 and values["v_max"] == INF and values["dl1_max"] == INF
+                  and values["c1"] == values["c2"] == 0)
 
 
 def _clamp(value, low, high):
     return min(max(value, low), high)
+
+
+def _past_rail_end(c, x, t, time):
+    end = "x_max" if x > c.x_max else "x_min"
+    return Discard(f"the trolley would pass the rail end {end} = {getattr(c, end)!r} m (x = {x!r} m) "
+                   f"at t = {t!r} s: the step from t = {time!r} s is discarded")
+
+
+def _not_finite(time, u):
+    return Discard(f"plant state became non-finite in the step from t={time!r} s (u={u!r} m/s2); "
+                   "the step is discarded")
+
+
+def _paper_update(c, state, u, time, step):
+    """:func:`update` when only the trolley acceleration acts (no hoisting, forces, damping, lag or speed
+    limits; the cable at rest within its limits): the same numbers, faster."""
+    n = 1 if 0.0 < step <= c.max_substep else substeps(step, c.max_substep)  # ValueError for an unusable step
+    dt = step / n
+    demand = _clamp(u, -c.u_max, c.u_max)
+    swing, drive = state[:8], state[8]
+    try:
+        for k in range(n):
+            drive = demand + (drive - demand) * 0.0  # no lag, as update() computes it
+            swing = _paper_rk4_step(swing, demand, dt, c.paper)
+            if not c.x_min <= swing[0] <= c.x_max:
+                raise _past_rail_end(c, swing[0], time + (k + 1) * dt, time)
+        finite = all(map(math.isfinite, swing))
+    except (ArithmeticError, ValueError):  # overflow, or sin/cos of inf
+        finite = False
+    if not finite:
+        raise _not_finite(time, u)
+    return swing + (drive, demand)
 
 
 def update(config, state, inputs, time, step):
@@ -360,6 +395,9 @@ def update(config, state, inputs, time, step):
     would pass a rail end, or a state that becomes non-finite, discards the step.
     """
     u, hoist, f1, f2 = inputs
+    if config.plain_drive and hoist == 0.0 and f1 == 0.0 and f2 == 0.0 and state[7] == 0.0 \
+            and config.l1_min <= state[6] <= config.l1_max:
+        return _paper_update(config, state, u, time, step)
     if config.params.m2 == 0 and f2 != 0:
         raise Discard(f"F2 = {f2!r} N acts on a payload of mass m2 = 0: the step is discarded")
     n = substeps(step, config.max_substep)  # ValueError for an unusable step
@@ -384,9 +422,7 @@ def update(config, state, inputs, time, step):
                 swing = rk4_step(swing, accel, dt, p, hoist_now, forces)
             t = time + (k + 1) * dt
             if not c.x_min <= swing[0] <= c.x_max:
-                end = "x_max" if swing[0] > c.x_max else "x_min"
-                raise Discard(f"the trolley would pass the rail end {end} = {getattr(c, end)!r} m (x = {swing[0]!r} m) "
-                              f"at t = {t!r} s: the step from t = {time!r} s is discarded")
+                raise _past_rail_end(c, swing[0], t, time)
             if not c.l1_min <= swing[6] <= c.l1_max:
                 held = c.l1_max if swing[6] > c.l1_max else c.l1_min
                 if dl != 0.0:  # reached the limit in this sub-step (not already held there)
@@ -396,8 +432,7 @@ def update(config, state, inputs, time, step):
     except (ArithmeticError, ValueError):  # overflow, or sin/cos of inf
         finite = False
     if not finite:
-        raise Discard(f"plant state became non-finite in the step from t={time!r} s (u={u!r} m/s2); "
-                      "the step is discarded")
+        raise _not_finite(time, u)
     state = swing + (drive, accel)
     return Step(state, messages) if messages else state
 
