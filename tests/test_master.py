@@ -191,6 +191,41 @@ def test_csv_recorder_keeps_the_rows_of_a_run_cut_short(tmp_path):
     assert not list(tmp_path.glob("*.partial"))
 
 
+@pytest.mark.parametrize("suffix", [".csv", ".parquet"])
+def test_streaming_recorders_write_chunks_in_order_in_the_background(tmp_path, suffix):
+    from crane_fmu.cosim.recorder import read_result, recorder_for
+
+    recorder = recorder_for(tmp_path / f"run{suffix}")
+    recorder.CHUNK_ROWS = 3  # ten rows: three chunks written by the background thread, the last one by close
+    recorder.start(["a.y", "a.z"])
+    for k in range(10):
+        recorder.observe(0.1 * k, _values([k / 3, -k / 7]))
+    recorder.close()
+    columns = read_result(tmp_path / f"run{suffix}")
+    assert list(columns["time"]) == [0.1 * k for k in range(10)]
+    assert list(columns["a.y"]) == [k / 3 for k in range(10)]
+    assert list(columns["a.z"]) == [-k / 7 for k in range(10)]
+
+
+def test_a_chunk_that_cannot_be_written_stops_the_run(tmp_path):
+    from crane_fmu.cosim.recorder import CsvRecorder
+
+    class DiskFull(CsvRecorder):
+        CHUNK_ROWS = 2
+
+        def _write(self, table):
+            raise OSError(28, "No space left on device")
+
+    recorder = DiskFull(tmp_path / "full.csv")
+    recorder.start(["a.y"])
+    recorder.observe(0.0, _values([1.0]))
+    recorder.observe(0.1, _values([2.0]))  # the first chunk fails in the background
+    with pytest.raises(OSError, match="No space left on device"):
+        for k in range(2, 4):  # the second full chunk waits for the first and reports its error
+            recorder.observe(0.1 * k, _values([1.0]))
+    assert not (tmp_path / "full.csv").exists()
+
+
 def _values(values):
     buffer = (ctypes.c_double * len(values))(*values)
     return memoryview(buffer).cast("B").cast("d")
