@@ -23,6 +23,8 @@ project of that name).
 """
 
 import hashlib
+import importlib.util
+import marshal
 import os
 import sys
 import tempfile
@@ -104,6 +106,21 @@ def _stage(component, stage_dir, core, fmi_version):
     return script, package
 
 
+def _bytecode(item, source):
+    """``(name, data)`` of a checked-hash .pyc (PEP 552) of the FMU's Python file ``item`` for this interpreter.
+
+    A host unpacks an FMU into a fresh folder each time, so without it every
+    module of the core and of pythonfmu is compiled again at each instantiation.
+    The hash, not a timestamp (unzipping does not keep those), ties it to its
+    source; other Python versions do not find their cache tag and compile it.
+    """
+    folder, _, file = item.rpartition("/")
+    code = compile(source, item, "exec", dont_inherit=True)
+    data = importlib.util.MAGIC_NUMBER + (0b11).to_bytes(4, "little") + importlib.util.source_hash(source) \
+        + marshal.dumps(code)
+    return f"{folder}/__pycache__/{file[:-3]}.{sys.implementation.cache_tag}.pyc", data
+
+
 def build_fmu(component, out_dir, binaries=None, fmi_version=2):
     """Build one component's FMU into ``out_dir`` and return its path.
 
@@ -154,6 +171,8 @@ def build_fmu(component, out_dir, binaries=None, fmi_version=2):
                 elif item.filename == f"{linux}/{name}.so" and binaries is not None:
                     data = Path(binaries[0]).read_bytes()
                     dst.write(binaries[1], f"{linux}/PythonWrapper.so")
+                elif item.filename.startswith("resources/") and item.filename.endswith(".py"):
+                    dst.writestr(*_bytecode(item.filename, data))
                 dst.writestr(item.filename, data)
             dst.writestr("resources/slaveclass.txt", name)  # read by the wrapper
         os.replace(partial, final)

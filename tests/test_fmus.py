@@ -169,3 +169,22 @@ def test_instances_of_one_fmu_are_independent(crane_fmus):
     finally:
         a.free()
         b.free()
+
+
+@pytest.mark.parametrize("folder", ["fmus", "fmi3"])
+def test_every_bundled_module_comes_with_checked_bytecode_for_this_python(fmu_dir, folder):
+    """A host unpacks the FMU afresh each time: the .pyc spare the compile, and are refused if the source changes."""
+    import importlib.util
+    import sys
+    import zipfile
+
+    with zipfile.ZipFile(fmu_dir.parent / folder / "CranePlant.fmu") as fmu:
+        names = set(fmu.namelist())
+        sources = [n for n in names if n.startswith("resources/") and n.endswith(".py")]
+        assert len(sources) > 20  # the core, the slave script and pythonfmu
+        for source in sources:
+            folder_, _, file = source.rpartition("/")
+            pyc = fmu.read(f"{folder_}/__pycache__/{file[:-3]}.{sys.implementation.cache_tag}.pyc")
+            assert pyc[:4] == importlib.util.MAGIC_NUMBER
+            assert int.from_bytes(pyc[4:8], "little") == 0b11  # hash-based, checked (PEP 552)
+            assert pyc[8:16] == importlib.util.source_hash(fmu.read(source))
