@@ -287,10 +287,8 @@ def _cmd_simulate(args):
 def _simulate(args, system):
     """Run a system, writing the CSV (and plot) of ``args``; ``--parameters`` and ``--set`` override its values."""
     from crane_fmu import systems
-    from crane_fmu.analysis.plots import plot_run
     from crane_fmu.cosim import FmiError, read_result, recorder_for, simulate
     from crane_fmu.cosim.master import communication_points
-    from crane_fmu.cosim.ssp import load_parameters
 
     stop_time = system.stop_time if args.stop_time is None else args.stop_time
     step = system.step if args.step is None else args.step
@@ -298,6 +296,8 @@ def _simulate(args, system):
     fmus, connections = systems.resolve(system, args.fmu_dir)
     system = systems.at_step(system, args.fmu_dir, step)
     if args.parameters:
+        from crane_fmu.cosim.ssp import load_parameters
+
         system = system.with_parameters(load_parameters(args.parameters))
     system = system.with_parameters(_parse_sets(args.set, list(fmus), lambda i: _fmu_variables(fmus[i])))
     systems.check_parameters(system, args.fmu_dir)
@@ -325,6 +325,8 @@ def _simulate(args, system):
         recorder.close(reason="interrupted")  # no-op when the run finished
     print(f"wrote {args.out}")
     if args.plot:
+        from crane_fmu.analysis.plots import plot_run
+
         partial = args.plot + ".partial.png"
         settings = ", ".join(item.split("=", 1)[0] + "=" + item.split("=", 1)[1] for item in args.set)
         plot_run(read_result(args.out), partial, f"{system.name} ({args.master}, h={step:g} s)"

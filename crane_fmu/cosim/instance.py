@@ -5,8 +5,10 @@ warning becomes one :class:`FmiError` that names the instance, the FMI function
 and the simulation time, with the FMU's own log messages attached.
 """
 
+import functools
 import shutil
 from collections import deque
+from pathlib import Path
 
 STATUS = ("ok", "warning", "discard", "error", "fatal", "pending")
 
@@ -61,12 +63,10 @@ class Instance:
     """
 
     def _describe(self, path, name):
-        from fmpy import extract, read_model_description
+        from fmpy import extract
 
         self.name = name
-        self.md = read_model_description(str(path))
-        if self.md.coSimulation is None:
-            raise ValueError(f"{path} is not a co-simulation FMU")
+        self.md = read_fmu(path)
         self.variables = {v.name: v for v in self.md.modelVariables}
         self.outputs = [v.name for v in self.md.modelVariables if v.causality == "output"]
         self.inputs = [v.name for v in self.md.modelVariables if v.causality == "input"]
@@ -123,13 +123,35 @@ class Instance:
 
 def open_instance(path, name):
     """An instance of the FMU at ``path``: the one place where the FMI version chooses the adapter."""
-    from fmpy import read_model_description
-
-    version = read_model_description(str(path)).fmiVersion
-    if version.startswith("3"):
+    if read_fmu(path).fmiVersion.startswith("3"):
         from .fmi3 import Fmi3Instance
 
         return Fmi3Instance(path, name)
     from .fmi2 import Fmi2Instance
 
     return Fmi2Instance(path, name)
+
+
+def read_fmu(path):
+    """The model description of a readable FMI 2.0 or 3.0 co-simulation FMU, else ValueError (one line).
+
+    Read once per file version (path, size, modification time): treat it as read-only.
+    """
+    if not Path(path).is_file():
+        raise ValueError(f"{path} not found")
+    stat = Path(path).stat()
+    return _read_fmu(str(Path(path).resolve()), stat.st_size, stat.st_mtime_ns, str(path))
+
+
+@functools.lru_cache(maxsize=64)
+def _read_fmu(resolved, size, mtime_ns, path):
+    from fmpy import read_model_description
+
+    try:
+        md = read_model_description(str(path))
+    except Exception as exc:  # zip, XML and schema errors alike
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ValueError(f"{path} is not a readable FMU ({reason})") from None
+    if md.fmiVersion not in ("2.0", "3.0") or md.coSimulation is None:
+        raise ValueError(f"{path} is not an FMI 2.0 or 3.0 co-simulation FMU")
+    return md

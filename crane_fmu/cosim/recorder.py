@@ -172,8 +172,9 @@ def _table(rows, names):
     import numpy as np
     import pyarrow as pa
 
-    data = np.frombuffer(rows, dtype=float).reshape(-1, len(names))
-    return pa.Table.from_arrays([pa.array(data[:, i]) for i in range(len(names))], names=names)
+    columns = np.frombuffer(rows, dtype=float).reshape(-1, len(names)).T.copy()  # each column contiguous
+    return pa.Table.from_arrays([pa.Array.from_buffers(pa.float64(), len(c), [None, pa.py_buffer(c)])
+                                 for c in columns], names=names)
 
 
 def recorder_for(path):

@@ -5,11 +5,10 @@ either by a model identifier (the file ``<identifier>.fmu`` in a folder of built
 FMUs) or by the path of an ``.fmu`` file.
 """
 
-import functools
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from .instance import FmiError, open_instance
+from .instance import FmiError, open_instance, read_fmu
 from .master import Connection, Master, communication_points
 from .recorder import ArrayRecorder
 
@@ -123,31 +122,6 @@ def connect(interfaces, connections=(), match_names=True):
                 if sources:
                     result.append(Connection(sources[0], name, target, name))
     return result
-
-
-def read_fmu(path):
-    """The model description of a readable FMI 2.0 or 3.0 co-simulation FMU, else ValueError (one line).
-
-    Read once per file version (path, size, modification time): treat it as read-only.
-    """
-    if not Path(path).is_file():
-        raise ValueError(f"{path} not found")
-    stat = Path(path).stat()
-    return _read_fmu(str(Path(path).resolve()), stat.st_size, stat.st_mtime_ns, str(path))
-
-
-@functools.lru_cache(maxsize=64)
-def _read_fmu(resolved, size, mtime_ns, path):
-    from fmpy import read_model_description
-
-    try:
-        md = read_model_description(str(path))
-    except Exception as exc:  # zip, XML and schema errors alike
-        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ValueError(f"{path} is not a readable FMU ({reason})") from None
-    if md.fmiVersion not in ("2.0", "3.0") or md.coSimulation is None:
-        raise ValueError(f"{path} is not an FMI 2.0 or 3.0 co-simulation FMU")
-    return md
 
 
 def settable_variables(fmu_path):
