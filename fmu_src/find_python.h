@@ -19,6 +19,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* For Python hosts: every FMI call of this FMU runs Python in the host's own interpreter (place 1
+   above) under its GIL, so a host may call it without releasing the GIL first (ctypes.PyDLL, not
+   ctypes.CDLL) and save a release and re-acquire per call. The master of crane_fmu.cosim does. */
+__attribute__((visibility("default"))) const int crane_fmu_runs_in_host_python = 1;
+
 #ifndef FALLBACK_SONAMES
 #define FALLBACK_SONAMES "libpython3.13.so.1.0:libpython3.12.so.1.0:libpython3.11.so.1.0:libpython3.10.so.1.0"
 #endif

@@ -116,3 +116,18 @@ def test_readme_shows_the_current_scoreboard(fmu_dir, tmp_path):
     readme = (ROOT / "README.md").read_text()
     section = re.search(r"<!-- scoreboard:start -->\n(.*)\n<!-- scoreboard:end -->", readme, re.S).group(1)
     assert section.strip() == scoreboard.render_summary(rows)
+
+
+def test_only_fmus_that_run_python_here_are_called_holding_the_gil(template_fmu, crane_fmus):
+    """Ours say so (crane_fmu_runs_in_host_python); a stock pythonfmu FMU is called as fmpy loads it."""
+    import ctypes
+
+    from crane_fmu.cosim import open_instance
+
+    ours, stock = open_instance(crane_fmus["plant"], "plant"), open_instance(template_fmu, "mine")
+    try:
+        assert isinstance(ours._library, ctypes.PyDLL)
+        assert not isinstance(stock._library, ctypes.PyDLL)
+    finally:
+        ours.free()
+        stock.free()

@@ -64,6 +64,7 @@ class Fmi2Instance(Instance):
             shutil.rmtree(self._unzip, ignore_errors=True)
             raise
         self._instantiated = True
+        self._library = self._hot_library()
         self._step = self.stepper()
         # Ask for every log message. (pythonfmu 0.7's own binary ignores this and loggingOn
         # alike and never calls the logger, so its errors arrive without a reason.)
@@ -115,8 +116,8 @@ class Fmi2Instance(Instance):
     # --- hot path: raw ctypes calls (no fmpy argument conversion) on preallocated arrays ---
 
     def _raw(self, name, vrs, values):
-        # dll[name] is a fresh ctypes function without fmpy's argtypes: the arguments are ctypes objects already
-        call = partial(self._fmu.dll[name], ctypes.c_void_p(self._fmu.component), vrs, ctypes.c_size_t(len(vrs)),
+        # library[name] is a fresh ctypes function without fmpy's argtypes: the arguments are ctypes objects already
+        call = partial(self._library[name], ctypes.c_void_p(self._fmu.component), vrs, ctypes.c_size_t(len(vrs)),
                        values)
         return call, name
 
@@ -127,7 +128,7 @@ class Fmi2Instance(Instance):
         return self._raw("fmi2SetReal", vrs, values)
 
     def stepper(self):
-        do_step, component = self._fmu.dll["fmi2DoStep"], ctypes.c_void_p(self._fmu.component)
+        do_step, component = self._library["fmi2DoStep"], ctypes.c_void_p(self._fmu.component)
         do_step.argtypes = (ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int)
         return (lambda time, step: do_step(component, time, step, 1)), "fmi2DoStep"
 

@@ -24,6 +24,7 @@ class Fmi3Instance(Instance):
             shutil.rmtree(self._unzip, ignore_errors=True)
             raise
         self._instantiated = True
+        self._library = self._hot_library()
         self._step = self.stepper()
 
     def _log(self, environment, status, category, message):
@@ -70,7 +71,7 @@ class Fmi3Instance(Instance):
 
     def _raw(self, name, vrs, values):
         size = ctypes.c_size_t(len(vrs))
-        return partial(self._fmu.dll[name], ctypes.c_void_p(self._fmu.component), vrs, size, values, size), name
+        return partial(self._library[name], ctypes.c_void_p(self._fmu.component), vrs, size, values, size), name
 
     def reader(self, vrs, values):
         return self._raw("fmi3GetFloat64", vrs, values)
@@ -79,7 +80,7 @@ class Fmi3Instance(Instance):
         return self._raw("fmi3SetFloat64", vrs, values)
 
     def stepper(self):
-        do_step, component = self._fmu.dll["fmi3DoStep"], ctypes.c_void_p(self._fmu.component)
+        do_step, component = self._library["fmi3DoStep"], ctypes.c_void_p(self._fmu.component)
         flag = ctypes.POINTER(fmi3Boolean)
         do_step.argtypes = (ctypes.c_void_p, ctypes.c_double, ctypes.c_double, fmi3Boolean, flag, flag, flag,
                             ctypes.POINTER(fmi3Float64))

@@ -105,6 +105,17 @@ class Instance:
             raise KeyError(f"{self.name} has no variable {name!r}; valid names: " + ", ".join(self.variables))
         return v
 
+    def _hot_library(self):
+        """The FMU's library for the hot path. An FMU that says it runs Python in this process under its GIL
+        (ours export ``crane_fmu_runs_in_host_python``) is called without releasing the GIL; others as fmpy
+        loaded them."""
+        import ctypes
+
+        dll = self._fmu.dll
+        if hasattr(dll, "crane_fmu_runs_in_host_python"):
+            return ctypes.PyDLL(dll._name, handle=dll._handle)
+        return dll
+
     def vr_array(self, names):
         """A ctypes array of the value references of ``names`` (checked)."""
         import ctypes
