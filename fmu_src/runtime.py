@@ -7,6 +7,7 @@ is bundled into every FMU with the model core.
 
 import math
 import operator
+from math import isfinite
 
 from crane_fmu.model.component import Discard, Step
 
@@ -43,9 +44,9 @@ class Runtime:
 
         A value that is not finite is refused (ValueError naming the input) and nothing is set.
         """
-        if not all(map(math.isfinite, values)):
+        if not all(map(isfinite, values)):
             position, value = next((p, v) for p, v in zip(positions or range(len(values)), values)
-                                   if not math.isfinite(v))
+                                   if not isfinite(v))
             raise ValueError(f"input {self._input_names[position]} must be finite, got {value!r}")
         if positions is None:
             self.inputs[:] = values

@@ -80,19 +80,16 @@ def angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p, l1=None, load=
     return (e * r1 - b * r2) / det, (a * r2 - c * r1) / det
 
 
-def _paper_rk4_step(state, u, dt, constants):
+def _paper_stepper(p):
     """:func:`rk4_step` of the 8-element state when l1 is at rest and nothing but u acts: the same numbers, faster.
 
-    ``constants`` is ``(m1 + m2, m2 l2, l2, g)``. The accelerations are eqs (8)-(9) with the
-    arithmetic of :func:`angular_accelerations` less its terms that vanish here.
+    Returns ``step(state, u, dt)`` with the constants of ``p`` bound once. The accelerations are
+    eqs (8)-(9) with the arithmetic of :func:`angular_accelerations` less its terms that vanish here.
     """
-    x, v, a1, w1, a2, w2, big_l, _ = state
-    m1m2, m2l2, l2, g = constants
-    a = m1m2 * big_l
-    al2 = a * l2
+    m1m2, m2l2, l2, g = p.m1 + p.m2, p.m2 * p.l2, p.l2, p.g
     sin, cos = math.sin, math.cos
 
-    def accelerations(theta1, dtheta1, theta2, dtheta2):
+    def accelerations(theta1, dtheta1, theta2, dtheta2, u, big_l, a, al2):
         d = theta1 - theta2
         sd, cd = sin(d), cos(d)
         r1 = -m1m2 * (u * cos(theta1) + g * sin(theta1)) - m2l2 * dtheta2 * dtheta2 * sd
@@ -101,19 +98,25 @@ def _paper_rk4_step(state, u, dt, constants):
         det = al2 - b * c
         return (l2 * r1 - b * r2) / det, (a * r2 - c * r1) / det
 
-    h2 = 0.5 * dt
-    k1a, k1b = accelerations(a1, w1, a2, w2)
-    w1b, w2b = w1 + h2 * k1a, w2 + h2 * k1b
-    k2a, k2b = accelerations(a1 + h2 * w1, w1b, a2 + h2 * w2, w2b)
-    w1c, w2c = w1 + h2 * k2a, w2 + h2 * k2b
-    k3a, k3b = accelerations(a1 + h2 * w1b, w1c, a2 + h2 * w2b, w2c)
-    w1d, w2d = w1 + dt * k3a, w2 + dt * k3b
-    k4a, k4b = accelerations(a1 + dt * w1c, w1d, a2 + dt * w2c, w2d)
-    s = dt / 6.0
-    return (x + dt * v + h2 * dt * u, v + dt * u,
-            a1 + s * (w1 + 2.0 * w1b + 2.0 * w1c + w1d), w1 + s * (k1a + 2.0 * k2a + 2.0 * k3a + k4a),
-            a2 + s * (w2 + 2.0 * w2b + 2.0 * w2c + w2d), w2 + s * (k1b + 2.0 * k2b + 2.0 * k3b + k4b),
-            big_l, 0.0)
+    def step(state, u, dt):
+        x, v, a1, w1, a2, w2, big_l, _ = state
+        a = m1m2 * big_l
+        al2 = a * l2
+        h2 = 0.5 * dt
+        k1a, k1b = accelerations(a1, w1, a2, w2, u, big_l, a, al2)
+        w1b, w2b = w1 + h2 * k1a, w2 + h2 * k1b
+        k2a, k2b = accelerations(a1 + h2 * w1, w1b, a2 + h2 * w2, w2b, u, big_l, a, al2)
+        w1c, w2c = w1 + h2 * k2a, w2 + h2 * k2b
+        k3a, k3b = accelerations(a1 + h2 * w1b, w1c, a2 + h2 * w2b, w2c, u, big_l, a, al2)
+        w1d, w2d = w1 + dt * k3a, w2 + dt * k3b
+        k4a, k4b = accelerations(a1 + dt * w1c, w1d, a2 + dt * w2c, w2d, u, big_l, a, al2)
+        s = dt / 6.0
+        return (x + dt * v + h2 * dt * u, v + dt * u,
+                a1 + s * (w1 + 2.0 * w1b + 2.0 * w1c + w1d), w1 + s * (k1a + 2.0 * k2a + 2.0 * k3a + k4a),
+                a2 + s * (w2 + 2.0 * w2b + 2.0 * w2c + w2d), w2 + s * (k1b + 2.0 * k2b + 2.0 * k3b + k4b),
+                big_l, 0.0)
+
+    return step
 
 
 def derivative(state, u, p, hoist=0.0, forces=(0.0, 0.0, 0.0, 0.0)):
@@ -251,14 +254,15 @@ def outputs(state, p):
     """
     x, dx, theta1, dtheta1, theta2, dtheta2 = state[:6]
     l1, dl1 = state[6:8] if len(state) > 6 else (p.l1, 0.0)
+    m1, m2, l2 = p.m1, p.m2, p.l2
     s1, c1, s2, c2 = math.sin(theta1), math.cos(theta1), math.sin(theta2), math.cos(theta2)
     x1, y1 = x + l1 * s1, -l1 * c1
-    x2, y2 = x1 + p.l2 * s2, y1 - p.l2 * c2
+    x2, y2 = x1 + l2 * s2, y1 - l2 * c2
     vx1, vy1 = dx + l1 * dtheta1 * c1 + dl1 * s1, l1 * dtheta1 * s1 - dl1 * c1
-    vx2, vy2 = vx1 + p.l2 * dtheta2 * c2, vy1 + p.l2 * dtheta2 * s2
-    kinetic = 0.5 * (p.m1 * (vx1 * vx1 + vy1 * vy1) + p.m2 * (vx2 * vx2 + vy2 * vy2))
+    vx2, vy2 = vx1 + l2 * dtheta2 * c2, vy1 + l2 * dtheta2 * s2
+    kinetic = 0.5 * (m1 * (vx1 * vx1 + vy1 * vy1) + m2 * (vx2 * vx2 + vy2 * vy2))
     return (x, dx, theta1, dtheta1, theta2, dtheta2, x1, y1, x2, y2,
-            kinetic + p.g * (p.m1 * y1 + p.m2 * y2))
+            kinetic + p.g * (m1 * y1 + m2 * y2))
 
 
 # --- the CranePlant component -------------------------------------------------------
@@ -305,7 +309,7 @@ VARIABLES = PLANT_MODEL + (
 
 Config = namedtuple("Config", "params max_substep state0 forces_c u_max v_max tau x_min x_max l1_min l1_max dl1_max "
                                "paper plain_drive")
-Config.__doc__ = ("The plant's validated parameters; ``paper`` holds the constants of :func:`_paper_rk4_step`, "
+Config.__doc__ = ("The plant's validated parameters; ``paper`` is the RK4 step of :func:`_paper_stepper`, "
                   "``plain_drive`` says the drive has no lag, speed limits or joint damping.")
 
 
@@ -340,7 +344,7 @@ def setup(values):
                          f"got {p.l1!r}")
     return Config(p, values["max_substep"], state0 + (p.l1, 0.0, 0.0, 0.0), (values["c1"], values["c2"]),
                   values["u_max"], values["v_max"], values["tau"], values["x_min"], values["x_max"],
-                  values["l1_min"], values["l1_max"], values["dl1_max"], (p.m1 + p.m2, p.m2 * p.l2, p.l2, p.g),
+                  values["l1_min"], values["l1_max"], values["dl1_max"], _paper_stepper(p),
                   values["tau"] == 0 and values["v_max"] == INF and values["dl1_max"] == INF
                   and values["c1"] == values["c2"] == 0)
 
@@ -365,12 +369,12 @@ def _paper_update(c, state, u, time, step):
     limits; the cable at rest within its limits): the same numbers, faster."""
     n = 1 if 0.0 < step <= c.max_substep else substeps(step, c.max_substep)  # ValueError for an unusable step
     dt = step / n
-    demand = _clamp(u, -c.u_max, c.u_max)
+    demand = min(max(u, -c.u_max), c.u_max)
     swing, drive = state[:8], state[8]
     try:
         for k in range(n):
             drive = demand + (drive - demand) * 0.0  # no lag, as update() computes it
-            swing = _paper_rk4_step(swing, demand, dt, c.paper)
+            swing = c.paper(swing, demand, dt)
             if not c.x_min <= swing[0] <= c.x_max:
                 raise _past_rail_end(c, swing[0], time + (k + 1) * dt, time)
         finite = all(map(math.isfinite, swing))
@@ -417,7 +421,7 @@ def update(config, state, inputs, time, step):
                 accel = _clamp(accel, (-c.v_max - v) / dt, (c.v_max - v) / dt)
             hoist_now = hoist if c.dl1_max == INF else _clamp(hoist, (-c.dl1_max - dl) / dt, (c.dl1_max - dl) / dt)
             if hoist_now == 0.0 and swing[7] == 0.0 and not any(forces):
-                swing = _paper_rk4_step(swing, accel, dt, c.paper)
+                swing = c.paper(swing, accel, dt)
             else:
                 swing = rk4_step(swing, accel, dt, p, hoist_now, forces)
             t = time + (k + 1) * dt
@@ -438,7 +442,7 @@ def update(config, state, inputs, time, step):
 
 
 def _outputs(config, state, inputs):
-    return outputs(state[:8], config.params) + (state[6], state[7], state[9])
+    return outputs(state, config.params) + (state[6], state[7], state[9])
 
 
 COMPONENT = Component(
