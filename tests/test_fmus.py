@@ -2,6 +2,7 @@
 
 import math
 import random
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -169,6 +170,31 @@ def test_instances_of_one_fmu_are_independent(crane_fmus):
     finally:
         a.free()
         b.free()
+
+
+def test_an_unzipped_fmu_is_reused_once_freed_and_removed_at_exit(crane_fmus):
+    """Instances alive together each have their own folder; a freed one's folder serves the next instance."""
+    import subprocess
+    import sys
+
+    script = """
+import sys
+from crane_fmu.cosim import open_instance
+a, b = open_instance(sys.argv[1], "a"), open_instance(sys.argv[1], "b")
+assert a._unzip != b._unzip
+folders = {a._unzip, b._unzip}
+a.free()
+b.free()
+c = open_instance(sys.argv[1], "c")
+assert c._unzip in folders, (c._unzip, folders)
+c.free()
+print(*folders)
+"""
+    done = subprocess.run([sys.executable, "-c", script, str(crane_fmus["plant"])], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr
+    folders = done.stdout.split()
+    assert len(folders) == 2 and not any(Path(f).exists() for f in folders)
 
 
 @pytest.mark.parametrize("folder", ["fmus", "fmi3"])

@@ -5,7 +5,9 @@ warning becomes one :class:`FmiError` that names the instance, the FMI function
 and the simulation time, with the FMU's own log messages attached.
 """
 
+import atexit
 import functools
+import os
 import shutil
 from collections import deque
 from pathlib import Path
@@ -63,8 +65,6 @@ class Instance:
     """
 
     def _describe(self, path, name):
-        from fmpy import extract
-
         self.name = name
         self.md = read_fmu(path)
         self.variables = {v.name: v for v in self.md.modelVariables}
@@ -75,7 +75,7 @@ class Instance:
         self.messages = deque(maxlen=20)  # the FMU's latest log messages
         self.time = None
         self._instantiated = False
-        self._unzip = extract(str(path))
+        self._folder_key, self._unzip = _take_folder(path)
 
     def _call(self, function, call, *args, **kwargs):
         """Run an fmpy call, turning its exceptions into FmiError (with the exception as cause)."""
@@ -123,13 +123,14 @@ class Instance:
         return (ctypes.c_uint * len(names))(*(self._variable(n).valueReference for n in names))
 
     def free(self):
-        """Free the instance and unload the library; safe to call twice."""
+        """Free the instance and unload the library; safe to call twice. The extracted folder is kept for the
+        next instance of this FMU file and removed when the process exits."""
         if self._instantiated:
             self._instantiated = False
             try:
                 self._fmu.freeInstance()
             finally:
-                shutil.rmtree(self._unzip, ignore_errors=True)
+                _SPARE_FOLDERS.setdefault(self._folder_key, []).append(self._unzip)
 
 
 def open_instance(path, name):
@@ -141,6 +142,34 @@ def open_instance(path, name):
     from .fmi2 import Fmi2Instance
 
     return Fmi2Instance(path, name)
+
+
+# Extracted FMUs no instance uses now, by FMU file version: the next instance of the same FMU takes
+# one instead of unzipping it again (a sweep's worker runs thousands of cases); removed at exit.
+# Instances alive at the same time each have their own folder, as if every one had unzipped it.
+_SPARE_FOLDERS = {}
+
+
+def _take_folder(path):
+    """``(key, folder)``: a spare extracted folder of the FMU at ``path``, else a new one."""
+    stat = Path(path).stat()
+    key = (str(Path(path).resolve()), stat.st_size, stat.st_mtime_ns)
+    spare = _SPARE_FOLDERS.get(key)
+    while spare:
+        folder = spare.pop()
+        if os.path.isdir(folder):
+            return key, folder
+    from fmpy import extract
+
+    return key, extract(str(path))
+
+
+@atexit.register
+def _remove_spare_folders():
+    for folders in _SPARE_FOLDERS.values():
+        for folder in folders:
+            shutil.rmtree(folder, ignore_errors=True)
+    _SPARE_FOLDERS.clear()
 
 
 def read_fmu(path):
