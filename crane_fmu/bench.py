@@ -241,13 +241,17 @@ def run_bench(stop_time=20.0, step=1e-3, repeat=5, out=print):
     return figures
 
 
-def run_sweep_bench(n_cases=16, stop_time=10.0, step=1e-3, out=print):
+def run_sweep_bench(n_cases=16, stop_time=10.0, step=1e-3, repeat=3, out=print):
     """Cases per second of a sweep on a local Dask cluster with 1 and with 2 workers.
 
-    Each cluster is started and warmed up (one case per worker) before the
-    clock starts. The per-case overhead is the wall time per case with one
-    worker minus the mean time the case itself took inside the worker.
+    Both clusters are started and warmed up (one case per worker) before the
+    clock starts; the batches then alternate between them ``repeat`` times and
+    the medians are reported, so drifts in machine speed hit both. The per-case
+    overhead is the wall time per case with one worker minus the mean time the
+    case itself took inside the worker.
     """
+    from contextlib import ExitStack
+
     from distributed import Client, LocalCluster
 
     from crane_fmu.sweep import spec
@@ -256,24 +260,30 @@ def run_sweep_bench(n_cases=16, stop_time=10.0, step=1e-3, out=print):
     study = spec.parse({"stop_time": stop_time, "step": step, "metrics": ["outcome", "max_theta1_deg"]})
     settings, metrics = study.settings(), study.metrics
     cases = [{"plant.theta1_0": 0.01 * (1 + i % 8), "controller.w_theta2": 0.0} for i in range(n_cases)]
-    figures = {}
-    with tempfile.TemporaryDirectory(prefix="crane_bench_") as tmp:
+    walls, case_times = {1: [], 2: []}, []
+    with tempfile.TemporaryDirectory(prefix="crane_bench_") as tmp, ExitStack() as stack:
         paper = systems.get("paper")
         build_all(Path(tmp) / "fmus", paper.instances.values(), systems=(), fmi3=False, log=lambda _: None)
         system = shippable(paper, Path(tmp) / "fmus")
+        clients = {}
         for workers in (1, 2):
-            with LocalCluster(n_workers=workers, threads_per_worker=1, dashboard_address=None,
-                              silence_logs=50) as cluster, Client(cluster) as client:
-                shipped = client.scatter([system], broadcast=True)[0]
-                client.gather(client.map(run_case, cases[:workers], settings=settings, system=shipped,
-                                         metric_names=metrics, pure=False))
+            cluster = stack.enter_context(LocalCluster(n_workers=workers, threads_per_worker=1,
+                                                       dashboard_address=":0", silence_logs=50))  # any free port
+            client = stack.enter_context(Client(cluster))
+            shipped = client.scatter([system], broadcast=True)[0]
+            clients[workers] = (client, shipped)
+            client.gather(client.map(run_case, cases[:workers], settings=settings, system=shipped,
+                                     metric_names=metrics, pure=False))
+        for _ in range(repeat):
+            for workers, (client, shipped) in clients.items():
                 start = time.perf_counter()
                 rows = client.gather(client.map(run_case, cases, settings=settings, system=shipped,
                                                 metric_names=metrics, pure=False))
-                figures[workers] = (time.perf_counter() - start, rows)
-    wall1, rows1 = figures[1]
-    wall2, _ = figures[2]
-    case_time = statistics.mean(r["duration_s"] for r in rows1)
+                walls[workers].append(time.perf_counter() - start)
+                if workers == 1:
+                    case_times.append(statistics.mean(r["duration_s"] for r in rows))
+    wall1, wall2 = statistics.median(walls[1]), statistics.median(walls[2])
+    case_time = statistics.median(case_times)
     result = {
         "cases_per_s_1": n_cases / wall1,
         "cases_per_s_2": n_cases / wall2,
@@ -281,7 +291,8 @@ def run_sweep_bench(n_cases=16, stop_time=10.0, step=1e-3, out=print):
         "case_s": case_time,
         "overhead_fraction": (wall1 / n_cases - case_time) / case_time,
     }
-    out(f"{n_cases} cases of {stop_time:g} s at h = {step:g} s (crane pair), local Dask cluster")
+    out(f"{n_cases} cases of {stop_time:g} s at h = {step:g} s (crane pair), local Dask cluster, "
+        f"medians of {repeat} alternating batches")
     out(f"1 worker:  {result['cases_per_s_1']:.2f} cases/s")
     out(f"2 workers: {result['cases_per_s_2']:.2f} cases/s")
     out(f"parallel efficiency on 2 workers: {100 * result['efficiency']:.0f} %  (target >= 85 %)")

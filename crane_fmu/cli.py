@@ -163,7 +163,8 @@ def _parser():
     p.add_argument("--stop-time", type=_number, default=None,
                    help="simulated time per run [s] (default 20, with --sweep 10)")
     p.add_argument("--step", type=_number, default=1e-3, help="communication step [s]")
-    p.add_argument("--repeat", type=int, default=5, help="runs per pair; the median is reported")
+    p.add_argument("--repeat", type=int, default=5,
+                   help="runs per pair (with --sweep: batches per cluster); the median is reported")
     p.add_argument("--sweep", action="store_true",
                    help="instead: cases per second of a Dask sweep with 1 and 2 workers")
     p.add_argument("--cases", type=int, default=16, help="with --sweep: cases per measurement")
@@ -516,7 +517,7 @@ def _cmd_bench(args):
         elif args.endurance:
             run_endurance(args.stop_time or 3600.0, args.step)
         elif args.sweep:
-            run_sweep_bench(args.cases, args.stop_time or 10.0, args.step)
+            run_sweep_bench(args.cases, args.stop_time or 10.0, args.step, args.repeat)
         else:
             run_bench(args.stop_time or 20.0, args.step, args.repeat)
     except ValueError as exc:
