@@ -198,19 +198,27 @@ print(*folders)
 
 
 @pytest.mark.parametrize("folder", ["fmus", "fmi3"])
-def test_every_bundled_module_comes_with_checked_bytecode_for_this_python(fmu_dir, folder):
-    """A host unpacks the FMU afresh each time: the .pyc spare the compile, and are refused if the source changes."""
+def test_the_python_code_is_one_archive_with_checked_bytecode_for_this_python(fmu_dir, folder):
+    """A host unpacks the FMU afresh each time: few files, and .pyc that spare the compile (refused if the
+    source changes: hash-based, checked, PEP 552)."""
     import importlib.util
+    import io
     import sys
     import zipfile
 
+    def check(pyc, source):
+        assert pyc[:4] == importlib.util.MAGIC_NUMBER
+        assert int.from_bytes(pyc[4:8], "little") == 0b11
+        assert pyc[8:16] == importlib.util.source_hash(source)
+
     with zipfile.ZipFile(fmu_dir.parent / folder / "CranePlant.fmu") as fmu:
-        names = set(fmu.namelist())
-        sources = [n for n in names if n.startswith("resources/") and n.endswith(".py")]
-        assert len(sources) > 20  # the core, the slave script and pythonfmu
-        for source in sources:
-            folder_, _, file = source.rpartition("/")
-            pyc = fmu.read(f"{folder_}/__pycache__/{file[:-3]}.{sys.implementation.cache_tag}.pyc")
-            assert pyc[:4] == importlib.util.MAGIC_NUMBER
-            assert int.from_bytes(pyc[4:8], "little") == 0b11  # hash-based, checked (PEP 552)
-            assert pyc[8:16] == importlib.util.source_hash(fmu.read(source))
+        loose = [n for n in fmu.namelist() if n.startswith("resources/") and n.endswith(".py")]
+        assert len(loose) == 1  # the slave script every wrapper imports
+        script = loose[0].removeprefix("resources/")[:-3]
+        check(fmu.read(f"resources/__pycache__/{script}.{sys.implementation.cache_tag}.pyc"), fmu.read(loose[0]))
+        archive = zipfile.ZipFile(io.BytesIO(fmu.read("resources/python.zip")))
+    sources = [n for n in archive.namelist() if n.endswith(".py")]
+    assert {n.split("/")[0] for n in sources} == {script.rsplit("_", 1)[0], "pythonfmu" if folder == "fmus"
+                                                  else "pythonfmu3"}
+    for name in sources:
+        check(archive.read(name[:-3] + ".pyc"), archive.read(name))
