@@ -42,8 +42,7 @@ class FakeInstance:
             return self.set_status
         return set_, "set"
 
-    @property
-    def _step(self):
+    def stepper(self):
         def do_step(t, h):
             self.calls.append(t)
             if self._step_function:

@@ -60,8 +60,8 @@ class Instance:
     ``writer(vrs, values)``, each ``(call, function)`` with ``call()`` getting or
     setting the Reals of the value references ``vrs`` from or into the ctypes
     array ``values`` and returning the FMI status, and ``stepper()``, the same
-    with ``call(time, step)`` taking one step. They set ``self._step`` to their
-    ``stepper()`` once instantiated.
+    with ``call(time, step)`` taking one step (:meth:`do_step` uses the one in
+    ``self._step``).
     """
 
     def _describe(self, path, name):

@@ -47,7 +47,7 @@ class _Port:
         size = len(instance.outputs)
         self.out = (ctypes.c_double * size).from_buffer(buffer, offset * ctypes.sizeof(ctypes.c_double))
         self.read = (*instance.reader(instance.vr_array(instance.outputs), self.out), instance)
-        self.step = (*instance._step, instance)
+        self.step = (*instance.stepper(), instance)
         self.write = None  # set by connect() when some input is connected
 
     def connect(self, inputs_and_sources):
