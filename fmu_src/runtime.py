@@ -44,10 +44,11 @@ class Runtime:
 
         A value that is not finite is refused (ValueError naming the input) and nothing is set.
         """
-        if not all(map(isfinite, values)):
-            position, value = next((p, v) for p, v in zip(positions or range(len(values)), values)
-                                   if not isfinite(v))
-            raise ValueError(f"input {self._input_names[position]} must be finite, got {value!r}")
+        for value in values:
+            if not isfinite(value):
+                i = next(i for i, v in enumerate(values) if not isfinite(v))
+                name = self._input_names[i if positions is None else positions[i]]
+                raise ValueError(f"input {name} must be finite, got {value!r}")
         if positions is None:
             self.inputs[:] = values
         else:
