@@ -18,7 +18,8 @@ static const char *const METHODS[N_METHODS] = {
     [TERMINATE] = "terminate", [DO_STEP] = "do_step", [GET_STATE] = "_get_fmu_state",
     [SET_STATE] = "_set_fmu_state", [TO_BYTES] = "_fmu_state_to_bytes", [FROM_BYTES] = "_fmu_state_from_bytes",
     [GET_F64] = "get_real", [SET_F64] = "set_real", [GET_I32] = "get_integer", [SET_I32] = "set_integer",
-    [GET_BOOL] = "get_boolean", [SET_BOOL] = "set_boolean", [GET_STR] = "get_string", [SET_STR] = "set_string"};
+    [GET_BOOL] = "get_boolean", [SET_BOOL] = "set_boolean", [GET_STR] = "get_string", [SET_STR] = "set_string",
+    [READER] = "real_reader", [WRITER] = "real_writer"};
 
 /* The modes of slave_bridge.h in the standard's words, by bit. */
 static const char *const MODE_NAMES[] = {

@@ -15,7 +15,8 @@ static const char *const METHODS[N_METHODS] = {
     [SET_STATE] = "_set_fmu_state", [TO_BYTES] = "_fmu_state_to_bytes", [FROM_BYTES] = "_fmu_state_from_bytes",
     [GET_F64] = "get_float64", [SET_F64] = "set_float64", [GET_I32] = "get_int32", [SET_I32] = "set_int32",
     [GET_I64] = "get_int64", [SET_I64] = "set_int64", [GET_U64] = "get_uint64", [SET_U64] = "set_uint64",
-    [GET_BOOL] = "get_boolean", [SET_BOOL] = "set_boolean", [GET_STR] = "get_string", [SET_STR] = "set_string"};
+    [GET_BOOL] = "get_boolean", [SET_BOOL] = "set_boolean", [GET_STR] = "get_string", [SET_STR] = "set_string",
+    [READER] = "real_reader", [WRITER] = "real_writer"};
 
 /* The modes of slave_bridge.h in the standard's words, by bit. */
 static const char *const MODE_NAMES[] = {

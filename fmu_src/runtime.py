@@ -5,6 +5,7 @@ which only register the variables and delegate here. Standard library only: it
 is bundled into every FMU with the model core.
 """
 
+import functools
 import math
 import operator
 from math import isfinite
@@ -158,7 +159,7 @@ class SlaveCalls:
     WARNING = ERROR = None
 
     def _index_reals(self, real):
-        """Prepare the batched get and set of the variables of class ``real`` (Real or Float64)."""
+        """Prepare the readers and writers of the variables of class ``real`` (Real or Float64)."""
         component = self.runtime.component
         outputs, inputs = component.names("output"), component.names("input")
         # value reference -> output or input position, or the variable's getter and setter
@@ -166,35 +167,51 @@ class SlaveCalls:
         self._input_index = {vr: inputs.index(v.name) for vr, v in self.vars.items() if v.name in inputs}
         self._getters = {vr: v.getter for vr, v in self.vars.items() if isinstance(v, real)}
         self._setters = {vr: v.setter for vr, v in self.vars.items() if isinstance(v, real) and v.setter}
-        self._reads, self._writes = {}, {}
+
+    def real_reader(self, vrs):
+        """A function of no arguments that returns the Real values of ``vrs``.
+
+        The wrapper asks once per value-reference array and keeps it: a get of
+        outputs is then one call that picks them from the runtime's cached tuple.
+        KeyError for a value reference that is not a Real.
+        """
+        runtime = self.runtime
+        if not all(vr in self._output_index for vr in vrs):
+            getters = [self._getters[vr] for vr in vrs]
+            return lambda: [float(get()) for get in getters]
+        indices = [self._output_index[vr] for vr in vrs]
+        if indices == list(range(len(self._output_index))):
+            return runtime.outputs  # every output, in order
+        if len(indices) == 1:
+            return lambda i=indices[0]: (runtime.outputs()[i],)
+        pick = operator.itemgetter(*indices)
+        return lambda: pick(runtime.outputs())
+
+    def real_writer(self, vrs):
+        """A function that sets the Real variables of ``vrs`` to its argument, a sequence of values.
+
+        Asked for once per value-reference array, like :meth:`real_reader`: inputs
+        are set together, checked first. KeyError for a value reference that is not
+        a settable Real.
+        """
+        if not all(vr in self._input_index for vr in vrs):
+            setters = [self._setters[vr] for vr in vrs]
+
+            def write(values):
+                for set_, value in zip(setters, values):
+                    set_(value)
+            return write
+        positions = [self._input_index[vr] for vr in vrs]
+        return functools.partial(self.runtime.set_inputs,
+                                 None if positions == list(range(len(self._input_index))) else positions)
 
     def get_reals(self, vrs):
-        """One Python call per FMI get: outputs are picked from one cached tuple, in C."""
-        key = vrs if type(vrs) is tuple else tuple(vrs)
-        pick = self._reads.get(key)
-        if pick is None:
-            if not all(vr in self._output_index for vr in key):
-                return [float(self._getters[vr]()) for vr in key]  # KeyError: not a Real
-            indices = [self._output_index[vr] for vr in key]
-            pick = self._reads[key] = (tuple if indices == list(range(len(self._output_index)))  # all, in order
-                                       else operator.itemgetter(*indices) if len(indices) > 1
-                                       else lambda values, i=indices[0]: (values[i],))
-        return pick(self.runtime.outputs())
+        """pythonfmu's batched get, for its own binaries (ours use :meth:`real_reader`)."""
+        return self.real_reader(tuple(vrs))()
 
     def set_reals(self, vrs, values):
-        """One Python call per FMI set: inputs are set together, checked first."""
-        key = vrs if type(vrs) is tuple else tuple(vrs)
-        positions = self._writes.get(key, False)
-        if positions is False:
-            if not all(vr in self._input_index for vr in key):
-                for vr, value in zip(key, values):
-                    self._setters[vr](value)  # KeyError: not a settable Real
-                return
-            positions = [self._input_index[vr] for vr in key]
-            if positions == list(range(len(self._input_index))):
-                positions = None  # every input, in order
-            self._writes[key] = positions
-        self.runtime.set_inputs(positions, values)
+        """pythonfmu's batched set, for its own binaries (ours use :meth:`real_writer`)."""
+        self.real_writer(tuple(vrs))(values)
 
     def exit_initialization_mode(self):
         self.runtime.initialise()

@@ -6,7 +6,9 @@
  * The GIL: every exported FMI function that touches Python takes it once (PyGILState_Ensure) and
  * releases it before returning; the functions here expect it held and never take it again.
  * Hot-path objects are cached per instance: the slave's bound methods and, per value-reference
- * array, the argument tuple holding its value references.
+ * array, the argument tuple holding its value references and the slave's reader and writer of
+ * those Reals (slave.real_reader(refs) and slave.real_writer(refs), asked for once: a Real get is
+ * then reader(), a set writer(values)).
  */
 #define Py_LIMITED_API 0x030A0000
 #define PY_SSIZE_T_CLEAN
@@ -18,7 +20,8 @@
 
 /* The slave's methods the wrappers call; each wrapper names them for its FMI version. */
 enum { SETUP, ENTER, EXIT, TERMINATE, DO_STEP, GET_STATE, SET_STATE, TO_BYTES, FROM_BYTES, GET_F64, SET_F64,
-       GET_I32, SET_I32, GET_I64, SET_I64, GET_U64, SET_U64, GET_BOOL, SET_BOOL, GET_STR, SET_STR, N_METHODS };
+       GET_I32, SET_I32, GET_I64, SET_I64, GET_U64, SET_U64, GET_BOOL, SET_BOOL, GET_STR, SET_STR, READER, WRITER,
+       N_METHODS };
 
 /* Statuses: the same numbers in FMI 2.0 and 3.0. */
 enum { STATUS_OK = 0, STATUS_DISCARD = 2, STATUS_ERROR = 3 };
@@ -38,7 +41,9 @@ typedef void (*Emit)(struct Slave *s, int status, const char *category, const ch
 typedef struct {
     size_t n;
     unsigned int *vr;
-    PyObject *args; /* (tuple of the value references,) */
+    PyObject *args;      /* (tuple of the value references,) */
+    PyObject *reader;    /* slave.real_reader(refs), once asked for */
+    PyObject *writer;    /* slave.real_writer(refs), once asked for */
 } VrArgs;
 
 /* One FMU instance: the first member of each wrapper's instance struct. */
@@ -139,11 +144,11 @@ static PyObject *call_method(Slave *s, int method, PyObject *args) {
     return PyObject_CallObject(s->bound[method], args);
 }
 
-/* The cached argument tuple (value references,) of this array: borrowed, NULL on a Python error. */
-static PyObject *vr_args(Slave *s, const unsigned int vr[], size_t n) {
+/* The cache entry of this value-reference array (made if new), NULL on a Python error. */
+static VrArgs *vr_entry(Slave *s, const unsigned int vr[], size_t n) {
     for (int i = 0; i < VR_CACHE; i++) {
         VrArgs *e = &s->vrs[i];
-        if (e->args && e->n == n && memcmp(e->vr, vr, n * sizeof *vr) == 0) return e->args;
+        if (e->args && e->n == n && memcmp(e->vr, vr, n * sizeof *vr) == 0) return e;
     }
     PyObject *refs = PyTuple_New((Py_ssize_t)n);
     for (size_t i = 0; refs && i < n; i++) {
@@ -162,18 +167,34 @@ static PyObject *vr_args(Slave *s, const unsigned int vr[], size_t n) {
     VrArgs *e = &s->vrs[s->next_vr];
     s->next_vr = (s->next_vr + 1) % VR_CACHE;
     Py_XDECREF(e->args);
+    Py_XDECREF(e->reader);
+    Py_XDECREF(e->writer);
     free(e->vr);
-    *e = (VrArgs){n, copy, args};
-    return args;
+    *e = (VrArgs){n, copy, args, NULL, NULL};
+    return e;
 }
 
-/* slave.get_<type>(value references): a new reference to a list or tuple of n items, else NULL. */
+/* *prepared, made by slave.<method>(refs) if not yet: borrowed, NULL on a Python error. */
+static PyObject *prepared(Slave *s, PyObject **prepared, int method, PyObject *args) {
+    if (!*prepared) *prepared = call_method(s, method, args);
+    return *prepared;
+}
+
+/* slave.get_<type>(value references), for Reals reader(): a new reference to a list or tuple of n
+   items, else NULL. */
 static PyObject *get_values(Slave *s, int method, const unsigned int vr[], size_t n) {
-    PyObject *args = vr_args(s, vr, n);
-    PyObject *result = args ? call_method(s, method, args) : NULL;
+    VrArgs *e = vr_entry(s, vr, n);
+    PyObject *result = NULL;
+    if (e && method == GET_F64) {
+        PyObject *reader = prepared(s, &e->reader, READER, e->args);
+        result = reader ? PyObject_CallNoArgs(reader) : NULL;
+    } else if (e) {
+        result = call_method(s, method, e->args);
+    }
     if (result && !((PyList_Check(result) || PyTuple_Check(result)) && (size_t)PyObject_Size(result) == n)) {
         Py_DECREF(result);
-        PyErr_Format(PyExc_TypeError, "%s must return a list of %zu values", s->names[method], n);
+        PyErr_Format(PyExc_TypeError, "%s must return a list of %zu values",
+                     s->names[method == GET_F64 ? READER : method], n);
         return NULL;
     }
     return result;
@@ -184,13 +205,20 @@ static PyObject *item(PyObject *values, size_t i) {
     return PyList_Check(values) ? PyList_GetItem(values, (Py_ssize_t)i) : PyTuple_GetItem(values, (Py_ssize_t)i);
 }
 
-/* slave.set_<type>(value references, values), values stolen; 0 with a Python exception on failure. */
+/* slave.set_<type>(value references, values), for Reals writer(values); values stolen; 0 with a
+   Python exception on failure. */
 static int set_values(Slave *s, int method, const unsigned int vr[], size_t n, PyObject *values) {
-    PyObject *args = values ? vr_args(s, vr, n) : NULL;
-    PyObject *pair = args ? PyTuple_Pack(2, PyTuple_GetItem(args, 0), values) : NULL;
-    PyObject *result = pair ? call_method(s, method, pair) : NULL;
+    VrArgs *e = values ? vr_entry(s, vr, n) : NULL;
+    PyObject *result = NULL;
+    if (e && method == SET_F64) {
+        PyObject *writer = prepared(s, &e->writer, WRITER, e->args);
+        result = writer ? PyObject_CallFunctionObjArgs(writer, values, NULL) : NULL;
+    } else if (e) {
+        PyObject *pair = PyTuple_Pack(2, PyTuple_GetItem(e->args, 0), values);
+        result = pair ? call_method(s, method, pair) : NULL;
+        Py_XDECREF(pair);
+    }
     Py_XDECREF(values);
-    Py_XDECREF(pair);
     Py_XDECREF(result);
     return result != NULL;
 }
@@ -222,8 +250,13 @@ static const char *keep_string(Slave *s, PyObject *value, size_t i) {
     return PyBytes_AsString(bytes); /* alive in s->strings */
 }
 
+/* Forget what belongs to the slave object: its bound methods, readers and writers. */
 static void forget_methods(Slave *s) {
     for (int i = 0; i < N_METHODS; i++) Py_CLEAR(s->bound[i]);
+    for (int i = 0; i < VR_CACHE; i++) {
+        Py_CLEAR(s->vrs[i].reader);
+        Py_CLEAR(s->vrs[i].writer);
+    }
 }
 
 /* A new slave object from the class (replacing any previous one); 0 with a Python exception. */

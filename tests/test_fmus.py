@@ -172,6 +172,46 @@ def test_instances_of_one_fmu_are_independent(crane_fmus):
         b.free()
 
 
+def test_the_wrappers_cached_readers_and_writers_follow_reset_and_saved_states(crane_fmus):
+    """The wrapper keeps one reader and writer per value-reference array: after fmi2Reset they must be the new
+    slave's, after fmi2SetFMUstate they must see the restored values."""
+    import ctypes
+
+    inst = open_instance(crane_fmus["plant"], "plant")
+    theta1, u, dx = ((ctypes.c_double * 1)() for _ in range(3))
+    read_theta1, _ = inst.reader(inst.vr_array(["theta1"]), theta1)
+    read_dx, _ = inst.reader(inst.vr_array(["dx"]), dx)
+    write_u, _ = inst.writer(inst.vr_array(["u"]), u)
+
+    def start(angle):
+        inst.setup(0.0)
+        inst.set("theta1_0", angle)
+        inst.enter_initialization()
+        inst.exit_initialization()
+
+    try:
+        start(0.1)
+        assert read_theta1() == 0 and theta1[0] == 0.1
+        u[0] = 2.0
+        assert write_u() == 0
+        inst.do_step(0.0, 0.01)
+        saved = inst.get_state()
+        inst.do_step(0.01, 0.01)
+        assert read_dx() == 0 and dx[0] == pytest.approx(0.04, rel=1e-12)
+        inst.set_state(saved)
+        assert read_dx() == 0 and dx[0] == pytest.approx(0.02, rel=1e-12)
+        inst.free_state(saved)
+        inst._fmu.reset()
+        start(-0.3)
+        assert read_theta1() == 0 and theta1[0] == -0.3
+        u[0] = -1.0
+        assert write_u() == 0
+        inst.do_step(0.0, 0.01)
+        assert read_dx() == 0 and dx[0] == pytest.approx(-0.01, rel=1e-12)
+    finally:
+        inst.free()
+
+
 def test_an_unzipped_fmu_is_reused_once_freed_and_removed_at_exit(crane_fmus):
     """Instances alive together each have their own folder; a freed one's folder serves the next instance."""
     import subprocess
