@@ -59,9 +59,6 @@ class Runtime:
         if self._feedthrough:
             self._outputs = None
 
-    def set_input(self, name, value):
-        self.set_inputs((self._input_names.index(name),), (value,))
-
     def output(self, index):
         """The output at ``index`` (in table order of the outputs)."""
         return self.outputs()[index]
