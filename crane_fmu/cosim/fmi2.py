@@ -4,7 +4,6 @@ import ctypes
 import itertools
 import shutil
 import weakref
-from functools import partial
 
 from fmpy import calloc, free
 from fmpy.fmi2 import (
@@ -113,24 +112,16 @@ class Fmi2Instance(Instance):
     def deserialize_state(self, data):
         return self._call("fmi2DeSerializeFMUstate", self._fmu.deSerializeFMUstate, data)
 
-    # --- hot path: raw ctypes calls (no fmpy argument conversion) on preallocated arrays ---
-
-    def _raw(self, name, vrs, values):
-        # library[name] is a fresh ctypes function without fmpy's argtypes: the arguments are ctypes objects already
-        call = partial(self._library[name], ctypes.c_void_p(self._fmu.component), vrs, ctypes.c_size_t(len(vrs)),
-                       values)
-        return call, name
+    # --- hot path (see Instance._hot_call) ---
 
     def reader(self, vrs, values):
-        return self._raw("fmi2GetReal", vrs, values)
+        return self._hot_call("fmi2GetReal", vrs, ctypes.c_size_t(len(vrs)), values)
 
     def writer(self, vrs, values):
-        return self._raw("fmi2SetReal", vrs, values)
+        return self._hot_call("fmi2SetReal", vrs, ctypes.c_size_t(len(vrs)), values)
 
     def stepper(self):
-        do_step, component = self._library["fmi2DoStep"], ctypes.c_void_p(self._fmu.component)
-        do_step.argtypes = (ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int)
-        return (lambda time, step: do_step(component, time, step, 1)), "fmi2DoStep"
+        return self._hot_stepper("fmi2DoStep", ctypes.c_int(1))  # noSetFMUStatePriorToCurrentPoint
 
     def terminate(self):
         self._call("fmi2Terminate", self._fmu.terminate)

@@ -2,7 +2,6 @@
 
 import ctypes
 import shutil
-from functools import partial
 
 from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64
 
@@ -67,27 +66,21 @@ class Fmi3Instance(Instance):
     def deserialize_state(self, data):
         return self._call("fmi3DeserializeFMUState", self._fmu.deserializeFMUState, data)
 
-    # --- hot path: raw ctypes calls (no fmpy argument conversion) on preallocated arrays ---
-
-    def _raw(self, name, vrs, values):
-        size = ctypes.c_size_t(len(vrs))
-        return partial(self._library[name], ctypes.c_void_p(self._fmu.component), vrs, size, values, size), name
+    # --- hot path (see Instance._hot_call) ---
 
     def reader(self, vrs, values):
-        return self._raw("fmi3GetFloat64", vrs, values)
+        size = ctypes.c_size_t(len(vrs))
+        return self._hot_call("fmi3GetFloat64", vrs, size, values, size)
 
     def writer(self, vrs, values):
-        return self._raw("fmi3SetFloat64", vrs, values)
+        size = ctypes.c_size_t(len(vrs))
+        return self._hot_call("fmi3SetFloat64", vrs, size, values, size)
 
     def stepper(self):
-        do_step, component = self._library["fmi3DoStep"], ctypes.c_void_p(self._fmu.component)
-        flag = ctypes.POINTER(fmi3Boolean)
-        do_step.argtypes = (ctypes.c_void_p, ctypes.c_double, ctypes.c_double, fmi3Boolean, flag, flag, flag,
-                            ctypes.POINTER(fmi3Float64))
-        # eventHandlingNeeded, terminateSimulation, earlyReturn, lastSuccessfulTime: not used by this master
+        # noSetFMUStatePriorToCurrentPoint; then eventHandlingNeeded, terminateSimulation, earlyReturn and
+        # lastSuccessfulTime, which this master does not use
         self._step_outputs = [fmi3Boolean(), fmi3Boolean(), fmi3Boolean(), fmi3Float64()]
-        out = [ctypes.byref(x) for x in self._step_outputs]
-        return (lambda time, step: do_step(component, time, step, True, *out)), "fmi3DoStep"
+        return self._hot_stepper("fmi3DoStep", fmi3Boolean(True), *map(ctypes.byref, self._step_outputs))
 
     def terminate(self):
         self._call("fmi3Terminate", self._fmu.terminate)

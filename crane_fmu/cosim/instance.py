@@ -6,6 +6,7 @@ and the simulation time, with the FMU's own log messages attached.
 """
 
 import atexit
+import ctypes
 import functools
 import os
 import shutil
@@ -109,17 +110,33 @@ class Instance:
         """The FMU's library for the hot path. An FMU that says it runs Python in this process under its GIL
         (ours export ``crane_fmu_runs_in_host_python``) is called without releasing the GIL; others as fmpy
         loaded them."""
-        import ctypes
-
         dll = self._fmu.dll
         if hasattr(dll, "crane_fmu_runs_in_host_python"):
             return ctypes.PyDLL(dll._name, handle=dll._handle)
         return dll
 
+    def _hot_call(self, function, *arguments):
+        """``(call, function)``: ``call()`` runs the FMI ``function`` of this instance with ``arguments``.
+
+        The arguments are ctypes objects made once, and ``library[function]`` is a
+        fresh ctypes function without fmpy's argtypes: no conversion per call.
+        """
+        return functools.partial(self._library[function], ctypes.c_void_p(self._fmu.component), *arguments), function
+
+    def _hot_stepper(self, function, *after):
+        """``(call, function)``: ``call(time, step)`` runs ``function(instance, time, step, *after)``, the two
+        doubles written into ctypes objects made once."""
+        time_, step_ = ctypes.c_double(), ctypes.c_double()
+        do_step, _ = self._hot_call(function, time_, step_, *after)
+
+        def call(time, step):
+            time_.value, step_.value = time, step
+            return do_step()
+
+        return call, function
+
     def vr_array(self, names):
         """A ctypes array of the value references of ``names`` (checked)."""
-        import ctypes
-
         return (ctypes.c_uint * len(names))(*(self._variable(n).valueReference for n in names))
 
     def free(self):
