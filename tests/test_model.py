@@ -153,3 +153,17 @@ def test_the_plants_fast_step_equals_its_general_step():
         state_fast = plant.update(fast, state_fast, inputs, k * 0.01, 0.01)
         state_general = plant.update(general, state_general, inputs, k * 0.01, 0.01)
         assert state_fast == state_general
+
+
+def test_the_fast_step_tells_huge_finite_states_from_non_finite_ones():
+    """Its finite check sums the state first: a sum that overflows must not discard a finite step."""
+    from crane_fmu.model.component import Discard
+
+    values = {v.name: v.start for v in plant.VARIABLES if v.causality == "parameter"}
+    config = plant.setup(values)
+    huge = (1e308, 0.0, 1e308, 0.0, 0.0, 0.0) + config.state0[6:]  # x and theta1 sum to inf
+    assert config.plain_drive and math.isinf(sum(huge[:8]))
+    state = plant.update(config, huge, (0.0, 0.0, 0.0, 0.0), 0.0, 1e-3)
+    assert state[0] == 1e308 and all(map(math.isfinite, state))
+    with pytest.raises(Discard, match="plant state became non-finite"):
+        plant.update(config, (0.0, math.inf) + huge[2:], (0.0, 0.0, 0.0, 0.0), 0.0, 1e-3)

@@ -369,7 +369,7 @@ def _paper_update(c, state, u, time, step):
     limits; the cable at rest within its limits): the same numbers, faster."""
     n = 1 if 0.0 < step <= c.max_substep else substeps(step, c.max_substep)  # ValueError for an unusable step
     dt = step / n
-    demand = min(max(u, -c.u_max), c.u_max)
+    demand = c.u_max if u > c.u_max else -c.u_max if u < -c.u_max else u  # _clamp(), without its two calls
     swing, drive = state[:8], state[8]
     try:
         for k in range(n):
@@ -377,7 +377,8 @@ def _paper_update(c, state, u, time, step):
             swing = c.paper(swing, demand, dt)
             if not c.x_min <= swing[0] <= c.x_max:
                 raise _past_rail_end(c, swing[0], time + (k + 1) * dt, time)
-        finite = all(map(math.isfinite, swing))
+        # a finite sum has finite terms (inf and nan propagate); only an overflowing sum needs a closer look
+        finite = math.isfinite(sum(swing)) or all(map(math.isfinite, swing))
     except (ArithmeticError, ValueError):  # overflow, or sin/cos of inf
         finite = False
     if not finite:
