@@ -459,18 +459,23 @@ static void free_instance(Slave *s) {
     free(s); /* the wrapper's instance, whose first member `s` is */
 }
 
+/* What every get and set checks first: the instance's mode, then an empty call (ok) and NULL arrays
+   (refused). GO_ON when the values are to be moved, else the status to return. */
+enum { GO_ON = -1 };
+static int first_checks(Slave *s, const char *function, int modes, size_t n, const void *vr, const void *v) {
+    if (!allowed(s, function, modes)) return STATUS_ERROR;
+    if (n == 0) return STATUS_OK;
+    if (!vr || !v) return refuse(s, function, "NULL array");
+    return GO_ON;
+}
+
 /* The body of an FMI get function: slave.<method>(value references), item x of the result
    converted into v[i] by `convert`. Evaluates to the status. */
 #define GET_VALUES(instance, function, method, vr, n, v, convert)                                            \
     ({                                                                                                       \
         Slave *s = (instance);                                                                               \
-        int status_ = STATUS_ERROR;                                                                          \
-        if (!allowed(s, function, GETTABLE)) {                                                               \
-        } else if ((n) == 0) {                                                                               \
-            status_ = STATUS_OK;                                                                             \
-        } else if (!(vr) || !(v)) {                                                                          \
-            refuse(s, function, "NULL array");                                                               \
-        } else {                                                                                             \
+        int status_ = first_checks(s, function, GETTABLE, n, vr, v);                                         \
+        if (status_ == GO_ON) {                                                                              \
             PyGILState_STATE gil_ = PyGILState_Ensure();                                                     \
             PyObject *values_ = get_values(s, method, vr, n);                                                \
             for (size_t i = 0; values_ && i < (n); i++) {                                                    \
@@ -489,13 +494,8 @@ static void free_instance(Slave *s) {
 #define SET_VALUES(instance, function, method, vr, n, v, make)                                               \
     ({                                                                                                       \
         Slave *s = (instance);                                                                               \
-        int status_ = STATUS_ERROR;                                                                          \
-        if (!allowed(s, function, SETTABLE)) {                                                               \
-        } else if ((n) == 0) {                                                                               \
-            status_ = STATUS_OK;                                                                             \
-        } else if (!(vr) || !(v)) {                                                                          \
-            refuse(s, function, "NULL array");                                                               \
-        } else {                                                                                             \
+        int status_ = first_checks(s, function, SETTABLE, n, vr, v);                                         \
+        if (status_ == GO_ON) {                                                                              \
             PyGILState_STATE gil_ = PyGILState_Ensure();                                                     \
             status_ = finish(s, function, set_values(s, method, vr, n, LIST_OF(n, make)));                   \
             PyGILState_Release(gil_);                                                                        \
