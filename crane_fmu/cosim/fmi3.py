@@ -78,9 +78,9 @@ class Fmi3Instance(Instance):
 
     def stepper(self):
         # noSetFMUStatePriorToCurrentPoint; then eventHandlingNeeded, terminateSimulation, earlyReturn and
-        # lastSuccessfulTime, which this master does not use
-        self._step_outputs = [fmi3Boolean(), fmi3Boolean(), fmi3Boolean(), fmi3Float64()]
-        return self._hot_stepper("fmi3DoStep", fmi3Boolean(True), *map(ctypes.byref, self._step_outputs))
+        # lastSuccessfulTime, which this master does not use (byref keeps each alive)
+        outputs = (fmi3Boolean(), fmi3Boolean(), fmi3Boolean(), fmi3Float64())
+        return self._hot_stepper("fmi3DoStep", fmi3Boolean(True), *map(ctypes.byref, outputs))
 
     def terminate(self):
         self._call("fmi3Terminate", self._fmu.terminate)

@@ -169,8 +169,7 @@ _SPARE_FOLDERS = {}
 
 def _take_folder(path):
     """``(key, folder)``: a spare extracted folder of the FMU at ``path``, else a new one."""
-    stat = Path(path).stat()
-    key = (str(Path(path).resolve()), stat.st_size, stat.st_mtime_ns)
+    key = _file_version(path)
     spare = _SPARE_FOLDERS.get(key)
     while spare:
         folder = spare.pop()
@@ -196,12 +195,17 @@ def read_fmu(path):
     """
     if not Path(path).is_file():
         raise ValueError(f"{path} not found")
+    return _read_fmu(_file_version(path), str(path))
+
+
+def _file_version(path):
+    """``(resolved path, size, modification time)``: what tells one version of a file from another."""
     stat = Path(path).stat()
-    return _read_fmu(str(Path(path).resolve()), stat.st_size, stat.st_mtime_ns, str(path))
+    return str(Path(path).resolve()), stat.st_size, stat.st_mtime_ns
 
 
 @functools.lru_cache(maxsize=64)
-def _read_fmu(resolved, size, mtime_ns, path):
+def _read_fmu(version, path):
     from fmpy import read_model_description
 
     try:
