@@ -7,17 +7,24 @@
  *   4. the dynamic linker's search (LD_LIBRARY_PATH, ld.so.cache, system folders) for its soname;
  *   5. the same search for the other CPythons' sonames (FALLBACK_SONAMES, newest first);
  *   6. python3, then python, on PATH, asked for their libpython.
- * The chosen libpython is loaded with RTLD_GLOBAL, then the wrapper (built against Python's limited
- * API, so any CPython from 3.10 on will do) next to the loader. Thread-safe: one search at a time.
+ * A CRANE_FMU_PYTHON that cannot be used ends the search with the reason: the FMU never quietly
+ * takes another Python than the one its user named.
+ * The chosen libpython is loaded with RTLD_GLOBAL and told where its standard library is (its home,
+ * found beside the library), so that it does not take its paths from whatever python3 comes first
+ * on PATH; then the wrapper (built against Python's limited API, so any CPython from 3.10 on will
+ * do) next to the loader is loaded. Thread-safe: one search at a time.
  */
 #define _GNU_SOURCE /* dladdr, RTLD_DEFAULT */
 #include <dlfcn.h>
+#include <limits.h>
 #include <libgen.h>
 #include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
+#include <wchar.h>
 
 /* For Python hosts: every FMI call of this FMU runs Python in the host's own interpreter (place 1
    above) under its GIL, so a host may call it without releasing the GIL first (ctypes.PyDLL, not
@@ -111,27 +118,73 @@ static void *host_python(void *symbol, Tried *t, char *version, size_t size, cha
     return lib;
 }
 
+/* The home of the libpython `lib`, CPython `version`: the first folder at or above the library's
+   own that holds lib/python3.X/os.py (or lib64/...), the prefix its standard library is under.
+   0 if there is none. */
+static int python_home(void *lib, const char *version, char *home, size_t size) {
+    Dl_info info;
+    char real[PATH_MAX], landmark[PATH_MAX + 64];
+    int major = 0, minor = 0;
+    void *symbol = dlsym(lib, "Py_GetVersion");
+    if (!symbol || !dladdr(symbol, &info) || !info.dli_fname || !realpath(info.dli_fname, real) ||
+        sscanf(version, "%d.%d", &major, &minor) != 2)
+        return 0;
+    for (char *slash = strrchr(real, '/'); slash; slash = strrchr(real, '/')) {
+        *slash = 0; /* real: the library's folder, then each folder above it ("" for /) */
+        for (int lib64 = 0; lib64 < 2; lib64++) {
+            snprintf(landmark, sizeof landmark, "%s/%s/python%d.%d/os.py", real, lib64 ? "lib64" : "lib", major,
+                     minor);
+            if (access(landmark, R_OK) == 0) {
+                snprintf(home, size, "%s", real[0] ? real : "/");
+                return 1;
+            }
+        }
+    }
+    return 0;
+}
+
+/* Before the interpreter starts: tell the libpython `lib` its home (see python_home), unless the
+   user set PYTHONHOME. Adds to `used` what was done. */
+static void set_python_home(void *lib, const char *version, char *used, size_t used_size) {
+    static wchar_t home_wide[PATH_MAX]; /* Py_SetPythonHome keeps the pointer */
+    char home[PATH_MAX];
+    size_t n = strlen(used);
+    void (*set_home)(const wchar_t *) = (void (*)(const wchar_t *))dlsym(lib, "Py_SetPythonHome");
+    if (getenv("PYTHONHOME")) {
+        snprintf(used + n, used_size - n, ", its home from PYTHONHOME=%s", getenv("PYTHONHOME"));
+    } else if (!set_home || !python_home(lib, version, home, sizeof home) ||
+               mbstowcs(home_wide, home, PATH_MAX) >= PATH_MAX) {
+        snprintf(used + n, used_size - n, ", no standard library found beside it: CPython looks for its own");
+    } else {
+        set_home(home_wide);
+        snprintf(used + n, used_size - n, ", its home %s", home);
+    }
+}
+
 /* Find a libpython (see the top of this file). Returns 1 and says in `used` which one and how it
-   was found, or 0 and lists in `tried` every place tried. */
+   was found; 0 after listing in `tried` every place tried; -1 if CRANE_FMU_PYTHON is set but
+   unusable (the reason in `tried`). */
 static int find_python(Tried *tried, char *used, size_t used_size) {
     char version[64] = "", path[4096] = "", place[4300];
     void *host = dlsym(RTLD_DEFAULT, "Py_IsInitialized");
     if (host) { /* a Python host: its own interpreter or none, never a second one */
         if (!host_python(host, tried, version, sizeof version, path, sizeof path)) return 0;
-        snprintf(used, used_size, "using the host process's CPython %s (%s)", version, path);
+        snprintf(used, used_size, "using the host process's CPython %s (%s)%s", version, path,
+                 getenv(PYTHON_VARIABLE) ? "; " PYTHON_VARIABLE " does not apply in a Python host" : "");
         return 1;
     }
-    note(tried, "the host process (no Python in it)");
     void *lib = NULL;
     const char *variable = getenv(PYTHON_VARIABLE);
-    if (variable && *variable) {
+    if (variable && *variable) { /* the user's choice, or none: `tried` then says only why not */
         const char *file = strrchr(variable, '/') ? strrchr(variable, '/') + 1 : variable;
         snprintf(place, sizeof place, "%s=%s", PYTHON_VARIABLE, variable);
         snprintf(path, sizeof path, "%s", variable);
         lib = strstr(file, "libpython") ? try_library(variable, place, tried, version, sizeof version)
                                         : try_executable(variable, place, tried, version, sizeof version, path,
                                                          sizeof path);
+        if (!lib) return -1;
     } else {
+        note(tried, "the host process (no Python in it)");
         note(tried, "%s (not set)", PYTHON_VARIABLE);
     }
     if (!lib) {
@@ -152,8 +205,10 @@ static int find_python(Tried *tried, char *used, size_t used_size) {
         snprintf(place, sizeof place, "%s on PATH", on_path[i]);
         lib = try_executable(on_path[i], place, tried, version, sizeof version, path, sizeof path);
     }
-    if (lib) snprintf(used, used_size, "using CPython %s from %s (found by: %s)", version, path, place);
-    return lib != NULL;
+    if (!lib) return 0;
+    snprintf(used, used_size, "using CPython %s from %s (found by: %s)", version, path, place);
+    set_python_home(lib, version, used, used_size);
+    return 1;
 }
 
 /* Find a Python and load the wrapper next to this loader (once; a failed search is repeated on the
@@ -166,9 +221,15 @@ static void *load_wrapper(const char *function, char *message, size_t size, char
     pthread_mutex_lock(&lock);
     if (!wrapper) {
         Tried *tried = calloc(1, sizeof *tried);
+        int status = 0;
         if (!tried) {
             snprintf(message, size, "%s: out of memory", function);
-        } else if (!find_python(tried, found, sizeof found)) {
+        } else if ((status = find_python(tried, found, sizeof found)) < 0) {
+            snprintf(message, size,
+                     "%s: the CPython named by %s cannot be used: %s. Set it to a CPython 3.10 or newer (an "
+                     "executable, or its shared libpython), or unset it to let the FMU search for one",
+                     function, PYTHON_VARIABLE, tried->text);
+        } else if (!status) {
             snprintf(message, size,
                      "%s: found no CPython 3.10 or newer (with a shared libpython) to run this FMU's Python model. "
                      "Tried: %s. Set %s to a Python executable (e.g. /usr/bin/python3) or to its libpython "

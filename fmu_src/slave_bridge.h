@@ -54,6 +54,8 @@ typedef struct Slave {
     const char *const *mode_names; /* by the bit of each mode */
     VrArgs vrs[VR_CACHE];
     int next_vr;
+    struct SavedState **states; /* the FMU states this instance made and has not freed */
+    size_t n_states, states_size;
     Emit emit; /* passes a message to the host's logger */
     int logging_on, mode;
     double time; /* the last successful communication point */
@@ -315,6 +317,7 @@ static char *resource_folder(const char *location) {
 }
 
 static void free_slave_memory(Slave *s) {
+    free(s->states);
     free(s->name);
     free(s->resources);
     for (int i = 0; i < VR_CACHE; i++) free(s->vrs[i].vr);
@@ -450,15 +453,6 @@ static int do_step(Slave *s, const char *function, double t, double h) {
     return status;
 }
 
-static void free_instance(Slave *s) {
-    if (!s) return;
-    PyGILState_STATE gil = PyGILState_Ensure();
-    release_slave(s);
-    PyGILState_Release(gil);
-    free_slave_memory(s);
-    free(s); /* the wrapper's instance, whose first member `s` is */
-}
-
 /* What every get and set checks first: the instance's mode, then an empty call (ok) and NULL arrays
    (refused). GO_ON when the values are to be moved, else the status to return. */
 enum { GO_ON = -1 };
@@ -504,11 +498,68 @@ static int first_checks(Slave *s, const char *function, int modes, size_t n, con
     })
 
 /* FMU states: the slave's state object with the instance's mode and time when it was taken. */
-typedef struct {
+typedef struct SavedState {
     PyObject *state;
     int mode;
     double time;
 } SavedState;
+
+/* An instance knows the FMU states it made: any other pointer a host hands it (another instance's
+   state, a freed one, garbage, or the state where its address belongs) is refused, never used. */
+#define NOT_OURS "not an FMU state of this instance (or one already freed)"
+static int is_own_state(const Slave *s, const void *state) {
+    for (size_t i = 0; state && i < s->n_states; i++)
+        if (s->states[i] == state) return 1;
+    return 0;
+}
+
+/* Remember a new state; 0 if out of memory. */
+static int keep_state(Slave *s, SavedState *state) {
+    if (s->n_states == s->states_size) {
+        size_t size = s->states_size ? 2 * s->states_size : 8;
+        SavedState **grown = realloc(s->states, size * sizeof *grown);
+        if (!grown) return 0;
+        s->states = grown, s->states_size = size;
+    }
+    s->states[s->n_states++] = state;
+    return 1;
+}
+
+/* Forget and free a state (GIL held). */
+static void drop_state(Slave *s, SavedState *state) {
+    for (size_t i = 0; i < s->n_states; i++)
+        if (s->states[i] == state) s->states[i] = s->states[--s->n_states];
+    Py_XDECREF(state->state);
+    PyMem_Free(state);
+}
+
+/* Keep the slave's state `object` (a new reference; NULL after a Python error) with `mode` and
+   `time` in `saved`, which is *state or, if new, becomes *state and one of the instance's states.
+   1 if stored, else 0 with a Python exception set (a new `saved` is freed). */
+static int store_state(Slave *s, void **state, SavedState *saved, PyObject *object, int mode, double time) {
+    if (object && saved != *state && !keep_state(s, saved)) {
+        Py_CLEAR(object);
+        PyErr_NoMemory();
+    }
+    if (!object) {
+        if (saved != *state) PyMem_Free(saved);
+        return 0;
+    }
+    Py_XDECREF(saved->state);
+    *saved = (SavedState){object, mode, time};
+    *state = saved;
+    return 1;
+}
+
+/* The check of a host's `FMUstate *` argument: NULL (refused), the state itself where its address
+   belongs, or an address holding neither NULL (when `null_ok`) nor one of this instance's states.
+   Returns NULL if the pointer may be used, else the reason. */
+static const char *bad_state_address(const Slave *s, void **state, int null_ok) {
+    if (!state) return "NULL state pointer";
+    if (is_own_state(s, state)) return "given an FMU state where the address of one belongs";
+    if (!*state) return null_ok ? NULL : "NULL state";
+    return is_own_state(s, *state) ? NULL : NOT_OURS;
+}
 
 /* A serialised state: this header, then the slave's bytes. */
 typedef struct {
@@ -520,18 +571,12 @@ typedef struct {
 /* Store the slave's state in *state, allocated if NULL, overwritten if not. */
 static int get_fmu_state(Slave *s, const char *function, void **state) {
     if (!allowed(s, function, ANY_MODE)) return STATUS_ERROR;
-    if (!state) return refuse(s, function, "NULL state pointer");
+    const char *bad = bad_state_address(s, state, 1);
+    if (bad) return refuse(s, function, bad);
     PyGILState_STATE gil = PyGILState_Ensure();
     SavedState *saved = *state ? *state : PyMem_Calloc(1, sizeof *saved);
     PyObject *object = saved ? call_method(s, GET_STATE, NULL) : PyErr_NoMemory();
-    if (object) {
-        Py_XDECREF(saved->state);
-        *saved = (SavedState){object, s->mode, s->time};
-        *state = saved;
-    } else if (saved != *state) {
-        PyMem_Free(saved);
-    }
-    int status = finish(s, function, object != NULL);
+    int status = finish(s, function, store_state(s, state, saved, object, s->mode, s->time));
     PyGILState_Release(gil);
     return status;
 }
@@ -540,6 +585,7 @@ static int get_fmu_state(Slave *s, const char *function, void **state) {
 static int set_fmu_state(Slave *s, const char *function, SavedState *saved) {
     if (!allowed(s, function, ANY_MODE)) return STATUS_ERROR;
     if (!saved) return refuse(s, function, "NULL state");
+    if (!is_own_state(s, saved)) return refuse(s, function, NOT_OURS);
     PyGILState_STATE gil = PyGILState_Ensure();
     PyObject *args = PyTuple_Pack(1, saved->state);
     PyObject *result = args ? call_method(s, SET_STATE, args) : NULL;
@@ -553,11 +599,11 @@ static int set_fmu_state(Slave *s, const char *function, SavedState *saved) {
 
 static int free_fmu_state(Slave *s, const char *function, void **state) {
     if (!allowed(s, function, ANY_MODE)) return STATUS_ERROR;
-    if (!state || !*state) return STATUS_OK;
-    SavedState *saved = *state;
+    const char *bad = bad_state_address(s, state, 1);
+    if (bad) return refuse(s, function, bad);
+    if (!*state) return STATUS_OK;
     PyGILState_STATE gil = PyGILState_Ensure();
-    Py_XDECREF(saved->state);
-    PyMem_Free(saved);
+    drop_state(s, *state);
     PyGILState_Release(gil);
     *state = NULL;
     return STATUS_OK;
@@ -583,6 +629,7 @@ static PyObject *serialized_state(Slave *s, SavedState *saved) {
 static int serialize_fmu_state(Slave *s, const char *function, SavedState *saved, char *out, size_t *size) {
     if (!allowed(s, function, ANY_MODE)) return STATUS_ERROR;
     if (!saved || !size) return refuse(s, function, "NULL state, size or buffer");
+    if (!is_own_state(s, saved)) return refuse(s, function, NOT_OURS);
     PyGILState_STATE gil = PyGILState_Ensure();
     PyObject *bytes = serialized_state(s, saved);
     int status = finish(s, function, bytes != NULL);
@@ -598,7 +645,8 @@ static int serialize_fmu_state(Slave *s, const char *function, SavedState *saved
 static int deserialize_fmu_state(Slave *s, const char *function, const char *data, size_t size, void **state) {
     StateHeader header;
     if (!allowed(s, function, ANY_MODE)) return STATUS_ERROR;
-    if (!state) return refuse(s, function, "NULL state pointer");
+    const char *bad = bad_state_address(s, state, 1);
+    if (bad) return refuse(s, function, bad);
     if (!data || size < sizeof header || (memcpy(&header, data, sizeof header), memcmp(header.magic, "CRS1", 4)) ||
         !(header.mode & ANY_MODE) || __builtin_popcount((unsigned)header.mode) != 1)
         return refuse(s, function, "not a serialised state of this FMU");
@@ -608,14 +656,17 @@ static int deserialize_fmu_state(Slave *s, const char *function, const char *dat
                            : PyErr_NoMemory();
     PyObject *object = args ? call_method(s, FROM_BYTES, args) : NULL;
     Py_XDECREF(args);
-    if (object) {
-        Py_XDECREF(saved->state);
-        *saved = (SavedState){object, header.mode, header.time};
-        *state = saved;
-    } else if (saved != *state) {
-        PyMem_Free(saved);
-    }
-    int status = finish(s, function, object != NULL);
+    int status = finish(s, function, store_state(s, state, saved, object, header.mode, header.time));
     PyGILState_Release(gil);
     return status;
+}
+
+static void free_instance(Slave *s) {
+    if (!s) return;
+    PyGILState_STATE gil = PyGILState_Ensure();
+    while (s->n_states) drop_state(s, s->states[0]); /* states the host did not free */
+    release_slave(s);
+    PyGILState_Release(gil);
+    free_slave_memory(s);
+    free(s); /* the wrapper's instance, whose first member `s` is */
 }

@@ -270,14 +270,13 @@ def _probe(host, fmu, tmp_path, **env):
 
 @pytest.mark.parametrize("version", [2, 3])
 def test_no_python_found_is_one_message_listing_every_place_tried(hosts, lost_fmus, version, tmp_path):
-    proc = _probe(hosts[version], lost_fmus[version], tmp_path, PATH=str(tmp_path),
-                  CRANE_FMU_PYTHON="/nowhere/python3")
+    proc = _probe(hosts[version], lost_fmus[version], tmp_path, PATH=str(tmp_path))
     assert proc.returncode == 4 and "instance NULL" in proc.stdout, proc.stdout + proc.stderr
     function = "fmi2Instantiate" if version == 2 else "fmi3InstantiateCoSimulation"
     message = proc.stderr.strip()
     assert message.count("\n") == 0 and message.startswith(f"[3] {function}: found no CPython 3.10 or newer")
-    for place in ["the host process (no Python in it)", "CRANE_FMU_PYTHON=/nowhere/python3 (/nowhere/python3 did "
-                  "not run", "the libpython recorded at build time, /nonexistent/libpython9.9.so.1.0 (",
+    for place in ["the host process (no Python in it)", "CRANE_FMU_PYTHON (not set)",
+                  "the libpython recorded at build time, /nonexistent/libpython9.9.so.1.0 (",
                   "the dynamic linker's search for libpython9.9.so.1.0 (", "python3 on PATH (", "python on PATH (",
                   "Set CRANE_FMU_PYTHON to a Python executable"]:
         assert place in message, place

@@ -28,9 +28,25 @@ def scaled(a, s):
     return [[s * x for x in row] for row in a]
 
 
+def total(values):
+    """The sum of ``values``, added left to right.
+
+    Not ``sum()``: CPython 3.12 made it compensated for floats, so one FMU would give other
+    last bits under 3.10/3.11 than under 3.12/3.13. This is what ``sum()`` did before 3.12.
+    """
+    result = 0.0
+    for value in values:
+        result += value
+    return result
+
+
+def dot(a, b):
+    return total([x * y for x, y in zip(a, b)])
+
+
 def matmul(a, b):
     bt = list(zip(*b))
-    return [[sum(x * y for x, y in zip(row, col)) for col in bt] for row in a]
+    return [[dot(row, col) for col in bt] for row in a]
 
 
 def solve(a, b):
@@ -53,7 +69,7 @@ def solve(a, b):
 
 def norm1(a):
     """The largest absolute column sum."""
-    return max(sum(abs(row[j]) for row in a) for j in range(len(a[0])))
+    return max(total([abs(row[j]) for row in a]) for j in range(len(a[0])))
 
 
 def expm(a):

@@ -49,7 +49,7 @@ def design(p, weights, r, h):
     q = [[weights[i] if i == j else 0.0 for j in range(6)] for i in range(6)]
     big_p = linalg.dare(ad, bd, q, [[r]])
     pb = linalg.matmul(big_p, bd)
-    bt_p_b = sum(bd[i][0] * pb[i][0] for i in range(6))
+    bt_p_b = linalg.dot([row[0] for row in bd], [row[0] for row in pb])
     bt_p_a = linalg.matmul(linalg.transpose(pb), ad)[0]
     return tuple(v / (r + bt_p_b) for v in bt_p_a)
 
@@ -104,7 +104,7 @@ def control(config, measured, reference=(0.0,) * 6, ddx_ref=0.0, l1=0.0):
     """
     error = [s - r for s, r in zip(measured, reference)]
     error[0] -= config.x_d
-    u = ddx_ref - sum(k * e for k, e in zip(scheduled_gains(config, l1), error))
+    u = ddx_ref - linalg.dot(scheduled_gains(config, l1), error)
     return limits.limited(u, measured[1], config.u_max, config.v_max, config.h)
 
 

@@ -15,6 +15,7 @@ import math
 from collections import namedtuple
 
 from .component import Component, Discard, Step
+from .linalg import total
 from .parameters import finite, plant_parameters, positive
 from .tables import PLANT_MODEL, input_, output, parameter
 
@@ -378,7 +379,7 @@ def _paper_update(c, state, u, time, step):
             if not c.x_min <= swing[0] <= c.x_max:
                 raise _past_rail_end(c, swing[0], time + (k + 1) * dt, time)
         # a finite sum has finite terms (inf and nan propagate); only an overflowing sum needs a closer look
-        finite = math.isfinite(sum(swing)) or all(map(math.isfinite, swing))
+        finite = math.isfinite(total(swing)) or all(map(math.isfinite, swing))
     except (ArithmeticError, ValueError):  # overflow, or sin/cos of inf
         finite = False
     if not finite:
