@@ -23,6 +23,12 @@ SSD_NS = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC_NS = "http://ssp-standard.org/SSP1/SystemStructureCommon"
 SSV_NS = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
 SSD, SSC, SSV = (f"{{{ns}}}" for ns in (SSD_NS, SSC_NS, SSV_NS))
+# The name of every component's one inline parameter set in the SSDs written here. One name for
+# all: Ecos applies the sets of the one name given to it (`ecos simulate --parameterSet
+# initialValues`), and none without it; libcosim takes each component's first set, OMSimulator
+# every set, and this package's reader every binding. Bindings on the System element and
+# `prefix` are left out: neither Ecos nor libcosim reads them.
+PARAMETER_SET = "initialValues"
 _CONVERT = {"Real": float, "Float64": float, "Integer": int, "Int32": int,
             "Boolean": lambda v: v.lower() in ("true", "1"), "String": str}
 _BASE_UNITS = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
@@ -208,7 +214,7 @@ def system_structure(system, fmus, connections, sources):
                 _typed(connector, SSC, v.type, unit=v.unit if v.type in ("Real", "Float64") else None)
         binding = ET.SubElement(ET.SubElement(component, f"{SSD}ParameterBindings"), f"{SSD}ParameterBinding")
         parameter_set = ET.SubElement(ET.SubElement(binding, f"{SSD}ParameterValues"), f"{SSV}ParameterSet",
-                                      version="1.0", name=f"{name}_parameters")
+                                      version="1.0", name=PARAMETER_SET)
         parameters = ET.SubElement(parameter_set, f"{SSV}Parameters")
         for pname, (v, value) in parameter_values(md, system.parameters.get(name, {})).items():
             if value is not None:
