@@ -170,11 +170,11 @@ class SlaveCalls:
 
         The wrapper asks once per value-reference array and keeps it: a get of
         outputs is then one call that picks them from the runtime's cached tuple.
-        KeyError for a value reference that is not a Real.
+        ValueError naming a value reference that is not a Real.
         """
         runtime = self.runtime
         if not all(vr in self._output_index for vr in vrs):
-            getters = [self._getters[vr] for vr in vrs]
+            getters = self._lookup(self._getters, vrs)
             return lambda: [float(get()) for get in getters]
         indices = [self._output_index[vr] for vr in vrs]
         if indices == list(range(len(self._output_index))):
@@ -188,11 +188,11 @@ class SlaveCalls:
         """A function that sets the Real variables of ``vrs`` to its argument, a sequence of values.
 
         Asked for once per value-reference array, like :meth:`real_reader`: inputs
-        are set together, checked first. KeyError for a value reference that is not
-        a settable Real.
+        are set together, checked first. ValueError naming a variable that is not a
+        settable Real.
         """
         if not all(vr in self._input_index for vr in vrs):
-            setters = [self._setters[vr] for vr in vrs]
+            setters = self._lookup(self._setters, vrs)
 
             def write(values):
                 for set_, value in zip(setters, values):
@@ -201,6 +201,21 @@ class SlaveCalls:
         positions = [self._input_index[vr] for vr in vrs]
         return functools.partial(self.runtime.set_inputs,
                                  None if positions == list(range(len(self._input_index))) else positions)
+
+    def _lookup(self, table, vrs):
+        """``[table[vr] for vr in vrs]``, or a ValueError that names the first variable missing and why."""
+        missing = next((vr for vr in vrs if vr not in table), None)
+        if missing is None:
+            return [table[vr] for vr in vrs]
+        component = self.runtime.component
+        variable = self.vars.get(missing)
+        if variable is None:
+            raise ValueError(f"{component.model_identifier} has no variable with value reference {missing}")
+        row = next(v for v in component.variables if v.name == variable.name)
+        if row.type == "String":
+            raise ValueError(f"{row.name} of {component.model_identifier} is a String, not a Real")
+        raise ValueError(f"{row.name} is an {row.causality} of {component.model_identifier}; only parameters and "
+                         "inputs can be set")
 
     def get_reals(self, vrs):
         """pythonfmu's batched get, for its own binaries (ours use :meth:`real_reader`)."""

@@ -62,6 +62,21 @@ def test_non_finite_inputs_are_refused(crane_fmus, fmu, name, value):
         inst.free()
 
 
+@pytest.mark.parametrize("fmu, name, message", [
+    ("plant", "x", "x is an output of CranePlant; only parameters and inputs can be set"),
+    ("controller", "u", "u is an output of BacksteppingController; only parameters and inputs can be set"),
+])
+def test_setting_an_output_is_refused_with_its_name_and_the_rule(crane_fmus, fmu, name, message):
+    """A host's mistake (or an SSV file naming plant.x): the variable and the rule, not a KeyError."""
+    inst = _initialise(crane_fmus[fmu], {})
+    try:
+        with pytest.raises(FmiError) as err:
+            inst.set(name, 1.0)
+        assert err.value.messages[-1] == f"fmi2SetReal: {message}"
+    finally:
+        inst.free()
+
+
 @pytest.mark.parametrize("step, message", [
     (0.0, "communication step must be > 0 and finite, got 0.0"),
     (-1e-3, "communication step must be > 0 and finite, got -0.001"),
