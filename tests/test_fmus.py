@@ -57,7 +57,15 @@ def test_only_the_controller_is_direct_feedthrough(fmu_dir):
     assert sorted(v.name for v in u.dependencies) == sorted(STATE)
 
 
-def test_default_experiment_is_the_papers_free_swing(fmu_dir):
+def test_every_fmus_default_experiment_runs_at_its_systems_step(fmu_dir):
+    """A host that runs an FMU with its defaults steps it as the built-in systems do (the LQR's
+    discrete design, the sensor's delay are for that step); the plant's default is the paper's 20 s."""
+    from crane_fmu import systems
+
+    for system in systems.all():
+        for path in system.fmus(fmu_dir).values():
+            experiment = read_model_description(str(path)).defaultExperiment
+            assert float(experiment.stepSize) == system.step, (system.name, path.name)
     md = read_model_description(str(fmu_dir / "CranePlant.fmu"))
     assert (md.defaultExperiment.startTime, md.defaultExperiment.stopTime) == ("0.0", "20.0")
 

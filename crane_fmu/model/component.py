@@ -59,7 +59,8 @@ class Component:
         messages for the log); raises :class:`Discard` when the step cannot be
         taken and ``ValueError`` for an unusable step.
     default_experiment : tuple, optional
-        ``(start, stop, step)`` [s] written into modelDescription.xml.
+        ``(start, stop, step)`` [s] written into modelDescription.xml, what a host
+        runs by default: the built-in systems' 20 s at 1 ms unless given.
     report : callable, optional
         ``report(config) -> {name: value}``: what ``setup`` derived from the
         parameters (gains, shaper impulses), shown by ``crane-fmu info``.
@@ -74,7 +75,7 @@ class Component:
     feedthrough: bool = False
     initial_state: Callable | None = None
     update: Callable | None = None
-    default_experiment: tuple | None = None
+    default_experiment: tuple = (0.0, 20.0, 1e-3)
     report: Callable | None = None
 
     def __post_init__(self):

@@ -452,4 +452,4 @@ COMPONENT = Component(
     "Overhead crane with a double-pendulum payload (hook m1 on cable l1, payload m2 on cable l2); "
     "inputs: trolley and hoist accelerations, horizontal forces; fixed-step RK4 inside doStep",
     VARIABLES, setup, _outputs,
-    initial_state=lambda config: config.state0, update=update, default_experiment=(0.0, 20.0, 0.01))
+    initial_state=lambda config: config.state0, update=update)
