@@ -37,3 +37,28 @@ def test_the_readme_python_example_runs(fmu_dir, tmp_path):
     lines = done.stdout.splitlines()
     assert lines[0] == "paper: largest hook swing 63 deg" and lines[1] == "lqr from 15 deg: 0.0032 deg at 10 s"
     assert (tmp_path / "lqr_15deg.png").stat().st_size > 10_000
+
+
+def _marked_blocks(text):
+    """``(language, code)`` of each fenced block that follows a ``<!-- test: run -->`` line."""
+    return re.findall(r"<!-- test: run -->\n```(\w*)\n(.*?)```", text, re.S)
+
+
+def test_every_marked_readme_block_runs_as_written(fmu_dir, tmp_path):
+    """The README's marked blocks, as a user runs them after `crane-fmu build`: shell blocks line by
+    line with the installed commands on PATH (`set -e`: any failing line fails), Python blocks with
+    this interpreter, in a folder whose build/ is this session's build."""
+    import os
+    import subprocess
+    import sys
+
+    blocks = _marked_blocks((ROOT / "README.md").read_text())
+    assert len(blocks) >= 3
+    (tmp_path / "build").symlink_to(fmu_dir.parent)
+    env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}")
+    for language, code in blocks:
+        command = [sys.executable, "-c", code] if language == "python" else ["bash", "-e", "-c", code]
+        done = subprocess.run(command, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=900)
+        assert done.returncode == 0, f"{code}\n{done.stdout[-1000:]}{done.stderr[-2000:]}"
+        if "libcosimpy" in code:
+            assert done.stdout.startswith("20000 samples, theta1 = ") and done.stdout.endswith(" rad at 20.0 s\n")
