@@ -45,8 +45,10 @@ def test_defaults_are_the_papers_section_v_values():
 
 
 def test_plant_output_names_match_the_model_order():
-    assert plant.COMPONENT.names("output")[:len(plant.OUTPUTS)] == plant.OUTPUTS
-    assert plant.OUTPUTS[:6] == tables.STATE
+    """plant_equations.outputs gives the state, the positions and the energy; the FMU's outputs start with them."""
+    names = tables.STATE + ("x1", "y1", "x2", "y2", "energy")
+    assert plant.COMPONENT.names("output")[:len(names)] == names
+    assert len(plant.outputs((0.0,) * 6, PlantParameters())) == len(names)
 
 
 @pytest.mark.parametrize("step, max_substep, n", [(1e-3, 1e-3, 1), (0.01, 1e-3, 10), (0.0105, 1e-3, 11),
@@ -138,21 +140,27 @@ def test_the_fast_paths_compute_the_same_numbers_as_the_equations():
         assert controller.law(p, k)(state) == controller.control(state, p, k)
         u, dt, big_l = rng.uniform(-3, 3), rng.choice([1e-3, 0.01, 0.05]), rng.uniform(0.2, 3)
         swing = state + (big_l, 0.0)
-        assert plant._paper_stepper(p)(swing, u, dt) == plant.rk4_step(swing, u, dt, p)
+        assert plant.paper_stepper(p)(swing, u, dt) == plant.rk4_step(swing, u, dt, p)
 
 
 def test_the_plants_fast_step_equals_its_general_step():
     """update() of the paper's model (no hoist, forces, damping, lag, limits) against the general path."""
     values = {v.name: v.start for v in plant.VARIABLES if v.causality == "parameter"}
-    fast = plant.setup({**values, "theta1_0": 0.3, "dtheta2_0": -0.2, "u_max": 2.5})
-    general = fast._replace(plain_drive=False)
-    assert fast.plain_drive
-    state_fast = state_general = fast.state0
+    config = plant.setup({**values, "theta1_0": 0.3, "dtheta2_0": -0.2, "u_max": 2.5})
+    assert config.fast
+    state_fast = state_general = config.state0
     for k in range(300):
         inputs = (3.0 * math.sin(0.05 * k), 0.0, 0.0, 0.0)
-        state_fast = plant.update(fast, state_fast, inputs, k * 0.01, 0.01)
-        state_general = plant.update(general, state_general, inputs, k * 0.01, 0.01)
+        state_fast = plant.fast_update(config, state_fast, inputs[0], k * 0.01, 0.01)
+        state_general = plant.general_update(config, state_general, inputs, k * 0.01, 0.01)
         assert state_fast == state_general
+
+
+@pytest.mark.parametrize("name, value", [("c1", 0.1), ("c2", 0.1), ("tau", 0.05), ("v_max", 0.5)])
+def test_any_effect_away_from_its_neutral_value_leaves_the_fast_path(name, value):
+    """The fast path is chosen from the parameters themselves: an effect cannot be skipped."""
+    values = {v.name: v.start for v in plant.VARIABLES if v.causality == "parameter"}
+    assert plant.setup(values).fast and not plant.setup({**values, name: value}).fast
 
 
 def test_the_fast_step_tells_huge_finite_states_from_non_finite_ones():
@@ -162,7 +170,7 @@ def test_the_fast_step_tells_huge_finite_states_from_non_finite_ones():
     values = {v.name: v.start for v in plant.VARIABLES if v.causality == "parameter"}
     config = plant.setup(values)
     huge = (1e308, 0.0, 1e308, 0.0, 0.0, 0.0) + config.state0[6:]  # x and theta1 sum to inf
-    assert config.plain_drive and math.isinf(sum(huge[:8]))
+    assert config.fast and math.isinf(sum(huge[:8]))
     state = plant.update(config, huge, (0.0, 0.0, 0.0, 0.0), 0.0, 1e-3)
     assert state[0] == 1e308 and all(map(math.isfinite, state))
     with pytest.raises(Discard, match="plant state became non-finite"):

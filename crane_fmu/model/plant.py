@@ -1,14 +1,10 @@
-"""Double-pendulum payload under an accelerated trolley, eqs (4)-(9), with hoisting, forces and damping.
+"""The CranePlant FMU kind: its variables, parameter rules and communication step.
 
-The swing state is ``(x, dx, theta1, dtheta1, theta2, dtheta2)`` in SI units;
-with hoisting it continues with the main cable length and its rate ``(l1, dl1)``.
-The input is the trolley acceleration ``u = x''`` [m/s2]. Angles are measured
-from the downward vertical, positive in +x direction (Fig. 3).
-
-Beyond the paper (each term vanishes at its default, leaving eqs (8)-(9)):
-the hoist acceleration ``l1''`` (positive lowers the hook), horizontal forces
-``F1`` on the hook and ``F2`` on the payload, viscous damping ``c1`` at the
-trolley joint and ``c2`` at the hook joint, and the trolley drive's limits and lag.
+The equations of motion are in :mod:`.plant_equations` (eqs (4)-(9) and their
+extensions), the drive, rail and hoist limits in :mod:`.plant_limits`; this
+module puts them together. The plant's state is the swing and hoist state of
+:mod:`.plant_equations` followed by the drive's acceleration and the trolley's
+mean acceleration over the last sub-step (positions :data:`DRIVE`, :data:`ACCEL`).
 """
 
 import math
@@ -17,256 +13,29 @@ from collections import namedtuple
 from .component import Component, Discard, Step
 from .linalg import total
 from .parameters import finite, plant_parameters, positive
+from .plant_equations import (  # noqa: F401 (the plant's equations, importable from here)
+    DL1,
+    DX,
+    L1,
+    MAX_SUBSTEPS,
+    NO_LOAD,
+    THETA1,
+    X,
+    advance,
+    angular_accelerations,
+    derivative,
+    energy,
+    linearisation,
+    outputs,
+    paper_stepper,
+    rk4_step,
+    substeps,
+)
+from .plant_limits import clamp, drive_factors, held_cable, past_rail_end, within_speed
 from .tables import PLANT_MODEL, input_, output, parameter
 
-NO_LOAD = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # (dl1, ddl1, F1, F2, c1, c2): the paper's model
-
-
-def angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p, l1=None, load=NO_LOAD):
-    """Solve the Lagrange equations (8) and (9), extended, for the angular accelerations.
-
-    Parameters
-    ----------
-    theta1, dtheta1, theta2, dtheta2 : float
-        Swing angles [rad] and rates [rad/s].
-    u : float
-        Trolley acceleration [m/s2].
-    p : PlantParameters
-        Masses, cable lengths and gravity.
-    l1 : float, optional
-        The main cable's length now [m] (default ``p.l1``).
-    load : tuple
-        ``(dl1, ddl1, F1, F2, c1, c2)``: the main cable's rate [m/s] and
-        acceleration [m/s2], the horizontal forces on hook and payload [N], the
-        joint damping coefficients [N m s/rad]; :data:`NO_LOAD` is the paper's model.
-
-    Returns
-    -------
-    (float, float)
-        ``(ddtheta1, ddtheta2)`` [rad/s2].
-
-    Notes
-    -----
-    With ``d = theta1 - theta2``, ``L = l1(t)``, the damping torques
-    ``Q1 = -c1 w1 + c2 (w2 - w1)``, ``Q2 = -c2 (w2 - w1)`` and ``mu = m1 + m2``, the
-    Lagrange equations of eqs (4)-(7) with a time-varying ``L`` (derived symbolically
-    in ``tests/test_equations.py``), eq (8) divided by ``L`` and eq (9) by ``m2 l2``, are::
-
-        mu L dd1 + m2 l2 cos(d) dd2 = -mu (u cos th1 + g sin th1) - m2 l2 w2^2 sin d
-                                      - 2 mu L' w1 + (F1 + F2) cos th1 + Q1 / L
-        L cos(d) dd1 + l2 dd2 = -u cos th2 - g sin th2 + L w1^2 sin d
-                                - L'' sin d - 2 L' w1 cos d + (F2 cos th2 + Q2 / l2) / m2
-
-    With ``L' = L'' = F1 = F2 = c1 = c2 = 0`` these are eqs (8) and (9). The
-    determinant ``L l2 (m1 + m2 sin^2 d)`` is positive for m1 > 0, and dividing (9)
-    by m2 keeps the case m2 = 0 regular (then F2 and c2 must be 0).
-    """
-    m1m2 = p.m1 + p.m2
-    l2, g = p.l2, p.g
-    big_l = p.l1 if l1 is None else l1
-    dl1, ddl1, f1, f2, c1, c2 = load
-    s1, co1 = math.sin(theta1), math.cos(theta1)
-    s2, co2 = math.sin(theta2), math.cos(theta2)
-    d = theta1 - theta2
-    sd, cd = math.sin(d), math.cos(d)
-    q1 = -c1 * dtheta1 + c2 * (dtheta2 - dtheta1)
-    r1 = (-m1m2 * (u * co1 + g * s1) - p.m2 * l2 * dtheta2 * dtheta2 * sd
-          + (-2.0 * m1m2 * dl1 * dtheta1 + (f1 + f2) * co1 + q1 / big_l))
-    r2 = -u * co2 - g * s2 + big_l * dtheta1 * dtheta1 * sd + (-ddl1 * sd - 2.0 * dl1 * dtheta1 * cd)
-    if p.m2 > 0:
-        r2 += (f2 * co2 - c2 * (dtheta2 - dtheta1) / l2) / p.m2
-    a, b = m1m2 * big_l, p.m2 * l2 * cd
-    c, e = big_l * cd, l2
-    det = a * e - b * c
-    return (e * r1 - b * r2) / det, (a * r2 - c * r1) / det
-
-
-def _paper_stepper(p):
-    """:func:`rk4_step` of the 8-element state when l1 is at rest and nothing but u acts: the same numbers, faster.
-
-    Returns ``step(state, u, dt)`` with the constants of ``p`` bound once. The accelerations are
-    eqs (8)-(9) with the arithmetic of :func:`angular_accelerations` less its terms that vanish here.
-    """
-    m1m2, m2l2, l2, g = p.m1 + p.m2, p.m2 * p.l2, p.l2, p.g
-    sin, cos = math.sin, math.cos
-
-    def accelerations(theta1, dtheta1, theta2, dtheta2, u, big_l, a, al2):
-        d = theta1 - theta2
-        sd, cd = sin(d), cos(d)
-        r1 = -m1m2 * (u * cos(theta1) + g * sin(theta1)) - m2l2 * dtheta2 * dtheta2 * sd
-        r2 = -u * cos(theta2) - g * sin(theta2) + big_l * dtheta1 * dtheta1 * sd
-        b, c = m2l2 * cd, big_l * cd
-        det = al2 - b * c
-        return (l2 * r1 - b * r2) / det, (a * r2 - c * r1) / det
-
-    def step(state, u, dt):
-        x, v, a1, w1, a2, w2, big_l, _ = state
-        a = m1m2 * big_l
-        al2 = a * l2
-        h2 = 0.5 * dt
-        k1a, k1b = accelerations(a1, w1, a2, w2, u, big_l, a, al2)
-        w1b, w2b = w1 + h2 * k1a, w2 + h2 * k1b
-        k2a, k2b = accelerations(a1 + h2 * w1, w1b, a2 + h2 * w2, w2b, u, big_l, a, al2)
-        w1c, w2c = w1 + h2 * k2a, w2 + h2 * k2b
-        k3a, k3b = accelerations(a1 + h2 * w1b, w1c, a2 + h2 * w2b, w2c, u, big_l, a, al2)
-        w1d, w2d = w1 + dt * k3a, w2 + dt * k3b
-        k4a, k4b = accelerations(a1 + dt * w1c, w1d, a2 + dt * w2c, w2d, u, big_l, a, al2)
-        s = dt / 6.0
-        return (x + dt * v + h2 * dt * u, v + dt * u,
-                a1 + s * (w1 + 2.0 * w1b + 2.0 * w1c + w1d), w1 + s * (k1a + 2.0 * k2a + 2.0 * k3a + k4a),
-                a2 + s * (w2 + 2.0 * w2b + 2.0 * w2c + w2d), w2 + s * (k1b + 2.0 * k2b + 2.0 * k3b + k4b),
-                big_l, 0.0)
-
-    return step
-
-
-def derivative(state, u, p, hoist=0.0, forces=(0.0, 0.0, 0.0, 0.0)):
-    """Time derivative of the state for a held trolley acceleration ``u`` (and hoist acceleration).
-
-    Parameters
-    ----------
-    state : tuple
-        ``(x, dx, theta1, dtheta1, theta2, dtheta2)``, or with ``(l1, dl1)`` appended.
-    hoist : float
-        ``l1''`` [m/s2]; needs the 8-element state.
-    forces : tuple
-        ``(F1, F2, c1, c2)``.
-
-    Notes
-    -----
-    ``x'' = u`` by definition of the input (eq 12: f1 = 0, b1 = 1); the angular
-    accelerations come from eqs (8)-(9), see :func:`angular_accelerations`.
-    """
-    _, dx, theta1, dtheta1, theta2, dtheta2 = state[:6]
-    if len(state) == 6:
-        dd1, dd2 = angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p, None, (0.0, 0.0, *forces))
-        return (dx, u, dtheta1, dd1, dtheta2, dd2)
-    l1, dl1 = state[6:8]
-    dd1, dd2 = angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p, l1, (dl1, hoist, *forces))
-    return (dx, u, dtheta1, dd1, dtheta2, dd2, dl1, hoist)
-
-
-def rk4_step(state, u, dt, p, hoist=0.0, forces=(0.0, 0.0, 0.0, 0.0)):
-    """Advance ``state`` (6 or 8 elements, see :func:`derivative`) by ``dt``: one classical RK4 step, inputs held."""
-    x, v, a1, w1, a2, w2 = state[:6]
-    h2 = 0.5 * dt
-    if len(state) == 8:
-        big_l, dl = state[6:8]
-        # l1'' = hoist is constant over the step: l1 and its rate are exact at every stage
-        ls = (big_l, big_l + h2 * dl + 0.5 * hoist * h2 * h2, big_l + dt * dl + 0.5 * hoist * dt * dt)
-        dls = (dl, dl + h2 * hoist, dl + dt * hoist)
-    else:
-        ls, dls = (None, None, None), (0.0, 0.0, 0.0)
-    f = [(dls[i], hoist, *forces) for i in range(3)]
-    k1 = angular_accelerations(a1, w1, a2, w2, u, p, ls[0], f[0])
-    k2 = angular_accelerations(a1 + h2 * w1, w1 + h2 * k1[0], a2 + h2 * w2, w2 + h2 * k1[1], u, p, ls[1], f[1])
-    w1b, w2b = w1 + h2 * k1[0], w2 + h2 * k1[1]
-    w1c, w2c = w1 + h2 * k2[0], w2 + h2 * k2[1]
-    k3 = angular_accelerations(a1 + h2 * w1b, w1c, a2 + h2 * w2b, w2c, u, p, ls[1], f[1])
-    w1d, w2d = w1 + dt * k3[0], w2 + dt * k3[1]
-    k4 = angular_accelerations(a1 + dt * w1c, w1d, a2 + dt * w2c, w2d, u, p, ls[2], f[2])
-    s = dt / 6.0
-    # x'' = u is constant over the step, so RK4 integrates x exactly.
-    new = (
-        x + dt * v + h2 * dt * u,
-        v + dt * u,
-        a1 + s * (w1 + 2.0 * w1b + 2.0 * w1c + w1d),
-        w1 + s * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]),
-        a2 + s * (w2 + 2.0 * w2b + 2.0 * w2c + w2d),
-        w2 + s * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]),
-    )
-    return new if len(state) == 6 else new + (ls[2], dls[2])
-
-
-def linearisation(p):
-    """The swing dynamics linearised about the hanging equilibrium: ``q'' = -W q - w u``, ``q = (theta1, theta2)``.
-
-    Returns
-    -------
-    (W, w)
-        ``W`` (2x2, lists of rows) [1/s2] and ``w`` (2) [rad/m].
-
-    Notes
-    -----
-    Eqs (8)-(9) divided as in :func:`angular_accelerations`, with ``sin q = q``,
-    ``cos q = 1`` and the quadratic rate terms dropped, give ``N q'' + K q = -n u`` with
-    ``N = [[(m1+m2) l1, m2 l2], [l1, l2]]``, ``K = diag((m1+m2) g, g)``,
-    ``n = (m1+m2, 1)``; ``det N = m1 l1 l2 > 0``.
-    """
-    m12 = p.m1 + p.m2
-    a, b, c, d = m12 * p.l1, p.m2 * p.l2, p.l1, p.l2
-    det = a * d - b * c
-    inv = ((d / det, -b / det), (-c / det, a / det))  # N^-1
-    big_w = [[inv[i][0] * m12 * p.g, inv[i][1] * p.g] for i in range(2)]
-    small_w = [inv[i][0] * m12 + inv[i][1] for i in range(2)]
-    return big_w, small_w
-
-
-MAX_SUBSTEPS = 10_000_000  # per communication step: about a minute of computing
-
-
-def substeps(step, max_substep):
-    """Number of equal RK4 sub-steps no longer than ``max_substep`` covering ``step``.
-
-    Raises
-    ------
-    ValueError
-        If the step is not positive and finite, or needs more than
-        :data:`MAX_SUBSTEPS` sub-steps (a host must never hang in doStep).
-    """
-    if not (step > 0 and math.isfinite(step)):
-        raise ValueError(f"communication step must be > 0 and finite, got {step!r}")
-    # The 1e-9 slack keeps h = 1 ms with max_substep = 1 ms at one sub-step
-    # despite rounding in h.
-    n = step / max_substep - 1e-9
-    if not n <= MAX_SUBSTEPS:
-        raise ValueError(f"communication step {step!r} s needs more than {MAX_SUBSTEPS} RK4 sub-steps of at most "
-                         f"max_substep = {max_substep!r} s")
-    return max(1, math.ceil(n))
-
-
-def advance(state, u, step, max_substep, p):
-    """Integrate the paper's plant over one communication step with u held (zero-order hold)."""
-    n = substeps(step, max_substep)
-    dt = step / n
-    for _ in range(n):
-        state = rk4_step(state, u, dt, p)
-    return state
-
-
-def energy(state, p):
-    """Kinetic plus potential energy of hook and payload [J], eqs (6)-(7)."""
-    return outputs(state, p)[10]
-
-
-OUTPUTS = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2", "x1", "y1", "x2", "y2", "energy")
-
-
-def outputs(state, p):
-    """The swing state, hook and payload positions and the energy, in the order of :data:`OUTPUTS`.
-
-    Notes
-    -----
-    Positions from eqs (4)-(5) with the main cable's length now (``state[6]``,
-    else ``p.l1``); kinetic energy eq (6), including the hoisting speed
-    ``state[7]``, plus potential energy eq (7). The trolley's own mass is not
-    part of the model, so with ``u = 0`` (constant trolley velocity), no
-    hoisting, no forces and no damping this energy is conserved.
-    """
-    x, dx, theta1, dtheta1, theta2, dtheta2 = state[:6]
-    l1, dl1 = state[6:8] if len(state) > 6 else (p.l1, 0.0)
-    m1, m2, l2 = p.m1, p.m2, p.l2
-    s1, c1, s2, c2 = math.sin(theta1), math.cos(theta1), math.sin(theta2), math.cos(theta2)
-    x1, y1 = x + l1 * s1, -l1 * c1
-    x2, y2 = x1 + l2 * s2, y1 - l2 * c2
-    vx1, vy1 = dx + l1 * dtheta1 * c1 + dl1 * s1, l1 * dtheta1 * s1 - dl1 * c1
-    vx2, vy2 = vx1 + l2 * dtheta2 * c2, vy1 + l2 * dtheta2 * s2
-    kinetic = 0.5 * (m1 * (vx1 * vx1 + vy1 * vy1) + m2 * (vx2 * vx2 + vy2 * vy2))
-    return (x, dx, theta1, dtheta1, theta2, dtheta2, x1, y1, x2, y2,
-            kinetic + p.g * (m1 * y1 + m2 * y2))
-
-
-# --- the CranePlant component -------------------------------------------------------
+DRIVE, ACCEL = 8, 9  # after the swing and hoist state: the drive's acceleration, the trolley's mean one
+INITIAL_STATE = ("x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0")
 
 INF = math.inf
 
@@ -308,10 +77,18 @@ VARIABLES = PLANT_MODEL + (
     output("ddx", "m/s2", "trolley acceleration over the last step, after the drive's limits and lag"),
 )
 
-Config = namedtuple("Config", "params max_substep state0 forces_c u_max v_max tau x_min x_max l1_min l1_max dl1_max "
-                               "paper plain_drive")
-Config.__doc__ = ("The plant's validated parameters; ``paper`` is the RK4 step of :func:`_paper_stepper`, "
-                  "``plain_drive`` says the drive has no lag, speed limits or joint damping.")
+U = 0  # the trolley acceleration among the inputs; the others (hoist, F1, F2) act when non-zero
+
+# The parameters that the fast path (the paper's RK4 step with the demand limited to u_max and the
+# rail and cable limits checked) takes into account; any other parameter away from its neutral
+# default sends every step to the general path, so that no effect can be skipped.
+FAST_PATH_PARAMETERS = {"m1", "m2", "l1", "l2", "g", *INITIAL_STATE, "max_substep", "u_max", "x_min", "x_max",
+                        "l1_min", "l1_max", "dl1_max"}  # dl1_max: no hoisting on the fast path
+
+Config = namedtuple("Config", "params max_substep state0 damping u_max v_max tau x_min x_max l1_min l1_max dl1_max "
+                              "paper_step fast")
+Config.__doc__ = ("The plant's validated parameters; ``paper_step`` is :func:`.plant_equations.paper_stepper` "
+                  "for them, ``fast`` that every parameter outside :data:`FAST_PATH_PARAMETERS` is neutral.")
 
 
 def _at_least(name, value, low, rule):
@@ -335,29 +112,20 @@ def setup(values):
         raise ValueError(f"c2 must be 0 when m2 = 0 (the hook joint then moves no mass), got {values['c2']!r}")
     if not values["x_min"] < values["x_max"]:
         raise ValueError(f"x_min must be < x_max, got {values['x_min']!r} and {values['x_max']!r}")
-    state0 = tuple(values[name] for name in ("x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0"))
-    for name, value in zip(("x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0"), state0):
+    state0 = tuple(values[name] for name in INITIAL_STATE)
+    for name, value in zip(INITIAL_STATE, state0):
         finite(name, value)
     if not values["x_min"] <= values["x0"] <= values["x_max"]:
         raise ValueError(f"x0 must lie on the rail [{values['x_min']!r}, {values['x_max']!r}], got {values['x0']!r}")
     if not values["l1_min"] <= p.l1 <= values["l1_max"]:
         raise ValueError(f"l1 must lie within [l1_min, l1_max] = [{values['l1_min']!r}, {values['l1_max']!r}], "
                          f"got {p.l1!r}")
-    return Config(p, values["max_substep"], state0 + (p.l1, 0.0, 0.0, 0.0), (values["c1"], values["c2"]),
-                  values["u_max"], values["v_max"], values["tau"], values["x_min"], values["x_max"],
-                  values["l1_min"], values["l1_max"], values["dl1_max"], _paper_stepper(p),
-                  values["tau"] == 0 and values["v_max"] == INF and values["dl1_max"] == INF
-                  and values["c1"] == values["c2"] == 0)
-
-
-def _clamp(value, low, high):
-    return min(max(value, low), high)
-
-
-def _past_rail_end(c, x, t, time):
-    end = "x_max" if x > c.x_max else "x_min"
-    return Discard(f"the trolley would pass the rail end {end} = {getattr(c, end)!r} m (x = {x!r} m) "
-                   f"at t = {t!r} s: the step from t = {time!r} s is discarded")
+    fast = all(values[v.name] == v.start for v in VARIABLES
+               if v.causality == "parameter" and v.name not in FAST_PATH_PARAMETERS)
+    return Config(params=p, max_substep=values["max_substep"], state0=state0 + (p.l1, 0.0, 0.0, 0.0),
+                  damping=(values["c1"], values["c2"]), u_max=values["u_max"], v_max=values["v_max"],
+                  tau=values["tau"], x_min=values["x_min"], x_max=values["x_max"], l1_min=values["l1_min"],
+                  l1_max=values["l1_max"], dl1_max=values["dl1_max"], paper_step=paper_stepper(p), fast=fast)
 
 
 def _not_finite(time, u):
@@ -365,86 +133,91 @@ def _not_finite(time, u):
                    "the step is discarded")
 
 
-def _paper_update(c, state, u, time, step):
-    """:func:`update` when only the trolley acceleration acts (no hoisting, forces, damping, lag or speed
-    limits; the cable at rest within its limits): the same numbers, faster."""
-    n = 1 if 0.0 < step <= c.max_substep else substeps(step, c.max_substep)  # ValueError for an unusable step
-    dt = step / n
-    demand = c.u_max if u > c.u_max else -c.u_max if u < -c.u_max else u  # _clamp(), without its two calls
-    swing, drive = state[:8], state[8]
-    try:
-        for k in range(n):
-            drive = demand + (drive - demand) * 0.0  # no lag, as update() computes it
-            swing = c.paper(swing, demand, dt)
-            if not c.x_min <= swing[0] <= c.x_max:
-                raise _past_rail_end(c, swing[0], time + (k + 1) * dt, time)
-        # a finite sum has finite terms (inf and nan propagate); only an overflowing sum needs a closer look
-        finite = math.isfinite(total(swing)) or all(map(math.isfinite, swing))
-    except (ArithmeticError, ValueError):  # overflow, or sin/cos of inf
-        finite = False
-    if not finite:
-        raise _not_finite(time, u)
-    return swing + (drive, demand)
-
-
 def update(config, state, inputs, time, step):
     """The state after one communication step with the inputs held.
 
-    The state is the 8-element swing and hoist state, the drive's acceleration
-    and the trolley's mean acceleration over the last sub-step. Per RK4 sub-step
-    ``dt``: the demand is limited to ``u_max``;
-    the drive's acceleration follows it with the lag ``tau`` (exactly, and the
-    trolley takes its mean over the sub-step); the trolley's acceleration is then
-    limited so that the speed ends within ``v_max``; the hoist acceleration is
-    limited likewise by ``dl1_max``, and a cable reaching ``l1_min`` or ``l1_max``
-    is held there at rest (reported in the step's messages). A trolley that
-    would pass a rail end, or a state that becomes non-finite, discards the step.
+    Steps where nothing but the trolley acceleration acts, with the cable at rest within its limits
+    and every other effect at its neutral parameter value, take :func:`fast_update`; the others
+    :func:`general_update`. Both give the same numbers where both apply.
+    """
+    if config.fast and not any(inputs[U + 1:]) and state[DL1] == 0.0 \
+            and config.l1_min <= state[L1] <= config.l1_max:
+        return fast_update(config, state, inputs[U], time, step)
+    return general_update(config, state, inputs, time, step)
+
+
+def fast_update(c, state, u, time, step):
+    """:func:`general_update` of the paper's model: no hoisting, forces, damping, lag or speed limits."""
+    n = 1 if 0.0 < step <= c.max_substep else substeps(step, c.max_substep)  # ValueError for an unusable step
+    dt = step / n
+    demand = c.u_max if u > c.u_max else -c.u_max if u < -c.u_max else u  # clamp(), without its two calls
+    swing = state[:DRIVE]
+    try:
+        for k in range(n):
+            swing = c.paper_step(swing, demand, dt)
+            if not c.x_min <= swing[X] <= c.x_max:
+                raise past_rail_end(c.x_min, c.x_max, swing[X], time + (k + 1) * dt, time)
+        # a finite sum has finite terms (inf and nan propagate); only an overflowing sum needs a closer look
+        finite_state = math.isfinite(total(swing)) or all(map(math.isfinite, swing))
+    except (ArithmeticError, ValueError):  # overflow, or sin/cos of inf
+        finite_state = False
+    if not finite_state:
+        raise _not_finite(time, u)
+    return swing + (demand, demand)
+
+
+def general_update(config, state, inputs, time, step):
+    """The state after one communication step, every effect included.
+
+    Per RK4 sub-step ``dt``: the demand is limited to ``u_max``; the drive's
+    acceleration follows it with the lag ``tau`` (exactly, and the trolley takes
+    its mean over the sub-step); the trolley's acceleration is then limited so
+    that the speed ends within ``v_max``; the hoist acceleration is limited
+    likewise by ``dl1_max``, and a cable reaching ``l1_min`` or ``l1_max`` is held
+    there at rest (reported in the step's messages). A trolley that would pass a
+    rail end, or a state that becomes non-finite, discards the step.
     """
     u, hoist, f1, f2 = inputs
-    if config.plain_drive and hoist == 0.0 and f1 == 0.0 and f2 == 0.0 and state[7] == 0.0 \
-            and config.l1_min <= state[6] <= config.l1_max:
-        return _paper_update(config, state, u, time, step)
-    if config.params.m2 == 0 and f2 != 0:
+    c, p = config, config.params
+    if p.m2 == 0 and f2 != 0:
         raise Discard(f"F2 = {f2!r} N acts on a payload of mass m2 = 0: the step is discarded")
-    n = substeps(step, config.max_substep)  # ValueError for an unusable step
-    dt, p, c = step / n, config.params, config
-    forces = (f1, f2, *c.forces_c)
-    demand = _clamp(u, -c.u_max, c.u_max)
-    lag = math.exp(-dt / c.tau) if c.tau > 0 else 0.0
-    mean = c.tau / dt * (1.0 - lag) if c.tau > 0 else 0.0
+    n = substeps(step, c.max_substep)  # ValueError for an unusable step
+    dt = step / n
+    forces = (f1, f2, *c.damping)
+    demand = clamp(u, -c.u_max, c.u_max)
+    lag, mean = drive_factors(c.tau, dt)
     messages = []
-    swing, drive = state[:8], state[8]
+    swing, drive = state[:DRIVE], state[DRIVE]
     try:
         for k in range(n):
             accel = demand + (drive - demand) * mean if c.tau > 0 else demand
             drive = demand + (drive - demand) * lag
-            v, dl = swing[1], swing[7]
-            if c.v_max < INF:
-                accel = _clamp(accel, (-c.v_max - v) / dt, (c.v_max - v) / dt)
-            hoist_now = hoist if c.dl1_max == INF else _clamp(hoist, (-c.dl1_max - dl) / dt, (c.dl1_max - dl) / dt)
-            if hoist_now == 0.0 and swing[7] == 0.0 and not any(forces):
-                swing = c.paper(swing, accel, dt)
+            cable_rate = swing[DL1]
+            accel = within_speed(accel, swing[DX], c.v_max, dt)
+            hoist_now = within_speed(hoist, cable_rate, c.dl1_max, dt)
+            if hoist_now == 0.0 and cable_rate == 0.0 and not any(forces):
+                swing = c.paper_step(swing, accel, dt)
             else:
                 swing = rk4_step(swing, accel, dt, p, hoist_now, forces)
             t = time + (k + 1) * dt
-            if not c.x_min <= swing[0] <= c.x_max:
-                raise _past_rail_end(c, swing[0], t, time)
-            if not c.l1_min <= swing[6] <= c.l1_max:
-                held = c.l1_max if swing[6] > c.l1_max else c.l1_min
-                if dl != 0.0:  # reached the limit in this sub-step (not already held there)
+            if not c.x_min <= swing[X] <= c.x_max:
+                raise past_rail_end(c.x_min, c.x_max, swing[X], t, time)
+            held = held_cable(swing[L1], c.l1_min, c.l1_max)
+            if held is not None:
+                if cable_rate != 0.0:  # reached the limit in this sub-step (not already held there)
                     messages.append(f"hoist: l1 reached {held!r} m at t = {t!r} s and is held there")
-                swing = swing[:6] + (held, 0.0)
-        finite = all(map(math.isfinite, swing))
+                swing = swing[:L1] + (held, 0.0)
+        finite_state = all(map(math.isfinite, swing))
     except (ArithmeticError, ValueError):  # overflow, or sin/cos of inf
-        finite = False
-    if not finite:
+        finite_state = False
+    if not finite_state:
         raise _not_finite(time, u)
     state = swing + (drive, accel)
     return Step(state, messages) if messages else state
 
 
 def _outputs(config, state, inputs):
-    return outputs(state, config.params) + (state[6], state[7], state[9])
+    return outputs(state, config.params) + (state[L1], state[DL1], state[ACCEL])
 
 
 COMPONENT = Component(

@@ -1,0 +1,47 @@
+"""The plant's drive, rail and hoist limits: what stands between a demanded and an applied acceleration.
+
+Plain functions of values and limits, used per RK4 sub-step by :func:`.plant.update`.
+Each limit is inactive at its neutral value (``INF``, or ``tau = 0``).
+"""
+
+import math
+
+from .component import Discard
+
+
+def clamp(value, low, high):
+    return min(max(value, low), high)
+
+
+def drive_factors(tau, dt):
+    """``(lag, mean)`` of the drive's first-order lag over a sub-step ``dt``.
+
+    The drive's acceleration ``a`` follows the demand ``d`` exactly as
+    ``a(dt) = d + (a(0) - d) lag`` with ``lag = exp(-dt / tau)``, and its mean over
+    the sub-step is ``d + (a(0) - d) mean``; ``tau = 0`` is no lag: ``(0, 0)``.
+    """
+    if tau == 0:
+        return 0.0, 0.0
+    lag = math.exp(-dt / tau)
+    return lag, tau / dt * (1.0 - lag)
+
+
+def within_speed(accel, speed, speed_max, dt):
+    """``accel`` limited so that ``speed`` ends the sub-step ``dt`` within ``+-speed_max``."""
+    if speed_max == math.inf:
+        return accel
+    return clamp(accel, (-speed_max - speed) / dt, (speed_max - speed) / dt)
+
+
+def past_rail_end(x_min, x_max, x, t, time):
+    """The Discard of a step in which the trolley (at ``x`` at time ``t``) would pass a rail end."""
+    end, at = ("x_max", x_max) if x > x_max else ("x_min", x_min)
+    return Discard(f"the trolley would pass the rail end {end} = {at!r} m (x = {x!r} m) "
+                   f"at t = {t!r} s: the step from t = {time!r} s is discarded")
+
+
+def held_cable(l1, l1_min, l1_max):
+    """The limit a cable of length ``l1`` is held at, or None when it lies within them."""
+    if l1_min <= l1 <= l1_max:
+        return None
+    return l1_max if l1 > l1_max else l1_min
