@@ -5,7 +5,7 @@ import math
 from . import limits
 from .component import Component
 from .parameters import PLANT_FIELDS, ControllerGains, plant_parameters, positive
-from .tables import MEASURED_STATE, controller_model, output, parameter
+from .tables import MEASURED_STATE, controller_model, output, parameter, positions
 
 
 def drift_and_input_gain(theta1, dtheta1, theta2, dtheta2, p, b3_form="derived"):
@@ -146,6 +146,7 @@ VARIABLES = controller_model() + (
 ) + MEASURED_STATE + (
     output("u", "m/s2", "demanded trolley acceleration, eq (21)"),
 )
+IN = positions(VARIABLES, "input")
 
 
 def setup(values):
@@ -161,7 +162,7 @@ def _output(config, state, inputs):
     _, _, (u_max, v_max, h), u = config
     if u_max == v_max == math.inf:  # limited() would return u itself
         return (u(inputs),)
-    return (limits.limited(u(inputs), inputs[1], u_max, v_max, h),)
+    return (limits.limited(u(inputs), inputs[IN.dx], u_max, v_max, h),)
 
 
 COMPONENT = Component(

@@ -71,8 +71,8 @@ def setup(values):
     u_max, v_max = limits.check(values)
     if not math.isfinite(u_max):
         raise ValueError(f"u_max must be finite for the saturated law (E4), got {u_max!r}")
-    return Config(p.m1 + p.m2, p.m2, p.l1, p.l2, values["k_c"], values["k_p"], values["k_d"], values["x_d"],
-                  u_max, v_max, values["h"])
+    return Config(mu=p.m1 + p.m2, m2=p.m2, l1=p.l1, l2=p.l2, k_c=values["k_c"], k_p=values["k_p"], k_d=values["k_d"],
+                  x_d=values["x_d"], u_max=u_max, v_max=v_max, h=values["h"])
 
 
 def control(c, measured):

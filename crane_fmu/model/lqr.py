@@ -15,7 +15,7 @@ from . import limits, linalg
 from .component import Component
 from .parameters import finite, plant_parameters, positive
 from .plant import linearisation
-from .tables import MEASURED_STATE, STATE, controller_model, input_, output, parameter
+from .tables import MEASURED_STATE, STATE, controller_model, input_, output, parameter, positions
 
 WEIGHTS = tuple("q_" + name for name in STATE)
 REFERENCE = ("x_ref", "dx_ref", "theta1_ref", "dtheta1_ref", "theta2_ref", "dtheta2_ref")
@@ -83,7 +83,7 @@ def setup(values):
         schedule = (lengths, [design(dataclasses.replace(p, l1=length), weights, values["r"], values["h"])
                               for length in lengths])
     gains = design(p, weights, values["r"], values["h"])
-    return Config(gains, values["x_d"], u_max, v_max, values["h"], schedule)
+    return Config(gains=gains, x_d=values["x_d"], u_max=u_max, v_max=v_max, h=values["h"], schedule=schedule)
 
 
 def scheduled_gains(config, l1):
@@ -109,7 +109,8 @@ def control(config, measured, reference=(0.0,) * 6, ddx_ref=0.0, l1=0.0):
 
 
 def _output(config, state, inputs):
-    return (control(config, inputs[:6], inputs[6:12], inputs[12], inputs[13]),)
+    return (control(config, inputs[IN.x:IN.dtheta2 + 1], inputs[IN.x_ref:IN.dtheta2_ref + 1], inputs[IN.ddx_ref],
+                    inputs[IN.l1_now]),)
 
 
 def report(config):
@@ -142,6 +143,7 @@ VARIABLES = controller_model() + tuple(
     input_("l1_now", "m", "measured main cable length, for the gain schedule; 0: not measured"),
     output("u", "m/s2", "demanded trolley acceleration, ddx_ref - K (s - s_ref), limited"),
 )
+IN = positions(VARIABLES, "input")
 
 
 COMPONENT = Component(

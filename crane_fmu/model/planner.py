@@ -124,7 +124,8 @@ def setup(values):
         t_a, t_c = _base(distance_abs, accel, v_max)
         steps = [(values["t0"] + t, sign * jump) for t, jump in _accel_steps(impulses, accel, t_a, t_c)]
     end = values["t0"] + impulses[-1][0] + 2 * t_a + t_c if steps else values["t0"]
-    return Config(values["x0"], distance, values["t0"], steps, end, omegas, shapes, gains, u_max, v_max, impulses)
+    return Config(x0=values["x0"], distance=distance, t0=values["t0"], steps=steps, end=end, omegas=omegas,
+                  shapes=shapes, gains=gains, u_max=u_max, v_max=v_max, impulses=impulses)
 
 
 def reference(c, t):

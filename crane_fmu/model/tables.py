@@ -44,6 +44,17 @@ def xml_double(value):
     return repr(value) if abs(value) != float("inf") else ("INF" if value > 0 else "-INF")
 
 
+def positions(variables, causality):
+    """The positions of one causality's variables in table order, by name.
+
+    The slaves pass a component its inputs, and take its outputs, as tuples in table
+    order; code reads them by name (python-control's ``input_index`` habit), e.g.
+    ``IN = positions(VARIABLES, "input")`` and ``inputs[IN.l1_now]``.
+    """
+    names = [v.name for v in variables if v.causality == causality]
+    return namedtuple(f"{causality.capitalize()}Positions", names)(*range(len(names)))
+
+
 def parameter(name, start, unit, description, type="Real"):
     return Variable(name, "parameter", "fixed", start, unit, description, type)
 
