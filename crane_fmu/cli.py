@@ -12,6 +12,8 @@ import shutil
 import sys
 from pathlib import Path
 
+from crane_fmu.cosim.algorithms import ALGORITHMS
+
 EXAMPLES = {
     "build": ("examples:\n  crane-fmu build\n  crane-fmu build --out my/fmus --bench\n"
               "  crane-fmu build --container transport       # build/containers/CraneTransport.fmu\n"
@@ -101,11 +103,11 @@ def _parser():
     p.add_argument("--fmu-dir", default="build/fmus", help="folder of the built FMUs (default: build/fmus)")
     p.add_argument("--stop-time", type=_number, help="stop time [s] (default: the system's, 20 s built in)")
     p.add_argument("--step", type=_number, help="communication step [s] (default: the system's, 1 ms built in)")
-    p.add_argument("--master", choices=("gauss-seidel", "jacobi"), default="gauss-seidel",
-                   help="master algorithm (default gauss-seidel)")
+    p.add_argument("--master", choices=tuple(ALGORITHMS), default="gauss-seidel",
+                   help="master algorithm (default gauss-seidel; iterative-jacobi repeats the Jacobi exchange "
+                        "until the inputs are consistent)")
     p.add_argument("--no-initial-exchange", action="store_true",
                    help="start with the inputs' start values, not the initial outputs (as fmpy's container FMU does)")
-    p.add_argument("--no-controller", action="store_true", help=argparse.SUPPRESS)  # replaced by --system free
     p.add_argument("--parameters", metavar="FILE.ssv",
                    help="SSP parameter set with names INSTANCE.VARIABLE, applied before --set")
     p.add_argument("--set", action="append", default=[], metavar="INSTANCE.VARIABLE=VALUE",
@@ -276,8 +278,6 @@ def _cmd_build(args):
 def _cmd_simulate(args):
     from crane_fmu import systems
 
-    if args.no_controller:
-        raise UsageError("--no-controller is gone: run the plant alone with --system free")
     try:
         with systems.open_system(args.system) as system:
             return _simulate(args, system)

@@ -10,7 +10,7 @@ import contextlib
 from pathlib import Path
 
 from crane_fmu import components
-from crane_fmu.cosim.master import Connection
+from crane_fmu.cosim.connections import Connection
 from crane_fmu.cosim.system import System, read_fmu
 from crane_fmu.registry import Registry
 

@@ -1,10 +1,12 @@
 """A general co-simulation library on fmpy: instances, systems as data, master, recorders, SSP/OSP."""
 
-from .instance import FmiError, open_instance
-from .master import MODES, Connection, Master
+from .adapters import open_instance
+from .connections import Connection, connect
+from .instance import FmiError
+from .master import Master
 from .recorder import ArrayRecorder, CsvRecorder, ParquetRecorder, read_csv, read_result, recorder_for, write_csv
-from .system import System, connect, run, simulate
+from .system import System, run, simulate
 
-__all__ = ["FmiError", "open_instance", "MODES", "Connection", "Master", "ArrayRecorder", "CsvRecorder",
+__all__ = ["FmiError", "open_instance", "Connection", "Master", "ArrayRecorder", "CsvRecorder",
            "ParquetRecorder", "read_csv", "read_result", "recorder_for", "write_csv", "System", "connect", "run",
            "simulate"]

@@ -150,17 +150,6 @@ class Instance:
                 _SPARE_FOLDERS.setdefault(self._folder_key, []).append(self._unzip)
 
 
-def open_instance(path, name):
-    """An instance of the FMU at ``path``: the one place where the FMI version chooses the adapter."""
-    if read_fmu(path).fmiVersion.startswith("3"):
-        from .fmi3 import Fmi3Instance
-
-        return Fmi3Instance(path, name)
-    from .fmi2 import Fmi2Instance
-
-    return Fmi2Instance(path, name)
-
-
 # Extracted FMUs no instance uses now, by FMU file version: the next instance of the same FMU takes
 # one instead of unzipping it again (a sweep's worker runs thousands of cases); removed at exit.
 # Instances alive at the same time each have their own folder, as if every one had unzipped it.

@@ -1,8 +1,9 @@
 """Fixed-step co-simulation master over FMU instances of any FMI version.
 
-As in libcosim, the stepping algorithm (:class:`Master`), the connections
-(:class:`Connection`) and the observers (``crane_fmu.cosim.recorder``) are
-separate objects. An observer has ``start(names)``, called once with the
+As in libcosim, the wiring (:class:`Wiring`: ports, buffers, connections), the
+stepping algorithm (``crane_fmu.cosim.algorithms``), and the observers
+(``crane_fmu.cosim.recorder``) are separate objects, put together by
+:class:`Master`. An observer has ``start(names)``, called once with the
 ``instance.variable`` name of every output, and ``observe(time, values)``,
 called at every communication point with the values in the same order
 (``values[i]`` is the value of ``names[i]``; a read-only memoryview of doubles
@@ -10,12 +11,9 @@ that the next exchange overwrites: copy what you keep).
 """
 
 import ctypes
-from collections import namedtuple
 
-MODES = ("gauss-seidel", "jacobi")
-
-Connection = namedtuple("Connection", "source output target input")
-Connection.__doc__ = "``source.output`` feeds ``target.input`` (instance and variable names)."
+from . import algorithms
+from .connections import connect
 
 
 def communication_points(start_time, stop_time, step):
@@ -76,30 +74,24 @@ class _Port:
         self.write = (copy_and_set, function, self.instance)
 
 
-class Master:
-    """Steps FMU instances at a fixed communication step, exchanging values along connections.
+class Wiring:
+    """The instances' ports, one buffer of every output and the connections, checked once.
 
-    Parameters
-    ----------
-    instances : dict
-        ``{name: Instance}`` (FMI 2.0 or 3.0), already instantiated.
-    connections : list of Connection
-    mode : {"gauss-seidel", "jacobi"}
-        ``gauss-seidel``: before every step, values propagate along the
-        connections in dependency order, so a direct-feedthrough output sees
-        the inputs of the same instant. ``jacobi``: all outputs are read, then
-        all inputs set, then every instance steps; a feedthrough path lags one
-        step.
-    initial_exchange : bool
-        Settle the inputs at the start time by propagating the initial outputs
-        along the connections (default). Without it the first step runs with
-        the inputs' start values, as fmpy's container FMU does.
+    Offers the algorithms prebuilt calls, each ``(call, function, instance)``: :attr:`reads`,
+    :attr:`writes` and :attr:`steps` of every instance (in dependency order where there is one),
+    and :meth:`propagation`; :meth:`run` and :meth:`fail` for calls that go wrong.
+
+    Raises
+    ------
+    ValueError
+        For a connection naming an unknown instance or variable, or an input fed twice
+        (the check of :func:`~crane_fmu.cosim.connections.connect`).
     """
 
-    def __init__(self, instances, connections, mode="gauss-seidel", initial_exchange=True):
-        if mode not in MODES:
-            raise ValueError(f"master mode must be one of {', '.join(MODES)}, got {mode!r}")
-        self.instances, self.mode, self.initial_exchange = instances, mode, initial_exchange
+    def __init__(self, instances, connections):
+        connections = connect({name: (inst.inputs, inst.outputs) for name, inst in instances.items()},
+                              connections, match_names=False)
+        self.instances, self.connections = instances, connections
         self.output_names = [f"{name}.{v}" for name, inst in instances.items() for v in inst.outputs]
         buffer = (ctypes.c_double * len(self.output_names))()  # every output, in output_names order
         # what observers get: the outputs as floats (values[i] is output_names[i]), read-only
@@ -110,62 +102,77 @@ class Master:
             offset += len(inst.outputs)
         wiring = {name: [] for name in instances}
         for c in connections:
-            for inst in (c.source, c.target):
-                if inst not in instances:
-                    raise KeyError(f"connection {c.source}.{c.output} -> {c.target}.{c.input}: "
-                                   f"unknown instance {inst!r}; instances: {', '.join(instances)}")
             src = self.ports[c.source]
-            if c.output not in src.instance.outputs:
-                raise KeyError(f"{c.source}.{c.output} is not an output; outputs: "
-                               + ", ".join(src.instance.outputs))
-            if c.input not in instances[c.target].inputs:
-                raise KeyError(f"{c.target}.{c.input} is not an input; inputs: "
-                               + ", ".join(instances[c.target].inputs))
             wiring[c.target].append((c.input, src, src.instance.outputs.index(c.output)))
         for name, links in wiring.items():
             self.ports[name].connect(links)
-        self.order = self._dependency_order(connections)
-        # The exchange before each step as a flat list of calls. Gauss-Seidel: a
-        # feedthrough instance gets its inputs before its outputs are read; the
-        # others' inputs are set once every output is known.
-        gauss_seidel = []
-        for p in self.order:
-            gauss_seidel += [p.write, p.read] if p.instance.feedthrough else [p.read]
-        gauss_seidel += [p.write for p in self.order if not p.instance.feedthrough]
-        self._plans = {
-            "gauss-seidel": [c for c in gauss_seidel if c],
-            "jacobi": [p.read for p in self.order] + [p.write for p in self.order if p.write],
-        }
-        self._steps = [p.step for p in self.order]
+        self._sources = {name: {c.source for c in connections if c.target == name and c.source != name
+                                and instances[name].feedthrough} for name in instances}
+        self.order = self._dependency_order() or list(self.ports.values())
+        self.reads = [p.read for p in self.order]
+        self.writes = [p.write for p in self.order if p.write]
+        self.steps = [p.step for p in self.order]
         # who made a call, for the error of a call that fails
-        self._callers = {id(call): (instance, function)
-                         for call, function, instance in self._plans["jacobi"] + self._steps}
+        self._callers = {id(call): (instance, function) for call, function, instance in
+                         self.reads + self.writes + self.steps}
 
-    def _dependency_order(self, connections):
-        """Instances ordered so that every feedthrough instance follows its sources."""
-        after = {name: set() for name in self.instances}
-        for c in connections:
-            if self.instances[c.target].feedthrough and c.source != c.target:
-                after[c.target].add(c.source)
-        order = []
+    def _dependency_order(self):
+        """Ports ordered so that every feedthrough instance follows its sources; None around an algebraic loop."""
+        after, order = dict(self._sources), []
         while after:
             ready = [n for n, deps in after.items() if not deps - set(order)]
             if not ready:
-                raise ValueError("algebraic loop through direct-feedthrough instances: "
-                                 + ", ".join(sorted(after)))
+                self.loop = sorted(after)
+                return None
             for n in ready:
                 order.append(n)
                 del after[n]
+        self.loop = None
         return [self.ports[n] for n in order]
 
-    def _fail(self, call, status, time):
+    def propagation(self):
+        """The calls that propagate values along the connections in dependency order: a feedthrough
+        instance gets its inputs before its outputs are read, the others once every output is known.
+        ValueError around an algebraic loop of direct-feedthrough instances."""
+        if self.loop:
+            raise ValueError("algebraic loop through direct-feedthrough instances: " + ", ".join(self.loop))
+        calls = []
+        for p in self.order:
+            calls += [p.write, p.read] if p.instance.feedthrough else [p.read]
+        return [c for c in calls + [p.write for p in self.order if not p.instance.feedthrough] if c]
+
+    def fail(self, call, status, time):
         instance, function = self._callers[id(call)]
         instance.fail(function, status, time)
 
-    def _exchange(self, mode, time):
-        for call, _, _ in self._plans[mode]:
+    def run(self, calls, time):
+        for call, _, _ in calls:
             if (status := call()) > 1:  # worse than warning
-                self._fail(call, status, time)
+                self.fail(call, status, time)
+
+
+class Master:
+    """Steps FMU instances at a fixed communication step, exchanging values along connections.
+
+    Parameters
+    ----------
+    instances : dict
+        ``{name: Instance}`` (FMI 2.0 or 3.0), already instantiated.
+    connections : list of Connection
+    algorithm : str or Algorithm
+        A registered algorithm's name (``gauss-seidel``, ``jacobi``, ``iterative-jacobi``, or one
+        registered in ``crane_fmu.cosim.algorithms.ALGORITHMS``) or an algorithm object.
+    initial_exchange : bool
+        With an algorithm name: see :class:`~crane_fmu.cosim.algorithms.Algorithm`.
+    """
+
+    def __init__(self, instances, connections, algorithm="gauss-seidel", initial_exchange=True):
+        if isinstance(algorithm, str):
+            algorithm = algorithms.create(algorithm, initial_exchange=initial_exchange)
+        self.wiring = Wiring(instances, connections)
+        self.algorithm = algorithm
+        algorithm.setup(self.wiring)
+        self.instances, self.output_names, self.values = instances, self.wiring.output_names, self.wiring.values
 
     def initialize(self, start_time, stop_time, parameters=None):
         """Set parameters, run initialisation mode and settle the inputs at ``start_time``.
@@ -180,8 +187,7 @@ class Master:
             for var, value in (parameters or {}).get(name, {}).items():
                 inst.set(var, value)
             inst.enter_initialization()
-        if self.initial_exchange:
-            self._exchange("gauss-seidel", start_time)  # consistent inputs at t0 in both modes
+        self.algorithm.initialize(start_time)
         for inst in self.instances.values():
             inst.exit_initialization()
 
@@ -212,26 +218,21 @@ class Master:
         At each communication point: exchange, observe, then step every instance.
         Observers must have been started with :attr:`output_names`.
         """
-        exchange = [call for call, _, _ in self._plans[self.mode]]
-        steps = [call for call, _, _ in self._steps]
+        exchange, do_step = self.algorithm.exchange, self.algorithm.step
         observe = [o.observe for o in observers]
-        values, fail = self.values, self._fail
+        values = self.values
         for k in range(first, last):
             t = start_time + k * step
-            for call in exchange:
-                if (status := call()) > 1:  # worse than warning
-                    fail(call, status, t)
+            exchange(t)
             for f in observe:
                 f(t, values)
-            for do_step in steps:
-                if (status := do_step(t, step)) > 1:
-                    fail(do_step, status, t)
+            do_step(t, step)
         for inst in self.instances.values():
             inst.time = start_time + last * step
 
     def finish(self, stop_time, observers=()):
         """The exchange and observation at the last communication point."""
-        self._exchange(self.mode, stop_time)
+        self.algorithm.exchange(stop_time)
         for o in observers:
             o.observe(stop_time, self.values)
 

@@ -16,7 +16,7 @@ import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
-from .master import Connection
+from .connections import Connection
 from .system import System, read_fmu
 
 SSD_NS = "http://ssp-standard.org/SSP1/SystemStructureDescription"

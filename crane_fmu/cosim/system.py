@@ -8,8 +8,10 @@ FMUs) or by the path of an ``.fmu`` file.
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from .instance import FmiError, open_instance, read_fmu
-from .master import Connection, Master, communication_points
+from .adapters import open_instance
+from .connections import connect
+from .instance import FmiError, read_fmu
+from .master import Master, communication_points
 from .recorder import ArrayRecorder
 
 
@@ -76,54 +78,6 @@ class System:
         return fmus, connect(interfaces, self.connections, self.match_names)
 
 
-def connect(interfaces, connections=(), match_names=True):
-    """Every connection of a system: the written-out ones, then inputs matched to outputs by name.
-
-    Parameters
-    ----------
-    interfaces : dict
-        ``{instance: (input names, output names)}``.
-    connections : iterable of Connection
-    match_names : bool
-        Connect each input that no written-out connection feeds to the one
-        other instance's output of the same name.
-
-    Raises
-    ------
-    ValueError
-        For a connection naming an unknown instance or variable, an input fed
-        twice, or an input that matches outputs of several instances.
-    """
-    result, fed = [], set()
-    for c in connections:
-        for instance in (c.source, c.target):
-            if instance not in interfaces:
-                raise ValueError(f"connection {c.source}.{c.output} -> {c.target}.{c.input}: unknown instance "
-                                 f"{instance!r}; instances: {', '.join(interfaces)}")
-        if c.output not in interfaces[c.source][1]:
-            raise ValueError(f"connection: {c.source}.{c.output} is not an output; outputs: "
-                             + ", ".join(interfaces[c.source][1]))
-        if c.input not in interfaces[c.target][0]:
-            raise ValueError(f"connection: {c.target}.{c.input} is not an input; inputs: "
-                             + ", ".join(interfaces[c.target][0]))
-        if (c.target, c.input) in fed:
-            raise ValueError(f"connection: {c.target}.{c.input} is fed twice")
-        fed.add((c.target, c.input))
-        result.append(Connection(*c))
-    if match_names:
-        for target, (inputs, _) in interfaces.items():
-            for name in inputs:
-                if (target, name) in fed:
-                    continue
-                sources = [s for s, (_, outputs) in interfaces.items() if s != target and name in outputs]
-                if len(sources) > 1:
-                    raise ValueError(f"input {target}.{name} matches the outputs of {', '.join(sources)}: "
-                                     "connect it explicitly")
-                if sources:
-                    result.append(Connection(sources[0], name, target, name))
-    return result
-
-
 def settable_variables(fmu_path):
     """``{name: FMI type}`` of the parameters and inputs of an FMU, from its modelDescription.xml."""
     md = read_fmu(fmu_path)
@@ -141,7 +95,8 @@ def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters
     connections : list of Connection
     stop_time, step : float
         Stop time and communication step [s]; the step must divide the interval.
-    mode : {"gauss-seidel", "jacobi"}
+    mode : str or Algorithm
+        The master algorithm: a registered name (``crane_fmu.cosim.algorithms``) or object.
     parameters : dict, optional
         ``{instance: {variable: value}}`` set before initialisation.
     recorder : observer, optional

@@ -156,12 +156,13 @@ def parse(data, source="study"):
             raise ValueError(f"{source}: {key} is required")
     stop_time = _number("stop_time", data["stop_time"], "a number > 0")
     step = _number("step", data["step"], "a number > 0")
-    from crane_fmu.cosim.master import MODES, communication_points
+    from crane_fmu.cosim.algorithms import ALGORITHMS
+    from crane_fmu.cosim.master import communication_points
 
     communication_points(0.0, stop_time, step)
     master = data.get("master", "gauss-seidel")
-    if master not in MODES:
-        raise ValueError(f"master must be one of {', '.join(MODES)}, got {master!r}")
+    if master not in ALGORITHMS:
+        raise ValueError(f"master must be one of {', '.join(ALGORITHMS)}, got {master!r}")
     system = data.get("system", "paper")
     if not isinstance(system, str) or not system:
         raise ValueError(f"system must be a system's name or an SSP file, got {system!r}")

@@ -1,0 +1,12 @@
+"""Opening an FMU: the one place where its FMI version chooses the adapter."""
+
+from .instance import read_fmu
+
+
+def open_instance(path, name):
+    """An instance of the FMU at ``path`` (FMI 2.0 or 3.0 co-simulation), named ``name``."""
+    if read_fmu(path).fmiVersion.startswith("3"):
+        from .fmi3 import Fmi3Instance as Adapter  # fmpy is imported with the first FMU opened
+    else:
+        from .fmi2 import Fmi2Instance as Adapter
+    return Adapter(path, name)
