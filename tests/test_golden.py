@@ -28,3 +28,23 @@ def test_section5_runs_equal_the_reference_results(fmu_dir, case, system, parame
             got = result[name][::100]
             assert len(got) == len(values) == 201
             assert np.array_equal(got, values), name  # every value parses to the same double
+
+
+GOLDEN = {
+    "lqr": ("lqr", {}), "energy": ("energy", {}), "transport": ("transport", {}),
+    "hoist-transport": ("hoist-transport", {}),
+    "paper_gust": ("paper", {"plant": {"F1": 20.0}}),
+    "paper_drive": ("paper", {"plant": {"tau": 0.2, "v_max": 0.5}}),
+    "paper_damped": ("paper", {"plant": {"c1": 0.5, "c2": 0.2}}),
+}
+
+
+@pytest.mark.parametrize("case", list(GOLDEN))
+def test_every_system_and_the_plants_general_path_equal_their_results_before_the_refactoring(fmu_dir, case):
+    """tests/data/golden_*.csv, written before issue 25's refactoring: every output, bit for bit."""
+    system, parameters = GOLDEN[case]
+    reference = read_csv(DATA / f"golden_{case}.csv")
+    result = run(systems.get(system).with_parameters(parameters), fmu_dir).columns()
+    assert list(result) == list(reference)
+    for name, values in reference.items():
+        assert np.array_equal(result[name][::100], values), name
