@@ -42,6 +42,7 @@ def test_every_controller_scenario_and_case_is_a_row(quick_board):
     for name in ("MyController", "LqrController"):
         mine = [r for r in table if r["controller"] == name]
         assert {s: sum(r["scenario"] == s for r in mine) for s in cases_per_controller} == cases_per_controller
+    # 2 controllers x the 11 cases above; the one not ok is MyController's S6 at h = 50 ms (see the next test)
     assert log[-1].startswith("22 cases: 22 run now, 0 already done, 1 not ok")
     for name in ("scoreboard.md", "S1.png", "S2.png", "S7.png", "summary.png"):
         assert (out / name).stat().st_size > 1000

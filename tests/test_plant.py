@@ -97,6 +97,9 @@ def test_drive_limits_and_lag(fmu_dir):
 
 
 def test_a_rail_end_discards_the_step_with_position_and_time(fmu_dir):
+    """u = 1 m/s2 from rest: x = t^2 / 2 passes x_max = 0.3 m at t = sqrt(0.6) = 0.7746 s, in the 10 ms step
+    from 0.77 s; the plant checks the rail after each 1 ms sub-step, first past it at t = 0.775 s, where
+    x = 0.775^2 / 2 = 0.3003125 m (the message's x = 0.300312...)."""
     with pytest.raises(FmiError) as err:
         _run(fmu_dir, {"theta1_0": 0.0, "u": 1.0, "x_max": 0.3}, 2.0, 0.01)
     assert err.value.status == "discard"
@@ -106,6 +109,7 @@ def test_a_rail_end_discards_the_step_with_position_and_time(fmu_dir):
 
 
 def test_the_hoist_holds_l1_at_its_limit_and_says_so(fmu_dir):
+    """l1'' = 1 m/s2 from l1 = 1 m at rest: l1 = 1 + t^2 / 2 reaches l1_max = 1.2 m at t = sqrt(0.4) = 0.632 s."""
     inst = open_instance(fmu_dir / "CranePlant.fmu", "plant")
     try:
         inst.setup(0.0)
