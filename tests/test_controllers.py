@@ -109,7 +109,10 @@ def test_lqr_regulation_meets_its_targets(fmu_dir):
         assert settled is not None and settled <= target, (band, settled)
         k = int(np.searchsorted(t, settled))
         inside = (np.abs(theta1) <= math.radians(band)) & (np.abs(theta2) <= math.radians(band))
-        assert inside[k:].all() and not inside[k - 1], (band, settled, theta1[k - 1], theta2[k - 1])
+        late = k + int(np.argmin(inside[k:])) if not inside[k:].all() else None
+        assert late is None, (f"settled within {band} deg at {settled} s, yet at t = {t[late]:.3f} s theta1 = "
+                              f"{math.degrees(theta1[late]):.3f} deg, theta2 = {math.degrees(theta2[late]):.3f} deg")
+        assert not inside[k - 1], f"both angles within {band} deg already at t = {t[k - 1]:.3f} s, before {settled} s"
     assert m["position_1cm_s"] <= 4.0
     assert m["peak_abs_u"] <= 2.0 and m["peak_abs_v"] <= 1.0
 

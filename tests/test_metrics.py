@@ -125,8 +125,8 @@ def test_move_metrics_known_answers():
     m = metrics.move_metrics(T11, MOVE_X, MOVE_DX, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0)
     assert m["arrival_s"] == 7.0
     assert m["residual_deg"] == pytest.approx(0.3, rel=1e-12)
-    assert m["settling_0.5deg_s"] == 6.0
-    assert m["settling_0.1deg_s"] == 9.0
+    assert m["settling_0.5deg_s"] == 6.0, "theta2 is 0.6 deg at t = 5: both angles within 0.5 deg from 6 s"
+    assert m["settling_0.1deg_s"] == 9.0, "theta2 is -0.12 deg at t = 8: both angles within 0.1 deg from 9 s"
     assert m["position_1cm_s"] == 6.0
     assert m["overshoot_m"] == pytest.approx(0.1, rel=1e-12)
     assert m["final_error_m"] == pytest.approx(0.001, rel=1e-12)
@@ -205,7 +205,7 @@ def test_closed_loop_metrics_settling_needs_both_angles():
     theta2 = -theta1 / 2
     theta2[18] = math.radians(0.3)
     m = metrics.closed_loop_metrics(t, np.zeros(21), theta1, theta2, np.zeros(21), True)
-    assert (m["settling_0.5deg_s"], m["settling_0.1deg_s"]) == (7.0, 19.0)
+    assert (m["settling_0.5deg_s"], m["settling_0.1deg_s"]) == (7.0, 19.0), "theta2 = 0.3 deg at t = 18"
     theta2[20] = math.radians(0.2)
     m = metrics.closed_loop_metrics(t, np.zeros(21), theta1, theta2, np.zeros(21), True)
     assert m["settling_0.1deg_s"] is None and m["settling_0.5deg_s"] == 7.0
