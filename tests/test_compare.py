@@ -1,13 +1,15 @@
 """crane-fmu compare: a user's controller FMU (built from examples/) scored next to the built-in ones on Dask."""
 
+import math
 import re
 from pathlib import Path
 
+import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
 from crane_fmu import systems
-from crane_fmu.analysis import metrics, scoreboard
+from crane_fmu.analysis import scoreboard
 from crane_fmu.cli import main
 from crane_fmu.compare import compare
 from crane_fmu.cosim import ArrayRecorder, read_csv, run
@@ -40,12 +42,16 @@ def test_every_controller_scenario_and_case_is_a_row(quick_board):
     for name in ("MyController", "LqrController"):
         mine = [r for r in table if r["controller"] == name]
         assert {s: sum(r["scenario"] == s for r in mine) for s in cases_per_controller} == cases_per_controller
+    # 2 controllers x the 11 cases above; the one not ok is MyController's S6 at h = 50 ms (see the next test)
     assert log[-1].startswith("22 cases: 22 run now, 0 already done, 1 not ok")
     for name in ("scoreboard.md", "S1.png", "S2.png", "S7.png", "summary.png"):
         assert (out / name).stat().st_size > 1000
 
 
 def test_a_controller_that_fails_in_one_case_is_scored_failed_there_only(quick_board):
+    """Which case fails follows from the template's own rule, not from today's output: MyController discards
+    every step longer than its max_step = 0.02 s, and of all the quick suite's cases only S6's h = 50 ms
+    step is longer (S6 runs at 1, 10 and 50 ms; every other scenario at 1 ms)."""
     out, rows, _ = quick_board
     failed = [r for r in rows if r["status"] != "ok"]
     assert [(r["controller"], r["scenario"], r["case"]) for r in failed] == [("MyController", "S6", "h=50ms")]
@@ -57,7 +63,13 @@ def test_a_controller_that_fails_in_one_case_is_scored_failed_there_only(quick_b
 
 
 def test_the_harness_runs_the_same_system_as_simulate(quick_board, fmu_dir):
-    """S2 for the LQR is the built-in transport system on the drive-limited plant: the same metrics."""
+    """S2 for the LQR is the built-in transport system on the drive-limited plant: the same figures.
+
+    The expected figures are computed here from the recorded run, by their definitions, without
+    crane_fmu.analysis.metrics (which the harness uses): the arrival is the first sample from which on the
+    trolley stays within 5 mm of x_d = 2 m and both angles within 0.5 deg; the residual is the largest swing
+    of either angle from the later of the arrival and the planned move's end.
+    """
     _, rows, _ = quick_board
     row = next(r for r in rows if r["controller"] == "LqrController" and r["scenario"] == "S2")
     system = systems.get("transport").with_parameters({"plant": {"u_max": 2.0, "v_max": 1.0}})
@@ -65,9 +77,14 @@ def test_the_harness_runs_the_same_system_as_simulate(quick_board, fmu_dir):
     from crane_fmu.model import planner
 
     end = planner.setup({**planner.COMPONENT.defaults(), "x_d": 2.0}).end
-    expected = metrics.move_metrics(c["time"], c["plant.x"], c["plant.dx"], c["plant.theta1"], c["plant.theta2"],
-                                    c["controller.u"], 2.0, end)
-    assert row["arrival_s"] == expected["arrival_s"] and row["residual_deg"] == expected["residual_deg"]
+    t, theta1, theta2 = c["time"], c["plant.theta1"], c["plant.theta2"]
+    half_degree = math.radians(0.5)
+    inside = (np.abs(c["plant.x"] - 2.0) <= 0.005) & (np.abs(theta1) <= half_degree) & (np.abs(theta2) <= half_degree)
+    assert inside[-1]
+    arrival = t[np.nonzero(~inside)[0][-1] + 1]
+    after = t >= max(arrival, end)
+    residual = math.degrees(max(np.abs(theta1[after]).max(), np.abs(theta2[after]).max()))
+    assert row["arrival_s"] == arrival and row["residual_deg"] == pytest.approx(residual, rel=1e-12)
 
 
 def test_a_rerun_resumes(quick_board, template_fmu, fmu_dir):
@@ -111,7 +128,11 @@ def test_animate_a_simulate_result(fmu_dir, tmp_path, capsys):
 
 
 def test_readme_shows_the_current_scoreboard(fmu_dir, tmp_path):
-    """The full suite of every built-in controller, run now, gives the README's table."""
+    """Doc-sync only: the full suite of every built-in controller, run now, gives the README's table.
+
+    The table's figures are this code's output (regenerate with ``crane-fmu compare``); the behaviour
+    behind them is held by requirement tests: the LQR's targets (test_controllers.py), the documented
+    LQR design against scipy, and the metrics' known answers (test_metrics.py)."""
     rows = compare(tmp_path, (), fmu_dir, workers=2, progress=False, animate=(), log=lambda _: None)
     readme = (ROOT / "README.md").read_text()
     section = re.search(r"<!-- scoreboard:start -->\n(.*)\n<!-- scoreboard:end -->", readme, re.S).group(1)

@@ -75,3 +75,139 @@ def test_the_theta2_row_and_b3_sign_do_not_change_the_linearisation():
                  for kw in ({}, {"b3_form": "printed"}, {"w_theta2": 0.0})]
     assert np.abs(jacobians[0] - jacobians[1]).max() < 1e-6
     assert np.abs(jacobians[0] - jacobians[2]).max() < 1e-6
+
+
+# Known answers: signals sampled once a second (t = 0, 1, 2, ...), written sample by sample, whose
+# figures are read off by hand. Angles are given in degrees and converted with math.radians, the
+# same conversion the bands use, so a sample written as exactly 0.1 or 0.5 lies exactly on its band.
+def _rad(degrees):
+    return np.array([math.radians(d) for d in degrees])
+
+
+def test_settling_time_is_the_last_entry_into_the_band_not_the_first():
+    """[1, 0.05, 1, 0.05, 0.05], band 0.1: inside at t = 1 but out again at t = 2, so settled from t = 3."""
+    t = np.arange(5.0)
+    assert metrics.settling_time(t, [np.array([1.0, 0.05, 1.0, 0.05, 0.05])], 0.1) == 3.0
+
+
+def test_settling_time_edges():
+    t = np.arange(4.0)
+    assert metrics.settling_time(t, [np.array([1.0, 1.0, 0.5, 0.1])], 0.1) == 3.0  # last sample on the band: in
+    assert metrics.settling_time(t, [np.array([1.0, 0.0, 0.0, 0.2])], 0.1) is None  # out at the last sample: never
+    assert metrics.settling_time(t, [np.full(4, -0.1)], 0.1) == 0.0  # on the band throughout: from the start
+    # every signal counts: the second leaves the band last (t = 2), so the pair settles at t = 3
+    assert metrics.settling_time(t, [np.array([1.0, 0.0, 0.0, 0.0]), np.array([0.0, 0.0, -1.0, 0.0])], 0.1) == 3.0
+
+
+# A 2 m move, by hand (t = 0..10 s):
+#   x - 2:     -2, -1.5, -0.8, -0.1, +0.1, +0.05, +0.008, 0, 0, +0.003, -0.001   [m]
+#   theta1:     0,  3,    2,   -1,   0.4, -0.3,   0.2,   0.1, 0.05, 0, 0         [deg]
+#   theta2:     0,  4,    3,   -2,   1,    0.6,  -0.45,  0.3, -0.12, 0.08, 0.02  [deg]
+MOVE_X = 2.0 + np.array([-2.0, -1.5, -0.8, -0.1, 0.1, 0.05, 0.008, 0.0, 0.0, 0.003, -0.001])
+MOVE_THETA1 = _rad([0, 3, 2, -1, 0.4, -0.3, 0.2, 0.1, 0.05, 0, 0])
+MOVE_THETA2 = _rad([0, 4, 3, -2, 1, 0.6, -0.45, 0.3, -0.12, 0.08, 0.02])
+MOVE_DX = np.array([0.0, 0.5, 1.0, -1.5, 0.2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+MOVE_U = np.array([1.0, 2.0, -3.0, 0.5, 0, 0, 0, 0, 0, 0, 100.0])  # the last u is never held over a step
+T11 = np.arange(11.0)
+
+
+def test_move_metrics_known_answers():
+    """Each figure read off the table above.
+
+    - arrival: |x - 2| <= 5 mm from t = 7 on (t = 6 has 8 mm), both angles <= 0.5 deg from t = 6 on: 7 s;
+    - residual: the largest swing from t = 7 on is theta2's 0.3 deg;
+    - settling within 0.5 deg: theta1 from t = 4, theta2 (0.6 deg at t = 5) from t = 6: 6 s;
+    - within 0.1 deg: theta1 from t = 7 (0.1 exactly on the band), theta2 (-0.12 at t = 8) from t = 9: 9 s;
+    - within 1 cm: the 8 mm at t = 6 is inside, the 5 cm at t = 5 not: 6 s;
+    - overshoot 0.1 m (t = 4), final error 1 mm, peak |u| 100 (the last sample counts here),
+      peak |v| 1.5, effort 1 + 4 + 9 + 0.25 = 14.25 m2/s3 (u held over each 1 s step; the last u is not).
+    """
+    m = metrics.move_metrics(T11, MOVE_X, MOVE_DX, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0)
+    assert m["arrival_s"] == 7.0
+    assert m["residual_deg"] == pytest.approx(0.3, rel=1e-12)
+    assert m["settling_0.5deg_s"] == 6.0, "theta2 is 0.6 deg at t = 5: both angles within 0.5 deg from 6 s"
+    assert m["settling_0.1deg_s"] == 9.0, "theta2 is -0.12 deg at t = 8: both angles within 0.1 deg from 9 s"
+    assert m["position_1cm_s"] == 6.0
+    assert m["overshoot_m"] == pytest.approx(0.1, rel=1e-12)
+    assert m["final_error_m"] == pytest.approx(0.001, rel=1e-12)
+    assert m["peak_abs_u"] == 100.0 and m["peak_abs_v"] == 1.5
+    assert m["effort"] == 14.25
+
+
+def test_move_metrics_residual_counts_from_the_end_of_the_planned_move():
+    """move_end = 8.5 s, after the arrival at 7 s: only t = 9, 10 count, theta2's 0.08 deg."""
+    m = metrics.move_metrics(T11, MOVE_X, MOVE_DX, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0, move_end=8.5)
+    assert m["arrival_s"] == 7.0 and m["residual_deg"] == pytest.approx(0.08, rel=1e-12)
+
+
+def test_move_metrics_of_the_mirrored_move():
+    """The same move towards x_d = -2 m: the same figures; the overshoot is measured past -2 m, away from 0."""
+    m = metrics.move_metrics(T11, -MOVE_X, -MOVE_DX, -MOVE_THETA1, -MOVE_THETA2, -MOVE_U, -2.0)
+    assert (m["arrival_s"], m["settling_0.5deg_s"], m["settling_0.1deg_s"], m["position_1cm_s"]) == (7.0, 6.0, 9.0, 6.0)
+    assert m["overshoot_m"] == pytest.approx(0.1, rel=1e-12)
+
+
+def test_move_metrics_of_a_move_that_never_arrives():
+    """The trolley stops 3 cm short (x = 1.97 from t = 5): no arrival, no 1 cm settling; the residual is then
+    taken at the last sample alone (0.02 deg, theta2's); the angles themselves settle as before."""
+    x = np.minimum(MOVE_X, 1.97)
+    x[5:] = 1.97
+    m = metrics.move_metrics(T11, x, MOVE_DX, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0)
+    assert m["arrival_s"] is None and m["position_1cm_s"] is None
+    assert m["residual_deg"] == pytest.approx(0.02, rel=1e-12)
+    assert m["overshoot_m"] == 0.0 and m["final_error_m"] == pytest.approx(0.03, rel=1e-12)
+    assert (m["settling_0.5deg_s"], m["settling_0.1deg_s"]) == (6.0, 9.0)
+
+
+def test_move_metrics_arrival_waits_for_the_angles():
+    """Trolley within 5 mm from t = 7, but theta1 = 0.6 deg at t = 8 (out of the 0.5 deg arrival band): 9 s."""
+    theta1 = MOVE_THETA1.copy()
+    theta1[8] = math.radians(0.6)
+    m = metrics.move_metrics(T11, MOVE_X, MOVE_DX, theta1, MOVE_THETA2, MOVE_U, 2.0)
+    assert m["arrival_s"] == 9.0 and m["settling_0.5deg_s"] == 9.0
+
+
+# A regulation run of 20 s (t = 0..20), by hand: theta1 in degrees, theta2 = -theta1 / 2.
+REG_THETA1_DEG = [10, -8, 6, -4, 2, -1, 0.6, -0.4, 0.3, -0.2, 0.15, -0.1, 0.1, -0.05, 0.04, 0.03, -0.2, 0.02, 0.01,
+                  0.0, 0.0]
+
+
+def test_closed_loop_metrics_known_answers():
+    """Settling within 0.5 deg from t = 7 (0.6 at t = 6), within 0.1 deg from t = 17 (-0.2 at t = 16: the
+    swing comes back after being inside from t = 11); the largest swings 10 and 5 deg; the residual after
+    15 s is the 0.2 deg at t = 16; theta2 = -theta1 / 2 correlates -1; the trolley's excursion is its largest
+    distance from x(0) = 1 (0.5 m at t = 3), its final position 1.25 m; peak |u| 4. The late 0.2 deg
+    swing also decides the outcome: the last quarter's 0.2 deg exceeds 1.2 times the third quarter's 0.15 deg,
+    which :func:`metrics.classify` calls growing, "diverges"."""
+    t = np.arange(21.0)
+    theta1 = _rad(REG_THETA1_DEG)
+    theta2 = -theta1 / 2
+    x = 1.0 + np.array([0, 0.1, 0.3, -0.5, 0.2] + [0.25] * 16)
+    u = np.array([0, 4.0, -2.0] + [0.0] * 18)
+    m = metrics.closed_loop_metrics(t, x, theta1, theta2, u, True)
+    assert m["settling_0.5deg_s"] == 7.0 and m["settling_0.1deg_s"] == 17.0
+    assert m["max_theta1_deg"] == pytest.approx(10.0, rel=1e-12)
+    assert m["max_theta2_deg"] == pytest.approx(5.0, rel=1e-12)
+    assert m["residual_after_15s_deg"] == pytest.approx(0.2, rel=1e-12)
+    assert m["corr_theta1_theta2"] == pytest.approx(-1.0, abs=1e-12)
+    assert m["rms_theta1_deg"] == pytest.approx(math.sqrt(sum(d * d for d in REG_THETA1_DEG) / 21), rel=1e-12)
+    assert m["trolley_excursion_m"] == pytest.approx(0.5, rel=1e-12)
+    assert m["trolley_final_m"] == 1.25 and m["peak_abs_u"] == 4.0
+    assert m["end_time_s"] == 20.0 and m["outcome"] == "diverges" and m["completed"] is True
+
+
+def test_closed_loop_metrics_settling_needs_both_angles():
+    """theta1 still within 0.1 deg from t = 17, but theta2 = 0.3 deg at t = 18: settled within 0.1 deg at 19 s,
+    within 0.5 deg still at 7 s; a run ending outside the band never settles, and one shorter than 15 s has no
+    residual after 15 s."""
+    t = np.arange(21.0)
+    theta1 = _rad(REG_THETA1_DEG)
+    theta2 = -theta1 / 2
+    theta2[18] = math.radians(0.3)
+    m = metrics.closed_loop_metrics(t, np.zeros(21), theta1, theta2, np.zeros(21), True)
+    assert (m["settling_0.5deg_s"], m["settling_0.1deg_s"]) == (7.0, 19.0), "theta2 = 0.3 deg at t = 18"
+    theta2[20] = math.radians(0.2)
+    m = metrics.closed_loop_metrics(t, np.zeros(21), theta1, theta2, np.zeros(21), True)
+    assert m["settling_0.1deg_s"] is None and m["settling_0.5deg_s"] == 7.0
+    short = metrics.closed_loop_metrics(t[:15], np.zeros(15), theta1[:15], theta2[:15], np.zeros(15), True)
+    assert short["residual_after_15s_deg"] is None and short["corr_theta1_theta2"] == pytest.approx(-1.0, abs=1e-12)

@@ -55,7 +55,9 @@ def test_power_balance(fmu_dir):
 
     The drives' powers are their generalised forces times their rates: ``H = m1 x1'' + m2 x2'' - F1 - F2``
     for the trolley and ``Q_L = (m1 a1 + m2 a2 + (m1 + m2) g ey) . (sin th1, -cos th1) - (F1 + F2) sin th1``
-    for the hoist, with the loads' accelerations from the kinematics of eqs (4)-(5).
+    for the hoist, with the loads' accelerations from the kinematics of eqs (4)-(5) and the angular
+    accelerations of the symbolic Lagrange derivation (tests/test_equations.py), not of the plant's code: the
+    FMU's recorded state and energy are the only things taken from the code under test.
     """
     u, hoist, f1, f2, c1, c2 = 0.7, -0.2, 3.0, -5.0, 0.8, 0.3
     values = {"l1": 1.5, "theta1_0": 0.3, "theta2_0": -0.2, "u": u, "hoist": hoist, "F1": f1, "F2": f2,
@@ -64,8 +66,9 @@ def test_power_balance(fmu_dir):
     t, m1, m2, l2, g = c["time"], P.m1, P.m2, P.l2, P.g
     q1, w1, q2, w2, length, dl, v = (c[n] for n in ("theta1", "dtheta1", "theta2", "dtheta2", "l1_now", "dl1_now",
                                                      "dx"))
-    p = PlantParameters(l1=1.5)
-    dd = np.array([plant.angular_accelerations(a, b, c_, d, u, p, e, (f, hoist, f1, f2, c1, c2))
+    from test_equations import EXT_ACCEL  # the sympy-derived accelerations, not the plant's own code
+
+    dd = np.array([EXT_ACCEL(a, b, c_, d, u, m1, m2, e, l2, g, f, hoist, f1, f2, c1, c2)
                    for a, b, c_, d, e, f in zip(q1, w1, q2, w2, length, dl)])
     s1, co1, s2, co2 = np.sin(q1), np.cos(q1), np.sin(q2), np.cos(q2)
     ax1 = u + hoist * s1 + 2 * dl * w1 * co1 + length * dd[:, 0] * co1 - length * w1 ** 2 * s1
@@ -94,6 +97,9 @@ def test_drive_limits_and_lag(fmu_dir):
 
 
 def test_a_rail_end_discards_the_step_with_position_and_time(fmu_dir):
+    """u = 1 m/s2 from rest: x = t^2 / 2 passes x_max = 0.3 m at t = sqrt(0.6) = 0.7746 s, in the 10 ms step
+    from 0.77 s; the plant checks the rail after each 1 ms sub-step, first past it at t = 0.775 s, where
+    x = 0.775^2 / 2 = 0.3003125 m (the message's x = 0.300312...)."""
     with pytest.raises(FmiError) as err:
         _run(fmu_dir, {"theta1_0": 0.0, "u": 1.0, "x_max": 0.3}, 2.0, 0.01)
     assert err.value.status == "discard"
@@ -103,6 +109,7 @@ def test_a_rail_end_discards_the_step_with_position_and_time(fmu_dir):
 
 
 def test_the_hoist_holds_l1_at_its_limit_and_says_so(fmu_dir):
+    """l1'' = 1 m/s2 from l1 = 1 m at rest: l1 = 1 + t^2 / 2 reaches l1_max = 1.2 m at t = sqrt(0.4) = 0.632 s."""
     inst = open_instance(fmu_dir / "CranePlant.fmu", "plant")
     try:
         inst.setup(0.0)
