@@ -12,7 +12,8 @@ from pathlib import Path
 from crane_fmu import components, systems
 from crane_fmu.analysis import scoreboard
 from crane_fmu.analysis.scoreboard import SCENARIOS, Contender
-from crane_fmu.sweep.runner import Progress, read_journal, run_on_dask, write_table
+from crane_fmu.sweep.batch import JOURNAL, Progress, read_journal, run_batch
+from crane_fmu.sweep.runner import write_table
 
 SIGNALS = ("time", "plant.x", "plant.theta1", "plant.theta2", "controller.u", "plant.x1", "plant.y1", "plant.x2",
            "plant.y2", "plant.l1_now")
@@ -128,7 +129,8 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     pending = [c for c in cases if c["case_id"] not in done]
     bar = Progress(len(cases), len(cases) - len(pending)) if progress else None
     start = time.perf_counter()
-    ran = run_on_dask(run_score_case, pending, blobs, out_dir, workers, scheduler, bar=bar)
+    ran = run_batch(run_score_case, pending, blobs, on="dask", workers=workers, scheduler=scheduler,
+                    journal=out_dir / JOURNAL, progress=bar)
     done.update({r["case_id"]: r for r in ran})
     rows = [done[c["case_id"]] for c in cases] + refused
     write_table([{k: v for k, v in r.items() if k != "signals"} for r in rows], out_dir / "scores.parquet")

@@ -9,10 +9,10 @@ targets are printed next to the measurements and never asserted.
 import math
 import os
 from collections import namedtuple
-from concurrent.futures import ProcessPoolExecutor
 
 from crane_fmu import systems
 from crane_fmu.cosim import ArrayRecorder, FmiError, run
+from crane_fmu.sweep.batch import run_batch
 
 from . import metrics
 
@@ -62,6 +62,12 @@ def measure(r, fmu_dir):
     result = metrics.move_metrics(t, c["plant.x"], c["plant.dx"], th1, th2, c["controller.u"], x_d, move_end)
     result.update(outcome=metrics.classify(t, th1, th2, error is None), error=error, end_s=float(t[-1]))
     return r, result
+
+
+def _measure_nth(numbered, fmu_dir):
+    """``(n, measure(run))`` of ``numbered = (n, run)``: results that finish in any order keep the plan's."""
+    n, r = numbered
+    return n, measure(r, fmu_dir)
 
 
 def _fmt(value, digits=2, unit=" s"):
@@ -121,8 +127,8 @@ def run_controller_bench(fmu_dir, quick=False, workers=None, out=print):
     runs = plan(quick)
     workers = workers or os.cpu_count() or 1
     out(f"{len(runs)} co-simulations on {workers} worker(s)")
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        results = list(pool.map(measure, runs, [fmu_dir] * len(runs)))
+    finished = run_batch(_measure_nth, list(enumerate(runs)), workers=workers, fmu_dir=fmu_dir)
+    results = [result for _, result in sorted(finished, key=lambda pair: pair[0])]  # in the plan's order
     report(results, out)
     return results
 

@@ -9,13 +9,13 @@ cases are the paper's, and the verdict rules in ``report.py`` are fixed.
 import json
 import math
 import os
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
 
 from crane_fmu import systems
 from crane_fmu.cosim import ArrayRecorder, FmiError, run, write_csv
+from crane_fmu.sweep.batch import Progress, run_batch
 
 from . import figures, metrics, paper_summary, report
 from .paper_cases import plan
@@ -59,22 +59,6 @@ def free_swing_metrics(t, theta1, theta2, theta1_0):
     }
 
 
-def _run_all(cases, fmu_dir, csv_dir, workers, log):
-    results = {}
-    if workers == 1:
-        for i, case in enumerate(cases):
-            results[case.name] = run_case(case, fmu_dir, csv_dir)
-            log(f"  [{i + 1}/{len(cases)}] {case.name}")
-        return results
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        futures = {pool.submit(run_case, c, fmu_dir, csv_dir): c for c in cases}
-        for i, future in enumerate(futures):
-            results[futures[future].name] = future.result()
-            if (i + 1) % 20 == 0 or i + 1 == len(cases):
-                log(f"  {i + 1}/{len(cases)} runs done")
-    return results
-
-
 def reproduce(out_dir, fmu_dir="build/fmus", quick=False, workers=None, log=print):
     """Run every case, then write figures, CSVs, ``metrics.json`` and ``REPORT.md`` to ``out_dir``.
 
@@ -89,7 +73,10 @@ def reproduce(out_dir, fmu_dir="build/fmus", quick=False, workers=None, log=prin
     cases = plan(quick)
     workers = workers or os.cpu_count() or 1
     log(f"running {len(cases)} co-simulations on {workers} worker(s)")
-    results = _run_all(cases, fmu_dir, csv_dir, workers, log)
+    done = run_batch(run_case, cases, workers=workers, progress=Progress(len(cases), ok=lambda r: r["completed"]),
+                     fmu_dir=fmu_dir, csv_dir=csv_dir)
+    finished = {r["case"].name: r for r in done}
+    results = {case.name: finished[case.name] for case in cases}  # in the plan's order
     summary = paper_summary.summarise(results, quick)
     (out_dir / "metrics.json").write_text(json.dumps(summary, indent=2, default=_jsonable))
     for path in figures.draw_all(results, out_dir):

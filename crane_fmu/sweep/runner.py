@@ -9,17 +9,14 @@ dies has its running cases rescheduled by Dask on the others.
 """
 
 import hashlib
-import json
 import math
 import os
-import sys
 import tempfile
 import time
 from pathlib import Path
 
+from .batch import JOURNAL, Progress, read_journal, run_batch
 from .spec import case_id
-
-JOURNAL = "cases.jsonl"
 
 
 def shippable(system, fmu_dir):
@@ -94,55 +91,6 @@ def run_case(case, system, settings, metric_names):
     return row
 
 
-def read_journal(out_dir):
-    """Rows already finished in ``out_dir``, by case id (a torn last line is ignored)."""
-    rows = {}
-    path = Path(out_dir) / JOURNAL
-    if path.exists():
-        for line in path.read_text().splitlines():
-            try:
-                row = json.loads(line)
-            except json.JSONDecodeError:
-                continue
-            rows[row["case_id"]] = row
-    return rows
-
-
-class Progress:
-    """A one-line progress bar on stderr (a line per 10 % when stderr is not a terminal)."""
-
-    def __init__(self, total, done, stream=sys.stderr):
-        self.total, self.done, self.failed, self.stream = total, done, 0, stream
-        self.start, self.tty = time.perf_counter(), stream.isatty()
-        self._shown = -1
-
-    def update(self, row):
-        self.done += 1
-        self.failed += row["status"] != "ok"
-        tenth = 10 * self.done // max(self.total, 1)
-        if not self.tty and tenth == self._shown:
-            return
-        self._shown = tenth
-        filled = 30 * self.done // max(self.total, 1)
-        rate = self.done / max(time.perf_counter() - self.start, 1e-9)
-        text = (f"[{'#' * filled}{'.' * (30 - filled)}] {self.done}/{self.total} cases, "
-                f"{self.failed} not ok, {rate:.1f}/s")
-        self.stream.write(("\r" + text) if self.tty else text + "\n")
-        if self.tty and self.done == self.total:
-            self.stream.write("\n")
-        self.stream.flush()
-
-
-def _client(workers, scheduler):
-    from distributed import Client, LocalCluster
-
-    if scheduler:
-        return Client(scheduler), None
-    cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                           dashboard_address=None, silence_logs=50)
-    return Client(cluster), cluster
-
-
 def run_study(study, out_dir, fmu_dir="build/fmus", workers=None, scheduler=None, csv=False, progress=True):
     """Run every case of ``study`` not yet in ``out_dir``; write the results table and plot.
 
@@ -174,15 +122,16 @@ def run_study(study, out_dir, fmu_dir="build/fmus", workers=None, scheduler=None
         units = _check_names(study, system, fmu_dir)
         if pending:
             shipped = shippable(systems.at_step(system, fmu_dir, study.step), fmu_dir)
-            to_run = []
+            to_run, invalid = [], []
             for case in pending:  # the model's parameter rules, before anything is shipped
                 try:
                     systems.check_parameters(system.with_parameters(case_parameters(case)), fmu_dir)
                     to_run.append(case)
                 except ValueError as exc:
-                    rows_ran.append(_invalid_row(case, settings, str(exc), study.metrics))
-            rows_ran += run_on_dask(run_case, to_run, shipped, out_dir, workers, scheduler, rows_ran, bar,
-                                    settings=settings, metric_names=study.metrics)
+                    invalid.append(_invalid_row(case, settings, str(exc), study.metrics))
+            rows_ran = invalid + run_batch(run_case, to_run, shipped, on="dask", workers=workers, scheduler=scheduler,
+                                           journal=out_dir / JOURNAL, known=invalid, progress=bar, settings=settings,
+                                           metric_names=study.metrics)
     done.update({r["case_id"]: r for r in rows_ran})
     rows = [done[case_id(c, settings)] for c in cases]
     write_table(rows, out_dir / "results.parquet")
@@ -194,40 +143,6 @@ def run_study(study, out_dir, fmu_dir="build/fmus", workers=None, scheduler=None
         plot_study(rows, study, out_dir / "plot.png", units=units)
     return {"cases": len(cases), "skipped": len(cases) - len(pending), "ran": len(rows_ran),
             "not_ok": sum(r["status"] != "ok" for r in rows), "seconds": time.perf_counter() - start}
-
-
-def run_on_dask(task, items, shared, out_dir, workers=None, scheduler=None, known=(), bar=None, **kwargs):
-    """Run ``task(item, shared, **kwargs)`` for every item on Dask; return the rows it gave.
-
-    ``shared`` travels to every worker once. Each finished row is appended to
-    the journal in ``out_dir`` at once, after the rows ``known`` without running
-    (e.g. cases refused before shipping), so an interrupted run resumes.
-    """
-    from distributed import as_completed
-
-    rows = []
-    with open(Path(out_dir) / JOURNAL, "a") as journal:
-        def keep(row):
-            journal.write(json.dumps(row, default=_plain) + "\n")
-            journal.flush()
-            if bar:
-                bar.update(row)
-
-        for row in known:
-            keep(row)
-        if not items:
-            return rows
-        client, cluster = _client(workers, scheduler)
-        try:
-            scattered = client.scatter([shared], broadcast=True)[0]
-            for future in as_completed(client.map(task, items, [scattered] * len(items), pure=False, **kwargs)):
-                rows.append(future.result())
-                keep(rows[-1])
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
-    return rows
 
 
 def _check_names(study, system, fmu_dir):
@@ -258,14 +173,6 @@ def _check_names(study, system, fmu_dir):
         instance, _, variable = name.partition(".")
         units[name] = next(v.unit for v in read_fmu(fmus[instance]).modelVariables if v.name == variable)
     return units
-
-
-def _plain(value):
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if hasattr(value, "item"):
-        return value.item()
-    raise TypeError(f"cannot write {type(value).__name__}")
 
 
 def write_table(rows, path):
