@@ -200,27 +200,22 @@ def _convert(text, fmi_type, unit=None):
     return text
 
 
-def _parse_sets(items, instances, variables_of):
-    """``["plant.l1=1.5"]`` -> ``{"plant": {"l1": 1.5}}``, checked against the instances' variables.
+def _parse_sets(items, variables):
+    """``["plant.l1=1.5"]`` -> ``{"plant": {"l1": 1.5}}``, checked against ``variables``.
 
-    ``variables_of(instance)`` gives ``{name: (FMI type, unit)}`` of its parameters and inputs. An
+    ``variables`` is ``{instance: {name: (FMI type, unit)}}`` of the parameters and inputs. An
     angle given without a unit and larger than any swing the model is meant for gets a warning.
     """
-    known, result = {}, {}
+    from crane_fmu.cosim.system import split_name
+
+    result = {}
     for item in items:
         target, sep, text = item.partition("=")
-        instance, dot, name = target.partition(".")
-        if not sep or not dot:
-            raise UsageError(f"--set {item!r}: expected INSTANCE.VARIABLE=VALUE")
-        if instance not in instances:
-            raise UsageError(f"--set {item!r}: unknown instance {instance!r}; instances: {', '.join(instances)}")
-        if instance not in known:
-            known[instance] = variables_of(instance)
-        if name not in known[instance]:
-            raise UsageError(f"--set {item!r}: {instance} has no parameter or input {name!r}; valid: "
-                             + ", ".join(known[instance]))
-        fmi_type, unit = known[instance][name]
         try:
+            if not sep:
+                raise ValueError("expected INSTANCE.VARIABLE=VALUE")
+            instance, name = split_name(target, variables)
+            fmi_type, unit = variables[instance][name]
             value = _convert(text, fmi_type, unit)
         except (argparse.ArgumentTypeError, ValueError) as exc:
             raise UsageError(f"--set {item!r}: {exc}") from None
@@ -229,13 +224,6 @@ def _parse_sets(items, instances, variables_of):
                   f"for degrees write {text}deg", file=sys.stderr)
         result.setdefault(instance, {})[name] = value
     return result
-
-
-def _fmu_variables(path):
-    """``{name: (FMI type, unit)}`` of an FMU's parameters and inputs."""
-    from crane_fmu.cosim.system import read_fmu
-
-    return {v.name: (v.type, v.unit) for v in read_fmu(path).modelVariables if v.causality in ("parameter", "input")}
 
 
 def _writable_file(path, option, suffix=None):
@@ -290,17 +278,26 @@ def _simulate(args, system):
     from crane_fmu import systems
     from crane_fmu.cosim import FmiError, read_result, recorder_for, simulate
     from crane_fmu.cosim.master import communication_points
+    from crane_fmu.cosim.system import settable, split_name
 
     stop_time = system.stop_time if args.stop_time is None else args.stop_time
     step = system.step if args.step is None else args.step
     communication_points(system.start_time, stop_time, step)
     fmus, connections = systems.resolve(system, args.fmu_dir)
     system = systems.at_step(system, args.fmu_dir, step)
+    variables = settable(fmus)
     if args.parameters:
         from crane_fmu.cosim.ssp import load_parameters
 
-        system = system.with_parameters(load_parameters(args.parameters))
-    system = system.with_parameters(_parse_sets(args.set, list(fmus), lambda i: _fmu_variables(fmus[i])))
+        loaded = load_parameters(args.parameters)
+        for instance, values in loaded.items():
+            for name in values:
+                try:
+                    split_name(f"{instance}.{name}", variables)
+                except ValueError as exc:
+                    raise UsageError(f"--parameters {args.parameters}: {instance}.{name}: {exc}") from None
+        system = system.with_parameters(loaded)
+    system = system.with_parameters(_parse_sets(args.set, variables))
     systems.check_parameters(system, args.fmu_dir)
     _writable_file(args.out, "--out", ".parquet" if args.out.endswith(".parquet") else ".csv")
     if args.plot:
@@ -357,12 +354,12 @@ def _derived(system, sets):
     """Lines describing each instance of a built-in system and what its component derives from the parameters."""
     from crane_fmu import components
 
-    def variables_of(instance):
-        component = components.find(system.instances[instance])
-        rows = component.variables if component else ()
-        return {v.name: (v.type, v.unit) for v in rows if v.causality != "output"}
-
-    parameters = _parse_sets(sets, list(system.instances), variables_of)
+    variables = {}
+    for instance, kind in system.instances.items():
+        component = components.find(kind)
+        variables[instance] = {v.name: (v.type, v.unit) for v in (component.variables if component else ())
+                               if v.causality != "output"}
+    parameters = _parse_sets(sets, variables)
     system = system.with_parameters(parameters)
     lines = [f"{system.name}: {system.description}"]
     for name, kind in system.instances.items():

@@ -189,8 +189,10 @@ def test_cli_runs_the_minimal_study(fmu_dir, tmp_path, capsys):
 
 @pytest.mark.parametrize("study, message", [
     ('system = "nowhere"', "no system 'nowhere'; systems: paper, free"),
-    ('[parameters]\n"crane.l1" = [1.0]', "parameter 'crane.l1': system paper has no instance 'crane'"),
-    ('system = "free"\n[parameters]\n"controller.l1" = [1.0]', "system free has no instance 'controller'"),
+    ('[parameters]\n"crane.l1" = [1.0]',
+     "parameter 'crane.l1': system paper: unknown instance 'crane'; instances: plant, controller"),
+    ('system = "free"\n[parameters]\n"controller.l1" = [1.0]',
+     "system free: unknown instance 'controller'; instances: plant"),
 ])
 def test_cli_sweep_names_are_checked_against_the_system(fmu_dir, tmp_path, capsys, study, message):
     (tmp_path / "s.toml").write_text("stop_time = 1.0\nstep = 0.01\n" + study)

@@ -108,6 +108,16 @@ def test_parameters_from_an_ssv_file(fmu_dir, tmp_path, capsys):
     assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()  # --set wins over the file
 
 
+def test_a_typo_in_an_ssv_file_is_one_line_naming_the_file_and_the_name(fmu_dir, tmp_path, capsys):
+    """The same check as --set's (one checker of INSTANCE.VARIABLE names), nothing written."""
+    ssv = write_ssv({"plant": {"L1": 1.5}}, tmp_path / "typo.ssv")
+    out = tmp_path / "never.csv"
+    assert main(["simulate", "--fmu-dir", str(fmu_dir), "--parameters", str(ssv), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"--parameters {ssv}: plant.L1: plant has no parameter or input 'L1'" in err
+    assert not out.exists()
+
+
 def test_ssd_with_parameters_in_ssv_files_bound_to_components_and_system(system_files, tmp_path):
     ssp, _ = system_files
     with zipfile.ZipFile(ssp) as package:

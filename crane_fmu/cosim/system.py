@@ -78,10 +78,24 @@ class System:
         return fmus, connect(interfaces, self.connections, self.match_names)
 
 
-def settable_variables(fmu_path):
-    """``{name: FMI type}`` of the parameters and inputs of an FMU, from its modelDescription.xml."""
-    md = read_fmu(fmu_path)
-    return {v.name: v.type for v in md.modelVariables if v.causality in ("parameter", "input")}
+def settable(fmus):
+    """``{instance: {name: (FMI type, unit)}}``: the parameters and inputs of the FMUs ``{instance: path}``."""
+    return {name: {v.name: (v.type, v.unit) for v in read_fmu(path).modelVariables
+                   if v.causality in ("parameter", "input")} for name, path in fmus.items()}
+
+
+def split_name(name, variables):
+    """``(instance, variable)`` of ``"instance.variable"``, where ``variables`` (as :func:`settable` gives)
+    has it; else a ValueError naming what is unknown and what is valid. The one check of such names."""
+    instance, dot, variable = name.partition(".")
+    if not dot or not instance or not variable:
+        raise ValueError("expected INSTANCE.VARIABLE")
+    if instance not in variables:
+        raise ValueError(f"unknown instance {instance!r}; instances: {', '.join(variables)}")
+    if variable not in variables[instance]:
+        raise ValueError(f"{instance} has no parameter or input {variable!r}; valid: "
+                         + ", ".join(variables[instance]))
+    return instance, variable
 
 
 def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters=None,

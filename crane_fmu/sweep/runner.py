@@ -149,30 +149,23 @@ def _check_names(study, system, fmu_dir):
     """Check that every varied or fixed variable is a parameter or input of its instance, and that the
     system has a crane; return ``{"instance.variable": unit}`` of the varied and fixed variables."""
     from crane_fmu.analysis.metrics import CRANE_OUTPUTS
-    from crane_fmu.cosim.system import read_fmu, settable_variables
+    from crane_fmu.cosim.system import read_fmu, settable, split_name
 
     fmus = system.fmus(fmu_dir)
-    known = {name: settable_variables(path) for name, path in fmus.items()}
+    known = settable(fmus)
     names = list(study.fixed) + [n for names, *_ in list(study.grid.values()) + list(study.sampled.values())
                                  for n in names]
     for name in names:
-        instance, _, variable = name.partition(".")
-        if instance not in known:
-            raise ValueError(f"parameter {name!r}: system {system.name} has no instance {instance!r}; instances: "
-                             + ", ".join(known))
-        if variable not in known[instance]:
-            raise ValueError(f"parameter {name!r}: {instance} has no parameter or input {variable!r}; valid: "
-                             + ", ".join(known[instance]))
+        try:
+            split_name(name, known)
+        except ValueError as exc:
+            raise ValueError(f"parameter {name!r}: system {system.name}: {exc}") from None
     outputs = {name: {v.name for v in read_fmu(path).modelVariables if v.causality == "output"}
                for name, path in fmus.items()}
     if not any(set(CRANE_OUTPUTS) <= names for names in outputs.values()):
         raise ValueError(f"the sweep's metrics need an instance with outputs {', '.join(CRANE_OUTPUTS)}; system "
                          f"{system.name} has none")
-    units = {}
-    for name in names:
-        instance, _, variable = name.partition(".")
-        units[name] = next(v.unit for v in read_fmu(fmus[instance]).modelVariables if v.name == variable)
-    return units
+    return {name: known[name.partition(".")[0]][name.partition(".")[2]][1] for name in names}
 
 
 def write_table(rows, path):
