@@ -34,7 +34,7 @@ from pathlib import Path
 
 import crane_fmu.fmu_src
 import crane_fmu.model
-from crane_fmu import components
+from crane_fmu import DEFAULT_FMU_DIR, components
 from crane_fmu.build_scripts.model_description import postprocess, postprocess3
 from crane_fmu.build_scripts.wrapper import WrapperUnavailable, compile_binaries
 from crane_fmu.model.tables import DISPLAY_UNITS
@@ -226,7 +226,7 @@ def container_name(system_name):
     return "Crane" + "".join(part.capitalize() for part in system_name.replace("-", "_").split("_"))
 
 
-def build_all(out_dir="build/fmus", kinds=None, systems=None, fmi3=True, containers=None, log=print):
+def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, containers=None, log=print):
     """Build FMUs and system files; return their paths.
 
     Parameters

@@ -7,15 +7,11 @@ which instances exist.
 """
 
 import contextlib
-from pathlib import Path
 
 from crane_fmu import components
 from crane_fmu.cosim.connections import Connection
 from crane_fmu.cosim.system import System, read_fmu
 from crane_fmu.registry import Registry
-
-DEFAULT_FMU_DIR = Path("build/fmus")
-DEFAULT = "paper"
 
 _SYSTEMS = Registry("system", lambda s: s.name, " (or an .ssp/.ssd file)")
 register, unregister, get, all = _SYSTEMS.register, _SYSTEMS.unregister, _SYSTEMS.get, _SYSTEMS.all

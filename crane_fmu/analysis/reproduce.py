@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from crane_fmu import systems
+from crane_fmu import DEFAULT_FMU_DIR, systems
 from crane_fmu.cosim import ArrayRecorder, FmiError, run, write_csv
 from crane_fmu.sweep.batch import Progress, run_batch
 
@@ -59,7 +59,7 @@ def free_swing_metrics(t, theta1, theta2, theta1_0):
     }
 
 
-def reproduce(out_dir, fmu_dir="build/fmus", quick=False, workers=None, log=print):
+def reproduce(out_dir, fmu_dir=DEFAULT_FMU_DIR, quick=False, workers=None, log=print):
     """Run every case, then write figures, CSVs, ``metrics.json`` and ``REPORT.md`` to ``out_dir``.
 
     Returns

@@ -15,6 +15,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from crane_fmu import DEFAULT_FMU_DIR
+
 from .batch import JOURNAL, Progress, read_journal, run_batch
 from .spec import case_id
 
@@ -91,7 +93,7 @@ def run_case(case, system, settings, metric_names):
     return row
 
 
-def run_study(study, out_dir, fmu_dir="build/fmus", workers=None, scheduler=None, csv=False, progress=True):
+def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=None, csv=False, progress=True):
     """Run every case of ``study`` not yet in ``out_dir``; write the results table and plot.
 
     Parameters

@@ -38,6 +38,8 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from crane_fmu import DEFAULT_SYSTEM
+
 METRICS = ("outcome", "settling_band_s", "settling_0.5deg_s", "settling_0.1deg_s", "max_theta1_deg", "max_theta2_deg",
            "rms_theta1_deg", "residual_after_15s_deg", "trolley_excursion_m", "trolley_final_m", "peak_abs_u",
            "end_time_s")
@@ -52,7 +54,7 @@ class Study:
     stop_time: float
     step: float
     master: str = "gauss-seidel"
-    system: str = "paper"
+    system: str = DEFAULT_SYSTEM
     metrics: tuple = METRICS
     settling_band_deg: float = 0.5
     grid: dict = field(default_factory=dict)  # axis name -> (variable names, values)
@@ -163,7 +165,7 @@ def parse(data, source="study"):
     master = data.get("master", "gauss-seidel")
     if master not in ALGORITHMS:
         raise ValueError(f"master must be one of {', '.join(ALGORITHMS)}, got {master!r}")
-    system = data.get("system", "paper")
+    system = data.get("system", DEFAULT_SYSTEM)
     if not isinstance(system, str) or not system:
         raise ValueError(f"system must be a system's name or an SSP file, got {system!r}")
     metrics = tuple(data.get("metrics", METRICS))
