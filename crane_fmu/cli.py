@@ -10,6 +10,7 @@ import math
 import os
 import shutil
 import sys
+import time
 from pathlib import Path
 
 EXAMPLES = {
@@ -32,7 +33,9 @@ EXAMPLES = {
     "compare": (
         "examples:\n"
         "  crane-fmu compare --out results/compare                  # every built-in controller, every scenario\n"
-        "  crane-fmu compare --controller LqrController --controller my/MyController.fmu --out results/mine\n"
+        "  crane-fmu compare --controller my/MyController.fmu --out results/mine   # yours beside every built-in one\n"
+        "  crane-fmu compare --controller my/MyController.fmu --controller LqrController --only --out results/two\n"
+        "  crane-fmu compare --quick --animate none --out results/compare   # a first look: results/compare/quick\n"
         "  crane-fmu compare --out results/compare --scheduler tcp://scheduler-host:8786\n"
         "Re-running the same command resumes: finished cases are skipped."),
     "plot": ("examples:\n  crane-fmu plot results/paper.csv results/lqr.csv --out results/section5.png\n"
@@ -140,10 +143,15 @@ def _parser():
     p = sub.add_parser("compare", help="score controller FMUs on the same scenarios (the scoreboard)",
                        epilog=EXAMPLES["compare"], formatter_class=fmt)
     p.add_argument("--controller", action="append", default=[], metavar="NAME|FILE.fmu",
-                   help="a built-in controller's name or a controller FMU (repeatable; default: every built-in one)")
+                   help="a built-in controller's name or a controller FMU (repeatable); every built-in one is "
+                        "scored beside them unless --only")
+    p.add_argument("--only", action="store_true", help="score only the --controller ones")
     p.add_argument("--out", required=True, help="output folder: scoreboard.md, scores.parquet, plots, animations")
     _dask_options(p)
-    p.add_argument("--quick", action="store_true", help="3 of the 27 mismatch plants in S3")
+    p.add_argument("--quick", action="store_true",
+                   help="3 of the 27 mismatch plants in S3; a board marked QUICK, written to OUT/quick")
+    p.add_argument("--animate", default="S2", metavar="none|all|S1|S2|S7",
+                   help="whose nominal runs to animate (default S2); drawn again only when the run changed")
 
     p = sub.add_parser("plot", help="plot one or more simulate results on shared axes",
                        epilog=EXAMPLES["plot"], formatter_class=fmt)
@@ -156,7 +164,7 @@ def _parser():
                        epilog=EXAMPLES["animate"], formatter_class=fmt)
     p.add_argument("result", help="a CSV written by crane-fmu simulate")
     p.add_argument("--out", required=True, help="FILE.gif or FILE.mp4")
-    p.add_argument("--fps", type=int, default=25, help="frames per second (default 25)")
+    p.add_argument("--fps", type=int, default=15, help="frames per second (default 15)")
 
     p = sub.add_parser("bench", help="microseconds per communication step, crane pair vs framework floor",
                        epilog=EXAMPLES["bench"], formatter_class=fmt)
@@ -441,16 +449,22 @@ def _cmd_sweep(args):
 
 
 def _cmd_compare(args):
-    from crane_fmu.compare import compare
+    from crane_fmu.compare import ANIMATE, compare
 
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers must be >= 1, got {args.workers}")
     if args.workers is not None and args.scheduler:
         raise UsageError("--workers and --scheduler exclude each other: the scheduler's cluster has its workers")
-    _writable_file(Path(args.out) / "scoreboard.md", "--out")
+    choices = {"none": (), "all": ANIMATE, **{s: (s,) for s in ANIMATE}}
+    if args.animate not in choices:
+        raise UsageError(f"--animate {args.animate}: choose none, all, {', '.join(ANIMATE)} (the scenarios whose "
+                         "runs are animated)")
+    if args.only and not args.controller:
+        raise UsageError("--only scores only the --controller ones: give at least one --controller")
+    _writable_file(Path(args.out) / ("quick" if args.quick else "") / "scoreboard.md", "--out")
     try:
         compare(args.out, args.controller, args.fmu_dir, args.workers, args.scheduler, args.quick,
-                progress=not args.no_progress)
+                progress=not args.no_progress, animate=choices[args.animate], only=args.only)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     return 0
@@ -498,7 +512,9 @@ def _cmd_animate(args):
         raise UsageError(f"{args.result} has no crane to animate: it needs the plant outputs "
                          f"{', '.join(needed)}")
     _writable_file(args.out, "--out")
-    print(f"wrote {animate(columns, args.out, Path(args.result).stem, args.fps)}")
+    start = time.perf_counter()
+    path = animate(columns, args.out, Path(args.result).stem, args.fps, progress=sys.stderr.isatty())
+    print(f"wrote {path} ({time.perf_counter() - start:.1f} s)")
     return 0
 
 
