@@ -16,7 +16,8 @@ from pathlib import Path
 EXAMPLES = {
     "build": ("examples:\n  crane-fmu build\n  crane-fmu build --out my/fmus --bench\n"
               "  crane-fmu build --container transport       # build/containers/CraneTransport.fmu\n"
-              "  crane-fmu build --container my_system.ssp"),
+              "  crane-fmu build --container my_system.ssp\n"
+              "  crane-fmu build --component my_controller.py --out build/mine   # a component of your own"),
     "simulate": (
         "examples:\n"
         "  crane-fmu simulate --out results/section5.csv --plot results/section5.png\n"
@@ -94,6 +95,9 @@ def _parser():
     p.add_argument("--bench", action="store_true", help="also build the benchmark's trivial FMUs")
     p.add_argument("--container", metavar="SYSTEM|FILE.ssp",
                    help="instead: pack one system (a built-in one, or an SSP file) into one FMU in build/containers")
+    p.add_argument("--component", metavar="MODULE.py",
+                   help="instead: build the components (Component objects) defined in your Python module, "
+                        "FMI 2.0 into --out and FMI 3.0 beside it")
 
     p = sub.add_parser("simulate", help="co-simulate a system of FMUs", epilog=EXAMPLES["simulate"],
                        formatter_class=fmt,
@@ -265,6 +269,12 @@ def _cmd_build(args):
     from crane_fmu.build_scripts.build_fmus import build_all, container_name, containers_dir
     from crane_fmu.container import build_container
 
+    if args.container and args.component:
+        raise UsageError("--container and --component are separate builds: choose one")
+    if args.component:
+        for path in _build_component(args.component, args.out):
+            print(path)
+        return 0
     if args.container:
         try:
             with systems.open_system(args.container) as system:
@@ -279,6 +289,49 @@ def _cmd_build(args):
     for path in build_all(args.out, kinds):
         print(path)
     return 0
+
+
+def _build_component(module_path, out):
+    """Import a user's module by its file, register the components it defines, build their FMUs."""
+    import importlib.util
+
+    from crane_fmu import components
+    from crane_fmu.build_scripts.build_fmus import build_all
+    from crane_fmu.model.component import Component
+
+    path = Path(module_path)
+    if path.suffix != ".py" or not path.is_file():
+        raise UsageError(f"--component {module_path}: expected a Python file (MODULE.py) that defines a Component")
+    name = path.stem
+    if not name.isidentifier():
+        raise UsageError(f"--component {module_path}: {name!r} is not a Python module name; rename the file")
+    if name in sys.modules and getattr(sys.modules[name], "__file__", None) != str(path.resolve()):
+        raise UsageError(f"--component {module_path}: a module named {name!r} is already imported; rename the file")
+    spec = importlib.util.spec_from_file_location(name, path.resolve())
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    try:
+        spec.loader.exec_module(module)
+    except Exception as exc:  # the user's code: report it in one line
+        del sys.modules[name]
+        raise UsageError(f"--component {module_path}: importing it failed: {type(exc).__name__}: {exc}") from None
+    found = [v for v in vars(module).values() if isinstance(v, Component) and v.module == name]
+    if not found:
+        raise UsageError(f"--component {module_path}: defines no Component (crane_fmu.model.component.Component)")
+    for component in found:
+        known = components.find(component.model_identifier)
+        if known is not None and known is not component:
+            raise UsageError(f"--component {module_path}: {component.model_identifier} is already a component's "
+                             "name; choose another model identifier")
+    try:
+        for component in found:
+            components.register(component)
+        return build_all(out, [c.model_identifier for c in found], systems=[], containers=[])
+    except ValueError as exc:
+        raise UsageError(f"--component {module_path}: {exc}") from None
+    finally:
+        for component in found:
+            components.unregister(component.model_identifier)
 
 
 def _cmd_simulate(args):

@@ -172,7 +172,7 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     from crane_fmu.analysis import score_plots
 
     start = time.perf_counter()
-    if getattr(sys.modules.get("__main__"), "__name__", None) == "__mp_main__":
+    if sys._getframe(1).f_globals.get("__name__") == "__mp_main__":  # called by a script a worker imports
         raise RuntimeError("compare() was called while a Dask worker process imported your script again: call it "
                            "under `if __name__ == \"__main__\":`")
     unknown = [s for s in animate if s not in ANIMATE]
