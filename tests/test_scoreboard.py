@@ -136,3 +136,27 @@ def test_the_targets_physics_the_mode_periods_agree_with_scipy(l1, l2, m2):
 def test_the_time_optimal_move():
     assert scoreboard.move_time(2.0, 2.0, 1.0) == pytest.approx(2.5)  # 0.5 s up, 1.5 s coasting, 0.5 s down
     assert scoreboard.move_time(0.5, 2.0, 1.0) == pytest.approx(1.0)  # triangular: the speed limit is never reached
+
+
+def test_a_controllers_colour_is_its_own_on_every_board():
+    """By name: the built-in controllers' colours differ, and a user's never takes one of theirs."""
+    from crane_fmu import components
+    from crane_fmu.analysis.score_plots import colour
+
+    builtin = [colour(c.model_identifier) for c in components.all("controller")]
+    assert len(set(builtin)) == len(builtin)
+    for name in ("MyController", "PdController", "mine", "x"):
+        assert colour(name) == colour(name) and colour(name) not in builtin
+
+
+def test_animate_shows_progress_when_asked(tmp_path, capsys):
+    from crane_fmu.analysis.score_plots import animate
+
+    t = np.linspace(0.0, 1.0, 101)
+    x = 0.5 * t
+    signals = {"time": t, "plant.x": x, "plant.x1": x, "plant.y1": -np.ones_like(t), "plant.x2": x,
+               "plant.y2": -1.5 * np.ones_like(t)}
+    animate(signals, tmp_path / "a.gif", fps=10, progress=True)
+    assert capsys.readouterr().err.endswith("\rframe 11/11\n")
+    animate(signals, tmp_path / "b.gif", fps=10)
+    assert capsys.readouterr().err == ""
