@@ -292,12 +292,8 @@ def _cmd_build(args):
 
 
 def _build_component(module_path, out):
-    """Import a user's module by its file, register the components it defines, build their FMUs."""
+    """Import a user's module by its file and build the FMUs of the components it defines."""
     import importlib.util
-
-    from crane_fmu import components
-    from crane_fmu.build_scripts.build_fmus import build_all
-    from crane_fmu.model.component import Component
 
     path = Path(module_path)
     if path.suffix != ".py" or not path.is_file():
@@ -305,16 +301,32 @@ def _build_component(module_path, out):
     name = path.stem
     if not name.isidentifier():
         raise UsageError(f"--component {module_path}: {name!r} is not a Python module name; rename the file")
-    if name in sys.modules and getattr(sys.modules[name], "__file__", None) != str(path.resolve()):
-        raise UsageError(f"--component {module_path}: a module named {name!r} is already imported; rename the file")
+    if name in sys.stdlib_module_names:
+        raise UsageError(f"--component {module_path}: {name!r} is a standard library module's name; rename the file")
+    saved = sys.modules.get(name)  # another module of that name (e.g. a pythonfmu build's) comes back afterwards
     spec = importlib.util.spec_from_file_location(name, path.resolve())
     module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
+    sys.modules[name] = module  # where the build looks for the component's model module
     try:
-        spec.loader.exec_module(module)
-    except Exception as exc:  # the user's code: report it in one line
-        del sys.modules[name]
-        raise UsageError(f"--component {module_path}: importing it failed: {type(exc).__name__}: {exc}") from None
+        try:
+            spec.loader.exec_module(module)
+        except Exception as exc:  # the user's code: report it in one line
+            raise UsageError(f"--component {module_path}: importing it failed: {type(exc).__name__}: {exc}") from None
+        return _build_components(module, module_path, out)
+    finally:
+        if saved is None:
+            sys.modules.pop(name, None)
+        else:
+            sys.modules[name] = saved
+
+
+def _build_components(module, module_path, out):
+    """Register the components a user's module defines, build their FMUs, unregister them."""
+    from crane_fmu import components
+    from crane_fmu.build_scripts.build_fmus import build_all
+    from crane_fmu.model.component import Component
+
+    name = module.__name__
     found = [v for v in vars(module).values() if isinstance(v, Component) and v.module == name]
     if not found:
         raise UsageError(f"--component {module_path}: defines no Component (crane_fmu.model.component.Component)")
