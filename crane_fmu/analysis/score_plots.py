@@ -51,13 +51,15 @@ def plot_runs(rows, scenario, path, users=()):
                                 "demanded u [m/s2]")):
         ax.set_ylabel(label)
         ax.grid(True, alpha=0.3)
-    finite = [v for r in runs for v in np.degrees(r["signals"]["plant.theta1"]) if math.isfinite(v)]
+    finite = [v for r in runs for k in ("plant.theta1", "plant.theta2") for v in np.degrees(r["signals"][k])
+              if math.isfinite(v)]  # both angles share one scale
     limit = min(max(abs(min(finite)), abs(max(finite)), 1.0) * 1.1, 90.0)
     axes[1].set_ylim(-limit, limit)
     axes[2].set_ylim(-limit, limit)
     axes[3].set_ylim(-3, 3)  # the drive gives at most 2 m/s2; larger demands are clipped in the picture
     axes[0].legend(fontsize=8, loc="best")
-    axes[0].set_title(f"{scenario}: {SCENARIOS[scenario].title}")
+    quick = " (QUICK board: a subset of the cases)" if any(r.get("quick") for r in rows) else ""
+    axes[0].set_title(f"{scenario}: {SCENARIOS[scenario].title}{quick}")
     axes[-1].set_xlabel("time [s]")
     return save(fig, path, dpi=100)
 

@@ -272,14 +272,13 @@ def _name(line, users):
 
 def _scenario_label(sid, quick):
     """``S3: S2 on 27 plants: ...``, or on a quick board ``S3 (QUICK: 3 of 27 plants, 3 cases): ...``."""
-    label = f"{sid}: {SCENARIOS[sid].title}"
     if not quick:
-        return label
+        return f"{sid}: {SCENARIOS[sid].title}"
     part, full = scope(sid, True), scope(sid)
     what = [f"{part['plants']} of {full['plants']} plants"] if full["plants"] > 1 else []
     what += [f"{part['steps']} steps"] if full["steps"] > 1 else []
-    return f"{sid} (QUICK: {', '.join(what + [str(part['cases']) + ' case' + 's' * (part['cases'] > 1)])}): " \
-           f"{SCENARIOS[sid].title}"
+    what.append(f"{part['cases']} case" + ("s" if part["cases"] > 1 else ""))
+    return f"{sid} (QUICK: {', '.join(what)}): {SCENARIOS[sid].title}"
 
 
 def render_summary(rows, users=(), quick=False):
