@@ -10,6 +10,7 @@ import math
 import os
 import shutil
 import sys
+import time
 from pathlib import Path
 
 from crane_fmu.cosim.algorithms import ALGORITHMS
@@ -17,7 +18,8 @@ from crane_fmu.cosim.algorithms import ALGORITHMS
 EXAMPLES = {
     "build": ("examples:\n  crane-fmu build\n  crane-fmu build --out my/fmus --bench\n"
               "  crane-fmu build --container transport       # build/containers/CraneTransport.fmu\n"
-              "  crane-fmu build --container my_system.ssp"),
+              "  crane-fmu build --container my_system.ssp\n"
+              "  crane-fmu build --component my_controller.py --out build/mine   # a component of your own"),
     "simulate": (
         "examples:\n"
         "  crane-fmu simulate --out results/section5.csv --plot results/section5.png\n"
@@ -34,7 +36,9 @@ EXAMPLES = {
     "compare": (
         "examples:\n"
         "  crane-fmu compare --out results/compare                  # every built-in controller, every scenario\n"
-        "  crane-fmu compare --controller LqrController --controller my/MyController.fmu --out results/mine\n"
+        "  crane-fmu compare --controller my/MyController.fmu --out results/mine   # yours beside every built-in one\n"
+        "  crane-fmu compare --controller my/MyController.fmu --controller LqrController --only --out results/two\n"
+        "  crane-fmu compare --quick --animate none --out results/compare   # a first look: results/compare/quick\n"
         "  crane-fmu compare --out results/compare --scheduler tcp://scheduler-host:8786\n"
         "Re-running the same command resumes: finished cases are skipped."),
     "plot": ("examples:\n  crane-fmu plot results/paper.csv results/lqr.csv --out results/section5.png\n"
@@ -93,6 +97,9 @@ def _parser():
     p.add_argument("--bench", action="store_true", help="also build the benchmark's trivial FMUs")
     p.add_argument("--container", metavar="SYSTEM|FILE.ssp",
                    help="instead: pack one system (a built-in one, or an SSP file) into one FMU in build/containers")
+    p.add_argument("--component", metavar="MODULE.py",
+                   help="instead: build the components (Component objects) defined in your Python module, "
+                        "FMI 2.0 into --out and FMI 3.0 beside it")
 
     p = sub.add_parser("simulate", help="co-simulate a system of FMUs", epilog=EXAMPLES["simulate"],
                        formatter_class=fmt,
@@ -142,10 +149,15 @@ def _parser():
     p = sub.add_parser("compare", help="score controller FMUs on the same scenarios (the scoreboard)",
                        epilog=EXAMPLES["compare"], formatter_class=fmt)
     p.add_argument("--controller", action="append", default=[], metavar="NAME|FILE.fmu",
-                   help="a built-in controller's name or a controller FMU (repeatable; default: every built-in one)")
+                   help="a built-in controller's name or a controller FMU (repeatable); every built-in one is "
+                        "scored beside them unless --only")
+    p.add_argument("--only", action="store_true", help="score only the --controller ones")
     p.add_argument("--out", required=True, help="output folder: scoreboard.md, scores.parquet, plots, animations")
     _dask_options(p)
-    p.add_argument("--quick", action="store_true", help="3 of the 27 mismatch plants in S3")
+    p.add_argument("--quick", action="store_true",
+                   help="3 of the 27 mismatch plants in S3; a board marked QUICK, written to OUT/quick")
+    p.add_argument("--animate", default="S2", metavar="none|all|S1|S2|S7",
+                   help="whose nominal runs to animate (default S2); drawn again only when the run changed")
 
     p = sub.add_parser("plot", help="plot one or more simulate results on shared axes",
                        epilog=EXAMPLES["plot"], formatter_class=fmt)
@@ -158,7 +170,7 @@ def _parser():
                        epilog=EXAMPLES["animate"], formatter_class=fmt)
     p.add_argument("result", help="a CSV written by crane-fmu simulate")
     p.add_argument("--out", required=True, help="FILE.gif or FILE.mp4")
-    p.add_argument("--fps", type=int, default=25, help="frames per second (default 25)")
+    p.add_argument("--fps", type=int, default=15, help="frames per second (default 15)")
 
     p = sub.add_parser("bench", help="microseconds per communication step, crane pair vs framework floor",
                        epilog=EXAMPLES["bench"], formatter_class=fmt)
@@ -247,6 +259,12 @@ def _cmd_build(args):
     from crane_fmu.build_scripts.build_fmus import build_all, container_name, containers_dir
     from crane_fmu.container import build_container
 
+    if args.container and args.component:
+        raise UsageError("--container and --component are separate builds: choose one")
+    if args.component:
+        for path in _build_component(args.component, args.out):
+            print(path)
+        return 0
     if args.container:
         try:
             with systems.open_system(args.container) as system:
@@ -261,6 +279,61 @@ def _cmd_build(args):
     for path in build_all(args.out, kinds):
         print(path)
     return 0
+
+
+def _build_component(module_path, out):
+    """Import a user's module by its file and build the FMUs of the components it defines."""
+    import importlib.util
+
+    path = Path(module_path)
+    if path.suffix != ".py" or not path.is_file():
+        raise UsageError(f"--component {module_path}: expected a Python file (MODULE.py) that defines a Component")
+    name = path.stem
+    if not name.isidentifier():
+        raise UsageError(f"--component {module_path}: {name!r} is not a Python module name; rename the file")
+    if name in sys.stdlib_module_names:
+        raise UsageError(f"--component {module_path}: {name!r} is a standard library module's name; rename the file")
+    saved = sys.modules.get(name)  # another module of that name (e.g. a pythonfmu build's) comes back afterwards
+    spec = importlib.util.spec_from_file_location(name, path.resolve())
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # where the build looks for the component's model module
+    try:
+        try:
+            spec.loader.exec_module(module)
+        except Exception as exc:  # the user's code: report it in one line
+            raise UsageError(f"--component {module_path}: importing it failed: {type(exc).__name__}: {exc}") from None
+        return _build_components(module, module_path, out)
+    finally:
+        if saved is None:
+            sys.modules.pop(name, None)
+        else:
+            sys.modules[name] = saved
+
+
+def _build_components(module, module_path, out):
+    """Register the components a user's module defines, build their FMUs, unregister them."""
+    from crane_fmu import components
+    from crane_fmu.build_scripts.build_fmus import build_all
+    from crane_fmu.model.component import Component
+
+    name = module.__name__
+    found = [v for v in vars(module).values() if isinstance(v, Component) and v.module == name]
+    if not found:
+        raise UsageError(f"--component {module_path}: defines no Component (crane_fmu.model.component.Component)")
+    for component in found:
+        known = components.find(component.model_identifier)
+        if known is not None and known is not component:
+            raise UsageError(f"--component {module_path}: {component.model_identifier} is already a component's "
+                             "name; choose another model identifier")
+    try:
+        for component in found:
+            components.register(component)
+        return build_all(out, [c.model_identifier for c in found], systems=[], containers=[])
+    except ValueError as exc:
+        raise UsageError(f"--component {module_path}: {exc}") from None
+    finally:
+        for component in found:
+            components.unregister(component.model_identifier)
 
 
 def _cmd_simulate(args):
@@ -438,16 +511,22 @@ def _cmd_sweep(args):
 
 
 def _cmd_compare(args):
-    from crane_fmu.compare import compare
+    from crane_fmu.compare import ANIMATE, compare
 
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers must be >= 1, got {args.workers}")
     if args.workers is not None and args.scheduler:
         raise UsageError("--workers and --scheduler exclude each other: the scheduler's cluster has its workers")
-    _writable_file(Path(args.out) / "scoreboard.md", "--out")
+    choices = {"none": (), "all": ANIMATE, **{s: (s,) for s in ANIMATE}}
+    if args.animate not in choices:
+        raise UsageError(f"--animate {args.animate}: choose none, all, {', '.join(ANIMATE)} (the scenarios whose "
+                         "runs are animated)")
+    if args.only and not args.controller:
+        raise UsageError("--only scores only the --controller ones: give at least one --controller")
+    _writable_file(Path(args.out) / ("quick" if args.quick else "") / "scoreboard.md", "--out")
     try:
         compare(args.out, args.controller, args.fmu_dir, args.workers, args.scheduler, args.quick,
-                progress=not args.no_progress)
+                progress=not args.no_progress, animate=choices[args.animate], only=args.only)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     return 0
@@ -495,7 +574,9 @@ def _cmd_animate(args):
         raise UsageError(f"{args.result} has no crane to animate: it needs the plant outputs "
                          f"{', '.join(needed)}")
     _writable_file(args.out, "--out")
-    print(f"wrote {animate(columns, args.out, Path(args.result).stem, args.fps)}")
+    start = time.perf_counter()
+    path = animate(columns, args.out, Path(args.result).stem, args.fps, progress=sys.stderr.isatty())
+    print(f"wrote {path} ({time.perf_counter() - start:.1f} s)")
     return 0
 
 

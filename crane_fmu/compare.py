@@ -1,11 +1,19 @@
 """``crane-fmu compare``: every controller FMU on the scoreboard's scenarios, in parallel on Dask.
 
 Cases run through the sweep runner (journal, resume, progress bar). Each case
-is a system as data; its FMUs travel to the workers once, by content hash.
+is a system as data; its FMUs travel to the workers once, by content hash. A
+case's id is the hash of everything that makes its row (the FMUs' bytes, the
+connections, the parameters, the step, the stop time, :data:`ROW_FORMAT`), so
+the journal reuses a row only for the very same run.
+
+From a script, call :func:`compare` under ``if __name__ == "__main__":``: the
+local Dask cluster starts its workers as fresh Python processes, which import
+the script again (the ``spawn`` start method), as ``multiprocessing`` does.
 """
 
 import hashlib
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -18,30 +26,56 @@ from crane_fmu.sweep.runner import write_table
 SIGNALS = ("time", "plant.x", "plant.theta1", "plant.theta2", "controller.u", "plant.x1", "plant.y1", "plant.x2",
            "plant.y2", "plant.l1_now")
 SIGNAL_EVERY = 0.02  # s: the signals kept for plots and animations
+ROW_FORMAT = 2  # the version of what a row holds: a journal of another format is not reused
+ANIMATE = ("S1", "S2", "S7")  # the scenarios whose nominal runs keep their signals
 
 
-def contenders(chosen=(), fmu_dir="build/fmus"):
-    """The controllers to score: registered ones by model identifier, or FMU files (default: every registered one)."""
+def contenders(chosen=(), fmu_dir="build/fmus", only=False):
+    """The controllers to score, by name, each checked against every scenario's needs before anything runs.
+
+    Parameters
+    ----------
+    chosen : iterable of str
+        Registered controllers by model identifier, or controller FMU files (the user's).
+    only : bool
+        Score only ``chosen``; by default every registered controller is scored beside them.
+
+    Raises
+    ------
+    ValueError
+        One line: an unknown name, an FMU that cannot be read, two controllers of one name, or what a
+        controller misses of the interface (and which scenarios need it).
+    """
     from crane_fmu.cosim.system import read_fmu
 
-    result = []
-    for item in chosen or [c.model_identifier for c in components.all("controller")]:
+    builtin = [c.model_identifier for c in components.all("controller")]
+    items = list(chosen) + ([] if only and chosen else builtin)
+    result = {}
+    for item in items:
         if str(item).endswith(".fmu"):
-            md = read_fmu(item)
+            try:
+                md = read_fmu(item)
+            except (OSError, ValueError) as exc:
+                raise ValueError(f"--controller {item}: cannot be read as an FMU ({exc})") from None
             variables = {v.name: v.causality for v in md.modelVariables}
-            name = Path(item).stem
-            source = str(Path(item).resolve())
+            name, source, user = Path(item).stem, str(Path(item).resolve()), True
         else:
             component = components.find(item)
             if component is None or component.role != "controller":
-                known = ", ".join(c.model_identifier for c in components.all("controller"))
-                raise ValueError(f"no controller {item!r}; controllers: {known} (or a controller .fmu file)")
+                raise ValueError(f"no controller {item!r}; controllers: {', '.join(builtin)} (or a controller .fmu "
+                                 "file)")
             variables = {v.name: v.causality for v in component.variables}
-            name, source = item, item
+            name, source, user = item, item, False
+        if name in result:
+            if result[name].source == source:
+                continue
+            raise ValueError(f"two controllers are named {name}: {result[name].source} and {source}; rename the "
+                             "FMU file" + ("" if only else " or give --only"))
         inputs = [n for n, c in variables.items() if c == "input"]
-        scoreboard.check_interface(name, inputs, [n for n, c in variables.items() if c == "output"])
-        result.append(Contender(name, source, inputs, [n for n, c in variables.items() if c == "parameter"]))
-    return result
+        parameters = [n for n, c in variables.items() if c == "parameter"]
+        scoreboard.check_interface(name, inputs, [n for n, c in variables.items() if c == "output"], parameters)
+        result[name] = Contender(name, source, inputs, parameters, user)
+    return [result[name] for name in sorted(result)]
 
 
 def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), quick=False):
@@ -67,8 +101,8 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), quick=False):
                     hashes[name] = digests[path]
                 case = {"controller": contender.name, "scenario": sid, "case": label, "fmus": hashes,
                         "connections": [list(c) for c in connections], "parameters": system.parameters,
-                        "step": step, "stop_time": stop_time, "x_d": x_d,
-                        "keep_signals": label in ("nominal", "l1 2 m -> 1 m")}
+                        "step": step, "stop_time": stop_time, "x_d": x_d, "format": ROW_FORMAT,
+                        "keep_signals": sid in ANIMATE and len(runs) == 1}
                 case["case_id"] = hashlib.sha256(json.dumps(case, sort_keys=True).encode()).hexdigest()[:16]
                 try:
                     systems.check_parameters(system, fmu_dir)
@@ -117,28 +151,60 @@ def run_score_case(case, blobs):
 
 
 def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=None, quick=False, progress=True,
-            animate=("S2",), log=print):
-    """Score every contender; write scoreboard.md, scores.parquet, plots and animations to ``out_dir``."""
+            animate=("S2",), only=False, log=print):
+    """Score the contenders; write scoreboard.md, scores.parquet, plots and animations to ``out_dir``.
+
+    Parameters
+    ----------
+    chosen, only
+        The controllers (see :func:`contenders`): by default every built-in one, and the user's FMUs beside them.
+    quick : bool
+        A quick board (3 of S3's 27 plants), written to ``out_dir/quick`` with its own journal, so that it never
+        replaces a full board and is never mistaken for one.
+    animate : iterable of str
+        The scenarios (of :data:`ANIMATE`) whose nominal runs are animated; an animation is drawn again only when
+        its run changed.
+
+    Returns
+    -------
+    list of dict
+        The rows of the board: one per contender, scenario and case.
+    """
     from crane_fmu.analysis import score_plots
 
-    out_dir = Path(out_dir)
+    start = time.perf_counter()
+    if sys._getframe(1).f_globals.get("__name__") == "__mp_main__":  # called by a script a worker imports
+        raise RuntimeError("compare() was called while a Dask worker process imported your script again: call it "
+                           "under `if __name__ == \"__main__\":`")
+    unknown = [s for s in animate if s not in ANIMATE]
+    if unknown:
+        raise ValueError(f"animate {', '.join(unknown)}: no animation there; the animated scenarios are "
+                         f"{', '.join(ANIMATE)}")
+    out_dir = Path(out_dir) / "quick" if quick else Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    chosen = contenders(chosen, fmu_dir)
+    chosen = contenders(chosen, fmu_dir, only)
     cases, blobs, refused = plan(chosen, fmu_dir, quick=quick)
     done = read_journal(out_dir)
     pending = [c for c in cases if c["case_id"] not in done]
     bar = Progress(len(cases), len(cases) - len(pending)) if progress else None
-    start = time.perf_counter()
     ran = run_batch(run_score_case, pending, blobs, on="dask", workers=workers, scheduler=scheduler,
                     journal=out_dir / JOURNAL, progress=bar)
     done.update({r["case_id"]: r for r in ran})
     rows = [done[c["case_id"]] for c in cases] + refused
+    for row in rows:
+        row.update(quick=quick, **{f"scenario_{k}": v for k, v in scoreboard.scope(row["scenario"], quick).items()})
     write_table([{k: v for k, v in r.items() if k != "signals"} for r in rows], out_dir / "scores.parquet")
-    (out_dir / "scoreboard.md").write_text(scoreboard.render(rows, chosen))
-    paths = score_plots.plot_all(rows, out_dir)
+    board = out_dir / "scoreboard.md"
+    board.with_name(".scoreboard.md.partial").write_text(scoreboard.render(rows, chosen, quick))
+    board.with_name(".scoreboard.md.partial").replace(board)
+    paths = score_plots.plot_all(rows, out_dir, {c.name for c in chosen if c.user})
+    drawn = 0
     for sid in animate:
-        paths += score_plots.animate_all(rows, sid, out_dir / "animations")
+        new = score_plots.animate_all(rows, sid, out_dir / "animations")
+        paths += new
+        drawn += len(new)
     log(f"{len(cases)} cases: {len(ran)} run now, {len(cases) - len(pending)} already done, "
         f"{sum(r['status'] != 'ok' for r in rows)} not ok, in {time.perf_counter() - start:.1f} s; "
-        f"wrote {out_dir / 'scoreboard.md'}, {out_dir / 'scores.parquet'} and {len(paths)} plots and animations")
+        f"wrote {board}{' (a QUICK board)' if quick else ''}, {out_dir / 'scores.parquet'}, "
+        f"{len(paths) - drawn} plots and {drawn} animations drawn now")
     return rows

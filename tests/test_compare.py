@@ -8,11 +8,12 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from crane_fmu import systems
+from crane_fmu import components, systems
 from crane_fmu.analysis import scoreboard
 from crane_fmu.cli import main
-from crane_fmu.compare import compare
+from crane_fmu.compare import compare, contenders
 from crane_fmu.cosim import ArrayRecorder, read_csv, run
+from crane_fmu.sweep.runner import JOURNAL
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -28,11 +29,20 @@ def template_fmu(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def quick_board(template_fmu, fmu_dir, tmp_path_factory):
+    """The template and the LQR alone (--only), quick: the board is in OUT/quick."""
     out = tmp_path_factory.mktemp("compare")
     log = []
     rows = compare(out, [str(template_fmu), "LqrController"], fmu_dir, workers=2, quick=True, progress=False,
-                   animate=(), log=log.append)
-    return out, rows, log
+                   animate=(), only=True, log=log.append)
+    return out / "quick", rows, log
+
+
+@pytest.fixture(scope="module")
+def full_board(fmu_dir, tmp_path_factory):
+    """Every built-in controller on the full board."""
+    out = tmp_path_factory.mktemp("full")
+    rows = compare(out, (), fmu_dir, workers=2, progress=False, animate=(), log=lambda _: None)
+    return out, rows
 
 
 def test_every_controller_scenario_and_case_is_a_row(quick_board):
@@ -48,6 +58,86 @@ def test_every_controller_scenario_and_case_is_a_row(quick_board):
         assert (out / name).stat().st_size > 1000
 
 
+def test_a_quick_board_cannot_be_mistaken_for_a_full_one(quick_board):
+    out, _, _ = quick_board
+    table = pq.read_table(out / "scores.parquet").to_pylist()
+    assert all(r["quick"] for r in table)
+    s3 = [r for r in table if r["scenario"] == "S3"]
+    assert {(r["scenario_plants"], r["scenario_steps"], r["scenario_cases"]) for r in s3} == {(3, 1, 3)}
+    board = (out / "scoreboard.md").read_text()
+    assert board.startswith("# Controller scoreboard (QUICK")
+    assert "| S3 (QUICK: 3 of 27 plants, 3 cases): " in board and "## S3 (QUICK: 3 of 27 plants, 3 cases): " in board
+    assert not (out.parent / "scoreboard.md").exists()  # the quick board has a folder of its own
+
+
+def test_a_full_board_survives_a_quick_run_in_the_same_folder(full_board, fmu_dir):
+    out, rows = full_board
+    before = {name: (out / name).read_bytes() for name in ("scoreboard.md", "scores.parquet", JOURNAL)}
+    compare(out, ["LqrController"], fmu_dir, workers=2, quick=True, only=True, progress=False, animate=(),
+            log=lambda _: None)
+    assert {name: (out / name).read_bytes() for name in before} == before
+    assert (out / "quick" / "scoreboard.md").read_text().startswith("# Controller scoreboard (QUICK")
+    table = pq.read_table(out / "scores.parquet").to_pylist()
+    assert not any(r["quick"] for r in table) and len(table) == 3 * 35
+    assert {r["scenario_plants"] for r in table if r["scenario"] == "S3"} == {27}
+
+
+def test_the_paper_law_ranks_below_the_converging_laws_in_every_scenario(full_board):
+    """The paper's law limit-cycles or diverges; the energy law converges (slowly) and the LQR converges: the
+    board says so in every scenario, not the alphabet."""
+    _, rows = full_board
+    for sid in scoreboard.SCENARIOS:
+        ranked = [line["controller"] for line in scoreboard.summarise(rows, sid)]
+        assert ranked.index("BacksteppingController") > max(ranked.index("EnergyController"),
+                                                            ranked.index("LqrController")), sid
+
+
+def test_any_order_of_controllers_gives_the_same_board(quick_board, template_fmu, fmu_dir, tmp_path):
+    """The quick board again, from the command line, with the controllers in the other order, in a new folder."""
+    out, _, _ = quick_board
+    assert main(["compare", "--controller", "LqrController", "--controller", str(template_fmu), "--only", "--quick",
+                 "--out", str(tmp_path), "--fmu-dir", str(fmu_dir), "--workers", "2", "--no-progress",
+                 "--animate", "none"]) == 0
+    assert (tmp_path / "quick" / "scoreboard.md").read_text() == (out / "scoreboard.md").read_text()
+
+    def table(folder):
+        return [{k: v for k, v in r.items() if k != "duration_s"}
+                for r in pq.read_table(folder / "scores.parquet").to_pylist()]
+
+    assert table(tmp_path / "quick") == table(out)
+
+
+def test_your_controller_is_scored_beside_every_built_in_one(template_fmu, fmu_dir):
+    chosen = contenders([str(template_fmu)], fmu_dir)
+    builtin = [c.model_identifier for c in components.all("controller")]
+    assert sorted(c.name for c in chosen) == sorted(builtin + ["MyController"])
+    assert [c.name for c in chosen if c.user] == ["MyController"]
+    assert [c.name for c in contenders([str(template_fmu)], fmu_dir, only=True)] == ["MyController"]
+
+
+def test_the_board_marks_your_controller(quick_board):
+    out, _, _ = quick_board
+    board = (out / "scoreboard.md").read_text()
+    assert "Controllers: `LqrController`, `MyController` (yours)" in board
+    assert "`MyController` (yours):" in board and "`LqrController` (yours)" not in board
+
+
+def test_animations_are_drawn_only_when_their_run_changed(quick_board, template_fmu, fmu_dir):
+    out, _, _ = quick_board
+    chosen = [str(template_fmu), "LqrController"]
+    logs = []
+    for _ in range(2):
+        compare(out.parent, chosen, fmu_dir, workers=2, quick=True, only=True, progress=False, animate=("S2",),
+                log=logs.append)
+    assert logs[0].endswith("4 plots and 2 animations drawn now") and "22 already done" in logs[0]
+    assert logs[1].endswith("4 plots and 0 animations drawn now")
+    (out / "animations" / "S2_LqrController.gif").unlink()
+    compare(out.parent, chosen, fmu_dir, workers=2, quick=True, only=True, progress=False, animate=("S2",),
+            log=logs.append)
+    assert logs[2].endswith("4 plots and 1 animations drawn now")
+    assert (out / "animations" / "S2_LqrController.gif").stat().st_size > 10_000
+
+
 def test_a_controller_that_fails_in_one_case_is_scored_failed_there_only(quick_board):
     """Which case fails follows from the template's own rule, not from today's output: MyController discards
     every step longer than its max_step = 0.02 s, and of all the quick suite's cases only S6's h = 50 ms
@@ -58,8 +148,8 @@ def test_a_controller_that_fails_in_one_case_is_scored_failed_there_only(quick_b
     assert "controller: fmi2DoStep returned discard at t=0 s" in failed[0]["error"]
     board = (out / "scoreboard.md").read_text()
     assert "**failed** in 1 of 3: controller: fmi2DoStep returned discard" in board
-    s2 = board.split("## S2")[1].split("## S3")[0]
-    assert s2.index("`LqrController`") < s2.index("`MyController`")  # ranked by arrival
+    s6 = board.split("## S6")[1].split("## S7")[0]
+    assert s6.index("`LqrController`") < s6.index("`MyController`")  # a failed case ranks last
 
 
 def test_the_harness_runs_the_same_system_as_simulate(quick_board, fmu_dir):
@@ -90,8 +180,8 @@ def test_the_harness_runs_the_same_system_as_simulate(quick_board, fmu_dir):
 def test_a_rerun_resumes(quick_board, template_fmu, fmu_dir):
     out, rows, _ = quick_board
     log = []
-    again = compare(out, [str(template_fmu), "LqrController"], fmu_dir, workers=2, quick=True, progress=False,
-                    animate=(), log=log.append)
+    again = compare(out.parent, [str(template_fmu), "LqrController"], fmu_dir, workers=2, quick=True,
+                    progress=False, animate=(), only=True, log=log.append)
     assert log[-1].startswith("22 cases: 0 run now, 22 already done")
     assert [r["case_id"] for r in again] == [r["case_id"] for r in rows]
 
@@ -99,14 +189,21 @@ def test_a_rerun_resumes(quick_board, template_fmu, fmu_dir):
 @pytest.mark.parametrize("argv, message", [
     (["--controller", "Nothing"], "no controller 'Nothing'; controllers: BacksteppingController, LqrController"),
     (["--controller", "{fmu_dir}/CranePlant.fmu"], "CranePlant is not a crane controller: it misses x, dx, theta1, "
-                                                  "dtheta1, theta2, dtheta2, output u"),
+                                                  "dtheta1, theta2, dtheta2, output u (every scenario); a parameter "
+                                                  "x_d or the inputs x_ref, dx_ref, ddx_ref (S2, S3, S4, S5, S7)"),
+    (["--controller", "{fmu_dir}/LqrController.fmu"],
+     "LqrController.fmu and LqrController; rename the FMU file or give --only"),
     (["--workers", "0"], "--workers must be >= 1"),
+    (["--animate", "S4"], "--animate S4: choose none, all, S1, S2, S7"),
+    (["--only"], "--only scores only the --controller ones: give at least one --controller"),
 ])
 def test_compare_mistakes_are_one_line(fmu_dir, tmp_path, capsys, argv, message):
+    """Refused before anything runs: nothing is written."""
     argv = [a.format(fmu_dir=fmu_dir) for a in argv]
     assert main(["compare", "--out", str(tmp_path / "o"), "--fmu-dir", str(fmu_dir), *argv]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err
+    assert not (tmp_path / "o" / JOURNAL).exists()
 
 
 def test_animate_a_simulate_result(fmu_dir, tmp_path, capsys):
@@ -115,9 +212,17 @@ def test_animate_a_simulate_result(fmu_dir, tmp_path, capsys):
     csv = tmp_path / "move.csv"
     assert main(["simulate", "--system", "transport", "--fmu-dir", str(fmu_dir), "--stop-time", "1",
                  "--out", str(csv)]) == 0
+    capsys.readouterr()
     assert main(["animate", str(csv), "--out", str(tmp_path / "move.gif"), "--fps", "10"]) == 0
+    out, err = capsys.readouterr()
+    assert re.fullmatch(r"wrote \S+move.gif \(\d+\.\d s\)\n", out) and "frame" not in err  # no progress off a terminal
     gif = Image.open(tmp_path / "move.gif")
     assert gif.n_frames == 11 and gif.size[0] > 300
+    durations = []
+    for k in range(gif.n_frames):
+        gif.seek(k)
+        durations.append(gif.info["duration"])
+    assert sum(durations) == 1100  # real time: 10 frames a second, and the last one shown as long
     assert main(["animate", str(csv), "--out", str(tmp_path / "move.txt")]) == 2
     free = {k: v for k, v in read_csv(csv).items() if k in ("time", "controller.u")}
     from crane_fmu.cosim import write_csv
@@ -127,13 +232,14 @@ def test_animate_a_simulate_result(fmu_dir, tmp_path, capsys):
     assert "has no crane to animate: it needs the plant outputs x, x1, y1, x2, y2" in capsys.readouterr().err
 
 
-def test_readme_shows_the_current_scoreboard(fmu_dir, tmp_path):
+def test_readme_shows_the_current_scoreboard(full_board):
     """Doc-sync only: the full suite of every built-in controller, run now, gives the README's table.
 
     The table's figures are this code's output (regenerate with ``crane-fmu compare``); the behaviour
     behind them is held by requirement tests: the LQR's targets (test_controllers.py), the documented
-    LQR design against scipy, and the metrics' known answers (test_metrics.py)."""
-    rows = compare(tmp_path, (), fmu_dir, workers=2, progress=False, animate=(), log=lambda _: None)
+    LQR design against scipy, the metrics' known answers (test_metrics.py) and the ranking rules
+    (test_scoreboard.py)."""
+    _, rows = full_board
     readme = (ROOT / "README.md").read_text()
     section = re.search(r"<!-- scoreboard:start -->\n(.*)\n<!-- scoreboard:end -->", readme, re.S).group(1)
     assert section.strip() == scoreboard.render_summary(rows)

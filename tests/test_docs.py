@@ -71,3 +71,30 @@ def test_every_marked_readme_block_runs_as_written(fmu_dir, tmp_path):
         assert done.returncode == 0, f"{code}\n{done.stdout[-1000:]}{done.stderr[-2000:]}"
         if "libcosimpy" in code:
             assert done.stdout.startswith("20000 samples, theta1 = ") and done.stdout.endswith(" rad at 20.0 s\n")
+
+
+def test_the_readme_component_example_is_built_and_scored(fmu_dir, tmp_path, monkeypatch, capsys):
+    """The README's PD component, its build and compare commands and its Python script, as a user runs them."""
+    import shlex
+    import subprocess
+    import sys
+
+    readme = (ROOT / "README.md").read_text()
+    section = readme.split("## Components and systems: adding a controller")[1]
+    module, script = re.findall(r"```python\n(.*?)```", section, re.S)[:2]
+    commands = re.search(r"Build its FMUs.*?```\n(.*?)```", section, re.S).group(1).splitlines()
+    assert [c.split()[:2] for c in commands] == [["crane-fmu", "build"], ["crane-fmu", "compare"]]
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "my_controller.py").write_text(module)
+    (tmp_path / "build").mkdir()
+    (tmp_path / "build" / "fmus").symlink_to(fmu_dir)  # the built-in FMUs, as `crane-fmu build` leaves them
+    for command in commands:
+        assert main(shlex.split(command)[1:]) == 0, capsys.readouterr().err
+    board = (tmp_path / "results" / "mine" / "quick" / "scoreboard.md").read_text()
+    assert "Controllers: `BacksteppingController`, `EnergyController`, `LqrController`, `PdController` (yours)" \
+        in board
+    assert all(f"| S{i} (QUICK" in board for i in range(1, 8))
+    (tmp_path / "script.py").write_text(script)
+    done = subprocess.run([sys.executable, "script.py"], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.splitlines()[-1] == "44 cases scored"  # 4 controllers x 11 quick cases, from the journal

@@ -99,3 +99,33 @@ def test_descriptors_are_checked():
         Component("X", "controller", "", (table[0]._replace(unit="furlong"),), pd_controller.setup, lambda *a: ())
     with pytest.raises(ValueError, match="a component 'CranePlant' is already registered"):
         components.register(Component("CranePlant", "plant", "", table, pd_controller.setup, lambda *a: ()))
+
+
+@pytest.mark.parametrize("name, text, message", [
+    ("nothing.py", "X = 1\n", "--component {path}: defines no Component (crane_fmu.model.component.Component)"),
+    ("broken.py", "import no_such_module_here\n",
+     "--component {path}: importing it failed: ModuleNotFoundError: No module named 'no_such_module_here'"),
+    ("notes.txt", "", "--component {path}: expected a Python file (MODULE.py) that defines a Component"),
+    ("json.py", "", "--component {path}: 'json' is a standard library module's name; rename the file"),
+    ("taken.py", "from crane_fmu.model.lqr import COMPONENT\n",
+     "--component {path}: defines no Component"),  # an imported one is not the module's own
+])
+def test_build_component_mistakes_are_one_line(tmp_path, capsys, name, text, message):
+    path = tmp_path / name
+    path.write_text(text)
+    assert main(["build", "--component", str(path), "--out", str(tmp_path / "fmus")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message.format(path=path) in err
+    assert not (tmp_path / "fmus").exists()
+
+
+def test_build_component_leaves_another_module_of_that_name_alone(tmp_path):
+    """A module already imported under the file's name (a pythonfmu build's, say) is back after the build."""
+    import sys
+    from pathlib import Path
+
+    text = Path(pd_controller.__file__).read_text().replace('"PdController"', '"PdTwo"')
+    (tmp_path / "pd_controller.py").write_text(text)
+    assert main(["build", "--component", str(tmp_path / "pd_controller.py"), "--out", str(tmp_path / "fmus")]) == 0
+    assert (tmp_path / "fmus" / "PdTwo.fmu").is_file() and (tmp_path / "fmi3" / "PdTwo.fmu").is_file()
+    assert sys.modules["pd_controller"] is pd_controller and components.find("PdTwo") is None

@@ -166,12 +166,14 @@ def move_metrics(t, x, dx, theta1, theta2, u, x_d, move_end=0.0, position_band=0
         ``position_1cm_s``: the trolley alone, within 1 cm; ``overshoot_m``: the
         farthest the trolley went past ``x_d`` (in the direction of the move);
         ``final_error_m``; ``peak_abs_u``, ``peak_abs_v``; ``effort``: the
-        integral of u^2 with u held over each step [m2/s3].
+        integral of u^2 with u held over each step [m2/s3]; ``end_swing_deg``: the
+        largest swing over the last quarter of the run (what is left of the swing).
     """
     arrival = settling_time(t, [x - x_d, theta1 / angle_band * position_band, theta2 / angle_band * position_band],
                             position_band)
     since = max(arrival if arrival is not None else t[-1], move_end)
     after = t >= since
+    last = t >= t[0] + 0.75 * (t[-1] - t[0])
     direction = 1.0 if x_d >= x[0] else -1.0
     return {
         "arrival_s": arrival,
@@ -184,6 +186,7 @@ def move_metrics(t, x, dx, theta1, theta2, u, x_d, move_end=0.0, position_band=0
         "peak_abs_u": peak_abs(u),
         "peak_abs_v": peak_abs(dx),
         "effort": float(np.sum(np.square(u[:-1]) * np.diff(t))),
+        "end_swing_deg": math.degrees(max(peak_abs(theta1[last]), peak_abs(theta2[last]))),
     }
 
 
