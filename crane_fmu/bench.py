@@ -160,7 +160,7 @@ def _plain_loop(system, stop_time, step, csv_path):
         values.update(system.parameters.get(name, {}))
         if "h" in values:
             values["h"] = step
-        configs[name] = c.setup(values)
+        configs[name] = c.configure(values)
         states[name] = c.initial_state(configs[name]) if c.stateful else None
         names += [f"{name}.{o}" for o in c.names("output")]
     plant, ctrl = models["plant"], models["controller"]

@@ -138,7 +138,7 @@ def run_score_case(case, blobs):
         if "planner" in case["fmus"]:
             from crane_fmu.model import planner
 
-            move_end = planner.setup({**planner.COMPONENT.defaults(), **case["parameters"]["planner"]}).end
+            move_end = planner.configure({**planner.COMPONENT.defaults(), **case["parameters"]["planner"]}).end
         t = columns["time"]
         row.update(metrics.move_metrics(t, columns["plant.x"], columns["plant.dx"], columns["plant.theta1"],
                                         columns["plant.theta2"], columns["controller.u"], case["x_d"], move_end))

@@ -68,14 +68,14 @@ class Runtime:
         if self._outputs is None:
             config, state = self.config, self.state
             if not self.initialised:  # outputs follow the parameters
-                config = self.component.setup(dict(self.values))
+                config = self.component.configure(dict(self.values))
                 state = self.component.initial_state(config) if self._stateful else None
             self._outputs = self.component.output(config, state, tuple(self.inputs))
         return self._outputs
 
     def initialise(self, state=None):
         """End of initialisation (or a restored state): validate the parameters, set the state."""
-        self.config = self.component.setup(dict(self.values))
+        self.config = self.component.configure(dict(self.values))
         self.initialised = True
         if self._stateful:
             self.state = self.component.initial_state(self.config) if state is None else tuple(state)

@@ -14,7 +14,7 @@ def law(state, k_x, k_v, x_d):
     return -k_x * (state[0] - x_d) - k_v * state[1]
 
 
-def setup(values):
+def configure(values):
     positive("k_x", values["k_x"])
     positive("k_v", values["k_v"])
     return values["k_x"], values["k_v"], values["x_d"]
@@ -25,4 +25,4 @@ COMPONENT = Component(
     (parameter("k_x", 4.0, "1/s2", "position gain"), parameter("k_v", 3.0, "1/s", "velocity gain"),
      parameter("x_d", 0.0, "m", "target trolley position")) + MEASURED_STATE
     + (output("u", "m/s2", "demanded trolley acceleration"),),
-    setup, lambda config, state, inputs: (law(inputs, *config),), feedthrough=True)
+    configure, lambda config, state, inputs: (law(inputs, *config),), feedthrough=True)

@@ -166,7 +166,7 @@ def test_the_harness_runs_the_same_system_as_simulate(quick_board, fmu_dir):
     c = run(system, fmu_dir, recorder=ArrayRecorder()).columns()
     from crane_fmu.model import planner
 
-    end = planner.setup({**planner.COMPONENT.defaults(), "x_d": 2.0}).end
+    end = planner.configure({**planner.COMPONENT.defaults(), "x_d": 2.0}).end
     t, theta1, theta2 = c["time"], c["plant.theta1"], c["plant.theta2"]
     half_degree = math.radians(0.5)
     inside = (np.abs(c["plant.x"] - 2.0) <= 0.005) & (np.abs(theta1) <= half_degree) & (np.abs(theta2) <= half_degree)

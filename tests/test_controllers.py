@@ -151,7 +151,7 @@ def _linear_swing(p, accel, t_end):
 
 @pytest.mark.parametrize("shaper", ["zv", "zvd", "ei", "none"])
 def test_planner_reference_is_a_consistent_move_within_the_limits(shaper):
-    c = planner.setup({**planner.COMPONENT.defaults(), "x_d": 2.0, "shaper": shaper})
+    c = planner.configure({**planner.COMPONENT.defaults(), "x_d": 2.0, "shaper": shaper})
     t = np.arange(0.0, c.end + 1.0, 1e-3)
     ref = np.array([planner.reference(c, ti) for ti in t])
     assert np.abs(ref[:, 2]).max() <= 2.0 * (1 + 1e-12) and np.abs(ref[:, 1]).max() <= 1.0 * (1 + 1e-12)
@@ -164,7 +164,7 @@ def test_planner_reference_is_a_consistent_move_within_the_limits(shaper):
 def test_planner_swing_references_and_zero_residual_in_the_linear_model():
     p = PlantParameters()
     for shaper in ("zv", "zvd"):
-        c = planner.setup({**planner.COMPONENT.defaults(), "x_d": 2.0, "shaper": shaper})
+        c = planner.configure({**planner.COMPONENT.defaults(), "x_d": 2.0, "shaper": shaper})
         swing = _linear_swing(p, lambda t, c=c: planner.reference(c, t)[2], c.end + 3.0)
         during = np.arange(0.0, c.end, 0.01)
         ref = np.array([planner.reference(c, ti)[3:] for ti in during])
@@ -177,7 +177,7 @@ def test_zvd_and_ei_are_more_robust_than_zv_to_a_wrong_cable_length():
     """Planned for l2 = 0.5 m, run on a linear model with l2 = 0.6 m: residual swing by shaper."""
     residual = {}
     for shaper in ("zv", "zvd", "ei", "none"):
-        c = planner.setup({**planner.COMPONENT.defaults(), "x_d": 2.0, "shaper": shaper})
+        c = planner.configure({**planner.COMPONENT.defaults(), "x_d": 2.0, "shaper": shaper})
         swing = _linear_swing(PlantParameters(l2=0.6), lambda t, c=c: planner.reference(c, t)[2], c.end + 4.0)
         residual[shaper] = np.abs(swing(np.arange(c.end, c.end + 4.0, 0.01))[[0, 2]]).max()
     assert residual["zvd"] < residual["zv"] < residual["none"] and residual["ei"] < residual["zv"]
@@ -195,7 +195,7 @@ def _relative_energy(s, p):
 def test_energy_law_lyapunov_function_never_increases():
     """Eq (E5): along the continuous-time closed loop from 40 deg, V(t) is non-increasing and |u| <= u_max."""
     p = PlantParameters()
-    c = energy.setup({**energy.COMPONENT.defaults(), "v_max": math.inf})
+    c = energy.configure({**energy.COMPONENT.defaults(), "v_max": math.inf})
     a = c.u_max / 2
     mu = p.m1 + p.m2
 
@@ -228,8 +228,8 @@ def test_every_controller_keeps_its_limits_through_the_fmus(fmu_dir):
 def test_lqr_system_through_the_fmus_equals_the_python_loop(fmu_dir):
     """Same code in the FMUs and here: bit for bit; and the regulation converges."""
     result = run(systems.get("lqr"), fmu_dir, recorder=ArrayRecorder(), stop_time=6.0).columns()
-    config = plant.setup(plant.COMPONENT.defaults())
-    law = lqr.setup(lqr.COMPONENT.defaults())
+    config = plant.configure(plant.COMPONENT.defaults())
+    law = lqr.configure(lqr.COMPONENT.defaults())
     state = config.state0
     for k in range(6000):
         assert result["plant.x"][k] == state[0] and result["plant.theta1"][k] == state[2]
@@ -252,7 +252,7 @@ def test_runs_at_another_step_get_designs_for_it(fmu_dir):
 
 
 def test_lqr_gains_follow_the_measured_cable_length():
-    c = lqr.setup({**lqr.COMPONENT.defaults(), "l1_low": 1.0, "l1_high": 2.0})
+    c = lqr.configure({**lqr.COMPONENT.defaults(), "l1_low": 1.0, "l1_high": 2.0})
     at_1_5 = lqr.design(PlantParameters(l1=1.5), WEIGHTS, 0.05, 1e-3)
     assert lqr.scheduled_gains(c, 1.5) == pytest.approx(at_1_5, rel=1e-12)  # a design point
     between = lqr.scheduled_gains(c, 1.525)  # halfway to the next design point, 1.55 m

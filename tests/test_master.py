@@ -194,8 +194,8 @@ def test_a_new_algorithm_is_one_class_and_one_registration():
     class EveryOther(algorithms.Jacobi):
         name = "test-every-other"  # Jacobi, but the exchange only at every second point
 
-        def setup(self, wiring):
-            super().setup(wiring)
+        def bind(self, wiring):
+            super().bind(wiring)
             self._count = 0
 
         def exchange(self, time):

@@ -146,7 +146,7 @@ def test_the_fast_paths_compute_the_same_numbers_as_the_equations():
 def test_the_plants_fast_step_equals_its_general_step():
     """update() of the paper's model (no hoist, forces, damping, lag, limits) against the general path."""
     values = {v.name: v.start for v in plant.VARIABLES if v.causality == "parameter"}
-    config = plant.setup({**values, "theta1_0": 0.3, "dtheta2_0": -0.2, "u_max": 2.5})
+    config = plant.configure({**values, "theta1_0": 0.3, "dtheta2_0": -0.2, "u_max": 2.5})
     assert config.fast
     state_fast = state_general = config.state0
     for k in range(300):
@@ -160,7 +160,7 @@ def test_the_plants_fast_step_equals_its_general_step():
 def test_any_effect_away_from_its_neutral_value_leaves_the_fast_path(name, value):
     """The fast path is chosen from the parameters themselves: an effect cannot be skipped."""
     values = {v.name: v.start for v in plant.VARIABLES if v.causality == "parameter"}
-    assert plant.setup(values).fast and not plant.setup({**values, name: value}).fast
+    assert plant.configure(values).fast and not plant.configure({**values, name: value}).fast
 
 
 def test_the_fast_step_tells_huge_finite_states_from_non_finite_ones():
@@ -168,7 +168,7 @@ def test_the_fast_step_tells_huge_finite_states_from_non_finite_ones():
     from crane_fmu.model.component import Discard
 
     values = {v.name: v.start for v in plant.VARIABLES if v.causality == "parameter"}
-    config = plant.setup(values)
+    config = plant.configure(values)
     huge = (1e308, 0.0, 1e308, 0.0, 0.0, 0.0) + config.state0[6:]  # x and theta1 sum to inf
     assert config.fast and math.isinf(sum(huge[:8]))
     state = plant.update(config, huge, (0.0, 0.0, 0.0, 0.0), 0.0, 1e-3)

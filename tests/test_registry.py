@@ -42,7 +42,7 @@ def pd_build(tmp_path_factory):
 
 def _python_loop(stop_time, step, k_x=4.0, k_v=3.0, x_d=0.5):
     """The same loop without FMI: the plant's update and the law, Gauss-Seidel order."""
-    config = plant.setup(plant.COMPONENT.defaults())
+    config = plant.configure(plant.COMPONENT.defaults())
     state, rows = config.state0, []
     for k in range(round(stop_time / step)):
         u = pd_controller.law(state, k_x, k_v, x_d)
@@ -94,11 +94,11 @@ def test_swept_on_dask(pd_build, tmp_path):
 def test_descriptors_are_checked():
     table = pd_controller.COMPONENT.variables
     with pytest.raises(ValueError, match="role must be one of plant, controller, planner, disturbance, sensor, "):
-        Component("X", "observer", "", table, pd_controller.setup, lambda *a: ())
+        Component("X", "observer", "", table, pd_controller.configure, lambda *a: ())
     with pytest.raises(ValueError, match="X.k_x: unit must be one of"):
-        Component("X", "controller", "", (table[0]._replace(unit="furlong"),), pd_controller.setup, lambda *a: ())
+        Component("X", "controller", "", (table[0]._replace(unit="furlong"),), pd_controller.configure, lambda *a: ())
     with pytest.raises(ValueError, match="a component 'CranePlant' is already registered"):
-        components.register(Component("CranePlant", "plant", "", table, pd_controller.setup, lambda *a: ()))
+        components.register(Component("CranePlant", "plant", "", table, pd_controller.configure, lambda *a: ()))
 
 
 @pytest.mark.parametrize("name, text, message", [

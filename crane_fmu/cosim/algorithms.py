@@ -1,7 +1,7 @@
 """Master algorithms: how the instances of a :class:`~crane_fmu.cosim.master.Wiring` exchange and step.
 
 libcosim's idiom: the wiring (ports, buffers, connections) is one thing, the stepping
-algorithm another. An algorithm is set up once on a wiring, then called at every
+algorithm another. An algorithm is bound once to a wiring, then called at every
 communication point ``t``: :meth:`Algorithm.exchange` brings every connected input up to
 date, the observers see the outputs, and :meth:`Algorithm.step` steps every instance and
 returns the step it took. Algorithms are registered by name (:data:`ALGORITHMS`, the
@@ -28,7 +28,7 @@ class Algorithm:
         self.initial_exchange = initial_exchange
         self.wiring = None
 
-    def setup(self, wiring):
+    def bind(self, wiring):
         """Prepare the calls of the exchange on ``wiring``; ValueError if this algorithm cannot step it."""
         self.wiring = wiring
         self._steps = [call for call, _, _ in wiring.steps]
@@ -56,8 +56,8 @@ class GaussSeidel(Algorithm):
 
     name = "gauss-seidel"
 
-    def setup(self, wiring):
-        super().setup(wiring)
+    def bind(self, wiring):
+        super().bind(wiring)
         self._exchange = [call for call, _, _ in wiring.propagation()]
 
     def exchange(self, time):
@@ -73,8 +73,8 @@ class Jacobi(GaussSeidel):
 
     name = "jacobi"
 
-    def setup(self, wiring):
-        Algorithm.setup(self, wiring)
+    def bind(self, wiring):
+        Algorithm.bind(self, wiring)
         self._exchange = [call for call, _, _ in wiring.reads + wiring.writes]
 
 
@@ -100,8 +100,8 @@ class IterativeJacobi(Algorithm):
         super().__init__(initial_exchange)
         self.tolerance, self.max_exchanges = tolerance, max_exchanges
 
-    def setup(self, wiring):
-        super().setup(wiring)
+    def bind(self, wiring):
+        super().bind(wiring)
         self._reads = [call for call, _, _ in wiring.reads]
         self._writes = [call for call, _, _ in wiring.writes]
 

@@ -171,7 +171,7 @@ class Master:
             algorithm = algorithms.create(algorithm, initial_exchange=initial_exchange)
         self.wiring = Wiring(instances, connections)
         self.algorithm = algorithm
-        algorithm.setup(self.wiring)
+        algorithm.bind(self.wiring)
         self.instances, self.output_names, self.values = instances, self.wiring.output_names, self.wiring.values
 
     def initialize(self, start_time, stop_time, parameters=None):

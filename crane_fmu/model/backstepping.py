@@ -149,7 +149,7 @@ VARIABLES = controller_model() + (
 IN = positions(VARIABLES, "input")
 
 
-def setup(values):
+def configure(values):
     """Validated ``(PlantParameters, ControllerGains, (u_max, v_max, h), law)`` from the parameter values."""
     positive("h", values["h"])
     bounds = (*limits.check(values), values["h"])
@@ -169,4 +169,4 @@ COMPONENT = Component(
     "BacksteppingController", "controller",
     "Backstepping anti-swing controller for a double-pendulum crane payload "
     "(least-squares eq 21); output: trolley acceleration u, direct feedthrough",
-    VARIABLES, setup, _output, feedthrough=True)
+    VARIABLES, configure, _output, feedthrough=True)

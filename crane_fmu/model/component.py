@@ -42,8 +42,8 @@ class Component:
         One line, written into modelDescription.xml.
     variables : tuple of tables.Variable
         Every parameter, input and output, in value-reference order.
-    setup : callable
-        ``setup({parameter: value}) -> config``: validates the parameter values
+    configure : callable
+        ``configure({parameter: value}) -> config``: validates the parameter values
         (``ValueError`` naming the field, the rule and the value) and returns
         what ``output`` and ``update`` need.
     output : callable
@@ -62,7 +62,7 @@ class Component:
         ``(start, stop, step)`` [s] written into modelDescription.xml, what a host
         runs by default: the built-in systems' 20 s at 1 ms unless given.
     report : callable, optional
-        ``report(config) -> {name: value}``: what ``setup`` derived from the
+        ``report(config) -> {name: value}``: what ``configure`` derived from the
         parameters (gains, shaper impulses), shown by ``crane-fmu info``.
     """
 
@@ -70,7 +70,7 @@ class Component:
     role: str
     description: str
     variables: tuple
-    setup: Callable
+    configure: Callable
     output: Callable
     feedthrough: bool = False
     initial_state: Callable | None = None
@@ -114,8 +114,8 @@ class Component:
         return {v.name: v.start for v in self.variables if v.causality == causality}
 
     def check(self, values):
-        """``setup`` of the defaults overridden by ``values``: the validated configuration."""
-        return self.setup({**self.defaults(), **values})
+        """``configure`` of the defaults overridden by ``values``: the validated configuration."""
+        return self.configure({**self.defaults(), **values})
 
 
 def find(module, model_identifier):

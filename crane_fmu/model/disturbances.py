@@ -11,7 +11,7 @@ from .tables import MEASURED_STATE, STATE, input_, output, parameter
 GustConfig = namedtuple("GustConfig", "F1 F2 start duration")
 
 
-def _gust_setup(values):
+def _gust_configure(values):
     for name in ("F1_peak", "F2_peak", "start"):
         if not math.isfinite(values[name]):
             raise ValueError(f"{name} must be finite, got {values[name]!r}")
@@ -36,7 +36,7 @@ GUST = Component(
      parameter("duration", 0.5, "s", "how long it lasts"),
      output("F1", "N", "horizontal force on the hook"),
      output("F2", "N", "horizontal force on the payload")),
-    _gust_setup, lambda config, state, inputs: gust(config, state[0]),
+    _gust_configure, lambda config, state, inputs: gust(config, state[0]),
     initial_state=lambda config: (0.0,), update=lambda config, state, inputs, time, step: (time + step,))
 
 
@@ -46,7 +46,7 @@ SIGMAS = ("sigma_x", "sigma_dx", "sigma_theta", "sigma_dtheta")
 SensorConfig = namedtuple("SensorConfig", "sigmas seed delay")
 
 
-def _sensor_setup(values):
+def _sensor_configure(values):
     for name in SIGMAS:
         if not (values[name] >= 0 and math.isfinite(values[name])):
             raise ValueError(f"{name} must be >= 0 and finite, got {values[name]!r}")
@@ -103,5 +103,5 @@ SENSOR = Component(
      parameter("delay", 1.0, "1", "1: the measurement reaches the output one communication step late; 0: at once"),
      ) + tuple(input_(v.name, v.unit, v.description.replace("measured ", "true ")) for v in MEASURED_STATE)
     + tuple(output(name + "_m", v.unit, v.description) for name, v in zip(STATE, MEASURED_STATE)),
-    _sensor_setup, _sensor_output, feedthrough=True,
+    _sensor_configure, _sensor_output, feedthrough=True,
     initial_state=lambda config: (0, None), update=_sensor_update)

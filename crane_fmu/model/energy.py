@@ -63,7 +63,7 @@ from .tables import MEASURED_STATE, controller_model, output, parameter
 Config = namedtuple("Config", "mu m2 l1 l2 k_c k_p k_d x_d u_max v_max h")
 
 
-def setup(values):
+def configure(values):
     p = plant_parameters(values)
     for name in ("k_c", "k_p", "k_d", "h"):
         positive(name, values[name])
@@ -101,4 +101,4 @@ COMPONENT = Component(
     "EnergyController", "controller",
     "Energy-coupling anti-swing law with a Lyapunov/LaSalle proof (saturated, |u| <= u_max); "
     "output: trolley acceleration u, direct feedthrough",
-    VARIABLES, setup, lambda config, state, inputs: (control(config, inputs),), feedthrough=True)
+    VARIABLES, configure, lambda config, state, inputs: (control(config, inputs),), feedthrough=True)

@@ -61,7 +61,7 @@ Config.__doc__ = ("The gains for l1, the limits, and the gain schedule: ``(l1 va
                   "[l1_low, l1_high], or None.")
 
 
-def setup(values):
+def configure(values):
     """Validated parameters and the gains designed from them (and the schedule over the cable length)."""
     p = plant_parameters(values)
     for name in WEIGHTS:
@@ -150,4 +150,4 @@ COMPONENT = Component(
     "LqrController", "controller",
     "Discrete-time LQR of the double-pendulum crane about the hanging equilibrium, designed from its parameters "
     "at initialisation; tracks x_ref, dx_ref, ddx_ref; output: trolley acceleration u, direct feedthrough",
-    VARIABLES, setup, _output, feedthrough=True, report=report)
+    VARIABLES, configure, _output, feedthrough=True, report=report)

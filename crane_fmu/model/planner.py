@@ -95,7 +95,7 @@ def _peak(steps):
 Config = namedtuple("Config", "x0 distance t0 steps end omegas shapes gains u_max v_max impulses")
 
 
-def setup(values):
+def configure(values):
     p = plant_parameters(values)
     u_max, v_max = limits.check(values)
     if values["shaper"] not in SHAPERS:
@@ -185,6 +185,6 @@ COMPONENT = Component(
     "TrajectoryPlanner", "planner",
     "Input-shaped rest-to-rest trolley moves (ZV, ZVD, EI on both swing modes) within u_max and v_max; "
     "outputs: the reference x_ref, dx_ref, ddx_ref and the swing it induces",
-    VARIABLES, setup, lambda config, state, inputs: reference(config, state[0]),
+    VARIABLES, configure, lambda config, state, inputs: reference(config, state[0]),
     initial_state=lambda config: (0.0,), update=lambda config, state, inputs, time, step: (time + step,),
     report=report, default_experiment=(0.0, 10.0, 1e-3))  # the transport system's move

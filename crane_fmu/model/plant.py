@@ -96,7 +96,7 @@ def _at_least(name, value, low, rule):
         raise ValueError(f"{name} must be {rule}, got {value!r}")
 
 
-def setup(values):
+def configure(values):
     """Validated :class:`Config` from the CranePlant parameter values; the state starts at rest in the drive."""
     positive("max_substep", values["max_substep"])
     p = plant_parameters(values)
@@ -224,5 +224,5 @@ COMPONENT = Component(
     "CranePlant", "plant",
     "Overhead crane with a double-pendulum payload (hook m1 on cable l1, payload m2 on cable l2); "
     "inputs: trolley and hoist accelerations, horizontal forces; fixed-step RK4 inside doStep",
-    VARIABLES, setup, _outputs,
+    VARIABLES, configure, _outputs,
     initial_state=lambda config: config.state0, update=update)
