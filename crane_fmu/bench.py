@@ -301,15 +301,6 @@ def run_sweep_bench(n_cases=16, stop_time=10.0, step=1e-3, repeat=3, out=print):
     return result
 
 
-def run_controllers(quick=False, out=print):
-    """Build every controller's FMUs fresh and measure them against their targets."""
-    from crane_fmu.analysis.controller_bench import run_controller_bench
-
-    with tempfile.TemporaryDirectory(prefix="crane_bench_") as tmp:
-        build_all(Path(tmp) / "fmus", systems=(), fmi3=False, log=lambda _: None)
-        return run_controller_bench(Path(tmp) / "fmus", quick, out=out)
-
-
 def _rss_mb():
     """Resident memory of this process [MB] (Linux /proc)."""
     with open("/proc/self/statm") as f:

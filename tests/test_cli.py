@@ -139,12 +139,17 @@ def test_unreadable_fmu_is_one_line(tmp_path, fmu_dir, capsys):
     (["bench", "--stop-time", "0.2", "--repeat", "1"], "4. whole processes: crane-fmu simulate"),
     (["bench", "--endurance", "--stop-time", "2"], "resident memory:"),
     (["bench", "--sweep", "--cases", "2", "--stop-time", "0.2"], "parallel efficiency on 2 workers:"),
-    (["bench", "--controllers", "--quick"], "Region of attraction, energy: converges from every theta1(0)"),
 ])
 def test_benchmarks_run_and_print_their_figures(capsys, argv, expect):
     """A smoke test only: the figures themselves are measured with crane-fmu bench, not asserted here."""
     assert main(argv) == 0
     assert expect in capsys.readouterr().out
+
+
+def test_targets_measures_every_controller_against_its_targets(fmu_dir, capsys):
+    """A smoke test of the command: the targets themselves are guarded by test_controllers.py."""
+    assert main(["targets", "--quick", "--fmu-dir", str(fmu_dir), "--workers", "2"]) == 0
+    assert "Region of attraction, energy: converges from every theta1(0)" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("argv, message", [

@@ -96,3 +96,18 @@ MEASURED_STATE = tuple(input_(name, unit, "measured " + text) for name, (unit, t
 def controller_model():
     """The :data:`PLANT_MODEL` rows as a controller's model of the plant."""
     return tuple(v._replace(description="controller's model: " + v.description) for v in PLANT_MODEL)
+
+
+def variable_table(component, markdown=False):
+    """A component's variables as text (``crane-fmu info``) or as the README's Markdown table."""
+    lines = ([f"#### {component.model_identifier}", "", "| name | causality | start | unit | description |",
+              "|---|---|---|---|---|"] if markdown else
+             [f"{component.model_identifier}.fmu ({component.role}): {component.description}"])
+    for v in component.variables:
+        start = "" if v.start is None else f"{v.start:.6g}" if v.type == "Real" else v.start
+        unit = v.unit or ""
+        if unit in DISPLAY_UNITS:
+            unit += f" (display {DISPLAY_UNITS[unit]})"
+        lines.append(f"| `{v.name}` | {v.causality} | {start} | {unit} | {v.description} |" if markdown else
+                     f"  {v.name:<12} {v.causality:<10} {start:>10} {unit:<22} {v.description}")
+    return "\n".join(lines) + "\n"

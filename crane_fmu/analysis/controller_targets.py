@@ -1,4 +1,4 @@
-"""The controllers against their targets, through the FMUs: ``crane-fmu bench --controllers``.
+"""The controllers against their targets, through the FMUs: ``crane-fmu targets``.
 
 Conditions: the Section V plant (nonlinear model), |u| <= 2 m/s2 and |v| <= 1 m/s
 in every controller and the planner, a 1 ms communication step unless stated.
@@ -123,7 +123,7 @@ def report(results, out=print):
             out(f"  {name:<9} {m['outcome']}{' (' + m['error'] + ')' if m['error'] else ''}: {what}")
 
 
-def run_controller_bench(fmu_dir, quick=False, workers=None, out=print):
+def run_targets(fmu_dir, quick=False, workers=None, out=print):
     """Measure every run of :func:`plan` on ``workers`` processes and print the report; return the results."""
     runs = plan(quick)
     workers = workers or os.cpu_count() or 1

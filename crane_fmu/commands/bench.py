@@ -1,0 +1,49 @@
+"""``crane-fmu bench``: microseconds per communication step, crane pair vs framework floor."""
+
+
+
+from .common import UsageError, number
+
+NAME = "bench"
+HELP = "microseconds per communication step, crane pair vs framework floor"
+EXAMPLES = (
+    "examples:\n"
+    "  crane-fmu bench\n"
+    "  crane-fmu bench --repeat 7 --stop-time 20\n"
+    "  crane-fmu bench --sweep\n"
+    "  crane-fmu bench --endurance            # one simulated hour at 1 ms"
+)
+
+
+def arguments(p):
+    p.add_argument("--stop-time", type=number, default=None,
+                   help="simulated time per run [s] (default 20, with --sweep 10)")
+    p.add_argument("--step", type=number, default=1e-3, help="communication step [s]")
+    p.add_argument("--repeat", type=int, default=5,
+                   help="runs per pair (with --sweep: batches per cluster); the median is reported")
+    p.add_argument("--sweep", action="store_true",
+                   help="instead: cases per second of a Dask sweep with 1 and 2 workers")
+    p.add_argument("--cases", type=int, default=16, help="with --sweep: cases per measurement")
+    p.add_argument("--endurance", action="store_true",
+                   help="instead: one long run (default one simulated hour) recorded to CSV, memory sampled")
+
+
+def run(args):
+    from crane_fmu.bench import run_bench, run_endurance, run_sweep_bench
+
+    if args.repeat < 1:
+        raise UsageError(f"--repeat must be >= 1, got {args.repeat}")
+    if args.cases < 2:
+        raise UsageError(f"--cases must be >= 2, got {args.cases}")
+    try:
+        if args.sweep and args.endurance:
+            raise UsageError("--sweep and --endurance are separate benchmarks: choose one")
+        if args.endurance:
+            run_endurance(args.stop_time or 3600.0, args.step)
+        elif args.sweep:
+            run_sweep_bench(args.cases, args.stop_time or 10.0, args.step, args.repeat)
+        else:
+            run_bench(args.stop_time or 20.0, args.step, args.repeat)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    return 0

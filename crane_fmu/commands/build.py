@@ -1,0 +1,112 @@
+"""``crane-fmu build``: build the FMUs of every component and the files of every built-in system."""
+
+import sys
+from pathlib import Path
+
+from crane_fmu import DEFAULT_FMU_DIR
+
+from .common import UsageError
+
+NAME = "build"
+HELP = "build the FMUs of every component and the files of every built-in system"
+EXAMPLES = (
+    "examples:\n"
+    "  crane-fmu build\n"
+    "  crane-fmu build --out my/fmus --bench\n"
+    "  crane-fmu build --container transport       # build/containers/CraneTransport.fmu\n"
+    "  crane-fmu build --container my_system.ssp\n"
+    "  crane-fmu build --component my_controller.py --out build/mine   # a component of your own"
+)
+
+
+def arguments(p):
+    p.add_argument("--out", default=DEFAULT_FMU_DIR,
+                   help=f"FMI 2.0 FMUs (default: {DEFAULT_FMU_DIR}); FMI 3.0 ones and systems/ go beside it")
+    p.add_argument("--bench", action="store_true", help="also build the benchmark's trivial FMUs")
+    p.add_argument("--container", metavar="SYSTEM|FILE.ssp",
+                   help="instead: pack one system (a built-in one, or an SSP file) into one FMU in build/containers")
+    p.add_argument("--component", metavar="MODULE.py",
+                   help="instead: build the components (Component objects) defined in your Python module, "
+                        "FMI 2.0 into --out and FMI 3.0 beside it")
+
+
+def run(args):
+    from crane_fmu import components, systems
+    from crane_fmu.build_scripts.build_fmus import build_all, container_name, containers_dir
+    from crane_fmu.container import build_container
+
+    if args.container and args.component:
+        raise UsageError("--container and --component are separate builds: choose one")
+    if args.component:
+        for path in _build_component(args.component, args.out):
+            print(path)
+        return 0
+    if args.container:
+        try:
+            with systems.open_system(args.container) as system:
+                name = container_name(Path(args.container).stem if args.container.endswith((".ssp", ".ssd"))
+                                      else system.name)
+                path = build_container(system, args.out, containers_dir(args.out) / f"{name}.fmu")
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+        print(path)
+        return 0
+    kinds = [c.model_identifier for c in components.all() if args.bench or c.role != "benchmark"]
+    for path in build_all(args.out, kinds):
+        print(path)
+    return 0
+
+
+def _build_component(module_path, out):
+    """Import a user's module by its file and build the FMUs of the components it defines."""
+    import importlib.util
+
+    path = Path(module_path)
+    if path.suffix != ".py" or not path.is_file():
+        raise UsageError(f"--component {module_path}: expected a Python file (MODULE.py) that defines a Component")
+    name = path.stem
+    if not name.isidentifier():
+        raise UsageError(f"--component {module_path}: {name!r} is not a Python module name; rename the file")
+    if name in sys.stdlib_module_names:
+        raise UsageError(f"--component {module_path}: {name!r} is a standard library module's name; rename the file")
+    saved = sys.modules.get(name)  # another module of that name (e.g. a pythonfmu build's) comes back afterwards
+    spec = importlib.util.spec_from_file_location(name, path.resolve())
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # where the build looks for the component's model module
+    try:
+        try:
+            spec.loader.exec_module(module)
+        except Exception as exc:  # the user's code: report it in one line
+            raise UsageError(f"--component {module_path}: importing it failed: {type(exc).__name__}: {exc}") from None
+        return _build_components(module, module_path, out)
+    finally:
+        if saved is None:
+            sys.modules.pop(name, None)
+        else:
+            sys.modules[name] = saved
+
+
+def _build_components(module, module_path, out):
+    """Register the components a user's module defines, build their FMUs, unregister them."""
+    from crane_fmu import components
+    from crane_fmu.build_scripts.build_fmus import build_all
+    from crane_fmu.model.component import Component
+
+    name = module.__name__
+    found = [v for v in vars(module).values() if isinstance(v, Component) and v.module == name]
+    if not found:
+        raise UsageError(f"--component {module_path}: defines no Component (crane_fmu.model.component.Component)")
+    for component in found:
+        known = components.find(component.model_identifier)
+        if known is not None and known is not component:
+            raise UsageError(f"--component {module_path}: {component.model_identifier} is already a component's "
+                             "name; choose another model identifier")
+    try:
+        for component in found:
+            components.register(component)
+        return build_all(out, [c.model_identifier for c in found], systems=[], containers=[])
+    except ValueError as exc:
+        raise UsageError(f"--component {module_path}: {exc}") from None
+    finally:
+        for component in found:
+            components.unregister(component.model_identifier)

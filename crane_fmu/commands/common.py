@@ -1,0 +1,109 @@
+"""What the commands share: the one-line usage error, number and value parsing, file checks."""
+
+import argparse
+import math
+import os
+import sys
+from pathlib import Path
+
+from crane_fmu import DEFAULT_FMU_DIR
+
+
+class UsageError(Exception):
+    """A mistake in the command line: one line, exit status 2."""
+
+
+class Parser(argparse.ArgumentParser):
+    def error(self, message):
+        raise UsageError(message)
+
+
+def number(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return value
+
+
+def dask_options(p):
+    """The options that sweep and compare share: the FMUs, the Dask workers, the progress bar."""
+    p.add_argument("--fmu-dir", default=DEFAULT_FMU_DIR, help=f"folder of the built FMUs (default {DEFAULT_FMU_DIR})")
+    p.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
+    p.add_argument("--scheduler", help="address of an existing Dask scheduler (no local cluster)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+LARGEST_SWING = math.pi / 2  # rad: no swing the model is meant for is larger
+
+
+def convert(text, fmi_type, unit=None):
+    """A --set value as the variable's FMI type; an angle may be given in degrees (``10deg``, ``5deg/s``)."""
+    if fmi_type in ("Real", "Float64", "Float32"):
+        for suffix, si in (("deg/s", "rad/s"), ("deg", "rad")):
+            if text.endswith(suffix):
+                if unit != si:
+                    raise ValueError(f"{text!r}: a {suffix} value needs a variable in {si}, this one is in {unit}")
+                return math.radians(number(text[:-len(suffix)]))
+        return number(text)
+    if fmi_type in ("Integer", "Int32"):
+        return int(text)
+    if fmi_type == "Boolean":
+        if text.lower() not in ("true", "false", "1", "0"):
+            raise ValueError(f"{text!r} is not a Boolean (true, false, 1, 0)")
+        return text.lower() in ("true", "1")
+    return text
+
+
+def parse_sets(items, variables):
+    """``["plant.l1=1.5"]`` -> ``{"plant": {"l1": 1.5}}``, checked against ``variables``.
+
+    ``variables`` is ``{instance: {name: (FMI type, unit)}}`` of the parameters and inputs. An
+    angle given without a unit and larger than any swing the model is meant for gets a warning.
+    """
+    from crane_fmu.cosim.system import split_name
+
+    result = {}
+    for item in items:
+        target, sep, text = item.partition("=")
+        try:
+            if not sep:
+                raise ValueError("expected INSTANCE.VARIABLE=VALUE")
+            instance, name = split_name(target, variables)
+            fmi_type, unit = variables[instance][name]
+            value = convert(text, fmi_type, unit)
+        except (argparse.ArgumentTypeError, ValueError) as exc:
+            raise UsageError(f"--set {item!r}: {exc}") from None
+        if unit == "rad" and not text.endswith("deg") and abs(value) > LARGEST_SWING:
+            print(f"crane-fmu: warning: {instance}.{name} = {value:g} rad ({math.degrees(value):.0f} deg); "
+                  f"for degrees write {text}deg", file=sys.stderr)
+        result.setdefault(instance, {})[name] = value
+    return result
+
+
+def writable_file(path, option, suffix=None):
+    """One line, exit 2, unless ``path`` can be written: not a folder, the right suffix, a writable folder."""
+    if Path(path).is_dir() or str(path).endswith(os.sep):
+        example = Path(path) / ("result" + (suffix or ""))
+        raise UsageError(f"{option} {path}: is a folder; give a file name, e.g. {example}")
+    if suffix and Path(path).suffix != suffix:
+        raise UsageError(f"{option} {path}: writes a {suffix} file; the name must end in {suffix}")
+    folder = Path(path).resolve().parent
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UsageError(f"{option} {path}: cannot create folder {folder} ({exc.strerror})") from None
+    if not os.access(folder, os.W_OK):
+        raise UsageError(f"{option} {path}: folder {folder} is not writable")
+
+
+
+
+def check_workers(args):
+    """--workers, and with --scheduler (where the command has it) not both: one line each."""
+    if args.workers is not None and args.workers < 1:
+        raise UsageError(f"--workers must be >= 1, got {args.workers}")
+    if args.workers is not None and getattr(args, "scheduler", None):
+        raise UsageError("--workers and --scheduler exclude each other: the scheduler's cluster has its workers")

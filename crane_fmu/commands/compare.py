@@ -1,0 +1,49 @@
+"""``crane-fmu compare``: score controller FMUs on the same scenarios (the scoreboard)."""
+
+from pathlib import Path
+
+from .common import UsageError, check_workers, dask_options, writable_file
+
+NAME = "compare"
+HELP = "score controller FMUs on the same scenarios (the scoreboard)"
+EXAMPLES = (
+    "examples:\n"
+    "  crane-fmu compare --out results/compare                  # every built-in controller, every scenario\n"
+    "  crane-fmu compare --controller my/MyController.fmu --out results/mine   # yours beside every built-in one\n"
+    "  crane-fmu compare --controller my/MyController.fmu --controller LqrController --only --out results/two\n"
+    "  crane-fmu compare --quick --animate none --out results/compare   # a first look: results/compare/quick\n"
+    "  crane-fmu compare --out results/compare --scheduler tcp://scheduler-host:8786\n"
+    "Re-running the same command resumes: finished cases are skipped."
+)
+
+
+def arguments(p):
+    p.add_argument("--controller", action="append", default=[], metavar="NAME|FILE.fmu",
+                   help="a built-in controller's name or a controller FMU (repeatable); every built-in one is "
+                        "scored beside them unless --only")
+    p.add_argument("--only", action="store_true", help="score only the --controller ones")
+    p.add_argument("--out", required=True, help="output folder: scoreboard.md, scores.parquet, plots, animations")
+    dask_options(p)
+    p.add_argument("--quick", action="store_true",
+                   help="3 of the 27 mismatch plants in S3; a board marked QUICK, written to OUT/quick")
+    p.add_argument("--animate", default="S2", metavar="none|all|S1|S2|S7",
+                   help="whose nominal runs to animate (default S2); drawn again only when the run changed")
+
+
+def run(args):
+    from crane_fmu.compare import ANIMATE, compare
+
+    check_workers(args)
+    choices = {"none": (), "all": ANIMATE, **{s: (s,) for s in ANIMATE}}
+    if args.animate not in choices:
+        raise UsageError(f"--animate {args.animate}: choose none, all, {', '.join(ANIMATE)} (the scenarios whose "
+                         "runs are animated)")
+    if args.only and not args.controller:
+        raise UsageError("--only scores only the --controller ones: give at least one --controller")
+    writable_file(Path(args.out) / ("quick" if args.quick else "") / "scoreboard.md", "--out")
+    try:
+        compare(args.out, args.controller, args.fmu_dir, args.workers, args.scheduler, args.quick,
+                progress=not args.no_progress, animate=choices[args.animate], only=args.only)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    return 0

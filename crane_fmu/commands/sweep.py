@@ -1,0 +1,43 @@
+"""``crane-fmu sweep``: run a parameter study of the FMUs on Dask."""
+
+from pathlib import Path
+
+from .common import UsageError, check_workers, dask_options, writable_file
+
+NAME = "sweep"
+HELP = "run a parameter study of the FMUs on Dask"
+EXAMPLES = (
+    "examples:\n"
+    "  crane-fmu sweep study.toml --out results/study --workers 2\n"
+    "  crane-fmu sweep builtin:region-of-attraction --out results/roa\n"
+    "  crane-fmu sweep builtin:theta2-gain-sensitivity --out results/gains --csv\n"
+    "  crane-fmu sweep study.toml --out results/study --scheduler tcp://scheduler-host:8786\n"
+    "Re-running the same command resumes: finished cases are skipped."
+)
+
+
+def arguments(p):
+    p.add_argument("study", help="study file (TOML, or YAML with PyYAML) or builtin:NAME")
+    p.add_argument("--out", required=True, help="output folder: results.parquet, cases.jsonl, plot.png")
+    dask_options(p)
+    p.add_argument("--csv", action="store_true", help="also write results.csv")
+
+
+def run(args):
+    from crane_fmu.sweep import spec
+    from crane_fmu.sweep.runner import run_study
+
+    check_workers(args)
+    try:
+        study = spec.load(args.study)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    writable_file(Path(args.out) / "results.parquet", "--out")
+    try:
+        summary = run_study(study, args.out, args.fmu_dir, args.workers, args.scheduler, args.csv,
+                            progress=not args.no_progress)
+    except (ValueError, FileNotFoundError) as exc:
+        raise UsageError(str(exc)) from None
+    print(f"{summary['cases']} cases: {summary['ran']} run now, {summary['skipped']} already done, "
+          f"{summary['not_ok']} not ok; results in {Path(args.out) / 'results.parquet'}")
+    return 0

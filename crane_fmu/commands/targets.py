@@ -1,0 +1,33 @@
+"""``crane-fmu targets``: every controller against its targets, through the built FMUs."""
+
+from crane_fmu import DEFAULT_FMU_DIR
+
+from .common import UsageError, check_workers
+
+NAME = "targets"
+HELP = "measure every controller against its targets (regulation, transport, robustness, reach, coarse steps)"
+EXAMPLES = (
+    "examples:\n"
+    "  crane-fmu targets\n"
+    "  crane-fmu targets --quick --workers 2"
+)
+
+
+def arguments(p):
+    p.add_argument("--fmu-dir", default=DEFAULT_FMU_DIR, help=f"folder of the built FMUs (default {DEFAULT_FMU_DIR})")
+    p.add_argument("--quick", action="store_true", help="fewer cases")
+    p.add_argument("--workers", type=int, default=None, help="worker processes (default: one per core)")
+
+
+def run(args):
+    from crane_fmu import systems
+    from crane_fmu.analysis.controller_targets import run_targets
+
+    check_workers(args)
+    try:
+        for name in ("lqr", "energy", "paper", "transport", "hoist-transport"):
+            systems.resolve(systems.get(name), args.fmu_dir)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    run_targets(args.fmu_dir, args.quick, args.workers)
+    return 0
