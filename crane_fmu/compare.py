@@ -23,10 +23,9 @@ from crane_fmu.analysis.scoreboard import SCENARIOS, Contender
 from crane_fmu.sweep.batch import JOURNAL, Progress, read_journal, run_batch
 from crane_fmu.sweep.runner import write_table
 
-SIGNALS = ("time", "plant.x", "plant.theta1", "plant.theta2", "controller.u", "plant.x1", "plant.y1", "plant.x2",
-           "plant.y2", "plant.l1_now")
+SIGNALS = ("time", "x", "theta1", "theta2", "u", "x1", "y1", "x2", "y2", "l1_now")  # crane_signals() names
 SIGNAL_EVERY = 0.02  # s: the signals kept for plots and animations
-ROW_FORMAT = 2  # the version of what a row holds: a journal of another format is not reused
+ROW_FORMAT = 3  # the version of what a row holds: a journal of another format is not reused
 ANIMATE = ("S1", "S2", "S7")  # the scenarios whose nominal runs keep their signals
 
 
@@ -139,13 +138,13 @@ def run_score_case(case, blobs):
             from crane_fmu.model import planner
 
             move_end = planner.configure({**planner.COMPONENT.defaults(), **case["parameters"]["planner"]}).end
-        t = columns["time"]
-        row.update(metrics.move_metrics(t, columns["plant.x"], columns["plant.dx"], columns["plant.theta1"],
-                                        columns["plant.theta2"], columns["controller.u"], case["x_d"], move_end))
-        row["outcome"] = metrics.classify(t, columns["plant.theta1"], columns["plant.theta2"], row["status"] == "ok")
+        s = metrics.crane_signals(columns, ("dx",) + SIGNALS[5:])
+        row.update(metrics.move_metrics(s["time"], s["x"], s["dx"], s["theta1"], s["theta2"], s["u"], case["x_d"],
+                                        move_end))
+        row["outcome"] = metrics.classify(s["time"], s["theta1"], s["theta2"], row["status"] == "ok")
         if case["keep_signals"]:
             every = max(1, round(SIGNAL_EVERY / case["step"]))
-            row["signals"] = {k: columns[k][::every].tolist() for k in SIGNALS if k in columns}
+            row["signals"] = {k: s[k][::every].tolist() for k in SIGNALS if k in s}
     row["duration_s"] = time.perf_counter() - start
     return row
 

@@ -19,10 +19,8 @@ from . import metrics, scoreboard
 Run = namedtuple("Run", "group label system parameters step stop_time")
 REGULATORS = ("lqr", "energy", "paper")
 SHAPERS = ("zv", "zvd", "ei", "none")
-MISMATCH = [{"l1": l1, "l2": l2, "m2": m2}
-            for l1 in (0.9, 1.0, 1.1) for l2 in (0.4, 0.5, 0.6) for m2 in (3.5, 7.0, 10.5)]
 ROA_ANGLES = tuple(range(5, 65, 5))
-DISTANCE = 2.0
+MISMATCH, DISTANCE = scoreboard.MISMATCH, scoreboard.DISTANCE  # the scoreboard's S3 grid and S2 move
 
 
 def plan(quick=False):
@@ -50,7 +48,6 @@ def measure(r, fmu_dir):
         run(system, fmu_dir, recorder=recorder, stop_time=r.stop_time, step=r.step)
     except FmiError as exc:
         error = str(exc)
-    c = recorder.columns()
     x_d = system.parameters.get("planner", {}).get("x_d", system.parameters.get("controller", {}).get("x_d", 0.0))
     move_end = 0.0
     if "planner" in system.instances:
@@ -58,9 +55,10 @@ def measure(r, fmu_dir):
 
         planner = components.get("TrajectoryPlanner")
         move_end = planner.check(system.parameters.get("planner", {})).end
-    t, th1, th2 = c["time"], c["plant.theta1"], c["plant.theta2"]
-    result = metrics.move_metrics(t, c["plant.x"], c["plant.dx"], th1, th2, c["controller.u"], x_d, move_end)
-    result.update(outcome=metrics.classify(t, th1, th2, error is None), error=error, end_s=float(t[-1]))
+    s = metrics.crane_signals(recorder.columns(), ("dx",))
+    result = metrics.move_metrics(s["time"], s["x"], s["dx"], s["theta1"], s["theta2"], s["u"], x_d, move_end)
+    result.update(outcome=metrics.classify(s["time"], s["theta1"], s["theta2"], error is None), error=error,
+                  end_s=float(s["time"][-1]))
     return r, result
 
 

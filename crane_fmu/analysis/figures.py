@@ -17,8 +17,8 @@ def _angle_figure(runs, label, title, path):
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 5.5))
     for r in runs:
         s = r["signals"]
-        axes[0].plot(s["time"], _deg(s["plant.theta1"]), lw=1, label=label(r))
-        axes[1].plot(s["time"], _deg(s["plant.theta2"]), lw=1, label=label(r))
+        axes[0].plot(s["time"], _deg(s["theta1"]), lw=1, label=label(r))
+        axes[1].plot(s["time"], _deg(s["theta2"]), lw=1, label=label(r))
     axes[0].set_ylabel("first-order angle theta1 [deg]")
     axes[1].set_ylabel("second-order angle theta2 [deg]")
     axes[1].set_xlabel("time [s]")
@@ -30,19 +30,19 @@ def _angle_figure(runs, label, title, path):
 
 
 def _loop_panels(axes, s, label, **style):
-    axes[0].plot(s["time"], s["plant.x"], label=label, **style)
-    axes[1].plot(s["time"], _deg(s["plant.theta1"]), label=label, **style)
-    axes[2].plot(s["time"], _deg(s["plant.theta2"]), label=label, **style)
+    axes[0].plot(s["time"], s["x"], label=label, **style)
+    axes[1].plot(s["time"], _deg(s["theta1"]), label=label, **style)
+    axes[2].plot(s["time"], _deg(s["theta2"]), label=label, **style)
 
 
-FALLBACK_LIMITS = {"plant.x": 5.0, "plant.theta1": 180.0, "plant.theta2": 180.0, "controller.u": 1000.0}
+FALLBACK_LIMITS = {"x": 5.0, "theta1": 180.0, "theta2": 180.0, "u": 1000.0}
 
 
 def _diverged(r):
     return r["metrics"].get("outcome") == "diverges"
 
 
-def _limit_to(axes, runs, keys=("plant.x", "plant.theta1", "plant.theta2", "controller.u")):
+def _limit_to(axes, runs, keys=("x", "theta1", "theta2", "u")):
     """Y limits from the runs that did not diverge, so a blow-up does not flatten the rest."""
     for ax, key in zip(axes, keys):
         values = [v for r in runs if not _diverged(r) for v in r["signals"].get(key, [])]
@@ -83,7 +83,7 @@ def draw_all(results, out_dir):
         end = (f" (diverged, stopped at {r['signals']['time'][-1]:.3f} s)" if not r["completed"]
                else " (diverged)" if _diverged(r) else "")
         _loop_panels(axes, r["signals"], form.label + end, lw=1)
-        axes[3].plot(r["signals"]["time"], r["signals"]["controller.u"], lw=1, label=form.label)
+        axes[3].plot(r["signals"]["time"], r["signals"]["u"], lw=1, label=form.label)
     axes[0].set_title("Fig. 7: with and without the backstepping controller (Section V)")
     axes[0].legend(fontsize=8)
     axes[3].set_xlabel("time [s]")

@@ -13,12 +13,13 @@ SETTLED_BAND = math.radians(0.1)  # a swing below 0.1 degree counts as settled
 ARRIVAL_ANGLE = math.radians(0.5)  # an arrival leaves both angles within 0.5 degree
 
 
-def crane_signals(columns):
-    """``time``, ``x``, ``theta1``, ``theta2`` and ``u`` of a recorded run of any system.
+def crane_signals(columns, extra=()):
+    """``time``, ``x``, ``theta1``, ``theta2`` and ``u`` of a recorded run of any system (and of ``extra``).
 
     The crane signals are the outputs ``x``, ``theta1``, ``theta2`` of the first
     instance that has all three, and ``u`` of the first other instance that
-    outputs ``u`` (zero when none does).
+    outputs ``u`` (zero when none does). ``extra`` names more outputs of that first
+    instance (``dx``, ``x1``, ...), kept where it has them.
 
     Raises
     ------
@@ -33,7 +34,8 @@ def crane_signals(columns):
     if plant is None:
         raise ValueError(f"these results have no instance with outputs {', '.join(CRANE_OUTPUTS)}; columns: "
                          + ", ".join(columns))
-    signals = {"time": columns["time"], **{n: columns[key(plant, n)] for n in CRANE_OUTPUTS}}
+    signals = {"time": columns["time"], **{n: columns[key(plant, n)] for n in CRANE_OUTPUTS + tuple(extra)
+                                           if key(plant, n) in columns}}
     sources = [key(i, "u") for i in instances if i != plant] + (["u"] if plant == "" else [])
     source = next((k for k in sources if k in columns), None)
     signals["u"] = columns[source] if source else np.zeros_like(columns["time"])

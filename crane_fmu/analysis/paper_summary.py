@@ -86,9 +86,9 @@ def _step_study(results, form):
         common = sig["time"] <= ref_end
         exact = ref.sol(sig["time"][common])
         deviation = {
-            "max_angle_deg": math.degrees(max(np.abs(sig["plant.theta1"][common] - exact[2]).max(),
-                                              np.abs(sig["plant.theta2"][common] - exact[4]).max())),
-            "max_x_m": float(np.abs(sig["plant.x"][common] - exact[0]).max()),
+            "max_angle_deg": math.degrees(max(np.abs(sig["theta1"][common] - exact[2]).max(),
+                                              np.abs(sig["theta2"][common] - exact[4]).max())),
+            "max_x_m": float(np.abs(sig["x"][common] - exact[0]).max()),
             "over_s": float(sig["time"][common][-1]),
         }
         rows.append({"step_s": r["case"].step, "outcome": r["metrics"]["outcome"],

@@ -34,16 +34,16 @@ def run_case(case, fmu_dir, csv_dir):
     columns = recorder.columns()
     every = max(1, round(case.output_interval / case.step))
     write_csv(Path(csv_dir) / f"{case.name}.csv", columns, every)
-    t = columns["time"]
-    x, th1, th2 = columns["plant.x"], columns["plant.theta1"], columns["plant.theta2"]
+    s = metrics.crane_signals(columns)
     result = {"case": case, "error": error, "completed": error is None}
     if case.form is None:
-        result["metrics"] = free_swing_metrics(t, th1, th2, case.plant.get("theta1_0", math.pi / 18))
+        result["metrics"] = free_swing_metrics(s["time"], s["theta1"], s["theta2"],
+                                               case.plant.get("theta1_0", math.pi / 18))
     else:
-        result["metrics"] = metrics.closed_loop_metrics(t, x, th1, th2, columns["controller.u"], error is None)
-    keep = ["time", "plant.x", "plant.theta1", "plant.theta2"] + (
-        ["controller.u"] if case.form else [])
-    result["signals"] = {k: columns[k][::every].tolist() for k in keep}
+        result["metrics"] = metrics.closed_loop_metrics(s["time"], s["x"], s["theta1"], s["theta2"], s["u"],
+                                                        error is None)
+    keep = ["time", "x", "theta1", "theta2"] + (["u"] if case.form else [])
+    result["signals"] = {k: s[k][::every].tolist() for k in keep}
     return result
 
 

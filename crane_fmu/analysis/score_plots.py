@@ -43,15 +43,15 @@ def plot_runs(rows, scenario, path, users=()):
         s, c = r["signals"], colour(r["controller"])
         label = r["controller"] + (" (yours)" if r["controller"] in users else "") + (
             "" if r["status"] == "ok" else " (failed)")
-        axes[0].plot(s["time"], s["plant.x"], color=c, lw=1.2, label=label)
-        axes[1].plot(s["time"], np.degrees(s["plant.theta1"]), color=c, lw=1.2)
-        axes[2].plot(s["time"], np.degrees(s["plant.theta2"]), color=c, lw=1.2)
-        axes[3].plot(s["time"], s["controller.u"], color=c, lw=1.2)
+        axes[0].plot(s["time"], s["x"], color=c, lw=1.2, label=label)
+        axes[1].plot(s["time"], np.degrees(s["theta1"]), color=c, lw=1.2)
+        axes[2].plot(s["time"], np.degrees(s["theta2"]), color=c, lw=1.2)
+        axes[3].plot(s["time"], s["u"], color=c, lw=1.2)
     for ax, label in zip(axes, ("trolley x [m]", "hook angle theta1 [deg]", "payload angle theta2 [deg]",
                                 "demanded u [m/s2]")):
         ax.set_ylabel(label)
         ax.grid(True, alpha=0.3)
-    finite = [v for r in runs for k in ("plant.theta1", "plant.theta2") for v in np.degrees(r["signals"][k])
+    finite = [v for r in runs for k in ("theta1", "theta2") for v in np.degrees(r["signals"][k])
               if math.isfinite(v)]  # both angles share one scale
     limit = min(max(abs(min(finite)), abs(max(finite)), 1.0) * 1.1, 90.0)
     axes[1].set_ylim(-limit, limit)
@@ -235,7 +235,7 @@ def animate_all(rows, scenario, out_dir, fps=15):
     drawn = json.loads(ledger.read_text()) if ledger.exists() else {}
     paths = []
     for r in sorted(_nominal(rows, scenario), key=lambda r: r["controller"]):
-        if "plant.x2" not in r["signals"]:
+        if "x2" not in r["signals"]:
             continue
         title = f"{scenario}, {r['controller']}" + ("" if r["status"] == "ok" else " (failed)")
         key = f"{r['case_id']} {fps} fps"
