@@ -249,7 +249,7 @@ def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, cont
     from crane_fmu.cosim.ssp import write_ssp
 
     if kinds is None:
-        kinds = [c.model_identifier for c in components.all() if c.role != "benchmark"]
+        kinds = [c.model_identifier for c in components.registered() if c.role != "benchmark"]
     chosen = [components.get(kind) for kind in kinds]
     with tempfile.TemporaryDirectory(prefix="crane_wrapper_") as tmp:
         try:
@@ -262,7 +262,7 @@ def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, cont
         if fmi3:
             paths += [build_fmu(c, fmi3_dir(out_dir), binaries and binaries[3], fmi_version=3) for c in chosen]
     names = systems if systems is not None else [
-        s.name for s in registry.all() if set(s.instances.values()) <= set(kinds)]
+        s.name for s in registry.registered() if set(s.instances.values()) <= set(kinds)]
     for name in names:
         system = registry.get(name)
         paths.append(write_ssp(system, out_dir, systems_dir(out_dir) / f"{name}.ssp"))

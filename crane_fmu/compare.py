@@ -47,7 +47,7 @@ def contenders(chosen=(), fmu_dir="build/fmus", only=False):
     """
     from crane_fmu.cosim.system import read_fmu
 
-    builtin = [c.model_identifier for c in components.all("controller")]
+    builtin = [c.model_identifier for c in components.registered("controller")]
     items = list(chosen) + ([] if only and chosen else builtin)
     result = {}
     for item in items:

@@ -13,9 +13,9 @@ _COMPONENTS = Registry("component", lambda c: c.model_identifier)
 register, unregister, get, find = _COMPONENTS.register, _COMPONENTS.unregister, _COMPONENTS.get, _COMPONENTS.find
 
 
-def all(role=None):
+def registered(role=None):
     """Every registered component (of one role), in registration order."""
-    return [c for c in _COMPONENTS.all() if role is None or c.role == role]
+    return [c for c in _COMPONENTS.registered() if role is None or c.role == role]
 
 
 def check_parameters(model_identifier, values):

@@ -29,5 +29,6 @@ class Registry:
         """The item, or None."""
         return self._items.get(name)
 
-    def all(self):
+    def registered(self):
+        """Every item, in registration order."""
         return list(self._items.values())

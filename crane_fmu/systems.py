@@ -14,7 +14,7 @@ from crane_fmu.cosim.system import System, read_fmu
 from crane_fmu.registry import Registry
 
 _SYSTEMS = Registry("system", lambda s: s.name, " (or an .ssp/.ssd file)")
-register, unregister, get, all = _SYSTEMS.register, _SYSTEMS.unregister, _SYSTEMS.get, _SYSTEMS.all
+register, unregister, get, registered = _SYSTEMS.register, _SYSTEMS.unregister, _SYSTEMS.get, _SYSTEMS.registered
 
 
 @contextlib.contextmanager

@@ -12,7 +12,7 @@ pytest_plugins = ["required_checks"]  # CI=true: a skipped test fails the run
 def fmu_dir(tmp_path_factory):
     """Folder holding freshly built FMUs of every registered component (FMI 3.0 ones in ../fmi3)."""
     out = tmp_path_factory.mktemp("build") / "fmus"
-    build_all(out, [c.model_identifier for c in components.all()])
+    build_all(out, [c.model_identifier for c in components.registered()])
     return out
 
 

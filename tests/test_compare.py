@@ -109,7 +109,7 @@ def test_any_order_of_controllers_gives_the_same_board(quick_board, template_fmu
 
 def test_your_controller_is_scored_beside_every_built_in_one(template_fmu, fmu_dir):
     chosen = contenders([str(template_fmu)], fmu_dir)
-    builtin = [c.model_identifier for c in components.all("controller")]
+    builtin = [c.model_identifier for c in components.registered("controller")]
     assert sorted(c.name for c in chosen) == sorted(builtin + ["MyController"])
     assert [c.name for c in chosen if c.user] == ["MyController"]
     assert [c.name for c in contenders([str(template_fmu)], fmu_dir, only=True)] == ["MyController"]

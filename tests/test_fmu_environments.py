@@ -153,7 +153,7 @@ int main(int argc, char **argv) {
 
 STEPS, H = 300, 0.01
 CLEAN_PATH = "/usr/bin:/bin"  # no pyenv shims, no venv: what `env -i PATH=/usr/bin:/bin` leaves
-COMPONENTS = sorted(c.model_identifier for c in components.all())
+COMPONENTS = sorted(c.model_identifier for c in components.registered())
 PARAMETERS = {"TrajectoryPlanner": {"x_d": 2.0}}  # its default move is none: all outputs zero
 
 

@@ -62,7 +62,7 @@ def test_every_fmus_default_experiment_runs_at_its_systems_step(fmu_dir):
     discrete design, the sensor's delay are for that step); the plant's default is the paper's 20 s."""
     from crane_fmu import systems
 
-    for system in systems.all():
+    for system in systems.registered():
         for path in system.fmus(fmu_dir).values():
             experiment = read_model_description(str(path)).defaultExperiment
             assert float(experiment.stepSize) == system.step, (system.name, path.name)

@@ -143,7 +143,7 @@ def test_a_controllers_colour_is_its_own_on_every_board():
     from crane_fmu import components
     from crane_fmu.analysis.score_plots import colour
 
-    builtin = [colour(c.model_identifier) for c in components.all("controller")]
+    builtin = [colour(c.model_identifier) for c in components.registered("controller")]
     assert len(set(builtin)) == len(builtin)
     for name in ("MyController", "PdController", "mine", "x"):
         assert colour(name) == colour(name) and colour(name) not in builtin

@@ -21,7 +21,7 @@ def colour(name):
 
     from crane_fmu import components
 
-    builtin = [c.model_identifier for c in components.all("controller")]
+    builtin = [c.model_identifier for c in components.registered("controller")]
     if name in builtin:
         return COLOURS[builtin.index(name) % len(COLOURS)]
     left = COLOURS[len(builtin):] or COLOURS

@@ -51,7 +51,7 @@ def run(args):
             raise UsageError(str(exc)) from None
         print(path)
         return 0
-    kinds = [c.model_identifier for c in components.all() if args.bench or c.role != "benchmark"]
+    kinds = [c.model_identifier for c in components.registered() if args.bench or c.role != "benchmark"]
     for path in build_all(args.out, kinds):
         print(path)
     return 0

@@ -35,12 +35,12 @@ def run(args):
             raise UsageError(str(exc)) from None
         print("\n".join(_derived(system, args.set)))
         return 0
-    chosen = [c for c in components.all() if c.role != "benchmark"]
+    chosen = [c for c in components.registered() if c.role != "benchmark"]
     if args.markdown:
         print("\n".join(variable_table(c, True) for c in chosen), end="")
         return 0
     print("systems (crane-fmu simulate --system NAME):")
-    for system in systems.all():
+    for system in systems.registered():
         instances = ", ".join(f"{name} = {kind}" for name, kind in system.instances.items())
         print(f"  {system.name:<10} {instances}: {system.description}")
     print()
