@@ -34,7 +34,7 @@ from .plant_equations import (  # noqa: F401 (the plant's equations, importable 
 from .plant_limits import clamp, drive_factors, held_cable, past_rail_end, within_speed
 from .tables import PLANT_MODEL, input_, output, parameter
 
-DRIVE, ACCEL = 8, 9  # after the swing and hoist state: the drive's acceleration, the trolley's mean one
+DRIVE, ACCEL = DL1 + 1, DL1 + 2  # after the swing and hoist state: the drive's and the trolley's mean acceleration
 INITIAL_STATE = ("x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0")
 
 INF = math.inf
