@@ -36,7 +36,7 @@ class Algorithm:
     def initialize(self, time):
         """In initialisation mode at the start ``time``: the initial exchange, if any."""
         if self.initial_exchange:
-            self.wiring.run(self.wiring.propagation(), time)  # consistent inputs at t0 whatever the algorithm
+            self.wiring.run([call for call, _, _ in self.wiring.propagation()], time)  # consistent inputs at t0
 
     def exchange(self, time):
         raise NotImplementedError
@@ -61,10 +61,7 @@ class GaussSeidel(Algorithm):
         self._exchange = [call for call, _, _ in wiring.propagation()]
 
     def exchange(self, time):
-        fail = self.wiring.fail
-        for call in self._exchange:
-            if (status := call()) > 1:
-                fail(call, status, time)
+        self.wiring.run(self._exchange, time)
 
 
 class Jacobi(GaussSeidel):
@@ -110,18 +107,14 @@ class IterativeJacobi(Algorithm):
             self.exchange(time)
 
     def exchange(self, time):
-        wiring, fail, tolerance = self.wiring, self.wiring.fail, self.tolerance
+        wiring, tolerance = self.wiring, self.tolerance
         previous = None
         for _ in range(self.max_exchanges):
-            for call in self._reads:
-                if (status := call()) > 1:
-                    fail(call, status, time)
+            wiring.run(self._reads, time)
             now = wiring.values.tolist()
             if previous is not None and all(abs(a - b) <= tolerance * (1.0 + abs(a)) for a, b in zip(now, previous)):
                 return
-            for call in self._writes:
-                if (status := call()) > 1:
-                    fail(call, status, time)
+            wiring.run(self._writes, time)
             previous = now
         changes = [abs(a - b) for a, b in zip(now, previous)]
         worst = max(range(len(changes)), key=changes.__getitem__)

@@ -146,8 +146,10 @@ class Wiring:
         instance.fail(function, status, time)
 
     def run(self, calls, time):
-        for call, _, _ in calls:
-            if (status := call()) > 1:  # worse than warning
+        """Make the prebuilt ``calls`` (bare calls of :attr:`reads`, :attr:`writes`, ...) at ``time``; the first
+        whose status is worse than warning fails the run with its instance's error."""
+        for call in calls:
+            if (status := call()) > 1:
                 self.fail(call, status, time)
 
 
