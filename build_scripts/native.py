@@ -264,16 +264,32 @@ def build_native_fmu(component, out_dir, fmi_version=2, tools=None):
     return final
 
 
-def build_native(out_dir, kinds, log=print):
-    """The native FMUs of those ``kinds`` that are ported, FMI 2.0 and 3.0; [] with a warning without a compiler."""
-    from crane_fmu import components
+def build_native(out_dir, kinds, required=False, log=print):
+    """The native FMUs of those ``kinds`` that are ported, FMI 2.0 and 3.0, in :func:`native_dir`; their paths.
 
+    The other kinds' Python FMUs (already built in ``out_dir`` and its ``fmi3`` sibling) are
+    copied beside them, so that ``--fmu-dir build/native`` runs every built-in system. Without a
+    C compiler: a warning and nothing built, or NativeUnavailable when ``required``.
+    """
+    from crane_fmu import components
+    from crane_fmu.build_scripts.build_fmus import fmi3_dir
+
+    if not any(kind in MODELS for kind in kinds):
+        return []
     try:
         tools = compilers()
     except NativeUnavailable as exc:
+        if required:
+            raise
         log(f"warning: {exc}; no native FMUs built")
         return []
     if tools["windows"] is None:
         log(f"warning: {MINGW} not found; the native FMUs have no Windows binary")
-    ported = [components.get(kind) for kind in kinds if kind in MODELS]
-    return [build_native_fmu(c, native_dir(out_dir, version), version, tools) for version in (2, 3) for c in ported]
+    paths = []
+    for version, python_dir in ((2, Path(out_dir)), (3, fmi3_dir(out_dir))):
+        for kind in kinds:
+            if kind in MODELS:
+                paths.append(build_native_fmu(components.get(kind), native_dir(out_dir, version), version, tools))
+            elif (python_dir / f"{kind}.fmu").exists():  # not ported yet: the Python FMU
+                paths.append(Path(shutil.copy(python_dir / f"{kind}.fmu", native_dir(out_dir, version))))
+    return paths
