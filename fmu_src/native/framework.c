@@ -15,7 +15,7 @@ int instance_log(Instance *c, ModelStatus status, const char *function, const ch
     if (!c || (status == MODEL_OK && !c->logging_on)) return status;
     char text[1024];
     snprintf(text, sizeof text, "%s: %s", function, message);
-    c->host_log(c, status, CATEGORIES[status], text);
+    c->host_log(c, status, CATEGORIES[status], status == MODEL_ERROR ? text : message); /* as the Python FMU logs */
     return status;
 }
 

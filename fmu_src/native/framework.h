@@ -42,7 +42,7 @@ typedef struct Instance {
 Instance *instance_new(const char *function, const char *name, const char *const *mode_names, HostLog host_log,
                        void *host, int logging_on);
 void instance_free(Instance *c);
-/* Logs a message, the FMI function's name first ("fmi2DoStep: ..."); returns `status`. */
+/* Logs a message, an error's with the FMI function's name first ("fmi2DoStep: ..."); returns `status`. */
 int instance_log(Instance *c, ModelStatus status, const char *function, const char *message);
 /* May `function` be called in the instance's mode? If not, it logs why. */
 int allowed(Instance *c, const char *function, int modes);
