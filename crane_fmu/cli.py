@@ -176,6 +176,8 @@ def _parser():
                    help="instead: regulation, transport, robustness, region of attraction and coarse steps of every "
                         "controller against its targets")
     p.add_argument("--quick", action="store_true", help="with --controllers: fewer cases")
+    p.add_argument("--native", action="store_true",
+                   help="instead: the native (C) CranePlant FMU in our master, in a C host and as a whole process")
     return parser
 
 
@@ -518,9 +520,13 @@ def _cmd_bench(args):
     if args.cases < 2:
         raise UsageError(f"--cases must be >= 2, got {args.cases}")
     try:
-        if args.sweep + args.endurance + args.controllers > 1:
-            raise UsageError("--sweep, --endurance and --controllers are separate benchmarks: choose one")
-        if args.controllers:
+        if args.sweep + args.endurance + args.controllers + args.native > 1:
+            raise UsageError("--sweep, --endurance, --controllers and --native are separate benchmarks: choose one")
+        if args.native:
+            from crane_fmu.bench_native import run_native_bench
+
+            run_native_bench(args.stop_time or 20.0, args.step, args.repeat)
+        elif args.controllers:
             run_controllers(args.quick)
         elif args.endurance:
             run_endurance(args.stop_time or 3600.0, args.step)

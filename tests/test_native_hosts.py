@@ -1,6 +1,6 @@
 """The native CranePlant FMU where it will run: a C host with no Python, Windows x64 under Wine, long-lived hosts.
 
-``tests/native_host.c`` is compiled for Linux and, with mingw-w64, for Windows. For the Section V
+``fmu_src/native/host.c`` is compiled for Linux and, with mingw-w64, for Windows. For the Section V
 run without Python it closes the loop with the paper's backstepping law written in C inside the
 host (no native BacksteppingController FMU exists yet); on Linux that loop gives our master's run
 of the native plant with the Python controller FMU. Tests that need mingw-w64 or Wine skip where
@@ -12,7 +12,6 @@ import os
 import shutil
 import subprocess
 import zipfile
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,7 +23,7 @@ from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cosim import run
 from crane_fmu.model.tables import STATE
 
-HOST = Path(__file__).parent / "native_host.c"
+HOST = NATIVE / "host.c"
 CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # what `env -i PATH=/usr/bin:/bin` leaves: no venv, no pyenv
 FREE_SWING_MAX_THETA2_DEG = 15.5976  # the Python FMU's
 
@@ -47,7 +46,7 @@ def plant(fmu_dir, tmp_path_factory):
         z.extractall(folder)
     md = read_model_description(str(fmu))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    assert (vr["l1"], vr["u"], *[vr[s] for s in STATE]) == (2, 22, 26, 27, 28, 29, 30, 31)  # native_host.c's
+    assert (vr["l1"], vr["u"], *[vr[s] for s in STATE]) == (2, 22, 26, 27, 28, 29, 30, 31)  # host.c's
     return folder, md.guid
 
 

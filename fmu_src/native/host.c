@@ -1,12 +1,13 @@
 /*
- * A C host for the native CranePlant FMU (FMI 2.0), for the tests: compiled for Linux (dlopen) and,
- * with mingw-w64, for Windows (LoadLibrary) to run under Wine. No Python anywhere.
+ * A C host for the native CranePlant FMU (FMI 2.0), for the tests and `crane-fmu bench --native`
+ * (not part of any FMU): compiled for Linux (dlopen) and, with mingw-w64, for Windows (LoadLibrary)
+ * to run under Wine. No Python anywhere.
  *
  *   host run LIB GUID STEPS H                           free swing: rows "t,x,dx,theta1,dtheta1,theta2,dtheta2"
  *   host cycles LIB GUID N                              N instantiate/initialise/step/free cycles; RSS per 1000
  *   host after-failure LIB GUID STEPS H                 a run refused (l1 = -1), then a good one: its last row
  *   host threads LIB GUID STEPS H                       two instances in two threads vs one alone: "same" or "differ"
- *   host bench LIB GUID STEPS H                         seconds per step of get 6 / set u / doStep, no recording
+ *   host bench LIB GUID STEPS H                         seconds per step of the paper's loop, no recording
  *   host maps LIB GUID                                  the libraries loaded in this process that name python
  *   host paper LIB GUID STEPS H                         Section V: the plant under the paper's backstepping law,
  *                                                       written in C here (rows "t,6 states,u"); see paper_law()
@@ -278,7 +279,7 @@ int main(int argc, char **argv) {
         double t0 = seconds();
         for (int k = 0; k < steps; k++) {
             api.get(c, states, 6, y);
-            u = -0.5 * y[0] - 1.0 * y[1]; /* a feedback, so that the loop does what a pair does */
+            u = paper_law(y);
             api.set(c, &u_vr, 1, &u);
             if (api.step(c, k * h, h, fmi2True) > fmi2Warning) return 6;
         }
