@@ -291,5 +291,6 @@ def build_native(out_dir, kinds, required=False, log=print):
             if kind in MODELS:
                 paths.append(build_native_fmu(components.get(kind), native_dir(out_dir, version), version, tools))
             elif (python_dir / f"{kind}.fmu").exists():  # not ported yet: the Python FMU
+                native_dir(out_dir, version).mkdir(parents=True, exist_ok=True)
                 paths.append(Path(shutil.copy(python_dir / f"{kind}.fmu", native_dir(out_dir, version))))
     return paths

@@ -390,3 +390,27 @@ def test_the_model_and_framework_compile_without_warnings_under_strict_flags(tmp
     for source in ("crane_plant.c", "plant_equations.c", "framework.c", "py_repr.c", "portable_math.c"):
         subprocess.run([_compiler(), *STRICT, f"-I{tmp_path}", f"-I{NATIVE}", str(NATIVE / source), "-o",
                         str(tmp_path / "m.o")], check=True)
+
+
+# ---- the build and the benchmark -----------------------------------------------------------------------------------
+
+def test_without_a_c_compiler_the_build_warns_or_refuses(monkeypatch, tmp_path):
+    from crane_fmu.build_scripts import native as native_build
+
+    monkeypatch.setattr(native_build.shutil, "which", lambda name: None)
+    log = []
+    assert native_build.build_native(tmp_path / "fmus", ["CranePlant"], log=log.append) == []
+    assert log == ["warning: no C compiler found (set CC or install gcc); no native FMUs built"]
+    with pytest.raises(native_build.NativeUnavailable, match="no C compiler"):
+        native_build.build_native(tmp_path / "fmus", ["CranePlant"], required=True)
+    assert native_build.build_native(tmp_path / "fmus", ["LqrController"]) == []  # nothing to port: no folder
+    assert not (tmp_path / "native").exists()
+
+
+def test_bench_native_runs_and_prints_its_figures(native, capsys):
+    """A smoke test only: the figures are measured with crane-fmu bench --native, not asserted here."""
+    from crane_fmu.cli import main
+
+    assert main(["bench", "--native", "--stop-time", "0.2", "--repeat", "1"]) == 0
+    printed = capsys.readouterr().out
+    assert "3. native plant in the C host" in printed and "4. whole processes" in printed

@@ -141,13 +141,16 @@ def test_c_host_runs_section5_like_our_master(host, plant, section5):
 # ---- long-lived hosts -----------------------------------------------------------------------------------------
 
 def test_ten_thousand_instances_in_one_process_leave_memory_flat(host, plant):
-    """10,000 instantiate/initialise/10 steps/free cycles: resident memory after 1,000 and after 10,000 cycles."""
+    """10,000 instantiate/initialise/10 steps/free cycles: resident memory after 2,000 and after 10,000 cycles.
+
+    From 2,000 on: the host's first line of output (at 1,000) allocates stdout's buffer, a one-off step.
+    """
     folder, guid = plant
     out = _host(host, "cycles", folder / "binaries" / "linux64" / "CranePlant.so", guid, 10_000)
     rss = dict(tuple(map(int, line.split(","))) for line in out.splitlines())
     assert len(rss) == 10
-    # an instance is about 0.5 kB: a leak of one per cycle would add 4.5 MB over 9,000 cycles
-    assert rss[10_000] - rss[1_000] <= 64
+    # an instance is about 0.5 kB: a leak of one per cycle would add 4 MB over 8,000 cycles
+    assert rss[10_000] - rss[2_000] <= 64
 
 
 def test_a_run_after_a_failed_run_in_the_same_process_is_a_fresh_run(host, plant):

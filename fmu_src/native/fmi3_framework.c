@@ -99,7 +99,13 @@ static int map_vrs(Instance *c, const char *function, const fmi3ValueReference v
                    unsigned **mapped) {
     *mapped = n <= SMALL ? small : malloc(n * sizeof **mapped);
     if (!*mapped) return refuse(c, function, "out of memory"), 0;
-    for (size_t i = 0; i < n; i++) (*mapped)[i] = vr[i] - 1; /* time (0) maps to UINT_MAX: no model variable */
+    for (size_t i = 0; i < n; i++) {
+        if (vr[i] == 0) { /* time */
+            if (*mapped != small) free(*mapped);
+            return refuse(c, function, "time (value reference 0) can be read only alone, and never set"), 0;
+        }
+        (*mapped)[i] = vr[i] - 1;
+    }
     return 1;
 }
 
