@@ -226,7 +226,7 @@ def container_name(system_name):
     return "Crane" + "".join(part.capitalize() for part in system_name.replace("-", "_").split("_"))
 
 
-def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, containers=None, log=print):
+def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, containers=None, native=None, log=print):
     """Build FMUs and system files; return their paths.
 
     Parameters
@@ -243,6 +243,9 @@ def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, cont
     containers : iterable of str, optional
         Registered systems to pack each into one container FMU in
         :func:`containers_dir` (default: those of :data:`CONTAINERS` that are built).
+    native : bool, optional
+        Also build the native (C) FMUs into ``build/native`` (:mod:`.native`): True requires a C
+        compiler, False skips them, None (default) builds them when a C compiler is found.
     """
     from crane_fmu import systems as registry
     from crane_fmu.cosim.osp import write_osp
@@ -261,6 +264,10 @@ def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, cont
         paths = [build_fmu(c, out_dir, binaries and binaries[2]) for c in chosen]
         if fmi3:
             paths += [build_fmu(c, fmi3_dir(out_dir), binaries and binaries[3], fmi_version=3) for c in chosen]
+    if native is not False:
+        from crane_fmu.build_scripts.native import build_native
+
+        paths += build_native(out_dir, kinds, required=native is True, log=log)
     names = systems if systems is not None else [
         s.name for s in registry.registered() if set(s.instances.values()) <= set(kinds)]
     for name in names:

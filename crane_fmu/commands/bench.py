@@ -24,6 +24,8 @@ def arguments(p):
     p.add_argument("--sweep", action="store_true",
                    help="instead: cases per second of a Dask sweep with 1 and 2 workers")
     p.add_argument("--cases", type=int, default=16, help="with --sweep: cases per measurement")
+    p.add_argument("--native", action="store_true",
+                   help="instead: the native (C) CranePlant FMU in our master, in a C host and as a whole process")
     p.add_argument("--endurance", action="store_true",
                    help="instead: one long run (default one simulated hour) recorded to CSV, memory sampled")
 
@@ -36,9 +38,13 @@ def run(args):
     if args.cases < 2:
         raise UsageError(f"--cases must be >= 2, got {args.cases}")
     try:
-        if args.sweep and args.endurance:
-            raise UsageError("--sweep and --endurance are separate benchmarks: choose one")
-        if args.endurance:
+        if args.sweep + args.endurance + args.native > 1:
+            raise UsageError("--sweep, --endurance and --native are separate benchmarks: choose one")
+        if args.native:
+            from crane_fmu.bench_native import run_native_bench
+
+            run_native_bench(args.stop_time or 20.0, args.step, args.repeat)
+        elif args.endurance:
             run_endurance(args.stop_time or 3600.0, args.step)
         elif args.sweep:
             run_sweep_bench(args.cases, args.stop_time or 10.0, args.step, args.repeat)

@@ -1,5 +1,6 @@
 """``crane-fmu build``: build the FMUs of every component and the files of every built-in system."""
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -23,6 +24,8 @@ def arguments(p):
     p.add_argument("--out", default=DEFAULT_FMU_DIR,
                    help=f"FMI 2.0 FMUs (default: {DEFAULT_FMU_DIR}); FMI 3.0 ones and systems/ go beside it")
     p.add_argument("--bench", action="store_true", help="also build the benchmark's trivial FMUs")
+    p.add_argument("--native", action=argparse.BooleanOptionalAction, default=None,
+                   help="also build the native (C) FMUs into build/native (default: when a C compiler is found)")
     p.add_argument("--container", metavar="SYSTEM|FILE.ssp",
                    help="instead: pack one system (a built-in one, or an SSP file) into one FMU in build/containers")
     p.add_argument("--component", metavar="MODULE.py",
@@ -52,7 +55,13 @@ def run(args):
         print(path)
         return 0
     kinds = [c.model_identifier for c in components.registered() if args.bench or c.role != "benchmark"]
-    for path in build_all(args.out, kinds):
+    from crane_fmu.build_scripts.native import NativeUnavailable
+
+    try:
+        built = build_all(args.out, kinds, native=args.native)
+    except NativeUnavailable as exc:
+        raise UsageError(f"--native: {exc}") from None
+    for path in built:
         print(path)
     return 0
 

@@ -1,0 +1,223 @@
+/*
+ * The CranePlant component in C: the native twin of crane_fmu/model/plant.py (its variables,
+ * setup() rules and messages, update()) behind the model interface of model.h. Its variables,
+ * value references and start values come from CranePlant_variables.h, which `crane-fmu build`
+ * generates from the same table (plant.VARIABLES) as the Python FMU's modelDescription.xml.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "CranePlant_variables.h"
+#include "model.h"
+#include "plant_equations.h"
+#include "plant_math.h"
+#include "py_repr.h"
+
+enum { DRIVE = N_SWING, ACCEL, N_STATE }; /* after the swing and hoist state: the drive's and the trolley's acceleration */
+#define MAX_SUBSTEPS 10000000            /* per communication step: a host must never hang in doStep */
+#define N_MESSAGES 4                     /* hoist messages kept per step */
+
+typedef struct {
+    PlantParameters p;
+    Load damping; /* c1, c2 (hoist and forces are the inputs) */
+    double max_substep, u_max, v_max, tau, x_min, x_max, l1_min, l1_max, dl1_max;
+} Config;
+
+struct Model {
+    double values[N_VARIABLES]; /* parameters and inputs by value reference */
+    int initialised;
+    Config config;              /* set when initialisation ends */
+    double state[N_STATE];
+};
+
+const char *const MODEL_NAME = MODEL_IDENTIFIER;
+const char *const MODEL_TOKEN = INSTANTIATION_TOKEN;
+const size_t MODEL_SIZE = sizeof(Model);
+const unsigned MODEL_N_VARIABLES = N_VARIABLES;
+
+#define V(name) (values[VR_##name])
+#define R(value) py_repr(value, (char[REPR_SIZE]){0})
+
+void model_defaults(Model *m) {
+    memset(m, 0, sizeof *m);
+    for (unsigned i = 0; i < N_VARIABLES; i++) m->values[i] = VARIABLE_TABLE[i].start;
+}
+
+/* The rules of plant.setup() and parameters.py, in their order and words. */
+static ModelStatus rule(const Reporter *r, const char *name, const char *text, double value) {
+    return report(r, MODEL_ERROR, "%s must be %s, got %s", name, text, R(value));
+}
+
+static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
+    if (!(isfinite(V(max_substep)) && V(max_substep) > 0)) return rule(r, "max_substep", "> 0 and finite", V(max_substep));
+    if (!(isfinite(V(m1)) && V(m1) > 0)) return rule(r, "m1", "> 0 and finite", V(m1));
+    if (!(isfinite(V(m2)) && V(m2) >= 0)) return rule(r, "m2", ">= 0 and finite", V(m2));
+    if (!(isfinite(V(l1)) && V(l1) > 0)) return rule(r, "l1", "> 0 and finite", V(l1));
+    if (!(isfinite(V(l2)) && V(l2) > 0)) return rule(r, "l2", "> 0 and finite", V(l2));
+    if (!(isfinite(V(g)) && V(g) > 0)) return rule(r, "g", "> 0 and finite", V(g));
+    static const unsigned at_least_zero[] = {VR_c1, VR_c2, VR_tau, VR_l1_min};
+    for (unsigned i = 0; i < 4; i++) {
+        double value = values[at_least_zero[i]];
+        if (!(value >= 0.0 && isfinite(value)))
+            return rule(r, VARIABLE_TABLE[at_least_zero[i]].name, ">= 0 and finite", value);
+    }
+    static const unsigned limits[] = {VR_u_max, VR_v_max, VR_dl1_max};
+    for (unsigned i = 0; i < 3; i++) {
+        double value = values[limits[i]];
+        if (!(value > 0.0)) return rule(r, VARIABLE_TABLE[limits[i]].name, "> 0 (INF: no limit)", value);
+    }
+    if (V(m2) == 0 && V(c2) != 0)
+        return report(r, MODEL_ERROR, "c2 must be 0 when m2 = 0 (the hook joint then moves no mass), got %s", R(V(c2)));
+    if (!(V(x_min) < V(x_max)))
+        return report(r, MODEL_ERROR, "x_min must be < x_max, got %s and %s", R(V(x_min)), R(V(x_max)));
+    static const unsigned initial[] = {VR_x0, VR_dx0, VR_theta1_0, VR_dtheta1_0, VR_theta2_0, VR_dtheta2_0};
+    for (unsigned i = 0; i < 6; i++)
+        if (!isfinite(values[initial[i]])) return rule(r, VARIABLE_TABLE[initial[i]].name, "finite", values[initial[i]]);
+    if (!(V(x_min) <= V(x0) && V(x0) <= V(x_max)))
+        return report(r, MODEL_ERROR, "x0 must lie on the rail [%s, %s], got %s", R(V(x_min)), R(V(x_max)), R(V(x0)));
+    if (!(V(l1_min) <= V(l1) && V(l1) <= V(l1_max)))
+        return report(r, MODEL_ERROR, "l1 must lie within [l1_min, l1_max] = [%s, %s], got %s", R(V(l1_min)),
+                      R(V(l1_max)), R(V(l1)));
+    *c = (Config){{V(m1), V(m2), V(l1), V(l2), V(g)}, {0.0, 0.0, 0.0, V(c1), V(c2)}, V(max_substep), V(u_max),
+                  V(v_max), V(tau), V(x_min), V(x_max), V(l1_min), V(l1_max), V(dl1_max)};
+    return MODEL_OK;
+}
+
+static void initial_state(const double values[], const Config *c, double state[N_STATE]) {
+    double s[N_STATE] = {V(x0), V(dx0), V(theta1_0), V(dtheta1_0), V(theta2_0), V(dtheta2_0), c->p.l1, 0.0, 0.0, 0.0};
+    memcpy(state, s, sizeof s);
+}
+
+ModelStatus model_initialize(Model *m, const Reporter *r) {
+    ModelStatus status = setup(m->values, &m->config, r);
+    if (status != MODEL_OK) return status;
+    initial_state(m->values, &m->config, m->state);
+    m->initialised = 1;
+    return MODEL_OK;
+}
+
+ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed,
+                            const Reporter *r) {
+    for (size_t i = 0; i < n; i++) { /* every value checked before any is set */
+        if (vr[i] >= N_VARIABLES)
+            return report(r, MODEL_ERROR, "%s has no variable with value reference %u", MODEL_IDENTIFIER, vr[i]);
+        const VariableRow *v = &VARIABLE_TABLE[vr[i]];
+        if (v->causality == OUTPUT)
+            return report(r, MODEL_ERROR, "%s is an output of %s; only parameters and inputs can be set", v->name,
+                          MODEL_IDENTIFIER);
+        if (v->causality == INPUT && !isfinite(values[i]))
+            return report(r, MODEL_ERROR, "input %s must be finite, got %s", v->name, R(values[i]));
+        if (v->causality == PARAMETER && !fixed_allowed)
+            return report(r, MODEL_ERROR, "%s is a fixed parameter of %s: it can be set only before initialisation ends",
+                          v->name, MODEL_IDENTIFIER);
+    }
+    for (size_t i = 0; i < n; i++) m->values[vr[i]] = values[i];
+    return MODEL_OK;
+}
+
+/* Every output in table order: plant_outputs(), then l1_now, dl1_now, ddx. */
+static void outputs(const double state[N_STATE], const Config *c, double out[N_OUTPUTS]) {
+    plant_outputs(state, &c->p, out);
+    out[11] = state[L1], out[12] = state[DL1], out[13] = state[ACCEL];
+}
+
+ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r) {
+    double out[N_OUTPUTS];
+    int have_outputs = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (vr[i] >= N_VARIABLES)
+            return report(r, MODEL_ERROR, "%s has no variable with value reference %u", MODEL_IDENTIFIER, vr[i]);
+        if (VARIABLE_TABLE[vr[i]].causality != OUTPUT) {
+            values[i] = m->values[vr[i]];
+            continue;
+        }
+        if (!have_outputs && m->initialised) {
+            outputs(m->state, &m->config, out);
+        } else if (!have_outputs) { /* before initialisation ends the outputs follow the parameters */
+            Config c;
+            double state[N_STATE];
+            if (setup(m->values, &c, r) != MODEL_OK) return MODEL_ERROR;
+            initial_state(m->values, &c, state);
+            outputs(state, &c, out);
+        }
+        have_outputs = 1;
+        values[i] = out[vr[i] - FIRST_OUTPUT];
+    }
+    return MODEL_OK;
+}
+
+/* Python's min(max(value, low), high). */
+static double clamp(double value, double low, double high) {
+    double v = low > value ? low : value;
+    return high < v ? high : v;
+}
+
+/* `accel` limited so that `speed` ends the sub-step dt within +-speed_max (plant_limits.within_speed). */
+static double within_speed(double accel, double speed, double speed_max, double dt) {
+    if (speed_max == INFINITY) return accel;
+    return clamp(accel, (-speed_max - speed) / dt, (speed_max - speed) / dt);
+}
+
+ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
+    const Config *c = &m->config;
+    const double *in = &m->values[VR_u];
+    double u = in[0], hoist = in[1], f1 = in[2], f2 = in[3];
+    if (!(step > 0 && isfinite(step)))
+        return report(r, MODEL_ERROR, "communication step must be > 0 and finite, got %s", R(step));
+    if (c->p.m2 == 0 && f2 != 0)
+        return report(r, MODEL_DISCARD, "F2 = %s N acts on a payload of mass m2 = 0: the step is discarded", R(f2));
+    /* plant_equations.substeps(): the 1e-9 slack keeps h = 1 ms with max_substep = 1 ms at one sub-step */
+    double need = step / c->max_substep - 1e-9;
+    if (!(need <= MAX_SUBSTEPS))
+        return report(r, MODEL_ERROR,
+                      "communication step %s s needs more than %d RK4 sub-steps of at most max_substep = %s s",
+                      R(step), MAX_SUBSTEPS, R(c->max_substep));
+    long n = (long)need; /* math.ceil, at least one */
+    if ((double)n < need) n++;
+    if (n < 1) n = 1;
+    double dt = step / (double)n;
+    Load load = {0.0, f1, f2, c->damping.c1, c->damping.c2};
+    int forces = f1 != 0 || f2 != 0 || load.c1 != 0 || load.c2 != 0;
+    double demand = clamp(u, -c->u_max, c->u_max);
+    /* the drive's first-order lag over a sub-step, exactly: a(dt) = d + (a(0) - d) lag, its mean d + (a(0) - d) mean */
+    double lag = 0.0, mean = 0.0;
+    if (c->tau != 0) lag = EXP(-dt / c->tau), mean = c->tau / dt * (1.0 - lag);
+    double swing[N_SWING], drive = m->state[DRIVE], accel = demand;
+    memcpy(swing, m->state, sizeof swing);
+    double reached[N_MESSAGES][2]; /* (l1, t) where the cable reached a hoist limit */
+    int n_reached = 0;
+    for (long k = 0; k < n; k++) {
+        accel = c->tau > 0 ? demand + (drive - demand) * mean : demand;
+        drive = demand + (drive - demand) * lag;
+        double cable_rate = swing[DL1];
+        accel = within_speed(accel, swing[DX], c->v_max, dt);
+        load.hoist = within_speed(hoist, cable_rate, c->dl1_max, dt);
+        if (load.hoist == 0.0 && cable_rate == 0.0 && !forces) paper_step(swing, accel, dt, &c->p);
+        else rk4_step(swing, accel, dt, &c->p, &load);
+        double t = time + (double)(k + 1) * dt;
+        for (int i = 0; i < N_SWING; i++) /* Python stops here on sin(inf); C computes on in NaN */
+            if (!isfinite(swing[i]))
+                return report(r, MODEL_DISCARD,
+                              "plant state became non-finite in the step from t=%s s (u=%s m/s2); the step is discarded",
+                              R(time), R(u));
+        if (!(c->x_min <= swing[X] && swing[X] <= c->x_max)) {
+            int high = swing[X] > c->x_max;
+            return report(r, MODEL_DISCARD,
+                          "the trolley would pass the rail end %s = %s m (x = %s m) at t = %s s: the step from t = %s s "
+                          "is discarded", high ? "x_max" : "x_min", R(high ? c->x_max : c->x_min), R(swing[X]), R(t),
+                          R(time));
+        }
+        if (!(c->l1_min <= swing[L1] && swing[L1] <= c->l1_max)) { /* the cable is held at the limit it reached */
+            double held = swing[L1] > c->l1_max ? c->l1_max : c->l1_min;
+            if (cable_rate != 0.0 && n_reached < N_MESSAGES) reached[n_reached][0] = held, reached[n_reached++][1] = t;
+            swing[L1] = held, swing[DL1] = 0.0;
+        }
+    }
+    memcpy(m->state, swing, sizeof swing);
+    m->state[DRIVE] = drive, m->state[ACCEL] = accel;
+    for (int i = 0; i < n_reached; i++)
+        report(r, MODEL_WARNING, "hoist: l1 reached %s m at t = %s s and is held there", R(reached[i][0]),
+               R(reached[i][1]));
+    return MODEL_OK;
+}

@@ -1,0 +1,134 @@
+/*
+ * FMI 2.0 co-simulation over the model interface (model.h): the official fmi2Functions.h, each
+ * call mapped to framework.c. The functions this FMU does not support answer fmi2Error.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi2Functions.h"
+#include "fmi2_functions.h"
+#include "framework.h"
+
+static const char *const MODE_NAMES[] = {
+    "instantiated", "in initialization mode", "in step-complete state",
+    "in step-failed state (its last step was discarded)", "terminated",
+    "in error state (after an fmi2Error; fmi2Reset or fmi2SetFMUstate recover it)"};
+
+typedef struct {
+    fmi2CallbackFunctions cb;
+} Host;
+
+static void host_log(Instance *c, ModelStatus status, const char *category, const char *message) {
+    const Host *h = c->host;
+    if (h->cb.logger) h->cb.logger(h->cb.componentEnvironment, c->name, (fmi2Status)status, category, "%s", message);
+}
+
+FMI2_Export const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+FMI2_Export const char *fmi2GetVersion(void) { return fmi2Version; }
+
+FMI2_Export fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, fmi2String location,
+                                          const fmi2CallbackFunctions *functions, fmi2Boolean visible,
+                                          fmi2Boolean logging_on) {
+    (void)location, (void)visible;
+    if (!functions || !functions->logger || !name) return NULL;
+    Host *h = calloc(1, sizeof *h);
+    if (!h) return NULL;
+    h->cb = *functions;
+    Instance *c = instance_new("fmi2Instantiate", name, MODE_NAMES, host_log, h, logging_on);
+    if (c && type != fmi2CoSimulation) {
+        refuse(c, "fmi2Instantiate", "this FMU supports co-simulation only");
+    } else if (c && guid && strcmp(guid, MODEL_TOKEN) != 0) {
+        refuse(c, "fmi2Instantiate", "the GUID is not this FMU's (a modelDescription.xml of another build?)");
+    } else if (c) {
+        return c;
+    }
+    instance_free(c);
+    free(h);
+    return NULL;
+}
+
+FMI2_Export void fmi2FreeInstance(fmi2Component c) {
+    if (!c) return;
+    void *h = ((Instance *)c)->host;
+    instance_free(c);
+    free(h);
+}
+
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n, const fmi2String cats[]) {
+    (void)n, (void)cats;
+    if (!allowed(c, "fmi2SetDebugLogging", ANY_MODE)) return fmi2Error;
+    ((Instance *)c)->logging_on = on;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolerance_defined, fmi2Real tolerance, fmi2Real start,
+                               fmi2Boolean stop_defined, fmi2Real stop) {
+    (void)tolerance_defined, (void)tolerance, (void)stop_defined, (void)stop;
+    if (!allowed(c, "fmi2SetupExperiment", INSTANTIATED)) return fmi2Error;
+    ((Instance *)c)->time = start;
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
+    return enter_initialization(c, "fmi2EnterInitializationMode", c ? ((Instance *)c)->time : 0.0);
+}
+fmi2Status fmi2ExitInitializationMode(fmi2Component c) { return exit_initialization(c, "fmi2ExitInitializationMode"); }
+fmi2Status fmi2Terminate(fmi2Component c) { return terminate(c, "fmi2Terminate"); }
+fmi2Status fmi2Reset(fmi2Component c) { return reset(c, "fmi2Reset"); }
+
+fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real v[]) {
+    return get_reals(c, "fmi2GetReal", vr, n, v);
+}
+fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Real v[]) {
+    return set_reals(c, "fmi2SetReal", vr, n, v);
+}
+
+#define NO_VALUES(Name, modes, ctype)                                                                        \
+    fmi2Status Name(fmi2Component c, const fmi2ValueReference vr[], size_t n, ctype v[]) {                   \
+        (void)vr, (void)v;                                                                                   \
+        return no_such_values(c, #Name, modes, n);                                                           \
+    }
+NO_VALUES(fmi2GetInteger, GETTABLE, fmi2Integer)
+NO_VALUES(fmi2GetBoolean, GETTABLE, fmi2Boolean)
+NO_VALUES(fmi2GetString, GETTABLE, fmi2String)
+NO_VALUES(fmi2SetInteger, SETTABLE, const fmi2Integer)
+NO_VALUES(fmi2SetBoolean, SETTABLE, const fmi2Boolean)
+NO_VALUES(fmi2SetString, SETTABLE, const fmi2String)
+
+fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean no_prior) {
+    (void)no_prior;
+    return do_step(c, "fmi2DoStep", t, h);
+}
+
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Real *v) {
+    if (!allowed(c, "fmi2GetRealStatus", STEPPING | STEP_DISCARDED | TERMINATED)) return fmi2Error;
+    if (kind != fmi2LastSuccessfulTime || !v) return refuse(c, "fmi2GetRealStatus", "only fmi2LastSuccessfulTime is known");
+    *v = ((Instance *)c)->time;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Boolean *v) {
+    if (!allowed(c, "fmi2GetBooleanStatus", STEPPING | STEP_DISCARDED | TERMINATED)) return fmi2Error;
+    if (kind != fmi2Terminated || !v) return refuse(c, "fmi2GetBooleanStatus", "only fmi2Terminated is known");
+    *v = fmi2False;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *s) { return get_fmu_state(c, "fmi2GetFMUstate", s); }
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate s) { return set_fmu_state(c, "fmi2SetFMUstate", s); }
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *s) { return free_fmu_state(c, "fmi2FreeFMUstate", s); }
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate s, size_t *size) {
+    return serialized_size(c, "fmi2SerializedFMUstateSize", s, size);
+}
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate s, fmi2Byte out[], size_t size) {
+    return serialize_fmu_state(c, "fmi2SerializeFMUstate", s, (unsigned char *)out, size);
+}
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte data[], size_t size, fmi2FMUstate *s) {
+    return deserialize_fmu_state(c, "fmi2DeSerializeFMUstate", (const unsigned char *)data, size, s);
+}
+
+#define UNSUPPORTED(ret, name, params, args)                                                                 \
+    ret name params {                                                                                        \
+        return c ? refuse(c, #name, "not supported by this FMU") : fmi2Error;                                \
+    }
+FMI2_UNSUPPORTED(UNSUPPORTED)

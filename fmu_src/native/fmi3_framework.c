@@ -1,0 +1,178 @@
+/*
+ * FMI 3.0 co-simulation over the model interface (model.h): the official fmi3Functions.h, each
+ * call mapped to framework.c. Value reference 0 is the independent variable `time`; the model's
+ * variables follow from 1 (the FMI 2.0 value reference plus one, as in the Python FMU).
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi3Functions.h"
+#include "fmi3_functions.h"
+#include "framework.h"
+
+static const char *const MODE_NAMES[] = {
+    "instantiated", "in initialization mode", "in step mode", "in step mode after a discarded step", "terminated",
+    "in error state (after an fmi3Error; fmi3Reset or fmi3SetFMUState recover it)"};
+
+typedef struct {
+    fmi3InstanceEnvironment environment;
+    fmi3LogMessageCallback log_message;
+} Host;
+
+static void host_log(Instance *c, ModelStatus status, const char *category, const char *message) {
+    const Host *h = c->host;
+    if (h->log_message) h->log_message(h->environment, (fmi3Status)status, category, message);
+}
+
+FMI3_Export const char *fmi3GetVersion(void) { return fmi3Version; }
+
+FMI3_Export fmi3Instance fmi3InstantiateCoSimulation(
+    fmi3String name, fmi3String token, fmi3String resource_path, fmi3Boolean visible, fmi3Boolean logging_on,
+    fmi3Boolean event_mode_used, fmi3Boolean early_return_allowed, const fmi3ValueReference required[],
+    size_t n_required, fmi3InstanceEnvironment environment, fmi3LogMessageCallback log_message,
+    fmi3IntermediateUpdateCallback intermediate_update) {
+    (void)resource_path, (void)visible, (void)early_return_allowed, (void)required, (void)n_required;
+    (void)intermediate_update;
+    if (!name) return NULL;
+    Host *h = calloc(1, sizeof *h);
+    if (!h) return NULL;
+    *h = (Host){environment, log_message};
+    Instance *c = instance_new("fmi3InstantiateCoSimulation", name, MODE_NAMES, host_log, h, logging_on);
+    if (c && event_mode_used) {
+        refuse(c, "fmi3InstantiateCoSimulation", "this FMU has no event mode");
+    } else if (c && token && strcmp(token, MODEL_TOKEN) != 0) {
+        refuse(c, "fmi3InstantiateCoSimulation", "the instantiation token is not this FMU's");
+    } else if (c) {
+        return c;
+    }
+    instance_free(c);
+    free(h);
+    return NULL;
+}
+
+FMI3_Export fmi3Instance fmi3InstantiateModelExchange(fmi3String name, fmi3String token, fmi3String resource_path,
+                                                      fmi3Boolean visible, fmi3Boolean logging_on,
+                                                      fmi3InstanceEnvironment environment,
+                                                      fmi3LogMessageCallback log_message) {
+    (void)name, (void)token, (void)resource_path, (void)visible, (void)logging_on;
+    if (log_message) log_message(environment, fmi3Error, "logStatusError", "this FMU supports co-simulation only");
+    return NULL;
+}
+
+FMI3_Export fmi3Instance fmi3InstantiateScheduledExecution(
+    fmi3String name, fmi3String token, fmi3String resource_path, fmi3Boolean visible, fmi3Boolean logging_on,
+    fmi3InstanceEnvironment environment, fmi3LogMessageCallback log_message, fmi3ClockUpdateCallback clock_update,
+    fmi3LockPreemptionCallback lock, fmi3UnlockPreemptionCallback unlock) {
+    (void)name, (void)token, (void)resource_path, (void)visible, (void)logging_on, (void)clock_update, (void)lock;
+    (void)unlock;
+    if (log_message) log_message(environment, fmi3Error, "logStatusError", "this FMU supports co-simulation only");
+    return NULL;
+}
+
+FMI3_Export void fmi3FreeInstance(fmi3Instance c) {
+    if (!c) return;
+    void *h = ((Instance *)c)->host;
+    instance_free(c);
+    free(h);
+}
+
+fmi3Status fmi3SetDebugLogging(fmi3Instance c, fmi3Boolean on, size_t n, const fmi3String cats[]) {
+    (void)n, (void)cats;
+    if (!allowed(c, "fmi3SetDebugLogging", ANY_MODE)) return fmi3Error;
+    ((Instance *)c)->logging_on = on;
+    return fmi3OK;
+}
+
+fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean tolerance_defined, fmi3Float64 tolerance,
+                                       fmi3Float64 start, fmi3Boolean stop_defined, fmi3Float64 stop) {
+    (void)tolerance_defined, (void)tolerance, (void)stop_defined, (void)stop;
+    return enter_initialization(c, "fmi3EnterInitializationMode", start);
+}
+fmi3Status fmi3ExitInitializationMode(fmi3Instance c) { return exit_initialization(c, "fmi3ExitInitializationMode"); }
+fmi3Status fmi3Terminate(fmi3Instance c) { return terminate(c, "fmi3Terminate"); }
+fmi3Status fmi3Reset(fmi3Instance c) { return reset(c, "fmi3Reset"); }
+
+#define SMALL 64 /* value references mapped on the stack; more take a checked allocation */
+
+/* The model's value references (FMI 3.0's less one) into *mapped; 0 with a logged error. */
+static int map_vrs(Instance *c, const char *function, const fmi3ValueReference vr[], size_t n, unsigned small[],
+                   unsigned **mapped) {
+    *mapped = n <= SMALL ? small : malloc(n * sizeof **mapped);
+    if (!*mapped) return refuse(c, function, "out of memory"), 0;
+    for (size_t i = 0; i < n; i++) {
+        if (vr[i] == 0) { /* time */
+            if (*mapped != small) free(*mapped);
+            return refuse(c, function, "time (value reference 0) can be read only alone, and never set"), 0;
+        }
+        (*mapped)[i] = vr[i] - 1;
+    }
+    return 1;
+}
+
+fmi3Status fmi3GetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 v[], size_t n) {
+    if (!allowed(c, "fmi3GetFloat64", GETTABLE)) return fmi3Error;
+    if (n != nvr) return refuse(c, "fmi3GetFloat64", "arrays are not supported (nValues != nValueReferences)");
+    if (nvr == 0) return fmi3OK;
+    if (!vr || !v) return refuse(c, "fmi3GetFloat64", "NULL array");
+    if (nvr == 1 && vr[0] == 0) return v[0] = ((Instance *)c)->time, fmi3OK;
+    unsigned small[SMALL], *mapped;
+    if (!map_vrs(c, "fmi3GetFloat64", vr, nvr, small, &mapped)) return fmi3Error;
+    fmi3Status status = get_reals(c, "fmi3GetFloat64", mapped, nvr, v);
+    if (mapped != small) free(mapped);
+    return status;
+}
+
+fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, const fmi3Float64 v[], size_t n) {
+    if (!allowed(c, "fmi3SetFloat64", SETTABLE)) return fmi3Error;
+    if (n != nvr) return refuse(c, "fmi3SetFloat64", "arrays are not supported (nValues != nValueReferences)");
+    if (nvr == 0) return fmi3OK;
+    if (!vr || !v) return refuse(c, "fmi3SetFloat64", "NULL array");
+    unsigned small[SMALL], *mapped;
+    if (!map_vrs(c, "fmi3SetFloat64", vr, nvr, small, &mapped)) return fmi3Error;
+    fmi3Status status = set_reals(c, "fmi3SetFloat64", mapped, nvr, v);
+    if (mapped != small) free(mapped);
+    return status;
+}
+
+#define NO_GET(Type)                                                                                         \
+    fmi3Status fmi3Get##Type(VRS_, fmi3##Type v[], size_t n) {                                               \
+        (void)vr, (void)nvr, (void)v;                                                                        \
+        return no_such_values(c, "fmi3Get" #Type, GETTABLE, n);                                              \
+    }
+#define NO_SET(Type)                                                                                         \
+    fmi3Status fmi3Set##Type(VRS_, const fmi3##Type v[], size_t n) {                                         \
+        (void)vr, (void)nvr, (void)v;                                                                        \
+        return no_such_values(c, "fmi3Set" #Type, SETTABLE, n);                                              \
+    }
+NO_GET(Int32) NO_GET(Int64) NO_GET(UInt64) NO_GET(Boolean) NO_GET(String)
+NO_SET(Int32) NO_SET(Int64) NO_SET(UInt64) NO_SET(Boolean) NO_SET(String)
+
+fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 t, fmi3Float64 h, fmi3Boolean no_prior, fmi3Boolean *event_needed,
+                      fmi3Boolean *terminate, fmi3Boolean *early_return, fmi3Float64 *last_time) {
+    (void)no_prior;
+    if (!event_needed || !terminate || !early_return || !last_time)
+        return c ? refuse(c, "fmi3DoStep", "NULL output pointer") : fmi3Error;
+    fmi3Status status = do_step(c, "fmi3DoStep", t, h);
+    *event_needed = *terminate = *early_return = fmi3False;
+    *last_time = c ? ((Instance *)c)->time : t;
+    return status;
+}
+
+fmi3Status fmi3GetFMUState(fmi3Instance c, fmi3FMUState *s) { return get_fmu_state(c, "fmi3GetFMUState", s); }
+fmi3Status fmi3SetFMUState(fmi3Instance c, fmi3FMUState s) { return set_fmu_state(c, "fmi3SetFMUState", s); }
+fmi3Status fmi3FreeFMUState(fmi3Instance c, fmi3FMUState *s) { return free_fmu_state(c, "fmi3FreeFMUState", s); }
+fmi3Status fmi3SerializedFMUStateSize(fmi3Instance c, fmi3FMUState s, size_t *size) {
+    return serialized_size(c, "fmi3SerializedFMUStateSize", s, size);
+}
+fmi3Status fmi3SerializeFMUState(fmi3Instance c, fmi3FMUState s, fmi3Byte out[], size_t size) {
+    return serialize_fmu_state(c, "fmi3SerializeFMUState", s, out, size);
+}
+fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte data[], size_t size, fmi3FMUState *s) {
+    return deserialize_fmu_state(c, "fmi3DeserializeFMUState", data, size, s);
+}
+
+#define UNSUPPORTED(ret, name, params, args)                                                                 \
+    ret name params {                                                                                        \
+        return c ? refuse(c, #name, "not supported by this FMU") : fmi3Error;                                \
+    }
+FMI3_UNSUPPORTED(UNSUPPORTED)

@@ -1,0 +1,70 @@
+/*
+ * What the FMI 2.0 and 3.0 frameworks share: one instance over one model (model.h), its state
+ * machine as bit masks (the modes of co-simulation without event mode, FMI 2.0 section 4.2.4 and
+ * FMI 3.0 section 4.2), the FMU states it made, and checked allocations. No globals: any number of
+ * instances, in any threads (one instance is called from one thread at a time, as FMI requires).
+ */
+#ifndef FRAMEWORK_H
+#define FRAMEWORK_H
+
+#include <stddef.h>
+
+#include "model.h"
+
+enum { INSTANTIATED = 1, INITIALIZATION = 2, STEPPING = 4, STEP_DISCARDED = 8, TERMINATED = 16, FAILED = 32 };
+#define ANY_MODE (INSTANTIATED | INITIALIZATION | STEPPING | STEP_DISCARDED | TERMINATED | FAILED)
+#define GETTABLE (INITIALIZATION | STEPPING | STEP_DISCARDED | TERMINATED | FAILED)
+#define SETTABLE (INSTANTIATED | INITIALIZATION | STEPPING)
+
+struct Instance;
+/* Passes one message to the host's logger (each FMI version has its own signature). */
+typedef void (*HostLog)(struct Instance *c, ModelStatus status, const char *category, const char *message);
+
+/* An FMU state: a copy of the model with the instance's mode and time. */
+typedef struct {
+    char magic[4]; /* "CRN1" */
+    int mode;
+    double time;
+} StateHeader;
+
+typedef struct Instance {
+    char *name;
+    int mode, logging_on;
+    double time;                 /* the last successful communication point */
+    Model *model;
+    void **states;               /* the FMU states this instance made and has not freed */
+    size_t n_states, states_size;
+    const char *const *mode_names;
+    HostLog host_log;
+    void *host;                  /* the version's callbacks, kept by its framework */
+} Instance;
+
+Instance *instance_new(const char *function, const char *name, const char *const *mode_names, HostLog host_log,
+                       void *host, int logging_on);
+void instance_free(Instance *c);
+/* Logs a message, an error's with the FMI function's name first ("fmi2DoStep: ..."); returns `status`. */
+int instance_log(Instance *c, ModelStatus status, const char *function, const char *message);
+/* May `function` be called in the instance's mode? If not, it logs why. */
+int allowed(Instance *c, const char *function, int modes);
+/* A refused call (bad arguments): an error and the reason, the mode unchanged. */
+int refuse(Instance *c, const char *function, const char *why);
+Reporter reporter(Instance *c, const char *function);
+
+int enter_initialization(Instance *c, const char *function, double start);
+int exit_initialization(Instance *c, const char *function);
+int terminate(Instance *c, const char *function);
+int reset(Instance *c, const char *function);
+int get_reals(Instance *c, const char *function, const unsigned vr[], size_t n, double v[]);
+int set_reals(Instance *c, const char *function, const unsigned vr[], size_t n, const double v[]);
+/* Values of a type this FMU has none of: only an empty call succeeds. */
+int no_such_values(Instance *c, const char *function, int modes, size_t n);
+int do_step(Instance *c, const char *function, double t, double h);
+
+int get_fmu_state(Instance *c, const char *function, void **state);
+int set_fmu_state(Instance *c, const char *function, void *state);
+int free_fmu_state(Instance *c, const char *function, void **state);
+int serialized_size(Instance *c, const char *function, void *state, size_t *size);
+int serialize_fmu_state(Instance *c, const char *function, void *state, unsigned char out[], size_t size);
+int deserialize_fmu_state(Instance *c, const char *function, const unsigned char data[], size_t size, void **state);
+
+#endif

@@ -1,0 +1,291 @@
+/*
+ * A C host for the native CranePlant FMU (FMI 2.0), for the tests and `crane-fmu bench --native`
+ * (not part of any FMU): compiled for Linux (dlopen) and, with mingw-w64, for Windows (LoadLibrary)
+ * to run under Wine. No Python anywhere.
+ *
+ *   host run LIB GUID STEPS H                           free swing: rows "t,x,dx,theta1,dtheta1,theta2,dtheta2"
+ *   host cycles LIB GUID N                              N instantiate/initialise/step/free cycles; RSS per 1000
+ *   host after-failure LIB GUID STEPS H                 a run refused (l1 = -1), then a good one: its last row
+ *   host threads LIB GUID STEPS H                       two instances in two threads vs one alone: "same" or "differ"
+ *   host bench LIB GUID STEPS H                         seconds per step of the paper's loop, no recording
+ *   host maps LIB GUID                                  the libraries loaded in this process that name python
+ *   host paper LIB GUID STEPS H                         Section V: the plant under the paper's backstepping law,
+ *                                                       written in C here (rows "t,6 states,u"); see paper_law()
+ *
+ * Value references are those of the CranePlant table (checked against modelDescription.xml by the tests).
+ */
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "fmi2Functions.h"
+#include "plant_math.h" /* SIN, COS: the C library's, or with CRANE_OWN_MATH the portable ones (Windows) */
+
+#ifdef _WIN32
+#include <windows.h>
+#define OPEN(path) ((void *)LoadLibraryA(path))
+#define SYMBOL(lib, name) ((void *)GetProcAddress((HMODULE)(lib), name))
+#else
+#include <dlfcn.h>
+#include <pthread.h>
+#define OPEN(path) dlopen(path, RTLD_NOW | RTLD_LOCAL)
+#define SYMBOL(lib, name) dlsym(lib, name)
+#endif
+
+enum { VR_L1 = 2, VR_U = 22, VR_X = 26 }; /* l1, u, and x: the first of the six states */
+
+typedef struct {
+    fmi2InstantiateTYPE *instantiate;
+    fmi2FreeInstanceTYPE *free_instance;
+    fmi2SetupExperimentTYPE *setup;
+    fmi2EnterInitializationModeTYPE *enter;
+    fmi2ExitInitializationModeTYPE *exit_init;
+    fmi2GetRealTYPE *get;
+    fmi2SetRealTYPE *set;
+    fmi2DoStepTYPE *step;
+    const char *guid;
+} Api;
+
+static int quiet;
+
+static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
+                   fmi2String format, ...) {
+    (void)env, (void)name, (void)category;
+    if (quiet) return;
+    va_list args;
+    va_start(args, format);
+    fprintf(stderr, "[%d] ", status);
+    vfprintf(stderr, format, args);
+    fputc('\n', stderr);
+    va_end(args);
+}
+
+static const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
+
+static Api load(const char *library, const char *guid) {
+    void *lib = OPEN(library);
+    if (!lib) {
+        fprintf(stderr, "cannot load %s\n", library);
+        exit(3);
+    }
+    Api api = {(fmi2InstantiateTYPE *)SYMBOL(lib, "fmi2Instantiate"),
+               (fmi2FreeInstanceTYPE *)SYMBOL(lib, "fmi2FreeInstance"),
+               (fmi2SetupExperimentTYPE *)SYMBOL(lib, "fmi2SetupExperiment"),
+               (fmi2EnterInitializationModeTYPE *)SYMBOL(lib, "fmi2EnterInitializationMode"),
+               (fmi2ExitInitializationModeTYPE *)SYMBOL(lib, "fmi2ExitInitializationMode"),
+               (fmi2GetRealTYPE *)SYMBOL(lib, "fmi2GetReal"),
+               (fmi2SetRealTYPE *)SYMBOL(lib, "fmi2SetReal"),
+               (fmi2DoStepTYPE *)SYMBOL(lib, "fmi2DoStep"),
+               guid};
+    if (!api.instantiate || !api.step) {
+        fprintf(stderr, "missing FMI functions in %s\n", library);
+        exit(3);
+    }
+    return api;
+}
+
+/* An initialised instance with the given parameter settings, or NULL (the FMU logged why). */
+static fmi2Component start(const Api *api, size_t n, const fmi2ValueReference vr[], const fmi2Real v[]) {
+    fmi2Component c = api->instantiate("plant", fmi2CoSimulation, api->guid, "", &callbacks, fmi2False, fmi2False);
+    if (!c) return NULL;
+    if (api->setup(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) > fmi2Warning || api->enter(c) > fmi2Warning ||
+        (n && api->set(c, vr, n, v) > fmi2Warning) || api->exit_init(c) > fmi2Warning) {
+        api->free_instance(c);
+        return NULL;
+    }
+    return c;
+}
+
+/* `steps` steps of h with u = 0; the states after each step into rows (7 a row). */
+static int run(const Api *api, fmi2Component c, int steps, double h, double *rows) {
+    const fmi2ValueReference states[6] = {VR_X, VR_X + 1, VR_X + 2, VR_X + 3, VR_X + 4, VR_X + 5};
+    for (int k = 0; k <= steps; k++) {
+        double t = k * h;
+        rows[7 * k] = t;
+        if (api->get(c, states, 6, rows + 7 * k + 1) > fmi2Warning) return 0;
+        if (k == steps) break;
+        if (api->step(c, t, h, fmi2True) > fmi2Warning) return 0;
+    }
+    return 1;
+}
+
+/* The BacksteppingController's u at its defaults (Section V: eqs (12), (14), (16)-(21), derived b3, W = I):
+   crane_fmu/model/backstepping.law() operation for operation, so that this host closes the paper's loop
+   without Python. The tests hold it equal to the Python controller FMU through our master. */
+static double paper_law(const double s[6]) {
+    const double m1 = 3.0, m2 = 7.0, l1 = 1.0, l2 = 0.5, g = 9.8;
+    const double k1x = 0.92, k2x = 0.84, k11 = 4.0, k21 = 2.0, k12 = 122.0, k22 = 310.0;
+    const double a = 2.0 * m1 + m2, ga = -g * a, gm2 = g * m2, two_m2 = 2.0 * m2, m12 = m1 + m2;
+    const double l2m2 = l2 * m2, m12g = m12 * g, two_m12 = 2.0 * m12, nk1x = -k1x, nk11 = -k11, nk12 = -k12;
+    double x = s[0], dx = s[1], theta1 = s[2], dtheta1 = s[3], theta2 = s[4], dtheta2 = s[5];
+    double d = theta1 - theta2, sd = SIN(d), cd = COS(d);
+    double den = a - m2 * COS(2.0 * d);
+    double w1s = dtheta1 * dtheta1, w2s = dtheta2 * dtheta2;
+    double f2 = (ga * SIN(theta1) - gm2 * SIN(theta1 - 2.0 * theta2) - two_m2 * (l1 * w1s * cd + l2 * w2s) * sd) /
+                (l1 * den);
+    double b2 = (-a * COS(theta1) + m2 * COS(theta1 - 2.0 * theta2)) / (l1 * den);
+    double f3 = 2.0 * (l1 * w1s * m12 + l2m2 * w2s * cd + m12g * COS(theta1)) * sd / (l2 * den);
+    double b3 = -(two_m12 * sd * SIN(theta1) / (l2 * den));
+    double e3x = nk1x * dx - k2x * (dx + k1x * (x - 0.0));
+    double e31 = nk11 * dtheta1 - k21 * (dtheta1 + k11 * (theta1 - 0.0));
+    double e32 = nk12 * dtheta2 - k22 * (dtheta2 + k12 * (theta2 - 0.0));
+    double num = 1.0 * e3x + 1.0 * b2 * (e31 - f2) + 1.0 * b3 * (e32 - f3);
+    return num / (1.0 + 1.0 * b2 * b2 + 1.0 * b3 * b3);
+}
+
+static void print_rows(const double *rows, int steps) {
+    for (int k = 0; k <= steps; k++)
+        for (int i = 0; i < 7; i++) printf(i < 6 ? "%.17g," : "%.17g\n", rows[7 * k + i]);
+}
+
+static double *rows_for(int steps) {
+    double *rows = calloc((size_t)(steps + 1) * 7, sizeof *rows);
+    if (!rows) exit(5);
+    return rows;
+}
+
+static double seconds(void) {
+#ifdef _WIN32
+    LARGE_INTEGER count, frequency;
+    QueryPerformanceCounter(&count);
+    QueryPerformanceFrequency(&frequency);
+    return (double)count.QuadPart / (double)frequency.QuadPart;
+#else
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+#endif
+}
+
+static long rss_kb(void) {
+#ifdef _WIN32
+    return -1;
+#else
+    long pages = -1, resident = -1;
+    FILE *f = fopen("/proc/self/statm", "r");
+    if (f && fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = -1;
+    if (f) fclose(f);
+    return resident * 4;
+#endif
+}
+
+#ifndef _WIN32
+typedef struct {
+    const Api *api;
+    int steps;
+    double h;
+    double *rows;
+    int ok;
+} Job;
+
+static void *run_job(void *arg) {
+    Job *job = arg;
+    fmi2Component c = start(job->api, 0, NULL, NULL);
+    job->ok = c && run(job->api, c, job->steps, job->h, job->rows);
+    if (c) job->api->free_instance(c);
+    return NULL;
+}
+#endif
+
+int main(int argc, char **argv) {
+    if (argc < 4) return 2;
+    const char *command = argv[1];
+    Api api = load(argv[2], argv[3]);
+    if (!strcmp(command, "run") && argc == 6) {
+        int steps = atoi(argv[4]);
+        double *rows = rows_for(steps);
+        fmi2Component c = start(&api, 0, NULL, NULL);
+        if (!c || !run(&api, c, steps, atof(argv[5]), rows)) return 6;
+        api.free_instance(c);
+        print_rows(rows, steps);
+        return 0;
+    }
+    if (!strcmp(command, "paper") && argc == 6) {
+        int steps = atoi(argv[4]);
+        double h = atof(argv[5]), y[6], u;
+        const fmi2ValueReference states[6] = {VR_X, VR_X + 1, VR_X + 2, VR_X + 3, VR_X + 4, VR_X + 5}, u_vr = VR_U;
+        fmi2Component c = start(&api, 0, NULL, NULL);
+        if (!c) return 6;
+        for (int k = 0; k <= steps; k++) {
+            if (api.get(c, states, 6, y) > fmi2Warning) return 6;
+            u = paper_law(y);
+            if (api.set(c, &u_vr, 1, &u) > fmi2Warning) return 6;
+            printf("%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", k * h, y[0], y[1], y[2], y[3], y[4], y[5], u);
+            if (k < steps && api.step(c, k * h, h, fmi2True) > fmi2Warning) return 6;
+        }
+        api.free_instance(c);
+        return 0;
+    }
+    if (!strcmp(command, "cycles") && argc == 5) {
+        quiet = 1;
+        double rows[7 * 11];
+        for (int i = 1; i <= atoi(argv[4]); i++) {
+            fmi2Component c = start(&api, 0, NULL, NULL);
+            if (!c || !run(&api, c, 10, 1e-3, rows)) return 6;
+            api.free_instance(c);
+            if (i % 1000 == 0) printf("%d,%ld\n", i, rss_kb());
+        }
+        return 0;
+    }
+    if (!strcmp(command, "after-failure") && argc == 6) {
+        int steps = atoi(argv[4]);
+        double h = atof(argv[5]), bad = -1.0, *rows = rows_for(steps);
+        fmi2ValueReference l1 = VR_L1;
+        if (start(&api, 1, &l1, &bad) != NULL) return 8; /* must be refused */
+        fmi2Component c = start(&api, 0, NULL, NULL);
+        if (!c || !run(&api, c, steps, h, rows)) return 6;
+        api.free_instance(c);
+        print_rows(rows + 7 * steps, 0);
+        return 0;
+    }
+#ifndef _WIN32
+    if (!strcmp(command, "threads") && argc == 6) {
+        int steps = atoi(argv[4]);
+        double h = atof(argv[5]);
+        Job alone = {&api, steps, h, rows_for(steps), 0}, jobs[2];
+        run_job(&alone);
+        pthread_t threads[2];
+        for (int i = 0; i < 2; i++) {
+            jobs[i] = (Job){&api, steps, h, rows_for(steps), 0};
+            if (pthread_create(&threads[i], NULL, run_job, &jobs[i])) return 9;
+        }
+        for (int i = 0; i < 2; i++) pthread_join(threads[i], NULL);
+        size_t size = (size_t)(steps + 1) * 7 * sizeof(double);
+        int same = alone.ok && jobs[0].ok && jobs[1].ok && !memcmp(alone.rows, jobs[0].rows, size) &&
+                   !memcmp(alone.rows, jobs[1].rows, size);
+        printf(same ? "same\n" : "differ\n");
+        return 0;
+    }
+    if (!strcmp(command, "maps")) {
+        fmi2Component c = start(&api, 0, NULL, NULL);
+        if (!c) return 6;
+        FILE *f = fopen("/proc/self/maps", "r");
+        char line[4096];
+        while (f && fgets(line, sizeof line, f))
+            if (strstr(line, "python")) fputs(line, stdout);
+        if (f) fclose(f);
+        api.free_instance(c);
+        return 0;
+    }
+#endif
+    if (!strcmp(command, "bench") && argc == 6) {
+        int steps = atoi(argv[4]);
+        double h = atof(argv[5]), y[6], u;
+        const fmi2ValueReference states[6] = {VR_X, VR_X + 1, VR_X + 2, VR_X + 3, VR_X + 4, VR_X + 5}, u_vr = VR_U;
+        fmi2Component c = start(&api, 0, NULL, NULL);
+        if (!c) return 6;
+        double t0 = seconds();
+        for (int k = 0; k < steps; k++) {
+            api.get(c, states, 6, y);
+            u = paper_law(y);
+            api.set(c, &u_vr, 1, &u);
+            if (api.step(c, k * h, h, fmi2True) > fmi2Warning) return 6;
+        }
+        printf("%.9g\n", (seconds() - t0) / steps);
+        api.free_instance(c);
+        return 0;
+    }
+    return 2;
+}

@@ -1,0 +1,48 @@
+/*
+ * The model interface: what the FMI frameworks (fmi2_framework.c, fmi3_framework.c) need from one
+ * component's model file (crane_plant.c), Reference-FMUs' shape. A model is plain data (no
+ * pointers), so an FMU state is a copy of it. Value references are the FMI 2.0 ones: the
+ * positions in the component's variable table (the FMI 3.0 framework maps its own, one higher).
+ */
+#ifndef MODEL_H
+#define MODEL_H
+
+#include <stddef.h>
+
+/* The statuses, with FMI's numbers (the same in 2.0 and 3.0). */
+typedef enum { MODEL_OK = 0, MODEL_WARNING = 1, MODEL_DISCARD = 2, MODEL_ERROR = 3 } ModelStatus;
+
+/* Where a model's messages go: the framework's logger, which prefixes the FMI function's name. */
+typedef struct {
+    void (*log)(void *host, ModelStatus status, const char *function, const char *message);
+    void *host;
+    const char *function; /* the FMI function being called, e.g. "fmi2DoStep" */
+} Reporter;
+
+/* Pass one message (printf-style) to the reporter; returns `status`. */
+ModelStatus report(const Reporter *r, ModelStatus status, const char *format, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+typedef struct Model Model; /* defined by the model file */
+
+extern const char *const MODEL_NAME; /* the model identifier */
+extern const char *const MODEL_TOKEN; /* the GUID / instantiation token of modelDescription.xml */
+extern const size_t MODEL_SIZE;       /* sizeof(Model) */
+extern const unsigned MODEL_N_VARIABLES;
+
+/* The start values: a model as instantiated (and after a reset). */
+void model_defaults(Model *m);
+/* Set n Reals, all or none; `fixed_allowed` is true before initialisation ends (parameters may change). */
+ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed,
+                            const Reporter *r);
+/* Get n Reals (outputs before initialisation follow the parameters, validated). */
+ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r);
+/* End of initialisation: validate the parameters and set the initial state. */
+ModelStatus model_initialize(Model *m, const Reporter *r);
+/* One communication step from `time` of length `step`: OK (maybe with warnings logged), DISCARD, or ERROR. */
+ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r);
+
+#endif

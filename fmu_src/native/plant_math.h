@@ -1,0 +1,24 @@
+/*
+ * The elementary functions the plant uses. By default the C library's: on Linux that is glibc's
+ * libm, the one CPython uses, so the native plant gives the Python plant's numbers. mingw-w64's
+ * libm differs (its sin and cos are the x87 instructions, up to 153 ULP off), so the Windows build
+ * defines CRANE_OWN_MATH and takes portable_math.c, the same source on every platform.
+ */
+#ifndef PLANT_MATH_H
+#define PLANT_MATH_H
+
+#ifdef CRANE_OWN_MATH
+double crane_sin(double x);
+double crane_cos(double x);
+double crane_exp(double x);
+#define SIN crane_sin
+#define COS crane_cos
+#define EXP crane_exp
+#else
+#include <math.h>
+#define SIN sin
+#define COS cos
+#define EXP exp
+#endif
+
+#endif
