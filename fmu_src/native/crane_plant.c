@@ -1,6 +1,6 @@
 /*
  * The CranePlant component in C: the native twin of crane_fmu/model/plant.py (its variables,
- * setup() rules and messages, update()) behind the model interface of model.h. Its variables,
+ * configure() rules and messages, update()) behind the model interface of model.h. Its variables,
  * value references and start values come from CranePlant_variables.h, which `crane-fmu build`
  * generates from the same table (plant.VARIABLES) as the Python FMU's modelDescription.xml.
  */
@@ -44,7 +44,7 @@ void model_defaults(Model *m) {
     for (unsigned i = 0; i < N_VARIABLES; i++) m->values[i] = VARIABLE_TABLE[i].start;
 }
 
-/* The rules of plant.setup() and parameters.py, in their order and words. */
+/* The rules of plant.configure() and parameters.py, in their order and words. */
 static ModelStatus rule(const Reporter *r, const char *name, const char *text, double value) {
     return report(r, MODEL_ERROR, "%s must be %s, got %s", name, text, R(value));
 }
