@@ -6,7 +6,7 @@ parameter rules are applied before a run. Nothing else in the toolkit names a
 component.
 """
 
-from crane_fmu.model import backstepping, benchmark, disturbances, energy, lqr, planner, plant
+from crane_fmu.model import backstepping, benchmark, disturbances, energy, estimator, lqr, planner, plant
 from crane_fmu.registry import Registry
 
 _COMPONENTS = Registry("component", lambda c: c.model_identifier)
@@ -34,5 +34,6 @@ def check_parameters(model_identifier, values):
 
 
 for _component in (plant.COMPONENT, backstepping.COMPONENT, lqr.COMPONENT, energy.COMPONENT, planner.COMPONENT,
-                   disturbances.GUST, disturbances.SENSOR, benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
+                   disturbances.GUST, disturbances.SENSOR, disturbances.CRANE_SENSOR,
+                   estimator.COMPONENT, benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
     register(_component)

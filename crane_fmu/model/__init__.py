@@ -13,6 +13,7 @@ from . import (  # noqa: F401
     component,
     disturbances,
     energy,
+    estimator,
     limits,
     linalg,
     lqr,
