@@ -115,3 +115,7 @@ register(System("lqg-transport", {"plant": "CranePlant", "planner": "TrajectoryP
                 stop_time=10.0,
                 description="the 2 m move of transport with only x and theta1 measured: a Kalman filter in front of "
                             "the LQR"))
+register(System("hard-hit", {"plant": "CranePlant", "controller": "HardHitController"},
+                parameters={"plant": {"theta1_0": 1.0471975511965976, "u_max": 2.0, "v_max": 1.0}},
+                description="a hard hit: regulation from theta1(0) = 60 deg by LQR gains scheduled on the swing "
+                            "energy, |u| <= 2 m/s2, |v| <= 1 m/s"))

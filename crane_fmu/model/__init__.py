@@ -14,6 +14,7 @@ from . import (  # noqa: F401
     disturbances,
     energy,
     estimator,
+    hard_hit,
     limits,
     linalg,
     lqr,
