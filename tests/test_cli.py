@@ -24,7 +24,7 @@ def test_build_writes_every_component_and_every_builtin_system(tmp_path, capsys)
     assert sorted(p.name for p in (tmp_path / "fmus").iterdir()) == sorted(
         fmus + [f"{n}.OspSystemStructure.xml" for n in names])
     assert sorted(p.name for p in (tmp_path / "fmi3").iterdir()) == fmus
-    assert sorted(p.name for p in (tmp_path / "systems").iterdir()) == [f"{n}.ssp" for n in names]
+    assert sorted(p.name for p in (tmp_path / "systems").iterdir()) == sorted(f"{n}.ssp" for n in names)
     assert sorted(p.name for p in (tmp_path / "containers").iterdir()) == [
         "CraneEnergy.fmu", "CraneLqr.fmu", "CranePaper.fmu", "CraneTransport.fmu"]
 
