@@ -158,8 +158,8 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     chosen, only
         The controllers (see :func:`contenders`): by default every built-in one, and the user's FMUs beside them.
     quick : bool
-        A quick board (3 of S3's 27 plants), written to ``out_dir/quick`` with its own journal, so that it never
-        replaces a full board and is never mistaken for one.
+        A quick board (3 of the 27 plants of S3 and S9), written to ``out_dir/quick`` with its own journal, so
+        that it never replaces a full board and is never mistaken for one.
     animate : iterable of str
         The scenarios (of :data:`ANIMATE`) whose nominal runs are animated; an animation is drawn again only when
         its run changed.

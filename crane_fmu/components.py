@@ -6,7 +6,7 @@ parameter rules are applied before a run. Nothing else in the toolkit names a
 component.
 """
 
-from crane_fmu.model import backstepping, benchmark, disturbances, energy, lqr, planner, plant
+from crane_fmu.model import backstepping, benchmark, disturbances, energy, estimator, hard_hit, lqr, planner, plant
 from crane_fmu.registry import Registry
 
 _COMPONENTS = Registry("component", lambda c: c.model_identifier)
@@ -33,6 +33,8 @@ def check_parameters(model_identifier, values):
         component.check(values)
 
 
-for _component in (plant.COMPONENT, backstepping.COMPONENT, lqr.COMPONENT, energy.COMPONENT, planner.COMPONENT,
-                   disturbances.GUST, disturbances.SENSOR, benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
+for _component in (plant.COMPONENT, backstepping.COMPONENT, lqr.COMPONENT, energy.COMPONENT, hard_hit.COMPONENT,
+                   planner.COMPONENT,
+                   disturbances.GUST, disturbances.SENSOR, disturbances.CRANE_SENSOR,
+                   estimator.COMPONENT, benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
     register(_component)

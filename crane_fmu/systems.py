@@ -95,3 +95,27 @@ register(System("hoist-transport",
                 stop_time=12.0,
                 description="a 2 m move while the hoist lifts the load from l1 = 2 m to 1 m; the LQR's gains "
                             "follow the measured cable length"))
+
+# What a crane measures: the sensor sees the plant's true x, theta1, theta2 and outputs x_meas, theta1_meas,
+# theta2_meas (to the estimator by name); the estimator's x, ..., dtheta2 feed the controller (written out: the
+# plant has outputs of those names too); u and l1_now connect by name.
+MEASURING = tuple(Connection("plant", name, "sensor", name) for name in ("x", "theta1", "theta2")) + tuple(
+    Connection("estimator", name, "controller", name) for name in ("x", "dx", "theta1", "dtheta1", "theta2",
+                                                                   "dtheta2"))
+register(System("lqg", {"plant": "CranePlant", "controller": "LqrController", "sensor": "CraneSensor",
+                        "estimator": "StateEstimator"},
+                connections=MEASURING, parameters={"plant": {"u_max": 2.0, "v_max": 1.0}},
+                description="Section V regulation from theta1(0) = 10 deg with only x and theta1 measured (1 mm, "
+                            "0.1 deg noise, one step late): a Kalman filter in front of the LQR, |u| <= 2 m/s2, "
+                            "|v| <= 1 m/s"))
+register(System("lqg-transport", {"plant": "CranePlant", "planner": "TrajectoryPlanner", "controller": "LqrController",
+                                  "sensor": "CraneSensor", "estimator": "StateEstimator"},
+                connections=MEASURING,
+                parameters={"plant": {"theta1_0": 0.0, "u_max": 2.0, "v_max": 1.0}, "planner": {"x_d": 2.0}},
+                stop_time=10.0,
+                description="the 2 m move of transport with only x and theta1 measured: a Kalman filter in front of "
+                            "the LQR"))
+register(System("hard-hit", {"plant": "CranePlant", "controller": "HardHitController"},
+                parameters={"plant": {"theta1_0": 1.0471975511965976, "u_max": 2.0, "v_max": 1.0}},
+                description="a hard hit: regulation from theta1(0) = 60 deg by LQR gains scheduled on the swing "
+                            "energy, |u| <= 2 m/s2, |v| <= 1 m/s"))

@@ -18,13 +18,13 @@ def _run(capsys, *argv):
 def test_build_writes_every_component_and_every_builtin_system(tmp_path, capsys):
     code, out, _ = _run(capsys, "build", "--out", str(tmp_path / "fmus"))
     assert code == 0
-    fmus = ["BacksteppingController.fmu", "CranePlant.fmu", "EnergyController.fmu", "Gust.fmu", "LqrController.fmu",
-            "Sensor.fmu", "TrajectoryPlanner.fmu"]
-    names = ["energy", "free", "hoist-transport", "lqr", "paper", "transport"]
+    fmus = ["BacksteppingController.fmu", "CranePlant.fmu", "CraneSensor.fmu", "EnergyController.fmu", "Gust.fmu",
+            "HardHitController.fmu", "LqrController.fmu", "Sensor.fmu", "StateEstimator.fmu", "TrajectoryPlanner.fmu"]
+    names = ["energy", "free", "hard-hit", "hoist-transport", "lqg", "lqg-transport", "lqr", "paper", "transport"]
     assert sorted(p.name for p in (tmp_path / "fmus").iterdir()) == sorted(
         fmus + [f"{n}.OspSystemStructure.xml" for n in names])
     assert sorted(p.name for p in (tmp_path / "fmi3").iterdir()) == fmus
-    assert sorted(p.name for p in (tmp_path / "systems").iterdir()) == [f"{n}.ssp" for n in names]
+    assert sorted(p.name for p in (tmp_path / "systems").iterdir()) == sorted(f"{n}.ssp" for n in names)
     assert sorted(p.name for p in (tmp_path / "containers").iterdir()) == [
         "CraneEnergy.fmu", "CraneLqr.fmu", "CranePaper.fmu", "CraneTransport.fmu"]
 
@@ -56,7 +56,8 @@ def test_simulate_free_swing_and_settings(fmu_dir, tmp_path, capsys):
 
 @pytest.mark.parametrize("argv, message", [
     (["--set", "crane.l1=1"], "unknown instance 'crane'; instances: plant, controller"),
-    (["--system", "nowhere"], "no system 'nowhere'; systems: paper, free, lqr, energy, transport, hoist-transport"),
+    (["--system", "nowhere"], "no system 'nowhere'; systems: paper, free, lqr, energy, transport, hoist-transport, "
+                              "lqg, lqg-transport, hard-hit"),
     (["--system", "free", "--set", "controller.l1=1"], "unknown instance 'controller'; instances: plant"),
     (["--set", "plant.l3=1"], "plant has no parameter or input 'l3'; valid: m1, m2, l1"),
     (["--set", "plant.x=1"], "plant has no parameter or input 'x'"),

@@ -48,12 +48,12 @@ def full_board(fmu_dir, tmp_path_factory):
 def test_every_controller_scenario_and_case_is_a_row(quick_board):
     out, rows, log = quick_board
     table = pq.read_table(out / "scores.parquet").to_pylist()
-    cases_per_controller = {"S1": 1, "S2": 1, "S3": 3, "S4": 1, "S5": 1, "S6": 3, "S7": 1}
+    cases_per_controller = {"S1": 1, "S2": 1, "S3": 3, "S4": 1, "S5": 1, "S6": 3, "S7": 1, "S8": 2, "S9": 3}
     for name in ("MyController", "LqrController"):
         mine = [r for r in table if r["controller"] == name]
         assert {s: sum(r["scenario"] == s for r in mine) for s in cases_per_controller} == cases_per_controller
-    # 2 controllers x the 11 cases above; the one not ok is MyController's S6 at h = 50 ms (see the next test)
-    assert log[-1].startswith("22 cases: 22 run now, 0 already done, 1 not ok")
+    # 2 controllers x the 16 cases above; the one not ok is MyController's S6 at h = 50 ms (see the next test)
+    assert log[-1].startswith("32 cases: 32 run now, 0 already done, 1 not ok")
     for name in ("scoreboard.md", "S1.png", "S2.png", "S7.png", "summary.png"):
         assert (out / name).stat().st_size > 1000
 
@@ -78,7 +78,7 @@ def test_a_full_board_survives_a_quick_run_in_the_same_folder(full_board, fmu_di
     assert {name: (out / name).read_bytes() for name in before} == before
     assert (out / "quick" / "scoreboard.md").read_text().startswith("# Controller scoreboard (QUICK")
     table = pq.read_table(out / "scores.parquet").to_pylist()
-    assert not any(r["quick"] for r in table) and len(table) == 3 * 35
+    assert not any(r["quick"] for r in table) and len(table) == 4 * 64  # S1-S7: 35 cases; S8: 2; S9: 27
     assert {r["scenario_plants"] for r in table if r["scenario"] == "S3"} == {27}
 
 
@@ -129,7 +129,7 @@ def test_animations_are_drawn_only_when_their_run_changed(quick_board, template_
     for _ in range(2):
         compare(out.parent, chosen, fmu_dir, workers=2, quick=True, only=True, progress=False, animate=("S2",),
                 log=logs.append)
-    assert logs[0].endswith("4 plots and 2 animations drawn now") and "22 already done" in logs[0]
+    assert logs[0].endswith("4 plots and 2 animations drawn now") and "32 already done" in logs[0]
     assert logs[1].endswith("4 plots and 0 animations drawn now")
     (out / "animations" / "S2_LqrController.gif").unlink()
     compare(out.parent, chosen, fmu_dir, workers=2, quick=True, only=True, progress=False, animate=("S2",),
@@ -182,7 +182,7 @@ def test_a_rerun_resumes(quick_board, template_fmu, fmu_dir):
     log = []
     again = compare(out.parent, [str(template_fmu), "LqrController"], fmu_dir, workers=2, quick=True,
                     progress=False, animate=(), only=True, log=log.append)
-    assert log[-1].startswith("22 cases: 0 run now, 22 already done")
+    assert log[-1].startswith("32 cases: 0 run now, 32 already done")
     assert [r["case_id"] for r in again] == [r["case_id"] for r in rows]
 
 
@@ -190,7 +190,8 @@ def test_a_rerun_resumes(quick_board, template_fmu, fmu_dir):
     (["--controller", "Nothing"], "no controller 'Nothing'; controllers: BacksteppingController, LqrController"),
     (["--controller", "{fmu_dir}/CranePlant.fmu"], "CranePlant is not a crane controller: it misses x, dx, theta1, "
                                                   "dtheta1, theta2, dtheta2, output u (every scenario); a parameter "
-                                                  "x_d or the inputs x_ref, dx_ref, ddx_ref (S2, S3, S4, S5, S7)"),
+                                                  "x_d or the inputs x_ref, dx_ref, ddx_ref "
+                                                  "(S2, S3, S4, S5, S7, S8, S9)"),
     (["--controller", "{fmu_dir}/LqrController.fmu"],
      "LqrController.fmu and LqrController; rename the FMU file or give --only"),
     (["--workers", "0"], "--workers must be >= 1"),

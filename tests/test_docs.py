@@ -91,10 +91,11 @@ def test_the_readme_component_example_is_built_and_scored(fmu_dir, tmp_path, mon
     for command in commands:
         assert main(shlex.split(command)[1:]) == 0, capsys.readouterr().err
     board = (tmp_path / "results" / "mine" / "quick" / "scoreboard.md").read_text()
-    assert "Controllers: `BacksteppingController`, `EnergyController`, `LqrController`, `PdController` (yours)" \
+    assert "Controllers: `BacksteppingController`, `EnergyController`, `HardHitController`, `LqrController`, " \
+        "`PdController` (yours)" \
         in board
-    assert all(f"| S{i} (QUICK" in board for i in range(1, 8))
+    assert all(f"| S{i} (QUICK" in board for i in range(1, 10))
     (tmp_path / "script.py").write_text(script)
     done = subprocess.run([sys.executable, "script.py"], capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-2000:]
-    assert done.stdout.splitlines()[-1] == "44 cases scored"  # 4 controllers x 11 quick cases, from the journal
+    assert done.stdout.splitlines()[-1] == "80 cases scored"  # 5 controllers x 16 quick cases, from the journal

@@ -91,7 +91,7 @@ def test_the_interface_is_checked_for_every_scenario_at_once():
     message = str(caught.value)
     assert "\n" not in message
     assert "Mine is not a crane controller: it misses a parameter x_d or the inputs x_ref, dx_ref, ddx_ref " \
-           "(S2, S3, S4, S5, S7)" in message
+           "(S2, S3, S4, S5, S7, S8, S9)" in message
     with pytest.raises(ValueError, match=r"it misses dtheta2, output u \(every scenario\); a parameter x_d"):
         scoreboard.check_interface("Half", ["x", "dx", "theta1", "dtheta1", "theta2"], [], [])
     scoreboard.check_interface("Tracker", list(scoreboard.MEASURED) + ["x_ref", "dx_ref", "ddx_ref"], ["u"])

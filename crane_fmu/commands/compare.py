@@ -25,7 +25,7 @@ def arguments(p):
     p.add_argument("--out", required=True, help="output folder: scoreboard.md, scores.parquet, plots, animations")
     dask_options(p)
     p.add_argument("--quick", action="store_true",
-                   help="3 of the 27 mismatch plants in S3; a board marked QUICK, written to OUT/quick")
+                   help="3 of the 27 mismatch plants in S3 and S9; a board marked QUICK, written to OUT/quick")
     p.add_argument("--animate", default="S2", metavar="none|all|S1|S2|S7",
                    help="whose nominal runs to animate (default S2); drawn again only when the run changed")
 

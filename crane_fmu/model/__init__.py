@@ -13,6 +13,8 @@ from . import (  # noqa: F401
     component,
     disturbances,
     energy,
+    estimator,
+    hard_hit,
     limits,
     linalg,
     lqr,

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from .tables import BASE_UNITS
 
-ROLES = ("plant", "controller", "planner", "disturbance", "sensor", "benchmark")
+ROLES = ("plant", "controller", "planner", "disturbance", "sensor", "estimator", "benchmark")
 CAUSALITIES = ("parameter", "input", "output")
 
 

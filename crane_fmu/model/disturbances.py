@@ -105,3 +105,63 @@ SENSOR = Component(
     + tuple(output(name + "_m", v.unit, v.description) for name, v in zip(STATE, MEASURED_STATE)),
     _sensor_configure, _sensor_output, feedthrough=True,
     initial_state=lambda config: (0, None), update=_sensor_update)
+
+
+# --- CraneSensor: only what a crane measures, noisy and whole steps late -------------------
+
+MEASURED = ("x", "theta1", "theta2")  # encoder, rope angle at the trolley, a camera on the payload
+CraneSensorConfig = namedtuple("CraneSensorConfig", "sigmas seed delay")
+
+
+def _crane_sensor_configure(values):
+    for name in ("sigma_x", "sigma_theta1", "sigma_theta2"):
+        if not (values[name] >= 0 and math.isfinite(values[name])):
+            raise ValueError(f"{name} must be >= 0 and finite, got {values[name]!r}")
+    seed, delay = values["seed"], values["delay"]
+    if not (math.isfinite(seed) and seed == int(seed) and 0 <= seed < 2 ** 32):
+        raise ValueError(f"seed must be a whole number in [0, 2^32), got {seed!r}")
+    if not (math.isfinite(delay) and delay == int(delay) and 0 <= delay <= 100):
+        raise ValueError(f"delay must be a whole number of steps in [0, 100], got {delay!r}")
+    return CraneSensorConfig((values["sigma_x"], values["sigma_theta1"], values["sigma_theta2"]), int(seed),
+                             int(delay))
+
+
+def crane_measure(c, k, true_values):
+    """``(x, theta1, theta2)`` measured at sample ``k``: the true values plus independent normal noise.
+
+    The noise is :func:`noise` on channels 8-10, apart from :class:`Sensor`'s 0-5.
+    """
+    return tuple(v + s * noise(c.seed, k, 8 + i) if s else v for i, (v, s) in enumerate(zip(true_values, c.sigmas)))
+
+
+def _crane_sensor_output(c, state, inputs):
+    k, history = state
+    if c.delay == 0 or not history:  # no delay, or the first sample: what is there now
+        return crane_measure(c, k, inputs)
+    return tuple(history[0])  # the sample delay steps ago (the first one until there is one that old)
+
+
+def _crane_sensor_update(c, state, inputs, time, step):
+    k, history = state
+    if c.delay == 0:
+        return (k + 1, [])
+    return (k + 1, ([*history, list(crane_measure(c, k, inputs))])[-c.delay:])
+
+
+CRANE_SENSOR = Component(
+    "CraneSensor", "sensor",
+    "What a crane measures: trolley position (encoder), hook angle (rope angle sensor) and payload angle (a "
+    "camera), each with normal noise (fixed seed), whole communication steps late",
+    (parameter("sigma_x", 1e-3, "m", "noise on the trolley position (standard deviation)"),
+     parameter("sigma_theta1", math.radians(0.1), "rad", "noise on the hook angle (standard deviation)"),
+     parameter("sigma_theta2", math.radians(0.1), "rad", "noise on the payload angle (standard deviation)"),
+     parameter("seed", 1.0, "1", "seed of the noise (a whole number): the same seed, the same noise"),
+     parameter("delay", 1.0, "1", "whole communication steps by which the outputs are late; 0: at once"),
+     input_("x", "m", "true trolley position"),
+     input_("theta1", "rad", "true hook swing angle"),
+     input_("theta2", "rad", "true payload swing angle"),
+     output("x_meas", "m", "measured trolley position"),
+     output("theta1_meas", "rad", "measured hook swing angle"),
+     output("theta2_meas", "rad", "measured payload swing angle (a camera)")),
+    _crane_sensor_configure, _crane_sensor_output, feedthrough=True,
+    initial_state=lambda config: (0, []), update=_crane_sensor_update)
