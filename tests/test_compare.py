@@ -196,6 +196,7 @@ def test_a_rerun_resumes(quick_board, template_fmu, fmu_dir):
     (["--workers", "0"], "--workers must be >= 1"),
     (["--animate", "S4"], "--animate S4: choose none, all, S1, S2, S7"),
     (["--only"], "--only scores only the --controller ones: give at least one --controller"),
+    (["--scheduler", "tcp://127.0.0.1:9"], "--scheduler tcp://127.0.0.1:9: no Dask scheduler answers there"),
 ])
 def test_compare_mistakes_are_one_line(fmu_dir, tmp_path, capsys, argv, message):
     """Refused before anything runs: nothing is written."""
@@ -203,7 +204,7 @@ def test_compare_mistakes_are_one_line(fmu_dir, tmp_path, capsys, argv, message)
     assert main(["compare", "--out", str(tmp_path / "o"), "--fmu-dir", str(fmu_dir), *argv]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err
-    assert not (tmp_path / "o" / JOURNAL).exists()
+    assert not (tmp_path / "o").exists()  # not even an empty folder (issue 29)
 
 
 def test_animate_a_simulate_result(fmu_dir, tmp_path, capsys):

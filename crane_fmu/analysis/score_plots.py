@@ -187,6 +187,7 @@ def animate(signals, path, title="", fps=15, progress=False):
             sys.stderr.flush()
     plt.close(fig)
     path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
     partial = path.with_name(f".{path.stem}.partial{path.suffix}")
     times = [t[i] - t[0] for i in frames]
     if path.suffix == ".mp4":

@@ -111,17 +111,18 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
     from crane_fmu import systems
 
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     settings = study.settings()
     cases = study.cases()
     done = read_journal(out_dir)
     pending = [c for c in cases if case_id(c, settings) not in done]
-    bar = Progress(len(cases), len(cases) - len(pending)) if progress else None
+    failed_before = sum(done[case_id(c, settings)]["status"] != "ok" for c in cases if case_id(c, settings) in done)
     start = time.perf_counter()
     rows_ran = []
     with systems.open_system(study.system) as system:
         systems.resolve(system, fmu_dir)
         units = _check_names(study, system, fmu_dir)
+        out_dir.mkdir(parents=True, exist_ok=True)  # only now: a refused study leaves no folder behind
+        bar = Progress(len(cases), len(cases) - len(pending), failed=failed_before) if progress else None
         if pending:
             shipped = shippable(systems.at_step(system, fmu_dir, study.step), fmu_dir)
             to_run, invalid = [], []
