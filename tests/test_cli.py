@@ -1,6 +1,7 @@
 """The crane-fmu command line, run in-process through main(argv)."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -331,3 +332,33 @@ def test_the_iterative_jacobi_master_is_a_choice_and_settles_like_gauss_seidel(f
         assert main(common + ["--master", master, "--out", str(tmp_path / f"{master}.csv")]) == 0
     assert (tmp_path / "iterative-jacobi.csv").read_bytes() == (tmp_path / "gauss-seidel.csv").read_bytes()
     assert (tmp_path / "jacobi.csv").read_bytes() != (tmp_path / "gauss-seidel.csv").read_bytes()
+
+
+def test_plot_draws_only_what_the_results_hold(fmu_dir, tmp_path, monkeypatch, capsys):
+    """No flat "demanded u" line for a result without u (fmpy's output of the plant); with the paper's law
+    and the LQR together each u stays readable (symlog beside +-800 m/s2) and each run's peak |u| is named."""
+    import crane_fmu.analysis.plots as plots
+    from crane_fmu.cosim import write_csv
+
+    drawn = []
+    overlay = plots.plot_overlay
+    monkeypatch.setattr(plots, "plot_overlay", lambda *a, **k: drawn.append(overlay(*a, **k)))
+    free = read_csv(_simulated(fmu_dir, tmp_path, "free", "2"))
+    write_csv(tmp_path / "fmpy.csv", {k.removeprefix("plant."): v for k, v in free.items()})  # fmpy's names
+    assert main(["plot", str(tmp_path / "fmpy.csv"), "--out", str(tmp_path / "free.png")]) == 0
+    assert [label for label, _ in drawn[-1]["panels"]] == ["trolley x [m]", "hook angle theta1 [deg]",
+                                                          "payload angle theta2 [deg]"]
+    paper, lqr = _simulated(fmu_dir, tmp_path, "paper", "4"), _simulated(fmu_dir, tmp_path, "lqr", "4")
+    assert main(["plot", str(paper), str(lqr), "--out", str(tmp_path / "s5.png")]) == 0
+    panels, legend = drawn[-1]["panels"], drawn[-1]["legend"]
+    assert panels[3][1] == "symlog" and panels[3][0].startswith("demanded u [m/s2]")
+    assert re.fullmatch(r"paper \(peak \|u\| \d{3} m/s2\)", legend[0]) and legend[1] == "lqr (peak |u| 2 m/s2)"
+    assert drawn[-1]["title"] == "paper vs lqr"
+    assert (tmp_path / "s5.png").stat().st_size > 10_000
+
+
+def _simulated(fmu_dir, tmp_path, system, stop_time):
+    path = tmp_path / f"{system}.csv"
+    assert main(["simulate", "--fmu-dir", str(fmu_dir), "--system", system, "--stop-time", stop_time,
+                 "--out", str(path)]) == 0
+    return path

@@ -233,6 +233,27 @@ def test_animate_a_simulate_result(fmu_dir, tmp_path, capsys):
     assert "has no crane to animate: it needs the plant outputs x, x1, y1, x2, y2" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("every", [32, 7, 250])
+def test_a_gif_plays_in_real_time_from_any_output_interval(fmu_dir, tmp_path, every):
+    """fmpy writes every 32 ms, the master every 1 ms, a user may keep every 0.25 s: the GIF's delays add up
+    to the run's duration (within one frame) and are all equal (issue 29: 32 ms output played at 0.8x)."""
+    from PIL import Image
+
+    from crane_fmu.analysis.score_plots import animate
+    from crane_fmu.cosim import run
+
+    columns = run(systems.get("transport"), fmu_dir, stop_time=3.0).columns()
+    kept = {name: values[::every] for name, values in columns.items()}
+    animate(kept, tmp_path / "move.gif", fps=15)
+    gif = Image.open(tmp_path / "move.gif")
+    durations = []
+    for k in range(gif.n_frames):
+        gif.seek(k)
+        durations.append(gif.info["duration"])
+    assert abs(sum(durations) - 1000 * kept["time"][-1]) <= 70, (sum(durations), kept["time"][-1])
+    assert all(d % 70 == 0 for d in durations)  # whole frames of 7 cs (identical ones merged)
+
+
 def test_readme_shows_the_current_scoreboard(full_board):
     """Doc-sync only: the full suite of every built-in controller, run now, gives the README's table.
 

@@ -36,10 +36,18 @@ def crane_signals(columns, extra=()):
                          + ", ".join(columns))
     signals = {"time": columns["time"], **{n: columns[key(plant, n)] for n in CRANE_OUTPUTS + tuple(extra)
                                            if key(plant, n) in columns}}
-    sources = [key(i, "u") for i in instances if i != plant] + (["u"] if plant == "" else [])
-    source = next((k for k in sources if k in columns), None)
+    source = u_column(columns)
     signals["u"] = columns[source] if source else np.zeros_like(columns["time"])
     return signals
+
+
+def u_column(columns):
+    """The column of the demanded ``u`` that :func:`crane_signals` takes, or None when no column gives it
+    (a plant alone: its ``u`` is then zero, and a plot must not show a demand that was never made)."""
+    instances = list(dict.fromkeys(name.rpartition(".")[0] for name in columns))
+    plant = next((i for i in instances if all((f"{i}.{n}" if i else n) in columns for n in CRANE_OUTPUTS)), None)
+    sources = [f"{i}.u" if i else "u" for i in instances if i != plant] + (["u"] if plant == "" else [])
+    return next((k for k in sources if k in columns), None)
 
 
 def peak_abs(values):
