@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .metrics import CONVERGING
 from .paper_cases import ALTERNATIVE, PAPER_LAW
 
 
@@ -103,7 +104,7 @@ def _settles_by_15(s, form):
 
 def _similar(s, form):
     m = s["fig7"][form]
-    return m["outcome"] == "converges" and (m.get("corr_theta1_theta2") or 0) > 0.5
+    return m["outcome"] in CONVERGING and (m.get("corr_theta1_theta2") or 0) > 0.5
 
 
 def _quiet_after_15(s, form):
@@ -153,7 +154,7 @@ def _l1_list(s, form, key, digits=1, unit=" deg"):
 # --- the law as a whole ----------------------------------------------------------------
 
 def _converges_from_10(s, form):
-    return s["fig7"][form]["outcome"] == "converges"
+    return s["fig7"][form]["outcome"] in CONVERGING
 
 
 def _stable(s, form):
@@ -268,8 +269,8 @@ def render(s):
         "theta2 row of eq (20) dropped (not the paper's law; included to show where the failure comes "
         "from). Outcomes follow fixed rules (`crane_fmu/analysis/metrics.py`): *diverges* if the run "
         "stopped, an angle passed 90 deg or the swing grows; *converges* if the swing in the last quarter "
-        "of the run is below 0.1 deg or below 0.9 times that of the third quarter; otherwise *sustained "
-        "oscillation*.",
+        "of the run is below 0.1 deg (it has a settling time); *decaying* if it is not, but below 0.9 times "
+        "that of the third quarter; otherwise *sustained oscillation*.",
         "",
         "## Claims",
         "",

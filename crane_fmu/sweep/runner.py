@@ -86,8 +86,11 @@ def run_case(case, system, settings, metric_names):
         s = metrics.crane_signals(columns)
         values = metrics.closed_loop_metrics(s["time"], s["x"], s["theta1"], s["theta2"], s["u"],
                                              row["status"] == "ok")
-        values["settling_band_s"] = metrics.settling_time(s["time"], [s["theta1"], s["theta2"]],
-                                                          math.radians(settings["settling_band_deg"]))
+        band = math.radians(settings["settling_band_deg"])
+        values["settling_band_s"] = metrics.settling_time(s["time"], [s["theta1"], s["theta2"]], band)
+        # "converges" only where the study's settling time exists too (a narrower band than 0.1 deg)
+        values["outcome"] = metrics.classify(s["time"], s["theta1"], s["theta2"], row["status"] == "ok",
+                                             min(band, metrics.SETTLED_BAND))
     row.update({name: values.get(name) for name in metric_names})
     row["duration_s"] = time.perf_counter() - start
     return row
