@@ -29,6 +29,18 @@ def test_ci_runs_the_readme_test_command():
     assert command in (ROOT / ".ci" / "run").read_text()
 
 
+def test_the_quick_start_plot_says_what_it_compares():
+    """The README's quick start ends with a titled plot that says only the LQR limits u (issue 29), and the
+    tutorial runs the same plot command."""
+    readme = (ROOT / "README.md").read_text()
+    command = re.search(r"## Quick start.*?```\n(.*?)\n```", readme, re.S).group(1)
+    plot = command.split(" && ")[-1]
+    assert plot.startswith(".venv/bin/crane-fmu plot results/paper.csv results/lqr.csv --out results/section5.png")
+    title = re.search(r'--title "(.*)"$', plot).group(1)
+    assert "u unlimited" in title and "LQR (|u| <= 2 m/s2)" in title
+    assert plot.removeprefix(".venv/bin/") in (DOCS / "tutorial.md").read_text()
+
+
 def test_the_readme_python_example_runs(fmu_dir, tmp_path):
     """The "From Python" block of the interoperability recipes, as a user runs it: in a folder with build/fmus.
 
