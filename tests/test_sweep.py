@@ -267,3 +267,22 @@ def test_settling_band_is_chosen_by_the_study(small_run, fmu_dir, tmp_path):
     row = run_case(case, shippable(systems.get("paper"), fmu_dir), study.settings(), study.metrics)
     assert row["settling_band_s"] == 0.0  # a 20-degree band holds from the start
     assert row["settling_0.5deg_s"] is None  # the 0.5-degree band: not within the 2 s (this law takes ~17 s)
+
+
+def _nap(item):
+    time.sleep(0.5)
+    return {"case_id": item, "status": "ok"}
+
+
+def test_ctrl_c_in_a_process_pool_batch_drops_the_items_not_begun():
+    """The pool's workers ignore Ctrl-C; the parent stops at once, not after every queued item."""
+    from crane_fmu.sweep.batch import run_batch
+
+    class Interrupt:
+        def update(self, result):
+            raise KeyboardInterrupt
+
+    start = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        run_batch(_nap, list(range(40)), workers=2, progress=Interrupt())
+    assert time.monotonic() - start < 5  # 40 items of 0.5 s on 2 workers would take 10 s

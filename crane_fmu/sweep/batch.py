@@ -109,7 +109,11 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
             return [keep(task(item, *extra, **kwargs)) for item in items]
         with ProcessPoolExecutor(max_workers=workers, initializer=ignore_interrupts) as pool:
             futures = [pool.submit(task, item, *extra, **kwargs) for item in items]
-            return [keep(future.result()) for future in as_completed(futures)]
+            try:
+                return [keep(future.result()) for future in as_completed(futures)]
+            except BaseException:  # Ctrl-C (the workers ignore it) or a failed item: drop what has not begun
+                pool.shutdown(wait=True, cancel_futures=True)
+                raise
 
 
 def _on_dask(task, items, extra, workers, scheduler, kwargs):
