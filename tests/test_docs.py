@@ -39,6 +39,20 @@ def test_the_quick_start_plot_says_what_it_compares():
     title = re.search(r'--title "(.*)"$', plot).group(1)
     assert "u unlimited" in title and "LQR (|u| <= 2 m/s2)" in title
     assert plot.removeprefix(".venv/bin/") in (DOCS / "tutorial.md").read_text()
+    # after the .venv/bin/ quick start, bare crane-fmu and fmpy: the README says to activate the venv
+    assert "activate the virtual environment first\n(`. .venv/bin/activate`)" in readme
+
+
+def test_the_stop_times_the_docs_state_are_the_systems():
+    """"Built-in systems run 20 s" was wrong (transport runs 10 s): the command line page names each exception."""
+    from crane_fmu import systems
+
+    page = " ".join((DOCS / "guide" / "command-line.md").read_text().split())  # lines joined
+    assert "1 ms for every built-in one; 20 s, except" in page
+    for system in systems.registered():
+        assert system.step == 1e-3
+        if system.stop_time != 20.0:
+            assert f"{system.stop_time:g} s for `{system.name}`" in page, system.name
 
 
 def test_the_readme_python_example_runs(fmu_dir, tmp_path):
