@@ -257,8 +257,7 @@ def test_ctrl_c_stops_a_sweep_with_one_line(fmu_dir, tmp_path):
     os.killpg(run.pid, signal.SIGINT)  # as a terminal's Ctrl-C does
     out, err = run.communicate(timeout=120)
     assert (run.returncode, out) == (130, ""), err
-    assert [line for line in err.splitlines() if "Port 8787" not in line and "Perhaps you already" not in line
-            and "Hosting the HTTP" not in line and "warnings.warn" not in line] == ["crane-fmu: interrupted"]
+    assert err == "crane-fmu: interrupted\n"  # (the dashboard on a free port: no "Port 8787 is in use" either)
 
 
 def test_settling_band_is_chosen_by_the_study(small_run, fmu_dir, tmp_path):

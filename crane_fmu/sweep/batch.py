@@ -132,7 +132,7 @@ def _on_dask(task, items, extra, workers, scheduler, kwargs):
         handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
             cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=50)
+                                   dashboard_address=":0", silence_logs=50)  # a free port: no warning
         finally:
             signal.signal(signal.SIGINT, handler)
         client = Client(cluster)
