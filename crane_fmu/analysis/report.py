@@ -39,10 +39,10 @@ def _magnitude(m, key, digits, unit):
 
 
 def _reach(r):
-    """The region of attraction in words: the largest angle whose smaller angles all converge."""
+    """The region of attraction in words: the largest angle whose smaller angles all converge or decay."""
     if r["largest_converging_deg"] == 0.0:
-        return f"converges from no angle tried (the smallest is {min(r['angles_deg']):g} deg)"
-    return f"converges from up to {_f(r['largest_converging_deg'], 1, ' deg')}"
+        return f"converges or decays from no angle tried (the smallest is {min(r['angles_deg']):g} deg)"
+    return f"converges or decays from up to {_f(r['largest_converging_deg'], 1, ' deg')}"
 
 
 def _outcome(m):
@@ -310,7 +310,7 @@ def render(s):
         "## Region of attraction (initial theta1, everything else at rest)",
         "",
         _table(["form", "largest theta1(0) with every smaller angle converging", "converging angles", "outcomes"],
-               [(form, _reach(r).removeprefix("converges "),
+               [(form, _reach(r).removeprefix("converges or decays "),
                  ", ".join(f"{a:g}" for a in r["converging_deg"]) or "none",
                  _outcome_counts(r["outcomes"])) for form, r in s["region_of_attraction"].items()]),
         "",
