@@ -149,7 +149,7 @@ def test_study_completes_when_a_worker_dies(fmu_dir, tmp_path):
     study = _study(tmp_path, 'stop_time = 20.0\nstep = 0.001\n[parameters]\n"plant.theta1_0" = '
                    '[0.01, 0.02, 0.03, 0.04, 0.05, 0.06]\n[fixed]\n"controller.w_theta2" = 0.0\n')
     killed_while_running = []
-    with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None, silence_logs=50) as cluster, \
+    with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0", silence_logs=50) as cluster, \
             Client(cluster) as client:
         def kill_a_busy_worker():
             deadline = time.monotonic() + 60
