@@ -19,7 +19,7 @@ def parser():
 
     top = Parser(prog="crane-fmu", description="Build, simulate, sweep, score and benchmark the crane's FMUs.")
     top.add_argument("--version", action="version", version=f"crane-fmu {__version__}")
-    sub = top.add_subparsers(dest="command", required=True, parser_class=Parser)
+    sub = top.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     for command in COMMANDS:
         p = sub.add_parser(command.NAME, help=command.HELP, description=getattr(command, "DESCRIPTION", None),
                            epilog=command.EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -31,11 +31,18 @@ def parser():
 def main(argv=None):
     """Run the command line; return the exit status."""
     try:
-        args = parser().parse_args(argv)
+        top = parser()
+        args = top.parse_args(argv)
+        if args.command is None:  # bare crane-fmu: what there is to run
+            top.print_help(sys.stderr)
+            return 2
         return args.run(args)
     except UsageError as exc:
         print(f"crane-fmu: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # Ctrl-C: one line; a command that keeps partial results says where itself
+        print("crane-fmu: interrupted", file=sys.stderr)
+        return 130
     except BrokenPipeError:  # the reader (e.g. head) has gone: not an error
         sys.stdout = open(os.devnull, "w")
         return 0

@@ -180,12 +180,13 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
         raise ValueError(f"animate {', '.join(unknown)}: no animation there; the animated scenarios are "
                          f"{', '.join(ANIMATE)}")
     out_dir = Path(out_dir) / "quick" if quick else Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     chosen = contenders(chosen, fmu_dir, only)
     cases, blobs, refused = plan(chosen, fmu_dir, quick=quick)
+    out_dir.mkdir(parents=True, exist_ok=True)  # only now: a refused board leaves no folder behind
     done = read_journal(out_dir)
     pending = [c for c in cases if c["case_id"] not in done]
-    bar = Progress(len(cases), len(cases) - len(pending)) if progress else None
+    failed_before = sum(done[c["case_id"]]["status"] != "ok" for c in cases if c["case_id"] in done)
+    bar = Progress(len(cases), len(cases) - len(pending), failed=failed_before) if progress else None
     ran = run_batch(run_score_case, pending, blobs, on="dask", workers=workers, scheduler=scheduler,
                     journal=out_dir / JOURNAL, progress=bar)
     done.update({r["case_id"]: r for r in ran})

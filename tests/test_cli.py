@@ -1,6 +1,7 @@
 """The crane-fmu command line, run in-process through main(argv)."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -94,15 +95,138 @@ def test_missing_fmus_and_unwritable_output(tmp_path, fmu_dir, capsys):
 
 
 def test_fmu_failure_keeps_results_and_exits_1(fmu_dir, tmp_path, capsys):
-    """The paper's law at h = 10 ms diverges; the plant discards the step where its state overflows."""
+    """The paper's law at h = 10 ms diverges; the plant discards the step where its state overflows.
+
+    The rows up to there go beside the result under a clear name; an earlier good result is left as it was
+    (issue 29: a failed run turned a 20,002-row file into 7 rows)."""
     csv = tmp_path / "diverged.csv"
+    good = "time,plant.x\n0,0\n"
+    csv.write_text(good)
     code, _, err = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--step", "0.01", "--out", str(csv))
     assert code == 1
     assert err.count("\n") == 1 and "plant: fmi2DoStep returned discard at t=" in err
-    lines = csv.read_text().splitlines()
+    cut = tmp_path / "diverged.cut-short.csv"
+    assert f"in {cut}; {csv} is as it was)" in err
+    assert csv.read_text() == good  # the earlier result, untouched
+    lines = cut.read_text().splitlines()
     assert lines[-1].startswith("# run cut short: plant: fmi2DoStep returned discard")
-    data = read_csv(csv)
+    data = read_csv(cut)
     assert 0 < data["time"][-1] < 20 and all(math.isfinite(v) for v in data["plant.x"])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["diverged.csv", "diverged.cut-short.csv"]
+
+
+def test_ctrl_c_in_simulate_is_one_line_and_keeps_the_rows_so_far(fmu_dir, tmp_path, capsys, monkeypatch):
+    """Ctrl-C during a run: one line naming where the rows went, status 130; the earlier result untouched."""
+    import crane_fmu.cosim.master
+
+    csv = tmp_path / "run.csv"
+    csv.write_text("an earlier result\n")
+    advance = crane_fmu.cosim.master.Master.advance
+
+    def interrupted(self, start_time, step, first, last, observers=()):
+        advance(self, start_time, step, first, min(last, first + 50), observers)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(crane_fmu.cosim.master.Master, "advance", interrupted)
+    code, out, err = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--stop-time", "1", "--out", str(csv))
+    cut = tmp_path / "run.cut-short.csv"
+    assert (code, out, err) == (130, "", f"crane-fmu: interrupted; the rows so far are in {cut}\n")
+    assert csv.read_text() == "an earlier result\n"
+    assert cut.read_text().splitlines()[-1] == "# run cut short: interrupted"
+    assert len(read_csv(cut)["time"]) > 1
+
+
+def test_ctrl_c_anywhere_else_is_one_line(capsys, monkeypatch):
+    import crane_fmu.commands.info
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(crane_fmu.commands.info, "run", interrupted)
+    assert _run(capsys, "info") == (130, "", "crane-fmu: interrupted\n")
+
+
+def test_bare_command_lists_the_commands(capsys):
+    code, out, err = _run(capsys)
+    assert code == 2 and out == ""
+    from crane_fmu.commands import COMMANDS
+
+    assert err.startswith("usage: crane-fmu") and all(f"    {c.NAME} " in err or f"    {c.NAME}\n" in err
+                                                       for c in COMMANDS)
+
+
+def test_simulate_writes_a_mat_file_with_the_csv_columns(fmu_dir, tmp_path, capsys):
+    """--out FILE.mat (scipy.io.savemat) for MATLAB: the CSV's column names and values, and a struct per instance."""
+    import scipy.io
+
+    from crane_fmu.cosim import read_result
+
+    for name in ("run.csv", "run.mat"):
+        assert main(["simulate", "--fmu-dir", str(fmu_dir), "--stop-time", "0.5", "--out", str(tmp_path / name)]) == 0
+    csv, mat = read_result(tmp_path / "run.csv"), read_result(tmp_path / "run.mat")
+    assert list(csv) == list(mat) and len(mat["time"]) == 501
+    for column in csv:
+        assert np.array_equal(csv[column], mat[column]), column
+    content = scipy.io.loadmat(tmp_path / "run.mat")
+    assert np.array_equal(content["plant"]["theta1"][0, 0].ravel(), csv["plant.theta1"])
+    assert np.array_equal(content["time"].ravel(), csv["time"])
+
+
+def test_use_swaps_one_instances_fmu(fmu_dir, tmp_path, capsys):
+    """--use controller=FILE.fmu runs another FMU as that instance; the system's values it lacks are noted."""
+    energy = tmp_path / "mine" / "EnergyController.fmu"
+    energy.parent.mkdir()
+    energy.write_bytes((fmu_dir / "EnergyController.fmu").read_bytes())
+    common = ["simulate", "--fmu-dir", str(fmu_dir), "--system", "lqr", "--stop-time", "0.2"]
+    assert main(common + ["--use", f"controller={energy}", "--out", str(tmp_path / "swap.csv")]) == 0
+    assert main(["simulate", "--fmu-dir", str(fmu_dir), "--system", "energy", "--stop-time", "0.2",
+                 "--out", str(tmp_path / "energy.csv")]) == 0
+    capsys.readouterr()
+    assert (tmp_path / "swap.csv").read_bytes() == (tmp_path / "energy.csv").read_bytes()
+    for item, message in [("controller", "expected INSTANCE=FILE.fmu"),
+                          (f"crane={energy}", "system lqr has no instance 'crane'; instances: plant, controller"),
+                          (f"controller={tmp_path / 'nowhere.fmu'}", "nowhere.fmu not found"),
+                          (f"controller={tmp_path / 'swap.csv'}", "is not an FMU file (the name must end in .fmu)")]:
+        code, _, err = _run(capsys, *common, "--use", item, "--out", str(tmp_path / "x.csv"))
+        assert code == 2 and err.count("\n") == 1 and message in err, err
+    assert not (tmp_path / "x.csv").exists()
+
+
+def test_progress_line_only_on_a_terminal(tmp_path):
+    """The progress observer writes t of the stop time on one line; simulate adds it only when stderr is a tty."""
+    import io
+
+    from crane_fmu.cosim import ProgressLine
+
+    stream = io.StringIO()
+    line = ProgressLine(0.0, 10.0, stream, interval=0.0, check_every=2)
+    for k in range(5):
+        line.observe(k * 1.0, None)
+    line.close()
+    assert stream.getvalue() == "\rt = 1 of 10 s (10 %)\rt = 3 of 10 s (30 %)\n"
+
+
+def test_simulate_shows_progress_on_a_terminal_and_not_in_a_pipe(fmu_dir, tmp_path):
+    """A run under a pseudo-terminal gets the line on stderr; with stderr a pipe nothing but the result line."""
+    import os
+    import pty
+    import subprocess
+    import sys
+
+    # long enough to pass the line's first second (about 2.5 s of stepping at 1 ms)
+    command = [sys.executable, "-m", "crane_fmu", "simulate", "--fmu-dir", str(fmu_dir), "--system", "lqr",
+               "--stop-time", "150", "--out", str(tmp_path / "long.parquet")]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+    leader, follower = pty.openpty()
+    done = subprocess.run(command, stdout=subprocess.PIPE, stderr=follower, timeout=300)
+    os.close(follower)
+    try:
+        shown = os.read(leader, 100_000).decode()
+    except OSError:  # EIO: the terminal is closed and nothing was written
+        shown = ""
+    os.close(leader)
+    assert done.returncode == 0 and "\rt = " in shown and " of 150 s (" in shown, shown
 
 
 def test_info_lists_every_variable_with_units(capsys):
@@ -150,12 +274,19 @@ def test_benchmarks_run_and_print_their_figures(capsys, argv, expect):
 def test_targets_measures_every_controller_against_its_targets(fmu_dir, capsys):
     """A smoke test of the command: the targets themselves are guarded by test_controllers.py."""
     assert main(["targets", "--quick", "--fmu-dir", str(fmu_dir), "--workers", "2"]) == 0
-    assert "Region of attraction, energy: converges from every theta1(0)" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "Region of attraction, energy (30 s runs): converges or is decaying from every theta1(0)" in out
+    # the words agree (issue 29): the law whose region of attraction is every angle tried is not called a
+    # sustained oscillation in its own 10-degree regulation run
+    energy = next(line for line in out.splitlines() if line.startswith("  energy   0.5 deg from"))
+    assert energy.endswith(("converges", "decaying")), energy
 
 
 @pytest.mark.parametrize("argv, message", [
     (["--out", "{tmp}/"], "is a folder; give a file name"),
-    (["--out", "{tmp}/section5.png"], "writes a .csv file; the name must end in .csv"),
+    (["--out", "{tmp}/section5.png"],
+     "writes a .csv, .parquet or .mat file; the name must end in .csv, .parquet or .mat"),
+    (["--out", "{tmp}/sub/x.xlsx"], "the name must end in .csv, .parquet or .mat"),
     (["--plot", "{tmp}/section5.csv"], "writes a .png file; the name must end in .png"),
     (["--out", "/proc/x.csv"], "--out /proc/x.csv: cannot be written"),
     (["--set", "plant.l1=2deg"], "'2deg': a deg value needs a variable in rad, this one is in m"),
@@ -196,7 +327,7 @@ def test_simulate_writes_parquet_with_the_csv_numbers(fmu_dir, tmp_path, capsys)
     for column in csv:
         assert np.array_equal(csv[column], parquet[column]), column
     assert main(["simulate", "--fmu-dir", str(fmu_dir), "--out", str(tmp_path / "run.txt")]) == 2
-    assert "--out " + str(tmp_path / "run.txt") + ": writes a .csv file" in capsys.readouterr().err
+    assert "--out " + str(tmp_path / "run.txt") + ": writes a .csv, .parquet or .mat file" in capsys.readouterr().err
 
 
 def test_the_iterative_jacobi_master_is_a_choice_and_settles_like_gauss_seidel(fmu_dir, tmp_path, capsys):
@@ -207,3 +338,33 @@ def test_the_iterative_jacobi_master_is_a_choice_and_settles_like_gauss_seidel(f
         assert main(common + ["--master", master, "--out", str(tmp_path / f"{master}.csv")]) == 0
     assert (tmp_path / "iterative-jacobi.csv").read_bytes() == (tmp_path / "gauss-seidel.csv").read_bytes()
     assert (tmp_path / "jacobi.csv").read_bytes() != (tmp_path / "gauss-seidel.csv").read_bytes()
+
+
+def test_plot_draws_only_what_the_results_hold(fmu_dir, tmp_path, monkeypatch, capsys):
+    """No flat "demanded u" line for a result without u (fmpy's output of the plant); with the paper's law
+    and the LQR together each u stays readable (symlog beside +-800 m/s2) and each run's peak |u| is named."""
+    import crane_fmu.analysis.plots as plots
+    from crane_fmu.cosim import write_csv
+
+    drawn = []
+    overlay = plots.plot_overlay
+    monkeypatch.setattr(plots, "plot_overlay", lambda *a, **k: drawn.append(overlay(*a, **k)))
+    free = read_csv(_simulated(fmu_dir, tmp_path, "free", "2"))
+    write_csv(tmp_path / "fmpy.csv", {k.removeprefix("plant."): v for k, v in free.items()})  # fmpy's names
+    assert main(["plot", str(tmp_path / "fmpy.csv"), "--out", str(tmp_path / "free.png")]) == 0
+    assert [label for label, _ in drawn[-1]["panels"]] == ["trolley x [m]", "hook angle theta1 [deg]",
+                                                          "payload angle theta2 [deg]"]
+    paper, lqr = _simulated(fmu_dir, tmp_path, "paper", "4"), _simulated(fmu_dir, tmp_path, "lqr", "4")
+    assert main(["plot", str(paper), str(lqr), "--out", str(tmp_path / "s5.png")]) == 0
+    panels, legend = drawn[-1]["panels"], drawn[-1]["legend"]
+    assert panels[3][1] == "symlog" and panels[3][0].startswith("demanded u [m/s2]")
+    assert re.fullmatch(r"paper \(peak \|u\| \d{3} m/s2\)", legend[0]) and legend[1] == "lqr (peak |u| 2 m/s2)"
+    assert drawn[-1]["title"] == "paper vs lqr"
+    assert (tmp_path / "s5.png").stat().st_size > 10_000
+
+
+def _simulated(fmu_dir, tmp_path, system, stop_time):
+    path = tmp_path / f"{system}.csv"
+    assert main(["simulate", "--fmu-dir", str(fmu_dir), "--system", system, "--stop-time", stop_time,
+                 "--out", str(path)]) == 0
+    return path

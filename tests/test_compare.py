@@ -197,6 +197,7 @@ def test_a_rerun_resumes(quick_board, template_fmu, fmu_dir):
     (["--workers", "0"], "--workers must be >= 1"),
     (["--animate", "S4"], "--animate S4: choose none, all, S1, S2, S7"),
     (["--only"], "--only scores only the --controller ones: give at least one --controller"),
+    (["--scheduler", "tcp://127.0.0.1:9"], "--scheduler tcp://127.0.0.1:9: no Dask scheduler answers there"),
 ])
 def test_compare_mistakes_are_one_line(fmu_dir, tmp_path, capsys, argv, message):
     """Refused before anything runs: nothing is written."""
@@ -204,7 +205,7 @@ def test_compare_mistakes_are_one_line(fmu_dir, tmp_path, capsys, argv, message)
     assert main(["compare", "--out", str(tmp_path / "o"), "--fmu-dir", str(fmu_dir), *argv]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err
-    assert not (tmp_path / "o" / JOURNAL).exists()
+    assert not (tmp_path / "o").exists()  # not even an empty folder (issue 29)
 
 
 def test_animate_a_simulate_result(fmu_dir, tmp_path, capsys):
@@ -233,6 +234,27 @@ def test_animate_a_simulate_result(fmu_dir, tmp_path, capsys):
     assert "has no crane to animate: it needs the plant outputs x, x1, y1, x2, y2" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("every", [32, 7, 250])
+def test_a_gif_plays_in_real_time_from_any_output_interval(fmu_dir, tmp_path, every):
+    """fmpy writes every 32 ms, the master every 1 ms, a user may keep every 0.25 s: the GIF's delays add up
+    to the run's duration (within one frame) and are all equal (issue 29: 32 ms output played at 0.8x)."""
+    from PIL import Image
+
+    from crane_fmu.analysis.score_plots import animate
+    from crane_fmu.cosim import run
+
+    columns = run(systems.get("transport"), fmu_dir, stop_time=3.0).columns()
+    kept = {name: values[::every] for name, values in columns.items()}
+    animate(kept, tmp_path / "move.gif", fps=15)
+    gif = Image.open(tmp_path / "move.gif")
+    durations = []
+    for k in range(gif.n_frames):
+        gif.seek(k)
+        durations.append(gif.info["duration"])
+    assert abs(sum(durations) - 1000 * kept["time"][-1]) <= 70, (sum(durations), kept["time"][-1])
+    assert all(d % 70 == 0 for d in durations)  # whole frames of 7 cs (identical ones merged)
+
+
 def test_readme_shows_the_current_scoreboard(full_board):
     """Doc-sync only: the full suite of every built-in controller, run now, gives the README's table.
 
@@ -241,9 +263,10 @@ def test_readme_shows_the_current_scoreboard(full_board):
     LQR design against scipy, the metrics' known answers (test_metrics.py) and the ranking rules
     (test_scoreboard.py)."""
     _, rows = full_board
-    readme = (ROOT / "README.md").read_text()
-    section = re.search(r"<!-- scoreboard:start -->\n(.*)\n<!-- scoreboard:end -->", readme, re.S).group(1)
-    assert section.strip() == scoreboard.render_summary(rows)
+    for page in (ROOT / "README.md", ROOT / "docs" / "guide" / "scoreboard.md"):  # the front door and the guide
+        text = page.read_text()
+        section = re.search(r"<!-- scoreboard:start -->\n(.*)\n<!-- scoreboard:end -->", text, re.S).group(1)
+        assert section.strip() == scoreboard.render_summary(rows), page
 
 
 def test_only_fmus_that_run_python_here_are_called_holding_the_gil(template_fmu, crane_fmus):

@@ -258,11 +258,50 @@ def test_csv_recorder_keeps_the_rows_of_a_run_cut_short(tmp_path):
         recorder.observe(0.5 * k, _values([k + 0.25]))
     assert path.read_text() == "an earlier result\n"  # nothing replaced before close
     recorder.close(reason="a: fmi2DoStep returned discard at t=1 s")
-    lines = path.read_text().splitlines()
+    cut = tmp_path / "cut.cut-short.csv"  # beside the earlier result, which is left as it was
+    assert recorder.written == str(cut) and path.read_text() == "an earlier result\n"
+    lines = cut.read_text().splitlines()
     assert lines == ["time,a.y", "0,0.25", "0.5,1.25", "1,2.25",
                      "# run cut short: a: fmi2DoStep returned discard at t=1 s"]
-    assert list(read_csv(path)["a.y"]) == [0.25, 1.25, 2.25]
+    assert list(read_csv(cut)["a.y"]) == [0.25, 1.25, 2.25]
     assert not list(tmp_path.glob("*.partial"))
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".parquet", ".mat"])
+def test_a_run_cut_short_never_replaces_an_earlier_result(tmp_path, suffix):
+    """Whatever the format, the named file keeps only complete runs; the cut-short one goes beside it."""
+    from crane_fmu.cosim.recorder import read_result, recorder_for
+
+    path = tmp_path / f"run{suffix}"
+    path.write_bytes(b"a good earlier result")
+    recorder = recorder_for(path)
+    recorder.start(["a.y"])
+    for k in range(3):
+        recorder.observe(0.5 * k, _values([k + 0.25]))
+    recorder.close(reason="interrupted")
+    assert path.read_bytes() == b"a good earlier result"
+    assert list(read_result(tmp_path / f"run.cut-short{suffix}")["a.y"]) == [0.25, 1.25, 2.25]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([path.name, f"run.cut-short{suffix}"])
+
+
+def test_a_chunk_whose_thread_never_began_is_written_once(tmp_path):
+    """Ctrl-C inside Thread.start(): the chunk's thread may never run; the next wait writes the chunk itself."""
+    import threading
+
+    from crane_fmu.cosim.recorder import CsvRecorder, read_csv
+
+    recorder = CsvRecorder(tmp_path / "run.csv")
+    recorder.CHUNK_ROWS = 2
+    started = threading.Thread.start
+    threading.Thread.start = lambda self: None  # the thread object exists, its start never happened
+    try:
+        recorder.start(["a.y"])
+        for k in range(3):
+            recorder.observe(float(k), _values([float(k)]))
+    finally:
+        threading.Thread.start = started
+    recorder.close()
+    assert list(read_csv(tmp_path / "run.csv")["a.y"]) == [0.0, 1.0, 2.0]
 
 
 @pytest.mark.parametrize("suffix", [".csv", ".parquet"])

@@ -37,6 +37,7 @@ def test_peak_and_rms():
 
 @pytest.mark.parametrize("signal, completed, outcome", [
     (0.2 * np.exp(-0.3 * T) * np.sin(5 * T), True, "converges"),
+    (0.2 * np.exp(-0.03 * T) * np.sin(5 * T), True, "decaying"),  # shrinks, but no settling time: not "converges"
     (0.2 * np.sin(5 * T), True, "sustained oscillation"),
     (0.01 * np.exp(0.05 * T) * np.sin(5 * T), True, "diverges"),
     (0.2 * np.sin(5 * T), False, "diverges"),
@@ -45,6 +46,9 @@ def test_peak_and_rms():
 ])
 def test_classify(signal, completed, outcome):
     assert metrics.classify(T, signal, 0.5 * signal, completed) == outcome
+    # the words agree with the figures: "converges" exactly where the settling time to the band exists
+    settles = metrics.settling_time(T, [signal, 0.5 * signal], metrics.SETTLED_BAND) is not None
+    assert (outcome == "converges") == (settles and completed and outcome != "diverges")
 
 
 def test_natural_frequencies_match_the_closed_form():

@@ -26,3 +26,5 @@ def test_wheel_adds_only_crane_fmu_to_site_packages(tmp_path):
     for path in ("crane_fmu/fmu_src/slave2.py", *c_sources, "crane_fmu/build_scripts/build_fmus.py",
                  "crane_fmu/sweep/builtin/region_of_attraction.toml"):
         assert path in names
+    packages = [p.parent.relative_to(ROOT).as_posix() for p in (ROOT / "crane_fmu").rglob("__init__.py")]
+    assert all(f"{package}/__init__.py" in names for package in packages), packages  # crane_fmu/commands too

@@ -149,7 +149,7 @@ def test_study_completes_when_a_worker_dies(fmu_dir, tmp_path):
     study = _study(tmp_path, 'stop_time = 20.0\nstep = 0.001\n[parameters]\n"plant.theta1_0" = '
                    '[0.01, 0.02, 0.03, 0.04, 0.05, 0.06]\n[fixed]\n"controller.w_theta2" = 0.0\n')
     killed_while_running = []
-    with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None, silence_logs=50) as cluster, \
+    with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0", silence_logs=50) as cluster, \
             Client(cluster) as client:
         def kill_a_busy_worker():
             deadline = time.monotonic() + 60
@@ -199,6 +199,7 @@ def test_cli_sweep_names_are_checked_against_the_system(fmu_dir, tmp_path, capsy
     assert main(["sweep", str(tmp_path / "s.toml"), "--out", str(tmp_path / "o"), "--fmu-dir", str(fmu_dir)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err
+    assert not (tmp_path / "o").exists()  # a refused study leaves no empty folder (issue 29)
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -212,9 +213,75 @@ def test_cli_sweep_mistakes(capsys, argv, message):
     assert err.count("\n") == 1 and message in err
 
 
+def test_an_unreachable_scheduler_fails_fast_in_one_line(tmp_path, capsys):
+    """Nothing listens on port 9: one line and status 2 within seconds (Dask alone: 30 s, then a traceback)."""
+    start = time.monotonic()
+    code = main(["sweep", "builtin:region-of-attraction", "--out", str(tmp_path / "o"),
+                 "--scheduler", "tcp://127.0.0.1:9"])
+    err = capsys.readouterr().err
+    assert code == 2 and time.monotonic() - start < 5
+    assert err == ("crane-fmu: error: --scheduler tcp://127.0.0.1:9: no Dask scheduler answers there (Connection "
+                   "refused); start one with `dask scheduler` or leave out --scheduler for a local cluster\n")
+    assert not (tmp_path / "o").exists()
+    assert main(["sweep", "builtin:region-of-attraction", "--out", "o", "--scheduler", "somewhere"]) == 2
+    assert "expected an address tcp://HOST:PORT" in capsys.readouterr().err
+
+
+def test_a_resumed_study_counts_its_earlier_failures_in_the_progress_bar(small_run, fmu_dir, capsys):
+    """The bar's "not ok" agrees with the summary's when cases come from the journal (issue 29: 47 vs 70)."""
+    study, out, _ = small_run
+    journal = out / JOURNAL
+    journal.write_text("\n".join(journal.read_text().splitlines()[:5]) + "\n")
+    summary = run_study(study, out, fmu_dir, workers=2, progress=True)
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert f"{summary['cases']}/{summary['cases']} cases, {summary['not_ok']} not ok" in last, last
+    assert summary["not_ok"] > 0 and summary["skipped"] == 5
+
+
+def test_ctrl_c_stops_a_sweep_with_one_line(fmu_dir, tmp_path):
+    """Ctrl-C reaches the whole process group, workers too: one line, status 130, no worker tracebacks."""
+    import signal
+    import subprocess
+    import sys
+
+    (tmp_path / "s.toml").write_text('stop_time = 20.0\nstep = 0.001\n[parameters]\n"plant.theta1_0" = '
+                                     + str([0.01 * k for k in range(1, 41)]) + "\n")
+    command = [sys.executable, "-m", "crane_fmu", "sweep", str(tmp_path / "s.toml"), "--out", str(tmp_path / "o"),
+               "--workers", "2", "--fmu-dir", str(fmu_dir), "--no-progress"]
+    run = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           start_new_session=True, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    deadline = time.monotonic() + 120
+    while not (tmp_path / "o" / JOURNAL).exists() or not (tmp_path / "o" / JOURNAL).read_text():
+        assert time.monotonic() < deadline and run.poll() is None, run.communicate()
+        time.sleep(0.1)
+    os.killpg(run.pid, signal.SIGINT)  # as a terminal's Ctrl-C does
+    out, err = run.communicate(timeout=120)
+    assert (run.returncode, out) == (130, ""), err
+    assert err == "crane-fmu: interrupted\n"  # (the dashboard on a free port: no "Port 8787 is in use" either)
+
+
 def test_settling_band_is_chosen_by_the_study(small_run, fmu_dir, tmp_path):
     study = _study(tmp_path, SMALL.replace("step = 0.01", "step = 0.01\nsettling_band_deg = 20.0"))
     case = {"plant.theta1_0": 0.1, "controller.w_theta2": 0.0}
     row = run_case(case, shippable(systems.get("paper"), fmu_dir), study.settings(), study.metrics)
     assert row["settling_band_s"] == 0.0  # a 20-degree band holds from the start
     assert row["settling_0.5deg_s"] is None  # the 0.5-degree band: not within the 2 s (this law takes ~17 s)
+
+
+def _nap(item):
+    time.sleep(0.5)
+    return {"case_id": item, "status": "ok"}
+
+
+def test_ctrl_c_in_a_process_pool_batch_drops_the_items_not_begun():
+    """The pool's workers ignore Ctrl-C; the parent stops at once, not after every queued item."""
+    from crane_fmu.sweep.batch import run_batch
+
+    class Interrupt:
+        def update(self, result):
+            raise KeyboardInterrupt
+
+    start = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        run_batch(_nap, list(range(40)), workers=2, progress=Interrupt())
+    assert time.monotonic() - start < 5  # 40 items of 0.5 s on 2 workers would take 10 s

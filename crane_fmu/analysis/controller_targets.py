@@ -24,7 +24,8 @@ MISMATCH, DISTANCE = scoreboard.MISMATCH, scoreboard.DISTANCE  # the scoreboard'
 
 
 def plan(quick=False):
-    runs = [Run("regulation", name, name, {}, 1e-3, 10.0) for name in REGULATORS]
+    # regulation runs 40 s: the energy law's swing decays too slowly to classify in 10 s
+    runs = [Run("regulation", name, name, {}, 1e-3, 40.0) for name in REGULATORS]
     runs += [Run("transport", shaper, "transport", {"planner": {"shaper": shaper, "x_d": DISTANCE}}, 1e-3, 10.0)
              for shaper in SHAPERS]
     runs.append(Run("hoist", "hoist-transport", "hoist-transport", {}, 1e-3, 12.0))
@@ -35,7 +36,7 @@ def plan(quick=False):
         runs += [Run(f"roa_{name}", str(angle), name, {"plant": {"theta1_0": math.radians(angle)}}, 1e-3, 30.0)
                  for angle in (ROA_ANGLES[::4] if quick else ROA_ANGLES)]
     for h in (1e-2, 5e-2):
-        runs += [Run(f"step_{h:g}", name, name, {}, h, 10.0) for name in REGULATORS]
+        runs += [Run(f"step_{h:g}", name, name, {}, h, 40.0) for name in REGULATORS]
         runs.append(Run(f"step_{h:g}", "transport", "transport", {}, h, 10.0))
     return runs
 
@@ -77,7 +78,7 @@ def report(results, out=print):
     by = {}
     for r, m in results:
         by.setdefault(r.group, {})[r.label] = m
-    out("Regulation from theta1(0) = 10 deg, h = 1 ms (targets: 0.5 deg by <= 3.0 s, 0.1 deg by <= 4.0 s, "
+    out("Regulation from theta1(0) = 10 deg, h = 1 ms, 40 s (targets: 0.5 deg by <= 3.0 s, 0.1 deg by <= 4.0 s, "
         "trolley within 1 cm by 4 s; ambition 2.5 s and 3.5 s)")
     for name, m in by["regulation"].items():
         out(f"  {name:<8} 0.5 deg from {_fmt(m['settling_0.5deg_s'])}, 0.1 deg from {_fmt(m['settling_0.1deg_s'])}, "
@@ -107,10 +108,11 @@ def report(results, out=print):
         angles = sorted((int(a), m["outcome"]) for a, m in by[group].items())
         contiguous = 0
         for angle, outcome in angles:
-            if outcome != "converges":
+            if outcome not in metrics.CONVERGING:
                 break
             contiguous = angle
-        out(f"Region of attraction, {group[4:]}: converges from every theta1(0) up to {contiguous} deg "
+        out(f"Region of attraction, {group[4:]} (30 s runs): converges or is decaying from every theta1(0) up to "
+            f"{contiguous} deg "
             f"(target for the nonlinear law: >= 45 deg); " + ", ".join(f"{a}: {o}" for a, o in angles))
     for group in [g for g in by if g.startswith("step_")]:
         out(f"Communication step h = {float(group[5:]) * 1e3:g} ms:")

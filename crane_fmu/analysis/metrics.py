@@ -10,6 +10,7 @@ import numpy as np
 CRANE_OUTPUTS = ("x", "theta1", "theta2")  # what the crane metrics need from some instance
 DIVERGED_ANGLE = math.pi / 2  # a swing beyond 90 degrees counts as divergence
 SETTLED_BAND = math.radians(0.1)  # a swing below 0.1 degree counts as settled
+CONVERGING = ("converges", "decaying")  # the outcomes of classify() that head for rest
 ARRIVAL_ANGLE = math.radians(0.5)  # an arrival leaves both angles within 0.5 degree
 
 
@@ -36,10 +37,18 @@ def crane_signals(columns, extra=()):
                          + ", ".join(columns))
     signals = {"time": columns["time"], **{n: columns[key(plant, n)] for n in CRANE_OUTPUTS + tuple(extra)
                                            if key(plant, n) in columns}}
-    sources = [key(i, "u") for i in instances if i != plant] + (["u"] if plant == "" else [])
-    source = next((k for k in sources if k in columns), None)
+    source = u_column(columns)
     signals["u"] = columns[source] if source else np.zeros_like(columns["time"])
     return signals
+
+
+def u_column(columns):
+    """The column of the demanded ``u`` that :func:`crane_signals` takes, or None when no column gives it
+    (a plant alone: its ``u`` is then zero, and a plot must not show a demand that was never made)."""
+    instances = list(dict.fromkeys(name.rpartition(".")[0] for name in columns))
+    plant = next((i for i in instances if all((f"{i}.{n}" if i else n) in columns for n in CRANE_OUTPUTS)), None)
+    sources = [f"{i}.u" if i else "u" for i in instances if i != plant] + (["u"] if plant == "" else [])
+    return next((k for k in sources if k in columns), None)
 
 
 def peak_abs(values):
@@ -93,7 +102,7 @@ def settling_time(t, signals, band):
 
 
 def classify(t, theta1, theta2, completed, band=SETTLED_BAND):
-    """``"converges"``, ``"sustained oscillation"`` or ``"diverges"``.
+    """``"converges"``, ``"decaying"``, ``"sustained oscillation"`` or ``"diverges"``.
 
     Parameters
     ----------
@@ -109,8 +118,12 @@ def classify(t, theta1, theta2, completed, band=SETTLED_BAND):
 
     - diverges: the run stopped early, a swing angle passed 90 degrees, or
       the swing grows (``A4 > 1.2 A3``);
-    - converges: settled (``A4 < band``) or still decaying (``A4 < 0.9 A3``);
-    - otherwise (``0.9 A3 <= A4 <= 1.2 A3``) a sustained oscillation.
+    - converges: settled (``A4 < band``), so a settling time to ``band`` exists;
+    - decaying: not settled by the end, but the swing shrinks (``A4 < 0.9 A3``);
+    - otherwise (``0.9 A3 <= A4 <= 1.2 A3``) a sustained oscillation, over this run (a law that
+      decays more slowly than 10 % a quarter of the run looks sustained: give it a longer run).
+
+    :data:`CONVERGING` holds the first two.
     """
     if not completed or peak_abs(theta1) > DIVERGED_ANGLE or peak_abs(theta2) > DIVERGED_ANGLE:
         return "diverges"
@@ -121,8 +134,10 @@ def classify(t, theta1, theta2, completed, band=SETTLED_BAND):
     a4 = max(peak_abs(theta1[last]), peak_abs(theta2[last]))
     if a4 > 1.2 * a3:
         return "diverges"
-    if a4 < band or a4 < 0.9 * a3:
+    if a4 < band:
         return "converges"
+    if a4 < 0.9 * a3:
+        return "decaying"
     return "sustained oscillation"
 
 

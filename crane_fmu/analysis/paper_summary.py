@@ -10,6 +10,7 @@ from crane_fmu.model import backstepping, plant
 from crane_fmu.model.parameters import ControllerGains, PlantParameters
 
 from . import linear
+from .metrics import CONVERGING
 from .paper_cases import FORMS
 
 
@@ -65,13 +66,13 @@ def _roa(results, form):
     rows = sorted((r["case"].plant["theta1_0"], r["metrics"]["outcome"]) for r in _runs(results, "roa", form))
     contiguous = 0.0
     for angle, outcome in rows:
-        if outcome != "converges":
+        if outcome not in CONVERGING:
             break
         contiguous = math.degrees(angle)
     return {"angles_deg": [round(math.degrees(a), 6) for a, _ in rows],
             "outcomes": [o for _, o in rows],
             "largest_converging_deg": contiguous,
-            "converging_deg": [round(math.degrees(a), 6) for a, o in rows if o == "converges"]}
+            "converging_deg": [round(math.degrees(a), 6) for a, o in rows if o in CONVERGING]}
 
 
 def _step_study(results, form):
@@ -93,7 +94,7 @@ def _step_study(results, form):
         }
         rows.append({"step_s": r["case"].step, "outcome": r["metrics"]["outcome"],
                      "end_time_s": r["metrics"]["end_time_s"], "deviation": deviation})
-    converging = [row["step_s"] for row in rows if row["outcome"] == "converges"]
+    converging = [row["step_s"] for row in rows if row["outcome"] in CONVERGING]
     return {"reference_end_s": ref_end, "reference_stop_s": stop, "runs": rows,
             "largest_converging_step_s": max(converging) if converging else None}
 

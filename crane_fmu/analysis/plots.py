@@ -27,27 +27,54 @@ def plot_overlay(runs, path, title=""):
     """Trolley position, both swing angles and u of several crane runs on shared axes, to a PNG.
 
     ``runs`` is ``{label: columns}``; each run needs an instance with outputs ``x``, ``theta1``, ``theta2``.
+    The ``u`` panel shows the runs that record a demanded ``u`` (none: no panel), each labelled with its
+    peak ``|u|``; where one run's peak is over 20 times another's, its axis is symmetric-logarithmic
+    (linear within the smallest peak), so that every run's ``u`` stays readable. Without ``title`` the
+    runs' labels are the title.
+
+    Returns
+    -------
+    dict
+        What was drawn: ``title``, ``panels`` (each ``(y label, y scale)``) and ``legend`` (the runs' labels).
     """
     plt = pyplot()
 
-    from .metrics import crane_signals
+    from .metrics import crane_signals, u_column
 
-    fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 8.5))
+    demanded = {label: u_column(columns) for label, columns in runs.items()}
+    panels = 4 if any(demanded.values()) else 3
+    fig, axes = plt.subplots(panels, 1, sharex=True, figsize=(9, 2.2 * panels))
+    peaks = {}
     for label, columns in runs.items():
         s = crane_signals(columns)
-        axes[0].plot(s["time"], s["x"], lw=1.3, label=label)
+        if demanded[label]:
+            peaks[label] = float(abs(s["u"]).max())
+            label_u = f"{label} (peak |u| {peaks[label]:.3g} m/s2)"
+        else:
+            label_u = f"{label} (no u recorded)" if panels == 4 else label
+        axes[0].plot(s["time"], s["x"], lw=1.3, label=label_u)
         axes[1].plot(s["time"], [math.degrees(v) for v in s["theta1"]], lw=1.3)
         axes[2].plot(s["time"], [math.degrees(v) for v in s["theta2"]], lw=1.3)
-        axes[3].plot(s["time"], s["u"], lw=1.3)
-    for ax, label in zip(axes, ("trolley x [m]", "hook angle theta1 [deg]", "payload angle theta2 [deg]",
-                                "demanded u [m/s2]")):
+        if demanded[label]:
+            axes[3].plot(s["time"], s["u"], lw=1.3)
+        elif panels == 4:
+            axes[3].plot([], [])  # keep each run's colour in every panel
+    labels = ["trolley x [m]", "hook angle theta1 [deg]", "payload angle theta2 [deg]", "demanded u [m/s2]"]
+    nonzero = [p for p in peaks.values() if p > 0]
+    if len(nonzero) > 1 and max(nonzero) > 20 * min(nonzero):
+        axes[3].set_yscale("symlog", linthresh=min(nonzero))
+        labels[3] = f"demanded u [m/s2]\n(symlog, linear within +-{min(nonzero):.3g})"
+    for ax, label in zip(axes, labels):
         ax.set_ylabel(label)
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize=9)
     axes[-1].set_xlabel("time [s]")
-    if title:
-        axes[0].set_title(title)
+    fig.align_ylabels(axes)
+    axes[0].set_title(title or " vs ".join(runs))
+    drawn = {"title": axes[0].get_title(), "panels": [(ax.get_ylabel(), ax.get_yscale()) for ax in axes],
+             "legend": [text.get_text() for text in axes[0].get_legend().get_texts()]}
     save(fig, path)
+    return drawn
 
 
 def plot_run(columns, path, title=""):

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .metrics import CONVERGING
 from .paper_cases import ALTERNATIVE, PAPER_LAW
 
 
@@ -38,10 +39,10 @@ def _magnitude(m, key, digits, unit):
 
 
 def _reach(r):
-    """The region of attraction in words: the largest angle whose smaller angles all converge."""
+    """The region of attraction in words: the largest angle whose smaller angles all converge or decay."""
     if r["largest_converging_deg"] == 0.0:
-        return f"converges from no angle tried (the smallest is {min(r['angles_deg']):g} deg)"
-    return f"converges from up to {_f(r['largest_converging_deg'], 1, ' deg')}"
+        return f"converges or decays from no angle tried (the smallest is {min(r['angles_deg']):g} deg)"
+    return f"converges or decays from up to {_f(r['largest_converging_deg'], 1, ' deg')}"
 
 
 def _outcome(m):
@@ -103,7 +104,7 @@ def _settles_by_15(s, form):
 
 def _similar(s, form):
     m = s["fig7"][form]
-    return m["outcome"] == "converges" and (m.get("corr_theta1_theta2") or 0) > 0.5
+    return m["outcome"] in CONVERGING and (m.get("corr_theta1_theta2") or 0) > 0.5
 
 
 def _quiet_after_15(s, form):
@@ -153,7 +154,7 @@ def _l1_list(s, form, key, digits=1, unit=" deg"):
 # --- the law as a whole ----------------------------------------------------------------
 
 def _converges_from_10(s, form):
-    return s["fig7"][form]["outcome"] == "converges"
+    return s["fig7"][form]["outcome"] in CONVERGING
 
 
 def _stable(s, form):
@@ -268,8 +269,8 @@ def render(s):
         "theta2 row of eq (20) dropped (not the paper's law; included to show where the failure comes "
         "from). Outcomes follow fixed rules (`crane_fmu/analysis/metrics.py`): *diverges* if the run "
         "stopped, an angle passed 90 deg or the swing grows; *converges* if the swing in the last quarter "
-        "of the run is below 0.1 deg or below 0.9 times that of the third quarter; otherwise *sustained "
-        "oscillation*.",
+        "of the run is below 0.1 deg (it has a settling time); *decaying* if it is not, but below 0.9 times "
+        "that of the third quarter; otherwise *sustained oscillation*.",
         "",
         "## Claims",
         "",
@@ -309,7 +310,7 @@ def render(s):
         "## Region of attraction (initial theta1, everything else at rest)",
         "",
         _table(["form", "largest theta1(0) with every smaller angle converging", "converging angles", "outcomes"],
-               [(form, _reach(r).removeprefix("converges "),
+               [(form, _reach(r).removeprefix("converges or decays "),
                  ", ".join(f"{a:g}" for a in r["converging_deg"]) or "none",
                  _outcome_counts(r["outcomes"])) for form, r in s["region_of_attraction"].items()]),
         "",

@@ -134,7 +134,10 @@ def animate(signals, path, title="", fps=15, progress=False):
     Parameters
     ----------
     fps : int
-        Frames per second of the motion (the recorded samples nearest to them are drawn).
+        Frames per second of the motion, as near as whole centiseconds allow (GIF delays are whole
+        centiseconds: 15 gives a frame every 7 cs, 14.3 a second). Each frame shows the last recorded
+        sample at or before its time, so the animation runs in real time from any output interval,
+        uniform or not (fmpy's 32 ms, the master's 1 ms).
     progress : bool
         Show ``frame k/n`` on stderr as frames are drawn.
 
@@ -151,8 +154,9 @@ def animate(signals, path, title="", fps=15, progress=False):
         return np.asarray(next(v for k, v in signals.items() if k == name or k.endswith("." + name)))
 
     t, x, x1, y1, x2, y2 = (column(n) for n in ("time", "x", "x1", "y1", "x2", "y2"))
-    every = max(1, round(1.0 / (fps * (t[1] - t[0]))))
-    frames = range(0, len(t), every)
+    delay = frame_delay(fps)
+    count = int(math.floor((t[-1] - t[0]) / delay + 1e-9)) + 1
+    frames = np.searchsorted(t, t[0] + delay * np.arange(count) + 1e-9, side="right") - 1
     fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=80)
     span = [min(x.min(), x2.min()) - 0.6, max(x.max(), x2.max()) + 0.6]
     ax.set_xlim(*span)
@@ -176,7 +180,8 @@ def animate(signals, path, title="", fps=15, progress=False):
         cables.set_data([x[i], x1[i], x2[i]], [0.0, y1[i], y2[i]])
         hook.set_data([x1[i]], [y1[i]])
         payload.set_data([x2[i]], [y2[i]])
-        trail.set_data(x2[max(0, i - 2 * fps * every):i + 1], y2[max(0, i - 2 * fps * every):i + 1])
+        first = np.searchsorted(t, t[i] - 2.0)  # the payload's path over the last 2 s
+        trail.set_data(x2[first:i + 1], y2[first:i + 1])
         clock.set_text(f"t = {t[i]:5.2f} s   hook {math.degrees(math.atan2(x1[i] - x[i], -y1[i])):+5.1f} deg")
         fig.canvas.restore_region(background)
         for artist in (trail, cables, trolley, hook, payload, clock):
@@ -187,27 +192,30 @@ def animate(signals, path, title="", fps=15, progress=False):
             sys.stderr.flush()
     plt.close(fig)
     path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
     partial = path.with_name(f".{path.stem}.partial{path.suffix}")
-    times = [t[i] - t[0] for i in frames]
     if path.suffix == ".mp4":
-        _write_mp4(images, partial, len(frames) / max(times[-1], 1e-9) if len(frames) > 1 else fps)
+        _write_mp4(images, partial, 1.0 / delay)
     else:
-        _write_gif(images, partial, times)
+        _write_gif(images, partial, round(100 * delay))
     partial.replace(path)
     return path
 
 
-def _write_gif(images, path, times):
-    """A GIF of RGB frames shown at ``times`` [s] (GIF delays are whole centiseconds: rounded without drift)."""
+def frame_delay(fps):
+    """Seconds between frames for ``fps``: whole centiseconds (as GIF stores them), at least 2 (browsers
+    show shorter delays as 10)."""
+    return max(2, round(100 / fps)) / 100
+
+
+def _write_gif(images, path, delay_cs):
+    """A GIF of RGB frames, each shown ``delay_cs`` centiseconds."""
     from PIL import Image
 
     sample = np.concatenate([images[0], images[len(images) // 2], images[-1]])  # every colour that moves
     palette = Image.fromarray(sample).quantize(colors=64, method=Image.Quantize.MEDIANCUT)
     frames = [Image.fromarray(a).quantize(palette=palette, dither=Image.Dither.NONE) for a in images]
-    ticks = [round(100 * s) for s in times] + [round(100 * times[-1]) + (round(100 * (times[1] - times[0]))
-                                                                       if len(times) > 1 else 10)]
-    durations = [10 * max(1, b - a) for a, b in zip(ticks, ticks[1:])]
-    frames[0].save(path, format="GIF", save_all=True, append_images=frames[1:], duration=durations, loop=0)
+    frames[0].save(path, format="GIF", save_all=True, append_images=frames[1:], duration=10 * delay_cs, loop=0)
 
 
 def _write_mp4(images, path, fps):

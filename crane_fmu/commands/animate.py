@@ -19,7 +19,8 @@ EXAMPLES = (
 def arguments(p):
     p.add_argument("result", help="a CSV written by crane-fmu simulate")
     p.add_argument("--out", required=True, help="FILE.gif or FILE.mp4")
-    p.add_argument("--fps", type=int, default=15, help="frames per second (default 15)")
+    p.add_argument("--fps", type=int, default=15,
+                   help="frames per second (default 15), rounded to whole centiseconds between frames (15: 7 cs)")
 
 
 def run(args):

@@ -84,21 +84,54 @@ def parse_sets(items, variables):
 
 
 def writable_file(path, option, suffix=None):
-    """One line, exit 2, unless ``path`` can be written: not a folder, the right suffix, a writable folder."""
+    """One line, exit 2, unless ``path`` can be written: not a folder, an accepted suffix, a writable folder.
+
+    ``suffix`` is one suffix (``".png"``) or a tuple of the accepted ones, named in the message. Nothing is
+    created here: a folder that does not exist yet must be creatable (its nearest existing parent a writable
+    folder); the writer creates it when it writes, so a refused command leaves no empty folder behind.
+    """
+    suffixes = (suffix,) if isinstance(suffix, str) else tuple(suffix or ())
     if Path(path).is_dir() or str(path).endswith(os.sep):
-        example = Path(path) / ("result" + (suffix or ""))
+        example = Path(path) / ("result" + (suffixes[0] if suffixes else ""))
         raise UsageError(f"{option} {path}: is a folder; give a file name, e.g. {example}")
-    if suffix and Path(path).suffix != suffix:
-        raise UsageError(f"{option} {path}: writes a {suffix} file; the name must end in {suffix}")
-    folder = Path(path).resolve().parent
+    if suffixes and Path(path).suffix not in suffixes:
+        names = suffixes[0] if len(suffixes) == 1 else ", ".join(suffixes[:-1]) + " or " + suffixes[-1]
+        raise UsageError(f"{option} {path}: writes a {names} file; the name must end in {names}")
+    writable_folder(Path(path).resolve().parent, f"{option} {path}")
+
+
+def writable_folder(folder, what):
+    """One line, exit 2, unless ``folder`` is a writable folder or can be created (without creating it)."""
+    folder = Path(folder).resolve()
+    existing = folder
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir():
+        raise UsageError(f"{what}: cannot create folder {folder} ({existing} is a file)")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise UsageError(f"{what}: folder {existing} is not writable")
+
+
+def check_scheduler(address, timeout=3.0):
+    """One line, exit 2, unless a server answers at a ``tcp://HOST:PORT`` (or ``HOST:PORT``) scheduler address.
+
+    Dask itself retries a refused connection for 30 s and then raises a long ``OSError``; this asks once.
+    Other protocols (``tls://``, ``ucx://``, ...) are left to Dask.
+    """
+    import socket
+
+    protocol, sep, rest = address.rpartition("://")
+    if sep and protocol != "tcp":
+        return
+    host, colon, port = rest.rpartition(":")
+    if not colon or not port.isdigit():
+        raise UsageError(f"--scheduler {address}: expected an address tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786")
     try:
-        folder.mkdir(parents=True, exist_ok=True)
+        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout).close()
     except OSError as exc:
-        raise UsageError(f"{option} {path}: cannot create folder {folder} ({exc.strerror})") from None
-    if not os.access(folder, os.W_OK):
-        raise UsageError(f"{option} {path}: folder {folder} is not writable")
-
-
+        reason = exc.strerror or type(exc).__name__.replace("Error", " error").strip()
+        raise UsageError(f"--scheduler {address}: no Dask scheduler answers there ({reason}); start one with "
+                         f"`dask scheduler` or leave out --scheduler for a local cluster") from None
 
 
 def check_workers(args):
@@ -107,3 +140,5 @@ def check_workers(args):
         raise UsageError(f"--workers must be >= 1, got {args.workers}")
     if args.workers is not None and getattr(args, "scheduler", None):
         raise UsageError("--workers and --scheduler exclude each other: the scheduler's cluster has its workers")
+    if getattr(args, "scheduler", None):
+        check_scheduler(args.scheduler)

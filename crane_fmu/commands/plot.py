@@ -35,6 +35,7 @@ def run(args):
             raise UsageError(f"cannot read {path}: {exc}") from None
     writable_file(args.out, "--out")
     partial = str(Path(args.out).with_name(f".{Path(args.out).stem}.partial.png"))
+    Path(partial).parent.mkdir(parents=True, exist_ok=True)
     try:
         plot_overlay(runs, partial, args.title)
     except ValueError as exc:

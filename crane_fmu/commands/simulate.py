@@ -2,6 +2,8 @@
 
 import os
 import sys
+from dataclasses import replace
+from pathlib import Path
 
 from crane_fmu import DEFAULT_FMU_DIR, DEFAULT_SYSTEM
 from crane_fmu.cosim.algorithms import ALGORITHMS
@@ -18,7 +20,10 @@ EXAMPLES = (
     "  crane-fmu simulate --system free --stop-time 10 --out free.csv\n"
     "  crane-fmu simulate --system build/systems/paper.ssp --parameters my.ssv\n"
     "  crane-fmu simulate --master jacobi --step 0.01 --set controller.w_theta2=0\n"
-    "  crane-fmu simulate --set plant.l1=1.5 --set controller.l1=1.5 --set plant.theta1_0=0.2"
+    "  crane-fmu simulate --set plant.l1=1.5 --set controller.l1=1.5 --set plant.theta1_0=0.2\n"
+    "  crane-fmu simulate --system lqr --use controller=build/mine/MyController.fmu --out mine.csv\n"
+    "  crane-fmu simulate --system transport --out move.mat          # for MATLAB: columns and data\n"
+    "On a terminal a long run shows its progress on stderr; Ctrl-C stops it and keeps the rows so far."
 )
 
 
@@ -39,8 +44,12 @@ def arguments(p):
     p.add_argument("--set", action="append", default=[], metavar="INSTANCE.VARIABLE=VALUE",
                    help="set any parameter or input before initialisation (repeatable); angles in rad, or with a deg "
                         "suffix: plant.theta1_0=10deg")
+    p.add_argument("--use", action="append", default=[], metavar="INSTANCE=FILE.fmu",
+                   help="run this FMU as the instance instead of the system's (repeatable), e.g. "
+                        "controller=mine.fmu; the system's values for the instance are kept where the FMU has them")
     p.add_argument("--out", default="results/simulation.csv",
-                   help="result file: .csv (default results/simulation.csv) or .parquet (pyarrow, for long runs)")
+                   help="result file: .csv (default results/simulation.csv), .parquet (pyarrow, for long runs) or "
+                        ".mat (MATLAB, scipy.io.savemat: the CSV's columns and data)")
     p.add_argument("--plot", help="also write a PNG plot of x, theta1, theta2 and u (or of every output)")
 
 
@@ -49,22 +58,60 @@ def run(args):
 
     try:
         with systems.open_system(args.system) as system:
-            return _simulate(args, system)
+            return _simulate(args, _use(args.use, system))
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+
+
+def _use(items, system):
+    """``system`` with the FMUs of ``--use INSTANCE=FILE.fmu`` in place of its own (checked: one line each)."""
+    from pathlib import Path
+
+    overrides = {}
+    for item in items:
+        instance, sep, path = item.partition("=")
+        if not sep or not instance or not path:
+            raise UsageError(f"--use {item!r}: expected INSTANCE=FILE.fmu, e.g. controller=mine.fmu")
+        if instance not in system.instances:
+            raise UsageError(f"--use {item!r}: system {system.name} has no instance {instance!r}; instances: "
+                             f"{', '.join(system.instances)}")
+        if Path(path).suffix != ".fmu":
+            raise UsageError(f"--use {item!r}: {path} is not an FMU file (the name must end in .fmu)")
+        if not Path(path).is_file():
+            raise UsageError(f"--use {item!r}: {path} not found")
+        overrides[instance] = str(Path(path).resolve())
+    return system.with_instances(overrides) if overrides else system
+
+
+def _keep_known(system, fmus, replaced):
+    """The system's values for the ``replaced`` instances that their new FMUs have; a note on stderr for the rest."""
+    from crane_fmu.cosim.system import settable
+
+    variables = settable({name: fmus[name] for name in replaced})
+    parameters = {name: dict(values) for name, values in system.parameters.items()}
+    for name in replaced:
+        dropped = [v for v in parameters.get(name, {}) if v not in variables[name]]
+        for variable in dropped:
+            del parameters[name][variable]
+        if dropped:
+            print(f"crane-fmu: note: {name} ({Path(fmus[name]).name}) has no {', '.join(dropped)}: the system's "
+                  "values for them are not set", file=sys.stderr)
+    return replace(system, parameters=parameters)
 
 
 def _simulate(args, system):
     """Run a system, writing the CSV (and plot) of ``args``; ``--parameters`` and ``--set`` override its values."""
     from crane_fmu import systems
-    from crane_fmu.cosim import FmiError, read_result, recorder_for, simulate
+    from crane_fmu.cosim import FmiError, ProgressLine, read_result, recorder_for, simulate
     from crane_fmu.cosim.master import communication_points
+    from crane_fmu.cosim.recorder import RESULT_SUFFIXES
     from crane_fmu.cosim.system import settable, split_name
 
     stop_time = system.stop_time if args.stop_time is None else args.stop_time
     step = system.step if args.step is None else args.step
     communication_points(system.start_time, stop_time, step)
     fmus, connections = systems.resolve(system, args.fmu_dir)
+    system = _keep_known(system, fmus, [item.partition("=")[0] for item in args.use])
     system = systems.at_step(system, args.fmu_dir, step)
     variables = settable(fmus)
     if args.parameters:
@@ -80,36 +127,58 @@ def _simulate(args, system):
         system = system.with_parameters(loaded)
     system = system.with_parameters(parse_sets(args.set, variables))
     systems.check_parameters(system, args.fmu_dir)
-    writable_file(args.out, "--out", ".parquet" if args.out.endswith(".parquet") else ".csv")
+    writable_file(args.out, "--out", RESULT_SUFFIXES)
     if args.plot:
         writable_file(args.plot, "--plot", ".png")
     try:
         recorder = recorder_for(args.out)
     except OSError as exc:
         raise UsageError(f"--out {args.out}: cannot be written ({exc.strerror})") from None
-    except ImportError:
-        raise UsageError(f"--out {args.out}: writing Parquet needs pyarrow (pip install pyarrow)") from None
+    except ImportError as exc:
+        raise UsageError(f"--out {args.out}: writing it needs {exc.name} (pip install {exc.name})") from None
+    progress = [ProgressLine(system.start_time, stop_time, sys.stderr)] if sys.stderr.isatty() else []
     try:
         simulate(fmus, connections, stop_time, step, args.master, system.parameters, recorder, system.start_time,
-                 not args.no_initial_exchange)
+                 not args.no_initial_exchange, observers=progress)
     except FmiError as exc:
         # Bad parameter values are refused when initialisation ends: the user's mistake.
         if exc.time is None or exc.function.endswith(("ExitInitializationMode", "SetReal", "SetFloat64",
                                                        "SetString")):
             raise UsageError(str(exc)) from None
-        print(f"crane-fmu: simulation failed: {exc} (results up to t={exc.time:.9g} s in {args.out})",
-              file=sys.stderr)
+        _end(progress)
+        if "KeyboardInterrupt" in str(exc):  # Ctrl-C while an FMU's Python code ran: it returned an error
+            return _interrupted(recorder)
+        print(f"crane-fmu: simulation failed: {exc} (results up to t={exc.time:.9g} s in {recorder.written}; "
+              f"{args.out} is {'as it was' if os.path.exists(args.out) else 'not written'})", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        _end(progress)
+        return _interrupted(recorder)
     finally:
-        recorder.close(reason="interrupted")  # no-op when the run finished
+        recorder.close(reason="interrupted")  # no-op when the run finished or failed
+    _end(progress)
     print(f"wrote {args.out}")
     if args.plot:
         from crane_fmu.analysis.plots import plot_run
 
         partial = args.plot + ".partial.png"
+        Path(partial).parent.mkdir(parents=True, exist_ok=True)
         settings = ", ".join(item.split("=", 1)[0] + "=" + item.split("=", 1)[1] for item in args.set)
         plot_run(read_result(args.out), partial, f"{system.name} ({args.master}, h={step:g} s)"
                  + (f"\n{settings}" if settings else ""))
         os.replace(partial, args.plot)
         print(f"wrote {args.plot}")
     return 0
+
+
+def _end(progress):
+    for line in progress:
+        line.close()
+
+
+def _interrupted(recorder):
+    """Ctrl-C: one line saying where the rows so far went; exit status 130 (the shell's for SIGINT)."""
+    recorder.close(reason="interrupted")
+    where = f"the rows so far are in {recorder.written}" if recorder.written else "nothing was recorded"
+    print(f"crane-fmu: interrupted; {where}", file=sys.stderr)
+    return 130

@@ -39,9 +39,12 @@ class _StreamingRecorder(ArrayRecorder):
     for it, so chunks land in order and at most two are in memory. A write error
     is raised by the next :meth:`observe` that fills a chunk, or by :meth:`close`.
     The file is written under a temporary name and renamed by :meth:`close`, so
-    an existing result is never replaced by a half-written one; :meth:`close`
-    with a ``reason`` keeps every row recorded so far and says why the run was
-    cut short. Subclasses write a chunk (a pyarrow table) and finish the file.
+    an existing result is never replaced by a half-written one. :meth:`close`
+    with a ``reason`` keeps every row recorded so far, says why the run was cut
+    short and renames the file to :func:`cut_short_path` (``run.cut-short.csv``
+    beside ``run.csv``): the file named ``path`` only ever holds a complete run,
+    and an earlier good result there is left as it was. :attr:`written` is the
+    file written. Subclasses write a chunk (a pyarrow table) and finish the file.
     """
 
     CHUNK_ROWS = 2048
@@ -50,8 +53,10 @@ class _StreamingRecorder(ArrayRecorder):
         super().__init__()
         self.path = os.fspath(path)
         self._partial = self.path + ".partial"
+        self.written = None
         self._closed = False
-        self._writer_thread, self._write_error = None, None
+        os.makedirs(os.path.dirname(os.path.abspath(self.path)), exist_ok=True)
+        self._pending, self._write_error, self._done = None, None, threading.Event()
 
     def start(self, names):
         super().start(names)
@@ -65,26 +70,39 @@ class _StreamingRecorder(ArrayRecorder):
             self._flush(background=True)
 
     def _flush(self, background=False):
+        self._wait()
         table = _table(self._rows, self.names)
         self._rows = array("d")
-        self._wait()
         if background:
-            self._writer_thread = threading.Thread(target=self._write_keeping_error, args=(table,), daemon=True)
-            self._writer_thread.start()
+            # The chunk is written once, by whoever claims it: the thread, or _wait when Ctrl-C stopped
+            # Thread.start() before the thread began.
+            claim = threading.Lock()
+            self._pending = (table, claim)
+            threading.Thread(target=self._write_keeping_error, args=(table, claim), daemon=True).start()
         else:
             self._write(table)
 
-    def _write_keeping_error(self, table):
+    def _write_keeping_error(self, table, claim):
+        if not claim.acquire(blocking=False):
+            return
         try:
             self._write(table)
         except BaseException as exc:  # raised in the recording thread by _wait
             self._write_error = exc
+        finally:
+            self._done.set()
 
     def _wait(self):
-        """Wait for the chunk being written; raise its error, if any."""
-        if self._writer_thread is not None:
-            self._writer_thread.join()
-            self._writer_thread = None
+        """Wait for the chunk being written (or write it here if its thread never began); raise its error."""
+        if self._pending is not None:
+            table, claim = self._pending
+            if claim.acquire(blocking=False):
+                self._pending = None
+                self._write(table)
+            else:
+                self._done.wait()
+                self._done.clear()
+                self._pending = None
         if self._write_error is not None:
             error, self._write_error = self._write_error, None
             raise error
@@ -102,7 +120,14 @@ class _StreamingRecorder(ArrayRecorder):
             return
         self._flush()
         self._finish(reason)
-        os.replace(self._partial, self.path)
+        self.written = cut_short_path(self.path) if reason else self.path
+        os.replace(self._partial, self.written)
+
+
+def cut_short_path(path):
+    """Where a run cut short is written instead of ``path``: ``results/run.csv`` -> ``results/run.cut-short.csv``."""
+    root, suffix = os.path.splitext(os.fspath(path))
+    return f"{root}.cut-short{suffix}"
 
 
 class CsvRecorder(_StreamingRecorder):
@@ -167,6 +192,95 @@ class ParquetRecorder(_StreamingRecorder):
         pass  # nothing written yet
 
 
+class MatRecorder(ArrayRecorder):
+    """Writes the results as a MATLAB file (``scipy.io.savemat``, format 5) when the run ends.
+
+    The file holds ``columns`` (the CSV's column names, a cell array of strings) and ``data`` (a matrix,
+    a row per communication point, a column per name, in the CSV's order), and ``time`` and a struct per
+    instance whose name is a MATLAB name (``tank.level`` in MATLAB is the CSV's ``tank.level``). A
+    run cut short holds ``run_cut_short``, the reason, and goes to :func:`cut_short_path`. The rows stay in
+    memory until the end (128 bytes a row of 16 values): for runs of millions of steps, write Parquet.
+    """
+
+    def __init__(self, path):
+        import scipy.io  # noqa: F401  (fail here, before the run, if it is missing)
+
+        super().__init__()
+        self.path = os.fspath(path)
+        self.written = None
+        self._closed = False
+        os.makedirs(os.path.dirname(os.path.abspath(self.path)), exist_ok=True)
+
+    def close(self, reason=None):
+        """Write the file (under a temporary name, then renamed); ``reason`` marks a run cut short."""
+        import re
+
+        import numpy as np
+        import scipy.io
+
+        if self._closed:
+            return
+        self._closed = True
+        if self.names is None:
+            return
+        data = np.frombuffer(self._rows, dtype=float).reshape(-1, len(self.names))
+        content = {"columns": np.array(self.names, dtype=object), "data": data, "time": data[:, 0]}
+        for i, name in enumerate(self.names[1:], start=1):
+            instance, _, variable = name.rpartition(".")
+            if re.fullmatch(r"[A-Za-z]\w{0,62}", instance) and re.fullmatch(r"[A-Za-z]\w{0,62}", variable) \
+                    and instance not in ("columns", "data", "time", "run_cut_short"):
+                content.setdefault(instance, {})[variable] = data[:, i]
+        if reason:
+            content["run_cut_short"] = reason
+        self.written = cut_short_path(self.path) if reason else self.path
+        partial = self.path + ".partial"
+        with open(partial, "wb") as f:
+            scipy.io.savemat(f, content, do_compression=True, oned_as="column")
+        os.replace(partial, self.written)
+
+
+class ProgressLine:
+    """An observer that shows ``t = 12.0 of 3600 s (0 %)`` on one line of a terminal while a run goes on.
+
+    It looks at the clock once every ``check_every`` communication points and redraws the line at most every
+    ``interval`` seconds, starting after ``interval`` seconds (a short run shows nothing); :meth:`close` ends
+    the line. Give it a stream that is a terminal: it does not check (the simulate command adds it only
+    when stderr is one).
+    """
+
+    def __init__(self, start_time, stop_time, stream, interval=1.0, check_every=1000):
+        import time
+
+        self.start_time, self.stop_time, self.stream = start_time, stop_time, stream
+        self.interval, self.check_every = interval, check_every
+        self._clock = time.monotonic
+        self._next = self._clock() + interval
+        self._count, self._shown = 0, False
+
+    def start(self, names):
+        pass
+
+    def observe(self, time, values):
+        self._count += 1
+        if self._count % self.check_every:
+            return
+        now = self._clock()
+        if now < self._next:
+            return
+        self._next = now + self.interval
+        share = (time - self.start_time) / (self.stop_time - self.start_time)
+        self.stream.write(f"\rt = {time:.6g} of {self.stop_time:g} s ({100 * share:.0f} %)")
+        self.stream.flush()
+        self._shown = True
+
+    def close(self, reason=None):
+        """End the line (when one was shown)."""
+        if self._shown:
+            self.stream.write("\n")
+            self.stream.flush()
+            self._shown = False
+
+
 def _table(rows, names):
     """Recorded rows (a flat array of doubles) as a pyarrow table of float64 columns."""
     import numpy as np
@@ -177,13 +291,23 @@ def _table(rows, names):
                                  for c in columns], names=names)
 
 
+RESULT_SUFFIXES = (".csv", ".parquet", ".mat")
+
+
 def recorder_for(path):
-    """The streaming recorder for a result file: Parquet for ``.parquet``, else CSV."""
-    return ParquetRecorder(path) if os.fspath(path).endswith(".parquet") else CsvRecorder(path)
+    """The recorder for a result file by its suffix: Parquet (``.parquet``), MATLAB (``.mat``), else CSV."""
+    suffix = os.path.splitext(os.fspath(path))[1]
+    return {".parquet": ParquetRecorder, ".mat": MatRecorder}.get(suffix, CsvRecorder)(path)
 
 
 def read_result(path):
-    """Read a result file (CSV or Parquet) into ``{column: numpy array}``."""
+    """Read a result file (CSV, Parquet or MATLAB ``.mat``) into ``{column: numpy array}``."""
+    if os.fspath(path).endswith(".mat"):
+        import scipy.io
+
+        content = scipy.io.loadmat(path)
+        names = [str(cell.ravel()[0]) for cell in content["columns"].ravel()]  # a cell array of strings
+        return {name: content["data"][:, i].copy() for i, name in enumerate(names)}
     if os.fspath(path).endswith(".parquet"):
         import pyarrow.parquet as pq
 

@@ -61,6 +61,17 @@ class System:
             merged.setdefault(name, {}).update(values)
         return replace(self, parameters=merged)
 
+    def with_instances(self, overrides):
+        """A copy with some instances' FMUs replaced: ``{instance: model identifier or .fmu path}``.
+
+        The system's parameter values for a replaced instance are kept; connections are matched again
+        when the copy is resolved.
+        """
+        unknown = [name for name in overrides if name not in self.instances]
+        if unknown:
+            raise ValueError(f"unknown instance {unknown[0]!r}; instances: {', '.join(self.instances)}")
+        return replace(self, instances={**self.instances, **overrides})
+
     def resolve(self, fmu_dir):
         """``(fmus, connections)``: the checked FMU paths and every connection, matched ones included.
 
@@ -99,7 +110,7 @@ def split_name(name, variables):
 
 
 def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters=None,
-             recorder=None, start_time=0.0, initial_exchange=True):
+             recorder=None, start_time=0.0, initial_exchange=True, observers=()):
     """Co-simulate FMUs with the fixed-step master.
 
     Parameters
@@ -117,13 +128,17 @@ def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters
         Defaults to an :class:`ArrayRecorder`.
     initial_exchange : bool
         See :class:`~crane_fmu.cosim.master.Master`.
+    observers : sequence, optional
+        More observers (e.g. a :class:`~crane_fmu.cosim.recorder.ProgressLine`), told of every
+        communication point after the recorder.
 
     Returns
     -------
     recorder
         The recorder, holding every output at every communication point. On an
-        FMU error, a :class:`CsvRecorder` is closed with the rows up to the last
-        good step before the :class:`FmiError` propagates.
+        FMU error, a file recorder is closed with the rows up to the last good
+        step (written to :func:`~crane_fmu.cosim.recorder.cut_short_path`, never
+        over an earlier result) before the :class:`FmiError` propagates.
     """
     communication_points(start_time, stop_time, step)  # fail before loading anything
     for name in parameters or {}:
@@ -135,7 +150,7 @@ def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters
         for name, path in fmus.items():
             instances[name] = open_instance(path, name)
         master = Master(instances, connections, mode, initial_exchange)
-        master.run(start_time, stop_time, step, [recorder], parameters)
+        master.run(start_time, stop_time, step, [recorder, *observers], parameters)
         master.terminate()
     except FmiError as exc:
         if hasattr(recorder, "close"):

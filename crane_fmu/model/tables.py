@@ -2,7 +2,7 @@
 
 Each component lists its variables in one table (a tuple of :class:`Variable`);
 the slaves register them, the build post-processes units and descriptions from
-them, and the README's variable lists are generated from them
+them, and the documentation's variable lists (docs/reference/variables.md) are generated from them
 (``crane-fmu info --markdown``). The rows that several components share live here.
 """
 
@@ -100,7 +100,7 @@ def controller_model():
 
 
 def variable_table(component, markdown=False):
-    """A component's variables as text (``crane-fmu info``) or as the README's Markdown table."""
+    """A component's variables as text (``crane-fmu info``) or as the docs' Markdown table."""
     lines = ([f"#### {component.model_identifier}", "", "| name | causality | start | unit | description |",
               "|---|---|---|---|---|"] if markdown else
              [f"{component.model_identifier}.fmu ({component.role}): {component.description}"])

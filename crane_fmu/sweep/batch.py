@@ -10,6 +10,7 @@ from :func:`read_journal`; a worker that dies has its running items rescheduled 
 import json
 import math
 import os
+import signal
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -36,12 +37,14 @@ def read_journal(out_dir):
 class Progress:
     """A one-line progress bar on stderr (a line per 10 % when stderr is not a terminal).
 
-    ``total`` items, ``done`` of them finished before; ``ok(result)`` tells a result that is not
-    counted as "not ok" (default: its ``status`` is ``ok``).
+    ``total`` items, ``done`` of them finished before, ``failed`` of those not ok (so that a resumed
+    batch counts as its summary does); ``ok(result)`` tells a result that is not counted as "not ok"
+    (default: its ``status`` is ``ok``).
     """
 
-    def __init__(self, total, done=0, stream=sys.stderr, ok=lambda result: result.get("status") == "ok"):
-        self.total, self.done, self.failed, self.stream, self.ok = total, done, 0, stream, ok
+    def __init__(self, total, done=0, stream=None, ok=lambda result: result.get("status") == "ok", failed=0):
+        stream = sys.stderr if stream is None else stream
+        self.total, self.done, self.failed, self.stream, self.ok = total, done, failed, stream, ok
         self.start, self.tty = time.perf_counter(), stream.isatty()
         self._shown = -1
 
@@ -104,9 +107,13 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
         workers = workers or os.cpu_count() or 1
         if workers == 1:
             return [keep(task(item, *extra, **kwargs)) for item in items]
-        with ProcessPoolExecutor(max_workers=workers) as pool:
+        with ProcessPoolExecutor(max_workers=workers, initializer=ignore_interrupts) as pool:
             futures = [pool.submit(task, item, *extra, **kwargs) for item in items]
-            return [keep(future.result()) for future in as_completed(futures)]
+            try:
+                return [keep(future.result()) for future in as_completed(futures)]
+            except BaseException:  # Ctrl-C (the workers ignore it) or a failed item: drop what has not begun
+                pool.shutdown(wait=True, cancel_futures=True)
+                raise
 
 
 def _on_dask(task, items, extra, workers, scheduler, kwargs):
@@ -115,10 +122,19 @@ def _on_dask(task, items, extra, workers, scheduler, kwargs):
     from distributed import as_completed as finished
 
     if scheduler:
-        client, cluster = Client(scheduler), None
+        try:
+            client, cluster = Client(scheduler, timeout=10), None
+        except (OSError, TimeoutError) as exc:
+            raise ValueError(f"scheduler {scheduler}: cannot connect ({str(exc).splitlines()[0]})") from None
     else:
-        cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=50)
+        # The workers ignore Ctrl-C (the disposition is inherited by the processes they start): only this
+        # process stops, closes the cluster and says so in one line, no traceback from every worker.
+        handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
+                                   dashboard_address=":0", silence_logs=50)  # a free port: no warning
+        finally:
+            signal.signal(signal.SIGINT, handler)
         client = Client(cluster)
     try:
         columns = [items] + ([[client.scatter([extra[0]], broadcast=True)[0]] * len(items)] if extra else [])
@@ -128,6 +144,11 @@ def _on_dask(task, items, extra, workers, scheduler, kwargs):
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def ignore_interrupts():
+    """Ignore Ctrl-C in a worker process: the parent handles it (one line, not a traceback per worker)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _plain(value):

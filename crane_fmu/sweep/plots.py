@@ -2,7 +2,7 @@
 
 import math
 
-OUTCOME_CODES = {"converges": 0, "sustained oscillation": 1, "diverges": 2}
+OUTCOME_CODES = {"converges": 0, "decaying": 1, "sustained oscillation": 2, "diverges": 3}
 
 
 def _value(row, metric):
@@ -52,7 +52,7 @@ def plot_study(rows, study, path, max_panels=12, units=None):
     cols = min(len(keys), 3)
     fig, axs = plt.subplots((len(keys) + cols - 1) // cols, cols, figsize=(5 * cols, 4.6 * math.ceil(len(keys) / cols)),
                             squeeze=False, layout="constrained")
-    norm = dict(vmin=0, vmax=2) if metric == "outcome" else dict(
+    norm = dict(vmin=0, vmax=3) if metric == "outcome" else dict(
         vmin=np.nanmin([_value(r, metric) for r in rows] + [np.inf]),
         vmax=np.nanmax([_value(r, metric) for r in rows] + [-np.inf]))
     if not all(map(math.isfinite, norm.values())):

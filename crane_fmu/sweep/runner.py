@@ -86,8 +86,11 @@ def run_case(case, system, settings, metric_names):
         s = metrics.crane_signals(columns)
         values = metrics.closed_loop_metrics(s["time"], s["x"], s["theta1"], s["theta2"], s["u"],
                                              row["status"] == "ok")
-        values["settling_band_s"] = metrics.settling_time(s["time"], [s["theta1"], s["theta2"]],
-                                                          math.radians(settings["settling_band_deg"]))
+        band = math.radians(settings["settling_band_deg"])
+        values["settling_band_s"] = metrics.settling_time(s["time"], [s["theta1"], s["theta2"]], band)
+        # "converges" only where the study's settling time exists too (a narrower band than 0.1 deg)
+        values["outcome"] = metrics.classify(s["time"], s["theta1"], s["theta2"], row["status"] == "ok",
+                                             min(band, metrics.SETTLED_BAND))
     row.update({name: values.get(name) for name in metric_names})
     row["duration_s"] = time.perf_counter() - start
     return row
@@ -111,17 +114,18 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
     from crane_fmu import systems
 
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     settings = study.settings()
     cases = study.cases()
     done = read_journal(out_dir)
     pending = [c for c in cases if case_id(c, settings) not in done]
-    bar = Progress(len(cases), len(cases) - len(pending)) if progress else None
+    failed_before = sum(done[case_id(c, settings)]["status"] != "ok" for c in cases if case_id(c, settings) in done)
     start = time.perf_counter()
     rows_ran = []
     with systems.open_system(study.system) as system:
         systems.resolve(system, fmu_dir)
         units = _check_names(study, system, fmu_dir)
+        out_dir.mkdir(parents=True, exist_ok=True)  # only now: a refused study leaves no folder behind
+        bar = Progress(len(cases), len(cases) - len(pending), failed=failed_before) if progress else None
         if pending:
             shipped = shippable(systems.at_step(system, fmu_dir, study.step), fmu_dir)
             to_run, invalid = [], []
