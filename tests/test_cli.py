@@ -368,3 +368,16 @@ def _simulated(fmu_dir, tmp_path, system, stop_time):
     assert main(["simulate", "--fmu-dir", str(fmu_dir), "--system", system, "--stop-time", stop_time,
                  "--out", str(path)]) == 0
     return path
+
+
+@pytest.mark.parametrize("argv", [["compare", "--quick", "--out", "{tmp}/board"], ["sweep", "study.toml", "--out",
+                                                                                  "{tmp}/study"]])
+def test_sweep_and_compare_without_dask_are_one_line_and_write_nothing(argv, tmp_path, capsys, monkeypatch):
+    """The quick start installs only the plot extra: a command that needs Dask says so before writing anything."""
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "distributed" else real(name, *a))
+    code, _, err = _run(capsys, *[a.format(tmp=tmp_path) for a in argv])
+    assert code == 2 and err.count("\n") == 1 and "runs its cases on Dask, which is not installed" in err
+    assert list(tmp_path.iterdir()) == []

@@ -142,3 +142,12 @@ def check_workers(args):
         raise UsageError("--workers and --scheduler exclude each other: the scheduler's cluster has its workers")
     if getattr(args, "scheduler", None):
         check_scheduler(args.scheduler)
+
+
+def require_dask(command):
+    """One line, exit 2, when Dask (the ``dask`` extra) is not installed: before anything is written."""
+    import importlib.util
+
+    if importlib.util.find_spec("distributed") is None:
+        raise UsageError(f"{command} runs its cases on Dask, which is not installed: "
+                         "pip install -e '.[dask]' (in this project's venv)")

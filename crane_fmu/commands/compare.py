@@ -2,7 +2,7 @@
 
 from pathlib import Path
 
-from .common import UsageError, check_workers, dask_options, writable_file
+from .common import UsageError, check_workers, dask_options, require_dask, writable_file
 
 NAME = "compare"
 HELP = "score controller FMUs on the same scenarios (the scoreboard)"
@@ -34,6 +34,7 @@ def run(args):
     from crane_fmu.compare import ANIMATE, compare
 
     check_workers(args)
+    require_dask("compare")
     choices = {"none": (), "all": ANIMATE, **{s: (s,) for s in ANIMATE}}
     if args.animate not in choices:
         raise UsageError(f"--animate {args.animate}: choose none, all, {', '.join(ANIMATE)} (the scenarios whose "

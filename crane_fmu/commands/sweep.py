@@ -2,7 +2,7 @@
 
 from pathlib import Path
 
-from .common import UsageError, check_workers, dask_options, writable_file
+from .common import UsageError, check_workers, dask_options, require_dask, writable_file
 
 NAME = "sweep"
 HELP = "run a parameter study of the FMUs on Dask"
@@ -28,6 +28,7 @@ def run(args):
     from crane_fmu.sweep.runner import run_study
 
     check_workers(args)
+    require_dask("sweep")
     try:
         study = spec.load(args.study)
     except ValueError as exc:
