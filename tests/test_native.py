@@ -416,4 +416,5 @@ def test_bench_native_runs_and_prints_its_figures(native, capsys):
 
     assert main(["bench", "--native", "--stop-time", "0.2", "--repeat", "1"]) == 0
     printed = capsys.readouterr().out
-    assert "3. native plant in the C host" in printed and "4. whole processes" in printed
+    assert "2. native pair (plant + controller), our master" in printed and "3. native pair in the C host" in printed
+    assert "4. whole processes" in printed
