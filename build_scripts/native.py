@@ -35,7 +35,7 @@ from crane_fmu.model.tables import DISPLAY_UNITS, xml_double
 
 NATIVE = Path(fmu_src.__file__).parent / "native"
 # the ported components: model identifier -> its model file in fmu_src/native
-MODELS = {"CranePlant": "crane_plant.c"}
+MODELS = {"CranePlant": "crane_plant.c", "BacksteppingController": "backstepping.c"}
 COMMON = ("plant_equations.c", "py_repr.c", "portable_math.c", "framework.c")
 HEADERS = ("model.h", "framework.h", "plant_equations.h", "plant_math.h", "py_repr.h")
 FRAMEWORKS = {2: ("fmi2_framework.c", "fmi2_functions.h"), 3: ("fmi3_framework.c", "fmi3_functions.h")}
@@ -81,11 +81,16 @@ def variables_header(component):
     rows, enum = [], []
     causality = {"parameter": "PARAMETER", "input": "INPUT", "output": "OUTPUT"}
     for vr, v in enumerate(component.variables):
-        if v.type != "Real":
-            raise ValueError(f"{component.model_identifier}.{v.name}: the native framework has Reals only")
-        start = "0.0" if v.start is None else xml_double(v.start)
-        start = {"INF": "INFINITY", "-INF": "-INFINITY"}.get(start, start)
-        rows.append(f'    {{"{v.name}", {causality[v.causality]}, {start}}},')
+        if v.type not in ("Real", "String") or (v.type == "String" and v.causality != "parameter"):
+            raise ValueError(f"{component.model_identifier}.{v.name}: the native framework has Reals and String "
+                             "parameters only")
+        if v.type == "String":
+            text = v.start.encode("unicode_escape").decode("ascii").replace('"', '\\"')
+            rows.append(f'    {{"{v.name}", {causality[v.causality]}, STRING, 0.0, "{text}"}},')
+        else:
+            start = "0.0" if v.start is None else xml_double(v.start)
+            start = {"INF": "INFINITY", "-INF": "-INFINITY"}.get(start, start)
+            rows.append(f'    {{"{v.name}", {causality[v.causality]}, REAL, {start}, NULL}},')
         enum.append(f"VR_{v.name} = {vr},")
     outputs = [i for i, v in enumerate(component.variables) if v.causality == "output"]
     if outputs != list(range(outputs[0], len(component.variables))):
@@ -96,15 +101,19 @@ def variables_header(component):
 #define VARIABLES_H
 
 #include <math.h>
+#include <stddef.h>
 
 #define MODEL_IDENTIFIER "{name}"
 #define INSTANTIATION_TOKEN "{token(component)}"
 
 typedef enum {{ PARAMETER, INPUT, OUTPUT }} Causality;
+typedef enum {{ REAL, STRING }} VariableType;
 typedef struct {{
     const char *name;
     Causality causality;
-    double start;
+    VariableType type;
+    double start;     /* a Real's */
+    const char *text; /* a String's start value */
 }} VariableRow;
 
 enum {{
@@ -143,7 +152,10 @@ def _skeleton2(component, sources):
         if v.causality == "output":
             attrs["initial"] = "calculated"
         sv = ET.SubElement(variables, "ScalarVariable", attrs)
-        ET.SubElement(sv, "Real", {} if v.start is None else {"start": xml_double(v.start)})
+        if v.type == "String":
+            ET.SubElement(sv, "String", start=v.start)
+        else:
+            ET.SubElement(sv, "Real", {} if v.start is None else {"start": xml_double(v.start)})
     ET.SubElement(root, "ModelStructure")
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
@@ -169,6 +181,9 @@ def _skeleton3(component):
                  "variability": v.variability}
         if v.causality == "output":
             attrs["initial"] = "calculated"
+        elif v.type == "String":
+            ET.SubElement(ET.SubElement(variables, "String", attrs), "Start", value=v.start)
+            continue
         else:
             attrs["start"] = xml_double(v.start)
         attrs["unit"] = v.unit

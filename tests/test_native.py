@@ -190,7 +190,7 @@ def _run(name, folder):
 
 @pytest.mark.parametrize("name", list(RUNS))
 def test_native_runs_equal_the_python_plant_over_their_whole_length(fmu_dir, native, name):
-    """Section V (native plant, Python controller), free swing, hoisting, disturbances: 1e-9 at every step."""
+    """Section V (native plant and controller), free swing, hoisting, disturbances: 1e-9 at every step."""
     ours, theirs = _run(name, native[2]), _run(name, fmu_dir)
     assert list(ours) == list(theirs)
     assert len(ours["time"]) == len(theirs["time"]) > 10_000
@@ -384,10 +384,13 @@ def test_the_model_and_framework_compile_without_warnings_under_strict_flags(tmp
     from crane_fmu.build_scripts.native import variables_header
 
     (tmp_path / "CranePlant_variables.h").write_text(variables_header(PLANT))
+    (tmp_path / "BacksteppingController_variables.h").write_text(
+        variables_header(components.get("BacksteppingController")))
     for framework in ("fmi2_framework.c", "fmi3_framework.c"):
         subprocess.run([_compiler(), *STRICT, f"-I{tmp_path}", f"-I{NATIVE}", f"-I{NATIVE.parent}",
                         f"-I{fmi_headers()}", str(NATIVE / framework), "-o", str(tmp_path / "f.o")], check=True)
-    for source in ("crane_plant.c", "plant_equations.c", "framework.c", "py_repr.c", "portable_math.c"):
+    for source in ("crane_plant.c", "backstepping.c", "plant_equations.c", "framework.c", "py_repr.c",
+                   "portable_math.c"):
         subprocess.run([_compiler(), *STRICT, f"-I{tmp_path}", f"-I{NATIVE}", str(NATIVE / source), "-o",
                         str(tmp_path / "m.o")], check=True)
 
@@ -413,4 +416,5 @@ def test_bench_native_runs_and_prints_its_figures(native, capsys):
 
     assert main(["bench", "--native", "--stop-time", "0.2", "--repeat", "1"]) == 0
     printed = capsys.readouterr().out
-    assert "3. native plant in the C host" in printed and "4. whole processes" in printed
+    assert "2. native pair (plant + controller), our master" in printed and "3. native pair in the C host" in printed
+    assert "4. whole processes" in printed

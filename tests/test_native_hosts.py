@@ -1,10 +1,10 @@
-"""The native CranePlant FMU where it will run: a C host with no Python, Windows x64 under Wine, long-lived hosts.
+"""The native FMUs where they will run: a C host with no Python, Windows x64 under Wine, long-lived hosts.
 
-``fmu_src/native/host.c`` is compiled for Linux and, with mingw-w64, for Windows. For the Section V
-run without Python it closes the loop with the paper's backstepping law written in C inside the
-host (no native BacksteppingController FMU exists yet); on Linux that loop gives our master's run
-of the native plant with the Python controller FMU. Tests that need mingw-w64 or Wine skip where
-they are missing; ``.ci/run`` installs both.
+``fmu_src/native/host.c`` is compiled for Linux and, with mingw-w64, for Windows. It runs Section V
+without Python two ways: the native plant closed by the paper's law written in C inside the host,
+and the native plant with the native BacksteppingController FMU (``pair``), exchanged by value
+references at each step as our master does. On Linux both give our master's run of the Python
+FMUs. Tests that need mingw-w64 or Wine skip where they are missing; ``.ci/run`` installs both.
 """
 
 import glob
@@ -51,6 +51,21 @@ def plant(fmu_dir, tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
+def controller(fmu_dir, tmp_path_factory):
+    """The unpacked native BacksteppingController (FMI 2.0): ``(folder, guid)``; host.c's value references checked."""
+    fmu = native_dir(fmu_dir) / "BacksteppingController.fmu"
+    folder = tmp_path_factory.mktemp("controller")
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(folder)
+    if not (folder / "binaries" / "linux64" / "BacksteppingController.so").exists():
+        pytest.skip("no native BacksteppingController was built (no C compiler)")
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    assert ([vr[s] for s in STATE], vr["u"]) == ([21, 22, 23, 24, 25, 26], 27)  # host.c's
+    return folder, md.guid
+
+
+@pytest.fixture(scope="module")
 def host(tmp_path_factory):
     out = tmp_path_factory.mktemp("host") / "host"
     subprocess.run([_compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", f"-I{NATIVE}",
@@ -72,11 +87,10 @@ def _host(host, *args, env=None, cwd=None, wine=None, timeout=300):
 
 @pytest.fixture(scope="module")
 def section5(fmu_dir):
-    """Our master's Section V run, native plant and Python controller FMU: ``[t, 6 states, u]`` rows, 20 s at 1 ms."""
-    folder = native_dir(fmu_dir)
-    if not (folder / "CranePlant.fmu").exists():
+    """Our master's Section V run of the Python plant and controller FMUs: ``[t, 6 states, u]`` rows, 20 s at 1 ms."""
+    if not (native_dir(fmu_dir) / "CranePlant.fmu").exists():
         pytest.skip("no native FMUs were built (no C compiler)")
-    columns = run(systems.get("paper"), folder).columns()
+    columns = run(systems.get("paper"), fmu_dir).columns()
     return np.column_stack([columns["time"]] + [columns[f"plant.{s}"] for s in STATE] + [columns["controller.u"]])
 
 
@@ -138,6 +152,15 @@ def test_c_host_runs_section5_like_our_master(host, plant, section5):
     assert np.max(np.abs(rows - section5)) <= 1e-9  # the same libm, the same operations: in practice 0
 
 
+def test_c_host_runs_section5_on_the_native_plant_and_controller_fmus(host, plant, controller, section5):
+    """The two native FMUs exchanged by value references in the C host, no Python: the Python pair's run, 1e-9."""
+    rows = _rows(_host(host, "pair", plant[0] / "binaries" / "linux64" / "CranePlant.so", plant[1],
+                       controller[0] / "binaries" / "linux64" / "BacksteppingController.so", controller[1], 20_000,
+                       1e-3, env=CLEAN_ENV))
+    assert rows.shape == section5.shape
+    assert np.max(np.abs(rows - section5)) <= 1e-9  # in practice 0
+
+
 # ---- long-lived hosts -----------------------------------------------------------------------------------------
 
 def test_ten_thousand_instances_in_one_process_leave_memory_flat(host, plant):
@@ -169,7 +192,7 @@ def test_two_instances_in_two_threads_give_the_results_of_one(host, plant):
 # ---- Windows x64 under Wine -------------------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
-def wine(plant, tmp_path_factory):
+def wine(plant, controller, tmp_path_factory):
     """``(wine command, folder with host.exe and CranePlant.dll, environment)``; the prefix is deleted afterwards."""
     if shutil.which(MINGW) is None or shutil.which("wine") is None:
         pytest.skip("needs mingw-w64 (gcc-mingw-w64-x86-64) and Wine (wine64, wine): .ci/run installs them")
@@ -178,6 +201,7 @@ def wine(plant, tmp_path_factory):
                     f"-I{fmi_headers()}", f"-I{NATIVE}", str(HOST), str(NATIVE / "portable_math.c"), "-o",
                     str(folder / "host.exe")], check=True)
     shutil.copy(plant[0] / "binaries" / "win64" / "CranePlant.dll", folder)
+    shutil.copy(controller[0] / "binaries" / "win64" / "BacksteppingController.dll", folder)
     prefix = tmp_path_factory.mktemp("wineprefix")
     env = {**CLEAN_ENV, "HOME": str(prefix), "WINEPREFIX": str(prefix), "WINEDEBUG": "-all"}
     yield ["wine"], folder, env
@@ -221,6 +245,22 @@ def test_windows_dll_under_wine_gives_the_linux_section5_run(wine, plant, sectio
                     f"-I{fmi_headers()}", f"-I{NATIVE}", str(HOST), str(NATIVE / "portable_math.c"), "-o",
                     str(own_host), "-ldl", "-lpthread"], check=True)
     assert np.array_equal(_rows(_host(own_host, "paper", own, guid, 20_000, 1e-3)), windows)
+
+
+def test_windows_dlls_of_both_native_fmus_under_wine_give_the_linux_section5_run(wine, plant, controller, section5):
+    """The plant and controller DLLs in the Windows host: the host's own law's bits, and Linux's run to 1e-9.
+
+    Both DLLs and the host use the portable math, the same operations: the pair gives exactly the
+    Windows run with the law written in the host, and the Linux run within the bound above.
+    """
+    command, folder, env = wine
+    pair = _rows(_host(folder / "host.exe", "pair", "CranePlant.dll", plant[1], "BacksteppingController.dll",
+                       controller[1], 20_000, 1e-3, env=env, cwd=folder, wine=command))
+    law_in_host = _rows(_host(folder / "host.exe", "paper", "CranePlant.dll", plant[1], 20_000, 1e-3, env=env,
+                              cwd=folder, wine=command))
+    assert np.array_equal(pair, law_in_host)
+    assert np.max(np.abs(pair[:, :7] - section5[:, :7])) <= 1e-9
+    assert np.max(np.abs(pair[:, 7] - section5[:, 7]) / np.maximum(np.abs(section5[:, 7]), 1.0)) <= 1e-9
 
 
 def test_windows_dll_under_wine_free_swing_and_long_lived_host(wine, plant):

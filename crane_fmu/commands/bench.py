@@ -25,7 +25,8 @@ def arguments(p):
                    help="instead: cases per second of a Dask sweep with 1 and 2 workers")
     p.add_argument("--cases", type=int, default=16, help="with --sweep: cases per measurement")
     p.add_argument("--native", action="store_true",
-                   help="instead: the native (C) CranePlant FMU in our master, in a C host and as a whole process")
+                   help="instead: the native (C) plant and controller FMUs in our master, in a C host and as a "
+                        "whole process")
     p.add_argument("--endurance", action="store_true",
                    help="instead: one long run (default one simulated hour) recorded to CSV, memory sampled")
 

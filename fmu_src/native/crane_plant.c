@@ -35,6 +35,7 @@ const char *const MODEL_NAME = MODEL_IDENTIFIER;
 const char *const MODEL_TOKEN = INSTANTIATION_TOKEN;
 const size_t MODEL_SIZE = sizeof(Model);
 const unsigned MODEL_N_VARIABLES = N_VARIABLES;
+const unsigned MODEL_N_STRINGS = 0; /* the frameworks never call the String functions below */
 
 #define V(name) (values[VR_##name])
 #define R(value) py_repr(value, (char[REPR_SIZE]){0})
@@ -114,6 +115,17 @@ ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const doubl
     }
     for (size_t i = 0; i < n; i++) m->values[vr[i]] = values[i];
     return MODEL_OK;
+}
+
+ModelStatus model_set_strings(Model *m, const unsigned vr[], size_t n, const char *const values[], int fixed_allowed,
+                              const Reporter *r) {
+    (void)m, (void)vr, (void)n, (void)values, (void)fixed_allowed;
+    return report(r, MODEL_ERROR, "this FMU has no variables of this type");
+}
+
+ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const char *values[], const Reporter *r) {
+    (void)m, (void)vr, (void)n, (void)values;
+    return report(r, MODEL_ERROR, "this FMU has no variables of this type");
 }
 
 /* Every output in table order: plant_outputs(), then l1_now, dl1_now, ddx. */

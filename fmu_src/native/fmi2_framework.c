@@ -90,10 +90,15 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
     }
 NO_VALUES(fmi2GetInteger, GETTABLE, fmi2Integer)
 NO_VALUES(fmi2GetBoolean, GETTABLE, fmi2Boolean)
-NO_VALUES(fmi2GetString, GETTABLE, fmi2String)
 NO_VALUES(fmi2SetInteger, SETTABLE, const fmi2Integer)
 NO_VALUES(fmi2SetBoolean, SETTABLE, const fmi2Boolean)
-NO_VALUES(fmi2SetString, SETTABLE, const fmi2String)
+
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2String v[]) {
+    return get_strings(c, "fmi2GetString", vr, n, v);
+}
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2String v[]) {
+    return set_strings(c, "fmi2SetString", vr, n, v);
+}
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean no_prior) {
     (void)no_prior;

@@ -144,8 +144,32 @@ fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t 
         (void)vr, (void)nvr, (void)v;                                                                        \
         return no_such_values(c, "fmi3Set" #Type, SETTABLE, n);                                              \
     }
-NO_GET(Int32) NO_GET(Int64) NO_GET(UInt64) NO_GET(Boolean) NO_GET(String)
-NO_SET(Int32) NO_SET(Int64) NO_SET(UInt64) NO_SET(Boolean) NO_SET(String)
+NO_GET(Int32) NO_GET(Int64) NO_GET(UInt64) NO_GET(Boolean)
+NO_SET(Int32) NO_SET(Int64) NO_SET(UInt64) NO_SET(Boolean)
+
+fmi3Status fmi3GetString(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, fmi3String v[], size_t n) {
+    if (!allowed(c, "fmi3GetString", GETTABLE)) return fmi3Error;
+    if (n != nvr) return refuse(c, "fmi3GetString", "arrays are not supported (nValues != nValueReferences)");
+    if (nvr == 0) return fmi3OK;
+    if (!vr || !v) return refuse(c, "fmi3GetString", "NULL array");
+    unsigned small[SMALL], *mapped;
+    if (!map_vrs(c, "fmi3GetString", vr, nvr, small, &mapped)) return fmi3Error;
+    fmi3Status status = get_strings(c, "fmi3GetString", mapped, nvr, v);
+    if (mapped != small) free(mapped);
+    return status;
+}
+
+fmi3Status fmi3SetString(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, const fmi3String v[], size_t n) {
+    if (!allowed(c, "fmi3SetString", SETTABLE)) return fmi3Error;
+    if (n != nvr) return refuse(c, "fmi3SetString", "arrays are not supported (nValues != nValueReferences)");
+    if (nvr == 0) return fmi3OK;
+    if (!vr || !v) return refuse(c, "fmi3SetString", "NULL array");
+    unsigned small[SMALL], *mapped;
+    if (!map_vrs(c, "fmi3SetString", vr, nvr, small, &mapped)) return fmi3Error;
+    fmi3Status status = set_strings(c, "fmi3SetString", mapped, nvr, v);
+    if (mapped != small) free(mapped);
+    return status;
+}
 
 fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 t, fmi3Float64 h, fmi3Boolean no_prior, fmi3Boolean *event_needed,
                       fmi3Boolean *terminate, fmi3Boolean *early_return, fmi3Float64 *last_time) {

@@ -130,6 +130,24 @@ int set_reals(Instance *c, const char *function, const unsigned vr[], size_t n, 
     return settle(c, model_set_reals(c->model, vr, n, v, c->mode != STEPPING, &r), 0);
 }
 
+int get_strings(Instance *c, const char *function, const unsigned vr[], size_t n, const char *v[]) {
+    if (MODEL_N_STRINGS == 0) return no_such_values(c, function, GETTABLE, n);
+    if (!allowed(c, function, GETTABLE)) return MODEL_ERROR;
+    if (n == 0) return MODEL_OK;
+    if (!vr || !v) return refuse(c, function, "NULL array");
+    Reporter r = reporter(c, function);
+    return settle(c, model_get_strings(c->model, vr, n, v, &r), 0);
+}
+
+int set_strings(Instance *c, const char *function, const unsigned vr[], size_t n, const char *const v[]) {
+    if (MODEL_N_STRINGS == 0) return no_such_values(c, function, SETTABLE, n);
+    if (!allowed(c, function, SETTABLE)) return MODEL_ERROR;
+    if (n == 0) return MODEL_OK;
+    if (!vr || !v) return refuse(c, function, "NULL array");
+    Reporter r = reporter(c, function);
+    return settle(c, model_set_strings(c->model, vr, n, v, c->mode != STEPPING, &r), 0);
+}
+
 int no_such_values(Instance *c, const char *function, int modes, size_t n) {
     if (!allowed(c, function, modes)) return MODEL_ERROR;
     return n == 0 ? MODEL_OK : refuse(c, function, "this FMU has no variables of this type");

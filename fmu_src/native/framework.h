@@ -56,6 +56,8 @@ int terminate(Instance *c, const char *function);
 int reset(Instance *c, const char *function);
 int get_reals(Instance *c, const char *function, const unsigned vr[], size_t n, double v[]);
 int set_reals(Instance *c, const char *function, const unsigned vr[], size_t n, const double v[]);
+int get_strings(Instance *c, const char *function, const unsigned vr[], size_t n, const char *v[]);
+int set_strings(Instance *c, const char *function, const unsigned vr[], size_t n, const char *const v[]);
 /* Values of a type this FMU has none of: only an empty call succeeds. */
 int no_such_values(Instance *c, const char *function, int modes, size_t n);
 int do_step(Instance *c, const char *function, double t, double h);

@@ -11,8 +11,14 @@
  *   host maps LIB GUID                                  the libraries loaded in this process that name python
  *   host paper LIB GUID STEPS H                         Section V: the plant under the paper's backstepping law,
  *                                                       written in C here (rows "t,6 states,u"); see paper_law()
+ *   host pair LIB GUID CLIB CGUID STEPS H               Section V on two FMUs: the plant and the native
+ *                                                       BacksteppingController (CLIB), exchanged by value
+ *                                                       references at each step as our master does (rows
+ *                                                       "t,6 states,u")
+ *   host pair-bench LIB GUID CLIB CGUID STEPS H         seconds per step of that loop, no recording
  *
- * Value references are those of the CranePlant table (checked against modelDescription.xml by the tests).
+ * Value references are those of the CranePlant and BacksteppingController tables (checked against
+ * modelDescription.xml by the tests).
  */
 #include <stdarg.h>
 #include <stdio.h>
@@ -35,6 +41,7 @@
 #endif
 
 enum { VR_L1 = 2, VR_U = 22, VR_X = 26 }; /* l1, u, and x: the first of the six states */
+enum { VR_C_X = 21, VR_C_U = 27 };        /* the controller's measured x (first of six) and its output u */
 
 typedef struct {
     fmi2InstantiateTYPE *instantiate;
@@ -49,6 +56,7 @@ typedef struct {
 } Api;
 
 static int quiet;
+static const char *instance_name = "plant";
 
 static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
                    fmi2String format, ...) {
@@ -88,7 +96,7 @@ static Api load(const char *library, const char *guid) {
 
 /* An initialised instance with the given parameter settings, or NULL (the FMU logged why). */
 static fmi2Component start(const Api *api, size_t n, const fmi2ValueReference vr[], const fmi2Real v[]) {
-    fmi2Component c = api->instantiate("plant", fmi2CoSimulation, api->guid, "", &callbacks, fmi2False, fmi2False);
+    fmi2Component c = api->instantiate(instance_name, fmi2CoSimulation, api->guid, "", &callbacks, fmi2False, fmi2False);
     if (!c) return NULL;
     if (api->setup(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) > fmi2Warning || api->enter(c) > fmi2Warning ||
         (n && api->set(c, vr, n, v) > fmi2Warning) || api->exit_init(c) > fmi2Warning) {
@@ -189,10 +197,43 @@ static void *run_job(void *arg) {
 }
 #endif
 
+/* The paper's loop on two FMUs, Gauss-Seidel as our master: the plant's states into the controller, its u
+   into the plant, then both step. Rows "t,6 states,u" when `rows` is given; seconds per step returned. */
+static double pair(const Api *plant, const Api *law, int steps, double h, FILE *rows) {
+    const fmi2ValueReference states[6] = {VR_X, VR_X + 1, VR_X + 2, VR_X + 3, VR_X + 4, VR_X + 5}, u_vr = VR_U;
+    const fmi2ValueReference measured[6] = {VR_C_X,     VR_C_X + 1, VR_C_X + 2,
+                                            VR_C_X + 3, VR_C_X + 4, VR_C_X + 5}, out_vr = VR_C_U;
+    fmi2Component p = start(plant, 0, NULL, NULL);
+    instance_name = "controller";
+    fmi2Component c = start(law, 0, NULL, NULL);
+    if (!p || !c) exit(6);
+    double y[6], u, t0 = seconds();
+    for (int k = 0; k <= steps; k++) {
+        if (plant->get(p, states, 6, y) > fmi2Warning || law->set(c, measured, 6, y) > fmi2Warning ||
+            law->get(c, &out_vr, 1, &u) > fmi2Warning || plant->set(p, &u_vr, 1, &u) > fmi2Warning)
+            exit(6);
+        if (rows) fprintf(rows, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", k * h, y[0], y[1], y[2], y[3], y[4],
+                          y[5], u);
+        if (k == steps) break;
+        if (plant->step(p, k * h, h, fmi2True) > fmi2Warning || law->step(c, k * h, h, fmi2True) > fmi2Warning) exit(6);
+    }
+    double per_step = (seconds() - t0) / steps;
+    plant->free_instance(p);
+    law->free_instance(c);
+    return per_step;
+}
+
 int main(int argc, char **argv) {
     if (argc < 4) return 2;
     const char *command = argv[1];
     Api api = load(argv[2], argv[3]);
+    if ((!strcmp(command, "pair") || !strcmp(command, "pair-bench")) && argc == 8) {
+        Api law = load(argv[4], argv[5]);
+        int bench = !strcmp(command, "pair-bench");
+        double per_step = pair(&api, &law, atoi(argv[6]), atof(argv[7]), bench ? NULL : stdout);
+        if (bench) printf("%.9g\n", per_step);
+        return 0;
+    }
     if (!strcmp(command, "run") && argc == 6) {
         int steps = atoi(argv[4]);
         double *rows = rows_for(steps);

@@ -32,6 +32,7 @@ extern const char *const MODEL_NAME; /* the model identifier */
 extern const char *const MODEL_TOKEN; /* the GUID / instantiation token of modelDescription.xml */
 extern const size_t MODEL_SIZE;       /* sizeof(Model) */
 extern const unsigned MODEL_N_VARIABLES;
+extern const unsigned MODEL_N_STRINGS; /* its String variables; none: the frameworks refuse String calls */
 
 /* The start values: a model as instantiated (and after a reset). */
 void model_defaults(Model *m);
@@ -40,6 +41,11 @@ ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const doubl
                             const Reporter *r);
 /* Get n Reals (outputs before initialisation follow the parameters, validated). */
 ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r);
+/* Set n Strings (copied), all or none; get n Strings (valid until the next call on the instance). Called only when
+   MODEL_N_STRINGS > 0. */
+ModelStatus model_set_strings(Model *m, const unsigned vr[], size_t n, const char *const values[], int fixed_allowed,
+                              const Reporter *r);
+ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const char *values[], const Reporter *r);
 /* End of initialisation: validate the parameters and set the initial state. */
 ModelStatus model_initialize(Model *m, const Reporter *r);
 /* One communication step from `time` of length `step`: OK (maybe with warnings logged), DISCARD, or ERROR. */

@@ -1,0 +1,236 @@
+/*
+ * The BacksteppingController component in C: the native twin of crane_fmu/model/backstepping.py (its
+ * variables, configure() rules and messages, law() and the output limiting of limits.limited()) behind
+ * the model interface of model.h. Its variables, value references and start values come from
+ * BacksteppingController_variables.h, generated from backstepping.VARIABLES. No state: the output u
+ * follows the inputs of the same instant (direct feedthrough).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "BacksteppingController_variables.h"
+#include "model.h"
+#include "plant_math.h"
+#include "py_repr.h"
+
+#define STRING_SIZE 256 /* the longest String value kept, with its terminating zero */
+
+/* What law() computes once from the parameters, named as there. */
+typedef struct {
+    double a, m2, l1, l2, ga, gm2, two_m2, m12, l2m2, m12g, two_m12;
+    int derived;
+    double k1x, k2x, k11, k21, k12, k22, nk1x, nk11, nk12, x_d, theta1_d, theta2_d, w_x, w_1, w_2;
+    double u_max, v_max, h;
+} Config;
+
+struct Model {
+    double values[N_VARIABLES]; /* Real parameters and inputs by value reference */
+    char b3_form[STRING_SIZE];
+    int initialised;
+    Config config; /* set when initialisation ends */
+};
+
+const char *const MODEL_NAME = MODEL_IDENTIFIER;
+const char *const MODEL_TOKEN = INSTANTIATION_TOKEN;
+const size_t MODEL_SIZE = sizeof(Model);
+const unsigned MODEL_N_VARIABLES = N_VARIABLES;
+const unsigned MODEL_N_STRINGS = 1;
+
+#define V(name) (values[VR_##name])
+#define R(value) py_repr(value, (char[REPR_SIZE]){0})
+
+void model_defaults(Model *m) {
+    memset(m, 0, sizeof *m);
+    for (unsigned i = 0; i < N_VARIABLES; i++) m->values[i] = VARIABLE_TABLE[i].start;
+    snprintf(m->b3_form, sizeof m->b3_form, "%s", VARIABLE_TABLE[VR_b3_form].text);
+}
+
+/* Python's repr() of a str: quotes and escapes as CPython chooses them (bytes >= 0x80 kept as they are). */
+static char *str_repr(const char *s, char out[4 * STRING_SIZE + 3]) {
+    int single = strchr(s, '\'') != NULL && strchr(s, '"') == NULL ? 0 : 1;
+    char quote = single ? '\'' : '"', *o = out;
+    *o++ = quote;
+    for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+        if (*p == '\\' || *p == (unsigned char)quote) *o++ = '\\', *o++ = (char)*p;
+        else if (*p == '\n') *o++ = '\\', *o++ = 'n';
+        else if (*p == '\r') *o++ = '\\', *o++ = 'r';
+        else if (*p == '\t') *o++ = '\\', *o++ = 't';
+        else if (*p < 0x20 || *p == 0x7f) o += sprintf(o, "\\x%02x", *p);
+        else *o++ = (char)*p;
+    }
+    *o++ = quote, *o = 0;
+    return out;
+}
+
+static ModelStatus rule(const Reporter *r, const char *name, const char *text, double value) {
+    return report(r, MODEL_ERROR, "%s must be %s, got %s", name, text, R(value));
+}
+
+/* The rules of backstepping.configure() in its order and words: h, the limits, the plant model, the gains. */
+static ModelStatus setup(const double values[], const char *b3_form, Config *c, const Reporter *r) {
+    if (!(isfinite(V(h)) && V(h) > 0)) return rule(r, "h", "> 0 and finite", V(h));
+    if (!(V(u_max) > 0)) return rule(r, "u_max", "> 0 (inf: no limit)", V(u_max));
+    if (!(V(v_max) > 0)) return rule(r, "v_max", "> 0 (inf: no limit)", V(v_max));
+    if (!(isfinite(V(m1)) && V(m1) > 0)) return rule(r, "m1", "> 0 and finite", V(m1));
+    if (!(isfinite(V(m2)) && V(m2) >= 0)) return rule(r, "m2", ">= 0 and finite", V(m2));
+    if (!(isfinite(V(l1)) && V(l1) > 0)) return rule(r, "l1", "> 0 and finite", V(l1));
+    if (!(isfinite(V(l2)) && V(l2) > 0)) return rule(r, "l2", "> 0 and finite", V(l2));
+    if (!(isfinite(V(g)) && V(g) > 0)) return rule(r, "g", "> 0 and finite", V(g));
+    static const unsigned finite[] = {VR_K1_x, VR_K1_theta1, VR_K1_theta2, VR_K2_x, VR_K2_theta1, VR_K2_theta2,
+                                      VR_x_d, VR_theta1_d, VR_theta2_d};
+    for (unsigned i = 0; i < 9; i++)
+        if (!isfinite(values[finite[i]])) return rule(r, VARIABLE_TABLE[finite[i]].name, "finite", values[finite[i]]);
+    static const unsigned weights[] = {VR_w_x, VR_w_theta1, VR_w_theta2};
+    for (unsigned i = 0; i < 3; i++) {
+        double value = values[weights[i]];
+        if (!(isfinite(value) && value >= 0)) return rule(r, VARIABLE_TABLE[weights[i]].name, ">= 0 and finite", value);
+    }
+    if (V(w_x) == 0) return report(r, MODEL_ERROR, "w_x must be > 0 (b'Wb must not vanish), got %s", R(V(w_x)));
+    int derived = strcmp(b3_form, "derived") == 0;
+    if (!derived && strcmp(b3_form, "printed") != 0)
+        return report(r, MODEL_ERROR, "b3_form must be one of derived, printed, got %s",
+                      str_repr(b3_form, (char[4 * STRING_SIZE + 3]){0}));
+    double m1 = V(m1), m2 = V(m2), l2 = V(l2), g = V(g);
+    c->a = 2.0 * m1 + m2;
+    c->m2 = m2, c->l1 = V(l1), c->l2 = l2;
+    c->ga = -g * c->a, c->gm2 = g * m2, c->two_m2 = 2.0 * m2;
+    c->m12 = m1 + m2;
+    c->l2m2 = l2 * m2, c->m12g = c->m12 * g, c->two_m12 = 2.0 * c->m12;
+    c->derived = derived;
+    c->k1x = V(K1_x), c->k2x = V(K2_x), c->k11 = V(K1_theta1), c->k21 = V(K2_theta1), c->k12 = V(K1_theta2);
+    c->k22 = V(K2_theta2);
+    c->nk1x = -c->k1x, c->nk11 = -c->k11, c->nk12 = -c->k12;
+    c->x_d = V(x_d), c->theta1_d = V(theta1_d), c->theta2_d = V(theta2_d);
+    c->w_x = V(w_x), c->w_1 = V(w_theta1), c->w_2 = V(w_theta2);
+    c->u_max = V(u_max), c->v_max = V(v_max), c->h = V(h);
+    return MODEL_OK;
+}
+
+/* backstepping.law(): the same arithmetic in the same order. */
+static double law(const Config *c, const double s[6]) {
+    double x = s[0], dx = s[1], theta1 = s[2], dtheta1 = s[3], theta2 = s[4], dtheta2 = s[5];
+    double d = theta1 - theta2;
+    double sd = SIN(d), cd = COS(d);
+    double den = c->a - c->m2 * COS(2.0 * d);
+    double w1s = dtheta1 * dtheta1, w2s = dtheta2 * dtheta2;
+    double f2 = (c->ga * SIN(theta1) - c->gm2 * SIN(theta1 - 2.0 * theta2) -
+                 c->two_m2 * (c->l1 * w1s * cd + c->l2 * w2s) * sd) / (c->l1 * den);
+    double b2 = (-c->a * COS(theta1) + c->m2 * COS(theta1 - 2.0 * theta2)) / (c->l1 * den);
+    double f3 = 2.0 * (c->l1 * w1s * c->m12 + c->l2m2 * w2s * cd + c->m12g * COS(theta1)) * sd / (c->l2 * den);
+    double b3 = c->two_m12 * sd * SIN(theta1) / (c->l2 * den);
+    if (c->derived) b3 = -b3;
+    double e3x = c->nk1x * dx - c->k2x * (dx + c->k1x * (x - c->x_d));
+    double e31 = c->nk11 * dtheta1 - c->k21 * (dtheta1 + c->k11 * (theta1 - c->theta1_d));
+    double e32 = c->nk12 * dtheta2 - c->k22 * (dtheta2 + c->k12 * (theta2 - c->theta2_d));
+    double num = c->w_x * e3x + c->w_1 * b2 * (e31 - f2) + c->w_2 * b3 * (e32 - f3);
+    return num / (c->w_x + c->w_1 * b2 * b2 + c->w_2 * b3 * b3);
+}
+
+/* Python's max(a, b) and min(a, b): the first unless the second compares greater (smaller). */
+static double py_max(double a, double b) { return b > a ? b : a; }
+static double py_min(double a, double b) { return b < a ? b : a; }
+
+/* limits.limited(u, dx, u_max, v_max, h). */
+static double limited(double u, double dx, double u_max, double v_max, double h) {
+    double low = -u_max, high = u_max;
+    if (isfinite(v_max)) {
+        low = py_max(low, (-v_max - dx) / h), high = py_min(high, (v_max - dx) / h);
+        if (low > high) return dx > 0 ? -u_max : u_max;
+    }
+    return py_min(py_max(u, low), high);
+}
+
+static double output(const Config *c, const double values[]) {
+    const double *in = &values[VR_x];
+    double u = law(c, in);
+    if (c->u_max == INFINITY && c->v_max == INFINITY) return u;
+    return limited(u, in[1], c->u_max, c->v_max, c->h);
+}
+
+ModelStatus model_initialize(Model *m, const Reporter *r) {
+    ModelStatus status = setup(m->values, m->b3_form, &m->config, r);
+    if (status != MODEL_OK) return status;
+    m->initialised = 1;
+    return MODEL_OK;
+}
+
+static ModelStatus not_real(const Reporter *r, unsigned vr) {
+    return report(r, MODEL_ERROR, "%s of %s is a String, not a Real", VARIABLE_TABLE[vr].name, MODEL_IDENTIFIER);
+}
+
+static ModelStatus no_variable(const Reporter *r, unsigned vr) {
+    return report(r, MODEL_ERROR, "%s has no variable with value reference %u", MODEL_IDENTIFIER, vr);
+}
+
+ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed,
+                            const Reporter *r) {
+    for (size_t i = 0; i < n; i++) { /* every value checked before any is set */
+        if (vr[i] >= N_VARIABLES) return no_variable(r, vr[i]);
+        const VariableRow *v = &VARIABLE_TABLE[vr[i]];
+        if (v->type == STRING) return not_real(r, vr[i]);
+        if (v->causality == OUTPUT)
+            return report(r, MODEL_ERROR, "%s is an output of %s; only parameters and inputs can be set", v->name,
+                          MODEL_IDENTIFIER);
+        if (v->causality == INPUT && !isfinite(values[i]))
+            return report(r, MODEL_ERROR, "input %s must be finite, got %s", v->name, R(values[i]));
+        if (v->causality == PARAMETER && !fixed_allowed)
+            return report(r, MODEL_ERROR, "%s is a fixed parameter of %s: it can be set only before initialisation ends",
+                          v->name, MODEL_IDENTIFIER);
+    }
+    for (size_t i = 0; i < n; i++) m->values[vr[i]] = values[i];
+    return MODEL_OK;
+}
+
+ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r) {
+    for (size_t i = 0; i < n; i++) {
+        if (vr[i] >= N_VARIABLES) return no_variable(r, vr[i]);
+        if (VARIABLE_TABLE[vr[i]].type == STRING) return not_real(r, vr[i]);
+        if (VARIABLE_TABLE[vr[i]].causality != OUTPUT) {
+            values[i] = m->values[vr[i]];
+        } else if (m->initialised) {
+            values[i] = output(&m->config, m->values);
+        } else { /* before initialisation ends the output follows the parameters */
+            Config c;
+            if (setup(m->values, m->b3_form, &c, r) != MODEL_OK) return MODEL_ERROR;
+            values[i] = output(&c, m->values);
+        }
+    }
+    return MODEL_OK;
+}
+
+static ModelStatus not_string(const Reporter *r, unsigned vr) {
+    if (vr >= N_VARIABLES) return no_variable(r, vr);
+    return report(r, MODEL_ERROR, "%s of %s is a Real, not a String", VARIABLE_TABLE[vr].name, MODEL_IDENTIFIER);
+}
+
+ModelStatus model_set_strings(Model *m, const unsigned vr[], size_t n, const char *const values[], int fixed_allowed,
+                              const Reporter *r) {
+    for (size_t i = 0; i < n; i++) {
+        if (vr[i] != VR_b3_form) return not_string(r, vr[i]);
+        if (!values[i]) return report(r, MODEL_ERROR, "b3_form must be a string, got NULL");
+        if (strlen(values[i]) >= STRING_SIZE)
+            return report(r, MODEL_ERROR, "b3_form must be one of derived, printed, got a string longer than %d "
+                          "characters", STRING_SIZE - 1);
+        if (!fixed_allowed)
+            return report(r, MODEL_ERROR, "b3_form is a fixed parameter of %s: it can be set only before "
+                          "initialisation ends", MODEL_IDENTIFIER);
+    }
+    for (size_t i = 0; i < n; i++) snprintf(m->b3_form, sizeof m->b3_form, "%s", values[i]);
+    return MODEL_OK;
+}
+
+ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const char *values[], const Reporter *r) {
+    for (size_t i = 0; i < n; i++) {
+        if (vr[i] != VR_b3_form) return not_string(r, vr[i]);
+        values[i] = m->b3_form; /* valid until the next call on this instance, as FMI allows */
+    }
+    return MODEL_OK;
+}
+
+ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
+    (void)m, (void)time;
+    if (!(step > 0 && isfinite(step)))
+        return report(r, MODEL_ERROR, "communication step must be > 0 and finite, got %s", R(step));
+    return MODEL_OK;
+}
