@@ -13,6 +13,7 @@
 #include "plant_equations.h"
 #include "plant_math.h"
 #include "py_repr.h"
+#include "model_values.h"
 
 enum { DRIVE = N_SWING, ACCEL, N_STATE }; /* after the swing and hoist state: the drive's and the trolley's acceleration */
 #define MAX_SUBSTEPS 10000000            /* per communication step: a host must never hang in doStep */
@@ -100,21 +101,7 @@ ModelStatus model_initialize(Model *m, const Reporter *r) {
 
 ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed,
                             const Reporter *r) {
-    for (size_t i = 0; i < n; i++) { /* every value checked before any is set */
-        if (vr[i] >= N_VARIABLES)
-            return report(r, MODEL_ERROR, "%s has no variable with value reference %u", MODEL_IDENTIFIER, vr[i]);
-        const VariableRow *v = &VARIABLE_TABLE[vr[i]];
-        if (v->causality == OUTPUT)
-            return report(r, MODEL_ERROR, "%s is an output of %s; only parameters and inputs can be set", v->name,
-                          MODEL_IDENTIFIER);
-        if (v->causality == INPUT && !isfinite(values[i]))
-            return report(r, MODEL_ERROR, "input %s must be finite, got %s", v->name, R(values[i]));
-        if (v->causality == PARAMETER && !fixed_allowed)
-            return report(r, MODEL_ERROR, "%s is a fixed parameter of %s: it can be set only before initialisation ends",
-                          v->name, MODEL_IDENTIFIER);
-    }
-    for (size_t i = 0; i < n; i++) m->values[vr[i]] = values[i];
-    return MODEL_OK;
+    return set_real_values(m->values, vr, n, values, fixed_allowed, r);
 }
 
 ModelStatus model_set_strings(Model *m, const unsigned vr[], size_t n, const char *const values[], int fixed_allowed,
