@@ -41,6 +41,12 @@ class Algorithm:
     def exchange(self, time):
         raise NotImplementedError
 
+    def plan(self):
+        """``(exchange, steps)``: the prebuilt ``(call, function, instance)`` triples one communication point
+        makes, always the same, for the compiled loop (:mod:`crane_fmu.cosim.compiled_loop`); None when the
+        exchange is not a fixed list of calls (the Python loop then steps this algorithm)."""
+        return None
+
     def step(self, time, step):
         """Step every instance from ``time`` by ``step``; returns the step taken."""
         fail = self.wiring.fail
@@ -58,10 +64,14 @@ class GaussSeidel(Algorithm):
 
     def bind(self, wiring):
         super().bind(wiring)
-        self._exchange = [call for call, _, _ in wiring.propagation()]
+        self._plan = wiring.propagation()
+        self._exchange = [call for call, _, _ in self._plan]
 
     def exchange(self, time):
         self.wiring.run(self._exchange, time)
+
+    def plan(self):
+        return self._plan, self.wiring.steps
 
 
 class Jacobi(GaussSeidel):
@@ -72,7 +82,8 @@ class Jacobi(GaussSeidel):
 
     def bind(self, wiring):
         Algorithm.bind(self, wiring)
-        self._exchange = [call for call, _, _ in wiring.reads + wiring.writes]
+        self._plan = wiring.reads + wiring.writes
+        self._exchange = [call for call, _, _ in self._plan]
 
 
 class IterativeJacobi(Algorithm):

@@ -133,6 +133,7 @@ class Instance:
             time_.value, step_.value = time, step
             return do_step()
 
+        call.fmi_call = do_step  # for the compiled loop, which passes time and step itself
         return call, function
 
     def vr_array(self, names):

@@ -7,12 +7,15 @@ stepping algorithm (``crane_fmu.cosim.algorithms``), and the observers
 ``instance.variable`` name of every output, and ``observe(time, values)``,
 called at every communication point with the values in the same order
 (``values[i]`` is the value of ``names[i]``; a read-only memoryview of doubles
-that the next exchange overwrites: copy what you keep).
+that the next exchange overwrites: copy what you keep). An observer that also has
+``observe_rows(rows)`` takes the points in blocks instead, as the master's compiled
+loop gives them: ``rows`` holds rows of ``time`` and the values, one after another.
 """
 
 import ctypes
 
 from . import algorithms
+from .compiled_loop import CompiledLoop
 from .connections import connect
 
 
@@ -71,6 +74,10 @@ class _Port:
                 inp[i] = out[pos]
             return set_inputs()
 
+        size = ctypes.sizeof(ctypes.c_double)  # for the compiled loop: the copies by address, then the call
+        copy_and_set.copies = [(ctypes.addressof(inp) + i * size, ctypes.addressof(out) + pos * size)
+                               for i, out, pos in links]
+        copy_and_set.fmi_call = set_inputs
         self.write = (copy_and_set, function, self.instance)
 
 
@@ -93,7 +100,7 @@ class Wiring:
                               connections, match_names=False)
         self.instances, self.connections = instances, connections
         self.output_names = [f"{name}.{v}" for name, inst in instances.items() for v in inst.outputs]
-        buffer = (ctypes.c_double * len(self.output_names))()  # every output, in output_names order
+        self.buffer = buffer = (ctypes.c_double * len(self.output_names))()  # every output, in output_names order
         # what observers get: the outputs as floats (values[i] is output_names[i]), read-only
         self.values = memoryview(buffer).cast("B").cast("d").toreadonly()
         self.ports, offset = {}, 0
@@ -166,15 +173,22 @@ class Master:
         registered in ``crane_fmu.cosim.algorithms.ALGORITHMS``) or an algorithm object.
     initial_exchange : bool
         With an algorithm name: see :class:`~crane_fmu.cosim.algorithms.Algorithm`.
+    loop : str
+        ``"auto"``: step through the compiled loop (:mod:`~crane_fmu.cosim.compiled_loop`) where it can
+        run the algorithm and the observers, else through Python; ``"python"``: always through Python.
+        Both give the same numbers.
     """
 
-    def __init__(self, instances, connections, algorithm="gauss-seidel", initial_exchange=True):
+    def __init__(self, instances, connections, algorithm="gauss-seidel", initial_exchange=True, loop="auto"):
+        if loop not in ("auto", "python"):
+            raise ValueError(f"loop must be auto or python, got {loop!r}")
         if isinstance(algorithm, str):
             algorithm = algorithms.create(algorithm, initial_exchange=initial_exchange)
         self.wiring = Wiring(instances, connections)
         self.algorithm = algorithm
         algorithm.bind(self.wiring)
         self.instances, self.output_names, self.values = instances, self.wiring.output_names, self.wiring.values
+        self.compiled = CompiledLoop.create(self.wiring, algorithm.plan()) if loop == "auto" else None
 
     def initialize(self, start_time, stop_time, parameters=None):
         """Set parameters, run initialisation mode and settle the inputs at ``start_time``.
@@ -220,6 +234,14 @@ class Master:
         At each communication point: exchange, observe, then step every instance.
         Observers must have been started with :attr:`output_names`.
         """
+        if self.compiled and all(hasattr(o, "observe_rows") for o in observers):
+            self.compiled.advance(start_time, step, first, last, observers)
+        else:
+            self._advance_in_python(start_time, step, first, last, observers)
+        for inst in self.instances.values():
+            inst.time = start_time + last * step
+
+    def _advance_in_python(self, start_time, step, first, last, observers):
         exchange, do_step = self.algorithm.exchange, self.algorithm.step
         observe = [o.observe for o in observers]
         values = self.values
@@ -229,8 +251,6 @@ class Master:
             for f in observe:
                 f(t, values)
             do_step(t, step)
-        for inst in self.instances.values():
-            inst.time = start_time + last * step
 
     def finish(self, stop_time, observers=()):
         """The exchange and observation at the last communication point."""

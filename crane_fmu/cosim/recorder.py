@@ -23,6 +23,10 @@ class ArrayRecorder:
         rows.append(time)
         rows.frombytes(values.cast("B"))  # memcpy of the outputs just read
 
+    def observe_rows(self, rows):
+        """Record a block of rows (``time`` and the values, one row after another) at once."""
+        self._rows.frombytes(rows.cast("B"))
+
     def columns(self):
         """``{name: numpy array}`` of everything recorded."""
         import numpy as np
@@ -67,6 +71,11 @@ class _StreamingRecorder(ArrayRecorder):
         rows.append(time)
         rows.frombytes(values.cast("B"))
         if len(rows) >= self._chunk:
+            self._flush(background=True)
+
+    def observe_rows(self, rows):
+        self._rows.frombytes(rows.cast("B"))
+        if len(self._rows) >= self._chunk:
             self._flush(background=True)
 
     def _flush(self, background=False):
@@ -242,10 +251,10 @@ class MatRecorder(ArrayRecorder):
 class ProgressLine:
     """An observer that shows ``t = 12.0 of 3600 s (0 %)`` on one line of a terminal while a run goes on.
 
-    It looks at the clock once every ``check_every`` communication points and redraws the line at most every
-    ``interval`` seconds, starting after ``interval`` seconds (a short run shows nothing); :meth:`close` ends
-    the line. Give it a stream that is a terminal: it does not check (the simulate command adds it only
-    when stderr is one).
+    It looks at the clock once every ``check_every`` communication points (or block of them) and redraws the
+    line at most every ``interval`` seconds, starting after ``interval`` seconds (a short run shows nothing);
+    :meth:`close` ends the line. Give it a stream that is a terminal: it does not check (the simulate command
+    adds it only when stderr is one).
     """
 
     def __init__(self, start_time, stop_time, stream, interval=1.0, check_every=1000):
@@ -258,12 +267,19 @@ class ProgressLine:
         self._count, self._shown = 0, False
 
     def start(self, names):
-        pass
+        self._width = len(names) + 1
 
     def observe(self, time, values):
         self._count += 1
-        if self._count % self.check_every:
-            return
+        if self._count % self.check_every == 0:
+            self._show(time)
+
+    def observe_rows(self, rows):
+        """A block of rows: the clock looked at once, at its last point."""
+        if rows:
+            self._show(rows[-self._width])
+
+    def _show(self, time):
         now = self._clock()
         if now < self._next:
             return
