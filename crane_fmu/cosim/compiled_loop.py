@@ -36,14 +36,18 @@ def _cache_dir():
 
 
 @functools.cache
-def library():
-    """The compiled loop (a ctypes library), or None: no C compiler, or ``CRANE_FMU_LOOP=python``."""
+def library(hold_gil=False):
+    """The compiled loop (a ctypes library), or None: no C compiler, or ``CRANE_FMU_LOOP=python``.
+
+    ``hold_gil``: loaded to be called holding the GIL (``ctypes.PyDLL``), for FMUs that run Python in
+    this interpreter and are called so by the Python loop too.
+    """
     if os.environ.get("CRANE_FMU_LOOP") == "python":
         return None
     path = _cache_dir() / f"step_loop-{zlib.crc32(SOURCE.read_bytes()):08x}.so"
     if not path.exists() and not _compile(path):
         return None
-    lib = ctypes.CDLL(str(path))
+    lib = (ctypes.PyDLL if hold_gil else ctypes.CDLL)(str(path))
     lib.run_steps.restype = ctypes.c_long
     lib.run_steps.argtypes = [ctypes.POINTER(Operation), ctypes.c_size_t, ctypes.POINTER(Operation), ctypes.c_size_t,
                               ctypes.c_double, ctypes.c_double, ctypes.c_long, ctypes.c_long, ctypes.c_void_p,
@@ -110,8 +114,11 @@ class CompiledLoop:
     @classmethod
     def create(cls, wiring, plan):
         """The compiled loop for ``plan``, or None where it cannot run it."""
-        lib = library()
-        if lib is None or plan is None:
+        if plan is None:
+            return None
+        lib = library(any(isinstance(getattr(inst, "_library", None), ctypes.PyDLL) for calls in plan
+                          for _, _, inst in calls))
+        if lib is None:
             return None
         parts = [_operations(calls) for calls in plan]
         return None if None in parts else cls(lib, wiring, parts)
