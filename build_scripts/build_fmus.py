@@ -273,7 +273,7 @@ def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, cont
         if built:  # a C compiler was found: the built-in systems whose components are all native, as one FMU
             from crane_fmu.build_scripts.one_fmu import build_one_fmus
 
-            paths += build_one_fmus(out_dir, log=log)
+            paths += build_one_fmus(out_dir, kinds=kinds, log=log)
     names = systems if systems is not None else [
         s.name for s in registry.registered() if set(s.instances.values()) <= set(kinds)]
     for name in names:

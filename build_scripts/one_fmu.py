@@ -340,14 +340,17 @@ def build_one_fmu(system, out_dir, fmi_version=2, name=None, tools=None):
                                 tools)
 
 
-def build_one_fmus(out_dir, systems=None, log=print):
+def build_one_fmus(out_dir, systems=None, kinds=None, log=print):
     """The one-FMUs (FMI 2.0 into ``build/native``, 3.0 into its ``fmi3``) of ``systems`` (names or System
-    objects; default: those of :data:`ONE_FMUS` whose components are all native, a note for the others)."""
+    objects; default: those of :data:`ONE_FMUS` made of the components ``kinds`` (default: any) whose
+    components are all native, with a note for the others); their paths."""
     from crane_fmu import systems as registry
 
     if systems is None:
         systems = []
         for system_name in ONE_FMUS:
+            if kinds is not None and not set(instance_kinds(registry.get(system_name)).values()) <= set(kinds):
+                continue
             missing = not_native(registry.get(system_name))
             if missing:
                 log(f"note: {one_fmu_name(system_name)} not built: {', '.join(missing)} has no native model yet")

@@ -246,3 +246,16 @@ def test_build_one_fmu_refuses_a_system_with_python_only_components_in_one_line(
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "has no native model" in err
     assert not (tmp_path / "native").exists()  # nothing written: every system is checked first
+
+
+def test_build_writes_the_built_in_one_fmus_whose_components_are_native_and_notes_the_others(fmu_dir):
+    from crane_fmu.build_scripts.one_fmu import build_one_fmus
+
+    notes = []
+    paths = build_one_fmus(fmu_dir.parent / "again" / "fmus", log=notes.append)
+    assert sorted(p.name for p in paths) == sorted(2 * [f"{one_fmu_name(n)}.fmu" for n in SYSTEMS])
+    others = [n for n in ONE_FMUS if n not in SYSTEMS]
+    assert [note.split()[1] for note in notes] == [one_fmu_name(n) for n in others]
+    assert all("has no native model yet" in note for note in notes)
+    for name in SYSTEMS:  # and crane-fmu build (the session's build) wrote them
+        assert _fmu(native_dir(fmu_dir), name, 2).is_file() and _fmu(native_dir(fmu_dir), name, 3).is_file()
