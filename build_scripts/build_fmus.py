@@ -244,8 +244,9 @@ def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, cont
         Registered systems to pack each into one container FMU in
         :func:`containers_dir` (default: those of :data:`CONTAINERS` that are built).
     native : bool, optional
-        Also build the native (C) FMUs into ``build/native`` (:mod:`.native`): True requires a C
-        compiler, False skips them, None (default) builds them when a C compiler is found.
+        Also build the native (C) FMUs into ``build/native`` (:mod:`.native`), with the built-in
+        systems as one native FMU each (:mod:`.one_fmu`): True requires a C compiler, False skips
+        them, None (default) builds them when a C compiler is found.
     """
     from crane_fmu import systems as registry
     from crane_fmu.cosim.osp import write_osp
@@ -267,7 +268,12 @@ def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, cont
     if native is not False:
         from crane_fmu.build_scripts.native import build_native
 
-        paths += build_native(out_dir, kinds, required=native is True, log=log)
+        built = build_native(out_dir, kinds, required=native is True, log=log)
+        paths += built
+        if built:  # a C compiler was found: the built-in systems whose components are all native, as one FMU
+            from crane_fmu.build_scripts.one_fmu import build_one_fmus
+
+            paths += build_one_fmus(out_dir, kinds=kinds, log=log)
     names = systems if systems is not None else [
         s.name for s in registry.registered() if set(s.instances.values()) <= set(kinds)]
     for name in names:

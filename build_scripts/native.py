@@ -76,7 +76,7 @@ def token(component):
     return "{" + str(uuid.UUID(digest.hexdigest()[:32])) + "}"
 
 
-def variables_header(component):
+def variables_header(component, guid=None):
     """``<model>_variables.h``: the value references, causalities and start values, from the table."""
     rows, enum = [], []
     causality = {"parameter": "PARAMETER", "input": "INPUT", "output": "OUTPUT"}
@@ -104,7 +104,7 @@ def variables_header(component):
 #include <stddef.h>
 
 #define MODEL_IDENTIFIER "{name}"
-#define INSTANTIATION_TOKEN "{token(component)}"
+#define INSTANTIATION_TOKEN "{guid or token(component)}"
 
 typedef enum {{ PARAMETER, INPUT, OUTPUT }} Causality;
 typedef enum {{ REAL, STRING }} VariableType;
@@ -131,10 +131,10 @@ static const VariableRow VARIABLE_TABLE[N_VARIABLES] = {{
 """
 
 
-def _skeleton2(component, sources):
+def _skeleton2(component, sources, guid):
     """An FMI 2.0 modelDescription.xml without units and structure, for model_description.postprocess()."""
     name = component.model_identifier
-    root = ET.Element("fmiModelDescription", fmiVersion="2.0", modelName=name, guid=token(component),
+    root = ET.Element("fmiModelDescription", fmiVersion="2.0", modelName=name, guid=guid,
                       generationTool="crane-fmu build (native C)", variableNamingConvention="structured",
                       description=component.description, author="crane anti-sway co-simulation toolkit")
     cs = ET.SubElement(root, "CoSimulation", needsExecutionTool="false",
@@ -160,10 +160,10 @@ def _skeleton2(component, sources):
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
-def _skeleton3(component):
+def _skeleton3(component, guid):
     """An FMI 3.0 modelDescription.xml for model_description.postprocess3(); value reference 0 is time."""
     name = component.model_identifier
-    root = ET.Element("fmiModelDescription", fmiVersion="3.0", modelName=name, instantiationToken=token(component),
+    root = ET.Element("fmiModelDescription", fmiVersion="3.0", modelName=name, instantiationToken=guid,
                       generationTool="crane-fmu build (native C)", variableNamingConvention="structured",
                       description=component.description, author="crane anti-sway co-simulation toolkit")
     ET.SubElement(root, "CoSimulation", needsExecutionTool="false", canBeInstantiatedOnlyOncePerProcess="false",
@@ -211,20 +211,25 @@ def _default_experiment(root, component):
                   stepSize=repr(float(step)))
 
 
-def model_description(component, fmi_version=2):
-    """The native FMU's modelDescription.xml (bytes), made like the Python FMU's from the same table."""
+def model_description(component, fmi_version=2, sources=None, guid=None):
+    """The native FMU's modelDescription.xml (bytes), made like the Python FMU's from the same table.
+
+    ``sources`` (the compiled C files) and ``guid`` default to the component's own.
+    """
+    guid = guid or token(component)
     if fmi_version == 3:
-        return postprocess3(_skeleton3(component), component.variables, DISPLAY_UNITS, component.feedthrough)
-    sources = _sources(component, 2)[0]
-    return postprocess(_skeleton2(component, sources), component.variables, DISPLAY_UNITS, component.feedthrough)
+        return postprocess3(_skeleton3(component, guid), component.variables, DISPLAY_UNITS, component.feedthrough)
+    sources = sources or _sources(component, 2)[0]
+    return postprocess(_skeleton2(component, sources, guid), component.variables, DISPLAY_UNITS,
+                       component.feedthrough)
 
 
-def build_description(component):
+def build_description(component, sources=None):
     """FMI 3.0 ``sources/buildDescription.xml``: every C file, with the portable math (no libm needed)."""
     root = ET.Element("fmiBuildDescription", fmiVersion="3.0")
     config = ET.SubElement(root, "BuildConfiguration", modelIdentifier=component.model_identifier)
     files = ET.SubElement(config, "SourceFileSet", language="C99")
-    for source in _sources(component, 3)[0]:
+    for source in sources or _sources(component, 3)[0]:
         ET.SubElement(files, "SourceFile", name=source)
     ET.SubElement(files, "PreprocessorDefinition", name="CRANE_OWN_MATH")
     ET.indent(root)
@@ -247,34 +252,48 @@ def build_native_fmu(component, out_dir, fmi_version=2, tools=None):
     ``tools`` is :func:`compilers` (found here if not given); a missing mingw-w64 leaves out the
     Windows binary. The FMU is written under a temporary name and renamed.
     """
-    tools = tools or compilers()
     name = component.model_identifier
     c_files, h_files = _sources(component, fmi_version)
+    with tempfile.TemporaryDirectory(prefix="crane_native_") as tmp:
+        sources = Path(tmp) / "sources"
+        copy_sources([*c_files, *h_files], sources)
+        (sources / f"{name}_variables.h").write_text(variables_header(component))
+        build = build_description(component) if fmi_version == 3 else None
+        return write_fmu(name, out_dir, sources, c_files, model_description(component, fmi_version), build,
+                         fmi_version, tools)
+
+
+def copy_sources(files, folder):
+    """Copy ``files`` (names in fmu_src/native or fmu_src) into ``folder``, made if missing."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for file in files:
+        shutil.copy(NATIVE / file if (NATIVE / file).exists() else NATIVE.parent / file, folder / file)
+
+
+def write_fmu(name, out_dir, sources, c_files, description, build, fmi_version, tools=None):
+    """Compile ``c_files`` of the folder ``sources`` for each platform of ``tools`` and write ``out_dir/<name>.fmu``
+    with the binaries, every file of ``sources``, the modelDescription.xml ``description`` and (FMI 3.0) the
+    buildDescription.xml ``build``; return its path. Written under a temporary name and renamed."""
+    tools = tools or compilers()
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="crane_native_") as tmp:
-        tmp = Path(tmp)
-        sources = tmp / "sources"
-        sources.mkdir()
-        for file in (*c_files, *h_files):
-            shutil.copy(NATIVE / file if (NATIVE / file).exists() else NATIVE.parent / file, sources / file)
-        (sources / f"{name}_variables.h").write_text(variables_header(component))
         binaries = {}
         for platform, compiler in tools.items():
             if compiler:
                 suffix = ".so" if platform == "linux" else ".dll"
-                binaries[platform] = tmp / f"{platform}{suffix}"
+                binaries[platform] = Path(tmp) / f"{platform}{suffix}"
                 _compile(compiler, [sources / f for f in c_files], [sources, fmi_headers()], binaries[platform],
                          platform)
         final, partial = out_dir / f"{name}.fmu", out_dir / f".{name}.fmu.partial"
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as fmu:
-            fmu.writestr("modelDescription.xml", model_description(component, fmi_version))
+            fmu.writestr("modelDescription.xml", description)
             for platform, binary in binaries.items():
                 fmu.write(binary, f"binaries/{PLATFORMS[fmi_version][platform]}/{name}{binary.suffix}")
             for file in sorted(sources.iterdir()):
                 fmu.write(file, f"sources/{file.name}")
-            if fmi_version == 3:
-                fmu.writestr("sources/buildDescription.xml", build_description(component))
+            if build is not None:
+                fmu.writestr("sources/buildDescription.xml", build)
         os.replace(partial, final)
     return final
 

@@ -16,6 +16,7 @@ EXAMPLES = (
     "  crane-fmu build --out my/fmus --bench\n"
     "  crane-fmu build --container transport       # build/containers/CraneTransport.fmu\n"
     "  crane-fmu build --container my_system.ssp\n"
+    "  crane-fmu build --one-fmu lqr transport      # build/native/CraneLqr.fmu (FMI 3.0: build/native/fmi3)\n"
     "  crane-fmu build --component my_controller.py --out build/mine   # a component of your own"
 )
 
@@ -28,6 +29,9 @@ def arguments(p):
                    help="also build the native (C) FMUs into build/native (default: when a C compiler is found)")
     p.add_argument("--container", metavar="SYSTEM|FILE.ssp",
                    help="instead: pack one system (a built-in one, or an SSP file) into one FMU in build/containers")
+    p.add_argument("--one-fmu", action="extend", nargs="+", metavar="SYSTEM|FILE.ssp",
+                   help="instead: write systems of native components (built-in names or SSP files) as one native "
+                        "FMU each, FMI 2.0 into build/native and 3.0 into build/native/fmi3 (repeatable)")
     p.add_argument("--component", metavar="MODULE.py",
                    help="instead: build the components (Component objects) defined in your Python module, "
                         "FMI 2.0 into --out and FMI 3.0 beside it")
@@ -38,8 +42,12 @@ def run(args):
     from crane_fmu.build_scripts.build_fmus import build_all, container_name, containers_dir
     from crane_fmu.container import build_container
 
-    if args.container and args.component:
-        raise UsageError("--container and --component are separate builds: choose one")
+    if sum(map(bool, (args.container, args.component, args.one_fmu))) > 1:
+        raise UsageError("--container, --component and --one-fmu are separate builds: choose one")
+    if args.one_fmu:
+        for path in _build_one_fmus(args.one_fmu, args.out):
+            print(path)
+        return 0
     if args.component:
         for path in _build_component(args.component, args.out):
             print(path)
@@ -64,6 +72,32 @@ def run(args):
     for path in built:
         print(path)
     return 0
+
+
+def _build_one_fmus(items, out):
+    """Each system (a built-in name or an SSP file) as one native FMU, FMI 2.0 and 3.0; their paths."""
+    from crane_fmu import systems
+    from crane_fmu.build_scripts.native import NativeUnavailable, compilers, native_dir
+    from crane_fmu.build_scripts.one_fmu import build_one_fmu, one_fmu_name, plan
+
+    try:
+        tools = compilers()
+    except NativeUnavailable as exc:
+        raise UsageError(f"--one-fmu: {exc}") from None
+    paths = []
+    for checking in (True, False):  # every system checked before any is written
+        for item in items:
+            try:
+                with systems.open_system(item) as system:
+                    if checking:
+                        plan(system)
+                        continue
+                    name = one_fmu_name(Path(item).stem if item.endswith((".ssp", ".ssd")) else system.name)
+                    for version in (2, 3):
+                        paths.append(build_one_fmu(system, native_dir(out, version), version, name, tools))
+            except ValueError as exc:
+                raise UsageError(f"--one-fmu {item}: {exc}") from None
+    return paths
 
 
 def _build_component(module_path, out):

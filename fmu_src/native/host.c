@@ -16,6 +16,8 @@
  *                                                       references at each step as our master does (rows
  *                                                       "t,6 states,u")
  *   host pair-bench LIB GUID CLIB CGUID STEPS H         seconds per step of that loop, no recording
+ *   host outputs LIB GUID STEPS H VR...                 any FMI 2.0 co-simulation FMU at its start values (e.g. a
+ *                                                       system as one FMU): rows "t,the Reals of VR..." at each step
  *
  * Value references are those of the CranePlant and BacksteppingController tables (checked against
  * modelDescription.xml by the tests).
@@ -232,6 +234,24 @@ int main(int argc, char **argv) {
         int bench = !strcmp(command, "pair-bench");
         double per_step = pair(&api, &law, atoi(argv[6]), atof(argv[7]), bench ? NULL : stdout);
         if (bench) printf("%.9g\n", per_step);
+        return 0;
+    }
+    if (!strcmp(command, "outputs") && argc > 6) {
+        int steps = atoi(argv[4]), n = argc - 6;
+        double h = atof(argv[5]), *y = calloc((size_t)n, sizeof *y);
+        fmi2ValueReference *vr = calloc((size_t)n, sizeof *vr);
+        if (!y || !vr) return 5;
+        for (int i = 0; i < n; i++) vr[i] = (fmi2ValueReference)strtoul(argv[6 + i], NULL, 10);
+        fmi2Component c = start(&api, 0, NULL, NULL);
+        if (!c) return 6;
+        for (int k = 0; k <= steps; k++) {
+            if (api.get(c, vr, (size_t)n, y) > fmi2Warning) return 6;
+            printf("%.17g", k * h);
+            for (int i = 0; i < n; i++) printf(",%.17g", y[i]);
+            putchar('\n');
+            if (k < steps && api.step(c, k * h, h, fmi2True) > fmi2Warning) return 6;
+        }
+        api.free_instance(c);
         return 0;
     }
     if (!strcmp(command, "run") && argc == 6) {

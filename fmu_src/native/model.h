@@ -9,6 +9,27 @@
 
 #include <stddef.h>
 
+/* Several model files in one library (a system as one FMU, build_scripts/one_fmu.py): a model file compiled
+   with MODEL_PREFIX defined (e.g. CranePlant_) gets its globals renamed (CranePlant_model_defaults,
+   CranePlant_MODEL_SIZE, struct CranePlant_Model, ...), so that they do not clash. Model files need no change. */
+#ifdef MODEL_PREFIX
+#define MODEL_PASTE_(prefix, name) prefix##name
+#define MODEL_PASTE(prefix, name) MODEL_PASTE_(prefix, name)
+#define Model MODEL_PASTE(MODEL_PREFIX, Model)
+#define MODEL_NAME MODEL_PASTE(MODEL_PREFIX, MODEL_NAME)
+#define MODEL_TOKEN MODEL_PASTE(MODEL_PREFIX, MODEL_TOKEN)
+#define MODEL_SIZE MODEL_PASTE(MODEL_PREFIX, MODEL_SIZE)
+#define MODEL_N_VARIABLES MODEL_PASTE(MODEL_PREFIX, MODEL_N_VARIABLES)
+#define MODEL_N_STRINGS MODEL_PASTE(MODEL_PREFIX, MODEL_N_STRINGS)
+#define model_defaults MODEL_PASTE(MODEL_PREFIX, model_defaults)
+#define model_set_reals MODEL_PASTE(MODEL_PREFIX, model_set_reals)
+#define model_get_reals MODEL_PASTE(MODEL_PREFIX, model_get_reals)
+#define model_set_strings MODEL_PASTE(MODEL_PREFIX, model_set_strings)
+#define model_get_strings MODEL_PASTE(MODEL_PREFIX, model_get_strings)
+#define model_initialize MODEL_PASTE(MODEL_PREFIX, model_initialize)
+#define model_do_step MODEL_PASTE(MODEL_PREFIX, model_do_step)
+#endif
+
 /* The statuses, with FMI's numbers (the same in 2.0 and 3.0). */
 typedef enum { MODEL_OK = 0, MODEL_WARNING = 1, MODEL_DISCARD = 2, MODEL_ERROR = 3 } ModelStatus;
 

@@ -1,0 +1,176 @@
+/*
+ * A system of native component models as one model behind model.h, so that the FMI frameworks wrap it
+ * unchanged: one model block per instance, the system's parameter values set after the defaults, the
+ * connections as copies by value reference in Gauss-Seidel order, and every instance stepped with the
+ * system's step (crane_fmu.cosim's master, algorithm gauss-seidel). All of a system is in the generated
+ * system_config.h (build_scripts/one_fmu.py); nothing here names a system or a component.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "system_config.h"
+#include "py_repr.h"
+#include "model_values.h"
+
+struct Model {
+    double values[N_VARIABLES]; /* the system's own parameters and inputs, by value reference */
+    int initialised, started, bad_defaults;
+    double start;               /* the time of the first step: inner times are start + k * SYSTEM_STEP */
+    double buffer[N_BUFFER];    /* every instance's outputs, as last read */
+    double blocks[N_BLOCKS];    /* the instances' models */
+};
+
+const char *const MODEL_NAME = MODEL_IDENTIFIER;
+const char *const MODEL_TOKEN = INSTANTIATION_TOKEN;
+const size_t MODEL_SIZE = sizeof(Model);
+const unsigned MODEL_N_VARIABLES = N_VARIABLES;
+const unsigned MODEL_N_STRINGS = 0;
+
+#define R(value) py_repr(value, (char[REPR_SIZE]){0})
+
+/* An inner model's messages go to the system's reporter, prefixed with the instance's name. */
+typedef struct {
+    const Reporter *outer;
+    const char *name;
+} Named;
+
+static void named_log(void *host, ModelStatus status, const char *function, const char *message) {
+    const Named *n = host;
+    report(n->outer, status, "%s: %s", n->name, message);
+    (void)function;
+}
+
+#define INNER(i, r)                                                                                  \
+    Named named_ = {r, INSTANCES[i].name};                                                           \
+    Reporter inner_ = {named_log, &named_, r ? r->function : ""};                                    \
+    const Reporter *ir = r ? &inner_ : NULL
+
+static void *block(Model *m, unsigned i) { return &m->blocks[INSTANCES[i].offset]; }
+
+/* The system's values of one instance; ERROR when one is refused (reported where `r` is given). */
+static ModelStatus apply_system_values(Model *m, unsigned i, const Reporter *r) {
+    const InstanceRow *row = &INSTANCES[i];
+    INNER(i, r);
+    if (row->n_reals && row->api->set_reals(block(m, i), row->real_vrs, row->n_reals, row->reals, 1, ir) > MODEL_WARNING)
+        return MODEL_ERROR;
+    if (row->n_strings &&
+        row->api->set_strings(block(m, i), row->string_vrs, row->n_strings, row->strings, 1, ir) > MODEL_WARNING)
+        return MODEL_ERROR;
+    return MODEL_OK;
+}
+
+void model_defaults(Model *m) {
+    memset(m, 0, sizeof *m);
+    for (unsigned i = 0; i < N_VARIABLES; i++) m->values[i] = VARIABLE_TABLE[i].start;
+    for (unsigned i = 0; i < N_INSTANCES; i++) {
+        INSTANCES[i].api->defaults(block(m, i));
+        if (apply_system_values(m, i, NULL) != MODEL_OK && !m->bad_defaults) m->bad_defaults = (int)i + 1;
+    }
+}
+
+/* One exchange: every operation of EXCHANGE in order; the first status worse than a warning ends it. */
+static ModelStatus exchange(Model *m, const Reporter *r) {
+    for (unsigned k = 0; k < N_EXCHANGE; k++) {
+        unsigned i = EXCHANGE[k].instance;
+        const InstanceRow *row = &INSTANCES[i];
+        INNER(i, r);
+        ModelStatus status;
+        if (EXCHANGE[k].operation == READ) {
+            status = row->api->get_reals(block(m, i), row->outputs, row->n_outputs, &m->buffer[row->buffer], ir);
+        } else {
+            double values[MAX_INPUTS];
+            for (unsigned j = 0; j < row->n_inputs; j++) values[j] = m->buffer[row->sources[j]];
+            status = row->api->set_reals(block(m, i), row->inputs, row->n_inputs, values, !m->initialised, ir);
+        }
+        if (status > MODEL_WARNING) return status;
+    }
+    return MODEL_OK;
+}
+
+ModelStatus model_initialize(Model *m, const Reporter *r) {
+    if (m->bad_defaults) { /* a system value was refused: say which, now that there is a reporter */
+        apply_system_values(m, (unsigned)m->bad_defaults - 1, r);
+        return MODEL_ERROR;
+    }
+    ModelStatus status = exchange(m, r); /* the master's initial exchange, in initialisation mode */
+    for (unsigned i = 0; i < N_INSTANCES && status <= MODEL_WARNING; i++) {
+        INNER(i, r);
+        status = INSTANCES[i].api->initialize(block(m, i), ir);
+    }
+    if (status > MODEL_WARNING) return status;
+    m->initialised = 1;
+    return exchange(m, r); /* the outputs at the start time */
+}
+
+ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed,
+                            const Reporter *r) {
+    ModelStatus status = set_real_values(m->values, vr, n, values, fixed_allowed, r);
+    for (size_t k = 0; k < n && status <= MODEL_WARNING; k++)
+        for (unsigned j = 0; j < N_LINKS && status <= MODEL_WARNING; j++)
+            if (LINKS[j].vr == vr[k]) {
+                unsigned i = LINKS[j].instance;
+                INNER(i, r);
+                status = INSTANCES[i].api->set_reals(block(m, i), &LINKS[j].target, 1, &values[k], fixed_allowed, ir);
+            }
+    return status;
+}
+
+ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r) {
+    int read = m->initialised; /* before initialisation ends the outputs follow the parameters */
+    for (size_t k = 0; k < n; k++) {
+        if (vr[k] >= N_VARIABLES)
+            return report(r, MODEL_ERROR, "%s has no variable with value reference %u", MODEL_IDENTIFIER, vr[k]);
+        if (VARIABLE_TABLE[vr[k]].causality != OUTPUT) {
+            values[k] = m->values[vr[k]];
+            continue;
+        }
+        if (!read) {
+            ModelStatus status = exchange(m, r);
+            if (status > MODEL_WARNING) return status;
+            read = 1;
+        }
+        for (unsigned j = 0; j < N_LINKS; j++)
+            if (LINKS[j].vr == vr[k]) values[k] = m->buffer[LINKS[j].target];
+    }
+    return MODEL_OK;
+}
+
+ModelStatus model_set_strings(Model *m, const unsigned vr[], size_t n, const char *const values[], int fixed_allowed,
+                              const Reporter *r) {
+    (void)m, (void)vr, (void)n, (void)values, (void)fixed_allowed;
+    return report(r, MODEL_ERROR, "this FMU has no variables of this type");
+}
+
+ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const char *values[], const Reporter *r) {
+    (void)m, (void)vr, (void)n, (void)values;
+    return report(r, MODEL_ERROR, "this FMU has no variables of this type");
+}
+
+/* A communication step of any whole number of system steps: at each, the exchange, then every instance steps
+   (in dependency order); after the last, the exchange that gives the outputs at the new time. */
+ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
+    if (!(step > 0 && isfinite(step)))
+        return report(r, MODEL_ERROR, "communication step must be > 0 and finite, got %s", R(step));
+    double n_steps = nearbyint(step / SYSTEM_STEP);
+    if (n_steps < 1 || fabs(n_steps * SYSTEM_STEP - step) > 1e-9 * SYSTEM_STEP)
+        return report(r, MODEL_ERROR, "communication step %s s must be a whole multiple of the system step %s s",
+                      R(step), R(SYSTEM_STEP));
+    if (!m->started) m->start = time, m->started = 1;
+    double first = nearbyint((time - m->start) / SYSTEM_STEP); /* time as the master's: start + k * step */
+    ModelStatus worst = MODEL_OK;
+    for (double k = first; k < first + n_steps; k++) {
+        double t = m->start + k * SYSTEM_STEP;
+        ModelStatus status = exchange(m, r);
+        for (unsigned s = 0; s < N_INSTANCES && status <= MODEL_WARNING; s++) {
+            unsigned i = STEP_ORDER[s];
+            INNER(i, r);
+            ModelStatus stepped = INSTANCES[i].api->do_step(block(m, i), t, SYSTEM_STEP, ir);
+            status = stepped > status ? stepped : status;
+        }
+        if (status > MODEL_WARNING) return status;
+        if (status > worst) worst = status;
+    }
+    ModelStatus status = exchange(m, r);
+    return status > worst ? status : worst;
+}

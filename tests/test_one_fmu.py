@@ -1,0 +1,261 @@
+"""A system of native components as one native FMU (build_scripts/one_fmu.py), against our master.
+
+Each built-in system of :data:`ONE_FMUS` whose components are all native (today ``paper``; the
+others join by themselves once their models are in ``native.MODELS``) is built by ``crane-fmu build``
+into ``build/native`` as one FMU, FMI 2.0 and 3.0. Run in fmpy, in the C host without Python and
+under Wine, it must give ``crane-fmu simulate --system NAME --fmu-dir build/native`` (our master,
+Gauss-Seidel, over the native component FMUs): the same C models in the same order of calls, so
+1e-9 guards only against another order of operations (in practice the bits are equal on Linux).
+"""
+
+import shutil
+import subprocess
+import zipfile
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+
+from crane_fmu import systems
+from crane_fmu.build_scripts.native import MINGW, NATIVE, native_dir
+from crane_fmu.build_scripts.one_fmu import ONE_FMUS, not_native, one_fmu_name, plan
+from crane_fmu.build_scripts.wrapper import fmi_headers
+from crane_fmu.cli import main
+from crane_fmu.cosim import FmiError, open_instance, read_result
+
+SYSTEMS = [name for name in ONE_FMUS if not not_native(systems.get(name))]
+CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # no venv, no pyenv: no Python to be found
+SAME = 1e-9  # the same C models, the same calls: any difference is another order of operations
+
+
+@pytest.fixture(scope="module")
+def native(fmu_dir):
+    folder = native_dir(fmu_dir)
+    if not (folder / "CranePaper.fmu").exists():
+        pytest.skip("no native FMUs were built (no C compiler)")
+    return folder
+
+
+def _fmu(native, name, version=2):
+    return (native if version == 2 else native / "fmi3") / f"{one_fmu_name(name)}.fmu"
+
+
+_RUNS = {}
+
+
+def _master(native, name, settings=(), stop_time=None, tmp=None):
+    """``crane-fmu simulate --system NAME --fmu-dir build/native --set ...``: its columns (cached)."""
+    key = (name, tuple(settings), stop_time)
+    if key not in _RUNS:
+        out = tmp / f"{len(_RUNS)}.csv"
+        args = ["simulate", "--system", name, "--fmu-dir", str(native), "--out", str(out)]
+        args += [f"--set={item}" for item in settings] + (["--stop-time", str(stop_time)] if stop_time else [])
+        assert main(args) == 0
+        _RUNS[key] = read_result(out)
+    return _RUNS[key]
+
+
+def _outputs(name):
+    """``{one-FMU output: master column}``."""
+    links = plan(systems.get(name)).links
+    md_outputs = [v for v in plan(systems.get(name)).variables if v.causality == "output"]
+    return {v.name: "{}.{}".format(*links[v.name][0]) for v in md_outputs}
+
+
+def _deviation(result, columns, name, every=1):
+    return max(np.max(np.abs(result[own] - columns[column][::every])) for own, column in _outputs(name).items())
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("name", SYSTEMS)
+@pytest.mark.parametrize("every", [1, 2, 10])
+def test_the_one_fmu_in_fmpy_is_our_master_over_the_native_fmus(native, tmp_path_factory, name, version, every):
+    system = systems.get(name)
+    columns = _master(native, name, tmp=tmp_path_factory.mktemp("runs"))
+    h = system.step * every
+    result = simulate_fmu(str(_fmu(native, name, version)), stop_time=system.stop_time, step_size=h,
+                          output_interval=h, output=list(_outputs(name)))
+    assert len(result) == len(columns["time"][::every])
+    assert np.array_equal(result["time"], columns["time"][::every])
+    assert _deviation(result, columns, name, every) <= SAME
+
+
+def _instance(path, name="one"):
+    inst = open_instance(path, name)
+    inst.setup(0.0, 20.0)
+    inst.enter_initialization()
+    inst.exit_initialization()
+    return inst
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_a_step_that_is_no_whole_multiple_of_the_system_step_is_refused(native, version):
+    inst = _instance(_fmu(native, "paper", version))
+    try:
+        with pytest.raises(FmiError, match=r"communication step 0\.0015 s must be a whole multiple of the system "
+                                            r"step 0\.001 s"):
+            inst.do_step(0.0, 0.0015)
+    finally:
+        inst.free()
+
+
+def test_an_inner_models_message_names_its_instance(native):
+    inst = open_instance(_fmu(native, "paper"), "one")
+    inst.setup(0.0, 20.0)
+    inst.set("l1", -1.0)
+    inst.enter_initialization()
+    try:
+        with pytest.raises(FmiError, match="plant: l1 must be > 0 and finite, got -1.0"):
+            inst.exit_initialization()
+    finally:
+        inst.free()
+
+
+def test_paper_interface_is_the_containers():
+    links = plan(systems.get("paper")).links
+    assert links["m1"] == [("plant", "m1"), ("controller", "m1")]
+    assert links["x_d"] == [("controller", "x_d")] and links["theta1_0"] == [("plant", "theta1_0")]
+    assert links["u"] == [("controller", "u")] and links["theta2"] == [("plant", "theta2")]
+    assert {v.name for v in plan(systems.get("paper")).variables if v.causality == "input"} == {"F1", "F2", "hoist"}
+
+
+SETTINGS = [{"m1": 4.0, "l1": 1.2}, {"theta1_0": 0.1, "x_d": 0.5}, {"F1": 2.0, "F2": -1.0}]
+
+
+@pytest.mark.parametrize("values", SETTINGS, ids=lambda s: ",".join(s))
+@pytest.mark.parametrize("name", SYSTEMS)
+def test_values_set_on_the_one_fmu_reach_every_instance_that_has_them(native, tmp_path_factory, name, values):
+    """As our master with the same values set on each instance the one-FMU maps them to; and they act."""
+    links = plan(systems.get(name)).links
+    settings = [f"{instance}.{target}={value!r}" for own, value in values.items() for instance, target in links[own]]
+    stop_time = 5.0
+    columns = _master(native, name, settings, stop_time, tmp=tmp_path_factory.mktemp("runs"))
+    plain = _master(native, name, (), stop_time, tmp=tmp_path_factory.mktemp("runs"))
+    for version in (2, 3):
+        step = systems.get(name).step
+        result = simulate_fmu(str(_fmu(native, name, version)), stop_time=stop_time, step_size=step,
+                              output_interval=step, start_values=values, output=list(_outputs(name)))
+        assert _deviation(result, columns, name) <= SAME
+        assert _deviation(result, plain, name) > 1e-3  # they act
+
+
+# ---- the C host: no Python; Windows under Wine --------------------------------------------------------------------
+
+OBSERVED = ("x", "theta1", "theta2", "u")
+
+
+@pytest.fixture(scope="module")
+def host(tmp_path_factory):
+    compiler = shutil.which("cc") or shutil.which("gcc")
+    if compiler is None:
+        pytest.skip("no C compiler")
+    out = tmp_path_factory.mktemp("host") / "host"
+    subprocess.run([compiler, "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", f"-I{NATIVE}",
+                    str(NATIVE / "host.c"), "-o", str(out), "-ldl", "-lpthread", "-lm"], check=True)
+    return out
+
+
+def _unpacked(native, name, folder):
+    fmu = _fmu(native, name)
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(folder)
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    return md.guid, [str(vr[v]) for v in OBSERVED]
+
+
+def _run(command, *args, **kwargs):
+    done = subprocess.run([*map(str, command), *map(str, args)], capture_output=True, text=True, timeout=300, **kwargs)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return np.array([[float(x) for x in line.split(",")] for line in done.stdout.replace("\r", "").splitlines()])
+
+
+def _columns(columns, name):
+    outputs = _outputs(name)
+    return np.column_stack([columns["time"]] + [columns[outputs[v]] for v in OBSERVED])
+
+
+@pytest.mark.parametrize("name", SYSTEMS)
+def test_the_c_host_runs_the_one_fmu_without_python(native, host, tmp_path, name):
+    system = systems.get(name)
+    guid, vrs = _unpacked(native, name, tmp_path)
+    steps = round((system.stop_time - system.start_time) / system.step)
+    rows = _run([host, "outputs"], tmp_path / "binaries" / "linux64" / f"{one_fmu_name(name)}.so", guid, steps,
+                system.step, *vrs, env=CLEAN_ENV)
+    expected = _columns(_master(native, name, tmp=tmp_path), name)
+    assert rows.shape == expected.shape
+    assert np.max(np.abs(rows - expected)) <= SAME
+
+
+@pytest.mark.parametrize("name", SYSTEMS)
+def test_the_windows_dll_under_wine_gives_the_linux_run(native, host, tmp_path_factory, name):
+    """The DLL uses the portable sin, cos and exp, Linux glibc's: as for the plant alone (test_native_hosts), the
+    states agree to 1e-9 and u to 1e-9 relative."""
+    if shutil.which(MINGW) is None or shutil.which("wine") is None:
+        pytest.skip("needs mingw-w64 (gcc-mingw-w64-x86-64) and Wine (wine64, wine): .ci/run installs them")
+    folder = tmp_path_factory.mktemp("windows")
+    guid, vrs = _unpacked(native, name, folder)
+    if not (folder / "binaries" / "win64" / f"{one_fmu_name(name)}.dll").exists():
+        pytest.skip("the one-FMU has no Windows binary (mingw-w64 missing at build time)")
+    subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", "-static-libgcc",
+                    f"-I{fmi_headers()}", f"-I{NATIVE}", str(NATIVE / "host.c"), str(NATIVE / "portable_math.c"), "-o",
+                    str(folder / "host.exe")], check=True)
+    shutil.copy(folder / "binaries" / "win64" / f"{one_fmu_name(name)}.dll", folder)
+    prefix = tmp_path_factory.mktemp("wineprefix")
+    env = {**CLEAN_ENV, "HOME": str(prefix), "WINEPREFIX": str(prefix), "WINEDEBUG": "-all"}
+    system = systems.get(name)
+    steps = round((system.stop_time - system.start_time) / system.step)
+    try:
+        windows = _run(["wine", folder / "host.exe", "outputs"], f"{one_fmu_name(name)}.dll", guid, steps,
+                       system.step, *vrs, env=env, cwd=folder)
+    finally:
+        subprocess.run(["wineserver", "-w"], env=env, timeout=120)
+        shutil.rmtree(prefix, ignore_errors=True)
+    expected = _columns(_master(native, name, tmp=folder), name)
+    assert windows.shape == expected.shape
+    assert np.max(np.abs(windows[:, :4] - expected[:, :4])) <= SAME
+    assert np.max(np.abs(windows[:, 4] - expected[:, 4]) / np.maximum(np.abs(expected[:, 4]), 1.0)) <= SAME
+
+
+# ---- the command ----------------------------------------------------------------------------------------------------
+
+def test_build_one_fmu_from_an_ssp_file_gives_the_built_in_systems_run(fmu_dir, native, tmp_path, capsys):
+    ssp = fmu_dir.parent / "systems" / "paper.ssp"
+    out = tmp_path / "fmus"
+    assert main(["build", "--out", str(out), "--one-fmu", str(ssp)]) == 0
+    written = capsys.readouterr().out.split()
+    assert written == [str(tmp_path / "native" / "CranePaper.fmu"),
+                       str(tmp_path / "native" / "fmi3" / "CranePaper.fmu")]
+    for version in (2, 3):
+        ours = simulate_fmu(written[version - 2], stop_time=2.0, output=list(OBSERVED))
+        built_in = simulate_fmu(str(_fmu(native, "paper", version)), stop_time=2.0, output=list(OBSERVED))
+        assert all(np.array_equal(ours[v], built_in[v]) for v in OBSERVED)
+
+
+def test_build_one_fmu_refuses_a_system_with_python_only_components_in_one_line(tmp_path, capsys):
+    from crane_fmu import components
+    from crane_fmu.build_scripts.native import MODELS
+
+    other = next((c.model_identifier for c in components.registered() if c.model_identifier not in MODELS), None)
+    if other is None:
+        pytest.skip("every component is native")
+    system = next((s for s in systems.registered() if other in s.instances.values()), None)
+    if system is None:
+        pytest.skip(f"no built-in system uses {other}")
+    assert main(["build", "--out", str(tmp_path / "fmus"), "--one-fmu", "paper", system.name]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "has no native model" in err
+    assert not (tmp_path / "native").exists()  # nothing written: every system is checked first
+
+
+def test_build_writes_the_built_in_one_fmus_whose_components_are_native_and_notes_the_others(fmu_dir):
+    from crane_fmu.build_scripts.one_fmu import build_one_fmus
+
+    notes = []
+    paths = build_one_fmus(fmu_dir.parent / "again" / "fmus", log=notes.append)
+    assert sorted(p.name for p in paths) == sorted(2 * [f"{one_fmu_name(n)}.fmu" for n in SYSTEMS])
+    others = [n for n in ONE_FMUS if n not in SYSTEMS]
+    assert [note.split()[1] for note in notes] == [one_fmu_name(n) for n in others]
+    assert all("has no native model yet" in note for note in notes)
+    for name in SYSTEMS:  # and crane-fmu build (the session's build) wrote them
+        assert _fmu(native_dir(fmu_dir), name, 2).is_file() and _fmu(native_dir(fmu_dir), name, 3).is_file()
