@@ -4,7 +4,8 @@
 without Python two ways: the native plant closed by the paper's law written in C inside the host,
 and the native plant with the native BacksteppingController FMU (``pair``), exchanged by value
 references at each step as our master does; likewise the ``lqr`` system with the native LqrController.
-On Linux they give our master's run of the Python FMUs. Tests that need mingw-w64 or Wine skip where they are missing; ``.ci/run`` installs both.
+On Linux they give our master's run of the Python FMUs. Tests that need mingw-w64 or Wine skip where
+they are missing; ``.ci/run`` installs both.
 """
 
 import glob
