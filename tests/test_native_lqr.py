@@ -341,3 +341,62 @@ def test_closed_loops_with_the_native_lqr_equal_the_python_fmus_runs(fmu_dir, na
     if LINUX:
         assert worst == 0.0
     assert np.max(np.abs(theirs["controller.u"])) > 0.1  # the controller does act
+
+
+# ---- linalg.c on its own ----------------------------------------------------------------------------------------
+
+class _Matrix(ctypes.Structure):
+    _fields_ = [("rows", ctypes.c_int), ("cols", ctypes.c_int), ("v", (ctypes.c_double * 7) * 7)]
+
+
+@pytest.fixture(scope="module")
+def linalg_c(tmp_path_factory):
+    """fmu_src/native/linalg.c as a shared library (CRANE_OWN_MATH, no libm linked: it needs none)."""
+    import shutil
+    import subprocess
+
+    from crane_fmu.build_scripts.native import NATIVE
+
+    compiler = shutil.which("cc") or shutil.which("gcc")
+    if compiler is None:
+        pytest.skip("no C compiler")
+    out = tmp_path_factory.mktemp("linalg") / "linalg.so"
+    subprocess.run([compiler, "-shared", "-fPIC", "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH",
+                    str(NATIVE / "linalg.c"), "-o", str(out)], check=True)
+    library = ctypes.CDLL(str(out))
+    library.la_ceil_log2.restype, library.la_ceil_log2.argtypes = ctypes.c_int, [ctypes.c_double]
+    library.la_expm.restype = ctypes.c_char_p
+    library.la_expm.argtypes = [_Matrix, ctypes.POINTER(_Matrix)]
+    return library
+
+
+def test_ceil_log2_without_libm_is_pythons_ceil_of_log2(linalg_c):
+    """Every power of two in range and the 400 doubles above and below each; 20,000 random y: math.ceil(math.log2)."""
+    import math
+
+    rng = random.Random(3)
+    ys = [rng.uniform(1.0, 4.0) for _ in range(10_000)] + [math.exp(rng.uniform(0, 709)) for _ in range(10_000)]
+    for k in range(1024):
+        below = above = math.ldexp(1.0, k)
+        ys.append(above)
+        for _ in range(400):
+            above, below = math.nextafter(above, INF), math.nextafter(below, 0.0)
+            ys += [above, below]
+    ys = [y for y in ys if 1.0 < y < INF]
+    assert [linalg_c.la_ceil_log2(y) for y in ys] == [math.ceil(math.log2(y)) for y in ys]
+
+
+def test_expm_equals_linalg_py_bit_for_bit(linalg_c):
+    """Random 7x7 matrices of entries up to about 30 (0 to 9 squarings): linalg.expm's bits."""
+    from crane_fmu.model import linalg
+
+    rng = random.Random(4)
+    for _ in range(200):
+        scale = 10 ** rng.uniform(-3, 1.5)
+        a = [[rng.gauss(0, scale) if rng.random() < 0.6 else 0.0 for _ in range(7)] for _ in range(7)]
+        matrix, out = _Matrix(7, 7), _Matrix()
+        for i in range(7):
+            for j in range(7):
+                matrix.v[i][j] = a[i][j]
+        assert linalg_c.la_expm(matrix, ctypes.byref(out)) is None
+        assert [[out.v[i][j] for j in range(7)] for i in range(7)] == linalg.expm(a)

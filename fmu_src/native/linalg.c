@@ -3,6 +3,7 @@
  * Python comprehension does, so the roundings are the same.
  */
 #include <math.h>
+#include <stdint.h>
 #include <string.h>
 
 #include "linalg.h"
@@ -94,17 +95,29 @@ const char *la_solve(Matrix a, Matrix b, Matrix *out) {
     return NULL;
 }
 
+/* math.ceil(math.log2(y)) for a finite y > 1, math.log2 correctly rounded (glibc's, CPython's), without libm:
+   y = 2^k (1 + n 2^-52) with 0 <= n < 2^52 has log2 y = k + n 2^-52 / ln 2 (1 - O(n 2^-52)), which rounds to k
+   when n = 0 or n 2^-52 / ln 2 < ulp(k) / 2 = 2^(j-53), j = floor(log2 k): n < ln 2 * 2^(j-1) (never a tie). */
+int la_ceil_log2(double y) {
+    uint64_t u;
+    memcpy(&u, &y, sizeof u);
+    int k = (int)(u >> 52 & 0x7ff) - 1023, j = 0;
+    uint64_t n = u & (((uint64_t)1 << 52) - 1);
+    if (n == 0) return k;
+    while (k >> (j + 1)) j++;
+    return k >= 1 && (double)n < 0.5 * 0.69314718055994530942 * (double)(1 << j) ? k : k + 1;
+}
+
 const char *la_expm(Matrix a, Matrix *out) {
-    /* squarings = ceil(log2(||a||_1 / 0.5)): libm's log2, as CPython's math.log2 (a different log2 can differ
-       only where ||a||_1 is within a rounding of a power of two) */
-    int squarings = 0;
+    int squarings = 0; /* ceil(log2(||a||_1 / 0.5)) */
     double norm = la_norm1(a);
     if (norm > 0.5) {
-        double exponent = ceil(log2(norm / 0.5));
-        if (!isfinite(exponent)) return "OverflowError: cannot convert float infinity to integer"; /* math.ceil */
-        squarings = (int)exponent;
+        if (!isfinite(norm / 0.5)) return "OverflowError: cannot convert float infinity to integer"; /* math.ceil */
+        squarings = la_ceil_log2(norm / 0.5);
     }
-    a = la_scaled(a, ldexp(1.0, -squarings)); /* 0.5 ** squarings, exact */
+    double scale = 1.0; /* 0.5 ** squarings: exact (a subnormal power of two, or 0 beyond 2^-1074 as pow gives) */
+    for (int i = 0; i < squarings; i++) scale *= 0.5;
+    a = la_scaled(a, scale);
     Matrix result = la_identity(a.rows), term = la_identity(a.rows);
     for (int k = 1; k <= 20; k++) {
         term = la_scaled(la_matmul(term, a), 1.0 / k);
