@@ -384,13 +384,13 @@ def test_the_model_and_framework_compile_without_warnings_under_strict_flags(tmp
     from crane_fmu.build_scripts.native import variables_header
 
     (tmp_path / "CranePlant_variables.h").write_text(variables_header(PLANT))
-    (tmp_path / "BacksteppingController_variables.h").write_text(
-        variables_header(components.get("BacksteppingController")))
+    for name in ("BacksteppingController", "LqrController"):
+        (tmp_path / f"{name}_variables.h").write_text(variables_header(components.get(name)))
     for framework in ("fmi2_framework.c", "fmi3_framework.c"):
         subprocess.run([_compiler(), *STRICT, f"-I{tmp_path}", f"-I{NATIVE}", f"-I{NATIVE.parent}",
                         f"-I{fmi_headers()}", str(NATIVE / framework), "-o", str(tmp_path / "f.o")], check=True)
-    for source in ("crane_plant.c", "backstepping.c", "plant_equations.c", "framework.c", "py_repr.c",
-                   "portable_math.c"):
+    for source in ("crane_plant.c", "backstepping.c", "lqr.c", "plant_equations.c", "linalg.c", "framework.c",
+                   "py_repr.c", "portable_math.c"):
         subprocess.run([_compiler(), *STRICT, f"-I{tmp_path}", f"-I{NATIVE}", str(NATIVE / source), "-o",
                         str(tmp_path / "m.o")], check=True)
 
@@ -406,7 +406,7 @@ def test_without_a_c_compiler_the_build_warns_or_refuses(monkeypatch, tmp_path):
     assert log == ["warning: no C compiler found (set CC or install gcc); no native FMUs built"]
     with pytest.raises(native_build.NativeUnavailable, match="no C compiler"):
         native_build.build_native(tmp_path / "fmus", ["CranePlant"], required=True)
-    assert native_build.build_native(tmp_path / "fmus", ["LqrController"]) == []  # nothing to port: no folder
+    assert native_build.build_native(tmp_path / "fmus", ["StateEstimator"]) == []  # nothing to port: no folder
     assert not (tmp_path / "native").exists()
 
 

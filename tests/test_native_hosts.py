@@ -3,8 +3,9 @@
 ``fmu_src/native/host.c`` is compiled for Linux and, with mingw-w64, for Windows. It runs Section V
 without Python two ways: the native plant closed by the paper's law written in C inside the host,
 and the native plant with the native BacksteppingController FMU (``pair``), exchanged by value
-references at each step as our master does. On Linux both give our master's run of the Python
-FMUs. Tests that need mingw-w64 or Wine skip where they are missing; ``.ci/run`` installs both.
+references at each step as our master does; likewise the ``lqr`` system with the native LqrController.
+On Linux they give our master's run of the Python FMUs. Tests that need mingw-w64 or Wine skip where
+they are missing; ``.ci/run`` installs both.
 """
 
 import glob
@@ -63,6 +64,28 @@ def controller(fmu_dir, tmp_path_factory):
     vr = {v.name: v.valueReference for v in md.modelVariables}
     assert ([vr[s] for s in STATE], vr["u"]) == ([21, 22, 23, 24, 25, 26], 27)  # host.c's
     return folder, md.guid
+
+
+@pytest.fixture(scope="module")
+def lqr(fmu_dir, tmp_path_factory):
+    """The unpacked native LqrController (FMI 2.0): ``(folder, guid)``; its x and u for ``host pair ... CX CU``."""
+    fmu = native_dir(fmu_dir) / "LqrController.fmu"
+    folder = tmp_path_factory.mktemp("lqr")
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(folder)
+    if not (folder / "binaries" / "linux64" / "LqrController.so").exists():
+        pytest.skip("no native LqrController was built (no C compiler)")
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    assert [vr[s] for s in STATE] == list(range(vr["x"], vr["x"] + 6))  # what host.c's pair expects
+    return folder, md.guid, vr["x"], vr["u"]
+
+
+@pytest.fixture(scope="module")
+def lqr_run(fmu_dir):
+    """Our master's run of the ``lqr`` system on the Python FMUs: ``[t, 6 states, u]`` rows, 20 s at 1 ms."""
+    columns = run(systems.get("lqr"), fmu_dir).columns()
+    return np.column_stack([columns["time"]] + [columns[f"plant.{s}"] for s in STATE] + [columns["controller.u"]])
 
 
 @pytest.fixture(scope="module")
@@ -161,6 +184,15 @@ def test_c_host_runs_section5_on_the_native_plant_and_controller_fmus(host, plan
     assert np.max(np.abs(rows - section5)) <= 1e-9  # in practice 0
 
 
+def test_c_host_runs_the_lqr_system_on_the_native_plant_and_lqr_fmus(host, plant, lqr, lqr_run):
+    """The LQR designed inside its FMU, no Python in the process: the Python FMUs' run through our master, 1e-9."""
+    folder, guid, x, u = lqr
+    rows = _rows(_host(host, "pair", plant[0] / "binaries" / "linux64" / "CranePlant.so", plant[1],
+                       folder / "binaries" / "linux64" / "LqrController.so", guid, 20_000, 1e-3, x, u, env=CLEAN_ENV))
+    assert rows.shape == lqr_run.shape
+    assert np.max(np.abs(rows - lqr_run)) <= 1e-9  # in practice 0
+
+
 # ---- long-lived hosts -----------------------------------------------------------------------------------------
 
 def test_ten_thousand_instances_in_one_process_leave_memory_flat(host, plant):
@@ -192,7 +224,7 @@ def test_two_instances_in_two_threads_give_the_results_of_one(host, plant):
 # ---- Windows x64 under Wine -------------------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
-def wine(plant, controller, tmp_path_factory):
+def wine(plant, controller, lqr, tmp_path_factory):
     """``(wine command, folder with host.exe and CranePlant.dll, environment)``; the prefix is deleted afterwards."""
     if shutil.which(MINGW) is None or shutil.which("wine") is None:
         pytest.skip("needs mingw-w64 (gcc-mingw-w64-x86-64) and Wine (wine64, wine): .ci/run installs them")
@@ -202,6 +234,7 @@ def wine(plant, controller, tmp_path_factory):
                     str(folder / "host.exe")], check=True)
     shutil.copy(plant[0] / "binaries" / "win64" / "CranePlant.dll", folder)
     shutil.copy(controller[0] / "binaries" / "win64" / "BacksteppingController.dll", folder)
+    shutil.copy(lqr[0] / "binaries" / "win64" / "LqrController.dll", folder)
     prefix = tmp_path_factory.mktemp("wineprefix")
     env = {**CLEAN_ENV, "HOME": str(prefix), "WINEPREFIX": str(prefix), "WINEDEBUG": "-all"}
     yield ["wine"], folder, env
@@ -261,6 +294,17 @@ def test_windows_dlls_of_both_native_fmus_under_wine_give_the_linux_section5_run
     assert np.array_equal(pair, law_in_host)
     assert np.max(np.abs(pair[:, :7] - section5[:, :7])) <= 1e-9
     assert np.max(np.abs(pair[:, 7] - section5[:, 7]) / np.maximum(np.abs(section5[:, 7]), 1.0)) <= 1e-9
+
+
+def test_windows_dlls_of_the_native_plant_and_lqr_under_wine_give_the_lqr_run(wine, plant, lqr, lqr_run):
+    """The lqr system in the Windows host: the LQR designed under Wine (portable math in the plant, mingw's
+    log2 in the design's scaling), the Python FMUs' run through our master to 1e-9 at every step."""
+    command, folder, env = wine
+    _, guid, x, u = lqr
+    rows = _rows(_host(folder / "host.exe", "pair", "CranePlant.dll", plant[1], "LqrController.dll", guid, 20_000,
+                       1e-3, x, u, env=env, cwd=folder, wine=command))
+    assert rows.shape == lqr_run.shape
+    assert np.max(np.abs(rows - lqr_run)) <= 1e-9
 
 
 def test_windows_dll_under_wine_free_swing_and_long_lived_host(wine, plant):

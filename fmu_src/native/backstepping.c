@@ -11,6 +11,7 @@
 
 #include "BacksteppingController_variables.h"
 #include "model.h"
+#include "limits.h"
 #include "plant_math.h"
 #include "py_repr.h"
 #include "model_values.h"
@@ -126,20 +127,6 @@ static double law(const Config *c, const double s[6]) {
     double e32 = c->nk12 * dtheta2 - c->k22 * (dtheta2 + c->k12 * (theta2 - c->theta2_d));
     double num = c->w_x * e3x + c->w_1 * b2 * (e31 - f2) + c->w_2 * b3 * (e32 - f3);
     return num / (c->w_x + c->w_1 * b2 * b2 + c->w_2 * b3 * b3);
-}
-
-/* Python's max(a, b) and min(a, b): the first unless the second compares greater (smaller). */
-static double py_max(double a, double b) { return b > a ? b : a; }
-static double py_min(double a, double b) { return b < a ? b : a; }
-
-/* limits.limited(u, dx, u_max, v_max, h). */
-static double limited(double u, double dx, double u_max, double v_max, double h) {
-    double low = -u_max, high = u_max;
-    if (isfinite(v_max)) {
-        low = py_max(low, (-v_max - dx) / h), high = py_min(high, (v_max - dx) / h);
-        if (low > high) return dx > 0 ? -u_max : u_max;
-    }
-    return py_min(py_max(u, low), high);
 }
 
 static double output(const Config *c, const double values[]) {

@@ -11,16 +11,18 @@
  *   host maps LIB GUID                                  the libraries loaded in this process that name python
  *   host paper LIB GUID STEPS H                         Section V: the plant under the paper's backstepping law,
  *                                                       written in C here (rows "t,6 states,u"); see paper_law()
- *   host pair LIB GUID CLIB CGUID STEPS H               Section V on two FMUs: the plant and the native
+ *   host pair LIB GUID CLIB CGUID STEPS H [CX CU]       Section V on two FMUs: the plant and the native
  *                                                       BacksteppingController (CLIB), exchanged by value
  *                                                       references at each step as our master does (rows
- *                                                       "t,6 states,u")
+ *                                                       "t,6 states,u"); another controller at its defaults
+ *                                                       with CX, CU: the value references of its x (the first
+ *                                                       of the six measured states) and of its u
  *   host pair-bench LIB GUID CLIB CGUID STEPS H         seconds per step of that loop, no recording
  *   host outputs LIB GUID STEPS H VR...                 any FMI 2.0 co-simulation FMU at its start values (e.g. a
  *                                                       system as one FMU): rows "t,the Reals of VR..." at each step
  *
- * Value references are those of the CranePlant and BacksteppingController tables (checked against
- * modelDescription.xml by the tests).
+ * Value references are those of the CranePlant and BacksteppingController tables, or given (CX CU) (checked
+ * against modelDescription.xml by the tests).
  */
 #include <stdarg.h>
 #include <stdio.h>
@@ -43,7 +45,7 @@
 #endif
 
 enum { VR_L1 = 2, VR_U = 22, VR_X = 26 }; /* l1, u, and x: the first of the six states */
-enum { VR_C_X = 21, VR_C_U = 27 };        /* the controller's measured x (first of six) and its output u */
+enum { VR_C_X = 21, VR_C_U = 27 };        /* BacksteppingController's measured x (first of six) and its output u */
 
 typedef struct {
     fmi2InstantiateTYPE *instantiate;
@@ -201,10 +203,10 @@ static void *run_job(void *arg) {
 
 /* The paper's loop on two FMUs, Gauss-Seidel as our master: the plant's states into the controller, its u
    into the plant, then both step. Rows "t,6 states,u" when `rows` is given; seconds per step returned. */
-static double pair(const Api *plant, const Api *law, int steps, double h, FILE *rows) {
+static double pair(const Api *plant, const Api *law, fmi2ValueReference cx, fmi2ValueReference out_vr, int steps,
+                   double h, FILE *rows) {
     const fmi2ValueReference states[6] = {VR_X, VR_X + 1, VR_X + 2, VR_X + 3, VR_X + 4, VR_X + 5}, u_vr = VR_U;
-    const fmi2ValueReference measured[6] = {VR_C_X,     VR_C_X + 1, VR_C_X + 2,
-                                            VR_C_X + 3, VR_C_X + 4, VR_C_X + 5}, out_vr = VR_C_U;
+    const fmi2ValueReference measured[6] = {cx, cx + 1, cx + 2, cx + 3, cx + 4, cx + 5};
     fmi2Component p = start(plant, 0, NULL, NULL);
     instance_name = "controller";
     fmi2Component c = start(law, 0, NULL, NULL);
@@ -229,10 +231,12 @@ int main(int argc, char **argv) {
     if (argc < 4) return 2;
     const char *command = argv[1];
     Api api = load(argv[2], argv[3]);
-    if ((!strcmp(command, "pair") || !strcmp(command, "pair-bench")) && argc == 8) {
+    if ((!strcmp(command, "pair") || !strcmp(command, "pair-bench")) && (argc == 8 || argc == 10)) {
         Api law = load(argv[4], argv[5]);
         int bench = !strcmp(command, "pair-bench");
-        double per_step = pair(&api, &law, atoi(argv[6]), atof(argv[7]), bench ? NULL : stdout);
+        fmi2ValueReference cx = argc == 10 ? (fmi2ValueReference)atoi(argv[8]) : VR_C_X;
+        fmi2ValueReference cu = argc == 10 ? (fmi2ValueReference)atoi(argv[9]) : VR_C_U;
+        double per_step = pair(&api, &law, cx, cu, atoi(argv[6]), atof(argv[7]), bench ? NULL : stdout);
         if (bench) printf("%.9g\n", per_step);
         return 0;
     }
