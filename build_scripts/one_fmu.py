@@ -13,7 +13,8 @@ several model files link into one library.
 
 The FMU's interface is that of fmpy's container (``crane_fmu/container.py``): the plant's outputs and
 the controller's ``u``; ``m1``, ``m2``, ``l1``, ``l2`` (to the plant, controller and planner that have
-them), ``x_d`` (to the planner if there is one, else to the controller) and ``theta1_0`` (to the
+them and agree with the first of them on its value: hoist-transport's planner, designed for l1 = 1.5 m,
+keeps its own l1), ``x_d`` (to the planner if there is one, else to the controller) and ``theta1_0`` (to the
 plant) as parameters, whose start values are the system's; the plant's inputs that nothing inside
 feeds (``F1``, ``F2``, ``hoist``) as inputs. A parameter reaches the instances only when a host sets it.
 """
@@ -164,8 +165,9 @@ def _interface(system, tables, inputs):
     for name in SHARED:
         holders = [i for i in MODELERS
                    if i in tables and name in tables[i] and tables[i][name].causality == "parameter"]
-        if holders:
-            expose(name, [(i, name) for i in holders], start(holders[0], name))
+        if holders:  # those that agree with the first: a host setting the start value then changes nothing
+            value = start(holders[0], name)
+            expose(name, [(i, name) for i in holders if start(i, name) == value], value)
     target = "planner" if "planner" in tables else "controller" if "controller" in tables else None
     if target and "x_d" in tables[target]:
         expose("x_d", [(target, "x_d")], start(target, "x_d"))

@@ -139,6 +139,40 @@ def test_values_set_on_the_one_fmu_reach_every_instance_that_has_them(native, tm
         assert _deviation(result, plain, name) > 1e-3  # they act
 
 
+@pytest.mark.parametrize("name", SYSTEMS)
+def test_setting_every_parameter_to_its_start_value_changes_nothing(native, tmp_path_factory, name):
+    """What many tools do (Simulink sets every parameter): the run must be the system's own."""
+    md = read_model_description(str(_fmu(native, name)))
+    starts = {v.name: float(v.start) for v in md.modelVariables if v.causality == "parameter"}
+    columns = _master(native, name, (), 5.0, tmp=tmp_path_factory.mktemp("runs"))
+    step = systems.get(name).step
+    result = simulate_fmu(str(_fmu(native, name)), stop_time=5.0, step_size=step, output_interval=step,
+                          start_values=starts, output=list(_outputs(name)))
+    assert _deviation(result, columns, name) <= SAME
+
+
+@pytest.mark.parametrize("name", SYSTEMS)
+def test_libcosim_runs_the_one_fmu_from_an_ssp_like_our_master(native, tmp_path, name):
+    """The one-FMU as the only component of an SSP package (every parameter set to its start value, as our SSP
+    writer does), in libcosim at the system's step."""
+    from test_system_files import libcosim_run
+
+    from crane_fmu.cosim import System
+    from crane_fmu.cosim.ssp import write_ssp
+
+    system = systems.get(name)
+    ssp = write_ssp(System(name, {"crane": str(_fmu(native, name))}, stop_time=system.stop_time), native,
+                    tmp_path / f"{name}.ssp")
+    steps = round(system.stop_time / system.step)
+    theirs = libcosim_run("ssp", ssp, steps=steps, instance="crane")
+    ours = _master(native, name, tmp=tmp_path)
+    for signal in ("x", "theta1", "theta2"):
+        times, values = np.array(theirs[signal][0]), np.array(theirs[signal][1])
+        assert len(times) >= steps
+        index = np.rint(times / system.step).astype(int)
+        assert np.max(np.abs(values - ours[_outputs(name)[signal]][index])) <= SAME, signal
+
+
 # ---- the C host: no Python; Windows under Wine --------------------------------------------------------------------
 
 OBSERVED = ("x", "theta1", "theta2", "u")
