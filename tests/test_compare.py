@@ -282,3 +282,35 @@ def test_only_fmus_that_run_python_here_are_called_holding_the_gil(template_fmu,
     finally:
         ours.free()
         stock.free()
+
+
+def _close(a, b):
+    """Equal to 1e-9 (relative above 1) in every number, NaN as NaN, recursively through lists and dicts."""
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(_close(a[k], b[k]) for k in a)
+    if isinstance(a, list):
+        return len(a) == len(b) and all(_close(x, y) for x, y in zip(a, b))
+    if isinstance(a, float) and isinstance(b, float):
+        return a == b or (math.isnan(a) and math.isnan(b)) or abs(a - b) <= 1e-9 * max(1.0, abs(a))
+    return a == b
+
+
+def test_the_native_fmus_give_the_python_board(full_board, fmu_dir, tmp_path):
+    """Issue 27: ``compare --fmu-dir build/native`` (the components ported to C native, the others the Python FMUs
+    copied beside them) scores every controller as the Python FMUs do: every figure to 1e-9, the same statuses
+    and board. (Not the case identities, which hash the FMU files, nor run times, nor the failed runs' log text.)"""
+    from crane_fmu.build_scripts.native import native_dir
+
+    native = native_dir(fmu_dir)
+    if not (native / "LqrController.fmu").exists():
+        pytest.skip("no native FMUs were built (no C compiler)")
+    _, python_rows = full_board
+    rows = compare(tmp_path, (), native, workers=2, progress=False, animate=(), log=lambda _: None)
+    key = lambda r: (r["scenario"], r["controller"], r["case"])  # noqa: E731
+    theirs = {key(r): r for r in python_rows}
+    assert sorted(map(key, rows)) == sorted(theirs)
+    for row in rows:
+        ours, other = ({k: v for k, v in r.items() if k not in ("case_id", "duration_s", "error")}
+                       for r in (row, theirs[key(row)]))
+        assert _close(ours, other), key(row)
+    assert scoreboard.render_summary(rows) == scoreboard.render_summary(python_rows)
