@@ -47,10 +47,6 @@ void model_defaults(Model *m) {
 }
 
 /* The rules of plant.configure() and parameters.py, in their order and words. */
-static ModelStatus rule(const Reporter *r, const char *name, const char *text, double value) {
-    return report(r, MODEL_ERROR, "%s must be %s, got %s", name, text, R(value));
-}
-
 static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
     if (!(isfinite(V(max_substep)) && V(max_substep) > 0)) return rule(r, "max_substep", "> 0 and finite", V(max_substep));
     if (!(isfinite(V(m1)) && V(m1) > 0)) return rule(r, "m1", "> 0 and finite", V(m1));
