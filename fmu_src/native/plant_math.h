@@ -14,11 +14,14 @@ double crane_exp(double x);
 #define SIN crane_sin
 #define COS crane_cos
 #define EXP crane_exp
+#include <math.h>
+#define TANH tanh /* mingw-w64's: no portable one yet (only the EnergyController uses it) */
 #else
 #include <math.h>
 #define SIN sin
 #define COS cos
 #define EXP exp
+#define TANH tanh
 #endif
 
 #endif
