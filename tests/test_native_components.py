@@ -1,0 +1,324 @@
+"""The native (C) TrajectoryPlanner and EnergyController FMUs against their specification, the Python models.
+
+Built by the session's ``fmu_dir`` fixture into ``build/native`` beside the Python FMUs. The Python
+models (crane_fmu/model/planner.py, energy.py) are the specification: on Linux (glibc's libm in both,
+the same operations in the same order) the native outputs are the Python ones bit for bit.
+"""
+
+import ctypes
+import random
+import sys
+
+import fmpy
+import numpy as np
+import pytest
+from fmpy import read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+)
+from fmpy.fmi3 import FMU3Slave
+from fmpy.logging import addLoggerProxy
+
+from crane_fmu import components, systems
+from crane_fmu.build_scripts.build_fmus import fmi3_dir
+from crane_fmu.build_scripts.native import native_dir
+from crane_fmu.cosim import System, run
+
+PLANNER, ENERGY = components.get("TrajectoryPlanner"), components.get("EnergyController")
+NAMES = ("TrajectoryPlanner", "EnergyController")
+SHAPERS = ("zv", "zvd", "ei", "none")
+LINUX = sys.platform.startswith("linux")  # glibc's libm in both models: the same bits
+_LIBC = ctypes.CDLL(None)
+_LIBC.calloc.restype, _LIBC.calloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t, ctypes.c_size_t]
+_LIBC.free.argtypes = [ctypes.c_void_p]
+INF, NAN = float("inf"), float("nan")
+
+
+@pytest.fixture(scope="module")
+def native(fmu_dir):
+    folders = {2: native_dir(fmu_dir, 2), 3: native_dir(fmu_dir, 3)}
+    if not (folders[2] / "TrajectoryPlanner.fmu").exists():
+        pytest.skip("no C compiler: no native FMUs were built")
+    for name in NAMES:  # native FMUs, not the Python ones copied
+        with open(folders[2] / f"{name}.fmu", "rb") as f:
+            assert f"binaries/linux64/{name}.so".encode() in f.read()
+    return folders
+
+
+def _python_folder(fmu_dir, version):
+    return fmu_dir if version == 2 else fmi3_dir(fmu_dir)
+
+
+def _open(path, version, parameters=None):
+    """An instance in initialisation mode with ``parameters`` set (a str as a String): ``(fmu, vr, get)``."""
+    md = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    name, unzipped = md.coSimulation.modelIdentifier, fmpy.extract(str(path))
+    if version == 2:
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=name, instanceName="c")
+        fmu.instantiate()
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        set_, get = fmu.setReal, fmu.getReal
+    else:
+        fmu = FMU3Slave(guid=md.instantiationToken, unzipDirectory=unzipped, modelIdentifier=name, instanceName="c")
+        fmu.instantiate()
+        fmu.enterInitializationMode(startTime=0.0)
+        set_, get = fmu.setFloat64, fmu.getFloat64
+    for key, value in (parameters or {}).items():
+        fmu.setString([vr[key]], [value]) if isinstance(value, str) else set_([vr[key]], [value])
+    return fmu, vr, set_, get
+
+
+def _close(fmu):
+    fmu.terminate()
+    fmu.freeInstance()
+
+
+def _compare(ours, theirs):
+    """Worst relative deviation (scale at least 1); on Linux also bit equality."""
+    ours, theirs = np.array(ours), np.array(theirs)
+    assert ours.shape == theirs.shape and np.all(np.isfinite(theirs))
+    worst = float(np.max(np.abs(ours - theirs) / np.maximum(np.abs(theirs), 1.0)))
+    assert worst <= 1e-12
+    if LINUX:  # bit for bit, the signs of zeros too
+        assert np.array_equal(ours.view(np.int64), theirs.view(np.int64))
+    return worst
+
+
+# ---- TrajectoryPlanner: outputs at random parameters and times ---------------------------------------------------
+
+def _planner_parameters(rng, i):
+    m2 = rng.choice([0.0, rng.uniform(0.1, 20)])
+    l1 = rng.uniform(0.2, 5)
+    l2 = rng.uniform(0.1, 3)
+    if m2 == 0:  # the linear model's modes coincide (a Python ZeroDivisionError) at l1 = l2: keep them apart
+        l2 = l1 * rng.uniform(0.2, 0.8)
+    return {"m1": rng.uniform(0.5, 20), "m2": m2, "l1": l1, "l2": l2, "g": rng.uniform(1, 25),
+            "x0": rng.uniform(-3, 3), "x_d": rng.choice([rng.uniform(-3, 3), 0.0]), "t0": rng.uniform(-1, 2),
+            "u_max": rng.uniform(0.1, 3), "v_max": rng.uniform(0.1, 2), "shaper": SHAPERS[i % 4]}
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_planner_outputs_equal_the_python_model_at_random_parameters_and_times(native, version):
+    """80 parameter sets (every shaper, m2 = 0, no move) x 40 steps of random length: 22400 outputs."""
+    rng = random.Random(2027)
+    outputs = PLANNER.names("output")
+    ours, theirs = [], []
+    for i in range(80):
+        parameters = _planner_parameters(rng, i)
+        if i % 10 == 9:
+            parameters["x_d"] = parameters["x0"]  # no move: x_ref stays at x0
+        fmu, vr, _, get = _open(native[version] / "TrajectoryPlanner.fmu", version, parameters)
+        config = PLANNER.check(parameters)
+        ours.append(get([vr[n] for n in outputs]))  # before initialisation ends: the outputs at time 0
+        theirs.append(PLANNER.output(config, (0.0,), ()))
+        fmu.exitInitializationMode()
+        t = 0.0
+        for _ in range(40):
+            h = rng.choice([1e-3, rng.uniform(1e-3, 0.6)])
+            fmu.doStep(t, h)
+            ours.append(get([vr[n] for n in outputs]))
+            theirs.append(PLANNER.output(config, (t + h,), ()))
+            t += h
+        _close(fmu)
+    _compare(ours, theirs)
+    theirs = np.array(theirs)
+    assert np.count_nonzero(theirs[:, 3]) > 1000 and np.count_nonzero(theirs[:, 2]) > 500  # moves and swing
+
+
+def test_the_shaper_string_is_read_back_and_changes_the_plan(native):
+    fmu, vr, set_, get = _open(native[2] / "TrajectoryPlanner.fmu", 2, {"x_d": 2.0})
+    assert fmu.getString([vr["shaper"]]) == [b"zv"]
+    fmu.setString([vr["shaper"]], ["ei"])
+    assert fmu.getString([vr["shaper"]]) == [b"ei"]
+    fmu.exitInitializationMode()
+    fmu.doStep(0.0, 1.0)
+    ei, zv = (PLANNER.output(PLANNER.check({"x_d": 2.0, "shaper": k}), (1.0,), ()) for k in ("ei", "zv"))
+    assert get([vr["x_ref"], vr["theta1_ref"]]) == [ei[0], ei[3]] and ei[0] != zv[0]
+    with pytest.raises(FMICallException):  # a fixed parameter once initialisation has ended
+        fmu.setString([vr["shaper"]], ["zv"])
+    fmu.freeInstance()
+
+
+# ---- EnergyController: outputs at random inputs and parameters ---------------------------------------------------
+
+def _energy_parameters(rng, i):
+    return {"m1": rng.uniform(0.5, 20), "m2": rng.choice([0.0, rng.uniform(0.1, 20)]), "l1": rng.uniform(0.2, 5),
+            "l2": rng.uniform(0.1, 3), "g": rng.uniform(1, 25), "k_c": rng.uniform(0.01, 2),
+            "k_p": rng.uniform(0.01, 5), "k_d": rng.uniform(0.1, 20), "x_d": rng.uniform(-5, 5),
+            "h": rng.uniform(1e-4, 0.05), "u_max": rng.uniform(0.05, 3), "v_max": (INF, rng.uniform(0.05, 2))[i % 2]}
+
+
+def _random_state(rng):
+    return [rng.uniform(-5, 5), rng.uniform(-3, 3), rng.uniform(-1.5, 1.5), rng.uniform(-5, 5),
+            rng.uniform(-1.5, 1.5), rng.uniform(-5, 5)]
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_energy_output_equals_the_python_model_at_random_inputs_and_parameters(native, version):
+    """2000 points: 40 parameter sets (finite and infinite v_max) x 50 inputs; near zero too, where tanh is linear."""
+    rng = random.Random(2028)
+    inputs = ENERGY.names("input")
+    ours, theirs, limited = [], [], 0
+    for i in range(40):
+        parameters = _energy_parameters(rng, i)
+        fmu, vr, set_, get = _open(native[version] / "EnergyController.fmu", version, parameters)
+        config = ENERGY.check(parameters)
+        for j in range(50):
+            state = _random_state(rng)
+            if j % 5 == 0:
+                state = [v * 1e-6 for v in state]
+                state[0] += parameters["x_d"]
+            set_([vr[n] for n in inputs], state)
+            ours.append(get([vr["u"]])[0])
+            theirs.append(ENERGY.output(config, None, tuple(state))[0])
+            limited += theirs[-1] != ENERGY.output(config._replace(v_max=INF), None, tuple(state))[0]
+            if j == 0:
+                fmu.exitInitializationMode()
+        _close(fmu)
+    _compare(ours, theirs)
+    assert limited > 100  # the speed guard acts on many points
+
+
+# ---- refusals: the Python FMU's rules and messages ----------------------------------------------------------------
+
+def _messages(path, settings, steps=()):
+    """``(statuses, log)`` of an FMI 2.0 run with ``settings`` (a str is set as a String) and then ``steps``."""
+    md = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    log = []
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, category, message: log.append(message.decode()))
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_LIBC.calloc)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_LIBC.free)
+    addLoggerProxy(ctypes.byref(callbacks))
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=fmpy.extract(str(path)),
+                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="c")
+    fmu.instantiate(callbacks=callbacks)
+
+    def setter(name, value):
+        if isinstance(value, str):
+            return lambda: fmu.setString([vr[name]], [value])
+        return lambda: fmu.setReal([vr[name]], [value])
+
+    calls = [("setup", lambda: fmu.setupExperiment(startTime=0.0)), ("enter", fmu.enterInitializationMode)]
+    calls += [(f"set {name}", setter(name, value)) for name, value in settings.items()]
+    calls.append(("exit", fmu.exitInitializationMode))
+    for t, h in steps:
+        calls.append((f"step {t}", lambda t=t, h=h: fmu.doStep(t, h)))
+    statuses = []
+    try:
+        for name, call in calls:
+            try:
+                call()
+            except FMICallException as exc:
+                statuses.append(f"{name}: {exc.status}")
+                break
+        statuses.append("end")
+    finally:
+        fmu.freeInstance()
+    return statuses, log
+
+
+REFUSED = {
+    "TrajectoryPlanner": [{"m1": -1.0}, {"m2": NAN}, {"l1": 0.0}, {"l2": INF}, {"g": -INF}, {"u_max": 0.0},
+                          {"v_max": NAN}, {"u_max": INF}, {"v_max": INF}, {"shaper": "ZV"}, {"shaper": ""},
+                          {"shaper": "it's"}, {"x0": NAN}, {"x_d": INF}, {"t0": -INF},
+                          {"u_max": -1.0, "shaper": "zz", "x0": NAN}],
+    "EnergyController": [{"m1": 0.0}, {"m2": -0.5}, {"l1": NAN}, {"g": INF}, {"k_c": 0.0}, {"k_p": -1.0},
+                         {"k_d": INF}, {"h": NAN}, {"x_d": -INF}, {"u_max": 0.0}, {"v_max": -1.0}, {"u_max": INF},
+                         {"k_c": -1.0, "u_max": INF}],
+}
+CASES = [(name, settings) for name, cases in REFUSED.items() for settings in cases]
+
+
+@pytest.mark.parametrize("name,settings", CASES, ids=lambda c: c if isinstance(c, str) else ",".join(
+    f"{k}={v!r}" for k, v in c.items()))
+def test_every_parameter_refusal_has_the_python_fmus_rule_and_message(fmu_dir, native, name, settings):
+    ours = _messages(native[2] / f"{name}.fmu", settings)
+    theirs = _messages(fmu_dir / f"{name}.fmu", settings)
+    assert ours == theirs
+    assert ours[0][-2] == "exit: 3" and ours[1][-1].startswith("fmi2ExitInitializationMode: ")
+
+
+@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("step", [NAN, -1e-3, 0.0, INF])
+def test_an_unusable_step_is_the_python_fmus_error(fmu_dir, native, name, step):
+    ours = _messages(native[2] / f"{name}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
+    theirs = _messages(fmu_dir / f"{name}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
+    assert ours == theirs
+    assert ours[0][-2] == "step 0.001: 3"
+
+
+# ---- FMU state ----------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_planner_fmu_state_saved_serialised_and_restored_repeats_the_steps_exactly(native, version):
+    """The planner's state is its time: restored, the reference repeats the same outputs."""
+    fmu, vr, _, get = _open(native[version] / "TrajectoryPlanner.fmu", version, {"x_d": 2.0, "shaper": "zvd"})
+    fmu.exitInitializationMode()
+    outputs = [vr[n] for n in PLANNER.names("output")]
+
+    def steps(k0, n):
+        rows = []
+        for k in range(k0, k0 + n):
+            fmu.doStep(k * 1e-2, 1e-2)
+            rows.append(get(outputs))
+        return rows
+
+    steps(0, 150)
+    state = fmu.getFMUState() if version == 3 else fmu.getFMUstate()
+    serialized = fmu.serializeFMUState(state) if version == 3 else fmu.serializeFMUstate(state)
+    first = steps(150, 100)
+    fmu.setFMUState(state) if version == 3 else fmu.setFMUstate(state)
+    again = steps(150, 100)
+    restored = fmu.deserializeFMUState(serialized) if version == 3 else fmu.deSerializeFMUstate(serialized)
+    fmu.setFMUState(restored) if version == 3 else fmu.setFMUstate(restored)
+    third = steps(150, 100)
+    _close(fmu)
+    assert first == again == third
+    assert len({round(r[0], 6) for r in first}) > 50  # the reference moves over those steps
+
+
+# ---- closed loops and whole runs: native against Python FMUs, through our master ---------------------------------
+
+def _runs_agree(system, native_folder, python_folder):
+    """Every recorded output of both runs within 1e-9 over the whole run (glibc: equal); the worst deviation."""
+    ours, theirs = run(system, native_folder).columns(), run(system, python_folder).columns()
+    assert list(ours) == list(theirs)
+    assert len(ours["time"]) == len(theirs["time"]) == round(system.stop_time / system.step) + 1
+    worst = max(float(np.max(np.abs(ours[k] - theirs[k]))) for k in theirs)
+    assert worst <= 1e-9
+    if LINUX:
+        assert worst == 0.0
+    return theirs
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_the_energy_system_on_native_fmus_equals_the_python_fmus(fmu_dir, native, version):
+    """20 s at 1 ms: the native plant and EnergyController against both Python FMUs."""
+    theirs = _runs_agree(systems.get("energy"), native[version], _python_folder(fmu_dir, version))
+    assert np.max(np.abs(theirs["controller.u"])) > 0.1  # the controller does act
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_the_transport_system_with_the_native_planner_equals_the_python_fmus(fmu_dir, native, version):
+    """10 s at 1 ms of the ZV move tracked by the LQR (Python or native, whichever build/native holds)."""
+    theirs = _runs_agree(systems.get("transport"), native[version], _python_folder(fmu_dir, version))
+    assert abs(theirs["planner.x_ref"][-1] - 2.0) < 1e-12 and np.max(np.abs(theirs["planner.theta1_ref"])) > 1e-3
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("shaper", SHAPERS)
+def test_the_planner_alone_over_its_run_equals_the_python_fmu(fmu_dir, native, version, shaper):
+    """A 3 m move back (x0 = 1, x_d = -2) from t0 = 0.25 s, 15 s at 1 ms, each shaper."""
+    system = System(f"planner-{shaper}", {"planner": "TrajectoryPlanner"},
+                    parameters={"planner": {"x0": 1.0, "x_d": -2.0, "t0": 0.25, "shaper": shaper}}, stop_time=15.0)
+    theirs = _runs_agree(system, native[version], _python_folder(fmu_dir, version))
+    assert theirs["planner.x_ref"][-1] == -2.0 and np.min(theirs["planner.dx_ref"]) < -0.5
