@@ -36,7 +36,8 @@ const char *const MODEL_NAME = MODEL_IDENTIFIER;
 const char *const MODEL_TOKEN = INSTANTIATION_TOKEN;
 const size_t MODEL_SIZE = sizeof(Model);
 const unsigned MODEL_N_VARIABLES = N_VARIABLES;
-const unsigned MODEL_N_STRINGS = 0; /* the frameworks never call the String functions below */
+const unsigned MODEL_N_STRINGS = 0;
+MODEL_WITHOUT_STRINGS
 
 #define V(name) (values[VR_##name])
 #define R(value) py_repr(value, (char[REPR_SIZE]){0})
@@ -98,17 +99,6 @@ ModelStatus model_initialize(Model *m, const Reporter *r) {
 ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed,
                             const Reporter *r) {
     return set_real_values(m->values, vr, n, values, fixed_allowed, r);
-}
-
-ModelStatus model_set_strings(Model *m, const unsigned vr[], size_t n, const char *const values[], int fixed_allowed,
-                              const Reporter *r) {
-    (void)m, (void)vr, (void)n, (void)values, (void)fixed_allowed;
-    return report(r, MODEL_ERROR, "this FMU has no variables of this type");
-}
-
-ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const char *values[], const Reporter *r) {
-    (void)m, (void)vr, (void)n, (void)values;
-    return report(r, MODEL_ERROR, "this FMU has no variables of this type");
 }
 
 /* Every output in table order: plant_outputs(), then l1_now, dl1_now, ddx. */

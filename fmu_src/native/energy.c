@@ -29,7 +29,8 @@ const char *const MODEL_NAME = MODEL_IDENTIFIER;
 const char *const MODEL_TOKEN = INSTANTIATION_TOKEN;
 const size_t MODEL_SIZE = sizeof(Model);
 const unsigned MODEL_N_VARIABLES = N_VARIABLES;
-const unsigned MODEL_N_STRINGS = 0; /* the frameworks never call the String functions below */
+const unsigned MODEL_N_STRINGS = 0;
+MODEL_WITHOUT_STRINGS
 
 #define V(name) (values[VR_##name])
 
@@ -95,17 +96,6 @@ ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double valu
         }
     }
     return MODEL_OK;
-}
-
-ModelStatus model_set_strings(Model *m, const unsigned vr[], size_t n, const char *const values[], int fixed_allowed,
-                              const Reporter *r) {
-    (void)m, (void)vr, (void)n, (void)values, (void)fixed_allowed;
-    return report(r, MODEL_ERROR, "this FMU has no variables of this type");
-}
-
-ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const char *values[], const Reporter *r) {
-    (void)m, (void)vr, (void)n, (void)values;
-    return report(r, MODEL_ERROR, "this FMU has no variables of this type");
 }
 
 ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {

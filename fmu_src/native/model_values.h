@@ -96,6 +96,18 @@ static inline ModelStatus get_string_value(const char store[STRING_SIZE], unsign
     return MODEL_OK;
 }
 
+/* The String functions of a model with no String variables (MODEL_N_STRINGS = 0: the frameworks never call them). */
+#define MODEL_WITHOUT_STRINGS                                                                                        \
+    ModelStatus model_set_strings(Model *m, const unsigned vr[], size_t n, const char *const values[],               \
+                                  int fixed_allowed, const Reporter *r) {                                            \
+        (void)m, (void)vr, (void)n, (void)values, (void)fixed_allowed;                                               \
+        return report(r, MODEL_ERROR, "this FMU has no variables of this type");                                     \
+    }                                                                                                                \
+    ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const char *values[], const Reporter *r) { \
+        (void)m, (void)vr, (void)n, (void)values;                                                                    \
+        return report(r, MODEL_ERROR, "this FMU has no variables of this type");                                     \
+    }
+
 /* Python's max(a, b) and min(a, b): the first unless the second compares greater (smaller). */
 static inline double py_max(double a, double b) { return b > a ? b : a; }
 static inline double py_min(double a, double b) { return b < a ? b : a; }
