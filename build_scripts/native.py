@@ -36,7 +36,7 @@ from crane_fmu.model.tables import DISPLAY_UNITS, xml_double
 NATIVE = Path(fmu_src.__file__).parent / "native"
 # the ported components: model identifier -> its model file in fmu_src/native
 MODELS = {"CranePlant": "crane_plant.c", "BacksteppingController": "backstepping.c", "TrajectoryPlanner": "planner.c",
-          "EnergyController": "energy.c", "Gust": "gust.c"}
+          "EnergyController": "energy.c", "Gust": "gust.c", "Sensor": "sensor.c"}
 COMMON = ("plant_equations.c", "py_repr.c", "portable_math.c", "framework.c")
 HEADERS = ("model.h", "model_values.h", "framework.h", "plant_equations.h", "plant_math.h", "py_repr.h")
 FRAMEWORKS = {2: ("fmi2_framework.c", "fmi2_functions.h"), 3: ("fmi3_framework.c", "fmi3_functions.h")}

@@ -15,13 +15,15 @@ double crane_exp(double x);
 #define COS crane_cos
 #define EXP crane_exp
 #include <math.h>
-#define TANH tanh /* mingw-w64's: no portable one yet (only the EnergyController uses it) */
+#define TANH tanh /* mingw-w64's: no portable ones yet (the EnergyController's tanh, the Sensor's log) */
+#define LOG log
 #else
 #include <math.h>
 #define SIN sin
 #define COS cos
 #define EXP exp
 #define TANH tanh
+#define LOG log
 #endif
 
 #endif
