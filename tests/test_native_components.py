@@ -1,8 +1,9 @@
-"""The native (C) TrajectoryPlanner and EnergyController FMUs against their specification, the Python models.
+"""The native (C) TrajectoryPlanner, EnergyController, Gust and Sensor FMUs against their specification.
 
 Built by the session's ``fmu_dir`` fixture into ``build/native`` beside the Python FMUs. The Python
-models (crane_fmu/model/planner.py, energy.py) are the specification: on Linux (glibc's libm in both,
-the same operations in the same order) the native outputs are the Python ones bit for bit.
+models (crane_fmu/model/planner.py, energy.py, disturbances.py) are the specification: on Linux
+(glibc's libm in both, the same operations in the same order) the native outputs are the Python ones
+bit for bit.
 """
 
 import ctypes
@@ -25,12 +26,14 @@ from fmpy.fmi3 import FMU3Slave
 from fmpy.logging import addLoggerProxy
 
 from crane_fmu import components, systems
+from crane_fmu.analysis.scoreboard import Contender, systems_for
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
 from crane_fmu.build_scripts.native import native_dir
 from crane_fmu.cosim import System, run
 
 PLANNER, ENERGY = components.get("TrajectoryPlanner"), components.get("EnergyController")
-NAMES = ("TrajectoryPlanner", "EnergyController")
+GUST, SENSOR = components.get("Gust"), components.get("Sensor")
+NAMES = ("TrajectoryPlanner", "EnergyController", "Gust", "Sensor")
 SHAPERS = ("zv", "zvd", "ei", "none")
 LINUX = sys.platform.startswith("linux")  # glibc's libm in both models: the same bits
 _LIBC = ctypes.CDLL(None)
@@ -186,6 +189,48 @@ def test_energy_output_equals_the_python_model_at_random_inputs_and_parameters(n
     assert limited > 100  # the speed guard acts on many points
 
 
+# ---- Gust and Sensor: outputs over random steps, against the Python component's output and update --------------
+
+def _gust_parameters(rng, i):
+    return {"F1_peak": rng.uniform(-50, 50), "F2_peak": rng.choice([0.0, rng.uniform(-50, 50)]),
+            "start": rng.uniform(-1, 3), "duration": rng.uniform(0.01, 3)}
+
+
+def _sensor_parameters(rng, i):
+    sigmas = [rng.choice([0.0, rng.uniform(0, 0.5), rng.uniform(0, 1e-3)]) for _ in range(4)]
+    return {**dict(zip(("sigma_x", "sigma_dx", "sigma_theta", "sigma_dtheta"), sigmas)),
+            "seed": float(rng.choice([0, 1, 2 ** 32 - 1, rng.randrange(2 ** 32)])), "delay": float(i % 2)}
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("component,random_parameters", [(GUST, _gust_parameters), (SENSOR, _sensor_parameters)],
+                         ids=["Gust", "Sensor"])
+def test_disturbance_outputs_equal_the_python_model_over_random_steps(native, version, component, random_parameters):
+    """30 parameter sets x 100 steps of random length (Gust: its pulse; Sensor: noise, seed, both delays)."""
+    rng = random.Random(2029)
+    name, inputs, outputs = component.model_identifier, component.names("input"), component.names("output")
+    ours, theirs = [], []
+    for i in range(30):
+        parameters = random_parameters(rng, i)
+        fmu, vr, set_, get = _open(native[version] / f"{name}.fmu", version, parameters)
+        config = component.check(parameters)
+        state, t = component.initial_state(config), 0.0
+        for j in range(100):
+            values = _random_state(rng)[:len(inputs)]
+            if inputs:
+                set_([vr[n] for n in inputs], values)
+            ours.append(get([vr[n] for n in outputs]))
+            theirs.append(component.output(config, state, tuple(values[:len(inputs)])))
+            if j == 0:
+                fmu.exitInitializationMode()
+            h = rng.choice([1e-3, rng.uniform(1e-3, 0.2)])
+            fmu.doStep(t, h)
+            state, t = component.update(config, state, tuple(values[:len(inputs)]), t, h), t + h
+        _close(fmu)
+    _compare(ours, theirs)
+    assert np.count_nonzero(np.array(theirs)) > 1000
+
+
 # ---- refusals: the Python FMU's rules and messages ----------------------------------------------------------------
 
 def _messages(path, settings, steps=()):
@@ -234,6 +279,11 @@ REFUSED = {
     "EnergyController": [{"m1": 0.0}, {"m2": -0.5}, {"l1": NAN}, {"g": INF}, {"k_c": 0.0}, {"k_p": -1.0},
                          {"k_d": INF}, {"h": NAN}, {"x_d": -INF}, {"u_max": 0.0}, {"v_max": -1.0}, {"u_max": INF},
                          {"k_c": -1.0, "u_max": INF}],
+    "Gust": [{"F1_peak": NAN}, {"F2_peak": INF}, {"start": -INF}, {"duration": 0.0}, {"duration": -1.0},
+             {"duration": INF}],
+    "Sensor": [{"sigma_x": -1e-3}, {"sigma_dx": NAN}, {"sigma_theta": INF}, {"sigma_dtheta": -0.5},
+               {"seed": -1.0}, {"seed": 1.5}, {"seed": 2.0 ** 32}, {"seed": NAN}, {"seed": INF}, {"delay": 2.0},
+               {"delay": 0.5}, {"delay": NAN}],
 }
 CASES = [(name, settings) for name, cases in REFUSED.items() for settings in cases]
 
@@ -322,3 +372,18 @@ def test_the_planner_alone_over_its_run_equals_the_python_fmu(fmu_dir, native, v
                     parameters={"planner": {"x0": 1.0, "x_d": -2.0, "t0": 0.25, "shaper": shaper}}, stop_time=15.0)
     theirs = _runs_agree(system, native[version], _python_folder(fmu_dir, version))
     assert theirs["planner.x_ref"][-1] == -2.0 and np.min(theirs["planner.dx_ref"]) < -0.5
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("scenario", ["S4", "S5"])
+def test_the_scoreboards_gust_and_sensor_cases_on_native_fmus_equal_the_python_fmus(fmu_dir, native, version,
+                                                                                     scenario):
+    """The EnergyController's S4 (a gust on the payload) and S5 (noisy, one step late) runs: all native vs Python."""
+    contender = Contender("EnergyController", "EnergyController", ENERGY.names("input"), ENERGY.names("parameter"))
+    (_, system, step, stop_time, _), = systems_for(contender, scenario)
+    assert (step, stop_time) == (system.step, system.stop_time)
+    theirs = _runs_agree(system, native[version], _python_folder(fmu_dir, version))
+    if scenario == "S4":
+        assert np.max(theirs["gust.F2"]) == pytest.approx(10.0, rel=1e-5)
+    else:
+        assert np.max(np.abs(theirs["sensor.x_m"] - theirs["plant.x"])) > 1e-4
