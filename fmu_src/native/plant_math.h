@@ -11,12 +11,13 @@
 double crane_sin(double x);
 double crane_cos(double x);
 double crane_exp(double x);
+double crane_tanh(double x);
+double crane_log(double x);
 #define SIN crane_sin
 #define COS crane_cos
 #define EXP crane_exp
-#include <math.h>
-#define TANH tanh /* mingw-w64's: no portable ones yet (the EnergyController's tanh, the Sensor's log) */
-#define LOG log
+#define TANH crane_tanh
+#define LOG crane_log
 #else
 #include <math.h>
 #define SIN sin
