@@ -8,7 +8,10 @@ bit for bit.
 
 import ctypes
 import random
+import shutil
+import subprocess
 import sys
+import zipfile
 
 import fmpy
 import numpy as np
@@ -28,7 +31,8 @@ from fmpy.logging import addLoggerProxy
 from crane_fmu import components, systems
 from crane_fmu.analysis.scoreboard import Contender, systems_for
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
-from crane_fmu.build_scripts.native import native_dir
+from crane_fmu.build_scripts.native import MINGW, NATIVE, native_dir
+from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cosim import System, run
 
 PLANNER, ENERGY = components.get("TrajectoryPlanner"), components.get("EnergyController")
@@ -40,6 +44,7 @@ _LIBC = ctypes.CDLL(None)
 _LIBC.calloc.restype, _LIBC.calloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t, ctypes.c_size_t]
 _LIBC.free.argtypes = [ctypes.c_void_p]
 INF, NAN = float("inf"), float("nan")
+CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # no venv, no pyenv: nothing of Python
 
 
 @pytest.fixture(scope="module")
@@ -387,3 +392,143 @@ def test_the_scoreboards_gust_and_sensor_cases_on_native_fmus_equal_the_python_f
         assert np.max(theirs["gust.F2"]) == pytest.approx(10.0, rel=1e-5)
     else:
         assert np.max(np.abs(theirs["sensor.x_m"] - theirs["plant.x"])) > 1e-4
+
+
+# ---- the portable math of the Windows build, and a C host with no Python, on Linux and under Wine ---------------
+
+MATH_HARNESS = r"""
+#include <math.h>
+#include <stdio.h>
+double crane_tanh(double), crane_log(double);
+int main(void) {
+    double x;
+    while (scanf("%lf", &x) == 1) printf("%.17g %.17g %.17g %.17g\n", crane_tanh(x), tanh(x), crane_log(fabs(x)),
+                                         log(fabs(x)));
+    return 0;
+}
+"""
+
+
+def _compiler():
+    compiler = shutil.which("cc") or shutil.which("gcc")
+    if compiler is None:
+        pytest.skip("no C compiler")
+    return compiler
+
+
+def test_the_portable_tanh_and_log_agree_with_glibcs(tmp_path):
+    """The EnergyController's tanh and the Sensor's log in the Windows build: within 3 (tanh) and 1 (log) ULP of
+    glibc's at 200000 random points, equal at most (fdlibm's methods; glibc's log is nearly correctly rounded)."""
+    (tmp_path / "harness.c").write_text(MATH_HARNESS)
+    subprocess.run([_compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", f"-I{NATIVE}",
+                    str(tmp_path / "harness.c"), str(NATIVE / "portable_math.c"), "-o", str(tmp_path / "h"), "-lm"],
+                   check=True)
+    rng = random.Random(31)
+    xs = [rng.uniform(-1, 1) * 10 ** rng.uniform(-20, 1.7) for _ in range(100_000)]
+    xs += [((rng.getrandbits(53) >> 11) + 0.5) / 2 ** 53 for _ in range(100_000)]  # the Sensor's u1
+    xs += [5e-324, 1e-310, 0.5, 1.0, 2.0, 22.0, -22.0, 1e300]
+    out = subprocess.run([str(tmp_path / "h")], input="\n".join(map(repr, xs)), capture_output=True, text=True,
+                         check=True).stdout
+    values = np.array([[float(v) for v in line.split()] for line in out.splitlines()])
+    assert values.shape == (len(xs), 4)
+    for ours, glibc, most_ulps in ((0, 1, 3), (2, 3, 1)):
+        ulps = np.abs(values[:, ours].view(np.int64) - values[:, glibc].view(np.int64))
+        assert ulps.max() <= most_ulps and np.count_nonzero(ulps) < 0.1 * len(xs)
+
+
+HOST_CASES = {  # component: (parameters and inputs set by the host, steps of 1 ms)
+    "TrajectoryPlanner": ({"x_d": 2.0, "t0": 0.1}, 5000),
+    "Gust": ({"F1_peak": 3.0, "start": 0.2, "duration": 0.3}, 1000),
+    "EnergyController": ({"x": 0.3, "dx": -0.2, "theta1": 0.1, "dtheta1": 0.4, "theta2": -0.2, "dtheta2": 0.5}, 3),
+    "Sensor": ({"x": 0.3, "theta2": -0.2, "sigma_dx": 0.0}, 1000),
+}
+
+
+def _python_rows(component, settings, steps, h):
+    """The rows the host prints, ``[t, outputs]`` after k steps from t = (k - 1) h, by the Python model."""
+    parameters = {k: v for k, v in settings.items() if k in component.names("parameter")}
+    inputs = tuple(settings.get(n, v.start) for n, v in ((v.name, v) for v in component.variables
+                                                         if v.causality == "input"))
+    config = component.check(parameters)
+    state = component.initial_state(config) if component.stateful else None
+    rows = []
+    for k in range(steps + 1):
+        rows.append([k * h, *component.output(config, state, inputs)])
+        if component.stateful:
+            state = component.update(config, state, inputs, k * h, h)
+    return np.array(rows)
+
+
+def _host_arguments(path, settings, steps, h):
+    md = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    outputs = [v.valueReference for v in md.modelVariables if v.causality == "output"]
+    return [md.coSimulation.modelIdentifier, md.guid, steps, h, *[f"{vr[k]}={v!r}" for k, v in settings.items()],
+            *outputs]
+
+
+@pytest.fixture(scope="module")
+def unpacked(native, tmp_path_factory):
+    """``{name: folder}`` of the four native FMI 2.0 FMUs, unzipped."""
+    folders = {}
+    for name in HOST_CASES:
+        folders[name] = tmp_path_factory.mktemp(name)
+        with zipfile.ZipFile(native[2] / f"{name}.fmu") as z:
+            z.extractall(folders[name])
+    return folders
+
+
+def _run_host(command, *args, cwd=None, env=None):
+    done = subprocess.run([*command, *map(str, args)], capture_output=True, text=True, cwd=cwd, env=env, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return np.array([[float(x) for x in line.split(",")] for line in done.stdout.replace("\r", "").splitlines()])
+
+
+@pytest.fixture(scope="module")
+def host(tmp_path_factory):
+    host = tmp_path_factory.mktemp("host") / "host"
+    subprocess.run([_compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", f"-I{NATIVE}",
+                    str(NATIVE / "host.c"), "-o", str(host), "-ldl", "-lpthread", "-lm"], check=True)
+    return host
+
+
+@pytest.mark.parametrize("name", HOST_CASES)
+def test_the_c_host_without_python_gives_the_python_models_outputs(native, unpacked, host, name):
+    """host.c's ``outputs`` (no Python in the process): the Python model's rows bit for bit (glibc)."""
+    settings, steps = HOST_CASES[name]
+    _, guid, *rest = _host_arguments(native[2] / f"{name}.fmu", settings, steps, 1e-3)
+    rows = _run_host([str(host), "outputs"], unpacked[name] / "binaries" / "linux64" / f"{name}.so", guid, *rest,
+                     env=CLEAN_ENV)
+    expected = _python_rows(components.get(name), settings, steps, 1e-3)
+    assert rows.shape == expected.shape and np.count_nonzero(expected[:, 1:]) > steps / 4
+    assert np.array_equal(rows.view(np.int64), expected.view(np.int64))
+
+
+@pytest.fixture(scope="module")
+def wine(unpacked, tmp_path_factory):
+    """``(wine command, folder with host.exe and the four DLLs, environment)``; the prefix is deleted afterwards."""
+    if shutil.which(MINGW) is None or shutil.which("wine") is None:
+        pytest.skip("needs mingw-w64 (gcc-mingw-w64-x86-64) and Wine (wine64, wine): .ci/run installs them")
+    folder = tmp_path_factory.mktemp("windows")
+    subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", "-static-libgcc",
+                    f"-I{fmi_headers()}", f"-I{NATIVE}", str(NATIVE / "host.c"), str(NATIVE / "portable_math.c"), "-o",
+                    str(folder / "host.exe")], check=True)
+    for name, unzipped in unpacked.items():
+        shutil.copy(unzipped / "binaries" / "win64" / f"{name}.dll", folder)
+    prefix = tmp_path_factory.mktemp("wineprefix")
+    env = {**CLEAN_ENV, "HOME": str(prefix), "WINEPREFIX": str(prefix), "WINEDEBUG": "-all"}
+    yield ["wine", str(folder / "host.exe")], folder, env
+    subprocess.run(["wineserver", "-w"], env=env, timeout=120)
+    shutil.rmtree(prefix, ignore_errors=True)
+
+
+@pytest.mark.parametrize("name", HOST_CASES)
+def test_the_windows_dlls_under_wine_give_the_python_models_outputs(native, wine, name):
+    """The Windows build (portable sin, cos, tanh, log): the Python model's rows to 1e-12 relative."""
+    command, folder, env = wine
+    settings, steps = HOST_CASES[name]
+    _, guid, *rest = _host_arguments(native[2] / f"{name}.fmu", settings, steps, 1e-3)
+    rows = _run_host([*command, "outputs"], f"{name}.dll", guid, *rest, cwd=folder, env=env)
+    expected = _python_rows(components.get(name), settings, steps, 1e-3)
+    assert rows.shape == expected.shape
+    assert np.max(np.abs(rows - expected) / np.maximum(np.abs(expected), 1.0)) <= 1e-12
