@@ -280,7 +280,9 @@ REFUSED = {
     "TrajectoryPlanner": [{"m1": -1.0}, {"m2": NAN}, {"l1": 0.0}, {"l2": INF}, {"g": -INF}, {"u_max": 0.0},
                           {"v_max": NAN}, {"u_max": INF}, {"v_max": INF}, {"shaper": "ZV"}, {"shaper": ""},
                           {"shaper": "it's"}, {"x0": NAN}, {"x_d": INF}, {"t0": -INF},
-                          {"u_max": -1.0, "shaper": "zz", "x0": NAN}],
+                          {"u_max": -1.0, "shaper": "zz", "x0": NAN},
+                          {"m2": 0.0, "l1": 1.0, "l2": 1.0},  # modes coincide: Python's ZeroDivisionError
+                          {"m2": 0.0, "l1": 1.0, "l2": 1.0 + 1e-15}],  # sqrt of a rounded negative: its ValueError
     "EnergyController": [{"m1": 0.0}, {"m2": -0.5}, {"l1": NAN}, {"g": INF}, {"k_c": 0.0}, {"k_p": -1.0},
                          {"k_d": INF}, {"h": NAN}, {"x_d": -INF}, {"u_max": 0.0}, {"v_max": -1.0}, {"u_max": INF},
                          {"k_c": -1.0, "u_max": INF}],

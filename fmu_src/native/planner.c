@@ -83,16 +83,23 @@ static int shaper(const char *kind, double period, Pair out[3]) {
     return 1;
 }
 
+/* What Python raises where planner.py divides by zero or takes the square root of a negative number. */
+#define ZERO_DIVISION(r) report(r, MODEL_ERROR, "ZeroDivisionError: float division by zero")
+#define DOMAIN_ERROR(r) report(r, MODEL_ERROR, "math domain error")
+
 /* planner.modes() on plant_equations.linearisation(): the swing modes of q'' = -W q - w u. */
-static void modes(double m1, double m2, double l1, double l2, double g, Config *c) {
+static ModelStatus modes(double m1, double m2, double l1, double l2, double g, Config *c, const Reporter *r) {
     double m12 = m1 + m2;
     double na = m12 * l1, nb = m2 * l2, nc = l1, nd = l2; /* N of linearisation() */
     double ndet = na * nd - nb * nc;
+    if (ndet == 0) return ZERO_DIVISION(r);
     double inv[2][2] = {{nd / ndet, -nb / ndet}, {-nc / ndet, na / ndet}};
     double a = inv[0][0] * m12 * g, b = inv[0][1] * g, cc = inv[1][0] * m12 * g, d = inv[1][1] * g; /* W */
     double w[2] = {inv[0][0] * m12 + inv[0][1], inv[1][0] * m12 + inv[1][1]};
     double half_trace = (a + d) / 2, det = a * d - b * cc;
-    double root = sqrt(half_trace * half_trace - det);
+    double discriminant = half_trace * half_trace - det;
+    if (discriminant < 0) return DOMAIN_ERROR(r);
+    double root = sqrt(discriminant);
     double lambdas[2] = {half_trace - root, half_trace + root};
     for (int k = 0; k < 2; k++) { /* (W - lam I) v = 0 */
         if (b != 0) c->shapes[k][0] = b, c->shapes[k][1] = lambdas[k] - a;
@@ -100,8 +107,12 @@ static void modes(double m1, double m2, double l1, double l2, double g, Config *
     }
     double v11 = c->shapes[0][0], v21 = c->shapes[0][1], v12 = c->shapes[1][0], v22 = c->shapes[1][1];
     double det_v = v11 * v22 - v12 * v21;
+    if (det_v == 0) return ZERO_DIVISION(r); /* the modes coincide (m2 = 0, l1 = l2) */
     c->gains[0] = (v22 * w[0] - v12 * w[1]) / det_v, c->gains[1] = (-v21 * w[0] + v11 * w[1]) / det_v;
+    if (lambdas[0] < 0 || lambdas[1] < 0) return DOMAIN_ERROR(r);
     c->omegas[0] = sqrt(lambdas[0]), c->omegas[1] = sqrt(lambdas[1]);
+    if (c->omegas[0] == 0 || c->omegas[1] == 0) return ZERO_DIVISION(r); /* the shapers' periods 2 pi / omega */
+    return MODEL_OK;
 }
 
 /* planner._base(): the accelerating and cruising times of the bang-coast-bang move. */
@@ -153,7 +164,8 @@ static ModelStatus setup(const double values[], const char *kind, Config *c, con
         return report(r, MODEL_ERROR, "u_max and v_max must be finite for a planned move, got %s, %s", R(u_max),
                       R(v_max));
     memset(c, 0, sizeof *c);
-    modes(V(m1), V(m2), V(l1), V(l2), V(g), c);
+    ModelStatus status = modes(V(m1), V(m2), V(l1), V(l2), V(g), c, r);
+    if (status != MODEL_OK) return status;
     Pair a[3], b[3];
     int na = shaper(kind, 2 * PI / c->omegas[0], a), nb = shaper(kind, 2 * PI / c->omegas[1], b);
     for (int i = 0; i < na; i++) /* planner.convolve() */
