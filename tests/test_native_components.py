@@ -238,8 +238,9 @@ def test_disturbance_outputs_equal_the_python_model_over_random_steps(native, ve
 
 # ---- refusals: the Python FMU's rules and messages ----------------------------------------------------------------
 
-def _messages(path, settings, steps=()):
-    """``(statuses, log)`` of an FMI 2.0 run with ``settings`` (a str is set as a String) and then ``steps``."""
+def _messages(path, settings, steps=(), read=()):
+    """``(statuses, log)`` of an FMI 2.0 run with ``settings`` (a str is set as a String), a get of ``read`` (names)
+    before and after initialisation ends, then ``steps``."""
     md = read_model_description(str(path))
     vr = {v.name: v.valueReference for v in md.modelVariables}
     log = []
@@ -259,7 +260,8 @@ def _messages(path, settings, steps=()):
 
     calls = [("setup", lambda: fmu.setupExperiment(startTime=0.0)), ("enter", fmu.enterInitializationMode)]
     calls += [(f"set {name}", setter(name, value)) for name, value in settings.items()]
-    calls.append(("exit", fmu.exitInitializationMode))
+    get = ("get", lambda: fmu.getReal([vr[name] for name in read]))
+    calls += [get, ("exit", fmu.exitInitializationMode), get] if read else [("exit", fmu.exitInitializationMode)]
     for t, h in steps:
         calls.append((f"step {t}", lambda t=t, h=h: fmu.doStep(t, h)))
     statuses = []
@@ -311,6 +313,13 @@ def test_an_unusable_step_is_the_python_fmus_error(fmu_dir, native, name, step):
     theirs = _messages(fmu_dir / f"{name}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
     assert ours == theirs
     assert ours[0][-2] == "step 0.001: 3"
+
+
+def test_an_output_python_cannot_compute_is_the_python_fmus_error(fmu_dir, native):
+    """u_max = 5e-324 passes the rules, but (E4) then divides by a = u_max / 2 = 0: Python's ZeroDivisionError."""
+    ours = _messages(native[2] / "EnergyController.fmu", {"u_max": 5e-324}, read=["u"])
+    theirs = _messages(fmu_dir / "EnergyController.fmu", {"u_max": 5e-324}, read=["u"])
+    assert ours == theirs == (["get: 3", "end"], ["fmi2GetReal: ZeroDivisionError: float division by zero"])
 
 
 # ---- FMU state ----------------------------------------------------------------------------------------------------

@@ -87,13 +87,12 @@ ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double valu
         if (vr[i] >= N_VARIABLES) return no_variable(r, vr[i]);
         if (VARIABLE_TABLE[vr[i]].causality != OUTPUT) {
             values[i] = m->values[vr[i]];
-        } else if (m->initialised) {
-            values[i] = control(&m->config, &m->values[VR_x]);
-        } else { /* before initialisation ends the output follows the parameters */
-            Config c;
-            if (setup(m->values, &c, r) != MODEL_OK) return MODEL_ERROR;
-            values[i] = control(&c, &m->values[VR_x]);
+            continue;
         }
+        Config c = m->config;
+        if (!m->initialised && setup(m->values, &c, r) != MODEL_OK) return MODEL_ERROR; /* follows the parameters */
+        if (0.5 * c.u_max == 0) return ZERO_DIVISION(r); /* u_max below 1e-323: (E4) divides by a = 0 */
+        values[i] = control(&c, &m->values[VR_x]);
     }
     return MODEL_OK;
 }

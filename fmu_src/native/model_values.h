@@ -34,6 +34,10 @@ static inline ModelStatus rule(const Reporter *r, const char *name, const char *
     return report(r, MODEL_ERROR, "%s must be %s, got %s", name, text, py_repr(value, (char[REPR_SIZE]){0}));
 }
 
+/* The Python FMU's messages where its model divides by zero or takes the square root of a negative number. */
+#define ZERO_DIVISION(r) report(r, MODEL_ERROR, "ZeroDivisionError: float division by zero")
+#define DOMAIN_ERROR(r) report(r, MODEL_ERROR, "math domain error")
+
 #define STRING_SIZE 256 /* the longest String value kept, with its terminating zero */
 #define STR_REPR_SIZE (4 * STRING_SIZE + 3)
 

@@ -83,10 +83,6 @@ static int shaper(const char *kind, double period, Pair out[3]) {
     return 1;
 }
 
-/* What Python raises where planner.py divides by zero or takes the square root of a negative number. */
-#define ZERO_DIVISION(r) report(r, MODEL_ERROR, "ZeroDivisionError: float division by zero")
-#define DOMAIN_ERROR(r) report(r, MODEL_ERROR, "math domain error")
-
 /* planner.modes() on plant_equations.linearisation(): the swing modes of q'' = -W q - w u. */
 static ModelStatus modes(double m1, double m2, double l1, double l2, double g, Config *c, const Reporter *r) {
     double m12 = m1 + m2;
