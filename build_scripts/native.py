@@ -15,7 +15,7 @@ built from. Each FMU holds
 Both are compiled with ``-ffp-contract=off`` (no fused multiply-adds: the same operations as
 the Python model). The Linux binary uses glibc's libm, as CPython does, so it gives the Python
 FMU's numbers; mingw-w64's libm differs, so the Windows binary (and a build from the sources)
-uses the portable sin, cos and exp of ``fmu_src/native/portable_math.c``.
+uses the portable sin, cos, exp, tanh and log of ``fmu_src/native/portable_math.c``.
 """
 
 import hashlib
