@@ -1,33 +1,11 @@
 /*
  * What the model files do alike with their generated variable table (<model>_variables.h, included
  * first, with model.h, math.h, stdio.h, string.h and py_repr.h): check a set of Reals, all before any
- * is stored, and store them; a model's one String parameter; the rule messages of parameters.py;
- * Python's repr() of a str, max() and min(); and limits.limited().
+ * is stored, and store them; a model's one String parameter, or none; the Python FMU's messages (the
+ * rules of parameters.py, its errors); Python's repr() of a str, max() and min(); limits.limited().
  */
 #ifndef MODEL_VALUES_H
 #define MODEL_VALUES_H
-
-static inline ModelStatus set_real_values(double store[], const unsigned vr[], size_t n, const double values[],
-                                   int fixed_allowed, const Reporter *r) {
-    for (size_t i = 0; i < n; i++) {
-        if (vr[i] >= N_VARIABLES)
-            return report(r, MODEL_ERROR, "%s has no variable with value reference %u", MODEL_IDENTIFIER, vr[i]);
-        const VariableRow *v = &VARIABLE_TABLE[vr[i]];
-        if (v->type == STRING)
-            return report(r, MODEL_ERROR, "%s of %s is a String, not a Real", v->name, MODEL_IDENTIFIER);
-        if (v->causality == OUTPUT)
-            return report(r, MODEL_ERROR, "%s is an output of %s; only parameters and inputs can be set", v->name,
-                          MODEL_IDENTIFIER);
-        if (v->causality == INPUT && !isfinite(values[i]))
-            return report(r, MODEL_ERROR, "input %s must be finite, got %s", v->name,
-                          py_repr(values[i], (char[REPR_SIZE]){0}));
-        if (v->causality == PARAMETER && !fixed_allowed)
-            return report(r, MODEL_ERROR, "%s is a fixed parameter of %s: it can be set only before initialisation ends",
-                          v->name, MODEL_IDENTIFIER);
-    }
-    for (size_t i = 0; i < n; i++) store[vr[i]] = values[i];
-    return MODEL_OK;
-}
 
 /* "name must be text, got repr(value)": the rule messages of parameters.py and the configure()s. */
 static inline ModelStatus rule(const Reporter *r, const char *name, const char *text, double value) {
@@ -71,10 +49,33 @@ static inline ModelStatus not_string(const Reporter *r, unsigned vr) {
     return report(r, MODEL_ERROR, "%s of %s is a Real, not a String", VARIABLE_TABLE[vr].name, MODEL_IDENTIFIER);
 }
 
+/* Check n Reals to set, all before any is stored, and store them. */
+static inline ModelStatus set_real_values(double store[], const unsigned vr[], size_t n, const double values[],
+                                          int fixed_allowed, const Reporter *r) {
+    for (size_t i = 0; i < n; i++) {
+        if (vr[i] >= N_VARIABLES) return no_variable(r, vr[i]);
+        const VariableRow *v = &VARIABLE_TABLE[vr[i]];
+        if (v->type == STRING) return not_real(r, vr[i]);
+        if (v->causality == OUTPUT)
+            return report(r, MODEL_ERROR, "%s is an output of %s; only parameters and inputs can be set", v->name,
+                          MODEL_IDENTIFIER);
+        if (v->causality == INPUT && !isfinite(values[i]))
+            return report(r, MODEL_ERROR, "input %s must be finite, got %s", v->name,
+                          py_repr(values[i], (char[REPR_SIZE]){0}));
+        if (v->causality == PARAMETER && !fixed_allowed)
+            return report(r, MODEL_ERROR,
+                          "%s is a fixed parameter of %s: it can be set only before initialisation ends", v->name,
+                          MODEL_IDENTIFIER);
+    }
+    for (size_t i = 0; i < n; i++) store[vr[i]] = values[i];
+    return MODEL_OK;
+}
+
 /* Set a model's one String parameter (value reference `svr`, kept in `store`), all or none; `allowed` says which
    values configure() takes ("one of derived, printed"), for the message on a value too long to keep. */
-static inline ModelStatus set_string_value(char store[STRING_SIZE], unsigned svr, const char *allowed, const unsigned vr[],
-                                    size_t n, const char *const values[], int fixed_allowed, const Reporter *r) {
+static inline ModelStatus set_string_value(char store[STRING_SIZE], unsigned svr, const char *allowed,
+                                           const unsigned vr[], size_t n, const char *const values[], int fixed_allowed,
+                                           const Reporter *r) {
     const char *name = VARIABLE_TABLE[svr].name;
     for (size_t i = 0; i < n; i++) {
         if (vr[i] != svr) return not_string(r, vr[i]);
@@ -83,16 +84,17 @@ static inline ModelStatus set_string_value(char store[STRING_SIZE], unsigned svr
             return report(r, MODEL_ERROR, "%s must be %s, got a string longer than %d characters", name, allowed,
                           STRING_SIZE - 1);
         if (!fixed_allowed)
-            return report(r, MODEL_ERROR, "%s is a fixed parameter of %s: it can be set only before initialisation ends",
-                          name, MODEL_IDENTIFIER);
+            return report(r, MODEL_ERROR,
+                          "%s is a fixed parameter of %s: it can be set only before initialisation ends", name,
+                          MODEL_IDENTIFIER);
     }
     for (size_t i = 0; i < n; i++) snprintf(store, STRING_SIZE, "%s", values[i]);
     return MODEL_OK;
 }
 
 /* Get a model's one String parameter: valid until the next call on the instance, as FMI allows. */
-static inline ModelStatus get_string_value(const char store[STRING_SIZE], unsigned svr, const unsigned vr[], size_t n,
-                                    const char *values[], const Reporter *r) {
+static inline ModelStatus get_string_value(const char store[STRING_SIZE], unsigned svr, const unsigned vr[],
+                                           size_t n, const char *values[], const Reporter *r) {
     for (size_t i = 0; i < n; i++) {
         if (vr[i] != svr) return not_string(r, vr[i]);
         values[i] = store;

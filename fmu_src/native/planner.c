@@ -76,7 +76,8 @@ static int shaper(const char *kind, double period, Pair out[3]) {
     }
     if (strcmp(kind, "ei") == 0) {
         double v = EI_TOLERANCE;
-        out[0] = (Pair){0.0, (1 + v) / 4}, out[1] = (Pair){period / 2, (1 - v) / 2}, out[2] = (Pair){period, (1 + v) / 4};
+        out[0] = (Pair){0.0, (1 + v) / 4}, out[1] = (Pair){period / 2, (1 - v) / 2};
+        out[2] = (Pair){period, (1 + v) / 4};
         return 3;
     }
     out[0] = (Pair){0.0, 1.0};

@@ -1,13 +1,13 @@
 /*
- * Portable sin, cos, exp, tanh and log: the same double operations on every platform and compiler, for the
- * builds whose C library differs from glibc (mingw-w64's sin and cos are the x87 instructions)
- * and for builds from the FMU's sources. The method is fdlibm's (Sun Microsystems, 1993: "Permission
- * to use, copy, modify, and distribute this software is freely granted, provided that this notice
- * is preserved"): for sin and cos Cody-Waite reduction by pi/2 in three parts, then minimax polynomials
- * on [-pi/4, pi/4]; for exp, expm1 (under tanh) and log a reduction by ln2 or to [sqrt(2)/2, sqrt(2)],
- * then its rational or polynomial forms; with fdlibm's coefficients, written anew here. Error below 1 ULP, so they agree with
- * glibc's (correctly rounded in almost every case) except in a rare last bit; the reduction is
- * exact enough for |x| < 2^20 pi/2 (angles far beyond any swing; larger ones lose digits).
+ * Portable sin, cos, exp, tanh and log: the same double operations on every platform and compiler, for
+ * the builds whose C library differs from glibc (mingw-w64's sin and cos are the x87 instructions) and
+ * for builds from the FMU's sources. The method is fdlibm's (Sun Microsystems, 1993: "Permission to use,
+ * copy, modify, and distribute this software is freely granted, provided that this notice is
+ * preserved"): for sin and cos Cody-Waite reduction by pi/2 in three parts, then minimax polynomials on
+ * [-pi/4, pi/4]; for exp, expm1 (under tanh) and log a reduction by ln2 or to [sqrt(2)/2, sqrt(2)], then
+ * their rational or polynomial forms; with fdlibm's coefficients, written anew here. Errors below 1 ULP
+ * (tanh: below 3 ULP of glibc's), so they agree with glibc's except in a rare last bit; the reduction of
+ * sin and cos is exact enough for |x| < 2^20 pi/2 (angles far beyond any swing; larger ones lose digits).
  * Compiled only with CRANE_OWN_MATH (see plant_math.h).
  */
 #ifdef CRANE_OWN_MATH
