@@ -407,14 +407,20 @@ def test_fmu_state_saved_serialised_and_restored_repeats_the_steps_exactly(nativ
 
 # ---- closed loops and whole runs: native against Python FMUs, through our master ---------------------------------
 
-def _runs_agree(system, native_folder, python_folder):
-    """Every recorded output of both runs within 1e-9 over the whole run (glibc: equal); the worst deviation."""
+def _is_native(path):
+    """Whether an FMU is one of the native ones (a generated variable header among its sources)."""
+    with zipfile.ZipFile(path) as z:
+        return any(n.startswith("sources/") and n.endswith("_variables.h") for n in z.namelist())
+
+
+def _runs_agree(system, native_folder, python_folder, exact=LINUX):
+    """Every recorded output of both runs within 1e-9 over the whole run (``exact``: equal); the recorded run."""
     ours, theirs = run(system, native_folder).columns(), run(system, python_folder).columns()
     assert list(ours) == list(theirs)
     assert len(ours["time"]) == len(theirs["time"]) == round(system.stop_time / system.step) + 1
     worst = max(float(np.max(np.abs(ours[k] - theirs[k]))) for k in theirs)
     assert worst <= 1e-9
-    if LINUX:
+    if exact:
         assert worst == 0.0
     return theirs
 
@@ -430,8 +436,10 @@ def test_the_energy_system_on_native_fmus_equals_the_python_fmus(fmu_dir, native
 @pytest.mark.parametrize("system", ["transport", "hoist-transport"])
 def test_the_transport_systems_with_the_native_planner_equal_the_python_fmus(fmu_dir, native, version, system):
     """10 s of the ZV move, 12 s of the ZVD move with a second planner as the hoist, both at 1 ms and tracked by the
-    LQR (Python or native, whichever build/native holds)."""
-    theirs = _runs_agree(systems.get(system), native[version], _python_folder(fmu_dir, version))
+    LQR (Python or native, whichever build/native holds; bit for bit on Linux with the Python LQR)."""
+    lqr_native = _is_native(native[version] / "LqrController.fmu")  # its design may differ in a last bit
+    theirs = _runs_agree(systems.get(system), native[version], _python_folder(fmu_dir, version),
+                         exact=LINUX and not lqr_native)
     assert abs(theirs["planner.x_ref"][-1] - 2.0) < 1e-12 and np.max(np.abs(theirs["planner.theta1_ref"])) > 1e-3
 
 
