@@ -15,7 +15,7 @@ built from. Each FMU holds
 Both are compiled with ``-ffp-contract=off`` (no fused multiply-adds: the same operations as
 the Python model). The Linux binary uses glibc's libm, as CPython does, so it gives the Python
 FMU's numbers; mingw-w64's libm differs, so the Windows binary (and a build from the sources)
-uses the portable sin, cos and exp of ``fmu_src/native/portable_math.c``.
+uses the portable sin, cos, exp, tanh and log of ``fmu_src/native/portable_math.c``.
 """
 
 import hashlib
@@ -35,10 +35,10 @@ from crane_fmu.model.tables import DISPLAY_UNITS, xml_double
 
 NATIVE = Path(fmu_src.__file__).parent / "native"
 # the ported components: model identifier -> its model file in fmu_src/native
-MODELS = {"CranePlant": "crane_plant.c", "BacksteppingController": "backstepping.c", "LqrController": "lqr.c"}
+MODELS = {"CranePlant": "crane_plant.c", "BacksteppingController": "backstepping.c", "LqrController": "lqr.c",
+          "TrajectoryPlanner": "planner.c", "EnergyController": "energy.c", "Gust": "gust.c", "Sensor": "sensor.c"}
 COMMON = ("plant_equations.c", "py_repr.c", "portable_math.c", "linalg.c", "framework.c")
-HEADERS = ("model.h", "model_values.h", "framework.h", "plant_equations.h", "plant_math.h", "py_repr.h", "linalg.h",
-           "limits.h")
+HEADERS = ("model.h", "model_values.h", "framework.h", "plant_equations.h", "plant_math.h", "py_repr.h", "linalg.h")
 FRAMEWORKS = {2: ("fmi2_framework.c", "fmi2_functions.h"), 3: ("fmi3_framework.c", "fmi3_functions.h")}
 PLATFORMS = {2: {"linux": "linux64", "windows": "win64"}, 3: {"linux": "x86_64-linux", "windows": "x86_64-windows"}}
 FLAGS = ["-shared", "-O2", "-Wall", "-Werror", "-ffp-contract=off"]

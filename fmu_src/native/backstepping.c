@@ -11,12 +11,9 @@
 
 #include "BacksteppingController_variables.h"
 #include "model.h"
-#include "limits.h"
 #include "plant_math.h"
 #include "py_repr.h"
 #include "model_values.h"
-
-#define STRING_SIZE 256 /* the longest String value kept, with its terminating zero */
 
 /* What law() computes once from the parameters, named as there. */
 typedef struct {
@@ -48,27 +45,6 @@ void model_defaults(Model *m) {
     snprintf(m->b3_form, sizeof m->b3_form, "%s", VARIABLE_TABLE[VR_b3_form].text);
 }
 
-/* Python's repr() of a str: quotes and escapes as CPython chooses them (bytes >= 0x80 kept as they are). */
-static char *str_repr(const char *s, char out[4 * STRING_SIZE + 3]) {
-    int single = strchr(s, '\'') != NULL && strchr(s, '"') == NULL ? 0 : 1;
-    char quote = single ? '\'' : '"', *o = out;
-    *o++ = quote;
-    for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
-        if (*p == '\\' || *p == (unsigned char)quote) *o++ = '\\', *o++ = (char)*p;
-        else if (*p == '\n') *o++ = '\\', *o++ = 'n';
-        else if (*p == '\r') *o++ = '\\', *o++ = 'r';
-        else if (*p == '\t') *o++ = '\\', *o++ = 't';
-        else if (*p < 0x20 || *p == 0x7f) o += sprintf(o, "\\x%02x", *p);
-        else *o++ = (char)*p;
-    }
-    *o++ = quote, *o = 0;
-    return out;
-}
-
-static ModelStatus rule(const Reporter *r, const char *name, const char *text, double value) {
-    return report(r, MODEL_ERROR, "%s must be %s, got %s", name, text, R(value));
-}
-
 /* The rules of backstepping.configure() in its order and words: h, the limits, the plant model, the gains. */
 static ModelStatus setup(const double values[], const char *b3_form, Config *c, const Reporter *r) {
     if (!(isfinite(V(h)) && V(h) > 0)) return rule(r, "h", "> 0 and finite", V(h));
@@ -92,7 +68,7 @@ static ModelStatus setup(const double values[], const char *b3_form, Config *c, 
     int derived = strcmp(b3_form, "derived") == 0;
     if (!derived && strcmp(b3_form, "printed") != 0)
         return report(r, MODEL_ERROR, "b3_form must be one of derived, printed, got %s",
-                      str_repr(b3_form, (char[4 * STRING_SIZE + 3]){0}));
+                      str_repr(b3_form, (char[STR_REPR_SIZE]){0}));
     double m1 = V(m1), m2 = V(m2), l2 = V(l2), g = V(g);
     c->a = 2.0 * m1 + m2;
     c->m2 = m2, c->l1 = V(l1), c->l2 = l2;
@@ -143,14 +119,6 @@ ModelStatus model_initialize(Model *m, const Reporter *r) {
     return MODEL_OK;
 }
 
-static ModelStatus not_real(const Reporter *r, unsigned vr) {
-    return report(r, MODEL_ERROR, "%s of %s is a String, not a Real", VARIABLE_TABLE[vr].name, MODEL_IDENTIFIER);
-}
-
-static ModelStatus no_variable(const Reporter *r, unsigned vr) {
-    return report(r, MODEL_ERROR, "%s has no variable with value reference %u", MODEL_IDENTIFIER, vr);
-}
-
 ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed,
                             const Reporter *r) {
     return set_real_values(m->values, vr, n, values, fixed_allowed, r);
@@ -173,33 +141,13 @@ ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double valu
     return MODEL_OK;
 }
 
-static ModelStatus not_string(const Reporter *r, unsigned vr) {
-    if (vr >= N_VARIABLES) return no_variable(r, vr);
-    return report(r, MODEL_ERROR, "%s of %s is a Real, not a String", VARIABLE_TABLE[vr].name, MODEL_IDENTIFIER);
-}
-
 ModelStatus model_set_strings(Model *m, const unsigned vr[], size_t n, const char *const values[], int fixed_allowed,
                               const Reporter *r) {
-    for (size_t i = 0; i < n; i++) {
-        if (vr[i] != VR_b3_form) return not_string(r, vr[i]);
-        if (!values[i]) return report(r, MODEL_ERROR, "b3_form must be a string, got NULL");
-        if (strlen(values[i]) >= STRING_SIZE)
-            return report(r, MODEL_ERROR, "b3_form must be one of derived, printed, got a string longer than %d "
-                          "characters", STRING_SIZE - 1);
-        if (!fixed_allowed)
-            return report(r, MODEL_ERROR, "b3_form is a fixed parameter of %s: it can be set only before "
-                          "initialisation ends", MODEL_IDENTIFIER);
-    }
-    for (size_t i = 0; i < n; i++) snprintf(m->b3_form, sizeof m->b3_form, "%s", values[i]);
-    return MODEL_OK;
+    return set_string_value(m->b3_form, VR_b3_form, "one of derived, printed", vr, n, values, fixed_allowed, r);
 }
 
 ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const char *values[], const Reporter *r) {
-    for (size_t i = 0; i < n; i++) {
-        if (vr[i] != VR_b3_form) return not_string(r, vr[i]);
-        values[i] = m->b3_form; /* valid until the next call on this instance, as FMI allows */
-    }
-    return MODEL_OK;
+    return get_string_value(m->b3_form, VR_b3_form, vr, n, values, r);
 }
 
 ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {

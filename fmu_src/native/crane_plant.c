@@ -36,7 +36,8 @@ const char *const MODEL_NAME = MODEL_IDENTIFIER;
 const char *const MODEL_TOKEN = INSTANTIATION_TOKEN;
 const size_t MODEL_SIZE = sizeof(Model);
 const unsigned MODEL_N_VARIABLES = N_VARIABLES;
-const unsigned MODEL_N_STRINGS = 0; /* the frameworks never call the String functions below */
+const unsigned MODEL_N_STRINGS = 0;
+MODEL_WITHOUT_STRINGS
 
 #define V(name) (values[VR_##name])
 #define R(value) py_repr(value, (char[REPR_SIZE]){0})
@@ -47,10 +48,6 @@ void model_defaults(Model *m) {
 }
 
 /* The rules of plant.configure() and parameters.py, in their order and words. */
-static ModelStatus rule(const Reporter *r, const char *name, const char *text, double value) {
-    return report(r, MODEL_ERROR, "%s must be %s, got %s", name, text, R(value));
-}
-
 static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
     if (!(isfinite(V(max_substep)) && V(max_substep) > 0)) return rule(r, "max_substep", "> 0 and finite", V(max_substep));
     if (!(isfinite(V(m1)) && V(m1) > 0)) return rule(r, "m1", "> 0 and finite", V(m1));
@@ -102,17 +99,6 @@ ModelStatus model_initialize(Model *m, const Reporter *r) {
 ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed,
                             const Reporter *r) {
     return set_real_values(m->values, vr, n, values, fixed_allowed, r);
-}
-
-ModelStatus model_set_strings(Model *m, const unsigned vr[], size_t n, const char *const values[], int fixed_allowed,
-                              const Reporter *r) {
-    (void)m, (void)vr, (void)n, (void)values, (void)fixed_allowed;
-    return report(r, MODEL_ERROR, "this FMU has no variables of this type");
-}
-
-ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const char *values[], const Reporter *r) {
-    (void)m, (void)vr, (void)n, (void)values;
-    return report(r, MODEL_ERROR, "this FMU has no variables of this type");
 }
 
 /* Every output in table order: plant_outputs(), then l1_now, dl1_now, ddx. */

@@ -18,11 +18,12 @@
  *                                                       with CX, CU: the value references of its x (the first
  *                                                       of the six measured states) and of its u
  *   host pair-bench LIB GUID CLIB CGUID STEPS H         seconds per step of that loop, no recording
- *   host outputs LIB GUID STEPS H VR...                 any FMI 2.0 co-simulation FMU at its start values (e.g. a
- *                                                       system as one FMU): rows "t,the Reals of VR..." at each step
+ *   host outputs LIB GUID STEPS H [VR=VALUE]... VR...    any FMI 2.0 FMU (e.g. a system as one FMU): Real
+ *                                                       parameters set, then rows "t,the Reals of VR..." at
+ *                                                       t = k H after k steps
  *
- * Value references are those of the CranePlant and BacksteppingController tables, or given (CX CU) (checked
- * against modelDescription.xml by the tests).
+ * Value references are those of the CranePlant and BacksteppingController tables (checked against
+ * modelDescription.xml by the tests), or given on the command line.
  */
 #include <stdarg.h>
 #include <stdio.h>
@@ -227,6 +228,31 @@ static double pair(const Api *plant, const Api *law, fmi2ValueReference cx, fmi2
     return per_step;
 }
 
+/* Any FMU alone: the Real settings "VR=VALUE" of args, then rows "t,values" of the other args' VRs at each step. */
+static int outputs(const Api *api, int steps, double h, int n_args, char **args) {
+    enum { MAX_VR = 64 };
+    fmi2ValueReference set_vr[MAX_VR], get_vr[MAX_VR];
+    double set_v[MAX_VR], y[MAX_VR];
+    size_t n_set = 0, n_get = 0;
+    for (int i = 0; i < n_args; i++) {
+        const char *eq = strchr(args[i], '=');
+        if ((eq ? n_set : n_get) == MAX_VR) return 0;
+        if (eq) set_vr[n_set] = (fmi2ValueReference)strtoul(args[i], NULL, 10), set_v[n_set++] = strtod(eq + 1, NULL);
+        else get_vr[n_get++] = (fmi2ValueReference)strtoul(args[i], NULL, 10);
+    }
+    fmi2Component c = start(api, n_set, set_vr, set_v);
+    if (!c) return 0;
+    for (int k = 0; k <= steps; k++) {
+        if (api->get(c, get_vr, n_get, y) > fmi2Warning) return 0;
+        printf("%.17g", k * h);
+        for (size_t i = 0; i < n_get; i++) printf(",%.17g", y[i]);
+        putchar('\n');
+        if (k < steps && api->step(c, k * h, h, fmi2True) > fmi2Warning) return 0;
+    }
+    api->free_instance(c);
+    return 1;
+}
+
 int main(int argc, char **argv) {
     if (argc < 4) return 2;
     const char *command = argv[1];
@@ -240,24 +266,7 @@ int main(int argc, char **argv) {
         if (bench) printf("%.9g\n", per_step);
         return 0;
     }
-    if (!strcmp(command, "outputs") && argc > 6) {
-        int steps = atoi(argv[4]), n = argc - 6;
-        double h = atof(argv[5]), *y = calloc((size_t)n, sizeof *y);
-        fmi2ValueReference *vr = calloc((size_t)n, sizeof *vr);
-        if (!y || !vr) return 5;
-        for (int i = 0; i < n; i++) vr[i] = (fmi2ValueReference)strtoul(argv[6 + i], NULL, 10);
-        fmi2Component c = start(&api, 0, NULL, NULL);
-        if (!c) return 6;
-        for (int k = 0; k <= steps; k++) {
-            if (api.get(c, vr, (size_t)n, y) > fmi2Warning) return 6;
-            printf("%.17g", k * h);
-            for (int i = 0; i < n; i++) printf(",%.17g", y[i]);
-            putchar('\n');
-            if (k < steps && api.step(c, k * h, h, fmi2True) > fmi2Warning) return 6;
-        }
-        api.free_instance(c);
-        return 0;
-    }
+    if (!strcmp(command, "outputs") && argc >= 7) return outputs(&api, atoi(argv[4]), atof(argv[5]), argc - 6, argv + 6) ? 0 : 6;
     if (!strcmp(command, "run") && argc == 6) {
         int steps = atoi(argv[4]);
         double *rows = rows_for(steps);

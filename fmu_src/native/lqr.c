@@ -7,11 +7,11 @@
  * u follows the inputs of the same instant (direct feedthrough).
  */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "LqrController_variables.h"
 #include "model.h"
-#include "limits.h"
 #include "linalg.h"
 #include "py_repr.h"
 #include "model_values.h"
@@ -79,10 +79,6 @@ static const char *design(const double values[], double l1, double gains[N_STATE
     if (V(r) + bt_p_b == 0.0) return DIVISION_BY_ZERO;
     for (int j = 0; j < N_STATE; j++) gains[j] = bt_p_a.v[0][j] / (V(r) + bt_p_b);
     return NULL;
-}
-
-static ModelStatus rule(const Reporter *r, const char *name, const char *text, double value) {
-    return report(r, MODEL_ERROR, "%s must be %s, got %s", name, text, R(value));
 }
 
 /* lqr.configure(): the rules of parameters.plant_parameters, the weights, r, h, x_d, limits.check and the

@@ -11,14 +11,20 @@
 double crane_sin(double x);
 double crane_cos(double x);
 double crane_exp(double x);
+double crane_tanh(double x);
+double crane_log(double x);
 #define SIN crane_sin
 #define COS crane_cos
 #define EXP crane_exp
+#define TANH crane_tanh
+#define LOG crane_log
 #else
 #include <math.h>
 #define SIN sin
 #define COS cos
 #define EXP exp
+#define TANH tanh
+#define LOG log
 #endif
 
 #endif

@@ -1,15 +1,17 @@
 /*
- * Portable sin, cos and exp: the same double operations on every platform and compiler, for the
- * builds whose C library differs from glibc (mingw-w64's sin and cos are the x87 instructions)
- * and for builds from the FMU's sources. The method is fdlibm's (Sun Microsystems, 1993: "Permission
- * to use, copy, modify, and distribute this software is freely granted, provided that this notice
- * is preserved"): Cody-Waite reduction by pi/2 in three parts, then minimax polynomials on
- * [-pi/4, pi/4] with their coefficients; written anew here. Error below 1 ULP, so they agree with
- * glibc's (correctly rounded in almost every case) except in a rare last bit; the reduction is
- * exact enough for |x| < 2^20 pi/2 (angles far beyond any swing; larger ones lose digits).
+ * Portable sin, cos, exp, tanh and log: the same double operations on every platform and compiler, for
+ * the builds whose C library differs from glibc (mingw-w64's sin and cos are the x87 instructions) and
+ * for builds from the FMU's sources. The method is fdlibm's (Sun Microsystems, 1993: "Permission to use,
+ * copy, modify, and distribute this software is freely granted, provided that this notice is
+ * preserved"): for sin and cos Cody-Waite reduction by pi/2 in three parts, then minimax polynomials on
+ * [-pi/4, pi/4]; for exp, expm1 (under tanh) and log a reduction by ln2 or to [sqrt(2)/2, sqrt(2)], then
+ * their rational or polynomial forms; with fdlibm's coefficients, written anew here. Errors below 1 ULP
+ * (tanh: below 3 ULP of glibc's), so they agree with glibc's except in a rare last bit; the reduction of
+ * sin and cos is exact enough for |x| < 2^20 pi/2 (angles far beyond any swing; larger ones lose digits).
  * Compiled only with CRANE_OWN_MATH (see plant_math.h).
  */
 #ifdef CRANE_OWN_MATH
+#include <math.h> /* INFINITY only */
 #include <stdint.h>
 #include <string.h>
 
@@ -126,6 +128,106 @@ double crane_exp(double x) {
     double xx = x * x, c = x - xx * (P1 + xx * (P2 + xx * (P3 + xx * (P4 + xx * P5))));
     double y = 1.0 + (x * c / (2.0 - c) - lo + hi);
     return k == 0 ? y : times_power_of_two(y, k);
+}
+
+/* x with its high 32 bits replaced by `high` and its low ones kept. */
+static double with_high_word(double x, uint32_t high) {
+    return from_bits((bits(x) & 0xffffffffu) | (uint64_t)high << 32);
+}
+
+/* y 2^k by adding k to the exponent (y normal and the result too, as in expm1's reconstruction). */
+static double add_exponent(double y, int k) { return from_bits((uint64_t)((int64_t)bits(y) + ((int64_t)k << 52))); }
+
+/* exp(x) - 1, fdlibm's method: x = k ln2 + r with r's rounding error c, then a rational form in r. */
+static double expm1_(double x) {
+    static const double o_threshold = 7.09782712893383973096e+02, ln2_hi = 6.93147180369123816490e-01,
+                        ln2_lo = 1.90821492927058770002e-10, invln2 = 1.44269504088896338700e+00,
+                        Q1 = -3.33333333333331316428e-02, Q2 = 1.58730158725481460165e-03,
+                        Q3 = -7.93650757867487942473e-05, Q4 = 4.00821782732936239552e-06,
+                        Q5 = -2.01099218183624371326e-07;
+    uint32_t hx = (uint32_t)(bits(x) >> 32) & 0x7fffffffu;
+    int negative = x < 0, k = 0;
+    double hi, lo, c = 0.0;
+    if (hx >= 0x4043687Au) { /* |x| >= 56 ln2 */
+        if (x != x) return x;
+        if (hx >= 0x7ff00000u) return negative ? -1.0 : x;
+        if (x > o_threshold) return x * 8.98846567431158e307 * 8.98846567431158e307; /* overflow: inf */
+        if (negative) return -1.0;
+    }
+    if (hx > 0x3fd62e42u) { /* |x| > ln2 / 2 */
+        if (hx < 0x3FF0A2B2u) { /* |x| < 1.5 ln2 */
+            hi = negative ? x + ln2_hi : x - ln2_hi, lo = negative ? -ln2_lo : ln2_lo, k = negative ? -1 : 1;
+        } else {
+            k = (int)(invln2 * x + (negative ? -0.5 : 0.5));
+            double t = k;
+            hi = x - t * ln2_hi, lo = t * ln2_lo;
+        }
+        x = hi - lo, c = (hi - x) - lo;
+    } else if (hx < 0x3c900000u) { /* |x| < 2^-54 */
+        return x;
+    }
+    double hfx = 0.5 * x, hxs = x * hfx;
+    double r1 = 1.0 + hxs * (Q1 + hxs * (Q2 + hxs * (Q3 + hxs * (Q4 + hxs * Q5))));
+    double t = 3.0 - r1 * hfx, e = hxs * ((r1 - t) / (6.0 - x * t));
+    if (k == 0) return x - (x * e - hxs);
+    e = x * (e - c) - c;
+    e -= hxs;
+    if (k == -1) return 0.5 * (x - e) - 0.5;
+    if (k == 1) return x < -0.25 ? -2.0 * (e - (x + 0.5)) : 1.0 + 2.0 * (x - e);
+    if (k <= -2 || k > 56) return add_exponent(1.0 - (e - x), k) - 1.0;
+    if (k < 20) return add_exponent(with_high_word(1.0, 0x3ff00000u - (0x200000u >> k)) - (e - x), k); /* 1 - 2^-k */
+    return add_exponent(x - (e + with_high_word(1.0, (uint32_t)(0x3ff - k) << 20)) + 1.0, k);          /* 2^-k */
+}
+
+double crane_tanh(double x) {
+    uint32_t ix = (uint32_t)(bits(x) >> 32) & 0x7fffffffu;
+    double z;
+    if (ix >= 0x7ff00000u) return x != x ? x : x > 0 ? 1.0 : -1.0;
+    if (ix < 0x3c800000u) return x * (1.0 + x); /* |x| < 2^-55 */
+    double a = x < 0 ? -x : x;
+    if (ix >= 0x40360000u) z = 1.0; /* |x| >= 22 */
+    else if (ix >= 0x3ff00000u) z = 1.0 - 2.0 / (expm1_(2.0 * a) + 2.0); /* |x| >= 1 */
+    else {
+        double t = expm1_(-2.0 * a);
+        z = -t / (t + 2.0);
+    }
+    return x < 0 ? -z : z;
+}
+
+/* log(x), fdlibm's method: x = 2^k (1 + f) with sqrt(2)/2 < 1 + f < sqrt(2), s = f / (2 + f), a polynomial in s^2. */
+double crane_log(double x) {
+    static const double ln2_hi = 6.93147180369123816490e-01, ln2_lo = 1.90821492927058770002e-10,
+                        two54 = 1.80143985094819840000e+16, Lg1 = 6.666666666666735130e-01,
+                        Lg2 = 3.999999999940941908e-01, Lg3 = 2.857142874366239149e-01,
+                        Lg4 = 2.222219843214978396e-01, Lg5 = 1.818357216161805012e-01,
+                        Lg6 = 1.531383769920937332e-01, Lg7 = 1.479819860511658591e-01;
+    if (x != x || x == INFINITY) return x + x;
+    if (x < 0) return (x - x) / 0.0; /* nan */
+    if (x == 0) return -INFINITY;
+    int k = 0;
+    int32_t hx = (int32_t)(bits(x) >> 32);
+    if (hx < 0x00100000) { /* subnormal: scale up */
+        k -= 54, x *= two54;
+        hx = (int32_t)(bits(x) >> 32);
+    }
+    k += (hx >> 20) - 1023;
+    hx &= 0x000fffff;
+    int32_t i = (hx + 0x95f64) & 0x100000;
+    x = with_high_word(x, (uint32_t)(hx | (i ^ 0x3ff00000))); /* x or x / 2: within [sqrt(2)/2, sqrt(2)] */
+    k += i >> 20;
+    double f = x - 1.0, dk = k;
+    if ((0x000fffff & (2 + hx)) < 3) { /* |f| < 2^-20 */
+        if (f == 0) return k == 0 ? 0.0 : dk * ln2_hi + dk * ln2_lo;
+        double R = f * f * (0.5 - 0.33333333333333333 * f);
+        return k == 0 ? f - R : dk * ln2_hi - ((R - dk * ln2_lo) - f);
+    }
+    double s = f / (2.0 + f), z = s * s, w = z * z;
+    double t1 = w * (Lg2 + w * (Lg4 + w * Lg6)), t2 = z * (Lg1 + w * (Lg3 + w * (Lg5 + w * Lg7))), R = t2 + t1;
+    if (((hx - 0x6147a) | (0x6b851 - hx)) > 0) {
+        double hfsq = 0.5 * f * f;
+        return k == 0 ? f - (hfsq - s * (hfsq + R)) : dk * ln2_hi - ((hfsq - (s * (hfsq + R) + dk * ln2_lo)) - f);
+    }
+    return k == 0 ? f - s * (f - R) : dk * ln2_hi - ((s * (f - R) - dk * ln2_lo) - f);
 }
 #else
 typedef int portable_math_unused; /* an empty translation unit is not ISO C */

@@ -1,0 +1,106 @@
+/*
+ * The EnergyController component in C: the native twin of crane_fmu/model/energy.py (its variables,
+ * configure() rules and messages, control(): eqs (E2)-(E4) with limits.limited()) behind the model
+ * interface of model.h. Its variables come from EnergyController_variables.h, generated from
+ * energy.VARIABLES. No state: the output u follows the inputs of the same instant (direct feedthrough).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "EnergyController_variables.h"
+#include "model.h"
+#include "plant_math.h"
+#include "py_repr.h"
+#include "model_values.h"
+
+/* energy.Config */
+typedef struct {
+    double mu, m2, l1, l2, k_c, k_p, k_d, x_d, u_max, v_max, h;
+} Config;
+
+struct Model {
+    double values[N_VARIABLES]; /* parameters and inputs by value reference */
+    int initialised;
+    Config config; /* set when initialisation ends */
+};
+
+const char *const MODEL_NAME = MODEL_IDENTIFIER;
+const char *const MODEL_TOKEN = INSTANTIATION_TOKEN;
+const size_t MODEL_SIZE = sizeof(Model);
+const unsigned MODEL_N_VARIABLES = N_VARIABLES;
+const unsigned MODEL_N_STRINGS = 0;
+MODEL_WITHOUT_STRINGS
+
+#define V(name) (values[VR_##name])
+
+void model_defaults(Model *m) {
+    memset(m, 0, sizeof *m);
+    for (unsigned i = 0; i < N_VARIABLES; i++) m->values[i] = VARIABLE_TABLE[i].start;
+}
+
+/* The rules of energy.configure() in its order and words: the plant model, the gains and h, x_d, the limits. */
+static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
+    if (!(isfinite(V(m1)) && V(m1) > 0)) return rule(r, "m1", "> 0 and finite", V(m1));
+    if (!(isfinite(V(m2)) && V(m2) >= 0)) return rule(r, "m2", ">= 0 and finite", V(m2));
+    if (!(isfinite(V(l1)) && V(l1) > 0)) return rule(r, "l1", "> 0 and finite", V(l1));
+    if (!(isfinite(V(l2)) && V(l2) > 0)) return rule(r, "l2", "> 0 and finite", V(l2));
+    if (!(isfinite(V(g)) && V(g) > 0)) return rule(r, "g", "> 0 and finite", V(g));
+    static const unsigned positive[] = {VR_k_c, VR_k_p, VR_k_d, VR_h};
+    for (unsigned i = 0; i < 4; i++) {
+        double value = values[positive[i]];
+        if (!(isfinite(value) && value > 0)) return rule(r, VARIABLE_TABLE[positive[i]].name, "> 0 and finite", value);
+    }
+    if (!isfinite(V(x_d))) return rule(r, "x_d", "finite", V(x_d));
+    if (!(V(u_max) > 0)) return rule(r, "u_max", "> 0 (inf: no limit)", V(u_max));
+    if (!(V(v_max) > 0)) return rule(r, "v_max", "> 0 (inf: no limit)", V(v_max));
+    if (!isfinite(V(u_max))) return rule(r, "u_max", "finite for the saturated law (E4)", V(u_max));
+    *c = (Config){V(m1) + V(m2), V(m2), V(l1), V(l2), V(k_c), V(k_p), V(k_d), V(x_d), V(u_max), V(v_max), V(h)};
+    return MODEL_OK;
+}
+
+/* energy.control(): eq (E4) with the speed guard, the same arithmetic in the same order. */
+static double control(const Config *c, const double s[6]) {
+    double x = s[0], v = s[1], theta1 = s[2], dtheta1 = s[3], theta2 = s[4], dtheta2 = s[5];
+    double xi = (c->mu * c->l1 * SIN(theta1) + c->m2 * c->l2 * SIN(theta2)) / c->mu; /* (E2) / mu */
+    double dxi = (c->mu * c->l1 * COS(theta1) * dtheta1 + c->m2 * c->l2 * COS(theta2) * dtheta2) / c->mu;
+    double chi = x - c->x_d - xi / c->k_c, sv = c->k_c * v - dxi; /* (E3) */
+    double a = 0.5 * c->u_max;
+    double u = -a * TANH(c->k_p * chi / a) - a * TANH(c->k_d * sv / a); /* (E4) */
+    return limited(u, v, c->u_max, c->v_max, c->h);
+}
+
+ModelStatus model_initialize(Model *m, const Reporter *r) {
+    ModelStatus status = setup(m->values, &m->config, r);
+    if (status != MODEL_OK) return status;
+    m->initialised = 1;
+    return MODEL_OK;
+}
+
+ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed,
+                            const Reporter *r) {
+    return set_real_values(m->values, vr, n, values, fixed_allowed, r);
+}
+
+ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r) {
+    for (size_t i = 0; i < n; i++) {
+        if (vr[i] >= N_VARIABLES) return no_variable(r, vr[i]);
+        if (VARIABLE_TABLE[vr[i]].causality != OUTPUT) {
+            values[i] = m->values[vr[i]];
+            continue;
+        }
+        Config c = m->config;
+        if (!m->initialised && setup(m->values, &c, r) != MODEL_OK) return MODEL_ERROR; /* follows the parameters */
+        if (0.5 * c.u_max == 0) return ZERO_DIVISION(r); /* u_max below 1e-323: (E4) divides by a = 0 */
+        values[i] = control(&c, &m->values[VR_x]);
+    }
+    return MODEL_OK;
+}
+
+ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
+    (void)m, (void)time;
+    if (!(step > 0 && isfinite(step)))
+        return report(r, MODEL_ERROR, "communication step must be > 0 and finite, got %s",
+                      py_repr(step, (char[REPR_SIZE]){0}));
+    return MODEL_OK;
+}

@@ -1,0 +1,139 @@
+/*
+ * The Sensor component in C: the native twin of Sensor in crane_fmu/model/disturbances.py (its
+ * variables, _sensor_configure() rules and messages, noise() on splitmix64 with Box-Muller, measure()
+ * and the one-step delay) behind the model interface of model.h. Its variables come from
+ * Sensor_variables.h, generated from disturbances.SENSOR. Its state is (k, held): the sample count and
+ * the last sample, none at first.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "Sensor_variables.h"
+#include "model.h"
+#include "plant_math.h"
+#include "py_repr.h"
+#include "model_values.h"
+
+#define PI 3.141592653589793 /* math.pi */
+#define TWO_53 9007199254740992.0
+
+/* disturbances.SensorConfig */
+typedef struct {
+    double sigmas[N_OUTPUTS];
+    uint64_t seed;
+    int delay;
+} Config;
+
+struct Model {
+    double values[N_VARIABLES]; /* parameters and inputs by value reference */
+    int initialised;
+    Config config;             /* set when initialisation ends */
+    uint64_t k;                /* the state: samples taken, */
+    int have_held;             /* whether there is one, */
+    double held[N_OUTPUTS];    /* and the last */
+};
+
+const char *const MODEL_NAME = MODEL_IDENTIFIER;
+const char *const MODEL_TOKEN = INSTANTIATION_TOKEN;
+const size_t MODEL_SIZE = sizeof(Model);
+const unsigned MODEL_N_VARIABLES = N_VARIABLES;
+const unsigned MODEL_N_STRINGS = 0;
+MODEL_WITHOUT_STRINGS
+
+#define V(name) (values[VR_##name])
+
+void model_defaults(Model *m) {
+    memset(m, 0, sizeof *m);
+    for (unsigned i = 0; i < N_VARIABLES; i++) m->values[i] = VARIABLE_TABLE[i].start;
+}
+
+/* The rules of _sensor_configure() in its order and words. */
+static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
+    static const unsigned sigmas[] = {VR_sigma_x, VR_sigma_dx, VR_sigma_theta, VR_sigma_dtheta};
+    for (unsigned i = 0; i < 4; i++) {
+        double value = values[sigmas[i]];
+        if (!(value >= 0 && isfinite(value))) return rule(r, VARIABLE_TABLE[sigmas[i]].name, ">= 0 and finite", value);
+    }
+    double seed = V(seed);
+    if (!(isfinite(seed) && seed == trunc(seed) && 0 <= seed && seed < 4294967296.0))
+        return rule(r, "seed", "a whole number in [0, 2^32)", seed);
+    if (!(V(delay) == 0.0 || V(delay) == 1.0)) return rule(r, "delay", "0 or 1 (communication steps)", V(delay));
+    double s[6] = {V(sigma_x), V(sigma_dx), V(sigma_theta), V(sigma_dtheta), V(sigma_theta), V(sigma_dtheta)};
+    memcpy(c->sigmas, s, sizeof s);
+    c->seed = (uint64_t)seed, c->delay = V(delay) == 1.0;
+    return MODEL_OK;
+}
+
+/* disturbances._mix(): splitmix64 (Python's & 0xFFFFFFFFFFFFFFFF is C's unsigned wrap-around). */
+static uint64_t mix(uint64_t z) {
+    z += 0x9E3779B97F4A7C15u;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9u;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBu;
+    return z ^ (z >> 31);
+}
+
+/* disturbances.noise(): a standard normal sample of (seed, k, channel), Box-Muller on splitmix64. */
+static double noise(uint64_t seed, uint64_t k, uint64_t channel) {
+    uint64_t a = mix((seed << 40) ^ (k << 4) ^ channel), b = mix(a); /* _mix keeps the low 64 bits alike */
+    double u1 = ((double)(a >> 11) + 0.5) / TWO_53, u2 = (double)(b >> 11) / TWO_53;
+    return sqrt(-2.0 * LOG(u1)) * COS(2.0 * PI * u2);
+}
+
+/* disturbances.measure(): the true state plus independent normal noise at sample k. */
+static void measure(const Config *c, uint64_t k, const double state[N_OUTPUTS], double out[N_OUTPUTS]) {
+    for (unsigned i = 0; i < N_OUTPUTS; i++)
+        out[i] = c->sigmas[i] != 0 ? state[i] + c->sigmas[i] * noise(c->seed, k, i) : state[i];
+}
+
+ModelStatus model_initialize(Model *m, const Reporter *r) {
+    ModelStatus status = setup(m->values, &m->config, r);
+    if (status != MODEL_OK) return status;
+    m->k = 0, m->have_held = 0; /* initial_state(): (0, None) */
+    m->initialised = 1;
+    return MODEL_OK;
+}
+
+ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed,
+                            const Reporter *r) {
+    return set_real_values(m->values, vr, n, values, fixed_allowed, r);
+}
+
+/* _sensor_output(): the held sample when delayed, else (and at first) a sample of the inputs now. */
+static void outputs(const Model *m, const Config *c, double out[N_OUTPUTS]) {
+    if (!c->delay || !m->have_held) measure(c, m->k, &m->values[VR_x], out);
+    else memcpy(out, m->held, sizeof m->held);
+}
+
+ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r) {
+    double out[N_OUTPUTS];
+    int have_outputs = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (vr[i] >= N_VARIABLES) return no_variable(r, vr[i]);
+        if (VARIABLE_TABLE[vr[i]].causality != OUTPUT) {
+            values[i] = m->values[vr[i]];
+            continue;
+        }
+        if (!have_outputs && m->initialised) {
+            outputs(m, &m->config, out);
+        } else if (!have_outputs) { /* before initialisation ends the outputs follow the parameters, at k = 0 */
+            Config c;
+            if (setup(m->values, &c, r) != MODEL_OK) return MODEL_ERROR;
+            measure(&c, 0, &m->values[VR_x], out);
+        }
+        have_outputs = 1;
+        values[i] = out[vr[i] - FIRST_OUTPUT];
+    }
+    return MODEL_OK;
+}
+
+ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
+    (void)time;
+    if (!(step > 0 && isfinite(step)))
+        return report(r, MODEL_ERROR, "communication step must be > 0 and finite, got %s",
+                      py_repr(step, (char[REPR_SIZE]){0}));
+    measure(&m->config, m->k, &m->values[VR_x], m->held); /* _sensor_update(): (k + 1, measure(k)) */
+    m->k++, m->have_held = 1;
+    return MODEL_OK;
+}

@@ -1,0 +1,648 @@
+"""The native (C) TrajectoryPlanner, EnergyController, Gust and Sensor FMUs against their specification.
+
+Built by the session's ``fmu_dir`` fixture into ``build/native`` beside the Python FMUs. The Python
+models (crane_fmu/model/planner.py, energy.py, disturbances.py) are the specification: on Linux
+(glibc's libm in both, the same operations in the same order) the native outputs are the Python ones
+bit for bit.
+"""
+
+import ctypes
+import os
+import random
+import shutil
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import fmpy
+import numpy as np
+import pytest
+from fmpy import read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+)
+from fmpy.fmi3 import FMU3Slave
+from fmpy.logging import addLoggerProxy
+from fmpy.validation import validate_fmu
+
+from crane_fmu import components, systems
+from crane_fmu.analysis.scoreboard import Contender, systems_for
+from crane_fmu.build_scripts.build_fmus import fmi3_dir
+from crane_fmu.build_scripts.native import MINGW, NATIVE, native_dir, variables_header
+from crane_fmu.build_scripts.wrapper import fmi_headers
+from crane_fmu.cosim import System, run
+
+PLANNER, ENERGY = components.get("TrajectoryPlanner"), components.get("EnergyController")
+GUST, SENSOR = components.get("Gust"), components.get("Sensor")
+NAMES = ("TrajectoryPlanner", "EnergyController", "Gust", "Sensor")
+SHAPERS = ("zv", "zvd", "ei", "none")
+LINUX = sys.platform.startswith("linux")  # glibc's libm in both models: the same bits
+_LIBC = ctypes.CDLL(None)
+_LIBC.calloc.restype, _LIBC.calloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t, ctypes.c_size_t]
+_LIBC.free.argtypes = [ctypes.c_void_p]
+INF, NAN = float("inf"), float("nan")
+CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # no venv, no pyenv: nothing of Python
+
+
+@pytest.fixture(scope="module")
+def native(fmu_dir):
+    folders = {2: native_dir(fmu_dir, 2), 3: native_dir(fmu_dir, 3)}
+    if not (folders[2] / "TrajectoryPlanner.fmu").exists():
+        pytest.skip("no C compiler: no native FMUs were built")
+    for name in NAMES:  # native FMUs, not the Python ones copied
+        with open(folders[2] / f"{name}.fmu", "rb") as f:
+            assert f"binaries/linux64/{name}.so".encode() in f.read()
+    return folders
+
+
+def _python_folder(fmu_dir, version):
+    return fmu_dir if version == 2 else fmi3_dir(fmu_dir)
+
+
+def _open(path, version, parameters=None):
+    """An instance in initialisation mode with ``parameters`` set (a str as a String): ``(fmu, vr, get)``."""
+    md = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    name, unzipped = md.coSimulation.modelIdentifier, fmpy.extract(str(path))
+    if version == 2:
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=name, instanceName="c")
+        fmu.instantiate()
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        set_, get = fmu.setReal, fmu.getReal
+    else:
+        fmu = FMU3Slave(guid=md.instantiationToken, unzipDirectory=unzipped, modelIdentifier=name, instanceName="c")
+        fmu.instantiate()
+        fmu.enterInitializationMode(startTime=0.0)
+        set_, get = fmu.setFloat64, fmu.getFloat64
+    for key, value in (parameters or {}).items():
+        fmu.setString([vr[key]], [value]) if isinstance(value, str) else set_([vr[key]], [value])
+    return fmu, vr, set_, get
+
+
+def _close(fmu):
+    fmu.terminate()
+    fmu.freeInstance()
+
+
+def _compare(ours, theirs):
+    """Worst relative deviation (scale at least 1); on Linux also bit equality."""
+    ours, theirs = np.array(ours), np.array(theirs)
+    assert ours.shape == theirs.shape and np.all(np.isfinite(theirs))
+    worst = float(np.max(np.abs(ours - theirs) / np.maximum(np.abs(theirs), 1.0)))
+    assert worst <= 1e-12
+    if LINUX:  # bit for bit, the signs of zeros too
+        assert np.array_equal(ours.view(np.int64), theirs.view(np.int64))
+    return worst
+
+
+# ---- one source: the Python FMU's variables; strict C --------------------------------------------------------------
+
+def _variables(path):
+    md = read_model_description(str(path))
+    return [(v.name, v.valueReference, v.causality, v.variability, v.initial, v.start, v.unit, v.displayUnit,
+             v.description) for v in md.modelVariables], md
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("name", NAMES)
+def test_native_model_description_has_the_python_fmus_variables(fmu_dir, native, name, version):
+    """Names, value references, causalities, start values, units, descriptions, outputs, default experiment."""
+    ours, md = _variables(native[version] / f"{name}.fmu")
+    theirs, py_md = _variables(_python_folder(fmu_dir, version) / f"{name}.fmu")
+    assert ours == theirs
+    assert md.coSimulation.modelIdentifier == py_md.coSimulation.modelIdentifier == name
+    assert (md.defaultExperiment.stopTime, md.defaultExperiment.stepSize) == \
+        (py_md.defaultExperiment.stopTime, py_md.defaultExperiment.stepSize)
+    assert [u.variable.name for u in md.outputs] == [u.variable.name for u in py_md.outputs]
+    assert validate_fmu(str(native[version] / f"{name}.fmu")) == []
+    with zipfile.ZipFile(native[version] / f"{name}.fmu") as z:
+        header = z.read(f"sources/{name}_variables.h").decode()
+    assert all(f"VR_{v.name} = {vr}," in header for vr, v in enumerate(components.get(name).variables))
+
+
+STRICT = ["-c", "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Wno-unused-parameter", "-Werror"]
+
+
+@pytest.mark.parametrize("own_math", [False, True], ids=["libm", "portable"])
+def test_the_model_files_compile_without_warnings_under_strict_flags(tmp_path, own_math):
+    """ISO C99, -Wall -Wextra -Werror (less unused parameters), with the C library's math and the portable one."""
+    flags = [*STRICT, "-DCRANE_OWN_MATH"] if own_math else STRICT
+    for name in NAMES:
+        (tmp_path / f"{name}_variables.h").write_text(variables_header(components.get(name)))
+    for source in ("planner.c", "energy.c", "gust.c", "sensor.c", "portable_math.c"):
+        subprocess.run([_compiler(), *flags, f"-I{tmp_path}", f"-I{NATIVE}", str(NATIVE / source), "-o",
+                        str(tmp_path / "m.o")], check=True)
+
+
+# ---- TrajectoryPlanner: outputs at random parameters and times ---------------------------------------------------
+
+def _planner_parameters(rng, i):
+    m2 = rng.choice([0.0, rng.uniform(0.1, 20)])
+    l1 = rng.uniform(0.2, 5)
+    l2 = rng.uniform(0.1, 3)
+    if m2 == 0:  # the linear model's modes coincide (a Python ZeroDivisionError) at l1 = l2: keep them apart
+        l2 = l1 * rng.uniform(0.2, 0.8)
+    return {"m1": rng.uniform(0.5, 20), "m2": m2, "l1": l1, "l2": l2, "g": rng.uniform(1, 25),
+            "x0": rng.uniform(-3, 3), "x_d": rng.choice([rng.uniform(-3, 3), 0.0]), "t0": rng.uniform(-1, 2),
+            "u_max": rng.uniform(0.1, 3), "v_max": rng.uniform(0.1, 2), "shaper": SHAPERS[i % 4]}
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_planner_outputs_equal_the_python_model_at_random_parameters_and_times(native, version):
+    """80 parameter sets (every shaper, m2 = 0, no move) x 40 steps of random length: 22400 outputs."""
+    rng = random.Random(2027)
+    outputs = PLANNER.names("output")
+    ours, theirs = [], []
+    for i in range(80):
+        parameters = _planner_parameters(rng, i)
+        if i % 10 == 9:
+            parameters["x_d"] = parameters["x0"]  # no move: x_ref stays at x0
+        fmu, vr, _, get = _open(native[version] / "TrajectoryPlanner.fmu", version, parameters)
+        config = PLANNER.check(parameters)
+        ours.append(get([vr[n] for n in outputs]))  # before initialisation ends: the outputs at time 0
+        theirs.append(PLANNER.output(config, (0.0,), ()))
+        fmu.exitInitializationMode()
+        t = 0.0
+        for _ in range(40):
+            h = rng.choice([1e-3, rng.uniform(1e-3, 0.6)])
+            fmu.doStep(t, h)
+            ours.append(get([vr[n] for n in outputs]))
+            theirs.append(PLANNER.output(config, (t + h,), ()))
+            t += h
+        _close(fmu)
+    _compare(ours, theirs)
+    theirs = np.array(theirs)
+    assert np.count_nonzero(theirs[:, 3]) > 1000 and np.count_nonzero(theirs[:, 2]) > 500  # moves and swing
+
+
+def test_the_shaper_string_is_read_back_and_changes_the_plan(native):
+    fmu, vr, set_, get = _open(native[2] / "TrajectoryPlanner.fmu", 2, {"x_d": 2.0})
+    assert fmu.getString([vr["shaper"]]) == [b"zv"]
+    fmu.setString([vr["shaper"]], ["ei"])
+    assert fmu.getString([vr["shaper"]]) == [b"ei"]
+    fmu.exitInitializationMode()
+    fmu.doStep(0.0, 1.0)
+    ei, zv = (PLANNER.output(PLANNER.check({"x_d": 2.0, "shaper": k}), (1.0,), ()) for k in ("ei", "zv"))
+    assert get([vr["x_ref"], vr["theta1_ref"]]) == [ei[0], ei[3]] and ei[0] != zv[0]
+    with pytest.raises(FMICallException):  # a fixed parameter once initialisation has ended
+        fmu.setString([vr["shaper"]], ["zv"])
+    fmu.freeInstance()
+
+
+# ---- EnergyController: outputs at random inputs and parameters ---------------------------------------------------
+
+def _energy_parameters(rng, i):
+    return {"m1": rng.uniform(0.5, 20), "m2": rng.choice([0.0, rng.uniform(0.1, 20)]), "l1": rng.uniform(0.2, 5),
+            "l2": rng.uniform(0.1, 3), "g": rng.uniform(1, 25), "k_c": rng.uniform(0.01, 2),
+            "k_p": rng.uniform(0.01, 5), "k_d": rng.uniform(0.1, 20), "x_d": rng.uniform(-5, 5),
+            "h": rng.uniform(1e-4, 0.05), "u_max": rng.uniform(0.05, 3), "v_max": (INF, rng.uniform(0.05, 2))[i % 2]}
+
+
+def _random_state(rng):
+    return [rng.uniform(-5, 5), rng.uniform(-3, 3), rng.uniform(-1.5, 1.5), rng.uniform(-5, 5),
+            rng.uniform(-1.5, 1.5), rng.uniform(-5, 5)]
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_energy_output_equals_the_python_model_at_random_inputs_and_parameters(native, version):
+    """2000 points: 40 parameter sets (finite and infinite v_max) x 50 inputs; near zero too, where tanh is linear."""
+    rng = random.Random(2028)
+    inputs = ENERGY.names("input")
+    ours, theirs, limited = [], [], 0
+    for i in range(40):
+        parameters = _energy_parameters(rng, i)
+        fmu, vr, set_, get = _open(native[version] / "EnergyController.fmu", version, parameters)
+        config = ENERGY.check(parameters)
+        for j in range(50):
+            state = _random_state(rng)
+            if j % 5 == 0:
+                state = [v * 1e-6 for v in state]
+                state[0] += parameters["x_d"]
+            set_([vr[n] for n in inputs], state)
+            ours.append(get([vr["u"]])[0])
+            theirs.append(ENERGY.output(config, None, tuple(state))[0])
+            limited += theirs[-1] != ENERGY.output(config._replace(v_max=INF), None, tuple(state))[0]
+            if j == 0:
+                fmu.exitInitializationMode()
+        _close(fmu)
+    _compare(ours, theirs)
+    assert limited > 100  # the speed guard acts on many points
+
+
+# ---- Gust and Sensor: outputs over random steps, against the Python component's output and update --------------
+
+def _gust_parameters(rng, i):
+    return {"F1_peak": rng.uniform(-50, 50), "F2_peak": rng.choice([0.0, rng.uniform(-50, 50)]),
+            "start": rng.uniform(-1, 3), "duration": rng.uniform(0.01, 3)}
+
+
+def _sensor_parameters(rng, i):
+    sigmas = [rng.choice([0.0, rng.uniform(0, 0.5), rng.uniform(0, 1e-3)]) for _ in range(4)]
+    return {**dict(zip(("sigma_x", "sigma_dx", "sigma_theta", "sigma_dtheta"), sigmas)),
+            "seed": float(rng.choice([0, 1, 2 ** 32 - 1, rng.randrange(2 ** 32)])), "delay": float(i % 2)}
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("component,random_parameters", [(GUST, _gust_parameters), (SENSOR, _sensor_parameters)],
+                         ids=["Gust", "Sensor"])
+def test_disturbance_outputs_equal_the_python_model_over_random_steps(native, version, component, random_parameters):
+    """30 parameter sets x 100 steps of random length (Gust: its pulse; Sensor: noise, seed, both delays)."""
+    rng = random.Random(2029)
+    name, inputs, outputs = component.model_identifier, component.names("input"), component.names("output")
+    ours, theirs = [], []
+    for i in range(30):
+        parameters = random_parameters(rng, i)
+        fmu, vr, set_, get = _open(native[version] / f"{name}.fmu", version, parameters)
+        config = component.check(parameters)
+        state, t = component.initial_state(config), 0.0
+        for j in range(100):
+            values = _random_state(rng)[:len(inputs)]
+            if inputs:
+                set_([vr[n] for n in inputs], values)
+            ours.append(get([vr[n] for n in outputs]))
+            theirs.append(component.output(config, state, tuple(values[:len(inputs)])))
+            if j == 0:
+                fmu.exitInitializationMode()
+            h = rng.choice([1e-3, rng.uniform(1e-3, 0.2)])
+            fmu.doStep(t, h)
+            state, t = component.update(config, state, tuple(values[:len(inputs)]), t, h), t + h
+        _close(fmu)
+    _compare(ours, theirs)
+    assert np.count_nonzero(np.array(theirs)) > 1000
+
+
+# ---- refusals: the Python FMU's rules and messages ----------------------------------------------------------------
+
+def _messages(path, settings, steps=(), read=()):
+    """``(statuses, log)`` of an FMI 2.0 run with ``settings`` (a str is set as a String), a get of ``read`` (names)
+    before and after initialisation ends, then ``steps``."""
+    md = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    log = []
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, category, message: log.append(message.decode()))
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_LIBC.calloc)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_LIBC.free)
+    addLoggerProxy(ctypes.byref(callbacks))
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=fmpy.extract(str(path)),
+                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="c")
+    fmu.instantiate(callbacks=callbacks)
+
+    def setter(name, value):
+        if isinstance(value, str):
+            return lambda: fmu.setString([vr[name]], [value])
+        return lambda: fmu.setReal([vr[name]], [value])
+
+    calls = [("setup", lambda: fmu.setupExperiment(startTime=0.0)), ("enter", fmu.enterInitializationMode)]
+    calls += [(f"set {name}", setter(name, value)) for name, value in settings.items()]
+    get = ("get", lambda: fmu.getReal([vr[name] for name in read]))
+    calls += [get, ("exit", fmu.exitInitializationMode), get] if read else [("exit", fmu.exitInitializationMode)]
+    for t, h in steps:
+        calls.append((f"step {t}", lambda t=t, h=h: fmu.doStep(t, h)))
+    statuses = []
+    try:
+        for name, call in calls:
+            try:
+                call()
+            except FMICallException as exc:
+                statuses.append(f"{name}: {exc.status}")
+                break
+        statuses.append("end")
+    finally:
+        fmu.freeInstance()
+    return statuses, log
+
+
+REFUSED = {
+    "TrajectoryPlanner": [{"m1": -1.0}, {"m2": NAN}, {"l1": 0.0}, {"l2": INF}, {"g": -INF}, {"u_max": 0.0},
+                          {"v_max": NAN}, {"u_max": INF}, {"v_max": INF}, {"shaper": "ZV"}, {"shaper": ""},
+                          {"shaper": "it's"}, {"x0": NAN}, {"x_d": INF}, {"t0": -INF},
+                          {"u_max": -1.0, "shaper": "zz", "x0": NAN},
+                          {"m2": 0.0, "l1": 1.0, "l2": 1.0},  # modes coincide: Python's ZeroDivisionError
+                          {"m2": 0.0, "l1": 1.0, "l2": 1.0 + 1e-15}],  # sqrt of a rounded negative: its ValueError
+    "EnergyController": [{"m1": 0.0}, {"m2": -0.5}, {"l1": NAN}, {"g": INF}, {"k_c": 0.0}, {"k_p": -1.0},
+                         {"k_d": INF}, {"h": NAN}, {"x_d": -INF}, {"u_max": 0.0}, {"v_max": -1.0}, {"u_max": INF},
+                         {"k_c": -1.0, "u_max": INF}],
+    "Gust": [{"F1_peak": NAN}, {"F2_peak": INF}, {"start": -INF}, {"duration": 0.0}, {"duration": -1.0},
+             {"duration": INF}],
+    "Sensor": [{"sigma_x": -1e-3}, {"sigma_dx": NAN}, {"sigma_theta": INF}, {"sigma_dtheta": -0.5},
+               {"seed": -1.0}, {"seed": 1.5}, {"seed": 2.0 ** 32}, {"seed": NAN}, {"seed": INF}, {"delay": 2.0},
+               {"delay": 0.5}, {"delay": NAN}],
+}
+CASES = [(name, settings) for name, cases in REFUSED.items() for settings in cases]
+
+
+@pytest.mark.parametrize("name,settings", CASES, ids=lambda c: c if isinstance(c, str) else ",".join(
+    f"{k}={v!r}" for k, v in c.items()))
+def test_every_parameter_refusal_has_the_python_fmus_rule_and_message(fmu_dir, native, name, settings):
+    ours = _messages(native[2] / f"{name}.fmu", settings)
+    theirs = _messages(fmu_dir / f"{name}.fmu", settings)
+    assert ours == theirs
+    assert ours[0][-2] == "exit: 3" and ours[1][-1].startswith("fmi2ExitInitializationMode: ")
+
+
+@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("step", [NAN, -1e-3, 0.0, INF])
+def test_an_unusable_step_is_the_python_fmus_error(fmu_dir, native, name, step):
+    ours = _messages(native[2] / f"{name}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
+    theirs = _messages(fmu_dir / f"{name}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
+    assert ours == theirs
+    assert ours[0][-2] == "step 0.001: 3"
+
+
+def test_an_output_python_cannot_compute_is_the_python_fmus_error(fmu_dir, native):
+    """u_max = 5e-324 passes the rules, but (E4) then divides by a = u_max / 2 = 0: Python's ZeroDivisionError."""
+    ours = _messages(native[2] / "EnergyController.fmu", {"u_max": 5e-324}, read=["u"])
+    theirs = _messages(fmu_dir / "EnergyController.fmu", {"u_max": 5e-324}, read=["u"])
+    assert ours == theirs == (["get: 3", "end"], ["fmi2GetReal: ZeroDivisionError: float division by zero"])
+
+
+# ---- FMU state ----------------------------------------------------------------------------------------------------
+
+STATEFUL = {  # component: parameters, and whether its outputs take inputs (the Sensor's)
+    "TrajectoryPlanner": {"x_d": 2.0, "shaper": "zvd"},
+    "Gust": {"start": 1.6, "duration": 0.8},
+    "Sensor": {"seed": 7.0, "delay": 1.0},
+}
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("name", STATEFUL)
+def test_fmu_state_saved_serialised_and_restored_repeats_the_steps_exactly(native, name, version):
+    """The planner's and the gust's state is their time, the sensor's its sample count and held sample."""
+    fmu, vr, set_, get = _open(native[version] / f"{name}.fmu", version, STATEFUL[name])
+    fmu.exitInitializationMode()
+    component = components.get(name)
+    outputs, inputs = [vr[n] for n in component.names("output")], [vr[n] for n in component.names("input")]
+
+    def steps(k0, n):
+        rows = []
+        for k in range(k0, k0 + n):
+            if inputs:
+                set_(inputs, [np.sin(k * 0.01 + i) for i in range(len(inputs))])
+            fmu.doStep(k * 1e-2, 1e-2)
+            rows.append(get(outputs))
+        return rows
+
+    steps(0, 150)
+    state = fmu.getFMUState() if version == 3 else fmu.getFMUstate()
+    serialized = fmu.serializeFMUState(state) if version == 3 else fmu.serializeFMUstate(state)
+    first = steps(150, 100)
+    fmu.setFMUState(state) if version == 3 else fmu.setFMUstate(state)
+    again = steps(150, 100)
+    restored = fmu.deserializeFMUState(serialized) if version == 3 else fmu.deSerializeFMUstate(serialized)
+    fmu.setFMUState(restored) if version == 3 else fmu.setFMUstate(restored)
+    third = steps(150, 100)
+    _close(fmu)
+    assert first == again == third
+    assert len({round(r[-1], 6) for r in first}) > 30  # the outputs move over those steps
+
+
+# ---- closed loops and whole runs: native against Python FMUs, through our master ---------------------------------
+
+def _is_native(path):
+    """Whether an FMU is one of the native ones (a generated variable header among its sources)."""
+    with zipfile.ZipFile(path) as z:
+        return any(n.startswith("sources/") and n.endswith("_variables.h") for n in z.namelist())
+
+
+def _runs_agree(system, native_folder, python_folder, exact=LINUX):
+    """Every recorded output of both runs within 1e-9 over the whole run (``exact``: equal); the recorded run."""
+    ours, theirs = run(system, native_folder).columns(), run(system, python_folder).columns()
+    assert list(ours) == list(theirs)
+    assert len(ours["time"]) == len(theirs["time"]) == round(system.stop_time / system.step) + 1
+    worst = max(float(np.max(np.abs(ours[k] - theirs[k]))) for k in theirs)
+    assert worst <= 1e-9
+    if exact:
+        assert worst == 0.0
+    return theirs
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_the_energy_system_on_native_fmus_equals_the_python_fmus(fmu_dir, native, version):
+    """20 s at 1 ms: the native plant and EnergyController against both Python FMUs."""
+    theirs = _runs_agree(systems.get("energy"), native[version], _python_folder(fmu_dir, version))
+    assert np.max(np.abs(theirs["controller.u"])) > 0.1  # the controller does act
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("system", ["transport", "hoist-transport"])
+def test_the_transport_systems_with_the_native_planner_equal_the_python_fmus(fmu_dir, native, version, system):
+    """10 s of the ZV move, 12 s of the ZVD move with a second planner as the hoist, both at 1 ms and tracked by the
+    LQR (Python or native, whichever build/native holds; bit for bit on Linux with the Python LQR)."""
+    lqr_native = _is_native(native[version] / "LqrController.fmu")  # its design may differ in a last bit
+    theirs = _runs_agree(systems.get(system), native[version], _python_folder(fmu_dir, version),
+                         exact=LINUX and not lqr_native)
+    assert abs(theirs["planner.x_ref"][-1] - 2.0) < 1e-12 and np.max(np.abs(theirs["planner.theta1_ref"])) > 1e-3
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("shaper", SHAPERS)
+def test_the_planner_alone_over_its_run_equals_the_python_fmu(fmu_dir, native, version, shaper):
+    """A 3 m move back (x0 = 1, x_d = -2) from t0 = 0.25 s, 15 s at 1 ms, each shaper."""
+    system = System(f"planner-{shaper}", {"planner": "TrajectoryPlanner"},
+                    parameters={"planner": {"x0": 1.0, "x_d": -2.0, "t0": 0.25, "shaper": shaper}}, stop_time=15.0)
+    theirs = _runs_agree(system, native[version], _python_folder(fmu_dir, version))
+    assert theirs["planner.x_ref"][-1] == -2.0 and np.min(theirs["planner.dx_ref"]) < -0.5
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("scenario", ["S4", "S5"])
+def test_the_scoreboards_gust_and_sensor_cases_on_native_fmus_equal_the_python_fmus(fmu_dir, native, version,
+                                                                                     scenario):
+    """The EnergyController's S4 (a gust on the payload) and S5 (noisy, one step late) runs: all native vs Python."""
+    contender = Contender("EnergyController", "EnergyController", ENERGY.names("input"), ENERGY.names("parameter"))
+    (_, system, step, stop_time, _), = systems_for(contender, scenario)
+    assert (step, stop_time) == (system.step, system.stop_time)
+    theirs = _runs_agree(system, native[version], _python_folder(fmu_dir, version))
+    if scenario == "S4":
+        assert np.max(theirs["gust.F2"]) == pytest.approx(10.0, rel=1e-5)
+    else:
+        assert np.max(np.abs(theirs["sensor.x_m"] - theirs["plant.x"])) > 1e-4
+
+
+# ---- the portable math of the Windows build, and a C host with no Python, on Linux and under Wine ---------------
+
+MATH_HARNESS = r"""
+#include <math.h>
+#include <stdio.h>
+double crane_tanh(double), crane_log(double);
+int main(void) {
+    double x;
+    while (scanf("%lf", &x) == 1) printf("%.17g %.17g %.17g %.17g\n", crane_tanh(x), tanh(x), crane_log(fabs(x)),
+                                         log(fabs(x)));
+    return 0;
+}
+"""
+
+
+def _compiler():
+    compiler = shutil.which("cc") or shutil.which("gcc")
+    if compiler is None:
+        pytest.skip("no C compiler")
+    return compiler
+
+
+def test_the_portable_tanh_and_log_agree_with_glibcs(tmp_path):
+    """The EnergyController's tanh and the Sensor's log in the Windows build: within 3 (tanh) and 1 (log) ULP of
+    glibc's at 200000 random points, equal at most (fdlibm's methods; glibc's log is nearly correctly rounded)."""
+    (tmp_path / "harness.c").write_text(MATH_HARNESS)
+    subprocess.run([_compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", f"-I{NATIVE}",
+                    str(tmp_path / "harness.c"), str(NATIVE / "portable_math.c"), "-o", str(tmp_path / "h"), "-lm"],
+                   check=True)
+    rng = random.Random(31)
+    xs = [rng.uniform(-1, 1) * 10 ** rng.uniform(-20, 1.7) for _ in range(100_000)]
+    xs += [((rng.getrandbits(53) >> 11) + 0.5) / 2 ** 53 for _ in range(100_000)]  # the Sensor's u1
+    xs += [5e-324, 1e-310, 0.5, 1.0, 2.0, 22.0, -22.0, 1e300]
+    out = subprocess.run([str(tmp_path / "h")], input="\n".join(map(repr, xs)), capture_output=True, text=True,
+                         check=True).stdout
+    values = np.array([[float(v) for v in line.split()] for line in out.splitlines()])
+    assert values.shape == (len(xs), 4)
+    for ours, glibc, most_ulps in ((0, 1, 3), (2, 3, 1)):
+        ulps = np.abs(values[:, ours].view(np.int64) - values[:, glibc].view(np.int64))
+        assert ulps.max() <= most_ulps and np.count_nonzero(ulps) < 0.1 * len(xs)
+
+
+HOST_CASES = {  # component: (parameters and inputs set by the host, steps of 1 ms)
+    "TrajectoryPlanner": ({"x_d": 2.0, "t0": 0.1}, 5000),
+    "Gust": ({"F1_peak": 3.0, "start": 0.2, "duration": 0.3}, 1000),
+    "EnergyController": ({"x": 0.3, "dx": -0.2, "theta1": 0.1, "dtheta1": 0.4, "theta2": -0.2, "dtheta2": 0.5}, 3),
+    "Sensor": ({"x": 0.3, "theta2": -0.2, "sigma_dx": 0.0}, 1000),
+}
+
+
+def _python_rows(component, settings, steps, h):
+    """The rows the host prints, ``[t, outputs]`` after k steps from t = (k - 1) h, by the Python model."""
+    parameters = {k: v for k, v in settings.items() if k in component.names("parameter")}
+    inputs = tuple(settings.get(n, v.start) for n, v in ((v.name, v) for v in component.variables
+                                                         if v.causality == "input"))
+    config = component.check(parameters)
+    state = component.initial_state(config) if component.stateful else None
+    rows = []
+    for k in range(steps + 1):
+        rows.append([k * h, *component.output(config, state, inputs)])
+        if component.stateful:
+            state = component.update(config, state, inputs, k * h, h)
+    return np.array(rows)
+
+
+def _host_arguments(path, settings, steps, h):
+    md = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    outputs = [v.valueReference for v in md.modelVariables if v.causality == "output"]
+    return [md.coSimulation.modelIdentifier, md.guid, steps, h, *[f"{vr[k]}={v!r}" for k, v in settings.items()],
+            *outputs]
+
+
+@pytest.fixture(scope="module")
+def unpacked(native, tmp_path_factory):
+    """``{name: folder}`` of the four native FMI 2.0 FMUs, unzipped."""
+    folders = {}
+    for name in HOST_CASES:
+        folders[name] = tmp_path_factory.mktemp(name)
+        with zipfile.ZipFile(native[2] / f"{name}.fmu") as z:
+            z.extractall(folders[name])
+    return folders
+
+
+def _run_host(command, *args, cwd=None, env=None):
+    done = subprocess.run([*command, *map(str, args)], capture_output=True, text=True, cwd=cwd, env=env, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return np.array([[float(x) for x in line.split(",")] for line in done.stdout.replace("\r", "").splitlines()])
+
+
+@pytest.fixture(scope="module")
+def host(tmp_path_factory):
+    host = tmp_path_factory.mktemp("host") / "host"
+    subprocess.run([_compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", f"-I{NATIVE}",
+                    str(NATIVE / "host.c"), "-o", str(host), "-ldl", "-lpthread", "-lm"], check=True)
+    return host
+
+
+@pytest.mark.parametrize("name", HOST_CASES)
+def test_the_c_host_without_python_gives_the_python_models_outputs(native, unpacked, host, name):
+    """host.c's ``outputs`` (no Python in the process): the Python model's rows bit for bit (glibc)."""
+    settings, steps = HOST_CASES[name]
+    _, guid, *rest = _host_arguments(native[2] / f"{name}.fmu", settings, steps, 1e-3)
+    rows = _run_host([str(host), "outputs"], unpacked[name] / "binaries" / "linux64" / f"{name}.so", guid, *rest,
+                     env=CLEAN_ENV)
+    expected = _python_rows(components.get(name), settings, steps, 1e-3)
+    assert rows.shape == expected.shape and np.count_nonzero(expected[:, 1:]) > steps / 4
+    assert np.array_equal(rows.view(np.int64), expected.view(np.int64))
+
+
+@pytest.fixture(scope="module")
+def wine(unpacked, tmp_path_factory):
+    """``(wine command, folder with host.exe and the four DLLs, environment)``; the prefix is deleted afterwards."""
+    if shutil.which(MINGW) is None or shutil.which("wine") is None:
+        pytest.skip("needs mingw-w64 (gcc-mingw-w64-x86-64) and Wine (wine64, wine): .ci/run installs them")
+    folder = tmp_path_factory.mktemp("windows")
+    subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", "-static-libgcc",
+                    f"-I{fmi_headers()}", f"-I{NATIVE}", str(NATIVE / "host.c"), str(NATIVE / "portable_math.c"), "-o",
+                    str(folder / "host.exe")], check=True)
+    for name, unzipped in unpacked.items():
+        shutil.copy(unzipped / "binaries" / "win64" / f"{name}.dll", folder)
+    prefix = tmp_path_factory.mktemp("wineprefix")
+    env = {**CLEAN_ENV, "HOME": str(prefix), "WINEPREFIX": str(prefix), "WINEDEBUG": "-all"}
+    yield ["wine", str(folder / "host.exe")], folder, env
+    subprocess.run(["wineserver", "-w"], env=env, timeout=120)
+    shutil.rmtree(prefix, ignore_errors=True)
+
+
+@pytest.mark.parametrize("name", HOST_CASES)
+def test_the_windows_dlls_under_wine_give_the_python_models_outputs(native, wine, name):
+    """The Windows build (portable sin, cos, tanh, log): the Python model's rows to 1e-12 relative."""
+    command, folder, env = wine
+    settings, steps = HOST_CASES[name]
+    _, guid, *rest = _host_arguments(native[2] / f"{name}.fmu", settings, steps, 1e-3)
+    rows = _run_host([*command, "outputs"], f"{name}.dll", guid, *rest, cwd=folder, env=env)
+    expected = _python_rows(components.get(name), settings, steps, 1e-3)
+    assert rows.shape == expected.shape
+    assert np.max(np.abs(rows - expected) / np.maximum(np.abs(expected), 1.0)) <= 1e-12
+
+
+@pytest.mark.parametrize("name", HOST_CASES)
+def test_the_same_math_source_on_linux_gives_the_windows_bits(native, unpacked, wine, host, name, tmp_path):
+    """The FMU's sources compiled on Linux with CRANE_OWN_MATH (as its buildDescription says): Wine's rows exactly."""
+    command, folder, env = wine
+    settings, steps = HOST_CASES[name]
+    _, guid, *rest = _host_arguments(native[2] / f"{name}.fmu", settings, steps, 1e-3)
+    sources = unpacked[name] / "sources"
+    library = tmp_path / f"{name}.so"
+    subprocess.run([_compiler(), "-shared", "-fPIC", "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH",
+                    f"-I{sources}", f"-I{fmi_headers()}", *[str(f) for f in sorted(sources.glob("*.c"))
+                                                             if f.name != "fmi3_framework.c"], "-o", str(library)],
+                   check=True)
+    linux = _run_host([str(host), "outputs"], library, guid, *rest)
+    windows = _run_host([*command, "outputs"], f"{name}.dll", guid, *rest, cwd=folder, env=env)
+    assert np.array_equal(linux.view(np.int64), windows.view(np.int64))
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_the_planners_source_fmu_compiles_with_fmpy_and_runs(native, version, tmp_path, monkeypatch):
+    """fmpy's build_platform_binary (CMake) on the sources alone; fmpy simulates its move like the built FMU's."""
+    from fmpy.build import build_platform_binary
+
+    if shutil.which("cmake") is None and not (Path(sys.executable).parent / "cmake").exists():
+        pytest.skip("no cmake")
+    folder = tmp_path / "unzipped"
+    with zipfile.ZipFile(native[version] / "TrajectoryPlanner.fmu") as z:
+        z.extractall(folder)
+    shutil.rmtree(folder / "binaries")
+    monkeypatch.setenv("PATH", str(Path(sys.executable).parent) + os.pathsep + os.environ["PATH"])  # the venv's cmake
+    (tmp_path / "cmake").mkdir()
+    build_platform_binary(folder, build_dir=tmp_path / "cmake")
+    settings = dict(start_values={"x_d": 2.0, "shaper": "ei"}, output_interval=1e-3, stop_time=10.0)
+    result = fmpy.simulate_fmu(str(folder), **settings)
+    reference = fmpy.simulate_fmu(str(native[version] / "TrajectoryPlanner.fmu"), **settings)
+    assert result["x_ref"][-1] == 2.0 and np.max(result["dx_ref"]) > 0.5
+    # FMI 2.0 sources use the C library's libm (here glibc: the same bits); FMI 3.0 ones the portable math
+    for name in ("x_ref", "theta1_ref", "theta2_ref"):
+        assert np.max(np.abs(result[name] - reference[name])) <= 1e-12
