@@ -50,11 +50,8 @@ static ModelStatus setup(const double values[], const char *b3_form, Config *c, 
     if (!(isfinite(V(h)) && V(h) > 0)) return rule(r, "h", "> 0 and finite", V(h));
     if (!(V(u_max) > 0)) return rule(r, "u_max", "> 0 (inf: no limit)", V(u_max));
     if (!(V(v_max) > 0)) return rule(r, "v_max", "> 0 (inf: no limit)", V(v_max));
-    if (!(isfinite(V(m1)) && V(m1) > 0)) return rule(r, "m1", "> 0 and finite", V(m1));
-    if (!(isfinite(V(m2)) && V(m2) >= 0)) return rule(r, "m2", ">= 0 and finite", V(m2));
-    if (!(isfinite(V(l1)) && V(l1) > 0)) return rule(r, "l1", "> 0 and finite", V(l1));
-    if (!(isfinite(V(l2)) && V(l2) > 0)) return rule(r, "l2", "> 0 and finite", V(l2));
-    if (!(isfinite(V(g)) && V(g) > 0)) return rule(r, "g", "> 0 and finite", V(g));
+    ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
+    if (plant != MODEL_OK) return plant;
     static const unsigned finite[] = {VR_K1_x, VR_K1_theta1, VR_K1_theta2, VR_K2_x, VR_K2_theta1, VR_K2_theta2,
                                       VR_x_d, VR_theta1_d, VR_theta2_d};
     for (unsigned i = 0; i < 9; i++)

@@ -50,11 +50,8 @@ void model_defaults(Model *m) {
 /* The rules of plant.configure() and parameters.py, in their order and words. */
 static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
     if (!(isfinite(V(max_substep)) && V(max_substep) > 0)) return rule(r, "max_substep", "> 0 and finite", V(max_substep));
-    if (!(isfinite(V(m1)) && V(m1) > 0)) return rule(r, "m1", "> 0 and finite", V(m1));
-    if (!(isfinite(V(m2)) && V(m2) >= 0)) return rule(r, "m2", ">= 0 and finite", V(m2));
-    if (!(isfinite(V(l1)) && V(l1) > 0)) return rule(r, "l1", "> 0 and finite", V(l1));
-    if (!(isfinite(V(l2)) && V(l2) > 0)) return rule(r, "l2", "> 0 and finite", V(l2));
-    if (!(isfinite(V(g)) && V(g) > 0)) return rule(r, "g", "> 0 and finite", V(g));
+    ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
+    if (plant != MODEL_OK) return plant;
     static const unsigned at_least_zero[] = {VR_c1, VR_c2, VR_tau, VR_l1_min};
     for (unsigned i = 0; i < 4; i++) {
         double value = values[at_least_zero[i]];

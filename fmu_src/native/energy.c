@@ -41,11 +41,8 @@ void model_defaults(Model *m) {
 
 /* The rules of energy.configure() in its order and words: the plant model, the gains and h, x_d, the limits. */
 static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
-    if (!(isfinite(V(m1)) && V(m1) > 0)) return rule(r, "m1", "> 0 and finite", V(m1));
-    if (!(isfinite(V(m2)) && V(m2) >= 0)) return rule(r, "m2", ">= 0 and finite", V(m2));
-    if (!(isfinite(V(l1)) && V(l1) > 0)) return rule(r, "l1", "> 0 and finite", V(l1));
-    if (!(isfinite(V(l2)) && V(l2) > 0)) return rule(r, "l2", "> 0 and finite", V(l2));
-    if (!(isfinite(V(g)) && V(g) > 0)) return rule(r, "g", "> 0 and finite", V(g));
+    ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
+    if (plant != MODEL_OK) return plant;
     static const unsigned positive[] = {VR_k_c, VR_k_p, VR_k_d, VR_h};
     for (unsigned i = 0; i < 4; i++) {
         double value = values[positive[i]];

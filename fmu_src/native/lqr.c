@@ -84,11 +84,8 @@ static const char *design(const double values[], double l1, double gains[N_STATE
 /* lqr.configure(): the rules of parameters.plant_parameters, the weights, r, h, x_d, limits.check and the
    schedule, in that order and in their words; then the schedule's designs and the design for l1. */
 static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
-    if (!(isfinite(V(m1)) && V(m1) > 0)) return rule(r, "m1", "> 0 and finite", V(m1));
-    if (!(isfinite(V(m2)) && V(m2) >= 0)) return rule(r, "m2", ">= 0 and finite", V(m2));
-    if (!(isfinite(V(l1)) && V(l1) > 0)) return rule(r, "l1", "> 0 and finite", V(l1));
-    if (!(isfinite(V(l2)) && V(l2) > 0)) return rule(r, "l2", "> 0 and finite", V(l2));
-    if (!(isfinite(V(g)) && V(g) > 0)) return rule(r, "g", "> 0 and finite", V(g));
+    ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
+    if (plant != MODEL_OK) return plant;
     for (int i = 0; i < N_STATE; i++) {
         double value = values[VR_q_x + i];
         if (!(value >= 0 && value < INFINITY)) return rule(r, VARIABLE_TABLE[VR_q_x + i].name, ">= 0 and finite", value);

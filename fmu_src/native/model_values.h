@@ -12,6 +12,16 @@ static inline ModelStatus rule(const Reporter *r, const char *name, const char *
     return report(r, MODEL_ERROR, "%s must be %s, got %s", name, text, py_repr(value, (char[REPR_SIZE]){0}));
 }
 
+/* parameters.plant_parameters(): the rules of a component's crane model, in their order and words. */
+static inline ModelStatus plant_rules(double m1, double m2, double l1, double l2, double g, const Reporter *r) {
+    if (!(isfinite(m1) && m1 > 0)) return rule(r, "m1", "> 0 and finite", m1);
+    if (!(isfinite(m2) && m2 >= 0)) return rule(r, "m2", ">= 0 and finite", m2);
+    if (!(isfinite(l1) && l1 > 0)) return rule(r, "l1", "> 0 and finite", l1);
+    if (!(isfinite(l2) && l2 > 0)) return rule(r, "l2", "> 0 and finite", l2);
+    if (!(isfinite(g) && g > 0)) return rule(r, "g", "> 0 and finite", g);
+    return MODEL_OK;
+}
+
 /* The Python FMU's messages where its model divides by zero or takes the square root of a negative number. */
 #define ZERO_DIVISION(r) report(r, MODEL_ERROR, "ZeroDivisionError: float division by zero")
 #define DOMAIN_ERROR(r) report(r, MODEL_ERROR, "math domain error")

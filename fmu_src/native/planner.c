@@ -143,11 +143,8 @@ static double peak(const Pair steps[], int n) {
 
 /* The rules of planner.configure() in its order and words, then its plan. */
 static ModelStatus setup(const double values[], const char *kind, Config *c, const Reporter *r) {
-    if (!(isfinite(V(m1)) && V(m1) > 0)) return rule(r, "m1", "> 0 and finite", V(m1));
-    if (!(isfinite(V(m2)) && V(m2) >= 0)) return rule(r, "m2", ">= 0 and finite", V(m2));
-    if (!(isfinite(V(l1)) && V(l1) > 0)) return rule(r, "l1", "> 0 and finite", V(l1));
-    if (!(isfinite(V(l2)) && V(l2) > 0)) return rule(r, "l2", "> 0 and finite", V(l2));
-    if (!(isfinite(V(g)) && V(g) > 0)) return rule(r, "g", "> 0 and finite", V(g));
+    ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
+    if (plant != MODEL_OK) return plant;
     double u_max = V(u_max), v_max = V(v_max);
     if (!(u_max > 0)) return rule(r, "u_max", "> 0 (inf: no limit)", u_max);
     if (!(v_max > 0)) return rule(r, "v_max", "> 0 (inf: no limit)", v_max);
