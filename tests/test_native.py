@@ -5,7 +5,6 @@ into ``build/native`` beside ``build/fmus`` when a C compiler is found). The Pyt
 the specification: every test here compares the native FMU with the Python model or FMU.
 """
 
-import ctypes
 import os
 import random
 import shutil
@@ -19,16 +18,8 @@ import fmpy
 import numpy as np
 import pytest
 from fmpy import read_model_description
-from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import (
-    FMU2Slave,
-    fmi2CallbackAllocateMemoryTYPE,
-    fmi2CallbackFreeMemoryTYPE,
-    fmi2CallbackFunctions,
-    fmi2CallbackLoggerTYPE,
-)
-from fmpy.logging import addLoggerProxy
 from fmpy.validation import validate_fmu
+from native_fmus import close, messages, open_native
 
 from crane_fmu import components, systems
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
@@ -40,9 +31,6 @@ from crane_fmu.model.parameters import PlantParameters
 
 PLANT = components.get("CranePlant")
 FREE_SWING_MAX_THETA2_DEG = 15.5976  # the Python FMU's free swing from 10 deg, 20 s at 1 ms
-_LIBC = ctypes.CDLL(None)
-_LIBC.calloc.restype, _LIBC.calloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t, ctypes.c_size_t]
-_LIBC.free.argtypes = [ctypes.c_void_p]
 
 
 @pytest.fixture(scope="module")
@@ -231,44 +219,6 @@ def test_fmpy_command_line_simulates_the_native_fmu(native, tmp_path):
 
 # ---- refusals and failures: the Python FMU's rules and messages ------------------------------------------------------
 
-def _messages(path, settings, steps=()):
-    """``(statuses, log)`` of an FMI 2.0 FMU run with ``settings`` and ``steps``, each ``(t, h, {input: value})``.
-
-    The run stops at the first call that fails; its name and status end the statuses.
-    """
-    md = read_model_description(str(path))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    log = []
-    callbacks = fmi2CallbackFunctions()
-    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, category, message: log.append(message.decode()))
-    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_LIBC.calloc)
-    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_LIBC.free)
-    addLoggerProxy(ctypes.byref(callbacks))
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=fmpy.extract(str(path)), modelIdentifier="CranePlant",
-                    instanceName="plant")
-    fmu.instantiate(callbacks=callbacks)
-    calls = [("setup", lambda: fmu.setupExperiment(startTime=0.0)), ("enter", fmu.enterInitializationMode)]
-    calls += [(f"set {name}", lambda name=name, value=value: fmu.setReal([vr[name]], [value]))
-              for name, value in settings.items()]
-    calls.append(("exit", fmu.exitInitializationMode))
-    for t, h, inputs in steps:
-        calls += [(f"set {name}", lambda name=name, value=value: fmu.setReal([vr[name]], [value]))
-                  for name, value in inputs.items()]
-        calls.append((f"step {t}", lambda t=t, h=h: fmu.doStep(t, h)))
-    statuses = []
-    try:
-        for name, call in calls:
-            try:
-                call()
-            except FMICallException as exc:
-                statuses.append(f"{name}: {exc.status}")
-                break
-        statuses.append("end")
-    finally:
-        fmu.freeInstance()
-    return statuses, log
-
-
 INF, NAN = float("inf"), float("nan")
 REFUSED = [{"m1": -1.0}, {"m1": 0.0}, {"m2": -0.5}, {"l1": NAN}, {"l2": INF}, {"g": 0.0}, {"max_substep": -1e-3},
            {"c1": -1.0}, {"c2": INF}, {"tau": NAN}, {"l1_min": -0.1}, {"u_max": 0.0}, {"v_max": -INF},
@@ -278,8 +228,8 @@ REFUSED = [{"m1": -1.0}, {"m1": 0.0}, {"m2": -0.5}, {"l1": NAN}, {"l2": INF}, {"
 
 @pytest.mark.parametrize("settings", REFUSED, ids=lambda s: ",".join(f"{k}={v}" for k, v in s.items()))
 def test_every_parameter_refusal_has_the_python_fmus_rule_and_message(fmu_dir, native, settings):
-    ours = _messages(native[2] / "CranePlant.fmu", settings)
-    theirs = _messages(fmu_dir / "CranePlant.fmu", settings)
+    ours = messages(native[2] / "CranePlant.fmu", settings, instance_name="plant")
+    theirs = messages(fmu_dir / "CranePlant.fmu", settings, instance_name="plant")
     assert ours == theirs
     assert ours[0][-2] == "exit: 3" and ours[1][-1].startswith("fmi2ExitInitializationMode: ")
 
@@ -298,8 +248,8 @@ STEPS = {
 @pytest.mark.parametrize("case", list(STEPS))
 def test_discards_and_step_errors_have_the_python_fmus_status_and_message(fmu_dir, native, case):
     settings, steps = STEPS[case]
-    ours = _messages(native[2] / "CranePlant.fmu", settings, steps)
-    theirs = _messages(fmu_dir / "CranePlant.fmu", settings, steps)
+    ours = messages(native[2] / "CranePlant.fmu", settings, steps, instance_name="plant")
+    theirs = messages(fmu_dir / "CranePlant.fmu", settings, steps, instance_name="plant")
     assert ours == theirs
     assert ours[1], "a message is logged"
 
@@ -309,22 +259,8 @@ def test_discards_and_step_errors_have_the_python_fmus_status_and_message(fmu_di
 @pytest.mark.parametrize("version", [2, 3])
 def test_fmu_state_saved_serialised_and_restored_repeats_the_steps_exactly(native, version, tmp_path):
     """The drive's lagged acceleration and the cable's state are part of it (tau > 0, hoisting)."""
-    md = read_model_description(str(native[version] / "CranePlant.fmu"))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    unzipped = fmpy.extract(str(native[version] / "CranePlant.fmu"))
-    if version == 2:
-        fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier="CranePlant", instanceName="p")
-        fmu.instantiate()
-        fmu.setupExperiment(startTime=0.0)
-        fmu.enterInitializationMode()
-    else:
-        from fmpy.fmi3 import FMU3Slave
-        fmu = FMU3Slave(guid=md.instantiationToken, unzipDirectory=unzipped, modelIdentifier="CranePlant",
-                        instanceName="p")
-        fmu.instantiate()
-        fmu.enterInitializationMode(startTime=0.0)
-    get, set_ = (fmu.getReal, fmu.setReal) if version == 2 else (fmu.getFloat64, fmu.setFloat64)
-    set_([vr["tau"], vr["v_max"]], [0.08, 0.5])
+    fmu, vr, set_, get = open_native(native[version] / "CranePlant.fmu", version, {"tau": 0.08, "v_max": 0.5},
+                                     instance_name="p")
     fmu.exitInitializationMode()
     outputs = [vr[n] for n in ("x", "dx", "theta1", "theta2", "l1_now", "dl1_now", "ddx")]
 
@@ -345,8 +281,7 @@ def test_fmu_state_saved_serialised_and_restored_repeats_the_steps_exactly(nativ
     restored = fmu.deserializeFMUState(serialized) if version == 3 else fmu.deSerializeFMUstate(serialized)
     fmu.setFMUState(restored) if version == 3 else fmu.setFMUstate(restored)
     third = steps(300, 300)
-    fmu.terminate()
-    fmu.freeInstance()
+    close(fmu)
     assert first == again == third
     assert len({round(r[-1], 6) for r in first}) > 10  # the drive's acceleration moves: the lag is in the state
 

@@ -4,24 +4,13 @@ Built by the session's ``fmu_dir`` fixture into ``build/native`` beside the Pyth
 Python model (crane_fmu/model/backstepping.py with limits.limited) is the specification.
 """
 
-import ctypes
 import random
 import sys
 
-import fmpy
 import numpy as np
 import pytest
-from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import (
-    FMU2Slave,
-    fmi2CallbackAllocateMemoryTYPE,
-    fmi2CallbackFreeMemoryTYPE,
-    fmi2CallbackFunctions,
-    fmi2CallbackLoggerTYPE,
-)
-from fmpy.fmi3 import FMU3Slave
-from fmpy.logging import addLoggerProxy
+from native_fmus import close, messages, open_native
 
 from crane_fmu import components, systems
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
@@ -30,9 +19,6 @@ from crane_fmu.cosim import run
 
 CONTROLLER = components.get("BacksteppingController")
 NAME = "BacksteppingController"
-_LIBC = ctypes.CDLL(None)
-_LIBC.calloc.restype, _LIBC.calloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t, ctypes.c_size_t]
-_LIBC.free.argtypes = [ctypes.c_void_p]
 INF, NAN = float("inf"), float("nan")
 
 
@@ -44,22 +30,6 @@ def native(fmu_dir):
     with open(folders[2] / f"{NAME}.fmu", "rb") as f:  # a native FMU, not the Python one copied
         assert b"binaries/linux64/BacksteppingController.so" in f.read()
     return folders
-
-
-def _open(path, version):
-    md = read_model_description(str(path))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    unzipped = fmpy.extract(str(path))
-    if version == 2:
-        fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=NAME, instanceName="c")
-        fmu.instantiate()
-        fmu.setupExperiment(startTime=0.0)
-        fmu.enterInitializationMode()
-        return fmu, vr, fmu.setReal, fmu.getReal
-    fmu = FMU3Slave(guid=md.instantiationToken, unzipDirectory=unzipped, modelIdentifier=NAME, instanceName="c")
-    fmu.instantiate()
-    fmu.enterInitializationMode(startTime=0.0)
-    return fmu, vr, fmu.setFloat64, fmu.getFloat64
 
 
 # ---- outputs at random inputs and parameters ----------------------------------------------------------------------
@@ -96,10 +66,7 @@ def test_native_outputs_equal_the_python_model_at_random_inputs_and_parameters(n
     ours, theirs, limited = [], [], 0
     for i in range(40):
         parameters = _random_parameters(rng, i)
-        fmu, vr, set_, get = _open(native[version] / f"{NAME}.fmu", version)
-        reals = {k: v for k, v in parameters.items() if k != "b3_form"}
-        set_([vr[k] for k in reals], list(reals.values()))
-        fmu.setString([vr["b3_form"]], [parameters["b3_form"]])
+        fmu, vr, set_, get = open_native(native[version] / f"{NAME}.fmu", version, parameters)
         fmu.exitInitializationMode()
         for _ in range(50):
             inputs = _random_inputs(rng)
@@ -109,8 +76,7 @@ def test_native_outputs_equal_the_python_model_at_random_inputs_and_parameters(n
             config = CONTROLLER.check(parameters)
             raw = config[3](tuple(inputs.values()))
             limited += raw != theirs[-1]
-        fmu.terminate()
-        fmu.freeInstance()
+        close(fmu)
     ours, theirs = np.array(ours), np.array(theirs)
     assert len(ours) == 2000 and np.all(np.isfinite(theirs))
     assert limited > 200  # the limits do act on many points
@@ -121,7 +87,7 @@ def test_native_outputs_equal_the_python_model_at_random_inputs_and_parameters(n
 
 
 def test_the_b3_form_string_is_read_back_and_changes_the_law(native):
-    fmu, vr, set_, get = _open(native[2] / f"{NAME}.fmu", 2)
+    fmu, vr, set_, get = open_native(native[2] / f"{NAME}.fmu", 2)
     assert fmu.getString([vr["b3_form"]]) == [b"derived"]
     set_([vr[n] for n in ("theta1", "dtheta2")], [0.2, -0.4])
     derived = get([vr["u"]])[0]
@@ -140,43 +106,6 @@ def test_the_b3_form_string_is_read_back_and_changes_the_law(native):
 
 # ---- refusals: the Python FMU's rules and messages ----------------------------------------------------------------
 
-def _messages(path, settings, steps=()):
-    """``(statuses, log)`` of an FMI 2.0 run with ``settings`` (a str is set as a String) and then ``steps``."""
-    md = read_model_description(str(path))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    log = []
-    callbacks = fmi2CallbackFunctions()
-    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, category, message: log.append(message.decode()))
-    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_LIBC.calloc)
-    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_LIBC.free)
-    addLoggerProxy(ctypes.byref(callbacks))
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=fmpy.extract(str(path)), modelIdentifier=NAME, instanceName="c")
-    fmu.instantiate(callbacks=callbacks)
-
-    def setter(name, value):
-        if isinstance(value, str):
-            return lambda: fmu.setString([vr[name]], [value])
-        return lambda: fmu.setReal([vr[name]], [value])
-
-    calls = [("setup", lambda: fmu.setupExperiment(startTime=0.0)), ("enter", fmu.enterInitializationMode)]
-    calls += [(f"set {name}", setter(name, value)) for name, value in settings.items()]
-    calls.append(("exit", fmu.exitInitializationMode))
-    for t, h in steps:
-        calls.append((f"step {t}", lambda t=t, h=h: fmu.doStep(t, h)))
-    statuses = []
-    try:
-        for name, call in calls:
-            try:
-                call()
-            except FMICallException as exc:
-                statuses.append(f"{name}: {exc.status}")
-                break
-        statuses.append("end")
-    finally:
-        fmu.freeInstance()
-    return statuses, log
-
-
 REFUSED = [{"h": 0.0}, {"h": INF}, {"h": NAN}, {"u_max": 0.0}, {"u_max": -INF}, {"v_max": NAN}, {"m1": -1.0},
            {"m2": -0.5}, {"l1": NAN}, {"l2": INF}, {"g": 0.0}, {"K1_x": INF}, {"K2_theta1": NAN},
            {"K1_theta2": -INF}, {"x_d": INF}, {"theta2_d": NAN}, {"w_x": 0.0}, {"w_x": -1.0}, {"w_theta1": -0.5},
@@ -186,16 +115,16 @@ REFUSED = [{"h": 0.0}, {"h": INF}, {"h": NAN}, {"u_max": 0.0}, {"u_max": -INF}, 
 
 @pytest.mark.parametrize("settings", REFUSED, ids=lambda s: ",".join(f"{k}={v!r}" for k, v in s.items()))
 def test_every_parameter_refusal_has_the_python_fmus_rule_and_message(fmu_dir, native, settings):
-    ours = _messages(native[2] / f"{NAME}.fmu", settings)
-    theirs = _messages(fmu_dir / f"{NAME}.fmu", settings)
+    ours = messages(native[2] / f"{NAME}.fmu", settings)
+    theirs = messages(fmu_dir / f"{NAME}.fmu", settings)
     assert ours == theirs
     assert ours[0][-2] == "exit: 3" and ours[1][-1].startswith("fmi2ExitInitializationMode: ")
 
 
 @pytest.mark.parametrize("step", [NAN, -1e-3, 0.0, INF])
 def test_an_unusable_step_is_the_python_fmus_error(fmu_dir, native, step):
-    ours = _messages(native[2] / f"{NAME}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
-    theirs = _messages(fmu_dir / f"{NAME}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
+    ours = messages(native[2] / f"{NAME}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
+    theirs = messages(fmu_dir / f"{NAME}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
     assert ours == theirs
     assert ours[0][-2] == "step 0.001: 3"
 
@@ -229,8 +158,8 @@ def test_fmpy_simulates_the_native_pair_like_the_python_pair(fmu_dir, native, ve
 
 def _fmpy_pair(folder, version):
     """5 s of the plant and the controller, Gauss-Seidel by hand in fmpy: the state and u at every step."""
-    plant, pvr, pset, pget = _open_any(folder / "CranePlant.fmu", "CranePlant", version)
-    ctrl, cvr, cset, cget = _open_any(folder / f"{NAME}.fmu", NAME, version)
+    plant, pvr, pset, pget = open_native(folder / "CranePlant.fmu", version, instance_name="CranePlant")
+    ctrl, cvr, cset, cget = open_native(folder / f"{NAME}.fmu", version, instance_name=NAME)
     states = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2")
     cset([cvr["x_d"]], [1.0])
     plant.exitInitializationMode()
@@ -248,22 +177,6 @@ def _fmpy_pair(folder, version):
         plant.doStep(k * h, h)
         ctrl.doStep(k * h, h)
     for fmu in (plant, ctrl):
-        fmu.terminate()
-        fmu.freeInstance()
+        close(fmu)
     return np.array(rows)
 
-
-def _open_any(path, name, version):
-    md = read_model_description(str(path))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    unzipped = fmpy.extract(str(path))
-    if version == 2:
-        fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=name, instanceName=name)
-        fmu.instantiate()
-        fmu.setupExperiment(startTime=0.0)
-        fmu.enterInitializationMode()
-        return fmu, vr, fmu.setReal, fmu.getReal
-    fmu = FMU3Slave(guid=md.instantiationToken, unzipDirectory=unzipped, modelIdentifier=name, instanceName=name)
-    fmu.instantiate()
-    fmu.enterInitializationMode(startTime=0.0)
-    return fmu, vr, fmu.setFloat64, fmu.getFloat64

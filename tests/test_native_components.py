@@ -6,7 +6,6 @@ models (crane_fmu/model/planner.py, energy.py, disturbances.py) are the specific
 bit for bit.
 """
 
-import ctypes
 import os
 import random
 import shutil
@@ -20,16 +19,8 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import (
-    FMU2Slave,
-    fmi2CallbackAllocateMemoryTYPE,
-    fmi2CallbackFreeMemoryTYPE,
-    fmi2CallbackFunctions,
-    fmi2CallbackLoggerTYPE,
-)
-from fmpy.fmi3 import FMU3Slave
-from fmpy.logging import addLoggerProxy
 from fmpy.validation import validate_fmu
+from native_fmus import close, messages, open_native
 
 from crane_fmu import components, systems
 from crane_fmu.analysis.scoreboard import Contender, systems_for
@@ -43,9 +34,6 @@ GUST, SENSOR = components.get("Gust"), components.get("Sensor")
 NAMES = ("TrajectoryPlanner", "EnergyController", "Gust", "Sensor")
 SHAPERS = ("zv", "zvd", "ei", "none")
 LINUX = sys.platform.startswith("linux")  # glibc's libm in both models: the same bits
-_LIBC = ctypes.CDLL(None)
-_LIBC.calloc.restype, _LIBC.calloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t, ctypes.c_size_t]
-_LIBC.free.argtypes = [ctypes.c_void_p]
 INF, NAN = float("inf"), float("nan")
 CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # no venv, no pyenv: nothing of Python
 
@@ -63,32 +51,6 @@ def native(fmu_dir):
 
 def _python_folder(fmu_dir, version):
     return fmu_dir if version == 2 else fmi3_dir(fmu_dir)
-
-
-def _open(path, version, parameters=None):
-    """An instance in initialisation mode with ``parameters`` set (a str as a String): ``(fmu, vr, get)``."""
-    md = read_model_description(str(path))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    name, unzipped = md.coSimulation.modelIdentifier, fmpy.extract(str(path))
-    if version == 2:
-        fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=name, instanceName="c")
-        fmu.instantiate()
-        fmu.setupExperiment(startTime=0.0)
-        fmu.enterInitializationMode()
-        set_, get = fmu.setReal, fmu.getReal
-    else:
-        fmu = FMU3Slave(guid=md.instantiationToken, unzipDirectory=unzipped, modelIdentifier=name, instanceName="c")
-        fmu.instantiate()
-        fmu.enterInitializationMode(startTime=0.0)
-        set_, get = fmu.setFloat64, fmu.getFloat64
-    for key, value in (parameters or {}).items():
-        fmu.setString([vr[key]], [value]) if isinstance(value, str) else set_([vr[key]], [value])
-    return fmu, vr, set_, get
-
-
-def _close(fmu):
-    fmu.terminate()
-    fmu.freeInstance()
 
 
 def _compare(ours, theirs):
@@ -164,7 +126,7 @@ def test_planner_outputs_equal_the_python_model_at_random_parameters_and_times(n
         parameters = _planner_parameters(rng, i)
         if i % 10 == 9:
             parameters["x_d"] = parameters["x0"]  # no move: x_ref stays at x0
-        fmu, vr, _, get = _open(native[version] / "TrajectoryPlanner.fmu", version, parameters)
+        fmu, vr, _, get = open_native(native[version] / "TrajectoryPlanner.fmu", version, parameters)
         config = PLANNER.check(parameters)
         ours.append(get([vr[n] for n in outputs]))  # before initialisation ends: the outputs at time 0
         theirs.append(PLANNER.output(config, (0.0,), ()))
@@ -176,14 +138,14 @@ def test_planner_outputs_equal_the_python_model_at_random_parameters_and_times(n
             ours.append(get([vr[n] for n in outputs]))
             theirs.append(PLANNER.output(config, (t + h,), ()))
             t += h
-        _close(fmu)
+        close(fmu)
     _compare(ours, theirs)
     theirs = np.array(theirs)
     assert np.count_nonzero(theirs[:, 3]) > 1000 and np.count_nonzero(theirs[:, 2]) > 500  # moves and swing
 
 
 def test_the_shaper_string_is_read_back_and_changes_the_plan(native):
-    fmu, vr, set_, get = _open(native[2] / "TrajectoryPlanner.fmu", 2, {"x_d": 2.0})
+    fmu, vr, set_, get = open_native(native[2] / "TrajectoryPlanner.fmu", 2, {"x_d": 2.0})
     assert fmu.getString([vr["shaper"]]) == [b"zv"]
     fmu.setString([vr["shaper"]], ["ei"])
     assert fmu.getString([vr["shaper"]]) == [b"ei"]
@@ -218,7 +180,7 @@ def test_energy_output_equals_the_python_model_at_random_inputs_and_parameters(n
     ours, theirs, limited = [], [], 0
     for i in range(40):
         parameters = _energy_parameters(rng, i)
-        fmu, vr, set_, get = _open(native[version] / "EnergyController.fmu", version, parameters)
+        fmu, vr, set_, get = open_native(native[version] / "EnergyController.fmu", version, parameters)
         config = ENERGY.check(parameters)
         for j in range(50):
             state = _random_state(rng)
@@ -231,7 +193,7 @@ def test_energy_output_equals_the_python_model_at_random_inputs_and_parameters(n
             limited += theirs[-1] != ENERGY.output(config._replace(v_max=INF), None, tuple(state))[0]
             if j == 0:
                 fmu.exitInitializationMode()
-        _close(fmu)
+        close(fmu)
     _compare(ours, theirs)
     assert limited > 100  # the speed guard acts on many points
 
@@ -259,7 +221,7 @@ def test_disturbance_outputs_equal_the_python_model_over_random_steps(native, ve
     ours, theirs = [], []
     for i in range(30):
         parameters = random_parameters(rng, i)
-        fmu, vr, set_, get = _open(native[version] / f"{name}.fmu", version, parameters)
+        fmu, vr, set_, get = open_native(native[version] / f"{name}.fmu", version, parameters)
         config = component.check(parameters)
         state, t = component.initial_state(config), 0.0
         for j in range(100):
@@ -273,52 +235,12 @@ def test_disturbance_outputs_equal_the_python_model_over_random_steps(native, ve
             h = rng.choice([1e-3, rng.uniform(1e-3, 0.2)])
             fmu.doStep(t, h)
             state, t = component.update(config, state, tuple(values[:len(inputs)]), t, h), t + h
-        _close(fmu)
+        close(fmu)
     _compare(ours, theirs)
     assert np.count_nonzero(np.array(theirs)) > 1000
 
 
 # ---- refusals: the Python FMU's rules and messages ----------------------------------------------------------------
-
-def _messages(path, settings, steps=(), read=()):
-    """``(statuses, log)`` of an FMI 2.0 run with ``settings`` (a str is set as a String), a get of ``read`` (names)
-    before and after initialisation ends, then ``steps``."""
-    md = read_model_description(str(path))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    log = []
-    callbacks = fmi2CallbackFunctions()
-    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, category, message: log.append(message.decode()))
-    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_LIBC.calloc)
-    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_LIBC.free)
-    addLoggerProxy(ctypes.byref(callbacks))
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=fmpy.extract(str(path)),
-                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="c")
-    fmu.instantiate(callbacks=callbacks)
-
-    def setter(name, value):
-        if isinstance(value, str):
-            return lambda: fmu.setString([vr[name]], [value])
-        return lambda: fmu.setReal([vr[name]], [value])
-
-    calls = [("setup", lambda: fmu.setupExperiment(startTime=0.0)), ("enter", fmu.enterInitializationMode)]
-    calls += [(f"set {name}", setter(name, value)) for name, value in settings.items()]
-    get = ("get", lambda: fmu.getReal([vr[name] for name in read]))
-    calls += [get, ("exit", fmu.exitInitializationMode), get] if read else [("exit", fmu.exitInitializationMode)]
-    for t, h in steps:
-        calls.append((f"step {t}", lambda t=t, h=h: fmu.doStep(t, h)))
-    statuses = []
-    try:
-        for name, call in calls:
-            try:
-                call()
-            except FMICallException as exc:
-                statuses.append(f"{name}: {exc.status}")
-                break
-        statuses.append("end")
-    finally:
-        fmu.freeInstance()
-    return statuses, log
-
 
 REFUSED = {
     "TrajectoryPlanner": [{"m1": -1.0}, {"m2": NAN}, {"l1": 0.0}, {"l2": INF}, {"g": -INF}, {"u_max": 0.0},
@@ -342,8 +264,8 @@ CASES = [(name, settings) for name, cases in REFUSED.items() for settings in cas
 @pytest.mark.parametrize("name,settings", CASES, ids=lambda c: c if isinstance(c, str) else ",".join(
     f"{k}={v!r}" for k, v in c.items()))
 def test_every_parameter_refusal_has_the_python_fmus_rule_and_message(fmu_dir, native, name, settings):
-    ours = _messages(native[2] / f"{name}.fmu", settings)
-    theirs = _messages(fmu_dir / f"{name}.fmu", settings)
+    ours = messages(native[2] / f"{name}.fmu", settings)
+    theirs = messages(fmu_dir / f"{name}.fmu", settings)
     assert ours == theirs
     assert ours[0][-2] == "exit: 3" and ours[1][-1].startswith("fmi2ExitInitializationMode: ")
 
@@ -351,16 +273,16 @@ def test_every_parameter_refusal_has_the_python_fmus_rule_and_message(fmu_dir, n
 @pytest.mark.parametrize("name", NAMES)
 @pytest.mark.parametrize("step", [NAN, -1e-3, 0.0, INF])
 def test_an_unusable_step_is_the_python_fmus_error(fmu_dir, native, name, step):
-    ours = _messages(native[2] / f"{name}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
-    theirs = _messages(fmu_dir / f"{name}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
+    ours = messages(native[2] / f"{name}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
+    theirs = messages(fmu_dir / f"{name}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
     assert ours == theirs
     assert ours[0][-2] == "step 0.001: 3"
 
 
 def test_an_output_python_cannot_compute_is_the_python_fmus_error(fmu_dir, native):
     """u_max = 5e-324 passes the rules, but (E4) then divides by a = u_max / 2 = 0: Python's ZeroDivisionError."""
-    ours = _messages(native[2] / "EnergyController.fmu", {"u_max": 5e-324}, read=["u"])
-    theirs = _messages(fmu_dir / "EnergyController.fmu", {"u_max": 5e-324}, read=["u"])
+    ours = messages(native[2] / "EnergyController.fmu", {"u_max": 5e-324}, read=["u"])
+    theirs = messages(fmu_dir / "EnergyController.fmu", {"u_max": 5e-324}, read=["u"])
     assert ours == theirs == (["get: 3", "end"], ["fmi2GetReal: ZeroDivisionError: float division by zero"])
 
 
@@ -377,7 +299,7 @@ STATEFUL = {  # component: parameters, and whether its outputs take inputs (the 
 @pytest.mark.parametrize("name", STATEFUL)
 def test_fmu_state_saved_serialised_and_restored_repeats_the_steps_exactly(native, name, version):
     """The planner's and the gust's state is their time, the sensor's its sample count and held sample."""
-    fmu, vr, set_, get = _open(native[version] / f"{name}.fmu", version, STATEFUL[name])
+    fmu, vr, set_, get = open_native(native[version] / f"{name}.fmu", version, STATEFUL[name])
     fmu.exitInitializationMode()
     component = components.get(name)
     outputs, inputs = [vr[n] for n in component.names("output")], [vr[n] for n in component.names("input")]
@@ -400,7 +322,7 @@ def test_fmu_state_saved_serialised_and_restored_repeats_the_steps_exactly(nativ
     restored = fmu.deserializeFMUState(serialized) if version == 3 else fmu.deSerializeFMUstate(serialized)
     fmu.setFMUState(restored) if version == 3 else fmu.setFMUstate(restored)
     third = steps(150, 100)
-    _close(fmu)
+    close(fmu)
     assert first == again == third
     assert len({round(r[-1], 6) for r in first}) > 30  # the outputs move over those steps
 

@@ -11,20 +11,9 @@ import functools
 import random
 import sys
 
-import fmpy
 import numpy as np
 import pytest
-from fmpy import read_model_description
-from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import (
-    FMU2Slave,
-    fmi2CallbackAllocateMemoryTYPE,
-    fmi2CallbackFreeMemoryTYPE,
-    fmi2CallbackFunctions,
-    fmi2CallbackLoggerTYPE,
-)
-from fmpy.fmi3 import FMU3Slave
-from fmpy.logging import addLoggerProxy
+from native_fmus import close, messages, open_native
 
 from crane_fmu import components, systems
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
@@ -35,9 +24,6 @@ from crane_fmu.model.tables import STATE
 
 CONTROLLER = components.get("LqrController")
 NAME = "LqrController"
-_LIBC = ctypes.CDLL(None)
-_LIBC.calloc.restype, _LIBC.calloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t, ctypes.c_size_t]
-_LIBC.free.argtypes = [ctypes.c_void_p]
 INF, NAN = float("inf"), float("nan")
 LINUX = sys.platform.startswith("linux")  # glibc's libm in both, the same operations: the same bits
 
@@ -50,32 +36,6 @@ def native(fmu_dir):
     with open(folders[2] / f"{NAME}.fmu", "rb") as f:  # a native FMU, not the Python one copied
         assert b"binaries/linux64/LqrController.so" in f.read()
     return folders
-
-
-def _open(path, version, parameters=None):
-    """An instance in initialisation mode with ``parameters`` set: ``(fmu, vr, set, get)``."""
-    md = read_model_description(str(path))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    unzipped = fmpy.extract(str(path))
-    if version == 2:
-        fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=NAME, instanceName="c")
-        fmu.instantiate()
-        fmu.setupExperiment(startTime=0.0)
-        fmu.enterInitializationMode()
-        set_, get = fmu.setReal, fmu.getReal
-    else:
-        fmu = FMU3Slave(guid=md.instantiationToken, unzipDirectory=unzipped, modelIdentifier=NAME, instanceName="c")
-        fmu.instantiate()
-        fmu.enterInitializationMode(startTime=0.0)
-        set_, get = fmu.setFloat64, fmu.getFloat64
-    if parameters:
-        set_([vr[k] for k in parameters], list(parameters.values()))
-    return fmu, vr, set_, get
-
-
-def _close(fmu):
-    fmu.terminate()
-    fmu.freeInstance()
 
 
 # ---- random parameters and inputs -------------------------------------------------------------------------------
@@ -125,7 +85,7 @@ def test_native_gains_equal_the_python_design_over_random_parameters(native):
     for i in range(24):
         parameters = {**_random_design(rng, scheduled=i % 2 == 1), "u_max": INF, "v_max": INF}
         config = _config(parameters)
-        fmu, vr, set_, get = _open(native[2] / f"{NAME}.fmu", 2, parameters)
+        fmu, vr, set_, get = open_native(native[2] / f"{NAME}.fmu", 2, parameters)
         fmu.exitInitializationMode()
         ours.append(_native_gains(set_, get, vr))
         theirs.append(config.gains)
@@ -135,7 +95,7 @@ def test_native_gains_equal_the_python_design_over_random_parameters(native):
                        0.5 * (lengths[12] + lengths[13]), lengths[-1], lengths[-1] + 1.0, 1e3):
                 ours.append(_native_gains(set_, get, vr, l1))
                 theirs.append(lqr.scheduled_gains(config, l1))
-        _close(fmu)
+        close(fmu)
     ours, theirs = np.array(ours), np.array(theirs)
     assert ours.shape == (24 + 12 * 8, 6) and np.all(np.isfinite(theirs))
     assert np.all(np.abs(ours - theirs) <= 1e-10 * np.abs(theirs))
@@ -145,18 +105,18 @@ def test_native_gains_equal_the_python_design_over_random_parameters(native):
 
 def test_the_default_design_is_the_python_fmus_report(native):
     """At the defaults: the K_ figures crane-fmu info prints, and the schedule's end designs of hoist-transport."""
-    fmu, vr, set_, get = _open(native[3] / f"{NAME}.fmu", 3, {"u_max": INF, "v_max": INF})
+    fmu, vr, set_, get = open_native(native[3] / f"{NAME}.fmu", 3, {"u_max": INF, "v_max": INF})
     fmu.exitInitializationMode()
     report = lqr.report(CONTROLLER.check({}))
     assert _native_gains(set_, get, vr) == [report["K_" + s] for s in STATE]
-    _close(fmu)
+    close(fmu)
     parameters = systems.get("hoist-transport").parameters["controller"]
     config = CONTROLLER.check(parameters)
-    fmu, vr, set_, get = _open(native[3] / f"{NAME}.fmu", 3, {**parameters, "u_max": INF, "v_max": INF})
+    fmu, vr, set_, get = open_native(native[3] / f"{NAME}.fmu", 3, {**parameters, "u_max": INF, "v_max": INF})
     fmu.exitInitializationMode()
     for length, gains in zip(*config.schedule):
         assert _native_gains(set_, get, vr, length) == pytest.approx(gains, rel=1e-10)
-    _close(fmu)
+    close(fmu)
 
 
 # ---- (b) outputs at random inputs and parameters ----------------------------------------------------------------
@@ -192,7 +152,7 @@ def test_native_outputs_equal_the_python_model_at_random_inputs_and_parameters(n
     for i in range(40):
         parameters = _random_parameters(rng, i)
         config = _config(parameters)
-        fmu, vr, set_, get = _open(native[version] / f"{NAME}.fmu", version, parameters)
+        fmu, vr, set_, get = open_native(native[version] / f"{NAME}.fmu", version, parameters)
         fmu.exitInitializationMode()
         for _ in range(50):
             inputs = _random_inputs(rng, parameters)
@@ -201,7 +161,7 @@ def test_native_outputs_equal_the_python_model_at_random_inputs_and_parameters(n
             values = tuple(inputs[n] for n in CONTROLLER.names("input"))
             theirs.append(CONTROLLER.output(config, None, values)[0])
             limited += theirs[-1] != CONTROLLER.output(config._replace(u_max=INF, v_max=INF), None, values)[0]
-        _close(fmu)
+        close(fmu)
     ours, theirs = np.array(ours), np.array(theirs)
     assert len(ours) == 2000 and np.all(np.isfinite(theirs))
     assert limited > 200  # the limits do act on many points
@@ -216,14 +176,14 @@ def test_before_initialisation_ends_the_output_follows_the_parameters(fmu_dir, n
                {"l1_low": 0.5, "l1_high": 2.0}, {"u_max": 5.0}]
     readings = {}
     for label, path in (("native", native[2] / f"{NAME}.fmu"), ("python", fmu_dir / f"{NAME}.fmu")):
-        fmu, vr, set_, get = _open(path, 2, {"theta1": 0.1, "dtheta2": -0.3, "l1_now": 1.2})
+        fmu, vr, set_, get = open_native(path, 2, {"theta1": 0.1, "dtheta2": -0.3, "l1_now": 1.2})
         readings[label] = []
         for change in changes:
             set_([vr[k] for k in change], list(change.values()))
             readings[label].append(get([vr["u"]])[0])
         fmu.exitInitializationMode()
         readings[label].append(get([vr["u"]])[0])
-        _close(fmu)
+        close(fmu)
     assert readings["native"] == readings["python"]
     assert len(set(readings["python"])) >= 4  # the changes do change u
 
@@ -231,13 +191,13 @@ def test_before_initialisation_ends_the_output_follows_the_parameters(fmu_dir, n
 def test_an_fmu_state_carries_the_design_and_the_schedule(native):
     """A state serialised after a scheduled design, set into an instance designed otherwise: the first one's outputs."""
     parameters = {"l1_low": 0.5, "l1_high": 3.0, "q_theta2": 200.0, "u_max": INF, "v_max": INF}
-    first, vr, set_, get = _open(native[2] / f"{NAME}.fmu", 2, parameters)
+    first, vr, set_, get = open_native(native[2] / f"{NAME}.fmu", 2, parameters)
     first.exitInitializationMode()
     expected = _native_gains(set_, get, vr, 1.7)
     state = first.getFMUstate()
     serialized = first.serializeFMUstate(state)
     first.freeFMUstate(state)
-    second, _, set2, get2 = _open(native[2] / f"{NAME}.fmu", 2)
+    second, _, set2, get2 = open_native(native[2] / f"{NAME}.fmu", 2)
     second.exitInitializationMode()
     assert _native_gains(set2, get2, vr, 1.7) != expected
     state = second.deSerializeFMUstate(serialized)
@@ -245,44 +205,10 @@ def test_an_fmu_state_carries_the_design_and_the_schedule(native):
     assert _native_gains(set2, get2, vr, 1.7) == expected
     second.freeFMUstate(state)
     for fmu in (first, second):
-        _close(fmu)
+        close(fmu)
 
 
 # ---- (c) refusals: the Python FMU's rules and messages ----------------------------------------------------------
-
-def _messages(path, settings, steps=(), get_output=False):
-    """``(statuses, log)`` of an FMI 2.0 run with ``settings``, then ``steps``, then a read of u if asked."""
-    md = read_model_description(str(path))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    log = []
-    callbacks = fmi2CallbackFunctions()
-    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, category, message: log.append(message.decode()))
-    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_LIBC.calloc)
-    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_LIBC.free)
-    addLoggerProxy(ctypes.byref(callbacks))
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=fmpy.extract(str(path)), modelIdentifier=NAME, instanceName="c")
-    fmu.instantiate(callbacks=callbacks)
-    calls = [("setup", lambda: fmu.setupExperiment(startTime=0.0)), ("enter", fmu.enterInitializationMode)]
-    calls += [(f"set {name}", lambda name=name, value=value: fmu.setReal([vr[name]], [value]))
-              for name, value in settings.items()]
-    calls.append(("exit", fmu.exitInitializationMode))
-    for t, h in steps:
-        calls.append((f"step {t}", lambda t=t, h=h: fmu.doStep(t, h)))
-    if get_output:
-        calls.append(("get u", lambda: fmu.getReal([vr["u"]])))
-    statuses = []
-    try:
-        for name, call in calls:
-            try:
-                call()
-            except FMICallException as exc:
-                statuses.append(f"{name}: {exc.status}")
-                break
-        statuses.append("end")
-    finally:
-        fmu.freeInstance()
-    return statuses, log
-
 
 REFUSED = [{"m1": -1.0}, {"m1": INF}, {"m2": -0.5}, {"l1": NAN}, {"l2": INF}, {"g": 0.0}, {"q_x": -1.0},
            {"q_dx": NAN}, {"q_theta1": INF}, {"q_dtheta2": -1e-300}, {"r": 0.0}, {"r": -INF}, {"h": 0.0},
@@ -296,8 +222,8 @@ REFUSED = [{"m1": -1.0}, {"m1": INF}, {"m2": -0.5}, {"l1": NAN}, {"l2": INF}, {"
 
 @pytest.mark.parametrize("settings", REFUSED, ids=lambda s: ",".join(f"{k}={v!r}" for k, v in s.items()))
 def test_every_parameter_refusal_has_the_python_fmus_rule_and_message(fmu_dir, native, settings):
-    ours = _messages(native[2] / f"{NAME}.fmu", settings)
-    theirs = _messages(fmu_dir / f"{NAME}.fmu", settings)
+    ours = messages(native[2] / f"{NAME}.fmu", settings)
+    theirs = messages(fmu_dir / f"{NAME}.fmu", settings)
     assert ours == theirs
     assert ours[0][-2] == "exit: 3" and ours[1][-1].startswith("fmi2ExitInitializationMode: ")
 
@@ -305,15 +231,15 @@ def test_every_parameter_refusal_has_the_python_fmus_rule_and_message(fmu_dir, n
 def test_a_schedule_narrower_than_a_rounding_fails_when_read_as_python_does(fmu_dir, native):
     """l1_high one ulp above l1_low: the designs are made, the interpolation divides by zero at the first read."""
     settings = {"l1_low": 1.0, "l1_high": 1.0000000000000002, "l1_now": 1.0}
-    ours = _messages(native[2] / f"{NAME}.fmu", settings, get_output=True)
-    assert ours == _messages(fmu_dir / f"{NAME}.fmu", settings, get_output=True)
+    ours = messages(native[2] / f"{NAME}.fmu", settings, read_at_end=["u"])
+    assert ours == messages(fmu_dir / f"{NAME}.fmu", settings, read_at_end=["u"])
     assert ours == (["get u: 3", "end"], ["fmi2GetReal: ZeroDivisionError: float division by zero"])
 
 
 @pytest.mark.parametrize("step", [NAN, -1e-3, 0.0, INF])
 def test_an_unusable_step_is_the_python_fmus_error(fmu_dir, native, step):
-    ours = _messages(native[2] / f"{NAME}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
-    theirs = _messages(fmu_dir / f"{NAME}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
+    ours = messages(native[2] / f"{NAME}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
+    theirs = messages(fmu_dir / f"{NAME}.fmu", {}, [(0.0, 1e-3), (1e-3, step)])
     assert ours == theirs
     assert ours[0][-2] == "step 0.001: 3"
 

@@ -1,0 +1,108 @@
+"""Helpers for the tests of the native (C) FMUs against the Python ones: open, close, and a logged FMI 2.0 run.
+
+``open_native`` gives an instance of any FMU (native or Python, FMI 2.0 or 3.0) in initialisation mode;
+``messages`` runs an FMI 2.0 instance call by call with a logger and returns its statuses and messages,
+so that a native FMU's refusals and errors can be compared with the Python FMU's.
+"""
+
+import ctypes
+
+import fmpy
+from fmpy import read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+)
+from fmpy.fmi3 import FMU3Slave
+from fmpy.logging import addLoggerProxy
+
+_LIBC = ctypes.CDLL(None)
+_LIBC.calloc.restype, _LIBC.calloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t, ctypes.c_size_t]
+_LIBC.free.argtypes = [ctypes.c_void_p]
+
+
+def open_native(path, version, parameters=None, instance_name="c"):
+    """An instance in initialisation mode with ``parameters`` set: ``(fmu, vr, set, get)``.
+
+    The real parameters are set in one call, in their order, then each str one as a String.
+    """
+    md = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    name, unzipped = md.coSimulation.modelIdentifier, fmpy.extract(str(path))
+    if version == 2:
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=name, instanceName=instance_name)
+        fmu.instantiate()
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        set_, get = fmu.setReal, fmu.getReal
+    else:
+        fmu = FMU3Slave(guid=md.instantiationToken, unzipDirectory=unzipped, modelIdentifier=name,
+                        instanceName=instance_name)
+        fmu.instantiate()
+        fmu.enterInitializationMode(startTime=0.0)
+        set_, get = fmu.setFloat64, fmu.getFloat64
+    reals = {k: v for k, v in (parameters or {}).items() if not isinstance(v, str)}
+    if reals:
+        set_([vr[k] for k in reals], list(reals.values()))
+    for key, value in (parameters or {}).items():
+        if isinstance(value, str):
+            fmu.setString([vr[key]], [value])
+    return fmu, vr, set_, get
+
+
+def close(fmu):
+    fmu.terminate()
+    fmu.freeInstance()
+
+
+def messages(path, settings, steps=(), read=(), read_at_end=(), instance_name="c"):
+    """``(statuses, log)`` of an FMI 2.0 run, call by call, of the FMU at ``path``.
+
+    The run sets ``settings`` in initialisation mode (one call each; a str is set as a String), gets ``read``
+    (names; a call named ``get``) before and after initialisation ends, makes ``steps``, each ``(t, h)`` or
+    ``(t, h, {input: value})`` with the inputs set before the step, and at last gets ``read_at_end`` (a call
+    named ``get`` and the names). It stops at the first call that fails; that call's name and status end the
+    statuses, then ``end``.
+    """
+    md = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    log = []
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, category, message: log.append(message.decode()))
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_LIBC.calloc)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_LIBC.free)
+    addLoggerProxy(ctypes.byref(callbacks))
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=fmpy.extract(str(path)),
+                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName=instance_name)
+    fmu.instantiate(callbacks=callbacks)
+
+    def setter(name, value):
+        if isinstance(value, str):
+            return lambda: fmu.setString([vr[name]], [value])
+        return lambda: fmu.setReal([vr[name]], [value])
+
+    calls = [("setup", lambda: fmu.setupExperiment(startTime=0.0)), ("enter", fmu.enterInitializationMode)]
+    calls += [(f"set {name}", setter(name, value)) for name, value in settings.items()]
+    get = ("get", lambda: fmu.getReal([vr[name] for name in read]))
+    calls += [get, ("exit", fmu.exitInitializationMode), get] if read else [("exit", fmu.exitInitializationMode)]
+    for t, h, *inputs in steps:  # inputs: none, or one dict
+        calls += [(f"set {name}", setter(name, value)) for name, value in dict(*inputs).items()]
+        calls.append((f"step {t}", lambda t=t, h=h: fmu.doStep(t, h)))
+    if read_at_end:
+        calls.append((" ".join(["get", *read_at_end]), lambda: fmu.getReal([vr[name] for name in read_at_end])))
+    statuses = []
+    try:
+        for name, call in calls:
+            try:
+                call()
+            except FMICallException as exc:
+                statuses.append(f"{name}: {exc.status}")
+                break
+        statuses.append("end")
+    finally:
+        fmu.freeInstance()
+    return statuses, log
