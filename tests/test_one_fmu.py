@@ -2,10 +2,11 @@
 
 Each built-in system of :data:`ONE_FMUS` whose components are all native (today ``paper``; the
 others join by themselves once their models are in ``native.MODELS``) is built by ``crane-fmu build``
-into ``build/native`` as one FMU, FMI 2.0 and 3.0. Run in fmpy, in the C host without Python and
-under Wine, it must give ``crane-fmu simulate --system NAME --fmu-dir build/native`` (our master,
-Gauss-Seidel, over the native component FMUs): the same C models in the same order of calls, so
-1e-9 guards only against another order of operations (in practice the bits are equal on Linux).
+into ``build/native`` as one FMU, FMI 2.0 and 3.0. Run in fmpy, and in the C host without Python and
+under Wine (FMI 2.0 and 3.0 alike: the host's ``outputs`` and ``outputs3``), it must give
+``crane-fmu simulate --system NAME --fmu-dir build/native`` (our master, Gauss-Seidel, over the
+native component FMUs): the same C models in the same order of calls, so 1e-9 guards only against
+another order of operations (in practice the bits are equal on Linux).
 """
 
 import shutil
@@ -189,8 +190,15 @@ def host(tmp_path_factory):
     return out
 
 
-def _unpacked(native, name, folder):
-    fmu = _fmu(native, name)
+# the host's command and the binary folders (Linux, Windows) of each FMI version
+HOST_COMMAND = {2: "outputs", 3: "outputs3"}
+BINARIES = {2: ("linux64", "win64"), 3: ("x86_64-linux", "x86_64-windows")}
+
+
+def _unpacked(native, name, folder, version=2):
+    """The FMU unpacked into folder: its guid (FMI 3.0: instantiationToken) and the value references of OBSERVED
+    (FMI 3.0's are FMI 2.0's plus one: vr 0 is time)."""
+    fmu = _fmu(native, name, version)
     with zipfile.ZipFile(fmu) as z:
         z.extractall(folder)
     md = read_model_description(str(fmu))
@@ -209,39 +217,42 @@ def _columns(columns, name):
     return np.column_stack([columns["time"]] + [columns[outputs[v]] for v in OBSERVED])
 
 
+@pytest.mark.parametrize("version", [2, 3])
 @pytest.mark.parametrize("name", SYSTEMS)
-def test_the_c_host_runs_the_one_fmu_without_python(native, host, tmp_path, name):
+def test_the_c_host_runs_the_one_fmu_without_python(native, host, tmp_path, name, version):
     system = systems.get(name)
-    guid, vrs = _unpacked(native, name, tmp_path)
+    guid, vrs = _unpacked(native, name, tmp_path, version)
     steps = round((system.stop_time - system.start_time) / system.step)
-    rows = _run([host, "outputs"], tmp_path / "binaries" / "linux64" / f"{one_fmu_name(name)}.so", guid, steps,
-                system.step, *vrs, env=CLEAN_ENV)
+    library = tmp_path / "binaries" / BINARIES[version][0] / f"{one_fmu_name(name)}.so"
+    rows = _run([host, HOST_COMMAND[version]], library, guid, steps, system.step, *vrs, env=CLEAN_ENV)
     expected = _columns(_master(native, name, tmp=tmp_path), name)
     assert rows.shape == expected.shape
     assert np.max(np.abs(rows - expected)) <= SAME
 
 
+@pytest.mark.parametrize("version", [2, 3])
 @pytest.mark.parametrize("name", SYSTEMS)
-def test_the_windows_dll_under_wine_gives_the_linux_run(native, host, tmp_path_factory, name):
+def test_the_windows_dll_under_wine_gives_the_linux_run(native, host, tmp_path_factory, name, version):
     """The DLL uses the portable sin, cos and exp, Linux glibc's: as for the plant alone (test_native_hosts), the
     states agree to 1e-9 and u to 1e-9 relative."""
     if shutil.which(MINGW) is None or shutil.which("wine") is None:
         pytest.skip("needs mingw-w64 (gcc-mingw-w64-x86-64) and Wine (wine64, wine): .ci/run installs them")
     folder = tmp_path_factory.mktemp("windows")
-    guid, vrs = _unpacked(native, name, folder)
-    if not (folder / "binaries" / "win64" / f"{one_fmu_name(name)}.dll").exists():
+    guid, vrs = _unpacked(native, name, folder, version)
+    dll = folder / "binaries" / BINARIES[version][1] / f"{one_fmu_name(name)}.dll"
+    if not dll.exists():
         pytest.skip("the one-FMU has no Windows binary (mingw-w64 missing at build time)")
     subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", "-static-libgcc",
                     f"-I{fmi_headers()}", f"-I{NATIVE}", str(NATIVE / "host.c"), str(NATIVE / "portable_math.c"), "-o",
                     str(folder / "host.exe")], check=True)
-    shutil.copy(folder / "binaries" / "win64" / f"{one_fmu_name(name)}.dll", folder)
+    shutil.copy(dll, folder)
     prefix = tmp_path_factory.mktemp("wineprefix")
     env = {**CLEAN_ENV, "HOME": str(prefix), "WINEPREFIX": str(prefix), "WINEDEBUG": "-all"}
     system = systems.get(name)
     steps = round((system.stop_time - system.start_time) / system.step)
     try:
-        windows = _run(["wine", folder / "host.exe", "outputs"], f"{one_fmu_name(name)}.dll", guid, steps,
-                       system.step, *vrs, env=env, cwd=folder)
+        windows = _run(["wine", folder / "host.exe", HOST_COMMAND[version]], dll.name, guid, steps, system.step,
+                       *vrs, env=env, cwd=folder)
     finally:
         subprocess.run(["wineserver", "-w"], env=env, timeout=120)
         shutil.rmtree(prefix, ignore_errors=True)

@@ -1,7 +1,7 @@
 /*
- * A C host for the native CranePlant FMU (FMI 2.0), for the tests and `crane-fmu bench --native`
- * (not part of any FMU): compiled for Linux (dlopen) and, with mingw-w64, for Windows (LoadLibrary)
- * to run under Wine. No Python anywhere.
+ * A C host for the native CranePlant FMU (FMI 2.0) and for any native FMU alone (FMI 2.0 or 3.0), for
+ * the tests and `crane-fmu bench --native` (not part of any FMU): compiled for Linux (dlopen) and, with
+ * mingw-w64, for Windows (LoadLibrary) to run under Wine. No Python anywhere.
  *
  *   host run LIB GUID STEPS H                           free swing: rows "t,x,dx,theta1,dtheta1,theta2,dtheta2"
  *   host cycles LIB GUID N                              N instantiate/initialise/step/free cycles; RSS per 1000
@@ -21,6 +21,9 @@
  *   host outputs LIB GUID STEPS H [VR=VALUE]... VR...    any FMI 2.0 FMU (e.g. a system as one FMU): Real
  *                                                       parameters set, then rows "t,the Reals of VR..." at
  *                                                       t = k H after k steps
+ *   host outputs3 LIB TOKEN STEPS H [VR=VALUE]... VR... the same for any FMI 3.0 co-simulation FMU (TOKEN: its
+ *                                                       instantiationToken): Float64 parameters set, Float64s read
+ *                                                       (its value references: FMI 2.0's plus one in ours)
  *
  * Value references are those of the CranePlant and BacksteppingController tables (checked against
  * modelDescription.xml by the tests), or given on the command line.
@@ -32,6 +35,7 @@
 #include <time.h>
 
 #include "fmi2Functions.h"
+#include "fmi3Functions.h"
 #include "plant_math.h" /* SIN, COS: the C library's, or with CRANE_OWN_MATH the portable ones (Windows) */
 
 #ifdef _WIN32
@@ -77,12 +81,17 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
 
 static const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
 
-static Api load(const char *library, const char *guid) {
+static void *open_library(const char *library) {
     void *lib = OPEN(library);
     if (!lib) {
         fprintf(stderr, "cannot load %s\n", library);
         exit(3);
     }
+    return lib;
+}
+
+static Api load(const char *library, const char *guid) {
+    void *lib = open_library(library);
     Api api = {(fmi2InstantiateTYPE *)SYMBOL(lib, "fmi2Instantiate"),
                (fmi2FreeInstanceTYPE *)SYMBOL(lib, "fmi2FreeInstance"),
                (fmi2SetupExperimentTYPE *)SYMBOL(lib, "fmi2SetupExperiment"),
@@ -228,18 +237,27 @@ static double pair(const Api *plant, const Api *law, fmi2ValueReference cx, fmi2
     return per_step;
 }
 
-/* Any FMU alone: the Real settings "VR=VALUE" of args, then rows "t,values" of the other args' VRs at each step. */
-static int outputs(const Api *api, int steps, double h, int n_args, char **args) {
-    enum { MAX_VR = 64 };
-    fmi2ValueReference set_vr[MAX_VR], get_vr[MAX_VR];
-    double set_v[MAX_VR], y[MAX_VR];
-    size_t n_set = 0, n_get = 0;
+enum { MAX_VR = 64 };
+
+/* The "VR=VALUE" settings of args (into set_vr, set_v) and the other args' VRs to read (into get_vr). */
+static int parse_vrs(int n_args, char **args, unsigned int set_vr[], double set_v[], size_t *n_set,
+                     unsigned int get_vr[], size_t *n_get) {
+    *n_set = *n_get = 0;
     for (int i = 0; i < n_args; i++) {
         const char *eq = strchr(args[i], '=');
-        if ((eq ? n_set : n_get) == MAX_VR) return 0;
-        if (eq) set_vr[n_set] = (fmi2ValueReference)strtoul(args[i], NULL, 10), set_v[n_set++] = strtod(eq + 1, NULL);
-        else get_vr[n_get++] = (fmi2ValueReference)strtoul(args[i], NULL, 10);
+        if ((eq ? *n_set : *n_get) == MAX_VR) return 0;
+        if (eq) set_vr[*n_set] = (unsigned int)strtoul(args[i], NULL, 10), set_v[(*n_set)++] = strtod(eq + 1, NULL);
+        else get_vr[(*n_get)++] = (unsigned int)strtoul(args[i], NULL, 10);
     }
+    return 1;
+}
+
+/* Any FMU alone: the Real settings "VR=VALUE" of args, then rows "t,values" of the other args' VRs at each step. */
+static int outputs(const Api *api, int steps, double h, int n_args, char **args) {
+    fmi2ValueReference set_vr[MAX_VR], get_vr[MAX_VR];
+    double set_v[MAX_VR], y[MAX_VR];
+    size_t n_set, n_get;
+    if (!parse_vrs(n_args, args, set_vr, set_v, &n_set, get_vr, &n_get)) return 0;
     fmi2Component c = start(api, n_set, set_vr, set_v);
     if (!c) return 0;
     for (int k = 0; k <= steps; k++) {
@@ -253,9 +271,60 @@ static int outputs(const Api *api, int steps, double h, int n_args, char **args)
     return 1;
 }
 
+/* ---- FMI 3.0: the `outputs3` mode ---------------------------------------------------------------------------- */
+
+static void logger3(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category, fmi3String message) {
+    (void)env, (void)category;
+    if (!quiet) fprintf(stderr, "[%d] %s\n", status, message);
+}
+
+/* outputs() for an FMI 3.0 co-simulation FMU: Float64 settings in initialization mode, then rows of Float64s. */
+static int outputs3(const char *library, const char *token, int steps, double h, int n_args, char **args) {
+    void *lib = open_library(library);
+    fmi3InstantiateCoSimulationTYPE *instantiate =
+        (fmi3InstantiateCoSimulationTYPE *)SYMBOL(lib, "fmi3InstantiateCoSimulation");
+    fmi3FreeInstanceTYPE *free_instance = (fmi3FreeInstanceTYPE *)SYMBOL(lib, "fmi3FreeInstance");
+    fmi3EnterInitializationModeTYPE *enter =
+        (fmi3EnterInitializationModeTYPE *)SYMBOL(lib, "fmi3EnterInitializationMode");
+    fmi3ExitInitializationModeTYPE *exit_init =
+        (fmi3ExitInitializationModeTYPE *)SYMBOL(lib, "fmi3ExitInitializationMode");
+    fmi3SetFloat64TYPE *set = (fmi3SetFloat64TYPE *)SYMBOL(lib, "fmi3SetFloat64");
+    fmi3GetFloat64TYPE *get = (fmi3GetFloat64TYPE *)SYMBOL(lib, "fmi3GetFloat64");
+    fmi3DoStepTYPE *step = (fmi3DoStepTYPE *)SYMBOL(lib, "fmi3DoStep");
+    if (!instantiate || !free_instance || !enter || !exit_init || !set || !get || !step) {
+        fprintf(stderr, "missing FMI 3.0 functions in %s\n", library);
+        exit(3);
+    }
+    fmi3ValueReference set_vr[MAX_VR], get_vr[MAX_VR];
+    double set_v[MAX_VR], y[MAX_VR];
+    size_t n_set, n_get;
+    if (!parse_vrs(n_args, args, set_vr, set_v, &n_set, get_vr, &n_get)) return 0;
+    fmi3Instance c = instantiate(instance_name, token, "", fmi3False, fmi3False, fmi3False, fmi3False, NULL, 0, NULL,
+                                 logger3, NULL);
+    if (!c) return 0;
+    int ok = enter(c, fmi3False, 0.0, 0.0, fmi3False, 0.0) <= fmi3Warning &&
+             (!n_set || set(c, set_vr, n_set, set_v, n_set) <= fmi3Warning) && exit_init(c) <= fmi3Warning;
+    for (int k = 0; ok && k <= steps; k++) {
+        fmi3Boolean event, terminate, early;
+        fmi3Float64 last;
+        if (get(c, get_vr, n_get, y, n_get) > fmi3Warning) ok = 0;
+        else {
+            printf("%.17g", k * h);
+            for (size_t i = 0; i < n_get; i++) printf(",%.17g", y[i]);
+            putchar('\n');
+            if (k < steps && (step(c, k * h, h, fmi3True, &event, &terminate, &early, &last) > fmi3Warning || terminate))
+                ok = 0;
+        }
+    }
+    free_instance(c);
+    return ok;
+}
+
 int main(int argc, char **argv) {
     if (argc < 4) return 2;
     const char *command = argv[1];
+    if (!strcmp(command, "outputs3") && argc >= 7)
+        return outputs3(argv[2], argv[3], atoi(argv[4]), atof(argv[5]), argc - 6, argv + 6) ? 0 : 6;
     Api api = load(argv[2], argv[3]);
     if ((!strcmp(command, "pair") || !strcmp(command, "pair-bench")) && (argc == 8 || argc == 10)) {
         Api law = load(argv[4], argv[5]);
