@@ -30,11 +30,7 @@ struct Model {
     Config config; /* set when initialisation ends */
 };
 
-const char *const MODEL_NAME = MODEL_IDENTIFIER;
-const char *const MODEL_TOKEN = INSTANTIATION_TOKEN;
-const size_t MODEL_SIZE = sizeof(Model);
-const unsigned MODEL_N_VARIABLES = N_VARIABLES;
-const unsigned MODEL_N_STRINGS = 1;
+MODEL_EXPORTS(1)
 
 #define V(name) (values[VR_##name])
 #define R(value) py_repr(value, (char[REPR_SIZE]){0})
@@ -116,11 +112,6 @@ ModelStatus model_initialize(Model *m, const Reporter *r) {
     return MODEL_OK;
 }
 
-ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed,
-                            const Reporter *r) {
-    return set_real_values(m->values, vr, n, values, fixed_allowed, r);
-}
-
 ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r) {
     for (size_t i = 0; i < n; i++) {
         if (vr[i] >= N_VARIABLES) return no_variable(r, vr[i]);
@@ -148,8 +139,6 @@ ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const cha
 }
 
 ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
-    (void)m, (void)time;
-    if (!(step > 0 && isfinite(step)))
-        return report(r, MODEL_ERROR, "communication step must be > 0 and finite, got %s", R(step));
+    (void)m, (void)time, (void)step, (void)r; /* no state */
     return MODEL_OK;
 }

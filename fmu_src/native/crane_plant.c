@@ -32,11 +32,7 @@ struct Model {
     double state[N_STATE];
 };
 
-const char *const MODEL_NAME = MODEL_IDENTIFIER;
-const char *const MODEL_TOKEN = INSTANTIATION_TOKEN;
-const size_t MODEL_SIZE = sizeof(Model);
-const unsigned MODEL_N_VARIABLES = N_VARIABLES;
-const unsigned MODEL_N_STRINGS = 0;
+MODEL_EXPORTS(0)
 MODEL_WITHOUT_STRINGS
 
 #define V(name) (values[VR_##name])
@@ -93,11 +89,6 @@ ModelStatus model_initialize(Model *m, const Reporter *r) {
     return MODEL_OK;
 }
 
-ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed,
-                            const Reporter *r) {
-    return set_real_values(m->values, vr, n, values, fixed_allowed, r);
-}
-
 /* Every output in table order: plant_outputs(), then l1_now, dl1_now, ddx. */
 static void outputs(const double state[N_STATE], const Config *c, double out[N_OUTPUTS]) {
     plant_outputs(state, &c->p, out);
@@ -145,8 +136,6 @@ ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r)
     const Config *c = &m->config;
     const double *in = &m->values[VR_u];
     double u = in[0], hoist = in[1], f1 = in[2], f2 = in[3];
-    if (!(step > 0 && isfinite(step)))
-        return report(r, MODEL_ERROR, "communication step must be > 0 and finite, got %s", R(step));
     if (c->p.m2 == 0 && f2 != 0)
         return report(r, MODEL_DISCARD, "F2 = %s N acts on a payload of mass m2 = 0: the step is discarded", R(f2));
     /* plant_equations.substeps(): the 1e-9 slack keeps h = 1 ms with max_substep = 1 ms at one sub-step */

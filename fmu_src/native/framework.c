@@ -3,7 +3,9 @@
  * Every allocation is checked; a failed one is an error with a message, never a crash.
  */
 #include "framework.h"
+#include "py_repr.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -156,7 +158,9 @@ int no_such_values(Instance *c, const char *function, int modes, size_t n) {
 int do_step(Instance *c, const char *function, double t, double h) {
     if (!allowed(c, function, STEPPING)) return MODEL_ERROR;
     Reporter r = reporter(c, function);
-    int status = settle(c, model_do_step(c->model, t, h, &r), 0);
+    ModelStatus status = h > 0 && isfinite(h) ? model_do_step(c->model, t, h, &r) /* the rule of runtime.py */
+        : report(&r, MODEL_ERROR, "communication step must be > 0 and finite, got %s", py_repr(h, (char[REPR_SIZE]){0}));
+    status = settle(c, status, 0);
     if (status <= MODEL_WARNING) c->time = t + h;
     return status;
 }

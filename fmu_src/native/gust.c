@@ -28,11 +28,7 @@ struct Model {
     double time;   /* the state: the time the outputs are for */
 };
 
-const char *const MODEL_NAME = MODEL_IDENTIFIER;
-const char *const MODEL_TOKEN = INSTANTIATION_TOKEN;
-const size_t MODEL_SIZE = sizeof(Model);
-const unsigned MODEL_N_VARIABLES = N_VARIABLES;
-const unsigned MODEL_N_STRINGS = 0;
+MODEL_EXPORTS(0)
 MODEL_WITHOUT_STRINGS
 
 #define V(name) (values[VR_##name])
@@ -70,11 +66,6 @@ ModelStatus model_initialize(Model *m, const Reporter *r) {
     return MODEL_OK;
 }
 
-ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed,
-                            const Reporter *r) {
-    return set_real_values(m->values, vr, n, values, fixed_allowed, r);
-}
-
 ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r) {
     double out[N_OUTPUTS];
     int have_outputs = 0;
@@ -98,9 +89,6 @@ ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double valu
 }
 
 ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
-    if (!(step > 0 && isfinite(step)))
-        return report(r, MODEL_ERROR, "communication step must be > 0 and finite, got %s",
-                      py_repr(step, (char[REPR_SIZE]){0}));
     m->time = time + step; /* update(): the outputs are for the end of the step */
     return MODEL_OK;
 }

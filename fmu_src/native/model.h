@@ -69,7 +69,8 @@ ModelStatus model_set_strings(Model *m, const unsigned vr[], size_t n, const cha
 ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const char *values[], const Reporter *r);
 /* End of initialisation: validate the parameters and set the initial state. */
 ModelStatus model_initialize(Model *m, const Reporter *r);
-/* One communication step from `time` of length `step`: OK (maybe with warnings logged), DISCARD, or ERROR. */
+/* One communication step from `time` of length `step` (> 0 and finite: the frameworks check it): OK (maybe with
+   warnings logged), DISCARD, or ERROR. */
 ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r);
 
 #endif

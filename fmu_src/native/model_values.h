@@ -113,6 +113,19 @@ static inline ModelStatus get_string_value(const char store[STRING_SIZE], unsign
 }
 
 /* The String functions of a model with no String variables (MODEL_N_STRINGS = 0: the frameworks never call them). */
+/* What every model file exports alike (model.h): its name, token, size and counts, and model_set_reals, the
+   check-and-store of set_real_values() into the model's `values`. */
+#define MODEL_EXPORTS(n_strings)                                                                                  \
+    const char *const MODEL_NAME = MODEL_IDENTIFIER;                                                              \
+    const char *const MODEL_TOKEN = INSTANTIATION_TOKEN;                                                          \
+    const size_t MODEL_SIZE = sizeof(Model);                                                                      \
+    const unsigned MODEL_N_VARIABLES = N_VARIABLES;                                                               \
+    const unsigned MODEL_N_STRINGS = n_strings;                                                                   \
+    ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed, \
+                                const Reporter *r) {                                                              \
+        return set_real_values(m->values, vr, n, values, fixed_allowed, r);                                       \
+    }
+
 #define MODEL_WITHOUT_STRINGS                                                                                        \
     ModelStatus model_set_strings(Model *m, const unsigned vr[], size_t n, const char *const values[],               \
                                   int fixed_allowed, const Reporter *r) {                                            \

@@ -39,11 +39,7 @@ struct Model {
     double time;   /* the state: the time the outputs are for */
 };
 
-const char *const MODEL_NAME = MODEL_IDENTIFIER;
-const char *const MODEL_TOKEN = INSTANTIATION_TOKEN;
-const size_t MODEL_SIZE = sizeof(Model);
-const unsigned MODEL_N_VARIABLES = N_VARIABLES;
-const unsigned MODEL_N_STRINGS = 1;
+MODEL_EXPORTS(1)
 
 #define V(name) (values[VR_##name])
 #define R(value) py_repr(value, (char[REPR_SIZE]){0})
@@ -221,11 +217,6 @@ ModelStatus model_initialize(Model *m, const Reporter *r) {
     return MODEL_OK;
 }
 
-ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed,
-                            const Reporter *r) {
-    return set_real_values(m->values, vr, n, values, fixed_allowed, r);
-}
-
 ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r) {
     double out[N_OUTPUTS];
     int have_outputs = 0;
@@ -259,8 +250,6 @@ ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const cha
 }
 
 ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
-    if (!(step > 0 && isfinite(step)))
-        return report(r, MODEL_ERROR, "communication step must be > 0 and finite, got %s", R(step));
     m->time = time + step; /* update(): the outputs are for the end of the step */
     return MODEL_OK;
 }

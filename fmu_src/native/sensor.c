@@ -35,11 +35,7 @@ struct Model {
     double held[N_OUTPUTS];    /* and the last */
 };
 
-const char *const MODEL_NAME = MODEL_IDENTIFIER;
-const char *const MODEL_TOKEN = INSTANTIATION_TOKEN;
-const size_t MODEL_SIZE = sizeof(Model);
-const unsigned MODEL_N_VARIABLES = N_VARIABLES;
-const unsigned MODEL_N_STRINGS = 0;
+MODEL_EXPORTS(0)
 MODEL_WITHOUT_STRINGS
 
 #define V(name) (values[VR_##name])
@@ -95,11 +91,6 @@ ModelStatus model_initialize(Model *m, const Reporter *r) {
     return MODEL_OK;
 }
 
-ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed,
-                            const Reporter *r) {
-    return set_real_values(m->values, vr, n, values, fixed_allowed, r);
-}
-
 /* _sensor_output(): the held sample when delayed, else (and at first) a sample of the inputs now. */
 static void outputs(const Model *m, const Config *c, double out[N_OUTPUTS]) {
     if (!c->delay || !m->have_held) measure(c, m->k, &m->values[VR_x], out);
@@ -130,9 +121,6 @@ ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double valu
 
 ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
     (void)time;
-    if (!(step > 0 && isfinite(step)))
-        return report(r, MODEL_ERROR, "communication step must be > 0 and finite, got %s",
-                      py_repr(step, (char[REPR_SIZE]){0}));
     measure(&m->config, m->k, &m->values[VR_x], m->held); /* _sensor_update(): (k + 1, measure(k)) */
     m->k++, m->have_held = 1;
     return MODEL_OK;

@@ -150,8 +150,6 @@ ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const cha
 /* A communication step of any whole number of system steps: at each, the exchange, then every instance steps
    (in dependency order); after the last, the exchange that gives the outputs at the new time. */
 ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
-    if (!(step > 0 && isfinite(step)))
-        return report(r, MODEL_ERROR, "communication step must be > 0 and finite, got %s", R(step));
     double n_steps = nearbyint(step / SYSTEM_STEP);
     if (n_steps < 1 || fabs(n_steps * SYSTEM_STEP - step) > 1e-9 * SYSTEM_STEP)
         return report(r, MODEL_ERROR, "communication step %s s must be a whole multiple of the system step %s s",
