@@ -8,6 +8,7 @@ so that a native FMU's refusals and errors can be compared with the Python FMU's
 import ctypes
 
 import fmpy
+import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (
@@ -106,3 +107,26 @@ def messages(path, settings, steps=(), read=(), read_at_end=(), instance_name="c
     finally:
         fmu.freeInstance()
     return statuses, log
+
+
+def compiler():
+    """The machine's C compiler, as the build finds it (``native.compilers``); the test skips without one."""
+    from crane_fmu.build_scripts.native import NativeUnavailable, compilers
+
+    try:
+        return compilers()["linux"]
+    except NativeUnavailable as exc:
+        pytest.skip(str(exc))
+
+
+def steps_after_restore(fmu, version, steps, k0, n):
+    """``(first, again, third)``: ``steps(k0, n)`` (the rows they give) run after saving the FMU state, again after
+    restoring it, and a third time after restoring a serialised and deserialised copy of it."""
+    state = fmu.getFMUState() if version == 3 else fmu.getFMUstate()
+    serialized = fmu.serializeFMUState(state) if version == 3 else fmu.serializeFMUstate(state)
+    first = steps(k0, n)
+    fmu.setFMUState(state) if version == 3 else fmu.setFMUstate(state)
+    again = steps(k0, n)
+    restored = fmu.deserializeFMUState(serialized) if version == 3 else fmu.deSerializeFMUstate(serialized)
+    fmu.setFMUState(restored) if version == 3 else fmu.setFMUstate(restored)
+    return first, again, steps(k0, n)

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
-from native_fmus import close, messages, open_native
+from native_fmus import close, compiler, messages, open_native, steps_after_restore
 
 from crane_fmu import components, systems
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
@@ -109,13 +109,6 @@ int main(void) {
 """
 
 
-def _compiler():
-    compiler = shutil.which("cc") or shutil.which("gcc")
-    if compiler is None:
-        pytest.skip("no C compiler")
-    return compiler
-
-
 @pytest.fixture(scope="module")
 def accel_harnesses(tmp_path_factory):
     """The C accelerations with glibc's libm and with the portable math of the Windows build."""
@@ -124,7 +117,7 @@ def accel_harnesses(tmp_path_factory):
     built = {}
     for name, flags in (("libm", []), ("portable", ["-DCRANE_OWN_MATH"])):
         built[name] = folder / name
-        subprocess.run([_compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", *flags, f"-I{NATIVE}",
+        subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", *flags, f"-I{NATIVE}",
                         str(folder / "harness.c"), str(NATIVE / "plant_equations.c"), str(NATIVE / "portable_math.c"),
                         "-o", str(built[name]), "-lm"], check=True)
     return built
@@ -273,14 +266,7 @@ def test_fmu_state_saved_serialised_and_restored_repeats_the_steps_exactly(nativ
         return rows
 
     steps(0, 300)
-    state = fmu.getFMUState() if version == 3 else fmu.getFMUstate()
-    serialized = fmu.serializeFMUState(state) if version == 3 else fmu.serializeFMUstate(state)
-    first = steps(300, 300)
-    fmu.setFMUState(state) if version == 3 else fmu.setFMUstate(state)
-    again = steps(300, 300)
-    restored = fmu.deserializeFMUState(serialized) if version == 3 else fmu.deSerializeFMUstate(serialized)
-    fmu.setFMUState(restored) if version == 3 else fmu.setFMUstate(restored)
-    third = steps(300, 300)
+    first, again, third = steps_after_restore(fmu, version, steps, 300, 300)
     close(fmu)
     assert first == again == third
     assert len({round(r[-1], 6) for r in first}) > 10  # the drive's acceleration moves: the lag is in the state
@@ -322,11 +308,11 @@ def test_the_model_and_framework_compile_without_warnings_under_strict_flags(tmp
     for name in ("BacksteppingController", "LqrController"):
         (tmp_path / f"{name}_variables.h").write_text(variables_header(components.get(name)))
     for framework in ("fmi2_framework.c", "fmi3_framework.c"):
-        subprocess.run([_compiler(), *STRICT, f"-I{tmp_path}", f"-I{NATIVE}", f"-I{NATIVE.parent}",
+        subprocess.run([compiler(), *STRICT, f"-I{tmp_path}", f"-I{NATIVE}", f"-I{NATIVE.parent}",
                         f"-I{fmi_headers()}", str(NATIVE / framework), "-o", str(tmp_path / "f.o")], check=True)
     for source in ("crane_plant.c", "backstepping.c", "lqr.c", "plant_equations.c", "linalg.c", "framework.c",
                    "py_repr.c", "portable_math.c"):
-        subprocess.run([_compiler(), *STRICT, f"-I{tmp_path}", f"-I{NATIVE}", str(NATIVE / source), "-o",
+        subprocess.run([compiler(), *STRICT, f"-I{tmp_path}", f"-I{NATIVE}", str(NATIVE / source), "-o",
                         str(tmp_path / "m.o")], check=True)
 
 

@@ -20,7 +20,7 @@ import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
-from native_fmus import close, messages, open_native
+from native_fmus import close, compiler, messages, open_native, steps_after_restore
 
 from crane_fmu import components, systems
 from crane_fmu.analysis.scoreboard import Contender, systems_for
@@ -99,7 +99,7 @@ def test_the_model_files_compile_without_warnings_under_strict_flags(tmp_path, o
     for name in NAMES:
         (tmp_path / f"{name}_variables.h").write_text(variables_header(components.get(name)))
     for source in ("planner.c", "energy.c", "gust.c", "sensor.c", "portable_math.c"):
-        subprocess.run([_compiler(), *flags, f"-I{tmp_path}", f"-I{NATIVE}", str(NATIVE / source), "-o",
+        subprocess.run([compiler(), *flags, f"-I{tmp_path}", f"-I{NATIVE}", str(NATIVE / source), "-o",
                         str(tmp_path / "m.o")], check=True)
 
 
@@ -314,14 +314,7 @@ def test_fmu_state_saved_serialised_and_restored_repeats_the_steps_exactly(nativ
         return rows
 
     steps(0, 150)
-    state = fmu.getFMUState() if version == 3 else fmu.getFMUstate()
-    serialized = fmu.serializeFMUState(state) if version == 3 else fmu.serializeFMUstate(state)
-    first = steps(150, 100)
-    fmu.setFMUState(state) if version == 3 else fmu.setFMUstate(state)
-    again = steps(150, 100)
-    restored = fmu.deserializeFMUState(serialized) if version == 3 else fmu.deSerializeFMUstate(serialized)
-    fmu.setFMUState(restored) if version == 3 else fmu.setFMUstate(restored)
-    third = steps(150, 100)
+    first, again, third = steps_after_restore(fmu, version, steps, 150, 100)
     close(fmu)
     assert first == again == third
     assert len({round(r[-1], 6) for r in first}) > 30  # the outputs move over those steps
@@ -405,18 +398,11 @@ int main(void) {
 """
 
 
-def _compiler():
-    compiler = shutil.which("cc") or shutil.which("gcc")
-    if compiler is None:
-        pytest.skip("no C compiler")
-    return compiler
-
-
 def test_the_portable_tanh_and_log_agree_with_glibcs(tmp_path):
     """The EnergyController's tanh and the Sensor's log in the Windows build: within 3 (tanh) and 1 (log) ULP of
     glibc's at 200000 random points, equal at most (fdlibm's methods; glibc's log is nearly correctly rounded)."""
     (tmp_path / "harness.c").write_text(MATH_HARNESS)
-    subprocess.run([_compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", f"-I{NATIVE}",
+    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", f"-I{NATIVE}",
                     str(tmp_path / "harness.c"), str(NATIVE / "portable_math.c"), "-o", str(tmp_path / "h"), "-lm"],
                    check=True)
     rng = random.Random(31)
@@ -483,7 +469,7 @@ def _run_host(command, *args, cwd=None, env=None):
 @pytest.fixture(scope="module")
 def host(tmp_path_factory):
     host = tmp_path_factory.mktemp("host") / "host"
-    subprocess.run([_compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", f"-I{NATIVE}",
+    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", f"-I{NATIVE}",
                     str(NATIVE / "host.c"), "-o", str(host), "-ldl", "-lpthread", "-lm"], check=True)
     return host
 
@@ -538,7 +524,7 @@ def test_the_same_math_source_on_linux_gives_the_windows_bits(native, unpacked, 
     _, guid, *rest = _host_arguments(native[2] / f"{name}.fmu", settings, steps, 1e-3)
     sources = unpacked[name] / "sources"
     library = tmp_path / f"{name}.so"
-    subprocess.run([_compiler(), "-shared", "-fPIC", "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH",
+    subprocess.run([compiler(), "-shared", "-fPIC", "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH",
                     f"-I{sources}", f"-I{fmi_headers()}", *[str(f) for f in sorted(sources.glob("*.c"))
                                                              if f.name != "fmi3_framework.c"], "-o", str(library)],
                    check=True)

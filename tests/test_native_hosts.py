@@ -17,6 +17,7 @@ import zipfile
 import numpy as np
 import pytest
 from fmpy import read_model_description
+from native_fmus import compiler
 
 from crane_fmu import systems
 from crane_fmu.build_scripts.native import MINGW, NATIVE, native_dir
@@ -27,13 +28,6 @@ from crane_fmu.model.tables import STATE
 HOST = NATIVE / "host.c"
 CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # what `env -i PATH=/usr/bin:/bin` leaves: no venv, no pyenv
 FREE_SWING_MAX_THETA2_DEG = 15.5976  # the Python FMU's
-
-
-def _compiler():
-    compiler = shutil.which("cc") or shutil.which("gcc")
-    if compiler is None:
-        pytest.skip("no C compiler")
-    return compiler
 
 
 @pytest.fixture(scope="module")
@@ -91,7 +85,7 @@ def lqr_run(fmu_dir):
 @pytest.fixture(scope="module")
 def host(tmp_path_factory):
     out = tmp_path_factory.mktemp("host") / "host"
-    subprocess.run([_compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", f"-I{NATIVE}",
+    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", f"-I{NATIVE}",
                     str(HOST), "-o", str(out), "-ldl", "-lpthread", "-lm"], check=True)
     return out
 
@@ -269,12 +263,12 @@ def test_windows_dll_under_wine_gives_the_linux_section5_run(wine, plant, sectio
     # the same math source on Linux: bit for bit
     sources = plant[0] / "sources"
     own = tmp_path / "own_math.so"
-    subprocess.run([_compiler(), "-shared", "-fPIC", "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH",
+    subprocess.run([compiler(), "-shared", "-fPIC", "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH",
                     f"-I{sources}", f"-I{fmi_headers()}", *[str(sources / f) for f in (
                         "crane_plant.c", "plant_equations.c", "py_repr.c", "portable_math.c", "framework.c",
                         "fmi2_framework.c")], "-o", str(own)], check=True)
     own_host = tmp_path / "own_host"
-    subprocess.run([_compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH",
+    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH",
                     f"-I{fmi_headers()}", f"-I{NATIVE}", str(HOST), str(NATIVE / "portable_math.c"), "-o",
                     str(own_host), "-ldl", "-lpthread"], check=True)
     assert np.array_equal(_rows(_host(own_host, "paper", own, guid, 20_000, 1e-3)), windows)
