@@ -21,8 +21,9 @@ Holding registers (function 3 to read, 16 to write; 6 only for the step register
 
 A request outside the map, a write that splits a float32 or touches a read-only register, is answered with
 exception 02 (illegal data address); a non-finite value, a step count of 0, a step in real time or past the
-stop time with 03 (illegal data value); any other function (coils, discrete inputs, function 23) with 01. Any unit id is answered. Every client is
-served: writes by any (the last wins), steps one after another in the order they arrive.
+stop time with 03 (illegal data value); any other function (coils, discrete inputs, function 23) with 01. Any
+unit id is answered. Every client is served: writes by any (the last wins), steps one after another in the
+order they arrive.
 """
 
 import asyncio
