@@ -111,7 +111,7 @@ def test_lock_step_over_opcua_equals_the_offline_run_and_ctrl_c_keeps_it(fmu_dir
     Step(1). What it reads, and what the server records, equal the offline run of the LQR FMU to 1e-12
     (doubles travel as doubles: the same Gauss-Seidel exchange). Ctrl-C then ends the server cleanly, its
     results (every row, the client's last u included) at --out."""
-    steps = 300
+    steps = 200
     server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--lock-step", "--opcua",
                     "127.0.0.1:0")
     try:
@@ -124,8 +124,8 @@ def test_lock_step_over_opcua_equals_the_offline_run_and_ctrl_c_keeps_it(fmu_dir
         assert np.max(np.abs(seen[:, i] - offline[f"plant.{name}"])) <= 1e-12, name
     assert np.max(np.abs(seen[:, 7] - offline["controller.u"])) <= 1e-12
     assert status == 0, err[-2000:]
-    assert f"stopped at t = 0.3 s; wrote {server.out}" in out
-    assert "lock-step: 300 steps in" in out
+    assert f"stopped at t = 0.2 s; wrote {server.out}" in out
+    assert "lock-step: 200 steps in" in out
     served = read_csv(server.out)
     assert list(served) == list(offline)
     for name in offline:
@@ -137,8 +137,8 @@ def test_lock_step_over_modbus_matches_the_offline_run_to_float32(fmu_dir, tmp_p
     server's double rounded to float32, each u the server applies is the client's rounded to float32. The run
     then differs from the offline run only by that rounding: within 1e-5 in SI units (float32 keeps 7
     digits of these values, of order 0.1 to 2; the rounding of the state, fed back through gains of at most
-    165, moves u by ~1e-5 m/s2 a step, and 300 steps of 1 ms integrate that to well under 1e-5)."""
-    steps = 300
+    165, moves u by ~1e-5 m/s2 a step, and 200 steps of 1 ms integrate that to well under 1e-5)."""
+    steps = 200
     server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--lock-step", "--modbus",
                     "127.0.0.1:0")
     variables = [r for r in register_map(_served_lqr(fmu_dir)) if r.type == "float32"]
@@ -206,7 +206,7 @@ def test_the_first_line_names_every_endpoint_on_ports_the_os_picked(server):
     assert url and int(url.group(1)) > 0 and server.modbus[0] == "127.0.0.1" and server.modbus[1] > 0
 
 
-def test_the_opcua_address_space(server):
+def test_the_opcua_address_space(server, printed_names):
     """Namespace urn:crane-fmu; one object named after the system; a Double per instance.variable with that
     browse name and its unit in the description; outputs and parameters read-only, the external instance's
     outputs writable; Time, Status and Step(n)."""
@@ -238,24 +238,39 @@ def test_the_opcua_address_space(server):
         assert bool(access.Value.Value & (1 << writable)) == (name == "controller.u"), name
     assert facts["Time"][2] == ua.VariantType.Double and facts["Status"][2] == ua.VariantType.String
     assert step_argument.Name == "n" and step_argument.DataType == ua.NodeId(ua.ObjectIds.UInt32)
-    assert count == len(_served_lqr_names(server)) + 3
+    assert count == len(printed_names) + 3  # Time, Status, Step
 
 
-def _served_lqr_names(server):
+@pytest.fixture(scope="module")
+def printed_map(server):
+    """What `crane-fmu serve --print-map` prints for the shared server's system and options."""
     done = subprocess.run([sys.executable, "-m", "crane_fmu", "serve", "--system", "lqr", "--external", "controller",
                            "--lock-step", "--fmu-dir", str(_fmu_dir_of(server)), "--print-map"],
                           capture_output=True, text=True, timeout=120)
-    return re.findall(r"\| `(\w+\.\w+)` \| float32", done.stdout)
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+@pytest.fixture(scope="module")
+def printed_names(printed_map):
+    """The variables' names in the order the printed map lists their registers."""
+    return re.findall(r"\| `(\w+\.\w+)` \| float32", printed_map)
+
+
+def test_the_docs_register_map_is_the_generated_one(printed_map):
+    page = (ROOT / "docs" / "guide" / "virtual-commissioning.md").read_text()
+    section = re.search(r"<!-- register-map:start -->\n(.*)\n<!-- register-map:end -->", page, re.S).group(1)
+    assert section.strip() == printed_map.strip()
 
 
 def _fmu_dir_of(server):
     return server.proc.args[server.proc.args.index("--fmu-dir") + 1]
 
 
-def test_modbus_registers_hold_what_opcua_serves(server):
+def test_modbus_registers_hold_what_opcua_serves(server, printed_names):
     """The generated map: every float32 pair read where --print-map says, high word first, is the OPC UA
     node's double rounded to float32; the header's time (float64) and steps (uint32) are OPC UA's Time."""
-    names = _served_lqr_names(server)
+    names = printed_names
     entries = {r.name: r for r in register_map(_served_lqr(_fmu_dir_of(server)))}
     assert names == [n for n in entries if "." in n]
     inputs = [n for n in names if entries[n].table == "input"]
