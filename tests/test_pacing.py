@@ -94,9 +94,14 @@ def test_timing_percentiles_summary_and_csv(tmp_path):
     assert summary["misses"] == sum(late + 0.0005 > 0.01 for late in lateness) == 90
     assert summary["lateness_max"] == 0.099
     assert math.isnan(percentile([], 50))
-    # the real-time factor: the simulated time over the wall time to the end of the last cycle
-    assert timing.end == pytest.approx(0.99 + 0.099 + 0.0005)
+    # the real-time factor: the simulated time over the wall time to the end of the last cycle's period, or
+    # of its work if that ended later (here: 99.5 ms after its deadline)
+    assert timing.end == pytest.approx(0.99 + 0.099 + 0.0005) and timing.wall() == timing.end
     assert f"real-time factor {1.0 / 1.0895:.4f}" in timing.describe(simulated=1.0)
+    on_time = Timing(0.01)
+    for j in range(100):
+        on_time.add(0.01 * j, 0.002, 0.001)
+    assert on_time.wall() == pytest.approx(1.0) and "real-time factor 1.0000" in on_time.describe(simulated=1.0)
     timing.write_csv(tmp_path / "t.csv", start_time=2.0)
     rows = (tmp_path / "t.csv").read_text().splitlines()
     assert rows[0] == "cycle,deadline_s,lateness_s,work_s,missed,time"

@@ -55,15 +55,20 @@ class Timing:
                 "lateness_p50": percentile(self.lateness, 50), "lateness_p99": percentile(self.lateness, 99),
                 "lateness_max": max(self.lateness, default=math.nan), "work_p50": percentile(self.work, 50)}
 
+    def wall(self):
+        """The wall time the cycles took [s]: from the first deadline to the end of the last cycle's period, or
+        of its work if that ended later."""
+        return max(self.end, self.deadlines[-1] + self.period) if len(self) else 0.0
+
     def describe(self, simulated=None):
         """One line: cycles, lateness percentiles, misses and, given the simulated time the cycles advanced, the
-        real-time factor: that time over the wall time from the first deadline to the end of the last cycle."""
+        real-time factor: that time over the :meth:`wall` time (1 when the cycles kept up)."""
         s = self.summary()
         line = (f"{s['cycles']} cycles of {self.period * 1e3:g} ms: lateness p50 {s['lateness_p50'] * 1e3:.3f} ms, "
                 f"p99 {s['lateness_p99'] * 1e3:.3f} ms, max {s['lateness_max'] * 1e3:.3f} ms; "
                 f"{s['misses']} deadline misses ({100 * (1 - s['on_time']):.2f} %)")
-        if simulated is not None and self.end > 0:
-            line += f"; real-time factor {simulated / self.end:.4f}"
+        if simulated is not None and len(self):
+            line += f"; real-time factor {simulated / self.wall():.4f}"
         return line
 
     def write_csv(self, path, start_time=0.0):
