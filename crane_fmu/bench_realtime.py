@@ -2,7 +2,8 @@
 
 1. the lqr system (plant and LQR FMUs, recorded to CSV) paced by :class:`~crane_fmu.cosim.realtime.Runner`
    at cycles of 1 ms and of 10 ms for ``seconds`` each, no protocol: lateness percentiles, deadline misses
-   and the real-time factor;
+   and the real-time factor; with normal scheduling, then (where permitted) under SCHED_FIFO as
+   ``crane-fmu serve --rt-priority`` runs it;
 2. a ``crane-fmu serve --lock-step --external controller`` process with OPC UA and Modbus TCP on loopback,
    driven from this process as a PLC would: per protocol the median and 99th percentile of a write of ``u``
    and a read of the six measured states (one round trip each), and of a whole lock-step cycle (read, write,
@@ -27,6 +28,7 @@ from crane_fmu.cosim.pacing import percentile
 from crane_fmu.cosim.realtime import Runner
 
 STATE = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2")
+RT_PRIORITY = 10  # as in the docs' example of serve --rt-priority
 
 
 def run_realtime_bench(seconds=2.0, round_trips=500, out=print):
@@ -38,18 +40,40 @@ def run_realtime_bench(seconds=2.0, round_trips=500, out=print):
         system = systems.get("lqr")
         build_all(built, set(system.instances.values()), systems=(), fmi3=False, log=lambda _: None)
         out(f"1. the lqr system (plant and LQR FMUs, CSV of every step) paced for {seconds:g} s, no protocol:")
-        for period in (1e-3, 1e-2):
-            timing = _paced(system, built, period, seconds, tmp / "paced.csv")
-            figures[f"loop_{period * 1e3:g}ms"] = timing.summary()
-            out(f"   {timing.describe(seconds)}")
+        for priority in (None, RT_PRIORITY):
+            for period in (1e-3, 1e-2):
+                timing = _paced(system, built, period, seconds, tmp / "paced.csv", priority)
+                if timing is None:
+                    out(f"   with --rt-priority {priority}: not permitted here (needs root or CAP_SYS_NICE)")
+                    break
+                figures[f"loop_{period * 1e3:g}ms" + ("_fifo" if priority else "")] = timing.summary()
+                scheduling = f"SCHED_FIFO {priority}" if priority else "normal scheduling"
+                out(f"   {scheduling}: {timing.describe(seconds)}")
         out(f"2. crane-fmu serve --lock-step, a client in this process, {round_trips} round trips each "
             "(median / p99):")
         figures.update(_round_trips(built, tmp, round_trips, out))
     return figures
 
 
-def _paced(system, fmu_dir, period, seconds, csv):
-    """The lqr system in real time at cycles of ``period`` (its step 1 ms) for ``seconds``: the Timing."""
+def _paced(system, fmu_dir, period, seconds, csv, priority=None):
+    """The lqr system in real time at cycles of ``period`` (its step 1 ms) for ``seconds``: the Timing; with a
+    ``priority``, under SCHED_FIFO as ``serve --rt-priority`` runs it (None where that is not permitted)."""
+    import os
+
+    if priority:
+        try:
+            before = (os.sched_getscheduler(0), os.sched_getparam(0))
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+        except (AttributeError, OSError):
+            return None
+    try:
+        return _paced_run(system, fmu_dir, period, seconds, csv)
+    finally:
+        if priority:
+            os.sched_setscheduler(0, *before)
+
+
+def _paced_run(system, fmu_dir, period, seconds, csv):
     system = systems.at_step(system, fmu_dir, 1e-3)
     fmus, connections = system.resolve(fmu_dir)
     instances = {name: open_instance(path, name) for name, path in fmus.items()}

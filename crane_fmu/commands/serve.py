@@ -1,6 +1,7 @@
 """``crane-fmu serve``: a system in real time or lock-step, reachable over OPC UA and Modbus TCP."""
 
 import math
+import os
 import signal
 import sys
 import time
@@ -55,6 +56,10 @@ def arguments(p):
                         "are held (default 1 s)")
     p.add_argument("--hold", choices=("zero", "last"), default="zero",
                    help="what the watchdog holds the external outputs at: zero (default) or their last values")
+    p.add_argument("--rt-priority", type=int, metavar="N",
+                   help="real time on Linux: run the stepping thread under SCHED_FIFO at priority N (1-99), ahead "
+                        "of every ordinary process; needs root, CAP_SYS_NICE or an rtprio limit (otherwise a note "
+                        "says so and the run goes on with normal scheduling)")
     p.add_argument("--out", default="results/serve.csv",
                    help="result file (.csv, .parquet or .mat; default results/serve.csv); in real time the timing "
                         "of every cycle goes beside it as NAME.timing.csv")
@@ -110,6 +115,11 @@ def _check(args, system):
         period_steps = round(args.period / step)
         if period_steps < 1 or not math.isclose(period_steps * step, args.period, rel_tol=1e-9):
             raise UsageError(f"--period {args.period:g}: must be a whole number of steps of {step:g} s")
+    if args.rt_priority is not None:
+        if args.lock_step:
+            raise UsageError("--rt-priority is for real time; in lock-step the client's requests take the steps")
+        if not 1 <= args.rt_priority <= 99:
+            raise UsageError(f"--rt-priority must be from 1 to 99, got {args.rt_priority}")
     if args.watchdog is not None:
         if args.lock_step or args.external is None:
             raise UsageError("--watchdog holds an --external instance's outputs in real time; in lock-step time waits "
@@ -187,6 +197,7 @@ def _run(args, system, runner, endpoints, watchdog):
         runner.listeners.append(live)
     _ready_for_real_time(args.out)
     previous = _stop_on_signals(runner)
+    normal = _real_time_priority(args.rt_priority) if args.rt_priority else None
     started = time.monotonic()
     try:
         runner.run()
@@ -195,6 +206,8 @@ def _run(args, system, runner, endpoints, watchdog):
         _say(f"simulation failed: {exc} (results up to t={exc.time:.9g} s in {recorder.written})")
     finally:
         wall = time.monotonic() - started
+        if normal is not None:
+            os.sched_setscheduler(0, *normal)
         network.stop()  # no client request comes after this
         _restore_signals(previous)
         if live:
@@ -225,6 +238,19 @@ def _ready_for_real_time(out):
     gc.collect()
     gc.freeze()
     sys.setswitchinterval(SWITCH_INTERVAL)
+
+
+def _real_time_priority(priority):
+    """This thread (the runner's) under SCHED_FIFO at ``priority``; its scheduling before, to restore, or None
+    (with a note) where the OS does not permit it."""
+    try:
+        before = (os.sched_getscheduler(0), os.sched_getparam(0))
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+        return before
+    except (AttributeError, OSError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) else "not on this OS"
+        _say(f"note: --rt-priority {priority}: real-time scheduling not permitted ({reason}); normal scheduling")
+        return None
 
 
 def _servers(runner, system, endpoints):
