@@ -211,3 +211,47 @@ def test_only_the_external_outputs_are_writable_and_only_finite_values(fmu_dir):
     assert isinstance(runner.request_steps(1).exception(), ValueError)  # not started yet
     for inst in master.instances.values():
         inst.free()
+
+
+GAIN = """
+from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
+
+
+class Gain(Fmi2Slave):
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.k, self.u, self.y = 2.0, 1.5, 0.0
+        self.register_variable(Real("k", causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable))
+        self.register_variable(Real("u", causality=Fmi2Causality.input))
+        self.register_variable(Real("y", causality=Fmi2Causality.output))
+
+    def do_step(self, current_time, step_size):
+        self.y = self.k * self.u
+        return True
+"""
+
+
+def test_writable_opens_tunable_parameters_only_and_they_take_effect_at_the_next_step(tmp_path):
+    """An FMU of another maker (stock pythonfmu) with a tunable gain k: without writable it is read-only;
+    with it a write reaches the FMU before the next step (y = k u)."""
+    from pythonfmu import FmuBuilder
+
+    (tmp_path / "gain.py").write_text(GAIN)
+    path = FmuBuilder.build_FMU(tmp_path / "gain.py", dest=tmp_path, needsExecutionTool=False)
+    for writable in (False, True):
+        gain = open_instance(path, "gain")
+        try:
+            runner = Runner(Master({"gain": gain}, []), 0.0, 0.5, None, lock_step=True, writable=writable)
+            assert {v.name: v.writable for v in runner.variables} == {"gain.y": False, "gain.k": writable}
+            runner.start()
+            runner.request_steps(1).result(10)
+            assert runner.snapshot().values == (3.0, 2.0)  # y, k
+            if not writable:
+                with pytest.raises(ValueError, match="gain.k is read-only"):
+                    runner.write({"gain.k": 4.0})
+                continue
+            runner.write({"gain.k": 4.0})
+            runner.request_steps(1).result(10)
+            assert runner.snapshot().values == (6.0, 4.0)
+        finally:
+            gain.free()
