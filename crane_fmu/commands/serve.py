@@ -211,6 +211,7 @@ def _run(args, system, runner, endpoints, watchdog):
         network.stop()  # no client request comes after this
         _restore_signals(previous)
         if live:
+            runner.listeners.remove(live)
             live.close()
     if runner.error is None:
         runner.finish()
@@ -281,6 +282,9 @@ def _first_line(args, system, runner, endpoints):
 
 
 def _say(line):
+    if _LiveLine.shown:  # end the live line first
+        sys.stderr.write("\n")
+        _LiveLine.shown = False
     print(f"crane-fmu: {line}", file=sys.stderr, flush=True)
 
 
@@ -304,26 +308,33 @@ class _LiveLine:
     """On a terminal: the simulated time, the status and the latest cycles' timing, twice a second, on stderr."""
 
     WINDOW = 1000  # the cycles the live percentiles are of
+    shown = False  # a live line is on the terminal, not yet ended
 
     def __init__(self, runner):
+        import shutil
+
         self.runner, self.next = runner, 0.0
+        self.width = max(20, shutil.get_terminal_size().columns - 1)
 
     def __call__(self, snapshot):
         now = time.monotonic()
         if now < self.next:
             return
         self.next = now + 0.5
-        line = f"t = {snapshot.time:.3f} s  {snapshot.status}"
+        line = f"t = {snapshot.time:.3f} s  "
         pacer = self.runner.pacer
         if pacer is not None and len(pacer.timing):
             from crane_fmu.cosim.pacing import percentile
 
             recent = pacer.timing.lateness[-self.WINDOW:]
-            misses = pacer.timing.misses
-            line += (f"  lateness p50 {percentile(recent, 50) * 1e3:.2f} ms p99 {percentile(recent, 99) * 1e3:.2f} ms"
-                     f"  misses {misses}/{len(pacer.timing)}")
-        sys.stderr.write("\r" + line[:150].ljust(150))
+            line += (f"lateness p50 {percentile(recent, 50) * 1e3:.2f} ms p99 {percentile(recent, 99) * 1e3:.2f} ms  "
+                     f"misses {pacer.timing.misses}/{len(pacer.timing)}  ")
+        line += snapshot.status
+        sys.stderr.write("\r" + line[:self.width].ljust(self.width))
         sys.stderr.flush()
+        _LiveLine.shown = True
 
     def close(self):
-        sys.stderr.write("\n")
+        if _LiveLine.shown:
+            sys.stderr.write("\n")
+            _LiveLine.shown = False
