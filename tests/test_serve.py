@@ -490,3 +490,12 @@ def test_the_core_imports_no_protocol_package():
             "print(sorted(m for m in sys.modules if m.split('.')[0] in ('asyncua', 'pymodbus')))")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert done.stdout.strip() == "[]", done.stderr
+
+
+def test_a_port_in_use_is_one_line(fmu_dir, tmp_path, capsys):
+    with socket.create_server(("127.0.0.1", 0)) as taken:
+        port = taken.getsockname()[1]
+        assert main(["serve", "--fmu-dir", str(fmu_dir), "--system", "lqr", "--lock-step", "--modbus",
+                     f"127.0.0.1:{port}", "--out", str(tmp_path / "serve.csv")]) == 2
+    err = capsys.readouterr().err
+    assert err == f"crane-fmu: error: --modbus 127.0.0.1:{port}: cannot listen (Address already in use)\n"

@@ -180,7 +180,7 @@ def _run(args, system, runner, endpoints, watchdog):
         endpoints = network.start(_servers(runner, system, endpoints))
     except OSError as exc:
         network.stop()
-        raise UsageError(f"cannot listen: {exc.strerror or exc}") from None
+        raise UsageError(str(exc)) from None
     print(_first_line(args, system, runner, endpoints), flush=True)
     for host in {h for h, _ in _hosts(args)}:
         if not is_loopback(host):

@@ -95,7 +95,7 @@ class Runner:
         self._pending = {}  # parameter writes, applied by the runner's thread before its next advance
         self._pending_lock = threading.Lock()
         self._last_write = None
-        self._status = ("starting", "waiting")
+        self._status = ("waiting", "starting")  # (code, line)
         self._snapshot = None
 
     def _served(self, writable):
@@ -161,7 +161,7 @@ class Runner:
             return future
         with self._lock:
             if self._stopping.is_set() or self._snapshot is None:
-                future.set_exception(ValueError(f"the run is not going ({self._status[0]})"))
+                future.set_exception(ValueError(f"the run is not going ({self._status[1]})"))
             elif self.last_steps is not None and self.steps + n > self.last_steps:
                 future.set_exception(ValueError(
                     f"{n} steps from t = {self.time():.9g} s would pass the stop time {self.stop_time:g} s "
@@ -184,8 +184,11 @@ class Runner:
     def start(self):
         """Initialise the master, start the observers and serve the first snapshot."""
         self.master.initialize(self.start_time, self.stop_time, self.parameters)
-        self._parameter_values = {f"{name}.{v}": inst.get(v) for name, inst in self.master.instances.items()
-                                  for v in inst.variables if f"{name}.{v}" in self._parameter_names()}
+        self._parameter_values = {}
+        for v in self.variables:
+            if v.role == "parameter":
+                instance, _, variable = v.name.partition(".")
+                self._parameter_values[v.name] = self.master.instances[instance].get(variable)
         for o in self.observers:
             o.start(self.master.output_names)
         self._sources = self._value_sources()
@@ -193,9 +196,6 @@ class Runner:
         self._set_status("waiting for Step (lock-step)" if self.lock_step else "running in real time",
                          "waiting" if self.lock_step else "running")
         return self._snapshot
-
-    def _parameter_names(self):
-        return {v.name for v in self.variables if v.role == "parameter"}
 
     def _value_sources(self):
         """For each served variable: ``("out", index in the master's values)``, ``("in", instance variable)`` or

@@ -28,6 +28,14 @@ def parse_endpoint(text, option):
     return host, int(port)
 
 
+def cannot_listen(protocol, host, port, error):
+    """The one-line OSError of a server that cannot listen at ``host:port`` (address in use, not this
+    machine's, ...)."""
+    text = getattr(error, "strerror", None) or str(error)
+    reason = text.rpartition("): ")[2].split(" (while")[0] or text
+    return OSError(f"{protocol} {host}:{port}: cannot listen ({reason})")
+
+
 def is_loopback(host):
     """Whether ``host`` (an address or ``localhost``) reaches only this machine."""
     if host == "localhost":
@@ -56,8 +64,8 @@ class Network:
         return asyncio.run_coroutine_threadsafe(coroutine, self.loop).result(timeout)
 
     def start(self, servers, timeout=30.0):
-        """Start ``servers`` one after another; their endpoints. A server that fails to start stops those
-        started before it, and its exception propagates."""
+        """Start ``servers`` one after another; their endpoints. The exception of a server that fails to start
+        propagates (:meth:`stop` then stops those started before it)."""
         endpoints = []
         for server in servers:
             endpoints.append(self.run(server.start(), timeout))

@@ -27,11 +27,15 @@ order they arrive.
 """
 
 import asyncio
+import logging
 import math
+import socket
 import struct
 from collections import namedtuple
 
 from crane_fmu.cosim.realtime import STATUS_CODES
+
+from . import cannot_listen
 
 Register = namedtuple("Register", "table address name type unit access description")
 Register.__doc__ = "One entry of the map: ``table`` is ``input`` or ``holding``; ``address`` of its first register."
@@ -107,8 +111,18 @@ class ModbusServer:
                   [SimData(0, count=n_holding, datatype=DataType.REGISTERS)],
                   [SimData(0, count=n_input, datatype=DataType.REGISTERS, readonly=True)])
         device = SimDevice(0, simdata=blocks, action=self._action)
+        logging.getLogger("pymodbus").setLevel(logging.CRITICAL)  # what goes wrong is said here, in one line
+        if self.port:  # pymodbus says only that it could not listen: ask the OS why
+            try:
+                with socket.create_server((self.host, self.port)):
+                    pass
+            except OSError as exc:
+                raise cannot_listen("--modbus", self.host, self.port, exc) from None
         self.server = ModbusTcpServer(device, address=(self.host, self.port))
-        await self.server.serve_forever(background=True)
+        try:
+            await self.server.serve_forever(background=True)
+        except RuntimeError as exc:
+            raise cannot_listen("--modbus", self.host, self.port, exc) from None
         self.port = self.server.transport.sockets[0].getsockname()[1]
         return f"{self.host}:{self.port}"
 

@@ -24,6 +24,8 @@ from datetime import datetime, timezone
 from asyncua import Server, ua
 from asyncua.common.callback import CallbackType
 
+from . import cannot_listen
+
 NAMESPACE = "urn:crane-fmu"
 
 
@@ -78,7 +80,10 @@ class OpcUaServer:
                            Description=ua.LocalizedText("the simulated time after them [s]"))
         await folder.add_method(ua.NodeId("Step", idx), ua.QualifiedName("Step", idx), self._step, [steps], [time])
         server.subscribe_server_callback(CallbackType.PostWrite, self._client_wrote)
-        await server.start()
+        try:
+            await server.start()
+        except OSError as exc:
+            raise cannot_listen("--opcua", self.host, self.port, exc) from None
         self.port = server.bserver.port
         self._loop = asyncio.get_running_loop()
         self.runner.listeners.append(self.publish)
