@@ -164,8 +164,7 @@ def _serve(args, system):
 
 
 def _run(args, system, runner, endpoints, watchdog):
-    from crane_fmu.cosim import FmiError, recorder_for
-    from crane_fmu.serve import Network, is_loopback
+    from crane_fmu.cosim import recorder_for
 
     try:
         recorder = recorder_for(args.out)
@@ -175,6 +174,17 @@ def _run(args, system, runner, endpoints, watchdog):
         raise UsageError(f"--out {args.out}: writing it needs {exc.name} (pip install {exc.name})") from None
     runner.observers.append(recorder)
     runner.start()
+    previous = _stop_on_signals(runner)  # from here Ctrl-C stops the run cleanly, also while it starts
+    try:
+        return _serve_until_stopped(args, system, runner, recorder, endpoints)
+    finally:
+        _restore_signals(previous)
+
+
+def _serve_until_stopped(args, system, runner, recorder, endpoints):
+    from crane_fmu.cosim import FmiError
+    from crane_fmu.serve import Network, is_loopback
+
     network = Network()
     try:
         endpoints = network.start(_servers(runner, system, endpoints))
@@ -196,7 +206,6 @@ def _run(args, system, runner, endpoints, watchdog):
     if live:
         runner.listeners.append(live)
     _ready_for_real_time(args.out)
-    previous = _stop_on_signals(runner)
     normal = _real_time_priority(args.rt_priority) if args.rt_priority else None
     started = time.monotonic()
     try:
@@ -209,7 +218,6 @@ def _run(args, system, runner, endpoints, watchdog):
         if normal is not None:
             os.sched_setscheduler(0, *normal)
         network.stop()  # no client request comes after this
-        _restore_signals(previous)
         if live:
             runner.listeners.remove(live)
             live.close()

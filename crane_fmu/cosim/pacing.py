@@ -63,6 +63,8 @@ class Timing:
     def describe(self, simulated=None):
         """One line: cycles, lateness percentiles, misses and, given the simulated time the cycles advanced, the
         real-time factor: that time over the :meth:`wall` time (1 when the cycles kept up)."""
+        if not len(self):
+            return f"no cycle of {self.period * 1e3:g} ms"
         s = self.summary()
         line = (f"{s['cycles']} cycles of {self.period * 1e3:g} ms: lateness p50 {s['lateness_p50'] * 1e3:.3f} ms, "
                 f"p99 {s['lateness_p99'] * 1e3:.3f} ms, max {s['lateness_max'] * 1e3:.3f} ms; "
