@@ -85,6 +85,8 @@ def timing_path(out):
 
 def _check(args, system):
     """The options' rules, before anything is loaded: ``(step, stop_time, period_steps, endpoints)``."""
+    import importlib.util
+
     from crane_fmu.cosim.master import communication_points
     from crane_fmu.serve import parse_endpoint
 
@@ -93,8 +95,6 @@ def _check(args, system):
         if text is not None:
             endpoints[option] = parse_endpoint(text, option)
             module = "asyncua" if option == "--opcua" else "pymodbus"
-            import importlib.util
-
             if importlib.util.find_spec(module) is None:
                 raise UsageError(f"{option} needs {module}, which is not installed: pip install -e '.[serve]' "
                                  "(in this project's venv)")
@@ -155,7 +155,7 @@ def _serve(args, system):
 
             print(markdown(register_map(runner.variables)))
             return 0
-        return _run(args, system, runner, endpoints, watchdog)
+        return _run(args, system, runner, endpoints)
     except FmiError as exc:
         raise UsageError(str(exc)) from None  # at initialisation: the values given
     finally:
@@ -163,7 +163,7 @@ def _serve(args, system):
             inst.free()
 
 
-def _run(args, system, runner, endpoints, watchdog):
+def _run(args, system, runner, endpoints):
     from crane_fmu.cosim import recorder_for
 
     try:
