@@ -239,7 +239,7 @@ def test_info_lists_every_variable_with_units(capsys):
     assert "| `K2_theta2` | parameter | 310 | 1/s |" in out
 
 
-@pytest.mark.parametrize("command", ["build", "simulate", "info", "reproduce", "sweep", "bench"])
+@pytest.mark.parametrize("command", ["build", "simulate", "info", "reproduce", "sweep", "bench", "serve"])
 def test_help_shows_examples(capsys, command):
     with pytest.raises(SystemExit) as exit_:
         main([command, "--help"])

@@ -6,6 +6,6 @@ A command module has ``NAME``, ``HELP``, ``EXAMPLES`` (and optionally ``DESCRIPT
 Imports of the heavy parts (fmpy, numpy, matplotlib, Dask) happen inside ``run``.
 """
 
-from . import animate, bench, build, compare, info, plot, reproduce, simulate, sweep, targets
+from . import animate, bench, build, compare, info, plot, reproduce, serve, simulate, sweep, targets
 
-COMMANDS = (build, simulate, info, reproduce, sweep, compare, targets, plot, animate, bench)
+COMMANDS = (build, simulate, info, reproduce, sweep, compare, targets, plot, animate, bench, serve)

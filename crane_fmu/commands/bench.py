@@ -11,7 +11,8 @@ EXAMPLES = (
     "  crane-fmu bench\n"
     "  crane-fmu bench --repeat 7 --stop-time 20\n"
     "  crane-fmu bench --sweep\n"
-    "  crane-fmu bench --endurance            # one simulated hour at 1 ms"
+    "  crane-fmu bench --endurance            # one simulated hour at 1 ms\n"
+    "  crane-fmu bench --realtime             # the real-time loop, OPC UA and Modbus round trips"
 )
 
 
@@ -29,6 +30,9 @@ def arguments(p):
                         "whole process")
     p.add_argument("--endurance", action="store_true",
                    help="instead: one long run (default one simulated hour) recorded to CSV, memory sampled")
+    p.add_argument("--realtime", action="store_true",
+                   help="instead: the real-time loop at 1 ms and 10 ms (default 2 s each) and the round trips of "
+                        "crane-fmu serve over OPC UA and Modbus TCP (needs the 'serve' extra)")
 
 
 def run(args):
@@ -39,9 +43,13 @@ def run(args):
     if args.cases < 2:
         raise UsageError(f"--cases must be >= 2, got {args.cases}")
     try:
-        if args.sweep + args.endurance + args.native > 1:
-            raise UsageError("--sweep, --endurance and --native are separate benchmarks: choose one")
-        if args.native:
+        if args.sweep + args.endurance + args.native + args.realtime > 1:
+            raise UsageError("--sweep, --endurance, --native and --realtime are separate benchmarks: choose one")
+        if args.realtime:
+            from crane_fmu.bench_realtime import run_realtime_bench
+
+            run_realtime_bench(args.stop_time or 2.0)
+        elif args.native:
             from crane_fmu.bench_native import run_native_bench
 
             run_native_bench(args.stop_time or 20.0, args.step, args.repeat)

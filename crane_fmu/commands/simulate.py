@@ -28,17 +28,26 @@ EXAMPLES = (
 
 
 def arguments(p):
+    run_options(p, "stop time [s] (default: the system's, 20 s built in)")
+    p.add_argument("--no-initial-exchange", action="store_true",
+                   help="start with the inputs' start values, not the initial outputs (as fmpy's container FMU does)")
+    p.add_argument("--out", default="results/simulation.csv",
+                   help="result file: .csv (default results/simulation.csv), .parquet (pyarrow, for long runs) or "
+                        ".mat (MATLAB, scipy.io.savemat: the CSV's columns and data)")
+    p.add_argument("--plot", help="also write a PNG plot of x, theta1, theta2 and u (or of every output)")
+
+
+def run_options(p, stop_time_help):
+    """The options that set up a run (system, FMUs, times, master, values), for the commands that run one."""
     p.add_argument("--system", default=DEFAULT_SYSTEM,
                    help=f"a built-in system's name (crane-fmu info lists them) or an SSP file "
                         f"(default: {DEFAULT_SYSTEM})")
     p.add_argument("--fmu-dir", default=DEFAULT_FMU_DIR, help=f"folder of the built FMUs (default: {DEFAULT_FMU_DIR})")
-    p.add_argument("--stop-time", type=number, help="stop time [s] (default: the system's, 20 s built in)")
+    p.add_argument("--stop-time", type=number, help=stop_time_help)
     p.add_argument("--step", type=number, help="communication step [s] (default: the system's, 1 ms built in)")
     p.add_argument("--master", choices=tuple(ALGORITHMS), default="gauss-seidel",
                    help="master algorithm (default gauss-seidel; iterative-jacobi repeats the Jacobi exchange "
                         "until the inputs are consistent)")
-    p.add_argument("--no-initial-exchange", action="store_true",
-                   help="start with the inputs' start values, not the initial outputs (as fmpy's container FMU does)")
     p.add_argument("--parameters", metavar="FILE.ssv",
                    help="SSP parameter set with names INSTANCE.VARIABLE, applied before --set")
     p.add_argument("--set", action="append", default=[], metavar="INSTANCE.VARIABLE=VALUE",
@@ -47,10 +56,6 @@ def arguments(p):
     p.add_argument("--use", action="append", default=[], metavar="INSTANCE=FILE.fmu",
                    help="run this FMU as the instance instead of the system's (repeatable), e.g. "
                         "controller=mine.fmu; the system's values for the instance are kept where the FMU has them")
-    p.add_argument("--out", default="results/simulation.csv",
-                   help="result file: .csv (default results/simulation.csv), .parquet (pyarrow, for long runs) or "
-                        ".mat (MATLAB, scipy.io.savemat: the CSV's columns and data)")
-    p.add_argument("--plot", help="also write a PNG plot of x, theta1, theta2 and u (or of every output)")
 
 
 def run(args):
@@ -99,17 +104,13 @@ def _keep_known(system, fmus, replaced):
     return replace(system, parameters=parameters)
 
 
-def _simulate(args, system):
-    """Run a system, writing the CSV (and plot) of ``args``; ``--parameters`` and ``--set`` override its values."""
+def prepare(args, system, step):
+    """``(system, fmus, connections)`` of a run of ``system`` at ``step`` as ``args`` set it up: the FMUs of
+    ``--use`` (the system's values kept where they fit), the step's designs, ``--parameters`` then ``--set``
+    applied and every instance's parameters checked. A mistake raises UsageError or ValueError (one line)."""
     from crane_fmu import systems
-    from crane_fmu.cosim import FmiError, ProgressLine, read_result, recorder_for, simulate
-    from crane_fmu.cosim.master import communication_points
-    from crane_fmu.cosim.recorder import RESULT_SUFFIXES
     from crane_fmu.cosim.system import settable, split_name
 
-    stop_time = system.stop_time if args.stop_time is None else args.stop_time
-    step = system.step if args.step is None else args.step
-    communication_points(system.start_time, stop_time, step)
     fmus, connections = systems.resolve(system, args.fmu_dir)
     system = _keep_known(system, fmus, [item.partition("=")[0] for item in args.use])
     system = systems.at_step(system, args.fmu_dir, step)
@@ -127,6 +128,19 @@ def _simulate(args, system):
         system = system.with_parameters(loaded)
     system = system.with_parameters(parse_sets(args.set, variables))
     systems.check_parameters(system, args.fmu_dir)
+    return system, fmus, connections
+
+
+def _simulate(args, system):
+    """Run a system, writing the CSV (and plot) of ``args``; ``--parameters`` and ``--set`` override its values."""
+    from crane_fmu.cosim import FmiError, ProgressLine, read_result, recorder_for, simulate
+    from crane_fmu.cosim.master import communication_points
+    from crane_fmu.cosim.recorder import RESULT_SUFFIXES
+
+    stop_time = system.stop_time if args.stop_time is None else args.stop_time
+    step = system.step if args.step is None else args.step
+    communication_points(system.start_time, stop_time, step)
+    system, fmus, connections = prepare(args, system, step)
     writable_file(args.out, "--out", RESULT_SUFFIXES)
     if args.plot:
         writable_file(args.plot, "--plot", ".png")

@@ -66,6 +66,14 @@ class Instance:
     """
 
     def _describe(self, path, name):
+        self._interface(path, name)
+        self.messages = deque(maxlen=20)  # the FMU's latest log messages
+        self.time = None
+        self._instantiated = False
+        self._folder_key, self._unzip = _take_folder(path)
+
+    def _interface(self, path, name):
+        """The name, model description, variables, inputs, outputs and feedthrough of the FMU at ``path``."""
         self.name = name
         self.md = read_fmu(path)
         self.variables = {v.name: v for v in self.md.modelVariables}
@@ -73,10 +81,6 @@ class Instance:
         self.inputs = [v.name for v in self.md.modelVariables if v.causality == "input"]
         # FMI: an output without a dependencies attribute may depend on every input
         self.feedthrough = bool(self.inputs) and any(u.dependencies is None or u.dependencies for u in self.md.outputs)
-        self.messages = deque(maxlen=20)  # the FMU's latest log messages
-        self.time = None
-        self._instantiated = False
-        self._folder_key, self._unzip = _take_folder(path)
 
     def _call(self, function, call, *args, **kwargs):
         """Run an fmpy call, turning its exceptions into FmiError (with the exception as cause)."""

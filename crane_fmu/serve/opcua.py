@@ -1,0 +1,167 @@
+"""The OPC UA face of a :class:`~crane_fmu.cosim.realtime.Runner` (asyncua, an optional extra: LGPL-3.0).
+
+Namespace ``urn:crane-fmu``; under ``Objects``, one object named after the system holds:
+
+- a Double variable per served variable, browse name and string NodeId exactly ``instance.variable``
+  (``ns=<urn:crane-fmu>;s=plant.x``), its SI unit in the description (``trolley position [m]``);
+  read-only, except the external instance's outputs (and, with ``--writable``, the tunable parameters);
+- ``Time`` (Double, the simulated time [s]) and ``Status`` (String);
+- the method ``Step(n)`` (UInt32): in lock-step, takes ``n`` communication steps and returns the new time;
+  a Bad status code otherwise (``BadInvalidArgument``: n is not a whole number >= 1; ``BadInvalidState``: the
+  run is in real time, has ended, or the steps would pass the stop time).
+
+A write of a non-finite number is refused (``BadOutOfRange``, the whole write request), of another type than
+Double too (``BadTypeMismatch``), to a read-only node too (``BadUserAccessDenied``). Anonymous access without
+encryption; logging in as ``admin`` grants nothing more. Every client is served: reads by all, writes by any
+(the last write wins), Step calls one after another in the order they arrive.
+"""
+
+import asyncio
+import logging
+import math
+from datetime import datetime, timezone
+
+from asyncua import Server, ua
+from asyncua.common.callback import CallbackType
+
+from . import cannot_listen
+
+NAMESPACE = "urn:crane-fmu"
+
+
+class OpcUaServer:
+    """Serves ``runner`` at ``opc.tcp://host:port`` (port 0: one the OS picks); call in the network loop.
+
+    Parameters
+    ----------
+    runner : Runner
+    host : str
+    port : int
+    system : str
+        The name of the object that holds the variables.
+    """
+
+    def __init__(self, runner, host, port, system):
+        self.runner, self.host, self.port, self.system = runner, host, port, system
+        self.server = None
+        self._latest, self._pending = None, False
+
+    async def start(self):
+        """Build the address space and listen; returns the endpoint URL (with the port the OS chose)."""
+        for name in ("asyncua", "asyncua.server.address_space", "asyncua.server.uaprocessor"):
+            logging.getLogger(name).setLevel(logging.CRITICAL)  # refused requests are answered, not logged
+        server = self.server = Server()
+        await server.init()
+        server.set_endpoint(f"opc.tcp://{_url_host(self.host)}:{self.port}")
+        server.set_server_name("crane-fmu serve")
+        server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
+        server.allow_remote_admin(False)
+        idx = await server.register_namespace(NAMESPACE)
+        folder = await server.nodes.objects.add_object(ua.NodeId(self.system, idx), ua.QualifiedName(self.system, idx))
+        snapshot = self._written = self.runner.snapshot()  # the nodes start with its values
+        self.nodes, self.writable = [], {}
+        for v, value in zip(self.runner.variables, snapshot.values):
+            node = await folder.add_variable(ua.NodeId(v.name, idx), ua.QualifiedName(v.name, idx),
+                                             ua.Variant(value, ua.VariantType.Double))
+            await node.write_attribute(ua.AttributeIds.Description, ua.DataValue(ua.Variant(
+                ua.LocalizedText(_description(v)), ua.VariantType.LocalizedText)))
+            if v.writable:
+                await node.set_writable()
+                server.iserver.aspace.set_attribute_value_setter(node.nodeid, ua.AttributeIds.Value, _finite_only)
+                self.writable[node.nodeid] = v.name
+            self.nodes.append(node.nodeid)
+        self.time_node = (await folder.add_variable(ua.NodeId("Time", idx), ua.QualifiedName("Time", idx),
+                                                    ua.Variant(snapshot.time, ua.VariantType.Double))).nodeid
+        self.status_node = (await folder.add_variable(ua.NodeId("Status", idx), ua.QualifiedName("Status", idx),
+                                                      ua.Variant(snapshot.status, ua.VariantType.String))).nodeid
+        steps = ua.Argument(Name="n", DataType=ua.NodeId(ua.ObjectIds.UInt32), ValueRank=-1,
+                            Description=ua.LocalizedText("communication steps to take"))
+        time = ua.Argument(Name="time", DataType=ua.NodeId(ua.ObjectIds.Double), ValueRank=-1,
+                           Description=ua.LocalizedText("the simulated time after them [s]"))
+        await folder.add_method(ua.NodeId("Step", idx), ua.QualifiedName("Step", idx), self._step, [steps], [time])
+        server.subscribe_server_callback(CallbackType.PostWrite, self._client_wrote)
+        try:
+            await server.start()
+        except OSError as exc:
+            raise cannot_listen("--opcua", self.host, self.port, exc) from None
+        self.port = server.bserver.port
+        self._loop = asyncio.get_running_loop()
+        self.runner.listeners.append(self.publish)
+        return f"opc.tcp://{_url_host(self.host)}:{self.port}"
+
+    async def stop(self):
+        if self.server is not None:
+            await self.server.stop()
+
+    # --- the runner's snapshots into the nodes ---
+
+    def publish(self, snapshot):
+        """From the runner's thread: serve ``snapshot`` (only the latest one if the loop is behind)."""
+        self._latest = snapshot
+        if not self._pending:
+            self._pending = True
+            self._loop.call_soon_threadsafe(lambda: asyncio.ensure_future(self._write_latest()))
+
+    async def _write_latest(self):
+        self._pending = False
+        await self._write(self._latest)
+
+    async def _write(self, snapshot):
+        """Write the values of ``snapshot`` that changed since the last one written into their nodes (a node a
+        client wrote keeps that value until the value in effect changes)."""
+        if snapshot is self._written:
+            return
+        now = datetime.now(timezone.utc)
+        write = self.server.write_attribute_value
+        for nodeid, value, before in zip(self.nodes, snapshot.values, self._written.values):
+            if value != before:
+                await write(nodeid, ua.DataValue(ua.Variant(value, ua.VariantType.Double), SourceTimestamp=now,
+                                                 ServerTimestamp=now))
+        self._written = snapshot
+        await write(self.time_node, ua.DataValue(ua.Variant(snapshot.time, ua.VariantType.Double),
+                                                 SourceTimestamp=now, ServerTimestamp=now))
+        await write(self.status_node, ua.DataValue(ua.Variant(snapshot.status, ua.VariantType.String),
+                                                   SourceTimestamp=now, ServerTimestamp=now))
+
+    # --- what clients do ---
+
+    async def _client_wrote(self, event, _dispatcher):
+        """After a client's write: the values of writable nodes that were accepted go to the runner."""
+        if not event.is_external:  # the server's own writes
+            return
+        values = {}
+        for item, status in zip(event.request_params.NodesToWrite, event.response_params):
+            name = self.writable.get(item.NodeId)
+            if name and item.AttributeId == ua.AttributeIds.Value and status.is_good():
+                values[name] = item.Value.Value.Value
+        if values:
+            self.runner.write(values)
+
+    async def _step(self, _parent, n):
+        """``Step(n)``: the new time, or a Bad status code."""
+        count = n.Value if isinstance(n, ua.Variant) else n
+        if isinstance(count, bool) or not isinstance(count, int) or count < 1:
+            return ua.StatusCode(ua.StatusCodes.BadInvalidArgument)
+        try:
+            time = await asyncio.wrap_future(self.runner.request_steps(count))
+        except ValueError:
+            return ua.StatusCode(ua.StatusCodes.BadInvalidState)
+        await self._write(self.runner.snapshot())  # the client reads the new values after the reply
+        return [ua.Variant(time, ua.VariantType.Double)]
+
+
+def _finite_only(node, attribute, value):
+    """The setter of writable nodes: a Double that is finite, else the write is refused (BadOutOfRange)."""
+    number = value.Value.Value if value.Value is not None else None
+    if not isinstance(number, float) or not math.isfinite(number):
+        raise ua.uaerrors.BadOutOfRange()
+    node.attributes[attribute].value = value
+
+
+def _description(v):
+    text = v.description.rstrip(".") if v.description else v.name
+    return f"{text} [{v.unit}]"
+
+
+def _url_host(host):
+    return f"[{host}]" if ":" in host else host

@@ -1,0 +1,501 @@
+"""`crane-fmu serve` as a PLC meets it: a server process on loopback ports the OS picks, clients in this process.
+
+Every loop is bounded in count and time, every server stops by itself (at its stop time, or on the Ctrl-C
+the test sends) and is killed if it does not. The FMUs are the session's build (conftest.fmu_dir).
+"""
+
+import asyncio
+import math
+import re
+import select
+import signal
+import socket
+import struct
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from asyncua import Client, ua
+from pymodbus.client import ModbusTcpClient
+
+from crane_fmu import systems
+from crane_fmu.cli import main
+from crane_fmu.cosim import read_csv, simulate
+from crane_fmu.model import lqr
+from crane_fmu.serve.modbus import FIRST_HOLDING, FIRST_INPUT, float32_words, register_map, words_float32
+
+ROOT = Path(__file__).resolve().parent.parent
+STATE = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2")
+LQR_LAW = lqr.COMPONENT.check({"h": 1e-3})  # the LQR FMU's law at the lqr system's step
+
+
+class Server:
+    """A ``crane-fmu serve`` process; ``opcua`` and ``modbus`` are the endpoints its first line names."""
+
+    def __init__(self, fmu_dir, folder, *args):
+        self.out = Path(folder) / "serve.csv"
+        self.proc = subprocess.Popen([sys.executable, "-m", "crane_fmu", "serve", "--fmu-dir", str(fmu_dir),
+                                      "--out", str(self.out), *args],
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        ready, _, _ = select.select([self.proc.stdout], [], [], 120)
+        self.first_line = self.proc.stdout.readline() if ready else ""
+        if not self.first_line.startswith("crane-fmu serve: "):
+            self.proc.kill()
+            raise AssertionError(f"no first line: {self.first_line!r} {self.proc.stderr.read()[-2000:]}")
+        opcua = re.search(r"OPC UA (opc\.tcp://\S+?)(;|$)", self.first_line.strip())
+        modbus = re.search(r"Modbus TCP (\S+?):(\d+)(;|$)", self.first_line.strip())
+        self.opcua = opcua.group(1) if opcua else None
+        self.modbus = (modbus.group(1), int(modbus.group(2))) if modbus else None
+
+    def wait(self, timeout=60):
+        """``(exit status, the rest of stdout, stderr)`` once the process has ended by itself."""
+        try:
+            out, err = self.proc.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            out, err = self.proc.communicate()
+            raise AssertionError(f"the server did not end by itself: {err[-2000:]}") from None
+        return self.proc.returncode, out, err
+
+    def stop(self, timeout=60):
+        """Ctrl-C, then :meth:`wait`."""
+        self.proc.send_signal(signal.SIGINT)
+        return self.wait(timeout)
+
+
+def _offline(fmu_dir, stop_time):
+    """The lqr system run offline with the LQR FMU, as `crane-fmu simulate --system lqr` runs it."""
+    system = systems.at_step(systems.get("lqr"), fmu_dir, 1e-3)
+    return simulate(*system.resolve(fmu_dir), stop_time, 1e-3, parameters=system.parameters).columns()
+
+
+def _run(coroutine, timeout=120):
+    return asyncio.run(asyncio.wait_for(coroutine, timeout))
+
+
+async def _nodes(client):
+    ns = await client.get_namespace_index("urn:crane-fmu")
+    return ns, lambda name: client.get_node(ua.NodeId(name, ns))
+
+
+async def _call_step(client, n, variant=ua.VariantType.UInt32):
+    ns, node = await _nodes(client)
+    step = node("Step")
+    return await (await step.get_parent()).call_method(step, ua.Variant(n, variant))
+
+
+# --- the done-when runs: lock-step with the LQR's law in this process equals the offline run ---
+
+
+async def _lqr_over_opcua(url, steps):
+    """Apply the LQR's law over OPC UA before every step: what the client read and wrote, per step."""
+    async with Client(url) as client:
+        ns, node = await _nodes(client)
+        inputs = [node(f"controller.{name}") for name in STATE]
+        u, time_node = node("controller.u"), node("Time")
+        seen = []
+        for k in range(steps + 1):
+            state = await client.read_values(inputs + [time_node])
+            demand = lqr.control(LQR_LAW, state[:6])
+            await u.write_value(ua.Variant(demand, ua.VariantType.Double))
+            seen.append(state + [demand])
+            if k < steps:
+                await _call_step(client, 1)
+        return np.array(seen)
+
+
+def test_lock_step_over_opcua_equals_the_offline_run_and_ctrl_c_keeps_it(fmu_dir, tmp_path):
+    """A PLC's place: the controller left out, this process applies the LQR's law over OPC UA before every
+    Step(1). What it reads, and what the server records, equal the offline run of the LQR FMU to 1e-12
+    (doubles travel as doubles: the same Gauss-Seidel exchange). Ctrl-C then ends the server cleanly, its
+    results (every row, the client's last u included) at --out."""
+    steps = 200
+    server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--lock-step", "--opcua",
+                    "127.0.0.1:0")
+    try:
+        seen = _run(_lqr_over_opcua(server.opcua, steps))
+    finally:
+        status, out, err = server.stop()
+    offline = _offline(fmu_dir, steps * 1e-3)
+    assert np.max(np.abs(seen[:, 6] - offline["time"])) <= 1e-12
+    for i, name in enumerate(STATE):
+        assert np.max(np.abs(seen[:, i] - offline[f"plant.{name}"])) <= 1e-12, name
+    assert np.max(np.abs(seen[:, 7] - offline["controller.u"])) <= 1e-12
+    assert status == 0, err[-2000:]
+    assert f"stopped at t = 0.2 s; wrote {server.out}" in out
+    assert "lock-step: 200 steps in" in out
+    served = read_csv(server.out)
+    assert list(served) == list(offline)
+    for name in offline:
+        assert np.max(np.abs(served[name] - offline[name])) <= 1e-12, name
+
+
+def test_lock_step_over_modbus_matches_the_offline_run_to_float32(fmu_dir, tmp_path):
+    """The same over Modbus: values travel as float32 (high word first). Exactly: each value read is the
+    server's double rounded to float32, each u the server applies is the client's rounded to float32. The run
+    then differs from the offline run only by that rounding: within 1e-5 in SI units (float32 keeps 7
+    digits of these values, of order 0.1 to 2; the rounding of the state, fed back through gains of at most
+    165, moves u by ~1e-5 m/s2 a step, and 200 steps of 1 ms integrate that to well under 1e-5)."""
+    steps = 200
+    server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--lock-step", "--modbus",
+                    "127.0.0.1:0")
+    variables = [r for r in register_map(_served_lqr(fmu_dir)) if r.type == "float32"]
+    address = {r.name: r.address for r in variables}
+    first = address["controller.x"]
+    assert [address[f"controller.{n}"] for n in STATE] == list(range(first, first + 12, 2))
+    client = ModbusTcpClient(server.modbus[0], port=server.modbus[1], timeout=10)
+    read, applied = [], []
+    try:
+        assert client.connect()
+        for k in range(steps + 1):
+            words = client.read_input_registers(first, count=12, device_id=1).registers
+            state = [words_float32(*words[i:i + 2]) for i in range(0, 12, 2)]
+            demand = lqr.control(LQR_LAW, state)
+            assert not client.write_registers(address["controller.u"], float32_words(demand), device_id=1).isError()
+            read.append(state)
+            applied.append(demand)
+            if k < steps:
+                assert not client.write_register(0, 1, device_id=1).isError()
+    finally:
+        client.close()
+        status, out, err = server.stop()
+    assert status == 0, err[-2000:]
+    served, offline = read_csv(server.out), _offline(fmu_dir, steps * 1e-3)
+    read, applied = np.array(read), np.array(applied)
+    for i, name in enumerate(STATE):
+        assert np.array_equal(read[:, i], served[f"plant.{name}"].astype(np.float32).astype(float)), name
+    assert np.array_equal(served["controller.u"], applied.astype(np.float32).astype(float))
+    assert not np.array_equal(served["controller.u"], offline["controller.u"])  # float32 did travel
+    for name in offline:
+        assert np.max(np.abs(served[name] - offline[name])) <= 1e-5, name
+
+
+def _served_lqr(fmu_dir):
+    """The served variables of the lqr system with an external controller, as the server makes them."""
+    from crane_fmu.cosim import Master, open_instance
+    from crane_fmu.cosim.external import ExternalInstance
+    from crane_fmu.cosim.realtime import Runner
+
+    fmus, connections = systems.get("lqr").resolve(fmu_dir)
+    instances = {"plant": open_instance(fmus["plant"], "plant"),
+                 "controller": ExternalInstance(fmus["controller"], "controller")}
+    try:
+        return Runner(Master(instances, connections), 0.0, 1e-3, lock_step=True).variables
+    finally:
+        instances["plant"].free()
+
+
+# --- one shared lock-step server: the address space, the register map, bad requests, two clients ---
+
+
+@pytest.fixture(scope="module")
+def server(fmu_dir, tmp_path_factory):
+    """lqr in lock-step with the controller external, over OPC UA and Modbus; stopped with Ctrl-C."""
+    server = Server(fmu_dir, tmp_path_factory.mktemp("serve"), "--system", "lqr", "--external", "controller",
+                    "--lock-step", "--stop-time", "5", "--opcua", "127.0.0.1:0", "--modbus", "127.0.0.1:0")
+    yield server
+    status, _, err = server.stop()
+    assert status == 0, err[-2000:]
+
+
+def test_the_first_line_names_every_endpoint_on_ports_the_os_picked(server):
+    assert server.first_line.startswith("crane-fmu serve: lqr in lock-step (h = 0.001 s, controller external); ")
+    url = re.fullmatch(r"opc\.tcp://127\.0\.0\.1:(\d+)", server.opcua)
+    assert url and int(url.group(1)) > 0 and server.modbus[0] == "127.0.0.1" and server.modbus[1] > 0
+
+
+def test_the_opcua_address_space(server, printed_names):
+    """Namespace urn:crane-fmu; one object named after the system; a Double per instance.variable with that
+    browse name and its unit in the description; outputs and parameters read-only, the external instance's
+    outputs writable; Time, Status and Step(n)."""
+
+    async def look():
+        async with Client(server.opcua) as client:
+            ns, node = await _nodes(client)
+            system = await client.nodes.objects.get_child(f"{ns}:lqr")
+            children = {(await child.read_browse_name()).Name: child for child in await system.get_children()}
+            facts = {}
+            for name in ("plant.x", "plant.theta1", "plant.l1", "controller.theta1", "controller.u", "Time",
+                         "Status", "Step"):
+                child = children[name]
+                browse = await child.read_browse_name()
+                assert browse.NamespaceIndex == ns and child.nodeid == ua.NodeId(name, ns)
+                if name != "Step":
+                    facts[name] = ((await child.read_description()).Text,
+                                   await child.read_attribute(ua.AttributeIds.UserAccessLevel),
+                                   await child.read_data_type_as_variant_type())
+            arguments = await children["Step"].get_child("0:InputArguments")
+            return len(children), facts, (await arguments.read_value())[0]
+
+    count, facts, step_argument = _run(look())
+    writable = ua.AccessLevel.CurrentWrite
+    for name, unit in (("plant.x", "[m]"), ("plant.theta1", "[rad]"), ("plant.l1", "[m]"),
+                       ("controller.theta1", "[rad]"), ("controller.u", "[m/s2]")):
+        description, access, variant = facts[name]
+        assert description.endswith(unit) and variant == ua.VariantType.Double, name
+        assert bool(access.Value.Value & (1 << writable)) == (name == "controller.u"), name
+    assert facts["Time"][2] == ua.VariantType.Double and facts["Status"][2] == ua.VariantType.String
+    assert step_argument.Name == "n" and step_argument.DataType == ua.NodeId(ua.ObjectIds.UInt32)
+    assert count == len(printed_names) + 3  # Time, Status, Step
+
+
+@pytest.fixture(scope="module")
+def printed_map(server):
+    """What `crane-fmu serve --print-map` prints for the shared server's system and options."""
+    done = subprocess.run([sys.executable, "-m", "crane_fmu", "serve", "--system", "lqr", "--external", "controller",
+                           "--lock-step", "--fmu-dir", str(_fmu_dir_of(server)), "--print-map"],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+@pytest.fixture(scope="module")
+def printed_names(printed_map):
+    """The variables' names in the order the printed map lists their registers."""
+    return re.findall(r"\| `(\w+\.\w+)` \| float32", printed_map)
+
+
+def test_the_docs_register_map_is_the_generated_one(printed_map):
+    page = (ROOT / "docs" / "guide" / "virtual-commissioning.md").read_text()
+    section = re.search(r"<!-- register-map:start -->\n(.*)\n<!-- register-map:end -->", page, re.S).group(1)
+    assert section.strip() == printed_map.strip()
+
+
+def _fmu_dir_of(server):
+    return server.proc.args[server.proc.args.index("--fmu-dir") + 1]
+
+
+def test_modbus_registers_hold_what_opcua_serves(server, printed_names):
+    """The generated map: every float32 pair read where --print-map says, high word first, is the OPC UA
+    node's double rounded to float32; the header's time (float64) and steps (uint32) are OPC UA's Time."""
+    names = printed_names
+    entries = {r.name: r for r in register_map(_served_lqr(_fmu_dir_of(server)))}
+    assert names == [n for n in entries if "." in n]
+    inputs = [n for n in names if entries[n].table == "input"]
+    assert [entries[n].address for n in inputs] == list(range(FIRST_INPUT, FIRST_INPUT + 2 * len(inputs), 2))
+    assert [n for n in names if entries[n].table == "holding"] == ["controller.u"]
+    assert entries["controller.u"].address == FIRST_HOLDING
+
+    async def opcua_values():
+        async with Client(server.opcua) as client:
+            ns, node = await _nodes(client)
+            return await client.read_values([node(n) for n in names] + [node("Time")])
+
+    values = _run(opcua_values())
+    client = ModbusTcpClient(server.modbus[0], port=server.modbus[1], timeout=10)
+    try:
+        assert client.connect()
+        words = client.read_input_registers(0, count=FIRST_INPUT + 2 * len(inputs), device_id=1).registers
+        held = client.read_holding_registers(0, count=FIRST_HOLDING + 2, device_id=1).registers
+    finally:
+        client.close()
+    time_ = struct.unpack(">d", struct.pack(">4H", *words[:4]))[0]
+    assert time_ == values[-1] and words[4] * 65536 + words[5] == round(time_ / 1e-3) and words[6] == 1
+    for name, value in zip(names, values):
+        r = entries[name]
+        pair = words[r.address:r.address + 2] if r.table == "input" else held[r.address:r.address + 2]
+        assert words_float32(*pair) == float(np.float32(value)), name
+    assert held[0] == 0  # the step register reads 0
+
+
+def test_bad_opcua_requests_get_error_replies_and_change_nothing(server):
+    async def misbehave():
+        async with Client(server.opcua) as client:
+            ns, node = await _nodes(client)
+            before = await client.read_values([node("Time"), node("controller.u")])
+            codes = {}
+            for label, name, value in (("string", "controller.u", ua.Variant("fast", ua.VariantType.String)),
+                                       ("nan", "controller.u", ua.Variant(math.nan, ua.VariantType.Double)),
+                                       ("output", "plant.x", ua.Variant(1.0, ua.VariantType.Double)),
+                                       ("parameter", "plant.l1", ua.Variant(2.0, ua.VariantType.Double))):
+                try:
+                    await node(name).write_value(value)
+                    codes[label] = "Good"
+                except ua.UaStatusCodeError as exc:
+                    codes[label] = type(exc).__name__
+            for label, n, variant in (("zero steps", 0, ua.VariantType.UInt32),
+                                      ("text steps", "1", ua.VariantType.String),
+                                      ("past the stop time", 10**6, ua.VariantType.UInt32)):
+                try:
+                    await _call_step(client, n, variant)
+                    codes[label] = "Good"
+                except ua.UaStatusCodeError as exc:
+                    codes[label] = type(exc).__name__
+            after = await client.read_values([node("Time"), node("controller.u")])
+            return codes, before, after
+
+    codes, before, after = _run(misbehave())
+    assert codes == {"string": "BadTypeMismatch", "nan": "BadOutOfRange", "output": "BadUserAccessDenied",
+                     "parameter": "BadUserAccessDenied", "zero steps": "BadInvalidArgument",
+                     "text steps": "BadInvalidArgument", "past the stop time": "BadInvalidState"}
+    assert after == before
+    _garbage(server.opcua.rpartition(":")[0].removeprefix("opc.tcp://"), int(server.opcua.rpartition(":")[2]),
+             b"HELF\x05\x00\x00\x00\xff")
+    assert _run(_read_time(server.opcua)) == before[0]  # still serving
+
+
+async def _read_time(url):
+    async with Client(url) as client:
+        ns, node = await _nodes(client)
+        return await node("Time").read_value()
+
+
+def _garbage(host, port, data):
+    """Send bytes that are no valid request on a raw connection; read what comes back until it closes."""
+    with socket.create_connection((host, port), timeout=10) as raw:
+        raw.sendall(data)
+        raw.settimeout(2)
+        try:
+            return raw.recv(1024)
+        except TimeoutError:
+            return None
+
+
+def test_bad_modbus_requests_get_exception_replies(server):
+    client = ModbusTcpClient(server.modbus[0], port=server.modbus[1], timeout=10)
+    try:
+        assert client.connect()
+        t0 = client.read_input_registers(0, count=4, device_id=1).registers
+        replies = {
+            "beyond the map": client.read_input_registers(2000, count=2, device_id=1),
+            "half a float": client.write_registers(FIRST_HOLDING + 1, [0], device_id=1),
+            "the reserved register": client.write_registers(1, [0, 0, 0], device_id=1),
+            "nan": client.write_registers(FIRST_HOLDING, float32_words(math.nan), device_id=1),
+            "zero steps": client.write_register(0, 0, device_id=1),
+            "past the stop time": client.write_register(0, 65535, device_id=1),
+            "a coil": client.read_coils(0, count=1, device_id=1),
+        }
+        codes = {label: (reply.isError(), getattr(reply, "exception_code", None)) for label, reply in replies.items()}
+        unknown = _garbage(*server.modbus, bytes([0, 7, 0, 0, 0, 2, 1, 0x63]))  # function 0x63: none
+        t1 = client.read_input_registers(0, count=4, device_id=1).registers
+    finally:
+        client.close()
+    assert codes == {"beyond the map": (True, 2), "half a float": (True, 2), "the reserved register": (True, 2),
+                     "nan": (True, 3), "zero steps": (True, 3), "past the stop time": (True, 3), "a coil": (True, 1)}
+    assert unknown is None or (unknown[7] & 0x80 and unknown[8] == 1)  # "illegal function", or closed
+    assert t1 == t0  # nothing stepped, still serving
+
+
+def test_a_second_client_is_served_and_steps_are_taken_one_after_another(server):
+    """Two OPC UA clients ask for 5 steps at once and a Modbus client reads meanwhile: both are served, the
+    steps are not lost or interleaved (the two replies are 5 and 10 steps on), the Modbus client sees them."""
+
+    async def two_at_once():
+        async with Client(server.opcua) as first, Client(server.opcua) as second:
+            t0 = await _read_time(server.opcua)
+            times = await asyncio.gather(_call_step(first, 5), _call_step(second, 5))
+            return t0, times
+
+    t0, times = _run(two_at_once())
+    assert sorted(round((t - t0) / 1e-3) for t in times) == [5, 10]
+    client = ModbusTcpClient(server.modbus[0], port=server.modbus[1], timeout=10)
+    try:
+        assert client.connect()
+        words = client.read_input_registers(0, count=4, device_id=1).registers
+    finally:
+        client.close()
+    assert struct.unpack(">d", struct.pack(">4H", *words))[0] == max(times)
+
+
+def test_the_example_pd_client_moves_the_trolley(server):
+    """examples/opcua_pd_client.py, in its own process, as the docs run it (1 s of its PD law)."""
+    done = subprocess.run([sys.executable, str(ROOT / "examples" / "opcua_pd_client.py"), server.opcua,
+                           "--target", "0.5", "--seconds", "1"], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    found = re.fullmatch(r"x = (-?\d+\.\d+) m after 1 s \(target 0\.5 m\); largest hook swing (\d+\.\d+) deg\n",
+                         done.stdout)
+    assert found and 0.2 < float(found.group(1)) < 0.7, done.stdout
+
+
+# --- real time against the wall clock, with a client that falls silent ---
+
+
+def test_real_time_at_10_ms_keeps_its_deadlines_and_the_watchdog_holds_a_silent_client(fmu_dir, tmp_path):
+    """10 ms cycles for 3 s (>= 99 % of cycles on time; the run ends by itself at its stop time), the stepping
+    thread under SCHED_FIFO where the OS permits it (this machine's cores are shared with other jobs). The
+    client writes u = 0.5 for 0.3 s and falls silent: the watchdog (0.5 s) holds u at zero and says so, on
+    stderr and in Status; the timing of every cycle is written beside the results."""
+    server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--period", "0.01",
+                    "--stop-time", "3", "--watchdog", "0.5", "--rt-priority", "10", "--opcua", "127.0.0.1:0")
+
+    async def write_then_fall_silent():
+        async with Client(server.opcua) as client:
+            ns, node = await _nodes(client)
+            for _ in range(15):
+                await node("controller.u").write_value(ua.Variant(0.5, ua.VariantType.Double))
+                await asyncio.sleep(0.02)
+            for _ in range(100):  # at most 2 s
+                status = await node("Status").read_value()
+                if status.startswith("holding"):
+                    return status
+                await asyncio.sleep(0.02)
+            return status
+
+    try:
+        status_seen = _run(write_then_fall_silent())
+    finally:
+        code, out, err = server.wait()
+    assert code == 0, err[-2000:]
+    assert status_seen.startswith("holding: no client write for") and "held at zero" in status_seen
+    timing = read_csv(tmp_path / "serve.timing.csv")
+    assert len(timing["cycle"]) == 300 and np.all(np.diff(timing["deadline_s"]) == pytest.approx(0.01))
+    assert np.mean(timing["missed"] == 0) >= 0.99, out
+    assert re.search(r"timing: 300 cycles of 10 ms: .*; real-time factor", out)
+    u = read_csv(server.out)["controller.u"]
+    assert len(u) == 3001 and u[-1] == 0.0
+    last_written = np.flatnonzero(u == 0.5)
+    assert last_written.size and np.all(u[last_written[-1] + 1:] == 0.0)
+    holds = [line for line in err.splitlines() if "watchdog" in line]
+    assert holds and holds[-1].endswith("controller's outputs held at zero")
+
+
+# --- the command line's rules, in this process ---
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--system", "lqr"], "nothing to serve: give --opcua HOST:PORT, --modbus HOST:PORT or both"),
+    (["--opcua", "127.0.0.1:70000"], "--opcua '127.0.0.1:70000': expected HOST:PORT with a port from 0 to 65535"),
+    (["--modbus", "localhost:x"], "--modbus 'localhost:x': expected HOST:PORT"),
+    (["--opcua", "--external", "crane"], "--external crane: system paper has no instance 'crane'"),
+    (["--opcua", "--period", "0.0025"], "--period 0.0025: must be a whole number of steps of 0.001 s"),
+    (["--opcua", "--lock-step", "--period", "0.01"], "--period paces real time; in lock-step the client"),
+    (["--opcua", "--lock-step", "--external", "controller", "--watchdog", "1"], "--watchdog holds an --external"),
+    (["--opcua", "--external", "controller", "--watchdog", "0"], "--watchdog must be > 0 s, got 0"),
+    (["--opcua", "--stop-time", "0.0005"], "must divide the interval"),
+    (["--opcua", "--lock-step", "--rt-priority", "10"], "--rt-priority is for real time"),
+    (["--opcua", "--rt-priority", "100"], "--rt-priority must be from 1 to 99, got 100"),
+    (["--opcua", "--out", "r.txt"], "--out r.txt: writes a .csv"),
+])
+def test_serve_mistakes_are_one_line_and_status_2(fmu_dir, argv, message, capsys):
+    assert main(["serve", "--fmu-dir", str(fmu_dir), *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err, err
+
+
+def test_a_missing_protocol_package_is_one_line(fmu_dir, capsys, monkeypatch):
+    import importlib.util
+
+    find_spec = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "asyncua" else find_spec(name))
+    assert main(["serve", "--fmu-dir", str(fmu_dir), "--opcua"]) == 2
+    assert "--opcua needs asyncua, which is not installed: pip install -e '.[serve]'" in capsys.readouterr().err
+
+
+def test_the_core_imports_no_protocol_package():
+    """asyncua (LGPL-3.0) and pymodbus are an optional extra: importing the toolkit, its master, its real-time
+    runner and its command line loads neither."""
+    code = ("import sys, crane_fmu.cli, crane_fmu.cosim.realtime, crane_fmu.commands.serve; "
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in ('asyncua', 'pymodbus')))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert done.stdout.strip() == "[]", done.stderr
+
+
+def test_a_port_in_use_is_one_line(fmu_dir, tmp_path, capsys):
+    with socket.create_server(("127.0.0.1", 0)) as taken:
+        port = taken.getsockname()[1]
+        assert main(["serve", "--fmu-dir", str(fmu_dir), "--system", "lqr", "--lock-step", "--modbus",
+                     f"127.0.0.1:{port}", "--out", str(tmp_path / "serve.csv")]) == 2
+    err = capsys.readouterr().err
+    assert err == f"crane-fmu: error: --modbus 127.0.0.1:{port}: cannot listen (Address already in use)\n"
