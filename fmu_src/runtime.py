@@ -211,7 +211,10 @@ class SlaveCalls:
         variable = self.vars.get(missing)
         if variable is None:
             raise ValueError(f"{component.model_identifier} has no variable with value reference {missing}")
-        row = next(v for v in component.variables if v.name == variable.name)
+        row = next((v for v in component.variables if v.name == variable.name), None)
+        if row is None:  # FMI 3.0's time, read with any others
+            raise ValueError(f"{variable.name} (value reference {missing}) is the independent variable: it is never "
+                             "set")
         if row.type == "String":
             raise ValueError(f"{row.name} of {component.model_identifier} is a String, not a Real")
         raise ValueError(f"{row.name} is an {row.causality} of {component.model_identifier}; only parameters and "
@@ -224,6 +227,11 @@ class SlaveCalls:
     def set_reals(self, vrs, values):
         """pythonfmu's batched set, for its own binaries (ours use :meth:`real_writer`)."""
         self.real_writer(tuple(vrs))(values)
+
+    def setup_experiment(self, start_time, *rest):
+        """pythonfmu's (start, stop, tolerance) and pythonfmu3's (start): time starts at ``start_time``."""
+        super().setup_experiment(start_time, *rest)
+        self.runtime.time = start_time
 
     def exit_initialization_mode(self):
         self.runtime.initialise()
