@@ -71,8 +71,9 @@ static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
     if (!(V(l1_min) <= V(l1) && V(l1) <= V(l1_max)))
         return report(r, MODEL_ERROR, "l1 must lie within [l1_min, l1_max] = [%s, %s], got %s", R(V(l1_min)),
                       R(V(l1_max)), R(V(l1)));
-    *c = (Config){{V(m1), V(m2), V(l1), V(l2), V(g)}, {0.0, 0.0, 0.0, V(c1), V(c2)}, V(max_substep), V(u_max),
-                  V(v_max), V(tau), V(x_min), V(x_max), V(l1_min), V(l1_max), V(dl1_max)};
+    *c = (Config){{V(m1), V(m2), V(l1), V(l2), V(g)}, {0.0, 0.0, 0.0, V(c1), V(c2)}, V(max_substep),
+                  unlimited(V(u_max)), unlimited(V(v_max)), V(tau), unlimited(V(x_min)), unlimited(V(x_max)),
+                  V(l1_min), unlimited(V(l1_max)), unlimited(V(dl1_max))}; /* 1e60 and beyond: no limit */
     return MODEL_OK;
 }
 

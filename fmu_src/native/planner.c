@@ -144,6 +144,7 @@ static ModelStatus setup(const double values[], const char *kind, Config *c, con
     double u_max = V(u_max), v_max = V(v_max);
     if (!(u_max > 0)) return rule(r, "u_max", "> 0 (inf: no limit)", u_max);
     if (!(v_max > 0)) return rule(r, "v_max", "> 0 (inf: no limit)", v_max);
+    u_max = unlimited(u_max), v_max = unlimited(v_max);
     if (strcmp(kind, "zv") && strcmp(kind, "zvd") && strcmp(kind, "ei") && strcmp(kind, "none"))
         return report(r, MODEL_ERROR, "shaper must be one of zv, zvd, ei, none, got %s",
                       str_repr(kind, (char[STR_REPR_SIZE]){0}));
