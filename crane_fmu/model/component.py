@@ -17,8 +17,9 @@ ROLES = ("plant", "controller", "planner", "disturbance", "sensor", "estimator",
 CAUSALITIES = ("parameter", "input", "output")
 
 
-Step = namedtuple("Step", "state messages")
-Step.__doc__ = "What ``update`` may return instead of a bare state: the state and messages for the host's log."
+Step = namedtuple("Step", "state messages notes", defaults=((),))
+Step.__doc__ = ("What ``update`` may return instead of a bare state: the state, warnings for the host's log "
+                "(what a user should act on) and notes (information, logged when the host asks for all messages).")
 
 
 class Discard(Exception):

@@ -32,7 +32,7 @@ from .plant_equations import (  # noqa: F401 (the plant's equations, importable 
     substeps,
 )
 from .limits import NO_LIMIT, unlimited
-from .plant_limits import clamp, drive_factors, held_cable, past_rail_end, within_speed
+from .plant_limits import clamp, drive_factors, held_cable, past_rail_end, reached_limit, within_speed
 from .tables import PLANT_MODEL, input_, output, parameter
 
 DRIVE, ACCEL = DL1 + 1, DL1 + 2  # after the swing and hoist state: the drive's and the trolley's mean acceleration
@@ -178,7 +178,8 @@ def general_update(config, state, inputs, time, step):
     that the speed ends within ``v_max``; the hoist acceleration is limited
     likewise by ``dl1_max``, and a cable reaching ``l1_min`` or ``l1_max`` is held
     there at rest (reported in the step's messages). A trolley that would pass a
-    rail end, or a state that becomes non-finite, discards the step.
+    rail end, or a state that becomes non-finite, discards the step. A cable reaching a hoist limit at
+    rest is a note for the log, at speed a warning (:func:`.plant_limits.reached_limit`).
     """
     u, hoist, f1, f2 = inputs
     c, p = config, config.params
@@ -189,7 +190,7 @@ def general_update(config, state, inputs, time, step):
     forces = (f1, f2, *c.damping)
     demand = clamp(u, -c.u_max, c.u_max)
     lag, mean = drive_factors(c.tau, dt)
-    messages = []
+    messages, notes = [], []
     swing, drive = state[:DRIVE], state[DRIVE]
     try:
         for k in range(n):
@@ -208,7 +209,8 @@ def general_update(config, state, inputs, time, step):
             held = held_cable(swing[L1], c.l1_min, c.l1_max)
             if held is not None:
                 if cable_rate != 0.0:  # reached the limit in this sub-step (not already held there)
-                    messages.append(f"hoist: l1 reached {held!r} m at t = {t!r} s and is held there")
+                    warning, text = reached_limit(held, t, swing[DL1])
+                    (messages if warning else notes).append(text)
                 swing = swing[:L1] + (held, 0.0)
         finite_state = all(map(math.isfinite, swing))
     except (ArithmeticError, ValueError):  # overflow, or sin/cos of inf
@@ -216,7 +218,7 @@ def general_update(config, state, inputs, time, step):
     if not finite_state:
         raise _not_finite(time, u)
     state = swing + (drive, accel)
-    return Step(state, messages) if messages else state
+    return Step(state, messages, notes) if messages or notes else state
 
 
 def _outputs(config, state, inputs):
