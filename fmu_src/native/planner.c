@@ -190,9 +190,10 @@ static ModelStatus setup(const double values[], const char *kind, Config *c, con
 static void reference(const Config *c, double t, double out[N_OUTPUTS]) {
     double x = c->x0, v = 0.0, a = 0.0, eta[2] = {0.0, 0.0}, deta[2] = {0.0, 0.0};
     int moving = t < c->end;
+    double rounding = 1e-9 * (t > 1.0 ? t : t < -1.0 ? -t : 1.0); /* TIME_ROUNDING * max(1.0, abs(t)) */
     for (int i = 0; i < c->n_steps; i++) {
         double dt = t - c->steps[i].t, jump = c->steps[i].value;
-        if (dt <= 0) break;
+        if (dt <= rounding) break;
         a += jump;
         v += jump * dt;
         x += 0.5 * jump * dt * dt;
