@@ -186,7 +186,7 @@ def build_fmu(component, out_dir, binaries=None, fmi_version=2):
             for item in src.infolist():
                 data = src.read(item)
                 if item.filename == "modelDescription.xml":
-                    data = process(data, component.variables, DISPLAY_UNITS, component.feedthrough)
+                    data = process(data, component.variables, DISPLAY_UNITS, component.dependencies())
                 elif item.filename == f"{linux}/{name}.so" and binaries is not None:
                     data = Path(binaries[0]).read_bytes()
                     dst.write(binaries[1], f"{linux}/PythonWrapper.so")

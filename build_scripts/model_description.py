@@ -4,6 +4,13 @@ pythonfmu 0.7 writes no units and no InitialUnknowns and declares no output
 dependencies. This module adds them, so that ``fmpy validate`` passes, every
 Real carries an SI unit (angles with display unit deg), and a master can see
 which outputs are direct feedthrough.
+
+The model structure lists real dependencies: an output (Outputs, FMI 3.0
+Output) lists the inputs it reads at the same instant (``Component.dependencies``),
+no more and no fewer, since a host reads a missing list as "every input" (a false
+algebraic loop) and an empty one as "none". At initialisation (InitialUnknowns,
+InitialUnknown) every output follows the parameters: it lists its inputs and
+every parameter.
 """
 
 import xml.etree.ElementTree as ET
@@ -21,7 +28,12 @@ def _unit_definitions(units, display_units):
     return node
 
 
-def postprocess(xml_bytes, table, display_units, feedthrough):
+def _joined(values):
+    return {"dependencies": " ".join(map(str, values)), **(
+        {"dependenciesKind": " ".join(["dependent"] * len(values))} if values else {})}
+
+
+def postprocess(xml_bytes, table, display_units, dependencies):
     """Return modelDescription.xml with units, descriptions and model structure.
 
     Parameters
@@ -32,9 +44,9 @@ def postprocess(xml_bytes, table, display_units, feedthrough):
         The FMU's variable table, in registration order.
     display_units : dict
         ``{unit: display unit}``, e.g. ``{"rad": "deg"}``.
-    feedthrough : bool
-        True when the outputs are computed from the current inputs (the
-        controller); False when they are states (the plant).
+    dependencies : dict
+        ``{output: (input, ...)}``: the inputs each output reads at the same
+        instant (``Component.dependencies()``).
 
     Returns
     -------
@@ -63,51 +75,87 @@ def postprocess(xml_bytes, table, display_units, feedthrough):
     position = list(root).index(root.find("CoSimulation")) + 1
     root.insert(position, _unit_definitions(units, display_units))
 
-    inputs = [str(i + 1) for i, v in enumerate(table) if v.causality == "input"]
+    index = {v.name: i + 1 for i, v in enumerate(table)}  # FMI 2.0 indices: 1-based ScalarVariable positions
+    parameters = [index[v.name] for v in table if v.causality == "parameter"]
     structure = root.find("ModelStructure")
     for child in list(structure):
         structure.remove(child)
-    outputs = [i + 1 for i, v in enumerate(table) if v.causality == "output"]
+    outputs = [v.name for v in table if v.causality == "output"]
     if outputs:
         out_node = ET.SubElement(structure, "Outputs")
         init_node = ET.SubElement(structure, "InitialUnknowns")
-        deps = inputs if feedthrough else []
-        for index in outputs:
-            attrs = {"index": str(index), "dependencies": " ".join(deps)}
-            if deps:
-                attrs["dependenciesKind"] = " ".join(["dependent"] * len(deps))
-            ET.SubElement(out_node, "Unknown", attrs)
-            ET.SubElement(init_node, "Unknown", index=str(index))
+        for name in outputs:
+            read = [index[i] for i in dependencies[name]]
+            ET.SubElement(out_node, "Unknown", index=str(index[name]), **_joined(read))
+            ET.SubElement(init_node, "Unknown", index=str(index[name]), **_joined(sorted(read + parameters)))
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
 
-def postprocess3(xml_bytes, table, display_units, feedthrough):
+def postprocess3(xml_bytes, table, display_units, dependencies):
     """The FMI 3.0 counterpart of :func:`postprocess` for pythonfmu3's modelDescription.xml.
 
     pythonfmu3 already declares units natively; this adds display units, exact
-    start values and the outputs' dependencies on the inputs.
+    start values and the outputs' dependencies on the inputs (and, at
+    initialisation, the parameters).
     """
     root = ET.fromstring(xml_bytes)
     by_name = {v.name: v for v in table}
-    inputs = []
+    vrs = {}
     for node in root.find("ModelVariables"):
         v = by_name.get(node.get("name"))
         if v is None:
             continue
+        vrs[v.name] = int(node.get("valueReference"))
         if node.get("start") is not None and v.type == "Real":
             node.set("start", xml_double(v.start))
         if v.unit in display_units:
             node.set("displayUnit", display_units[v.unit])
-        if v.causality == "input":
-            inputs.append(node.get("valueReference"))
     for unit in root.find("UnitDefinitions"):
         if unit.get("name") in display_units:
             ET.SubElement(unit, "DisplayUnit", name=display_units[unit.get("name")], factor=repr(DEG_PER_RAD))
-    for output in root.find("ModelStructure").iter("Output"):
-        output.set("dependencies", " ".join(inputs) if feedthrough else "")
-        if feedthrough:
-            output.set("dependenciesKind", " ".join(["dependent"] * len(inputs)))
+    parameters = [vrs[v.name] for v in table if v.causality == "parameter"]
+    names = {vr: name for name, vr in vrs.items()}
+    structure = root.find("ModelStructure")
+    for unknown in list(structure):
+        read = sorted(vrs[i] for i in dependencies[names[int(unknown.get("valueReference"))]])
+        if unknown.tag == "Output":
+            unknown.attrib.update(_joined(read))
+        elif unknown.tag == "InitialUnknown":
+            unknown.attrib.update(_joined(sorted(read + parameters)))
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def system_dependencies(dependencies, connections, outputs, inputs):
+    """``{own output: (own input, ...)}`` of a system packed as one FMU (a one-FMU, a container).
+
+    An own output reads an own input at the same instant when a chain of direct feedthrough, along the
+    connections, leads from an instance input that the own input sets to the instance output it shows.
+
+    Parameters
+    ----------
+    dependencies : dict
+        ``{instance: {output: (input, ...)}}``: the inputs each instance's outputs read at the same instant.
+    connections : iterable of Connection
+    outputs : dict
+        ``{own output: (instance, output)}``: where each own output comes from.
+    inputs : dict
+        ``{own input: [(instance, input)]}``: what each own input sets, in the own inputs' order.
+    """
+    fed = {(c.target, c.input): (c.source, c.output) for c in connections}
+    result = {}
+    for name, source in outputs.items():
+        read, todo, seen = set(), [source], set()
+        while todo:
+            instance, output = todo.pop()
+            if (instance, output) in seen:
+                continue
+            seen.add((instance, output))
+            for variable in dependencies[instance][output]:
+                read.add((instance, variable))
+                if (instance, variable) in fed:
+                    todo.append(fed[(instance, variable)])
+        result[name] = tuple(own for own, targets in inputs.items() if read.intersection(targets))
+    return result

@@ -219,10 +219,10 @@ def model_description(component, fmi_version=2, sources=None, guid=None):
     """
     guid = guid or token(component)
     if fmi_version == 3:
-        return postprocess3(_skeleton3(component, guid), component.variables, DISPLAY_UNITS, component.feedthrough)
+        return postprocess3(_skeleton3(component, guid), component.variables, DISPLAY_UNITS, component.dependencies())
     sources = sources or _sources(component, 2)[0]
     return postprocess(_skeleton2(component, sources, guid), component.variables, DISPLAY_UNITS,
-                       component.feedthrough)
+                       component.dependencies())
 
 
 def build_description(component, sources=None):

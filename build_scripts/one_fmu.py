@@ -31,6 +31,7 @@ from types import SimpleNamespace
 
 from crane_fmu import components
 from crane_fmu.build_scripts import native
+from crane_fmu.build_scripts.model_description import system_dependencies
 from crane_fmu.cosim.connections import connect
 
 ONE_FMUS = ("paper", "lqr", "energy", "transport", "hoist-transport")  # built by default, once their models are native
@@ -76,7 +77,8 @@ class Plan:
         The FMU's own variables: parameters, inputs, outputs.
     links : dict
         ``{own variable: [(instance, variable)]}``: where a parameter or input goes, where an output comes from.
-    feedthrough : bool
+    dependencies : dict
+        ``{own output: (own input, ...)}``: the own inputs each own output reads at the same instant.
     """
 
     kinds: dict
@@ -86,7 +88,7 @@ class Plan:
     step_order: list
     variables: tuple
     links: dict
-    feedthrough: bool
+    dependencies: dict
 
 
 def plan(system):
@@ -113,9 +115,11 @@ def plan(system):
     exchange += [("write", name) for name in order if not feedthrough[name]]
     exchange = [(op, name) for op, name in exchange if op == "read" or inputs[name]]
     variables, links = _interface(system, tables, inputs)
-    fed = {instance for v in variables if v.causality == "input" for instance, _ in links[v.name]}
-    return Plan(kinds, inputs, _values(system, tables), exchange, order, variables, links,
-                any(feedthrough[name] for name in fed))
+    dependencies = system_dependencies(
+        {name: components.get(kind).dependencies() for name, kind in kinds.items()}, connections,
+        {v.name: links[v.name][0] for v in variables if v.causality == "output"},
+        {v.name: links[v.name] for v in variables if v.causality == "input"})
+    return Plan(kinds, inputs, _values(system, tables), exchange, order, variables, links, dependencies)
 
 
 def _dependency_order(kinds, connections, feedthrough):
@@ -332,7 +336,7 @@ def build_one_fmu(system, out_dir, fmi_version=2, name=None, tools=None):
         for file in sorted(sources.iterdir()):
             digest.update(file.name.encode() + file.read_bytes())
         guid = "{" + str(uuid.UUID(digest.hexdigest()[:32])) + "}"
-        model = SimpleNamespace(model_identifier=name, variables=p.variables, feedthrough=p.feedthrough,
+        model = SimpleNamespace(model_identifier=name, variables=p.variables, dependencies=lambda: p.dependencies,
                                 description=f"{system.name} as one native FMU: {system.description}".rstrip(": "),
                                 default_experiment=(system.start_time, system.stop_time, system.step))
         (sources / f"{name}_variables.h").write_text(native.variables_header(model, guid))

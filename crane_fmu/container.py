@@ -92,6 +92,7 @@ def build_container(system, fmu_dir, path):
             expose(name, "output", [("plant", name)])
     if "controller" in fmus and "u" in variables["controller"]:
         expose("u", "output", [("controller", "u")])
+    _declare_dependencies(md, mappings, {name: c.modelDescription for name, c in components.items()}, connections)
     config = Configuration(parallelDoStep=False, modelDescription=md, components=list(components.values()),
                            connections=links, variableMappings=mappings)
     path = Path(path)
@@ -101,3 +102,32 @@ def build_container(system, fmu_dir, path):
         create_container_fmu(config, Path(tmp), partial)
     shutil.move(partial, path)
     return path
+
+
+def _declare_dependencies(md, mappings, inner, connections):
+    """The container's real model structure: each output lists the own inputs it reads at the same instant
+    (through the inner FMUs' declared feedthrough, along the connections), at initialisation also every
+    parameter; without a list a host would take every input (a false algebraic loop).
+
+    ``inner`` is ``{instance: its modelDescription}``; an inner output without a list reads every input.
+    """
+    from crane_fmu.build_scripts.model_description import system_dependencies
+
+    dependencies = {}
+    for name, inner_md in inner.items():
+        inputs = tuple(v.name for v in inner_md.modelVariables if v.causality == "input")
+        dependencies[name] = {u.variable.name: inputs if u.dependencies is None else
+                              tuple(v.name for v in u.dependencies) for u in inner_md.outputs}
+    own = {v.name: v for v in md.modelVariables}
+    targets = {v.name: [(c.name, t.name) for c, t in mapped] for v, mapped in mappings.items()}
+    read = system_dependencies(dependencies, connections,
+                               {n: targets[n][0] for n, v in own.items() if v.causality == "output"},
+                               {n: targets[n] for n, v in own.items() if v.causality == "input"})
+    parameters = [v for v in md.modelVariables if v.causality == "parameter"]
+    for unknown in md.outputs:
+        unknown.dependencies = [own[n] for n in read[unknown.variable.name]]
+        unknown.dependenciesKind = ["dependent"] * len(unknown.dependencies) or None
+    for unknown in md.initialUnknowns:
+        unknown.dependencies = sorted([own[n] for n in read[unknown.variable.name]] + parameters,
+                                      key=md.modelVariables.index)
+        unknown.dependenciesKind = ["dependent"] * len(unknown.dependencies) or None

@@ -34,7 +34,7 @@ class Runtime:
         self.config = self.state = None  # set when initialisation ends
         self.time = 0.0
         self._outputs = None
-        self.messages = ()  # the last step's messages for the host's log
+        self.messages = self.notes = ()  # the last step's warnings and notes for the host's log
 
     def set_parameter(self, name, value):
         self.values[name] = value
@@ -84,20 +84,21 @@ class Runtime:
     def step(self, time, step):
         """Advance one communication step; return None, or the reason the step is discarded.
 
-        Messages the component gives with the new state are kept in :attr:`messages` for the slave to log.
+        Warnings and notes the component gives with the new state are kept in :attr:`messages` and
+        :attr:`notes` for the slave to log.
         """
         if not (step > 0 and step < math.inf):
             raise ValueError(f"communication step must be > 0 and finite, got {step!r}")
         if not self.initialised:
             raise RuntimeError("doStep before initialisation ended")
-        self.messages = ()
+        self.messages = self.notes = ()
         if self._stateful:
             try:
                 state = self.component.update(self.config, self.state, tuple(self.inputs), time, step)
             except Discard as exc:
                 return str(exc)
             if type(state) is Step:
-                state, self.messages = state
+                state, self.messages, self.notes = state
             self.state = state
         self.time = time + step
         self._outputs = None
@@ -211,7 +212,10 @@ class SlaveCalls:
         variable = self.vars.get(missing)
         if variable is None:
             raise ValueError(f"{component.model_identifier} has no variable with value reference {missing}")
-        row = next(v for v in component.variables if v.name == variable.name)
+        row = next((v for v in component.variables if v.name == variable.name), None)
+        if row is None:  # FMI 3.0's time, read with any others
+            raise ValueError(f"{variable.name} (value reference {missing}) is the independent variable: it is never "
+                             "set")
         if row.type == "String":
             raise ValueError(f"{row.name} of {component.model_identifier} is a String, not a Real")
         raise ValueError(f"{row.name} is an {row.causality} of {component.model_identifier}; only parameters and "
@@ -225,6 +229,11 @@ class SlaveCalls:
         """pythonfmu's batched set, for its own binaries (ours use :meth:`real_writer`)."""
         self.real_writer(tuple(vrs))(values)
 
+    def setup_experiment(self, start_time, *rest):
+        """pythonfmu's (start, stop, tolerance) and pythonfmu3's (start): time starts at ``start_time``."""
+        super().setup_experiment(start_time, *rest)
+        self.runtime.time = start_time
+
     def exit_initialization_mode(self):
         self.runtime.initialise()
 
@@ -233,6 +242,8 @@ class SlaveCalls:
         reason = runtime.step(current_time, step_size)
         for message in runtime.messages:
             self.log(message, self.WARNING)
+        for note in runtime.notes:
+            self.log(note)  # status OK: the host sees it when it asks for every message
         if reason:
             self.log(reason, self.ERROR)
         return reason is None

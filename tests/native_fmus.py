@@ -60,14 +60,14 @@ def close(fmu):
     fmu.freeInstance()
 
 
-def messages(path, settings, steps=(), read=(), read_at_end=(), instance_name="c"):
+def messages(path, settings, steps=(), read=(), read_at_end=(), instance_name="c", logging_on=False):
     """``(statuses, log)`` of an FMI 2.0 run, call by call, of the FMU at ``path``.
 
     The run sets ``settings`` in initialisation mode (one call each; a str is set as a String), gets ``read``
     (names; a call named ``get``) before and after initialisation ends, makes ``steps``, each ``(t, h)`` or
     ``(t, h, {input: value})`` with the inputs set before the step, and at last gets ``read_at_end`` (a call
     named ``get`` and the names). It stops at the first call that fails; that call's name and status end the
-    statuses, then ``end``.
+    statuses, then ``end``. With ``logging_on`` the FMU logs its information too (status OK).
     """
     md = read_model_description(str(path))
     vr = {v.name: v.valueReference for v in md.modelVariables}
@@ -79,7 +79,7 @@ def messages(path, settings, steps=(), read=(), read_at_end=(), instance_name="c
     addLoggerProxy(ctypes.byref(callbacks))
     fmu = FMU2Slave(guid=md.guid, unzipDirectory=fmpy.extract(str(path)),
                     modelIdentifier=md.coSimulation.modelIdentifier, instanceName=instance_name)
-    fmu.instantiate(callbacks=callbacks)
+    fmu.instantiate(callbacks=callbacks, loggingOn=logging_on)
 
     def setter(name, value):
         if isinstance(value, str):

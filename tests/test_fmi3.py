@@ -61,3 +61,31 @@ def test_fmi3_state_round_trip(fmi3_fmus):
         inst.free_state(state)
     finally:
         inst.free()
+
+
+@pytest.mark.parametrize("kind", ["python", "native", "one-fmu"])
+def test_time_is_read_with_any_other_variables_and_never_set(fmu_dir, kind):
+    """FMI 3.0's independent variable in one fmi3GetFloat64 call with others, anywhere in it (as fmusim reads it
+    with the outputs); setting it is refused with a message."""
+    from fmpy.fmi1 import FMICallException
+    from native_fmus import open_native
+
+    from crane_fmu.build_scripts.native import native_dir
+
+    path = {"python": fmi3_dir(fmu_dir) / "CranePlant.fmu", "native": native_dir(fmu_dir, 3) / "CranePlant.fmu",
+            "one-fmu": native_dir(fmu_dir, 3) / "CraneLqr.fmu"}[kind]
+    if not path.exists():
+        pytest.skip("no native FMUs were built (no C compiler)")
+    fmu, vr, set_, get = open_native(path, 3)
+    try:
+        time, x, theta1 = 0, vr["x"], vr["theta1"]
+        assert get([time, theta1, time]) == [0.0, math.radians(10), 0.0]
+        fmu.exitInitializationMode()
+        fmu.doStep(0.0, 0.25)
+        alone = get([x]) + get([theta1])
+        assert get([x, time, theta1]) == [alone[0], 0.25, alone[1]]
+        assert get([time]) == [0.25] and get([theta1, x]) == alone[::-1]
+        with pytest.raises(FMICallException):
+            set_([time], [1.0])
+    finally:
+        fmu.freeInstance()

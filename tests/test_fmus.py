@@ -270,3 +270,33 @@ def test_the_python_code_is_one_archive_with_checked_bytecode_for_this_python(fm
                                                   else "pythonfmu3"}
     for name in sources:
         check(archive.read(name[:-3] + ".pyc"), archive.read(name))
+
+
+def test_no_limit_is_a_finite_start_value_and_setting_every_start_value_changes_nothing(fmu_dir):
+    """Hosts read every parameter and log an error for +-inf (OMSimulator: 8 per run of paper), so a limit that is
+    off starts at 1e60, which the models read as none: every Real start value of every FMU we build is finite; a
+    host that sets every parameter to its start value (Simulink does) gets the system's own run, and INF where
+    the start is 1e60 gives it too, bit for bit (paper, 2 s)."""
+    from crane_fmu import systems
+    from crane_fmu.build_scripts.build_fmus import fmi3_dir
+    from crane_fmu.build_scripts.native import native_dir
+    from crane_fmu.cosim import run
+
+    folders = [fmu_dir, fmi3_dir(fmu_dir), native_dir(fmu_dir, 2), native_dir(fmu_dir, 3)]
+    for path in (p for folder in folders for p in sorted(folder.glob("*.fmu"))):
+        md = read_model_description(str(path))
+        for v in md.modelVariables:
+            if v.type in ("Real", "Float64") and v.start is not None:
+                assert math.isfinite(float(v.start)), (path.name, v.name, v.start)
+    paper = systems.get("paper")
+    own = run(paper, fmu_dir, stop_time=2.0).columns()
+    starts = {name: {v.name: v.start if v.type == "String" else float(v.start)
+                     for v in read_model_description(str(path)).modelVariables if v.causality == "parameter"}
+              for name, path in paper.fmus(fmu_dir).items()}
+    infinite = {"plant": {"u_max": math.inf, "v_max": math.inf, "x_min": -math.inf, "x_max": math.inf,
+                          "l1_max": math.inf, "dl1_max": math.inf},
+                "controller": {"u_max": math.inf, "v_max": math.inf}}
+    for values in (starts, infinite):
+        again = run(paper.with_parameters(values), fmu_dir, stop_time=2.0).columns()
+        assert all(np.array_equal(again[k], own[k]) for k in own)
+    assert starts["plant"]["x_min"] == -1e60 and starts["controller"]["u_max"] == 1e60

@@ -238,6 +238,25 @@ STEPS = {
 }
 
 
+def test_a_hoist_limit_reached_at_rest_is_a_note_and_one_hit_at_speed_a_warning(fmu_dir, native):
+    """The end of a planned hoist (the cable arrives at 1 mm/s) is information, logged only to a host that asks
+    for every message; a cable stopped at 1 m/s by its limit is a warning, logged always. Both FMUs alike."""
+    at_rest = ({"l1": 1.0000012, "l1_min": 1.0}, [(0.0, 1e-3, {"hoist": -1.0}), (1e-3, 1e-3, {"hoist": 0.0})])
+    at_speed = ({"l1_max": 1.01}, [(0.0, 0.5, {"hoist": 1.0}), (0.5, 0.5, {"hoist": 1.0})])
+    logs = {}
+    for name, (settings, steps) in (("at rest", at_rest), ("at speed", at_speed)):
+        for logging_on in (False, True):
+            runs = [messages(folder / "CranePlant.fmu", settings, steps, instance_name="plant", logging_on=logging_on)
+                    for folder in (native[2], fmu_dir)]
+            hoist = [[m for m in log if m.startswith("hoist:")] for _, log in runs]  # the Python FMU says more
+            assert runs[0][0] == runs[1][0] == ["end"] and hoist[0] == hoist[1], (name, logging_on)
+            logs[name, logging_on] = hoist[0]
+    assert logs["at rest", False] == [] and logs["at rest", True] == [
+        "hoist: l1 reached 1.0 m at t = 0.002 s and is held there"]
+    assert logs["at speed", False] == logs["at speed", True] and len(logs["at speed", False]) == 1
+    assert logs["at speed", False][0].startswith("hoist: l1 hit the limit 1.01 m at 0.")
+
+
 @pytest.mark.parametrize("case", list(STEPS))
 def test_discards_and_step_errors_have_the_python_fmus_status_and_message(fmu_dir, native, case):
     settings, steps = STEPS[case]

@@ -445,8 +445,8 @@ def _host_arguments(path, settings, steps, h):
     md = read_model_description(str(path))
     vr = {v.name: v.valueReference for v in md.modelVariables}
     outputs = [v.valueReference for v in md.modelVariables if v.causality == "output"]
-    return [md.coSimulation.modelIdentifier, md.guid, steps, h, *[f"{vr[k]}={v!r}" for k, v in settings.items()],
-            *outputs]
+    return [md.coSimulation.modelIdentifier, md.guid, steps, h,
+            *[f"{vr[k]}s={v}" if isinstance(v, str) else f"{vr[k]}={v!r}" for k, v in settings.items()], *outputs]
 
 
 @pytest.fixture(scope="module")
@@ -502,6 +502,27 @@ def wine(unpacked, tmp_path_factory):
     yield ["wine", str(folder / "host.exe")], folder, env
     subprocess.run(["wineserver", "-w"], env=env, timeout=120)
     shutil.rmtree(prefix, ignore_errors=True)
+
+
+OTHER_SHAPERS = [s for s in SHAPERS if s != PLANNER.defaults()["shaper"]]
+
+
+@pytest.mark.parametrize("shaper", OTHER_SHAPERS)
+def test_the_planners_other_shapers_in_the_c_host_and_under_wine_give_the_python_models_outputs(native, unpacked, host,
+                                                                                              wine, shaper):
+    """The host sets the String ``shaper``: Linux's rows bit for bit, the Windows DLL's to 1e-12 relative."""
+    command, folder, env = wine
+    settings = {**HOST_CASES["TrajectoryPlanner"][0], "shaper": shaper}
+    _, guid, *rest = _host_arguments(native[2] / "TrajectoryPlanner.fmu", settings, 5000, 1e-3)
+    expected = _python_rows(PLANNER, settings, 5000, 1e-3)
+    default = _python_rows(PLANNER, HOST_CASES["TrajectoryPlanner"][0], 5000, 1e-3)
+    assert not np.array_equal(expected, default), "the shaper changes the plan"
+    linux = _run_host([str(host), "outputs"], unpacked["TrajectoryPlanner"] / "binaries" / "linux64" /
+                      "TrajectoryPlanner.so", guid, *rest, env=CLEAN_ENV)
+    assert np.array_equal(linux.view(np.int64), expected.view(np.int64))
+    windows = _run_host([*command, "outputs"], "TrajectoryPlanner.dll", guid, *rest, cwd=folder, env=env)
+    assert windows.shape == expected.shape
+    assert np.max(np.abs(windows - expected) / np.maximum(np.abs(expected), 1.0)) <= 1e-12
 
 
 @pytest.mark.parametrize("name", HOST_CASES)

@@ -1,15 +1,16 @@
 """SSP 1.0 in and out: a :class:`~crane_fmu.cosim.system.System` as an ``.ssp`` package, ``.ssd`` or ``.ssv`` file.
 
 Written packages hold SystemStructure.ssd (components with their connectors and
-units, every connection written out, every parameter value) and the FMUs under
-``resources/``. Read are packages and ``.ssd`` files with parameter values inline
-or in ``.ssv`` files, bound to a component (names ``variable``) or to the system
-(names ``instance.variable``).
+units, every connection written out, every parameter value, the step in
+OMSimulator's annotation) and the FMUs under ``resources/``. Read are packages
+and ``.ssd`` files with parameter values inline or in ``.ssv`` files, bound to a
+component (names ``variable``) or to the system (names ``instance.variable``).
 """
 
 import contextlib
 import math
 import os
+import re
 import shutil
 import tempfile
 import xml.etree.ElementTree as ET
@@ -22,12 +23,17 @@ from .system import System, read_fmu
 SSD_NS = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC_NS = "http://ssp-standard.org/SSP1/SystemStructureCommon"
 SSV_NS = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
-SSD, SSC, SSV = (f"{{{ns}}}" for ns in (SSD_NS, SSC_NS, SSV_NS))
+# OMSimulator (2.x, 3.0) takes a system's master and step only from its own annotation on the root system, and
+# without one refuses the file; every other engine ignores it. It matches the prefixes `oms:`, `ssc:`, `ssd:`.
+OMS_NS = "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
+SSD, SSC, SSV, OMS = (f"{{{ns}}}" for ns in (SSD_NS, SSC_NS, SSV_NS, OMS_NS))
 # The name of every component's one inline parameter set in the SSDs written here. One name for
 # all: Ecos applies the sets of the one name given to it (`ecos simulate --parameterSet
 # initialValues`), and none without it; libcosim takes each component's first set, OMSimulator
 # every set, and this package's reader every binding. Bindings on the System element and
-# `prefix` are left out: neither Ecos nor libcosim reads them.
+# `prefix` are left out: neither Ecos nor libcosim reads them. String parameters get no connector and
+# a value only where it differs from the FMU's start value: OMSimulator 3.0 applies no String and logs
+# an error for each String connector and value.
 PARAMETER_SET = "initialValues"
 _CONVERT = {"Real": float, "Float64": float, "Integer": int, "Int32": int,
             "Boolean": lambda v: v.lower() in ("true", "1"), "String": str}
@@ -130,6 +136,10 @@ def _parse(ssd, origin):
             if instance not in instances:
                 raise ValueError(f"{origin}: a connection names the unknown component {instance!r}")
     times = {}
+    master = system.find(f"{SSD}Annotations/{SSC}Annotation/{OMS}Annotations/{OMS}SimulationInformation/"
+                         f"{OMS}FixedStepMaster")
+    if master is not None and master.get("stepSize") is not None:
+        times["step"] = float(master.get("stepSize"))
     experiment = root.find(f"{SSD}DefaultExperiment")
     if experiment is not None:
         for attr, key in (("startTime", "start_time"), ("stopTime", "stop_time")):
@@ -181,7 +191,8 @@ def parameter_values(md, overrides):
     """``{name: (variable, value)}`` of the parameters to write for an FMU: its start values with ``overrides``.
 
     A start value that is not finite (``INF``: no limit) and not overridden is
-    left to the FMU: libcosim (0.10) refuses such values in system files.
+    left to the FMU: libcosim (0.10) refuses such values in system files; so is
+    a String equal to the FMU's start value (OMSimulator 3.0 applies no String).
     """
     values = {}
     for v in md.modelVariables:
@@ -190,16 +201,19 @@ def parameter_values(md, overrides):
             value = _CONVERT.get(v.type, str)(value) if value is not None else None
             if v.name not in overrides and isinstance(value, float) and not math.isfinite(value):
                 continue
+            if v.type == "String" and value == v.start:
+                continue
             values[v.name] = (v, value)
     return values
 
 
 def system_structure(system, fmus, connections, sources):
     """The SystemStructure.ssd element of a resolved system; ``sources`` maps instances to package paths."""
-    for prefix, ns in (("ssd", SSD_NS), ("ssc", SSC_NS), ("ssv", SSV_NS)):
+    for prefix, ns in (("ssd", SSD_NS), ("ssc", SSC_NS), ("ssv", SSV_NS), ("oms", OMS_NS)):
         ET.register_namespace(prefix, ns)
-    root = ET.Element(f"{SSD}SystemStructureDescription", version="1.0", name=system.name)
-    node = ET.SubElement(root, f"{SSD}System", name=system.name)
+    name = re.sub(r"\W", "_", system.name)  # OMSimulator refuses names that are not identifiers (hoist-transport)
+    root = ET.Element(f"{SSD}SystemStructureDescription", version="1.0", name=name)
+    node = ET.SubElement(root, f"{SSD}System", name=name)
     elements = ET.SubElement(node, f"{SSD}Elements")
     units = {}
     for name, path in fmus.items():
@@ -209,7 +223,7 @@ def system_structure(system, fmus, connections, sources):
                                   source=sources[name])
         connectors = ET.SubElement(component, f"{SSD}Connectors")
         for v in md.modelVariables:
-            if v.causality in ("parameter", "input", "output"):
+            if v.causality in ("parameter", "input", "output") and v.type != "String":
                 connector = ET.SubElement(connectors, f"{SSD}Connector", name=v.name, kind=v.causality)
                 _typed(connector, SSC, v.type, unit=v.unit if v.type in ("Real", "Float64") else None)
         binding = ET.SubElement(ET.SubElement(component, f"{SSD}ParameterBindings"), f"{SSD}ParameterBinding")
@@ -224,6 +238,8 @@ def system_structure(system, fmus, connections, sources):
     for c in connections:
         ET.SubElement(links, f"{SSD}Connection", startElement=c.source, startConnector=c.output,
                       endElement=c.target, endConnector=c.input)
+    information = ET.SubElement(_oms_annotation(node), f"{OMS}SimulationInformation")
+    ET.SubElement(information, f"{OMS}FixedStepMaster", description="oms-ma", stepSize=repr(float(system.step)))
     if units:
         unit_node = ET.SubElement(root, f"{SSD}Units")
         for name in sorted(units):
@@ -231,9 +247,16 @@ def system_structure(system, fmus, connections, sources):
             base = units[name].baseUnit
             exponents = {k: str(getattr(base, k)) for k in _BASE_UNITS if base is not None and getattr(base, k)}
             ET.SubElement(unit, f"{SSC}BaseUnit", exponents)
-    ET.SubElement(root, f"{SSD}DefaultExperiment", startTime=repr(float(system.start_time)),
-                  stopTime=repr(float(system.stop_time)))
+    experiment = ET.SubElement(root, f"{SSD}DefaultExperiment", startTime=repr(float(system.start_time)),
+                               stopTime=repr(float(system.stop_time)))
+    _oms_annotation(experiment)  # empty: without one OMSimulator warns of "wrong/deprecated content"
     return root
+
+
+def _oms_annotation(parent):
+    """An ``ssd:Annotations`` of type org.openmodelica under ``parent``; its ``oms:Annotations`` element."""
+    annotation = ET.SubElement(ET.SubElement(parent, f"{SSD}Annotations"), f"{SSC}Annotation", type="org.openmodelica")
+    return ET.SubElement(annotation, f"{OMS}Annotations")
 
 
 def write_ssp(system, fmu_dir, path):

@@ -141,7 +141,7 @@ VARIABLES = controller_model() + (
     parameter("w_theta2", _K.w_theta2, "1", "least-squares weight of the payload row of eq (20)"),
     parameter("b3_form", _K.b3_form, None,
               "b3 of eq (14): 'derived' (corrected sign) or 'printed' (as in the paper)", "String"),
-    *limits.parameters(u_max=math.inf, v_max=math.inf),  # the paper's law has none
+    *limits.parameters(u_max=limits.NO_LIMIT, v_max=limits.NO_LIMIT),  # the paper's law has none
     parameter("h", 1e-3, "s", "communication step (for the speed guard when v_max is finite)"),
 ) + MEASURED_STATE + (
     output("u", "m/s2", "demanded trolley acceleration, eq (21)"),

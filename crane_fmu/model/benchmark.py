@@ -26,4 +26,5 @@ TRIVIAL_PLANT = Component(
 TRIVIAL_CONTROLLER = Component(
     "TrivialController", "benchmark",
     "Benchmark floor: BacksteppingController's inputs and output, u = -x (feedthrough)",
-    CONTROLLER_VARIABLES, lambda values: None, lambda config, state, inputs: (-inputs[0],), feedthrough=True)
+    CONTROLLER_VARIABLES, lambda values: None, lambda config, state, inputs: (-inputs[0],), feedthrough=True,
+    depends_on={"u": ("x",)})

@@ -17,8 +17,9 @@ ROLES = ("plant", "controller", "planner", "disturbance", "sensor", "estimator",
 CAUSALITIES = ("parameter", "input", "output")
 
 
-Step = namedtuple("Step", "state messages")
-Step.__doc__ = "What ``update`` may return instead of a bare state: the state and messages for the host's log."
+Step = namedtuple("Step", "state messages notes", defaults=((),))
+Step.__doc__ = ("What ``update`` may return instead of a bare state: the state, warnings for the host's log "
+                "(what a user should act on) and notes (information, logged when the host asks for all messages).")
 
 
 class Discard(Exception):
@@ -51,6 +52,12 @@ class Component:
         ``inputs`` is the tuple of input values in table order.
     feedthrough : bool
         True when ``output`` depends on the inputs of the same instant.
+    depends_on : dict, optional
+        ``{output: (input, ...)}``: the inputs each output reads at the same instant,
+        where they are not all of them (a feedthrough component) or none; what
+        modelDescription.xml declares (:meth:`dependencies`). An output may list an
+        input it reads only for some parameter values (the LQR's ``l1_now``, read
+        when its gains are scheduled).
     initial_state : callable, optional
         ``initial_state(config) -> state`` for a component with a state.
     update : callable, optional
@@ -77,6 +84,7 @@ class Component:
     update: Callable | None = None
     default_experiment: tuple = (0.0, 20.0, 1e-3)
     report: Callable | None = None
+    depends_on: dict | None = None
 
     def __post_init__(self):
         if not self.model_identifier.isidentifier():
@@ -95,6 +103,15 @@ class Component:
                                  f"({', '.join(BASE_UNITS)}), got {v.unit!r}")
         if (self.initial_state is None) != (self.update is None):
             raise ValueError(f"{self.model_identifier}: a state needs both initial_state and update")
+        if self.depends_on is not None:
+            inputs, outputs = self.names("input"), self.names("output")
+            for output, read in self.depends_on.items():
+                if output not in outputs or not set(read) <= set(inputs):
+                    raise ValueError(f"{self.model_identifier}: depends_on maps outputs to inputs, got "
+                                     f"{output!r}: {read!r}")
+            if any(self.depends_on.values()) != self.feedthrough:
+                raise ValueError(f"{self.model_identifier}: depends_on must name an input exactly when feedthrough "
+                                 "is True")
 
     @property
     def stateful(self):
@@ -108,6 +125,13 @@ class Component:
     def names(self, causality):
         """Names of the variables of one causality, in table order."""
         return tuple(v.name for v in self.variables if v.causality == causality)
+
+    def dependencies(self):
+        """``{output: (input, ...)}``: the inputs each output reads at the same instant, in table order."""
+        inputs = self.names("input")
+        if self.depends_on is None:
+            return {name: inputs if self.feedthrough else () for name in self.names("output")}
+        return {name: tuple(i for i in inputs if i in self.depends_on.get(name, ())) for name in self.names("output")}
 
     def defaults(self, causality="parameter"):
         """``{name: start}`` of the variables of one causality."""

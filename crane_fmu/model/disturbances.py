@@ -104,7 +104,8 @@ SENSOR = Component(
      ) + tuple(input_(v.name, v.unit, v.description.replace("measured ", "true ")) for v in MEASURED_STATE)
     + tuple(output(name + "_m", v.unit, v.description) for name, v in zip(STATE, MEASURED_STATE)),
     _sensor_configure, _sensor_output, feedthrough=True,
-    initial_state=lambda config: (0, None), update=_sensor_update)
+    initial_state=lambda config: (0, None), update=_sensor_update,
+    depends_on={name + "_m": (name,) for name in STATE})  # each channel its own (at once: delay 0, first sample)
 
 
 # --- CraneSensor: only what a crane measures, noisy and whole steps late -------------------
@@ -164,4 +165,5 @@ CRANE_SENSOR = Component(
      output("theta1_meas", "rad", "measured hook swing angle"),
      output("theta2_meas", "rad", "measured payload swing angle (a camera)")),
     _crane_sensor_configure, _crane_sensor_output, feedthrough=True,
-    initial_state=lambda config: (0, []), update=_crane_sensor_update)
+    initial_state=lambda config: (0, []), update=_crane_sensor_update,
+    depends_on={name + "_meas": (name,) for name in MEASURED})  # each channel its own (at once: delay 0, first sample)

@@ -1,23 +1,37 @@
-"""Actuator limits every controller and the planner share: |u| <= u_max, |dx| <= v_max."""
+"""Actuator limits every controller and the planner share: |u| <= u_max, |dx| <= v_max.
+
+"No limit" is a value of :data:`NO_LIMIT` (1e60, Modelica's ``inf``) or beyond, ``INF`` included; it is the
+start value of every limit that is off by default. A finite start value because hosts read and log every
+parameter: OMSimulator logs an error for each one that reads as +-inf, libcosim refuses them in system
+files. The models turn such a value into ``inf`` when they are configured (:func:`unlimited`), so 1e60 and
+INF give the same run, bit for bit.
+"""
 
 import math
 
 from .tables import parameter
 
+NO_LIMIT = 1e60
+
+
+def unlimited(value):
+    """``value``, or +-inf where it lies at or beyond +-:data:`NO_LIMIT` (no limit)."""
+    return math.copysign(math.inf, value) if abs(value) >= NO_LIMIT else value
+
 
 def parameters(u_max=2.0, v_max=1.0, what="u"):
-    """The limit parameter rows; ``inf`` means no limit."""
-    return (parameter("u_max", u_max, "m/s2", f"largest |{what}| (trolley acceleration); INF: no limit"),
-            parameter("v_max", v_max, "m/s", "largest trolley speed it commands; INF: no limit"))
+    """The limit parameter rows; 1e60 or more (INF too) means no limit."""
+    return (parameter("u_max", u_max, "m/s2", f"largest |{what}| (trolley acceleration); 1e60 or INF: no limit"),
+            parameter("v_max", v_max, "m/s", "largest trolley speed it commands; 1e60 or INF: no limit"))
 
 
 def check(values):
-    """Validated ``(u_max, v_max)``: each > 0 (``inf`` allowed)."""
+    """Validated ``(u_max, v_max)``: each > 0; 1e60 or more is no limit (``inf``)."""
     for name in ("u_max", "v_max"):
         value = values[name]
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
             raise ValueError(f"{name} must be > 0 (inf: no limit), got {value!r}")
-    return values["u_max"], values["v_max"]
+    return unlimited(values["u_max"]), unlimited(values["v_max"])
 
 
 def limited(u, dx, u_max, v_max, h):

@@ -31,6 +31,10 @@ from .plant import linearisation
 from .tables import PLANT_MODEL, output, parameter
 
 EI_TOLERANCE = 0.05
+# A time at most this much (relative, of at least 1 s) past a step of the plan counts as at it, before it: the
+# rounding of a host that adds up its steps (OMSimulator) then switches where an exact time k h does (the 2 m move's
+# first switch is at 0.125 s, which 125 steps of 1 ms add up to 0.12500000000000008).
+TIME_ROUNDING = 1e-9
 SHAPERS = ("zv", "zvd", "ei", "none")
 
 
@@ -141,9 +145,10 @@ def reference(c, t):
     eta = [0.0, 0.0]
     deta = [0.0, 0.0]
     moving = t < c.end
+    rounding = TIME_ROUNDING * max(1.0, abs(t))
     for tau, jump in c.steps:
         dt = t - tau
-        if dt <= 0:
+        if dt <= rounding:
             break
         a += jump
         v += jump * dt

@@ -31,13 +31,15 @@ from .plant_equations import (  # noqa: F401 (the plant's equations, importable 
     rk4_step,
     substeps,
 )
-from .plant_limits import clamp, drive_factors, held_cable, past_rail_end, within_speed
+from .limits import NO_LIMIT, unlimited
+from .plant_limits import clamp, drive_factors, held_cable, past_rail_end, reached_limit, within_speed
 from .tables import PLANT_MODEL, input_, output, parameter
 
 DRIVE, ACCEL = DL1 + 1, DL1 + 2  # after the swing and hoist state: the drive's and the trolley's mean acceleration
 INITIAL_STATE = ("x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0")
 
-INF = math.inf
+INF = NO_LIMIT  # no limit, as a finite start value (limits.py says why); configure() makes it inf
+UNLIMITED = ("u_max", "v_max", "x_min", "x_max", "l1_max", "dl1_max")  # off at +-1e60 and beyond
 
 VARIABLES = PLANT_MODEL + (
     parameter("x0", 0.0, "m", "initial trolley position"),
@@ -49,14 +51,14 @@ VARIABLES = PLANT_MODEL + (
     parameter("max_substep", 1e-3, "s", "longest RK4 sub-step inside doStep"),
     parameter("c1", 0.0, "N.m.s/rad", "viscous damping at the trolley joint"),
     parameter("c2", 0.0, "N.m.s/rad", "viscous damping at the hook joint"),
-    parameter("u_max", INF, "m/s2", "trolley drive: largest |acceleration|; INF: no limit"),
-    parameter("v_max", INF, "m/s", "trolley drive: largest speed; INF: no limit"),
+    parameter("u_max", INF, "m/s2", "trolley drive: largest |acceleration|; 1e60 or INF: no limit"),
+    parameter("v_max", INF, "m/s", "trolley drive: largest speed; 1e60 or INF: no limit"),
     parameter("tau", 0.0, "s", "trolley drive: first-order lag of the acceleration; 0: none"),
-    parameter("x_min", -INF, "m", "rail end: the trolley cannot pass below this position"),
-    parameter("x_max", INF, "m", "rail end: the trolley cannot pass above this position"),
+    parameter("x_min", -INF, "m", "rail end: the trolley cannot pass below this position; -1e60 or -INF: none"),
+    parameter("x_max", INF, "m", "rail end: the trolley cannot pass above this position; 1e60 or INF: none"),
     parameter("l1_min", 0.0, "m", "hoist: shortest main cable; 0: no limit"),
-    parameter("l1_max", INF, "m", "hoist: longest main cable; INF: no limit"),
-    parameter("dl1_max", INF, "m/s", "hoist: largest |cable speed|; INF: no limit"),
+    parameter("l1_max", INF, "m", "hoist: longest main cable; 1e60 or INF: no limit"),
+    parameter("dl1_max", INF, "m/s", "hoist: largest |cable speed|; 1e60 or INF: no limit"),
     input_("u", "m/s2", "trolley acceleration demanded (held over each step)"),
     input_("hoist", "m/s2", "hoist acceleration l1'' (held over each step), positive lowers the hook"),
     input_("F1", "N", "horizontal force on the hook (wind, a push)"),
@@ -120,7 +122,8 @@ def configure(values):
     if not values["l1_min"] <= p.l1 <= values["l1_max"]:
         raise ValueError(f"l1 must lie within [l1_min, l1_max] = [{values['l1_min']!r}, {values['l1_max']!r}], "
                          f"got {p.l1!r}")
-    fast = all(values[v.name] == v.start for v in VARIABLES
+    values = {**values, **{name: unlimited(values[name]) for name in UNLIMITED}}  # validated: numbers
+    fast = all(values[v.name] == (unlimited(v.start) if v.name in UNLIMITED else v.start) for v in VARIABLES
                if v.causality == "parameter" and v.name not in FAST_PATH_PARAMETERS)
     return Config(params=p, max_substep=values["max_substep"], state0=state0 + (p.l1, 0.0, 0.0, 0.0),
                   damping=(values["c1"], values["c2"]), u_max=values["u_max"], v_max=values["v_max"],
@@ -175,7 +178,8 @@ def general_update(config, state, inputs, time, step):
     that the speed ends within ``v_max``; the hoist acceleration is limited
     likewise by ``dl1_max``, and a cable reaching ``l1_min`` or ``l1_max`` is held
     there at rest (reported in the step's messages). A trolley that would pass a
-    rail end, or a state that becomes non-finite, discards the step.
+    rail end, or a state that becomes non-finite, discards the step. A cable reaching a hoist limit at
+    rest is a note for the log, at speed a warning (:func:`.plant_limits.reached_limit`).
     """
     u, hoist, f1, f2 = inputs
     c, p = config, config.params
@@ -186,7 +190,7 @@ def general_update(config, state, inputs, time, step):
     forces = (f1, f2, *c.damping)
     demand = clamp(u, -c.u_max, c.u_max)
     lag, mean = drive_factors(c.tau, dt)
-    messages = []
+    messages, notes = [], []
     swing, drive = state[:DRIVE], state[DRIVE]
     try:
         for k in range(n):
@@ -205,7 +209,8 @@ def general_update(config, state, inputs, time, step):
             held = held_cable(swing[L1], c.l1_min, c.l1_max)
             if held is not None:
                 if cable_rate != 0.0:  # reached the limit in this sub-step (not already held there)
-                    messages.append(f"hoist: l1 reached {held!r} m at t = {t!r} s and is held there")
+                    warning, text = reached_limit(held, t, swing[DL1])
+                    (messages if warning else notes).append(text)
                 swing = swing[:L1] + (held, 0.0)
         finite_state = all(map(math.isfinite, swing))
     except (ArithmeticError, ValueError):  # overflow, or sin/cos of inf
@@ -213,7 +218,7 @@ def general_update(config, state, inputs, time, step):
     if not finite_state:
         raise _not_finite(time, u)
     state = swing + (drive, accel)
-    return Step(state, messages) if messages else state
+    return Step(state, messages, notes) if messages or notes else state
 
 
 def _outputs(config, state, inputs):

@@ -40,6 +40,21 @@ def past_rail_end(x_min, x_max, x, t, time):
                    f"at t = {t!r} s: the step from t = {time!r} s is discarded")
 
 
+AT_REST = 0.01  # m/s: a cable that reaches a hoist limit slower than this ends its move there
+
+
+def reached_limit(held, t, speed):
+    """``(is_warning, message)`` of a cable held at a hoist limit it reached at ``speed`` at ``t``.
+
+    Slower than :data:`AT_REST` it is the end of a hoist move planned to stop there (a plan sampled at
+    the communication step arrives with up to one step of its deceleration left, 0.5 mm/s in
+    ``hoist-transport``): information. Faster, the limit stopped a moving cable: a warning.
+    """
+    if abs(speed) < AT_REST:
+        return False, f"hoist: l1 reached {held!r} m at t = {t!r} s and is held there"
+    return True, f"hoist: l1 hit the limit {held!r} m at {abs(speed)!r} m/s at t = {t!r} s and is held there"
+
+
 def held_cable(l1, l1_min, l1_max):
     """The limit a cable of length ``l1`` is held at, or None when it lies within them."""
     if l1_min <= l1 <= l1_max:

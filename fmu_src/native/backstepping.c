@@ -74,7 +74,7 @@ static ModelStatus setup(const double values[], const char *b3_form, Config *c, 
     c->nk1x = -c->k1x, c->nk11 = -c->k11, c->nk12 = -c->k12;
     c->x_d = V(x_d), c->theta1_d = V(theta1_d), c->theta2_d = V(theta2_d);
     c->w_x = V(w_x), c->w_1 = V(w_theta1), c->w_2 = V(w_theta2);
-    c->u_max = V(u_max), c->v_max = V(v_max), c->h = V(h);
+    c->u_max = unlimited(V(u_max)), c->v_max = unlimited(V(v_max)), c->h = V(h);
     return MODEL_OK;
 }
 

@@ -18,6 +18,7 @@
 enum { DRIVE = N_SWING, ACCEL, N_STATE }; /* after the swing and hoist state: the drive's and the trolley's acceleration */
 #define MAX_SUBSTEPS 10000000            /* per communication step: a host must never hang in doStep */
 #define N_MESSAGES 4                     /* hoist messages kept per step */
+#define AT_REST 0.01                     /* m/s: plant_limits.AT_REST (slower at a hoist limit: a move's end) */
 
 typedef struct {
     PlantParameters p;
@@ -71,8 +72,9 @@ static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
     if (!(V(l1_min) <= V(l1) && V(l1) <= V(l1_max)))
         return report(r, MODEL_ERROR, "l1 must lie within [l1_min, l1_max] = [%s, %s], got %s", R(V(l1_min)),
                       R(V(l1_max)), R(V(l1)));
-    *c = (Config){{V(m1), V(m2), V(l1), V(l2), V(g)}, {0.0, 0.0, 0.0, V(c1), V(c2)}, V(max_substep), V(u_max),
-                  V(v_max), V(tau), V(x_min), V(x_max), V(l1_min), V(l1_max), V(dl1_max)};
+    *c = (Config){{V(m1), V(m2), V(l1), V(l2), V(g)}, {0.0, 0.0, 0.0, V(c1), V(c2)}, V(max_substep),
+                  unlimited(V(u_max)), unlimited(V(v_max)), V(tau), unlimited(V(x_min)), unlimited(V(x_max)),
+                  V(l1_min), unlimited(V(l1_max)), unlimited(V(dl1_max))}; /* 1e60 and beyond: no limit */
     return MODEL_OK;
 }
 
@@ -156,7 +158,7 @@ ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r)
     if (c->tau != 0) lag = EXP(-dt / c->tau), mean = c->tau / dt * (1.0 - lag);
     double swing[N_SWING], drive = m->state[DRIVE], accel = demand;
     memcpy(swing, m->state, sizeof swing);
-    double reached[N_MESSAGES][2]; /* (l1, t) where the cable reached a hoist limit */
+    double reached[N_MESSAGES][3]; /* (l1, t, speed) where the cable reached a hoist limit */
     int n_reached = 0;
     for (long k = 0; k < n; k++) {
         accel = c->tau > 0 ? demand + (drive - demand) * mean : demand;
@@ -181,14 +183,20 @@ ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r)
         }
         if (!(c->l1_min <= swing[L1] && swing[L1] <= c->l1_max)) { /* the cable is held at the limit it reached */
             double held = swing[L1] > c->l1_max ? c->l1_max : c->l1_min;
-            if (cable_rate != 0.0 && n_reached < N_MESSAGES) reached[n_reached][0] = held, reached[n_reached++][1] = t;
+            double speed = (swing[DL1] < 0 ? -swing[DL1] : swing[DL1]) + 0.0; /* Python's abs() */
+            if (cable_rate != 0.0 && n_reached < N_MESSAGES)
+                reached[n_reached][0] = held, reached[n_reached][1] = t, reached[n_reached++][2] = speed;
             swing[L1] = held, swing[DL1] = 0.0;
         }
     }
     memcpy(m->state, swing, sizeof swing);
     m->state[DRIVE] = drive, m->state[ACCEL] = accel;
-    for (int i = 0; i < n_reached; i++)
-        report(r, MODEL_WARNING, "hoist: l1 reached %s m at t = %s s and is held there", R(reached[i][0]),
-               R(reached[i][1]));
+    for (int i = 0; i < n_reached; i++) /* plant_limits.reached_limit(): at rest the end of a move, else a warning */
+        if (reached[i][2] < AT_REST)
+            report(r, MODEL_OK, "hoist: l1 reached %s m at t = %s s and is held there", R(reached[i][0]),
+                   R(reached[i][1]));
+        else
+            report(r, MODEL_WARNING, "hoist: l1 hit the limit %s m at %s m/s at t = %s s and is held there",
+                   R(reached[i][0]), R(reached[i][2]), R(reached[i][1]));
     return MODEL_OK;
 }

@@ -47,8 +47,9 @@ static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
     if (!isfinite(V(x_d))) return rule(r, "x_d", "finite", V(x_d));
     if (!(V(u_max) > 0)) return rule(r, "u_max", "> 0 (inf: no limit)", V(u_max));
     if (!(V(v_max) > 0)) return rule(r, "v_max", "> 0 (inf: no limit)", V(v_max));
-    if (!isfinite(V(u_max))) return rule(r, "u_max", "finite for the saturated law (E4)", V(u_max));
-    *c = (Config){V(m1) + V(m2), V(m2), V(l1), V(l2), V(k_c), V(k_p), V(k_d), V(x_d), V(u_max), V(v_max), V(h)};
+    double u_max = unlimited(V(u_max)), v_max = unlimited(V(v_max));
+    if (!isfinite(u_max)) return rule(r, "u_max", "finite for the saturated law (E4)", u_max);
+    *c = (Config){V(m1) + V(m2), V(m2), V(l1), V(l2), V(k_c), V(k_p), V(k_d), V(x_d), u_max, v_max, V(h)};
     return MODEL_OK;
 }
 

@@ -92,33 +92,43 @@ fmi3Status fmi3ExitInitializationMode(fmi3Instance c) { return exit_initializati
 fmi3Status fmi3Terminate(fmi3Instance c) { return terminate(c, "fmi3Terminate"); }
 fmi3Status fmi3Reset(fmi3Instance c) { return reset(c, "fmi3Reset"); }
 
+static const char *const TIME_NOT_SET = "time (value reference 0) is the independent variable: it is never set";
+static const char *const TIME_NOT_STRING = "value reference 0 is time, a Float64";
+
 #define SMALL 64 /* value references mapped on the stack; more take a checked allocation */
 
-/* The model's value references (FMI 3.0's less one) into *mapped; 0 with a logged error. */
-static int map_vrs(Instance *c, const char *function, const fmi3ValueReference vr[], size_t n, unsigned small[],
-                   unsigned **mapped) {
+/* The model's value references (FMI 3.0's less one) into *mapped, and their count into *n_model; 0 with a
+   logged error. Value reference 0 is `time`: with `time_refused` NULL it is skipped (the caller answers it),
+   else refused with that text. */
+static int map_vrs(Instance *c, const char *function, const fmi3ValueReference vr[], size_t n,
+                   const char *time_refused, unsigned small[], unsigned **mapped, size_t *n_model) {
     *mapped = n <= SMALL ? small : malloc(n * sizeof **mapped);
     if (!*mapped) return refuse(c, function, "out of memory"), 0;
+    *n_model = 0;
     for (size_t i = 0; i < n; i++) {
-        if (vr[i] == 0) { /* time */
+        if (vr[i] == 0 && time_refused) {
             if (*mapped != small) free(*mapped);
-            return refuse(c, function, "time (value reference 0) can be read only alone, and never set"), 0;
+            return refuse(c, function, time_refused), 0;
         }
-        (*mapped)[i] = vr[i] - 1;
+        if (vr[i] != 0) (*mapped)[(*n_model)++] = vr[i] - 1;
     }
     return 1;
 }
 
+/* `time` is read with any other Float64 variables, as any host may ask (fmusim reads it with the outputs): the
+   model's values fill the front of v, then spread out from the back to their places, time between them. */
 fmi3Status fmi3GetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 v[], size_t n) {
     if (!allowed(c, "fmi3GetFloat64", GETTABLE)) return fmi3Error;
     if (n != nvr) return refuse(c, "fmi3GetFloat64", "arrays are not supported (nValues != nValueReferences)");
     if (nvr == 0) return fmi3OK;
     if (!vr || !v) return refuse(c, "fmi3GetFloat64", "NULL array");
-    if (nvr == 1 && vr[0] == 0) return v[0] = ((Instance *)c)->time, fmi3OK;
     unsigned small[SMALL], *mapped;
-    if (!map_vrs(c, "fmi3GetFloat64", vr, nvr, small, &mapped)) return fmi3Error;
-    fmi3Status status = get_reals(c, "fmi3GetFloat64", mapped, nvr, v);
+    size_t n_model;
+    if (!map_vrs(c, "fmi3GetFloat64", vr, nvr, NULL, small, &mapped, &n_model)) return fmi3Error;
+    fmi3Status status = n_model ? get_reals(c, "fmi3GetFloat64", mapped, n_model, v) : fmi3OK;
     if (mapped != small) free(mapped);
+    if (status > fmi3Warning) return status;
+    for (size_t i = nvr, j = n_model; i-- > 0;) v[i] = vr[i] == 0 ? ((Instance *)c)->time : v[--j];
     return status;
 }
 
@@ -128,7 +138,8 @@ fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t 
     if (nvr == 0) return fmi3OK;
     if (!vr || !v) return refuse(c, "fmi3SetFloat64", "NULL array");
     unsigned small[SMALL], *mapped;
-    if (!map_vrs(c, "fmi3SetFloat64", vr, nvr, small, &mapped)) return fmi3Error;
+    size_t n_model;
+    if (!map_vrs(c, "fmi3SetFloat64", vr, nvr, TIME_NOT_SET, small, &mapped, &n_model)) return fmi3Error;
     fmi3Status status = set_reals(c, "fmi3SetFloat64", mapped, nvr, v);
     if (mapped != small) free(mapped);
     return status;
@@ -153,7 +164,8 @@ fmi3Status fmi3GetString(fmi3Instance c, const fmi3ValueReference vr[], size_t n
     if (nvr == 0) return fmi3OK;
     if (!vr || !v) return refuse(c, "fmi3GetString", "NULL array");
     unsigned small[SMALL], *mapped;
-    if (!map_vrs(c, "fmi3GetString", vr, nvr, small, &mapped)) return fmi3Error;
+    size_t n_model;
+    if (!map_vrs(c, "fmi3GetString", vr, nvr, TIME_NOT_STRING, small, &mapped, &n_model)) return fmi3Error;
     fmi3Status status = get_strings(c, "fmi3GetString", mapped, nvr, v);
     if (mapped != small) free(mapped);
     return status;
@@ -165,7 +177,8 @@ fmi3Status fmi3SetString(fmi3Instance c, const fmi3ValueReference vr[], size_t n
     if (nvr == 0) return fmi3OK;
     if (!vr || !v) return refuse(c, "fmi3SetString", "NULL array");
     unsigned small[SMALL], *mapped;
-    if (!map_vrs(c, "fmi3SetString", vr, nvr, small, &mapped)) return fmi3Error;
+    size_t n_model;
+    if (!map_vrs(c, "fmi3SetString", vr, nvr, TIME_NOT_STRING, small, &mapped, &n_model)) return fmi3Error;
     fmi3Status status = set_strings(c, "fmi3SetString", mapped, nvr, v);
     if (mapped != small) free(mapped);
     return status;

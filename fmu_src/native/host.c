@@ -19,10 +19,11 @@
  *                                                       of the six measured states) and of its u
  *   host pair-bench LIB GUID CLIB CGUID STEPS H         seconds per step of that loop, no recording
  *   host outputs LIB GUID STEPS H [VR=VALUE]... VR...    any FMI 2.0 FMU (e.g. a system as one FMU): Real
- *                                                       parameters set, then rows "t,the Reals of VR..." at
- *                                                       t = k H after k steps
+ *                                                       parameters set (and Strings: "VRs=TEXT"), then rows
+ *                                                       "t,the Reals of VR..." at t = k H after k steps
  *   host outputs3 LIB TOKEN STEPS H [VR=VALUE]... VR... the same for any FMI 3.0 co-simulation FMU (TOKEN: its
- *                                                       instantiationToken): Float64 parameters set, Float64s read
+ *                                                       instantiationToken): Float64 (and String) parameters set,
+ *                                                       Float64s read
  *                                                       (its value references: FMI 2.0's plus one in ours)
  *
  * Value references are those of the CranePlant and BacksteppingController tables (checked against
@@ -61,6 +62,7 @@ typedef struct {
     fmi2GetRealTYPE *get;
     fmi2SetRealTYPE *set;
     fmi2DoStepTYPE *step;
+    fmi2SetStringTYPE *set_string;
     const char *guid;
 } Api;
 
@@ -100,6 +102,7 @@ static Api load(const char *library, const char *guid) {
                (fmi2GetRealTYPE *)SYMBOL(lib, "fmi2GetReal"),
                (fmi2SetRealTYPE *)SYMBOL(lib, "fmi2SetReal"),
                (fmi2DoStepTYPE *)SYMBOL(lib, "fmi2DoStep"),
+               (fmi2SetStringTYPE *)SYMBOL(lib, "fmi2SetString"),
                guid};
     if (!api.instantiate || !api.step) {
         fprintf(stderr, "missing FMI functions in %s\n", library);
@@ -108,12 +111,23 @@ static Api load(const char *library, const char *guid) {
     return api;
 }
 
-/* An initialised instance with the given parameter settings, or NULL (the FMU logged why). */
+enum { MAX_VR = 64 };
+
+/* The String settings ("VRs=TEXT") of the `outputs` and `outputs3` modes, set after the Reals. */
+static struct {
+    unsigned int vr[MAX_VR];
+    const char *value[MAX_VR];
+    size_t n;
+} strings;
+
+/* An initialised instance with the given parameter settings (and `strings`), or NULL (the FMU logged why). */
 static fmi2Component start(const Api *api, size_t n, const fmi2ValueReference vr[], const fmi2Real v[]) {
     fmi2Component c = api->instantiate(instance_name, fmi2CoSimulation, api->guid, "", &callbacks, fmi2False, fmi2False);
     if (!c) return NULL;
     if (api->setup(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) > fmi2Warning || api->enter(c) > fmi2Warning ||
-        (n && api->set(c, vr, n, v) > fmi2Warning) || api->exit_init(c) > fmi2Warning) {
+        (n && api->set(c, vr, n, v) > fmi2Warning) ||
+        (strings.n && (!api->set_string || api->set_string(c, strings.vr, strings.n, strings.value) > fmi2Warning)) ||
+        api->exit_init(c) > fmi2Warning) {
         api->free_instance(c);
         return NULL;
     }
@@ -237,17 +251,23 @@ static double pair(const Api *plant, const Api *law, fmi2ValueReference cx, fmi2
     return per_step;
 }
 
-enum { MAX_VR = 64 };
-
-/* The "VR=VALUE" settings of args (into set_vr, set_v) and the other args' VRs to read (into get_vr). */
+/* The "VR=VALUE" settings of args (into set_vr, set_v), the "VRs=TEXT" ones (into `strings`) and the other args'
+   VRs to read (into get_vr). */
 static int parse_vrs(int n_args, char **args, unsigned int set_vr[], double set_v[], size_t *n_set,
                      unsigned int get_vr[], size_t *n_get) {
-    *n_set = *n_get = 0;
+    *n_set = *n_get = strings.n = 0;
     for (int i = 0; i < n_args; i++) {
+        char *end;
+        unsigned int vr = (unsigned int)strtoul(args[i], &end, 10);
+        if (end[0] == 's' && end[1] == '=') {
+            if (strings.n == MAX_VR) return 0;
+            strings.vr[strings.n] = vr, strings.value[strings.n++] = end + 2;
+            continue;
+        }
         const char *eq = strchr(args[i], '=');
         if ((eq ? *n_set : *n_get) == MAX_VR) return 0;
-        if (eq) set_vr[*n_set] = (unsigned int)strtoul(args[i], NULL, 10), set_v[(*n_set)++] = strtod(eq + 1, NULL);
-        else get_vr[(*n_get)++] = (unsigned int)strtoul(args[i], NULL, 10);
+        if (eq) set_vr[*n_set] = vr, set_v[(*n_set)++] = strtod(eq + 1, NULL);
+        else get_vr[(*n_get)++] = vr;
     }
     return 1;
 }
@@ -291,7 +311,8 @@ static int outputs3(const char *library, const char *token, int steps, double h,
     fmi3SetFloat64TYPE *set = (fmi3SetFloat64TYPE *)SYMBOL(lib, "fmi3SetFloat64");
     fmi3GetFloat64TYPE *get = (fmi3GetFloat64TYPE *)SYMBOL(lib, "fmi3GetFloat64");
     fmi3DoStepTYPE *step = (fmi3DoStepTYPE *)SYMBOL(lib, "fmi3DoStep");
-    if (!instantiate || !free_instance || !enter || !exit_init || !set || !get || !step) {
+    fmi3SetStringTYPE *set_string = (fmi3SetStringTYPE *)SYMBOL(lib, "fmi3SetString");
+    if (!instantiate || !free_instance || !enter || !exit_init || !set || !get || !step || !set_string) {
         fprintf(stderr, "missing FMI 3.0 functions in %s\n", library);
         exit(3);
     }
@@ -303,7 +324,9 @@ static int outputs3(const char *library, const char *token, int steps, double h,
                                  logger3, NULL);
     if (!c) return 0;
     int ok = enter(c, fmi3False, 0.0, 0.0, fmi3False, 0.0) <= fmi3Warning &&
-             (!n_set || set(c, set_vr, n_set, set_v, n_set) <= fmi3Warning) && exit_init(c) <= fmi3Warning;
+             (!n_set || set(c, set_vr, n_set, set_v, n_set) <= fmi3Warning) &&
+             (!strings.n || set_string(c, strings.vr, strings.n, strings.value, strings.n) <= fmi3Warning) &&
+             exit_init(c) <= fmi3Warning;
     for (int k = 0; ok && k <= steps; k++) {
         fmi3Boolean event, terminate, early;
         fmi3Float64 last;

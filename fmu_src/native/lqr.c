@@ -105,7 +105,7 @@ static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
         }
     }
     if ((error = design(values, V(l1), c->gains))) return report(r, MODEL_ERROR, "%s", error);
-    c->x_d = V(x_d), c->u_max = V(u_max), c->v_max = V(v_max), c->h = V(h);
+    c->x_d = V(x_d), c->u_max = unlimited(V(u_max)), c->v_max = unlimited(V(v_max)), c->h = V(h);
     return MODEL_OK;
 }
 

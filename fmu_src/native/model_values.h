@@ -141,6 +141,9 @@ static inline ModelStatus get_string_value(const char store[STRING_SIZE], unsign
 static inline double py_max(double a, double b) { return b > a ? b : a; }
 static inline double py_min(double a, double b) { return b < a ? b : a; }
 
+/* limits.unlimited(): a limit at or beyond +-1e60 (NO_LIMIT, the start value of a limit that is off) is none. */
+static inline double unlimited(double value) { return value >= 1e60 ? INFINITY : value <= -1e60 ? -INFINITY : value; }
+
 /* limits.limited(u, dx, u_max, v_max, h): u within +-u_max, and the speed after the step h within +-v_max. */
 static inline double limited(double u, double dx, double u_max, double v_max, double h) {
     double low = -u_max, high = u_max;

@@ -144,6 +144,7 @@ static ModelStatus setup(const double values[], const char *kind, Config *c, con
     double u_max = V(u_max), v_max = V(v_max);
     if (!(u_max > 0)) return rule(r, "u_max", "> 0 (inf: no limit)", u_max);
     if (!(v_max > 0)) return rule(r, "v_max", "> 0 (inf: no limit)", v_max);
+    u_max = unlimited(u_max), v_max = unlimited(v_max);
     if (strcmp(kind, "zv") && strcmp(kind, "zvd") && strcmp(kind, "ei") && strcmp(kind, "none"))
         return report(r, MODEL_ERROR, "shaper must be one of zv, zvd, ei, none, got %s",
                       str_repr(kind, (char[STR_REPR_SIZE]){0}));
@@ -189,9 +190,10 @@ static ModelStatus setup(const double values[], const char *kind, Config *c, con
 static void reference(const Config *c, double t, double out[N_OUTPUTS]) {
     double x = c->x0, v = 0.0, a = 0.0, eta[2] = {0.0, 0.0}, deta[2] = {0.0, 0.0};
     int moving = t < c->end;
+    double rounding = 1e-9 * (t > 1.0 ? t : t < -1.0 ? -t : 1.0); /* TIME_ROUNDING * max(1.0, abs(t)) */
     for (int i = 0; i < c->n_steps; i++) {
         double dt = t - c->steps[i].t, jump = c->steps[i].value;
-        if (dt <= 0) break;
+        if (dt <= rounding) break;
         a += jump;
         v += jump * dt;
         x += 0.5 * jump * dt * dt;

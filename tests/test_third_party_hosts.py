@@ -1,0 +1,184 @@
+"""Our FMUs and SSP files in FMI hosts nobody here wrote, run as a user's tool runs them.
+
+Reference-FMUs' fmusim (FMI 2.0 and 3.0), the FMU Compliance Checker (FMI 2.0) and OMSimulator (SSP
+files and FMI 2.0 co-simulation FMUs; its FMI 3.0 import crashes, Reference-FMUs' FMUs' too) against our
+master, for every kind of FMU we build: the pythonfmu FMUs, the native components, the one-FMU systems.
+The tools live in ``../shared/tools`` (tests/third_party_hosts.py); without them these tests skip.
+
+Tolerance: 1e-9 of each signal's largest magnitude (at least 1). The same FMU binaries run in every host,
+so only a host's own rounding of time and steps can move a result: OMSimulator steps by differences of
+its summed time, which the paper's law (|u| up to 810 m/s2) carries to 5e-10 of u over 20 s.
+"""
+
+import dataclasses
+import re
+
+import numpy as np
+import pytest
+from fmpy import read_model_description
+from third_party_hosts import (
+    FMUCHECK,
+    OMSIMULATOR,
+    SAME,
+    fmusim,
+    omsimulator_log_problems,
+    read_oms_mat,
+    run_tool,
+    tool,
+    worst_difference,
+)
+
+from crane_fmu import components, systems
+from crane_fmu.build_scripts.build_fmus import fmi3_dir, systems_dir
+from crane_fmu.build_scripts.native import MODELS, native_dir
+from crane_fmu.build_scripts.one_fmu import ONE_FMUS, not_native, one_fmu_name, plan
+from crane_fmu.cosim import System, run
+from crane_fmu.cosim.ssp import load_system, write_ssp
+
+KINDS = ("python", "native", "one-fmu")
+ONE_FMU_SYSTEMS = [name for name in ONE_FMUS if not not_native(systems.get(name))]
+SHORT = 1.0  # s: the stop time where the run's length tests nothing (the step, the outputs, the log do)
+
+
+def _fmus(fmu_dir, kind, version):
+    """``{name: path}`` of every FMU of one kind and FMI version that ``crane-fmu build`` writes."""
+    if kind == "python":
+        folder = fmu_dir if version == 2 else fmi3_dir(fmu_dir)
+        return {c.model_identifier: folder / f"{c.model_identifier}.fmu"
+                for c in components.registered() if c.role != "benchmark"}
+    folder = _native(fmu_dir, version)
+    if kind == "native":
+        return {name: folder / f"{name}.fmu" for name in MODELS}
+    return {name: folder / f"{one_fmu_name(name)}.fmu" for name in ONE_FMU_SYSTEMS}
+
+
+def _native(fmu_dir, version=2):
+    folder = native_dir(fmu_dir, version)
+    if not (folder / "CranePlant.fmu").exists():
+        pytest.skip("no native FMUs were built (no C compiler)")
+    return folder
+
+
+def _ours(fmu_dir, kind, name, path, stop_time):
+    """Our master's run (Gauss-Seidel) of what the FMU is: the component alone, or the one-FMU's system over
+    the native components; ``(columns, [(FMU output, our column)])``."""
+    if kind == "one-fmu":
+        system = systems.get(name)
+        links = plan(system).links
+        columns = run(system, native_dir(fmu_dir), stop_time=stop_time).columns()
+        outputs = [v.name for v in plan(system).variables if v.causality == "output"]
+        return columns, [(own, "{}.{}".format(*links[own][0])) for own in outputs]
+    md = read_model_description(str(path))
+    columns = run(System(name, {"it": str(path)}), fmu_dir, stop_time=stop_time,
+                  step=float(md.defaultExperiment.stepSize)).columns()
+    return columns, [(v.name, f"it.{v.name}") for v in md.modelVariables if v.causality == "output"]
+
+
+# ---- fmusim: FMI 3.0 and 2.0, every FMU we build, under env -i --------------------------------------------------
+
+@pytest.mark.parametrize("version", [3, 2])
+@pytest.mark.parametrize("kind", KINDS)
+def test_fmusim_runs_every_fmu_like_our_master(fmu_dir, tmp_path, kind, version):
+    """1 s at each FMU's own step, in a bare environment (``env -i PATH=/usr/bin:/bin``). fmusim reads ``time``
+    together with the outputs in one fmi3GetFloat64 call, as FMI 3.0 allows."""
+    for name, path in _fmus(fmu_dir, kind, version).items():
+        step = float(read_model_description(str(path)).defaultExperiment.stepSize)
+        theirs = fmusim(path, SHORT, step, tmp_path / f"{name}.csv")
+        ours, pairs = _ours(fmu_dir, kind, name, path, SHORT)
+        assert np.allclose(theirs["time"], ours["time"], rtol=0, atol=1e-12), name
+        assert worst_difference(theirs, ours, pairs) <= SAME, name
+
+
+# ---- OMSimulator: every SSP file we write, as it is --------------------------------------------------------------
+
+STRING_ERROR = "[importStartValuesHelper] Failed to import ssv:Parameter:Unknown ParameterBinding-type"
+
+
+def _omsimulator(ssp, stop_time, tmp_path):
+    """OMSimulator on an SSP file or FMU, from a temporary folder: ``(result, log)``."""
+    out = tmp_path / "result.mat"
+    code, log = run_tool([tool(OMSIMULATOR), f"--tempDir={tmp_path / 'oms'}", f"--stopTime={stop_time!r}",
+                          f"--resultFile={out}", *(["--mode=cs"] if ssp.suffix == ".fmu" else []), ssp], tmp_path)
+    assert code == 0, f"OMSimulator on {ssp.name}: exit {code}\n{log[-3000:]}"
+    return out, log
+
+
+def _strings(system):
+    """``{instance: {String parameter: value}}`` the system sets."""
+    return {name: {k: v for k, v in values.items() if isinstance(v, str)}
+            for name, values in system.parameters.items() if any(isinstance(v, str) for v in values.values())}
+
+
+@pytest.mark.parametrize("name", [s.name for s in systems.registered()])
+def test_omsimulator_runs_every_built_in_ssp_file_like_our_master(fmu_dir, tmp_path, name):
+    """``OMSimulator --stopTime=T --resultFile=R FILE.ssp`` on the file ``crane-fmu build`` wrote: at the file's step
+    (its OMSimulator annotation; OMSimulator reads no other) and stop time (paper; the others 1 s), no warning or
+    error in its log (no +-inf parameter, no String connector) and no algebraic loop (the plant's outputs read no
+    input). It applies no String value: a system that sets one (hoist-transport's shapers) runs with the FMUs'
+    own Strings, with one error per value; it then equals our master's run of that, and not the system's."""
+    ssp = systems_dir(fmu_dir) / f"{name}.ssp"
+    with load_system(ssp) as system:
+        assert (system.step, system.stop_time) == (systems.get(name).step, systems.get(name).stop_time)
+    stop_time = system.stop_time if name == "paper" else SHORT
+    out, log = _omsimulator(ssp, stop_time, tmp_path)
+    strings = _strings(systems.get(name))
+    assert omsimulator_log_problems(log) == [f"error:   {STRING_ERROR}"] * sum(map(len, strings.values()))
+    assert "Alg. loop" not in log
+    system = systems.get(name)
+    applied = dataclasses.replace(system, parameters={
+        instance: {k: v for k, v in values.items() if not isinstance(v, str)}
+        for instance, values in system.parameters.items()})
+    ours = run(applied, fmu_dir, stop_time=stop_time).columns()
+    theirs = read_oms_mat(out, system.step)
+    prefix = re.sub(r"\W", "_", name)
+    pairs = [(f"{prefix}.{prefix}.{column}", column) for column in ours if column != "time"]
+    assert np.array_equal(theirs["k"], np.arange(len(ours["time"])))
+    assert worst_difference(theirs, ours, pairs) <= SAME
+    if strings:
+        own = run(system, fmu_dir, stop_time=stop_time).columns()
+        assert worst_difference(theirs, own, pairs) > 1e-3
+
+
+@pytest.mark.parametrize("name", ["paper", "lqr"])
+def test_omsimulator_runs_an_ssp_file_of_native_fmus_like_our_master(fmu_dir, tmp_path, name):
+    """The SSP writer's file of a system on the native component FMUs (FMI 2.0), 1 s."""
+    folder = _native(fmu_dir)
+    ssp = write_ssp(systems.get(name), folder, tmp_path / f"{name}.ssp")
+    out, log = _omsimulator(ssp, SHORT, tmp_path)
+    assert omsimulator_log_problems(log) == [] and "Alg. loop" not in log
+    ours = run(systems.get(name), folder, stop_time=SHORT).columns()
+    pairs = [(f"{name}.{name}.{column}", column) for column in ours if column != "time"]
+    assert worst_difference(read_oms_mat(out, systems.get(name).step), ours, pairs) <= SAME
+
+
+@pytest.mark.parametrize("name", ONE_FMU_SYSTEMS)
+def test_omsimulator_runs_every_one_fmu_to_its_end_like_our_master(fmu_dir, tmp_path, name):
+    """``OMSimulator --mode=cs --stopTime=10 CraneX.fmu``: 1 ms steps at a summed time, then the remainder step of
+    1.03e-13 s, which the one-FMU takes as no step at all (not an error); FMI 2.0."""
+    path = _fmus(fmu_dir, "one-fmu", 2)[name]
+    out, log = _omsimulator(path, 10.0, tmp_path)
+    assert omsimulator_log_problems(log) == []
+    ours, pairs = _ours(fmu_dir, "one-fmu", name, path, 10.0)
+    theirs = read_oms_mat(out, systems.get(name).step)
+    assert np.array_equal(theirs["k"], np.arange(len(ours["time"])))
+    assert worst_difference(theirs, ours, pairs) <= SAME
+
+
+# ---- fmuCheck: every FMI 2.0 FMU, the FMU's own log included ----------------------------------------------------
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_fmucheck_reports_no_warning_or_error_on_any_fmi2_fmu(fmu_dir, tmp_path, kind):
+    """``fmuCheck.linux64 -l 4`` (info: the FMU's messages too) checks the XML and runs the FMU alone at its default
+    experiment's step: the one-FMU systems and native components to its stop time (hoist-transport's planned end
+    of the hoist, at 3 s, is information), the Python FMUs for 2 s (each starts an interpreter: the run's length
+    tests nothing more)."""
+    for name, path in _fmus(fmu_dir, kind, 2).items():
+        experiment = read_model_description(str(path)).defaultExperiment
+        stop_time = 2.0 if kind == "python" else float(experiment.stopTime)
+        code, log = run_tool([tool(FMUCHECK), "-l", "4", "-h", experiment.stepSize, "-s", repr(stop_time), "-n", "0",
+                              "-t", tmp_path, "-o", tmp_path / "out.csv", path], tmp_path)
+        summary = log[log.rindex("FMU check summary"):] if "FMU check summary" in log else log[-2000:]
+        assert code == 0 and f"Simulation finished successfully at time {stop_time:g}" in log, f"{name}: {summary}"
+        assert re.search(r"FMU reported:\s+0 warning\(s\) and error\(s\)\s+Checker reported:\s+0 Warning\(s\)\s+"
+                         r"0 Error\(s\)", summary), f"{name}: {summary}"
+        assert "[WARNING]" not in log and "[ERROR]" not in log, f"{name}: {log[-3000:]}"
