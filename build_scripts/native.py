@@ -26,6 +26,8 @@ import tempfile
 import uuid
 import xml.etree.ElementTree as ET
 import zipfile
+from concurrent.futures import ThreadPoolExecutor
+from functools import partial
 from pathlib import Path
 
 import crane_fmu.fmu_src as fmu_src
@@ -320,12 +322,20 @@ def build_native(out_dir, kinds, required=False, log=print):
         return []
     if tools["windows"] is None:
         log(f"warning: {MINGW} not found; the native FMUs have no Windows binary")
-    paths = []
+    builds = []
     for version, python_dir in ((2, Path(out_dir)), (3, fmi3_dir(out_dir))):
+        native_dir(out_dir, version).mkdir(parents=True, exist_ok=True)
         for kind in kinds:
             if kind in MODELS:
-                paths.append(build_native_fmu(components.get(kind), native_dir(out_dir, version), version, tools))
+                builds.append(partial(build_native_fmu, components.get(kind), native_dir(out_dir, version), version,
+                                      tools))
             elif (python_dir / f"{kind}.fmu").exists():  # not ported yet: the Python FMU
-                native_dir(out_dir, version).mkdir(parents=True, exist_ok=True)
-                paths.append(Path(shutil.copy(python_dir / f"{kind}.fmu", native_dir(out_dir, version))))
-    return paths
+                builds.append(partial(shutil.copy, python_dir / f"{kind}.fmu", native_dir(out_dir, version)))
+    return [Path(path) for path in in_parallel(builds)]
+
+
+def in_parallel(calls):
+    """Each of ``calls`` (builds that wait on compiler processes) on a thread of its own, as many at once as
+    there are cores; their results in the order of the calls."""
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
+        return list(pool.map(lambda call: call(), calls))

@@ -26,6 +26,7 @@ import subprocess
 import tempfile
 import uuid
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -363,9 +364,9 @@ def build_one_fmus(out_dir, systems=None, kinds=None, log=print):
             else:
                 systems.append(system_name)
     tools = native.compilers()
-    paths = []
+    builds = []
     for system in systems:
         system = registry.get(system) if isinstance(system, str) else system
         for version in (2, 3):
-            paths.append(build_one_fmu(system, native.native_dir(out_dir, version), version, tools=tools))
-    return paths
+            builds.append(partial(build_one_fmu, system, native.native_dir(out_dir, version), version, tools=tools))
+    return native.in_parallel(builds)
