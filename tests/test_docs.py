@@ -1,6 +1,7 @@
 """The README and the documentation site (docs/) agree with the code and with CI; the site builds."""
 
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -8,12 +9,14 @@ from pathlib import Path
 import pytest
 
 from crane_fmu.cli import main
+from crane_fmu.sweep.batch import JOURNAL
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs"
 PAGES = [ROOT / "README.md"] + sorted(DOCS.rglob("*.md"))  # every page a user reads
 
 
+@pytest.mark.quick
 def test_the_variable_tables_are_generated_from_the_tables(capsys):
     """docs/reference/variables.md holds what `crane-fmu info --markdown` prints (the one generator)."""
     main(["info", "--markdown"])
@@ -23,12 +26,14 @@ def test_the_variable_tables_are_generated_from_the_tables(capsys):
     assert section.strip() == generated
 
 
+@pytest.mark.quick
 def test_ci_runs_the_readme_test_command():
     readme = (ROOT / "README.md").read_text()
     command = re.search(r"## Run the tests\n\n```\n(.*?)\n```", readme, re.S).group(1)
     assert command in (ROOT / ".ci" / "run").read_text()
 
 
+@pytest.mark.quick
 def test_the_quick_start_plot_says_what_it_compares():
     """The README's quick start ends with a titled plot that says only the LQR limits u (issue 29), and the
     tutorial runs the same plot command."""
@@ -43,6 +48,7 @@ def test_the_quick_start_plot_says_what_it_compares():
     assert "activate the virtual environment first\n(`. .venv/bin/activate`)" in readme
 
 
+@pytest.mark.quick
 def test_the_stop_times_the_docs_state_are_the_systems():
     """"Built-in systems run 20 s" was wrong (transport runs 10 s): the command line page names each exception."""
     from crane_fmu import systems
@@ -90,12 +96,13 @@ def _marked_blocks(text):
 def test_every_marked_block_runs_as_written(fmu_dir, tmp_path):
     """The marked blocks of the README and of every docs page, as a user runs them after `crane-fmu build`:
     shell blocks line by line with the installed commands on PATH (`set -e`: any failing line fails),
-    Python blocks with this interpreter, in a folder whose build/ is this session's build."""
+    Python blocks with this interpreter, in a folder whose build/ is a copy of this session's build (a block may
+    write into build/; the session's build is shared by every test)."""
     import os
 
     blocks = [block for page in PAGES for block in _marked_blocks(page.read_text())]
     assert len(blocks) >= 8
-    (tmp_path / "build").symlink_to(fmu_dir.parent)
+    shutil.copytree(fmu_dir.parent, tmp_path / "build")
     env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}")
     for language, code in blocks:
         command = [sys.executable, "-c", code] if language == "python" else ["bash", "-e", "-c", code]
@@ -105,9 +112,11 @@ def test_every_marked_block_runs_as_written(fmu_dir, tmp_path):
             assert done.stdout.startswith("20000 samples, theta1 = ") and done.stdout.endswith(" rad at 20.0 s\n")
 
 
-def test_the_readme_component_example_is_built_and_scored(fmu_dir, tmp_path, monkeypatch, capsys):
+def test_the_readme_component_example_is_built_and_scored(fmu_dir, builtin_quick_board, tmp_path, monkeypatch,
+                                                          capsys):
     """The PD component of the controller interface page, its build and compare commands and its Python
-    script, as a user runs them."""
+    script, as a user runs them. The compare starts from the journal of the run's quick board of the built-in
+    controllers (the very same runs): it runs the PD controller's 16 cases and reuses the built-ins' 64."""
     import shlex
 
     page = (DOCS / "reference" / "controller-interface.md").read_text()
@@ -119,6 +128,8 @@ def test_the_readme_component_example_is_built_and_scored(fmu_dir, tmp_path, mon
     (tmp_path / "my_controller.py").write_text(module)
     (tmp_path / "build").mkdir()
     (tmp_path / "build" / "fmus").symlink_to(fmu_dir)  # the built-in FMUs, as `crane-fmu build` leaves them
+    (tmp_path / "results" / "mine" / "quick").mkdir(parents=True)
+    shutil.copy(builtin_quick_board[0] / JOURNAL, tmp_path / "results" / "mine" / "quick" / JOURNAL)
     for command in commands:
         assert main(shlex.split(command)[1:]) == 0, capsys.readouterr().err
     board = (tmp_path / "results" / "mine" / "quick" / "scoreboard.md").read_text()
@@ -146,6 +157,7 @@ def test_the_site_builds_strictly(tmp_path):
     assert set(nav) == {str(p.relative_to(DOCS)) for p in DOCS.rglob("*.md")}  # every page is in the navigation
 
 
+@pytest.mark.quick
 def test_readme_and_docs_link_only_to_files_that_exist():
     """The README's links (into docs/) and the docs' relative links resolve."""
     for page in PAGES:
@@ -153,6 +165,7 @@ def test_readme_and_docs_link_only_to_files_that_exist():
             assert (page.parent / target).exists(), f"{page.name}: {target}"
 
 
+@pytest.mark.quick
 def test_license_and_ignored_outputs():
     """The LICENSE is the MIT text pyproject names; every output the README and the docs make is ignored by git."""
     import shutil
