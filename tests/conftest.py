@@ -23,7 +23,8 @@ For test writers (keep new tests fast):
   ``run_batch`` unless the test is about starting a cluster (``workers=2`` starts one at every call).
 - ``builtin_quick_board``: the quick board of every built-in controller (Python FMUs), made once per run; its
   journal lets a test score one more controller without running the built-ins' cases again.
-- ``made_once(tmp_path_factory, name, make)``: your own thing made once per run for every worker.
+- ``made_once(tmp_path_factory, name, make)`` (``from once import made_once``): your own thing made once per
+  run for every worker.
 - ``CRANE_TEST_CACHE=<folder>`` (environment): the build is kept there under a hash of everything it is made
   from (the sources, the Python, pythonfmu, the C compilers) and reused by later runs while that is unchanged;
   for the edit-and-check loop only (CI and a fresh clone build afresh).
@@ -32,7 +33,6 @@ For test writers (keep new tests fast):
 """
 
 import contextlib
-import fcntl
 import io
 import os
 import shutil
@@ -40,11 +40,18 @@ import subprocess
 from pathlib import Path
 
 import pytest
+import pythonfmu  # noqa: F401 (see below)
+import pythonfmu3  # noqa: F401
 from fmu_kinds import FMU_KINDS
+from once import made_in, made_once
 
 from crane_fmu import systems
 
 pytest_plugins = ["required_checks"]  # CI=true: a skipped test fails the run
+
+# pythonfmu and pythonfmu3 are imported above, the installed ones, before any Python FMU runs in a test process: an
+# FMU run in a process that has not imported them imports its bundled copy under the same name, and a build later
+# in that process gets no binaries (build_fmus.build_fmu refuses it). An xdist worker may run FMUs before it builds.
 
 CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # what `env -i PATH=/usr/bin:/bin` leaves: no venv, no pyenv, no Python
 MINGW = "x86_64-w64-mingw32-gcc"
@@ -57,47 +64,17 @@ BUILT = {"fmu_dir", "build_record", "crane_fmus", "connections", "native_dirs", 
 
 
 def pytest_collection_modifyitems(config, items):
-    """The quick subset stays quick: a test marked quick that needs the build is a mistake, said at collection."""
+    """The quick subset stays quick: a test marked quick that needs the build is a mistake, said at collection.
+
+    The modules that need no build run first (each module stays whole, in its order): while the first worker
+    to need the build makes it, the others have work that does not wait for it.
+    """
     for item in items:
         needs = BUILT & set(item.fixturenames)
         if item.get_closest_marker("quick") and needs:
             raise pytest.UsageError(f"{item.nodeid} is marked quick but needs the build ({', '.join(sorted(needs))})")
-
-
-def _shared_root(tmp_path_factory):
-    """The run's temporary folder that every xdist worker sees (a worker's own is a folder in it)."""
-    base = tmp_path_factory.getbasetemp()
-    return base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
-
-
-@contextlib.contextmanager
-def _locked(path):
-    with open(path, "w") as handle:
-        fcntl.flock(handle, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(handle, fcntl.LOCK_UN)
-
-
-def made_once(tmp_path_factory, name, make):
-    """The folder ``name`` in the run's shared temporary folder, filled by ``make(folder)`` once per run.
-
-    The first worker to ask makes it under a file lock; the others wait and get the same folder. A folder
-    left half-made (its maker failed) is made again by the next one to ask, which then fails the same way.
-    """
-    return _made_in(_shared_root(tmp_path_factory), name, make)
-
-
-def _made_in(root, name, make):
-    folder, done = root / name, root / f"{name}.done"
-    with _locked(root / f"{name}.lock"):
-        if not done.exists():
-            shutil.rmtree(folder, ignore_errors=True)
-            folder.mkdir()
-            make(folder)
-            done.touch()
-    return folder
+    waits = {item.module for item in items if BUILT & set(item.fixturenames)}
+    items.sort(key=lambda item: item.module in waits)  # stable: each module's tests keep their order
 
 
 def _build_inputs():
@@ -145,7 +122,7 @@ def fmu_dir(tmp_path_factory):
     cache = os.environ.get("CRANE_TEST_CACHE")
     if cache:
         Path(cache).mkdir(parents=True, exist_ok=True)
-        return _made_in(Path(cache), f"build-{_build_inputs()}", _build) / "fmus"
+        return made_in(Path(cache), f"build-{_build_inputs()}", _build) / "fmus"
     return made_once(tmp_path_factory, "build", _build) / "fmus"
 
 

@@ -1,12 +1,14 @@
 """crane-fmu compare: a user's controller FMU (built from examples/) scored next to the built-in ones on Dask."""
 
 import math
+import pickle
 import re
 from pathlib import Path
 
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
+from once import made_once
 
 from crane_fmu import components, systems
 from crane_fmu.analysis import scoreboard
@@ -16,37 +18,46 @@ from crane_fmu.cosim import ArrayRecorder, read_csv, run
 from crane_fmu.sweep.runner import JOURNAL
 
 ROOT = Path(__file__).resolve().parent.parent
-pytestmark = pytest.mark.xdist_group("compare")  # one worker makes the module's boards, once
 
 
-@pytest.fixture(scope="module")
+# The boards are made once per run (once.made_once); the tests that add to a board run in this module's order, on one
+# worker (--dist loadscope keeps a module on one worker).
+
+@pytest.fixture(scope="session")
 def template_fmu(tmp_path_factory):
     """examples/my_controller built with pythonfmu alone, as its README recipe does."""
     from pythonfmu import FmuBuilder
 
-    out = tmp_path_factory.mktemp("mine")
-    return FmuBuilder.build_FMU(ROOT / "examples" / "my_controller" / "my_controller.py", dest=out)
+    def make(folder):
+        FmuBuilder.build_FMU(ROOT / "examples" / "my_controller" / "my_controller.py", dest=folder)
+
+    return made_once(tmp_path_factory, "template_fmu", make) / "MyController.fmu"
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def quick_board(template_fmu, fmu_dir, dask_scheduler, tmp_path_factory):
-    """The template and the LQR alone (--only), quick: the board is in OUT/quick."""
-    out = tmp_path_factory.mktemp("compare")
-    log = []
-    rows = compare(out, [str(template_fmu), "LqrController"], fmu_dir, scheduler=dask_scheduler, quick=True,
-                   progress=False, animate=(), only=True, log=log.append)
-    return out / "quick", rows, log
+    """The template and the LQR alone (--only), quick: ``(OUT/quick, rows, log)``."""
+    def make(out):
+        log = []
+        rows = compare(out, [str(template_fmu), "LqrController"], fmu_dir, scheduler=dask_scheduler, quick=True,
+                       progress=False, animate=(), only=True, log=log.append)
+        (out / "made.pickle").write_bytes(pickle.dumps((rows, log)))
+
+    out = made_once(tmp_path_factory, "compare_quick_board", make)
+    return (out / "quick", *pickle.loads((out / "made.pickle").read_bytes()))
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def full_board(native_dirs, dask_scheduler, tmp_path_factory):
     """Every built-in controller on the full board, scored with the native FMUs (``compare --fmu-dir
     build/native``): the Python FMUs' figures (test_the_native_fmus_give_the_python_board) in less time."""
-    out = tmp_path_factory.mktemp("full")
-    rows = compare(out, (), native_dirs[2], scheduler=dask_scheduler, progress=False, animate=(), log=lambda _: None)
-    return out, rows
+    def make(out):
+        rows = compare(out, (), native_dirs[2], scheduler=dask_scheduler, progress=False, animate=(),
+                       log=lambda _: None)
+        (out.parent / "compare_full_board.pickle").write_bytes(pickle.dumps(rows))
 
-
+    out = made_once(tmp_path_factory, "compare_full_board", make)
+    return out, pickle.loads((out.parent / "compare_full_board.pickle").read_bytes())
 
 
 def test_every_controller_scenario_and_case_is_a_row(quick_board):

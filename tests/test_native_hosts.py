@@ -29,7 +29,6 @@ HOST = NATIVE / "host.c"
 CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # what `env -i PATH=/usr/bin:/bin` leaves: no venv, no pyenv
 FREE_SWING_MAX_THETA2_DEG = 15.5976  # the Python FMU's
 
-pytestmark = pytest.mark.xdist_group("native_hosts")  # the module's fixtures are made once, on one worker
 
 
 @pytest.fixture(scope="module")

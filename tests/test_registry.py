@@ -26,7 +26,6 @@ from crane_fmu.sweep.runner import run_study
 PD = System("pd", {"plant": "CranePlant", "controller": "PdController"},
             parameters={"controller": {"x_d": 0.5}}, stop_time=5.0, description="test: PD on the trolley")
 
-pytestmark = pytest.mark.xdist_group("registry")  # the module's fixtures are made once, on one worker
 
 
 @pytest.fixture(scope="module")

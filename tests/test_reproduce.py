@@ -16,7 +16,6 @@ from crane_fmu.model.parameters import ControllerGains, PlantParameters
 
 VERDICTS = ("reproduced", "partly", "not reproduced")
 
-pytestmark = pytest.mark.xdist_group("reproduce")  # the module's fixtures are made once, on one worker
 
 
 @pytest.fixture(scope="module")

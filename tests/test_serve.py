@@ -26,7 +26,6 @@ from crane_fmu.cosim import read_csv, simulate
 from crane_fmu.model import lqr
 from crane_fmu.serve.modbus import FIRST_HOLDING, FIRST_INPUT, float32_words, register_map, words_float32
 
-pytestmark = pytest.mark.xdist_group("serve")  # the module's one shared server, on one worker
 ROOT = Path(__file__).resolve().parent.parent
 STATE = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2")
 LQR_LAW = lqr.COMPONENT.check({"h": 1e-3})  # the LQR FMU's law at the lqr system's step

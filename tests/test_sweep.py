@@ -101,9 +101,6 @@ def test_builtin_studies_load():
     assert len(spec.load("builtin:theta2-gain-sensitivity").cases()) == 25
 
 
-ON_SMALL_RUN = pytest.mark.xdist_group("small_run")  # the tests of one small_run share one worker (and one run)
-
-
 @pytest.fixture(scope="module")
 def small_run(fmu_dir, dask_scheduler, tmp_path_factory):
     out = tmp_path_factory.mktemp("sweep")
@@ -112,7 +109,6 @@ def small_run(fmu_dir, dask_scheduler, tmp_path_factory):
     return study, out / "results", summary
 
 
-@ON_SMALL_RUN
 def test_cluster_results_equal_a_serial_run(small_run, fmu_dir):
     study, out, summary = small_run
     assert summary["ran"] == summary["cases"] == 8
@@ -126,7 +122,6 @@ def test_cluster_results_equal_a_serial_run(small_run, fmu_dir):
             assert row[key] == serial[key], key
 
 
-@ON_SMALL_RUN
 def test_failing_cases_are_rows_with_their_message(small_run):
     _, out, _ = small_run
     rows = pq.read_table(out / "results.parquet").to_pylist()
@@ -140,7 +135,6 @@ def test_failing_cases_are_rows_with_their_message(small_run):
     assert all(r["end_time_s"] < 2.0 and r["outcome"] == "diverges" for r in failed)
 
 
-@ON_SMALL_RUN
 def test_rerun_resumes_and_skips_finished_cases(small_run, fmu_dir, dask_scheduler):
     study, out, _ = small_run
     before = pq.read_table(out / "results.parquet").to_pylist()
@@ -240,7 +234,6 @@ def test_an_unreachable_scheduler_fails_fast_in_one_line(tmp_path, capsys):
     assert "expected an address tcp://HOST:PORT" in capsys.readouterr().err
 
 
-@ON_SMALL_RUN
 def test_a_resumed_study_counts_its_earlier_failures_in_the_progress_bar(small_run, fmu_dir, dask_scheduler, capsys):
     """The bar's "not ok" agrees with the summary's when cases come from the journal (issue 29: 47 vs 70)."""
     study, out, _ = small_run
@@ -274,7 +267,6 @@ def test_ctrl_c_stops_a_sweep_with_one_line(fmu_dir, tmp_path):
     assert err == "crane-fmu: interrupted\n"  # (the dashboard on a free port: no "Port 8787 is in use" either)
 
 
-@ON_SMALL_RUN
 def test_settling_band_is_chosen_by_the_study(small_run, fmu_dir, tmp_path):
     study = _study(tmp_path, SMALL.replace("step = 0.01", "step = 0.01\nsettling_band_deg = 20.0"))
     case = {"plant.theta1_0": 0.1, "controller.w_theta2": 0.0}

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from crane_fmu import systems
+from crane_fmu.build_scripts.build_fmus import systems_dir
 from crane_fmu.cli import main
 from crane_fmu.cosim import ArrayRecorder, Connection, System, connect, read_csv, simulate
-from crane_fmu.cosim.osp import write_osp
 from crane_fmu.cosim.ssp import load_parameters, load_system, write_ssp, write_ssv
 from crane_fmu.model import backstepping, plant
 
@@ -52,10 +52,9 @@ def test_bad_connections_are_named(conn, message):
 
 
 @pytest.fixture(scope="module")
-def system_files(fmu_dir, tmp_path_factory):
-    """The paper system's SSP and OSP files, written here (not into the session's shared build)."""
-    paper, out = systems.get("paper"), tmp_path_factory.mktemp("system_files")
-    return write_ssp(paper, fmu_dir, out / "paper.ssp"), write_osp(paper, fmu_dir, out / "paper.OspSystemStructure.xml")
+def system_files(fmu_dir):
+    """The paper system's SSP and OSP files, as ``crane-fmu build`` (the session's build) writes them."""
+    return systems_dir(fmu_dir) / "paper.ssp", fmu_dir / "paper.OspSystemStructure.xml"
 
 
 def test_ssp_describes_the_paper_system(system_files, fmu_dir):
@@ -225,8 +224,9 @@ def _ecos_run(ssp, tmp_path):
 
 
 @pytest.fixture(scope="module")
-def transport_ssp(fmu_dir, tmp_path_factory):
-    return write_ssp(systems.get("transport"), fmu_dir, tmp_path_factory.mktemp("transport") / "transport.ssp")
+def transport_ssp(fmu_dir):
+    """The transport system's SSP file, as ``crane-fmu build`` (the session's build) writes it."""
+    return systems_dir(fmu_dir) / "transport.ssp"
 
 
 def test_every_component_has_one_parameter_set_of_the_one_name_every_engine_reads(transport_ssp):
