@@ -37,6 +37,7 @@ QUICK_MISMATCH = MISMATCH[::13]  # 3 of the 27 plants: the extremes and the nomi
 STEPS = (1e-3, 1e-2, 5e-2)
 TRANSPORT = ("S2", "S3", "S4", "S5", "S7", "S8", "S9")  # the scenarios that give the controller a target position
 HOIST = {"from": 2.0, "to": 1.0, "u_max": 0.5, "v_max": 0.5}  # S7's hoist: l1 [m], its drive [m/s2, m/s]
+GUST = {"F2_peak": 10.0, "start": 1.5, "duration": 0.5}  # S4's gust on the payload [N, s, s]
 
 
 def mode_periods(m1=3.0, m2=7.0, l1=1.0, l2=0.5, g=9.8):
@@ -236,7 +237,7 @@ def systems_for(contender, scenario, quick=False):
         grid = QUICK_MISMATCH if quick else MISMATCH
         return [(", ".join(f"{k}={v:g}" for k, v in p.items()), transport(p), 1e-3, 10.0, DISTANCE) for p in grid]
     if scenario == "S4":
-        gust = {"gust": ("Gust", {"F2_peak": 10.0, "start": 1.5, "duration": 0.5})}
+        gust = {"gust": ("Gust", dict(GUST))}
         return [("F2 10 N at 1.5 s", transport(extra=gust), 1e-3, 10.0, DISTANCE)]
     if scenario == "S5":
         sensor = {"sensor": ("Sensor", {"seed": 1.0, "delay": 1.0})}
