@@ -42,7 +42,7 @@ from .tables import MEASURED_STATE, controller_model, input_, output, parameter,
 
 RHO = 1e6  # the plan's weight on missing the target state
 REACHED = 1e-3  # the plan reaches the target when every state is this close (m, m/s, rad, rad/s)
-LONGEST_PLAN = 30.0  # s: a move that needs longer is not planned (the tracking QP regulates alone)
+LONGEST_PLAN = 6.0  # s: a move that needs longer is not planned (the tracking QP regulates alone)
 SCHEDULE_POINTS = 11
 
 Design = namedtuple("Design", "l1 ad bd gain qp")
@@ -320,18 +320,19 @@ def solve(config, state, measured, l1_now):
         warned = 1.0
         messages = (f"MpcController: the QP stopped at its iteration cap ({c.max_iterations}) at t = "
                     f"{count * c.h!r} s; u is its best feasible input (warned once)",)
-    flat_s = tuple(v for s in plan_s for v in s)
+    plan_part = (tuple(plan_u) + tuple(v for s in plan_s for v in s)) if count == 0 else \
+        state[len(HEADER) + 3 * n:]
     rest = ((u, float(solution.iterations), warned, float(len(plan_u))) + tuple(solution.x) + tuple(new_codes)
-            + tuple(plan_u) + flat_s)
+            + plan_part)
     return u, rest, messages
 
 
 def _solved(config, state, inputs):
     """The solve at this state and these inputs (shared by the output and the step through ``memo``)."""
-    key = (state, inputs)
     memo = config.memo
-    if memo.get("key") != key:
-        memo["key"], memo["value"] = key, solve(config, state, inputs[IN.x:IN.dtheta2 + 1], inputs[IN.l1_now])
+    if memo.get("state") is not state or memo.get("inputs") != inputs:
+        memo["state"], memo["inputs"] = state, inputs
+        memo["value"] = solve(config, state, inputs[IN.x:IN.dtheta2 + 1], inputs[IN.l1_now])
     return memo["value"]
 
 

@@ -30,8 +30,8 @@ from operator import add, mul
 
 from .linalg import total
 
-Prepared = namedtuple("Prepared", "n hinv rows chains norms g s")
-Prepared.__doc__ = ("A QP's fixed part: its size ``n``, ``H^-1`` (lists of rows), the constraint rows as "
+Prepared = namedtuple("Prepared", "n h hinv rows chains norms g s")
+Prepared.__doc__ = ("A QP's fixed part: its size ``n``, ``H`` and ``H^-1`` (lists of rows), the constraint rows as "
                     "``(first, values)`` (the non-zero span of each row), their chains (:func:`chains`), their 1-norms, "
                     "``G = R H^-1`` and ``S = R H^-1 R'``.")
 
@@ -140,7 +140,7 @@ def prepare(h, rows):
     runs = chains(rows)
     g = [[span_dot(first, values, hinv[j]) for j in range(n)] for first, values in rows]  # H^-1 is symmetric
     norms = [total([abs(v) for v in values]) for _, values in rows]
-    prepared = Prepared(n, hinv, rows, runs, norms, g, None)
+    prepared = Prepared(n, [list(row) for row in h], hinv, rows, runs, norms, g, None)
     return prepared._replace(s=[row_products(prepared, gi) for gi in g])
 
 
@@ -209,7 +209,7 @@ def solve(prepared, f, lower, upper, start, hint=(), max_iterations=100):
     -------
     Solution
     """
-    n, hinv, rows, _, norms, g, s = prepared
+    n, _, hinv, rows, _, norms, g, s = prepared
     x = list(start)
     xu = [-span_dot(0, hrow, f) for hrow in hinv]  # the unconstrained minimiser -H^-1 f
     rx = row_products(prepared, x)
