@@ -280,6 +280,10 @@ def test_targets_measures_every_controller_against_its_targets(fmu_dir, capsys):
     # sustained oscillation in its own 10-degree regulation run
     energy = next(line for line in out.splitlines() if line.startswith("  energy   0.5 deg from"))
     assert energy.endswith(("converges", "decaying")), energy
+    # the floors with their method, and the MPC's figures against its targets as ratios to them
+    assert "  S2: 2.70 s  2 m from rest to rest" in out and "LP feasibility (scipy HiGHS)" in out
+    s2 = next(line for line in out.splitlines() if line.startswith("  S2: arrival (5 mm, 0.5 deg): "))
+    assert "x floor) (target <= 2.95 s, ambition 2.85 s): " in s2, s2
 
 
 @pytest.mark.parametrize("argv, message", [

@@ -29,8 +29,9 @@ METHOD = (f"minimum time to exact rest on the linearised crane, input held over 
           "scenario's step, if longer), |u| and |v| within the drive limits: LP feasibility (scipy HiGHS), "
           "bisection on the horizon")
 
-Floor = namedtuple("Floor", "scenario seconds task grid")
-Floor.__doc__ = "A scenario's floor: the least time [s], the task it is for, and the input hold [s] it assumes."
+Floor = namedtuple("Floor", "scenario seconds task grid method")
+Floor.__doc__ = ("A scenario's floor: the least time [s], the task it is for, the input hold [s] it assumes and "
+                 "the method (:data:`METHOD`).")
 
 
 def crane_model(p, l1=None, dl1=0.0, ddl1=0.0):
@@ -198,5 +199,5 @@ def scenario_floors():
         "S7": (f"{DISTANCE:g} m from rest to rest while hoisting, the hoist's motion known in advance",
                dict(target=moved, hoist=hoist, p=PlantParameters(l1=HOIST["from"])), GRID),
     }
-    return {sid: Floor(sid, crane_floor(u_max=DRIVE["u_max"], v_max=DRIVE["v_max"], **kwargs), task, grid)
+    return {sid: Floor(sid, crane_floor(u_max=DRIVE["u_max"], v_max=DRIVE["v_max"], **kwargs), task, grid, METHOD)
             for sid, (task, kwargs, grid) in tasks.items()}

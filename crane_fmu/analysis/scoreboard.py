@@ -321,8 +321,15 @@ def _scenario_label(sid, quick):
     return f"{sid} (QUICK: {', '.join(what)}): {SCENARIOS[sid].title}"
 
 
-def render_summary(rows, users=(), quick=False):
-    """One table: per scenario the controllers ranked, with their ranking figure and how many targets they met."""
+def floor_ratio(value, floor):
+    """`` (1.32x floor)``: a time as a multiple of the scenario's floor (:mod:`.floor`), or nothing."""
+    return "" if floor is None or value is None else f" ({value / floor.seconds:.2f}x floor)"
+
+
+def render_summary(rows, users=(), quick=False, floors=None):
+    """One table: per scenario the controllers ranked, with their ranking figure (and its ratio to the scenario's
+    floor, where ``floors`` gives one) and how many targets they met."""
+    floors = floors or {}
     units = {"residual_deg": " deg"}
     lines = []
     for sid, s in SCENARIOS.items():
@@ -332,8 +339,9 @@ def render_summary(rows, users=(), quick=False):
         cells = []
         for line in ranked:
             value = line[s.rank_by]
-            figure = "failed" if line["failed"] else _cell(value, 3 if s.rank_by == "residual_deg" else 2,
-                                                           units.get(s.rank_by, " s"))
+            figure = "failed" if line["failed"] else (
+                _cell(value, 3 if s.rank_by == "residual_deg" else 2, units.get(s.rank_by, " s"))
+                + floor_ratio(value, floors.get(sid)))
             verdict = "all targets met" if all(line["targets"]) and not line["failed"] else (
                 f"{sum(line['targets'])} of {len(line['targets'])} targets met")
             cells.append(f"{_name(line, users)}: {figure}, {verdict}")
@@ -347,8 +355,13 @@ def render_summary(rows, users=(), quick=False):
     return "\n".join(out)
 
 
-def render(rows, contenders, quick=False):
-    """scoreboard.md: per scenario a table ranked by :data:`RULES`, with each target met or missed and its source."""
+def render(rows, contenders, quick=False, floors=None):
+    """scoreboard.md: per scenario a table ranked by :data:`RULES`, with each target met or missed and its source.
+
+    ``floors``: ``{scenario: floor.Floor}``, the least time the crane needs there, shown with its method and as
+    each ranking figure's ratio to it.
+    """
+    floors = floors or {}
     users = {c.name for c in contenders if c.user}
     title = "# Controller scoreboard" + (" (QUICK: a subset of the cases, not the full board)" if quick else "")
     out = [title, "",
@@ -359,13 +372,18 @@ def render(rows, contenders, quick=False):
            f"Ranking: {RULES}.", "",
            "Controllers: " + ", ".join(f"`{c.name}`" + (" (yours)" if c.user else "")
                                        for c in sorted(contenders, key=lambda c: c.name)), "",
-           render_summary(rows, users, quick), ""]
+           render_summary(rows, users, quick, floors), ""]
+    if floors:
+        method = next(iter(floors.values())).method
+        out += [f"The floor of a scenario is the least time the crane needs for its task: {method}.", ""]
     for sid, s in SCENARIOS.items():
         lines = summarise(rows, sid)
         if not lines:
             continue
         out += [f"## {_scenario_label(sid, quick)}", "", "Targets:", ""]
         out += [f"- {t.text} ({t.source})" for t in s.targets] + [""]
+        if sid in floors:
+            out += [f"Floor: {floors[sid].seconds:.2f} s ({floors[sid].task})", ""]
         out.append("| rank | controller | 0.5 deg from | 0.1 deg from | arrival | residual | overshoot | final error "
                    "| peak abs u | peak abs v | effort | targets |")
         out.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
