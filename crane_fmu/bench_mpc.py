@@ -21,7 +21,8 @@ SOLVE_TARGET_US, PROCESS_TARGET = 300.0, 4.0  # the Python MPC's targets: median
 
 
 def solve_times(system_name="mpc-transport", step=1e-3):
-    """Seconds of every solve of the system's MpcController over its run, the model called directly (first: the plan)."""
+    """Seconds of every solve of the system's MpcController over its run, the model called directly (first: the
+    plan)."""
     from crane_fmu.model.component import Step
 
     system = systems.get(system_name)

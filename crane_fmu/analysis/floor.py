@@ -151,7 +151,7 @@ def crane_floor(p=None, start=(0.0,) * 6, target=(0.0,) * 6, u_max=2.0, v_max=1.
         a, b, e = crane_model(p)
         still = hold(a, b, dt)
 
-    @functools.lru_cache(maxsize=None)
+    @functools.cache
     def step_at(k):
         middle = (k + 0.5) * dt
         if hoisting:
@@ -175,7 +175,7 @@ def rigid_floor(distance, u_max, v_max, dt=GRID):
     return round(steps * dt, 9)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def scenario_floors():
     """``{scenario: Floor}`` for the scoreboard's scenarios on the nominal plant (S1, S2, S4, S6, S7).
 

@@ -88,8 +88,8 @@ def design(p, weights, r, interval, steps):
     q = [[weights[i] if i == j else 0.0 for j in range(6)] for i in range(6)]
     terminal = linalg.dare(ad, bd, q, [[r]])
     b = predict_rows(ad, bd, steps)
-    powers, power = [], ad
-    for k in range(steps):
+    powers, power = [], ad  # Ad^(k+1) for state k+1
+    for _ in range(steps):
         powers.append(power)
         power = linalg.matmul(ad, power)
     weight = [terminal if k == steps - 1 else q for k in range(steps)]

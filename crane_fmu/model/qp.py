@@ -32,8 +32,8 @@ from .linalg import total
 
 Prepared = namedtuple("Prepared", "n h hinv rows chains norms g s")
 Prepared.__doc__ = ("A QP's fixed part: its size ``n``, ``H`` and ``H^-1`` (lists of rows), the constraint rows as "
-                    "``(first, values)`` (the non-zero span of each row), their chains (:func:`chains`), their 1-norms, "
-                    "``G = R H^-1`` and ``S = R H^-1 R'``.")
+                    "``(first, values)`` (the non-zero span of each row), their chains (:func:`chains`), their "
+                    "1-norms, ``G = R H^-1`` and ``S = R H^-1 R'``.")
 
 Solution = namedtuple("Solution", "x active iterations optimal")
 Solution.__doc__ = ("The solution ``x``; ``active``: the rows held at a bound, as ``(row, side)`` with side +1 at "
