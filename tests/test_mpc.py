@@ -18,7 +18,7 @@ TEN_DEG = math.radians(10.0)
 # --- the floor ----------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("distance, u_max, v_max", [(2.0, 2.0, 1.0), (3.0, 1.0, 0.5), (0.25, 2.0, 1.0)])
+@pytest.mark.parametrize("distance, u_max, v_max", [(2.0, 2.0, 1.0), (1.0, 1.0, 0.5), (0.25, 2.0, 1.0)])
 def test_a_rigid_loads_floor_is_the_bang_coast_bang_move(distance, u_max, v_max):
     """d/v + v/a when the drive reaches full speed, 2 sqrt(d/a) when it does not; on the 10 ms grid the least
     multiple of 10 ms at or above it (the first two are multiples)."""
