@@ -381,7 +381,8 @@ VARIABLES = controller_model() + tuple(
     parameter("l1_low", 0.0, "m", "designs for cable lengths from l1_low to l1_high (nearest to l1_now used); "
                                   "0 with l1_high = 0: one design for l1"),
     parameter("l1_high", 0.0, "m", "longest main cable designed for"),
-    *limits.parameters(),
+    *(v._replace(description=v.description.split(";")[0] + "; a constraint of its QPs: finite")
+      for v in limits.parameters()),
 ) + MEASURED_STATE + (
     input_("l1_now", "m", "measured main cable length, for the designs' schedule; 0: not measured"),
     output("u", "m/s2", "demanded trolley acceleration: the plan's plus the tracking QP's first input, held "
