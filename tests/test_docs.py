@@ -123,8 +123,7 @@ def test_the_readme_component_example_is_built_and_scored(fmu_dir, tmp_path, mon
         assert main(shlex.split(command)[1:]) == 0, capsys.readouterr().err
     board = (tmp_path / "results" / "mine" / "quick" / "scoreboard.md").read_text()
     assert "Controllers: `BacksteppingController`, `EnergyController`, `HardHitController`, `LqrController`, " \
-        "`PdController` (yours)" \
-        in board
+        "`MpcController`, `PdController` (yours)" in board
     assert all(f"| S{i} (QUICK" in board for i in range(1, 10))
     (tmp_path / "script.py").write_text(script)
     done = subprocess.run([sys.executable, "script.py"], capture_output=True, text=True, timeout=600)

@@ -37,6 +37,7 @@ QUICK_MISMATCH = MISMATCH[::13]  # 3 of the 27 plants: the extremes and the nomi
 STEPS = (1e-3, 1e-2, 5e-2)
 TRANSPORT = ("S2", "S3", "S4", "S5", "S7", "S8", "S9")  # the scenarios that give the controller a target position
 HOIST = {"from": 2.0, "to": 1.0, "u_max": 0.5, "v_max": 0.5}  # S7's hoist: l1 [m], its drive [m/s2, m/s]
+GUST = {"F2_peak": 10.0, "start": 1.5, "duration": 0.5}  # S4's gust on the payload [N, s, s]
 
 
 def mode_periods(m1=3.0, m2=7.0, l1=1.0, l2=0.5, g=9.8):
@@ -236,7 +237,7 @@ def systems_for(contender, scenario, quick=False):
         grid = QUICK_MISMATCH if quick else MISMATCH
         return [(", ".join(f"{k}={v:g}" for k, v in p.items()), transport(p), 1e-3, 10.0, DISTANCE) for p in grid]
     if scenario == "S4":
-        gust = {"gust": ("Gust", {"F2_peak": 10.0, "start": 1.5, "duration": 0.5})}
+        gust = {"gust": ("Gust", dict(GUST))}
         return [("F2 10 N at 1.5 s", transport(extra=gust), 1e-3, 10.0, DISTANCE)]
     if scenario == "S5":
         sensor = {"sensor": ("Sensor", {"seed": 1.0, "delay": 1.0})}
@@ -320,8 +321,15 @@ def _scenario_label(sid, quick):
     return f"{sid} (QUICK: {', '.join(what)}): {SCENARIOS[sid].title}"
 
 
-def render_summary(rows, users=(), quick=False):
-    """One table: per scenario the controllers ranked, with their ranking figure and how many targets they met."""
+def floor_ratio(value, floor):
+    """`` (1.32x floor)``: a time as a multiple of the scenario's floor (:mod:`.floor`), or nothing."""
+    return "" if floor is None or value is None else f" ({value / floor.seconds:.2f}x floor)"
+
+
+def render_summary(rows, users=(), quick=False, floors=None):
+    """One table: per scenario the controllers ranked, with their ranking figure (and its ratio to the scenario's
+    floor, where ``floors`` gives one) and how many targets they met."""
+    floors = floors or {}
     units = {"residual_deg": " deg"}
     lines = []
     for sid, s in SCENARIOS.items():
@@ -331,8 +339,9 @@ def render_summary(rows, users=(), quick=False):
         cells = []
         for line in ranked:
             value = line[s.rank_by]
-            figure = "failed" if line["failed"] else _cell(value, 3 if s.rank_by == "residual_deg" else 2,
-                                                           units.get(s.rank_by, " s"))
+            figure = "failed" if line["failed"] else (
+                _cell(value, 3 if s.rank_by == "residual_deg" else 2, units.get(s.rank_by, " s"))
+                + floor_ratio(value, floors.get(sid)))
             verdict = "all targets met" if all(line["targets"]) and not line["failed"] else (
                 f"{sum(line['targets'])} of {len(line['targets'])} targets met")
             cells.append(f"{_name(line, users)}: {figure}, {verdict}")
@@ -346,8 +355,13 @@ def render_summary(rows, users=(), quick=False):
     return "\n".join(out)
 
 
-def render(rows, contenders, quick=False):
-    """scoreboard.md: per scenario a table ranked by :data:`RULES`, with each target met or missed and its source."""
+def render(rows, contenders, quick=False, floors=None):
+    """scoreboard.md: per scenario a table ranked by :data:`RULES`, with each target met or missed and its source.
+
+    ``floors``: ``{scenario: floor.Floor}``, the least time the crane needs there, shown with its method and as
+    each ranking figure's ratio to it.
+    """
+    floors = floors or {}
     users = {c.name for c in contenders if c.user}
     title = "# Controller scoreboard" + (" (QUICK: a subset of the cases, not the full board)" if quick else "")
     out = [title, "",
@@ -358,13 +372,18 @@ def render(rows, contenders, quick=False):
            f"Ranking: {RULES}.", "",
            "Controllers: " + ", ".join(f"`{c.name}`" + (" (yours)" if c.user else "")
                                        for c in sorted(contenders, key=lambda c: c.name)), "",
-           render_summary(rows, users, quick), ""]
+           render_summary(rows, users, quick, floors), ""]
+    if floors:
+        method = next(iter(floors.values())).method
+        out += [f"The floor of a scenario is the least time the crane needs for its task: {method}.", ""]
     for sid, s in SCENARIOS.items():
         lines = summarise(rows, sid)
         if not lines:
             continue
         out += [f"## {_scenario_label(sid, quick)}", "", "Targets:", ""]
         out += [f"- {t.text} ({t.source})" for t in s.targets] + [""]
+        if sid in floors:
+            out += [f"Floor: {floors[sid].seconds:.2f} s ({floors[sid].task})", ""]
         out.append("| rank | controller | 0.5 deg from | 0.1 deg from | arrival | residual | overshoot | final error "
                    "| peak abs u | peak abs v | effort | targets |")
         out.append("|---|---|---|---|---|---|---|---|---|---|---|---|")

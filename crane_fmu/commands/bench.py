@@ -12,7 +12,8 @@ EXAMPLES = (
     "  crane-fmu bench --repeat 7 --stop-time 20\n"
     "  crane-fmu bench --sweep\n"
     "  crane-fmu bench --endurance            # one simulated hour at 1 ms\n"
-    "  crane-fmu bench --realtime             # the real-time loop, OPC UA and Modbus round trips"
+    "  crane-fmu bench --realtime             # the real-time loop, OPC UA and Modbus round trips\n"
+    "  crane-fmu bench --mpc                  # the MPC's solve and its whole process against transport's"
 )
 
 
@@ -28,6 +29,8 @@ def arguments(p):
     p.add_argument("--native", action="store_true",
                    help="instead: the native (C) plant and controller FMUs in our master, in a C host and as a "
                         "whole process")
+    p.add_argument("--mpc", action="store_true",
+                   help="instead: the MpcController's solve times and whole simulate process against transport's")
     p.add_argument("--endurance", action="store_true",
                    help="instead: one long run (default one simulated hour) recorded to CSV, memory sampled")
     p.add_argument("--realtime", action="store_true",
@@ -43,12 +46,17 @@ def run(args):
     if args.cases < 2:
         raise UsageError(f"--cases must be >= 2, got {args.cases}")
     try:
-        if args.sweep + args.endurance + args.native + args.realtime > 1:
-            raise UsageError("--sweep, --endurance, --native and --realtime are separate benchmarks: choose one")
+        if args.sweep + args.endurance + args.native + args.realtime + args.mpc > 1:
+            raise UsageError("--sweep, --endurance, --native, --realtime and --mpc are separate benchmarks: choose "
+                             "one")
         if args.realtime:
             from crane_fmu.bench_realtime import run_realtime_bench
 
             run_realtime_bench(args.stop_time or 2.0)
+        elif args.mpc:
+            from crane_fmu.bench_mpc import run_mpc_bench
+
+            run_mpc_bench(args.repeat)
         elif args.native:
             from crane_fmu.bench_native import run_native_bench
 
