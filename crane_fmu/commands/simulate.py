@@ -112,7 +112,10 @@ def prepare(args, system, step):
     from crane_fmu.cosim.system import settable, split_name
 
     fmus, connections = systems.resolve(system, args.fmu_dir)
-    system = _keep_known(system, fmus, [item.partition("=")[0] for item in args.use])
+    system = _keep_known(system, fmus, list(system.replaced))
+    system, notes = systems.tell_controllers(system, args.fmu_dir)
+    for note in notes:
+        print(f"crane-fmu: note: {note}", file=sys.stderr)
     system = systems.at_step(system, args.fmu_dir, step)
     variables = settable(fmus)
     if args.parameters:
@@ -178,7 +181,8 @@ def _simulate(args, system):
         partial = args.plot + ".partial.png"
         Path(partial).parent.mkdir(parents=True, exist_ok=True)
         settings = ", ".join(item.split("=", 1)[0] + "=" + item.split("=", 1)[1] for item in args.set)
-        plot_run(read_result(args.out), partial, f"{system.name} ({args.master}, h={step:g} s)"
+        used = "".join(f" with {name}={Path(system.instances[name]).name}" for name in system.replaced)
+        plot_run(read_result(args.out), partial, f"{system.name}{used} ({args.master}, h={step:g} s)"
                  + (f"\n{settings}" if settings else ""))
         os.replace(partial, args.plot)
         print(f"wrote {args.plot}")
