@@ -18,7 +18,7 @@ EXAMPLES = (
     "  crane-fmu build --container transport       # build/containers/CraneTransport.fmu\n"
     "  crane-fmu build --container my_system.ssp\n"
     "  crane-fmu build --one-fmu lqr transport      # build/native/CraneLqr.fmu (FMI 3.0: build/native/fmi3)\n"
-    "  crane-fmu build --component my_controller.py --out build/mine   # a component of your own: build/mine,\n"
+    "  crane-fmu build --component pd_sway.py --out build/mine        # a component of your own: build/mine,\n"
     "                                                                  # FMI 3.0 in build/mine/fmi3"
 )
 

@@ -21,7 +21,7 @@ EXAMPLES = (
     "  crane-fmu simulate --system build/systems/paper.ssp --parameters my.ssv\n"
     "  crane-fmu simulate --master jacobi --step 0.01 --set controller.w_theta2=0\n"
     "  crane-fmu simulate --set plant.l1=1.5 --set controller.l1=1.5 --set plant.theta1_0=0.2\n"
-    "  crane-fmu simulate --system lqr --use controller=build/mine/MyController.fmu --out mine.csv\n"
+    "  crane-fmu simulate --system transport --use controller=build/mine/PdSway.fmu --out mine.csv\n"
     "  crane-fmu simulate --system transport --out move.mat          # for MATLAB: columns and data\n"
     "On a terminal a long run shows its progress on stderr; Ctrl-C stops it and keeps the rows so far."
 )
@@ -121,6 +121,9 @@ def prepare(args, system, step):
     if args.parameters:
         from crane_fmu.cosim.ssp import load_parameters
 
+        if not Path(args.parameters).is_file():
+            raise UsageError(f"--parameters {args.parameters}: not found (an SSP parameter set, e.g. "
+                             "examples/parameters.ssv)")
         loaded = load_parameters(args.parameters)
         for instance, values in loaded.items():
             for name in values:
