@@ -8,6 +8,8 @@
   the planner's references, else the move's target as x_d, else refused with that reason.
 """
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import user_controllers
@@ -115,3 +117,15 @@ def test_the_built_in_controllers_fit_every_built_in_system(fmu_dir):
     for system in systems.registered():
         told_system, notes = systems.tell_controllers(system, fmu_dir)
         assert told_system.parameters == system.parameters and notes == [], system.name
+
+
+def test_the_plot_of_a_use_run_names_the_fmu_in_its_title(fmu_dir, tmp_path, capsys, monkeypatch):
+    from crane_fmu.analysis import plots
+
+    titles = []
+    monkeypatch.setattr(plots, "plot_run", lambda result, path, title: (titles.append(title),
+                                                                         Path(path).write_bytes(b"png")))
+    code, err = _simulate(capsys, fmu_dir, tmp_path, "lqr", f"controller={fmu_dir / 'EnergyController.fmu'}",
+                          "--stop-time", "0.1", "--plot", str(tmp_path / "run.png"))
+    assert code == 0, err
+    assert titles == ["lqr with controller=EnergyController.fmu (gauss-seidel, h=0.001 s)"]
