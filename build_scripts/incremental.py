@@ -131,9 +131,13 @@ def key(*parts):
 
 
 def component_data(component):
-    """What the build reads of a component descriptor besides its module's source (its functions are there)."""
-    return (component.model_identifier, component.role, component.description, component.variables,
-            component.feedthrough, component.default_experiment)
+    """What the build reads of a component descriptor besides its module's source (its functions are there):
+    every field that is data, whatever fields the descriptor gains, and the output dependencies."""
+    import dataclasses
+
+    data = [(f.name, getattr(component, f.name)) for f in dataclasses.fields(component)
+            if not callable(getattr(component, f.name))]
+    return data + [("dependencies", component.dependencies())] if hasattr(component, "dependencies") else data
 
 
 @functools.cache
