@@ -75,6 +75,8 @@ def test_simulate_free_swing_and_settings(fmu_dir, tmp_path, capsys):
     (["--stop-time", "-1"], "stop time must be > start time 0.0, got -1.0"),
     (["--step", "x"], "argument --step: 'x' is not a number"),
     (["--master", "euler"], "argument --master: invalid choice: 'euler'"),
+    (["--parameters", "my.ssv"], "--parameters my.ssv: not found (an SSP parameter set, e.g. "
+                                 "examples/parameters.ssv)"),
 ])
 def test_simulate_user_errors_give_one_line_and_status_2(fmu_dir, tmp_path, capsys, argv, message):
     out_file = tmp_path / "keep.csv"

@@ -27,8 +27,8 @@ Seering's zero-vibration shapers) achieve. None is set from a controller's resul
 import math
 from collections import namedtuple
 
-MEASURED = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2")
-REFERENCE = ("x_ref", "dx_ref", "ddx_ref", "theta1_ref", "dtheta1_ref", "theta2_ref", "dtheta2_ref")
+from crane_fmu.controller_interface import MEASURED, MOVE_NEEDS, misses, told
+
 DRIVE = {"u_max": 2.0, "v_max": 1.0}
 DISTANCE = 2.0
 MISMATCH = [{"l1": l1, "l2": l2, "m2": m2}
@@ -159,15 +159,16 @@ Contender.__doc__ = ("A controller to score: its name, its FMU (a model identifi
 
 
 def check_interface(name, inputs, outputs, parameters=()):
-    """Raise ValueError (one line) naming what a controller misses of the interface, and which scenarios need it."""
-    missing = [n for n in MEASURED if n not in inputs] + (["output u"] if "u" not in outputs else [])
-    problems = [f"{', '.join(missing)} (every scenario)"] if missing else []
-    if "x_d" not in parameters and not all(n in inputs for n in REFERENCE[:3]):
-        problems.append(f"a parameter x_d or the inputs {', '.join(REFERENCE[:3])} ({', '.join(TRANSPORT)})")
+    """Raise ValueError (one line) naming what a controller misses of the interface, and which scenarios need it.
+
+    The needs are those of :func:`crane_fmu.controller_interface.told`, the rule simulate applies too.
+    """
+    always, to_move = misses(inputs, outputs, parameters)
+    problems = ([f"{', '.join(always)} (every scenario)"] if always else []) + [
+        f"{need} ({', '.join(TRANSPORT)})" for need in to_move]
     if problems:
         raise ValueError(f"{name} is not a crane controller: it misses {'; '.join(problems)} (the interface: inputs "
-                         f"{', '.join(MEASURED)}; output u; for a target position a parameter x_d or the planner's "
-                         f"inputs {', '.join(REFERENCE[:3])})")
+                         f"{', '.join(MEASURED)}; output u; for a target position {MOVE_NEEDS})")
 
 
 def scope(scenario, quick=False):
@@ -189,7 +190,6 @@ def systems_for(contender, scenario, quick=False):
     from crane_fmu.cosim import Connection, System
 
     c = contender
-    tracking = all(n in c.inputs for n in REFERENCE[:3])
 
     def regulation(step, extra=None, connections=()):
         instances, parameters = {"plant": "CranePlant", "controller": c.source}, {"plant": dict(DRIVE)}
@@ -210,17 +210,15 @@ def systems_for(contender, scenario, quick=False):
         parameters = {"plant": {**DRIVE, "theta1_0": 0.0, **(plant or {})}, "controller": {}}
         if l1 is not None and "l1" in c.parameters:
             parameters["controller"]["l1"] = l1
-        if tracking:
+        move = told(c.name, c.inputs, ["u"], c.parameters, DISTANCE)  # the rule simulate applies too
+        if move.references:
             instances["planner"] = "TrajectoryPlanner"
             parameters["planner"] = {"x_d": DISTANCE, "shaper": "zvd" if hoist else "zv"}
             if hoist:
                 parameters["planner"]["l1"] = 1.5
-                connections = connections + tuple(Connection("planner", n, "controller", n) for n in REFERENCE
-                                                   if n in c.inputs)
-        elif "x_d" in c.parameters:
-            parameters["controller"]["x_d"] = DISTANCE
+                connections = connections + tuple(Connection("planner", n, "controller", n) for n in move.references)
         else:
-            check_interface(c.name, c.inputs, ["u"], c.parameters)
+            parameters["controller"]["x_d"] = move.x_d
         for name, (kind, values) in (extra or {}).items():
             instances[name] = kind
             parameters[name] = values
