@@ -49,21 +49,24 @@ def test_directional_derivatives_equal_central_differences():
     rounding eps |f| / h (about 1e-11): 1e-7 of the column's scale catches any wrong or missing term,
     which is of the order of the column itself.
     """
-    h = 1e-5
-    for config, state, inputs, mode in _cases():
-        a, b, c, d = (np.array(m) for m in me.jacobians(config, state, inputs, mode))
-        for k in range(N):
-            fd = _central(lambda s: me.derivatives(config, s, inputs, mode), state, k, h)
-            assert a[:, k] == pytest.approx(fd, rel=1e-7, abs=1e-7 * (1 + np.abs(fd).max())), (k, mode)
-            fd = _central(lambda s: me.output_values(config, s, inputs, mode), state, k, h)
-            assert c[:, k] == pytest.approx(fd, rel=1e-7, abs=1e-7 * (1 + np.abs(fd).max())), (k, mode)
-        for k in range(M):
-            if k == 0 and abs(abs(inputs[0]) - config.u_max) < 2 * h:
-                continue  # the drive's limit is a kink in u
-            fd = _central(lambda i: me.derivatives(config, state, i, mode), inputs, k, h)
-            assert b[:, k] == pytest.approx(fd, rel=1e-7, abs=1e-7 * (1 + np.abs(fd).max())), (k, mode)
-            fd = _central(lambda i: me.output_values(config, state, i, mode), inputs, k, h)
-            assert d[:, k] == pytest.approx(fd, rel=1e-7, abs=1e-7 * (1 + np.abs(fd).max())), (k, mode)
+    for case in _cases():
+        _check_columns(*case, h=1e-5)
+
+
+def _check_columns(config, state, inputs, mode, h):
+    a, b, c, d = (np.array(m) for m in me.jacobians(config, state, inputs, mode))
+
+    def close(got, fd):
+        assert got == pytest.approx(fd, rel=1e-7, abs=1e-7 * (1 + np.abs(fd).max())), mode
+
+    for k in range(N):
+        close(a[:, k], _central(lambda s: me.derivatives(config, s, inputs, mode), state, k, h))
+        close(c[:, k], _central(lambda s: me.output_values(config, s, inputs, mode), state, k, h))
+    for k in range(M):
+        if k == 0 and abs(abs(inputs[0]) - config.u_max) < 2 * h:
+            continue  # the drive's limit is a kink in u
+        close(b[:, k], _central(lambda i: me.derivatives(config, state, i, mode), inputs, k, h))
+        close(d[:, k], _central(lambda i: me.output_values(config, state, i, mode), inputs, k, h))
 
 
 def test_derivatives_are_the_function_the_co_simulation_rk4_calls():
