@@ -97,3 +97,23 @@ def test_cli_refuses_bad_input_in_one_line(fmu_dir, capsys, argv, message):
 def test_cli_refuses_a_missing_fmu(capsys, tmp_path):
     assert main(["linearize", str(tmp_path / "none.fmu")]) == 2
     assert "none.fmu not found" in capsys.readouterr().err
+
+
+def test_the_documented_example_prints_what_the_docs_show(fmu_dir, capsys):
+    """The interoperability page's excerpt of `crane-fmu linearize ... --at theta1=0`: each shown number is the
+    printed one to its 6 digits, and a shown 0 is within the co-simulation method's 1e-9 of it."""
+    import re
+    from pathlib import Path
+
+    page = (Path(__file__).parent.parent / "docs" / "guide" / "interoperability.md").read_text()
+    section = page.split("## Linearising a plant FMU", 1)[1].split("\n## ", 1)[0]
+    command = re.search(r"```bash\ncrane-fmu (linearize .*)\n```", section).group(1).split()
+    excerpt = re.findall(r"^(dtheta[12]) +(.*)$", section, re.M)
+    assert len(excerpt) == 2
+    fmu = str(fmu_dir / "CranePlant.fmu")
+    assert main([a if a != "build/fmus/CranePlant.fmu" else fmu for a in command if a != "--out" and
+                 not a.endswith(".npz")]) == 0
+    printed = dict(re.findall(r"^(dtheta[12]) +(.*)$", capsys.readouterr().out.split("\nB (")[0], re.M))
+    for name, shown in excerpt:
+        got = [float(v) for v in printed[name].split()]
+        assert [float(v) for v in shown.split()] == pytest.approx(got, rel=5e-6, abs=1e-9), name
