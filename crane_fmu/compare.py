@@ -195,7 +195,9 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
         row.update(quick=quick, **{f"scenario_{k}": v for k, v in scoreboard.scope(row["scenario"], quick).items()})
     write_table([{k: v for k, v in r.items() if k != "signals"} for r in rows], out_dir / "scores.parquet")
     board = out_dir / "scoreboard.md"
-    board.with_name(".scoreboard.md.partial").write_text(scoreboard.render(rows, chosen, quick))
+    from crane_fmu.analysis.floor import scenario_floors
+
+    board.with_name(".scoreboard.md.partial").write_text(scoreboard.render(rows, chosen, quick, scenario_floors()))
     board.with_name(".scoreboard.md.partial").replace(board)
     paths = score_plots.plot_all(rows, out_dir, {c.name for c in chosen if c.user})
     drawn = 0

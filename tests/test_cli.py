@@ -24,9 +24,10 @@ def test_build_writes_every_component_and_every_builtin_system(build_record, fmu
     assert code == 0
     build = fmu_dir.parent
     fmus = ["BacksteppingController.fmu", "CranePlant.fmu", "CraneSensor.fmu", "EnergyController.fmu", "Gust.fmu",
-            "HardHitController.fmu", "LqrController.fmu", "Sensor.fmu", "StateEstimator.fmu", "TrajectoryPlanner.fmu",
-            "TrivialController.fmu", "TrivialPlant.fmu"]
-    names = ["energy", "free", "hard-hit", "hoist-transport", "lqg", "lqg-transport", "lqr", "paper", "transport"]
+            "HardHitController.fmu", "LqrController.fmu", "MpcController.fmu", "Sensor.fmu", "StateEstimator.fmu",
+            "TrajectoryPlanner.fmu", "TrivialController.fmu", "TrivialPlant.fmu"]
+    names = ["energy", "free", "hard-hit", "hoist-transport", "lqg", "lqg-transport", "lqr", "mpc", "mpc-transport",
+             "paper", "transport"]
     assert sorted(p.name for p in (build / "fmus").iterdir()) == sorted(
         fmus + [f"{n}.OspSystemStructure.xml" for n in names])
     assert sorted(p.name for p in (build / "fmi3").iterdir()) == fmus
@@ -96,6 +97,8 @@ def test_simulate_free_swing_and_settings(fmu_dir, tmp_path, capsys):
     (["--stop-time", "-1"], "stop time must be > start time 0.0, got -1.0"),
     (["--step", "x"], "argument --step: 'x' is not a number"),
     (["--master", "euler"], "argument --master: invalid choice: 'euler'"),
+    (["--parameters", "my.ssv"], "--parameters my.ssv: not found (an SSP parameter set, e.g. "
+                                 "examples/parameters.ssv)"),
 ])
 def test_simulate_user_errors_give_one_line_and_status_2(fmu_dir, tmp_path, capsys, argv, message):
     out_file = tmp_path / "keep.csv"
@@ -319,6 +322,10 @@ def test_targets_measures_every_controller_against_its_targets(fmu_dir, capsys):
     # sustained oscillation in its own 10-degree regulation run
     energy = next(line for line in out.splitlines() if line.startswith("  energy   0.5 deg from"))
     assert energy.endswith(("converges", "decaying")), energy
+    # the floors with their method, and the MPC's figures against its targets as ratios to them
+    assert "  S2: 2.70 s  2 m from rest to rest" in out and "LP feasibility (scipy HiGHS)" in out
+    s2 = next(line for line in out.splitlines() if line.startswith("  S2: arrival (5 mm, 0.5 deg): "))
+    assert "x floor) (target <= 2.95 s, ambition 2.85 s): " in s2, s2
 
 
 @pytest.mark.parametrize("argv, message", [

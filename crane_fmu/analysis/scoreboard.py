@@ -27,8 +27,8 @@ Seering's zero-vibration shapers) achieve. None is set from a controller's resul
 import math
 from collections import namedtuple
 
-MEASURED = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2")
-REFERENCE = ("x_ref", "dx_ref", "ddx_ref", "theta1_ref", "dtheta1_ref", "theta2_ref", "dtheta2_ref")
+from crane_fmu.controller_interface import MEASURED, MOVE_NEEDS, misses, told
+
 DRIVE = {"u_max": 2.0, "v_max": 1.0}
 DISTANCE = 2.0
 MISMATCH = [{"l1": l1, "l2": l2, "m2": m2}
@@ -37,6 +37,7 @@ QUICK_MISMATCH = MISMATCH[::13]  # 3 of the 27 plants: the extremes and the nomi
 STEPS = (1e-3, 1e-2, 5e-2)
 TRANSPORT = ("S2", "S3", "S4", "S5", "S7", "S8", "S9")  # the scenarios that give the controller a target position
 HOIST = {"from": 2.0, "to": 1.0, "u_max": 0.5, "v_max": 0.5}  # S7's hoist: l1 [m], its drive [m/s2, m/s]
+GUST = {"F2_peak": 10.0, "start": 1.5, "duration": 0.5}  # S4's gust on the payload [N, s, s]
 
 
 def mode_periods(m1=3.0, m2=7.0, l1=1.0, l2=0.5, g=9.8):
@@ -158,15 +159,16 @@ Contender.__doc__ = ("A controller to score: its name, its FMU (a model identifi
 
 
 def check_interface(name, inputs, outputs, parameters=()):
-    """Raise ValueError (one line) naming what a controller misses of the interface, and which scenarios need it."""
-    missing = [n for n in MEASURED if n not in inputs] + (["output u"] if "u" not in outputs else [])
-    problems = [f"{', '.join(missing)} (every scenario)"] if missing else []
-    if "x_d" not in parameters and not all(n in inputs for n in REFERENCE[:3]):
-        problems.append(f"a parameter x_d or the inputs {', '.join(REFERENCE[:3])} ({', '.join(TRANSPORT)})")
+    """Raise ValueError (one line) naming what a controller misses of the interface, and which scenarios need it.
+
+    The needs are those of :func:`crane_fmu.controller_interface.told`, the rule simulate applies too.
+    """
+    always, to_move = misses(inputs, outputs, parameters)
+    problems = ([f"{', '.join(always)} (every scenario)"] if always else []) + [
+        f"{need} ({', '.join(TRANSPORT)})" for need in to_move]
     if problems:
         raise ValueError(f"{name} is not a crane controller: it misses {'; '.join(problems)} (the interface: inputs "
-                         f"{', '.join(MEASURED)}; output u; for a target position a parameter x_d or the planner's "
-                         f"inputs {', '.join(REFERENCE[:3])})")
+                         f"{', '.join(MEASURED)}; output u; for a target position {MOVE_NEEDS})")
 
 
 def scope(scenario, quick=False):
@@ -188,7 +190,6 @@ def systems_for(contender, scenario, quick=False):
     from crane_fmu.cosim import Connection, System
 
     c = contender
-    tracking = all(n in c.inputs for n in REFERENCE[:3])
 
     def regulation(step, extra=None, connections=()):
         instances, parameters = {"plant": "CranePlant", "controller": c.source}, {"plant": dict(DRIVE)}
@@ -209,17 +210,15 @@ def systems_for(contender, scenario, quick=False):
         parameters = {"plant": {**DRIVE, "theta1_0": 0.0, **(plant or {})}, "controller": {}}
         if l1 is not None and "l1" in c.parameters:
             parameters["controller"]["l1"] = l1
-        if tracking:
+        move = told(c.name, c.inputs, ["u"], c.parameters, DISTANCE)  # the rule simulate applies too
+        if move.references:
             instances["planner"] = "TrajectoryPlanner"
             parameters["planner"] = {"x_d": DISTANCE, "shaper": "zvd" if hoist else "zv"}
             if hoist:
                 parameters["planner"]["l1"] = 1.5
-                connections = connections + tuple(Connection("planner", n, "controller", n) for n in REFERENCE
-                                                   if n in c.inputs)
-        elif "x_d" in c.parameters:
-            parameters["controller"]["x_d"] = DISTANCE
+                connections = connections + tuple(Connection("planner", n, "controller", n) for n in move.references)
         else:
-            check_interface(c.name, c.inputs, ["u"], c.parameters)
+            parameters["controller"]["x_d"] = move.x_d
         for name, (kind, values) in (extra or {}).items():
             instances[name] = kind
             parameters[name] = values
@@ -236,7 +235,7 @@ def systems_for(contender, scenario, quick=False):
         grid = QUICK_MISMATCH if quick else MISMATCH
         return [(", ".join(f"{k}={v:g}" for k, v in p.items()), transport(p), 1e-3, 10.0, DISTANCE) for p in grid]
     if scenario == "S4":
-        gust = {"gust": ("Gust", {"F2_peak": 10.0, "start": 1.5, "duration": 0.5})}
+        gust = {"gust": ("Gust", dict(GUST))}
         return [("F2 10 N at 1.5 s", transport(extra=gust), 1e-3, 10.0, DISTANCE)]
     if scenario == "S5":
         sensor = {"sensor": ("Sensor", {"seed": 1.0, "delay": 1.0})}
@@ -320,8 +319,15 @@ def _scenario_label(sid, quick):
     return f"{sid} (QUICK: {', '.join(what)}): {SCENARIOS[sid].title}"
 
 
-def render_summary(rows, users=(), quick=False):
-    """One table: per scenario the controllers ranked, with their ranking figure and how many targets they met."""
+def floor_ratio(value, floor):
+    """`` (1.32x floor)``: a time as a multiple of the scenario's floor (:mod:`.floor`), or nothing."""
+    return "" if floor is None or value is None else f" ({value / floor.seconds:.2f}x floor)"
+
+
+def render_summary(rows, users=(), quick=False, floors=None):
+    """One table: per scenario the controllers ranked, with their ranking figure (and its ratio to the scenario's
+    floor, where ``floors`` gives one) and how many targets they met."""
+    floors = floors or {}
     units = {"residual_deg": " deg"}
     lines = []
     for sid, s in SCENARIOS.items():
@@ -331,8 +337,9 @@ def render_summary(rows, users=(), quick=False):
         cells = []
         for line in ranked:
             value = line[s.rank_by]
-            figure = "failed" if line["failed"] else _cell(value, 3 if s.rank_by == "residual_deg" else 2,
-                                                           units.get(s.rank_by, " s"))
+            figure = "failed" if line["failed"] else (
+                _cell(value, 3 if s.rank_by == "residual_deg" else 2, units.get(s.rank_by, " s"))
+                + floor_ratio(value, floors.get(sid)))
             verdict = "all targets met" if all(line["targets"]) and not line["failed"] else (
                 f"{sum(line['targets'])} of {len(line['targets'])} targets met")
             cells.append(f"{_name(line, users)}: {figure}, {verdict}")
@@ -346,8 +353,13 @@ def render_summary(rows, users=(), quick=False):
     return "\n".join(out)
 
 
-def render(rows, contenders, quick=False):
-    """scoreboard.md: per scenario a table ranked by :data:`RULES`, with each target met or missed and its source."""
+def render(rows, contenders, quick=False, floors=None):
+    """scoreboard.md: per scenario a table ranked by :data:`RULES`, with each target met or missed and its source.
+
+    ``floors``: ``{scenario: floor.Floor}``, the least time the crane needs there, shown with its method and as
+    each ranking figure's ratio to it.
+    """
+    floors = floors or {}
     users = {c.name for c in contenders if c.user}
     title = "# Controller scoreboard" + (" (QUICK: a subset of the cases, not the full board)" if quick else "")
     out = [title, "",
@@ -358,13 +370,18 @@ def render(rows, contenders, quick=False):
            f"Ranking: {RULES}.", "",
            "Controllers: " + ", ".join(f"`{c.name}`" + (" (yours)" if c.user else "")
                                        for c in sorted(contenders, key=lambda c: c.name)), "",
-           render_summary(rows, users, quick), ""]
+           render_summary(rows, users, quick, floors), ""]
+    if floors:
+        method = next(iter(floors.values())).method
+        out += [f"The floor of a scenario is the least time the crane needs for its task: {method}.", ""]
     for sid, s in SCENARIOS.items():
         lines = summarise(rows, sid)
         if not lines:
             continue
         out += [f"## {_scenario_label(sid, quick)}", "", "Targets:", ""]
         out += [f"- {t.text} ({t.source})" for t in s.targets] + [""]
+        if sid in floors:
+            out += [f"Floor: {floors[sid].seconds:.2f} s ({floors[sid].task})", ""]
         out.append("| rank | controller | 0.5 deg from | 0.1 deg from | arrival | residual | overshoot | final error "
                    "| peak abs u | peak abs v | effort | targets |")
         out.append("|---|---|---|---|---|---|---|---|---|---|---|---|")

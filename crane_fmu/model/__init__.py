@@ -21,5 +21,6 @@ from . import (  # noqa: F401
     parameters,
     planner,
     plant,
+    plant_continuous,
     tables,
 )
