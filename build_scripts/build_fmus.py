@@ -2,7 +2,7 @@
 
 Every FMU is made the same way from its component descriptor
 (``crane_fmu.model.component.Component``): a generated script whose one class
-is the generic slave of ``fmu_src/slave2.py`` (or ``slave3.py``) for that
+is the generic slave of ``fmu_src/python/slave2.py`` (or ``slave3.py``) for that
 component, the bundled runtime core, and a modelDescription.xml post-processed
 from the component's variable table (units, display units, dependencies).
 
@@ -32,7 +32,7 @@ import tempfile
 import zipfile
 from pathlib import Path
 
-import crane_fmu.fmu_src
+import crane_fmu.fmu_src.python
 import crane_fmu.model
 from crane_fmu import DEFAULT_FMU_DIR, components
 from crane_fmu.build_scripts.model_description import postprocess, postprocess3
@@ -40,7 +40,7 @@ from crane_fmu.build_scripts.wrapper import WrapperUnavailable, compile_binaries
 from crane_fmu.model.tables import DISPLAY_UNITS
 
 MODEL_DIR = Path(crane_fmu.model.__file__).parent
-SLAVE_DIR = Path(crane_fmu.fmu_src.__file__).parent
+SLAVE_DIR = Path(crane_fmu.fmu_src.python.__file__).parent
 # bundled with the core, by FMI version
 SUPPORT = {2: [SLAVE_DIR / "runtime.py", SLAVE_DIR / "slave2.py"],
            3: [SLAVE_DIR / "runtime.py", SLAVE_DIR / "slave3.py"]}
@@ -95,7 +95,7 @@ def core_name(component, fmi_version=2):
 
 def _bundled(source, core, name):
     """``source`` with this project's imports renamed to the bundled core package."""
-    source = source.replace("crane_fmu.fmu_src", core).replace("crane_fmu.model", core)
+    source = source.replace("crane_fmu.fmu_src.python", core).replace("crane_fmu.model", core)
     if "crane_fmu" in source:
         raise ValueError(f"{name} imports a part of crane_fmu that is not bundled (only crane_fmu.model is)")
     return source

@@ -170,7 +170,7 @@ def python_tools():
 
 def python_fmu_key(component, fmi_version, sources):
     """A Python FMU: the core it bundles (``sources``), its table, the wrapper's C sources, the build, the tools."""
-    wrapper_sources = _files(FMU_SRC, skip=("native",))
+    wrapper_sources = [*_files(FMU_SRC / "framework"), *_files(FMU_SRC / "python")]
     build = [HERE / name for name in ("build_fmus.py", "model_description.py", "wrapper.py")]
     return key("python", fmi_version, component_data(component), *sources, *wrapper_sources, *build,
                python_tools())

@@ -18,7 +18,7 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 
 from crane_fmu import systems
-from crane_fmu.build_scripts.native import MINGW, NATIVE, native_dir
+from crane_fmu.build_scripts.native import HOST, MINGW, native_dir
 from crane_fmu.build_scripts.one_fmu import ONE_FMUS, not_native, one_fmu_name, plan
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cli import main
@@ -206,8 +206,8 @@ def host(tmp_path_factory):
     if compiler is None:
         pytest.skip("no C compiler")
     out = tmp_path_factory.mktemp("host") / "host"
-    subprocess.run([compiler, "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", f"-I{NATIVE}",
-                    str(NATIVE / "host.c"), "-o", str(out), "-ldl", "-lpthread", "-lm"], check=True)
+    subprocess.run([compiler, "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", str(HOST), "-o",
+                    str(out), "-ldl", "-lpthread", "-lm"], check=True)
     return out
 
 
@@ -263,8 +263,7 @@ def test_the_windows_dll_under_wine_gives_the_linux_run(native, host, tmp_path_f
     dll = folder / "binaries" / BINARIES[version][1] / f"{one_fmu_name(name)}.dll"
     if not dll.exists():
         pytest.skip("the one-FMU has no Windows binary (mingw-w64 missing at build time)")
-    subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", "-static-libgcc",
-                    f"-I{fmi_headers()}", f"-I{NATIVE}", str(NATIVE / "host.c"), str(NATIVE / "portable_math.c"), "-o",
+    subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-static-libgcc", f"-I{fmi_headers()}", str(HOST), "-o",
                     str(folder / "host.exe")], check=True)
     shutil.copy(dll, folder)
     prefix = tmp_path_factory.mktemp("wineprefix")
