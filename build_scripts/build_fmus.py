@@ -213,9 +213,6 @@ def systems_dir(out_dir):
     return Path(out_dir).parent / "systems"
 
 
-CONTAINERS = ("paper", "lqr", "energy", "transport")  # the built-in closed loops packed as one FMU each
-
-
 def containers_dir(out_dir):
     """Where the container FMUs go: ``build/containers`` next to ``build/fmus``."""
     return Path(out_dir).parent / "containers"
@@ -251,7 +248,7 @@ def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, cont
         every registered system whose components are all built).
     containers : iterable of str, optional
         Registered systems to pack each into one container FMU in
-        :func:`containers_dir` (default: those of :data:`CONTAINERS` that are built).
+        :func:`containers_dir` (default: the built ones tagged ``container``).
     native : bool, optional
         Also build the native (C) FMUs into ``build/native`` (:mod:`.native`), with the built-in
         systems as one native FMU each (:mod:`.one_fmu`): True requires a C compiler, False skips
@@ -328,7 +325,7 @@ def _build_all(record, out_dir, kinds, systems, fmi3, containers, native, log, f
     from crane_fmu import container
     from crane_fmu.container import build_container
 
-    for name in containers if containers is not None else [n for n in CONTAINERS if n in names]:
+    for name in containers if containers is not None else [n for n in registry.tagged("container") if n in names]:
         system = registry.get(name)
         target = containers_dir(out_dir) / f"{container_name(name)}.fmu"
         paths.append(record.make(target, system_file_key("container", system, system.fmus(out_dir).values(),

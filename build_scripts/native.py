@@ -32,6 +32,7 @@ import zipfile
 from pathlib import Path
 
 import crane_fmu.fmu_src as fmu_src
+from crane_fmu import components
 from crane_fmu.build_scripts.model_description import _unit_definitions, postprocess, postprocess3
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.model.tables import DISPLAY_UNITS, xml_double
@@ -41,9 +42,6 @@ FOLDERS = tuple(SOURCES / folder for folder in ("framework", "models", "system")
 MODELS_DIR = SOURCES / "models"
 HOST = SOURCES / "host" / "host.c"  # a C host for tests and benchmarks, in no FMU
 DERIVATIVE_BENCH = SOURCES / "host" / "derivative_bench.c"  # the Model Exchange derivatives' cost (bench)
-# the ported components: model identifier -> its model file in fmu_src/models
-MODELS = {"CranePlant": "crane_plant.c", "BacksteppingController": "backstepping.c", "LqrController": "lqr.c",
-          "TrajectoryPlanner": "planner.c", "EnergyController": "energy.c", "Gust": "gust.c", "Sensor": "sensor.c"}
 # every native FMU's: the framework's files and what the model files share; besides them each FMU compiles the
 # generated fmu_model.c, which names the model its framework runs
 COMMON = ("instance.c", "py_repr.c", "component.c", "plant_equations.c", "portable_math.c", "linalg.c")
@@ -73,10 +71,15 @@ def compilers():
     return {"linux": cc, "windows": shutil.which(MINGW)}
 
 
+def ported():
+    """The model identifiers of the registered components that have a native model (``Component.native``)."""
+    return [c.model_identifier for c in components.registered() if c.native]
+
+
 def _sources(component, fmi_version):
     """The C files of fmu_src the component's FMU is compiled from, and its headers (not the generated ones)."""
     framework, functions = FRAMEWORKS[fmi_version]
-    return [MODELS[component.model_identifier], *COMMON, framework], [*HEADERS, functions]
+    return [component.native, *COMMON, framework], [*HEADERS, functions]
 
 
 def compiled(component, fmi_version):
@@ -334,13 +337,12 @@ def build_native(out_dir, kinds, required=False, log=print, record=None):
     C compiler: a warning and nothing built, or NativeUnavailable when ``required``. With a
     ``record`` (:class:`.incremental.Record`), an FMU made from the same inputs before is kept.
     """
-    from crane_fmu import components
     from crane_fmu.build_scripts import incremental
     from crane_fmu.build_scripts.build_fmus import fmi3_dir
 
     record = record or incremental.Record()  # keeps nothing
 
-    if not any(kind in MODELS for kind in kinds):
+    if not set(kinds) & set(ported()):
         return []
     try:
         tools = compilers()
@@ -355,7 +357,7 @@ def build_native(out_dir, kinds, required=False, log=print, record=None):
     for version, python_dir in ((2, Path(out_dir)), (3, fmi3_dir(out_dir))):
         for kind in kinds:
             folder, python = native_dir(out_dir, version), python_dir / f"{kind}.fmu"
-            if kind in MODELS:
+            if components.get(kind).native:
                 component = components.get(kind)
                 paths.append(record.make(folder / f"{kind}.fmu", incremental.native_key(component, version, tools),
                                          lambda c=component, v=version, f=folder: build_native_fmu(c, f, v, tools)))

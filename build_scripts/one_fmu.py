@@ -10,12 +10,10 @@ communication step must be a whole multiple of that step.
 Each component's model file is compiled once, as in its own FMU: it registers ``<Kind>_MODEL``, which
 the system reaches through the model interface.
 
-The FMU's interface is that of fmpy's container (``crane_fmu/container.py``): the plant's outputs and
-the controller's ``u``; ``m1``, ``m2``, ``l1``, ``l2`` (to the plant, controller and planner that have
-them and agree with the first of them on its value: hoist-transport's planner, designed for l1 = 1.5 m,
-keeps its own l1), ``x_d`` (to the planner if there is one, else to the controller) and ``theta1_0`` (to the
-plant) as parameters, whose start values are the system's; the plant's inputs that nothing inside
-feeds (``F1``, ``F2``, ``hoist``) as inputs. A parameter reaches the instances only when a host sets it.
+The FMU's interface is the closed loop's, chosen once for it and fmpy's container (``crane_fmu/closed_loop.py``):
+the plant's outputs and the controller's ``u``; the masses and lengths, ``x_d`` and ``theta1_0`` as
+parameters, whose start values are the system's; the plant's inputs that nothing inside feeds as inputs.
+A parameter reaches the instances only when a host sets it.
 """
 
 import hashlib
@@ -27,14 +25,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
 
-from crane_fmu import components
+from crane_fmu import closed_loop, components
+from crane_fmu import systems as registry
 from crane_fmu.build_scripts import native
 from crane_fmu.build_scripts.model_description import system_dependencies
 from crane_fmu.cosim.connections import connect
-
-ONE_FMUS = ("paper", "lqr", "energy", "transport", "hoist-transport")  # built by default, once their models are native
-SHARED = ("m1", "m2", "l1", "l2")
-MODELERS = ("plant", "controller", "planner")  # the instances that model the crane (the container's choice)
 
 
 def one_fmu_name(system_name):
@@ -42,17 +37,9 @@ def one_fmu_name(system_name):
     return "Crane" + "".join(part.capitalize() for part in re.split(r"[-_ ]", system_name) if part)
 
 
-def instance_kinds(system):
-    """``{instance: model identifier}``; an instance given as an ``.fmu`` file is named by its modelDescription."""
-    from crane_fmu.cosim.instance import read_fmu
-
-    return {name: read_fmu(source).coSimulation.modelIdentifier if str(source).endswith(".fmu") else source
-            for name, source in system.instances.items()}
-
-
 def not_native(system):
     """The model identifiers of the system's instances that have no native model yet (sorted)."""
-    return sorted({kind for kind in instance_kinds(system).values() if kind not in native.MODELS})
+    return sorted({kind for kind in registry.kinds(system).values() if kind not in native.ported()})
 
 
 @dataclass(frozen=True)
@@ -91,11 +78,11 @@ class Plan:
 
 def plan(system):
     """The :class:`Plan` of a system whose components all have native models; ValueError (one line) else."""
-    kinds = instance_kinds(system)
+    kinds = registry.kinds(system)
     missing = not_native(system)
     if missing:
         raise ValueError(f"system {system.name}: {', '.join(missing)} has no native model (ported: "
-                         f"{', '.join(native.MODELS)})")
+                         f"{', '.join(native.ported())})")
     tables = {name: {v.name: v for v in components.get(kind).variables} for name, kind in kinds.items()}
     names = {name: {c: [n for n, v in table.items() if v.causality == c] for c in ("input", "output")}
              for name, table in tables.items()}
@@ -112,7 +99,7 @@ def plan(system):
         exchange += [("write", name), ("read", name)] if feedthrough[name] else [("read", name)]
     exchange += [("write", name) for name in order if not feedthrough[name]]
     exchange = [(op, name) for op, name in exchange if op == "read" or inputs[name]]
-    variables, links = _interface(system, tables, inputs)
+    variables, links = _interface(system, kinds, tables, inputs)
     dependencies = system_dependencies(
         {name: components.get(kind).dependencies() for name, kind in kinds.items()}, connections,
         {v.name: links[v.name][0] for v in variables if v.causality == "output"},
@@ -136,53 +123,29 @@ def _dependency_order(kinds, connections, feedthrough):
 
 
 def _values(system, tables):
-    """The system's parameter values by instance, with ``h`` set to the system's step where a component has it."""
-    values = {name: dict(system.parameters.get(name, {})) for name in tables}
+    """The prepared system's values by instance (``h`` = the system's step where a component has it)."""
+    prepared = registry.prepare(system, check=False)  # the components' rules apply inside the FMU
+    values = {name: dict(prepared.parameters.get(name, {})) for name in tables}
     for name, table in tables.items():
-        if "h" in table and table["h"].causality == "parameter":
-            values[name].setdefault("h", system.step)
         for variable in values[name]:
             if variable not in table or table[variable].causality == "output":
                 raise ValueError(f"{name} has no parameter or input {variable!r}")
     return values
 
 
-def _interface(system, tables, inputs):
-    """The container's interface (module docstring): ``(variables, links)``."""
-    if "plant" not in tables:
-        raise ValueError(f"system {system.name} has no instance named plant to expose")
+def _interface(system, kinds, tables, inputs):
+    """The closed loop's interface (``crane_fmu.closed_loop``): ``(variables, links)``."""
+    exposed = closed_loop.interface(system, kinds, {name: {n: (v.causality, v.start) for n, v in table.items()}
+                                                    for name, table in tables.items()},
+                                    {(name, input_) for name, items in inputs.items() for input_, _ in items})
     variables, links = [], {}
-
-    def start(instance, name):
-        return system.parameters.get(instance, {}).get(name, tables[instance][name].start)
-
-    def expose(name, targets, start_value=None):
-        first = tables[targets[0][0]][targets[0][1]]
+    for e in exposed:
+        first = tables[e.targets[0][0]][e.targets[0][1]]
         description = first.description
-        if first.causality != "output":
-            description += f" (sets {', '.join(f'{i}.{n}' for i, n in targets)})"
-        variables.append(first._replace(name=name, start=start_value, description=description))
-        links[name] = targets
-
-    for name in SHARED:
-        holders = [i for i in MODELERS
-                   if i in tables and name in tables[i] and tables[i][name].causality == "parameter"]
-        if holders:  # those that agree with the first: a host setting the start value then changes nothing
-            value = start(holders[0], name)
-            expose(name, [(i, name) for i in holders if start(i, name) == value], value)
-    target = "planner" if "planner" in tables else "controller" if "controller" in tables else None
-    if target and "x_d" in tables[target]:
-        expose("x_d", [(target, "x_d")], start(target, "x_d"))
-    expose("theta1_0", [("plant", "theta1_0")], start("plant", "theta1_0"))
-    fed = {name for name, _ in inputs["plant"]}
-    for name, v in tables["plant"].items():
-        if v.causality == "input" and name not in fed:
-            expose(name, [("plant", name)], start("plant", name))
-    for name, v in tables["plant"].items():
-        if v.causality == "output":
-            expose(name, [("plant", name)])
-    if "controller" in tables and "u" in tables["controller"]:
-        expose("u", [("controller", "u")])
+        if e.causality != "output":
+            description += f" (sets {', '.join(f'{i}.{n}' for i, n in e.targets)})"
+        variables.append(first._replace(name=e.name, start=e.start, description=description))
+        links[e.name] = e.targets
     return tuple(variables), links
 
 
@@ -280,7 +243,7 @@ static const Link LINKS[N_LINKS] = {{
 def copied_sources(kinds, fmi_version):
     """The C files of fmu_src a one-FMU of components ``kinds`` is compiled from, and its headers (besides the
     generated ones)."""
-    return [*(native.MODELS[k] for k in kinds), *native.COMMON, "system.c", native.FRAMEWORKS[fmi_version][0],
+    return [*(components.get(k).native for k in kinds), *native.COMMON, "system.c", native.FRAMEWORKS[fmi_version][0],
             *native.HEADERS, "system.h", native.FRAMEWORKS[fmi_version][1]]
 
 
@@ -291,7 +254,7 @@ def build_one_fmu(system, out_dir, fmi_version=2, name=None, tools=None):
     p = plan(system)
     kinds = list(dict.fromkeys(p.kinds.values()))
     framework = native.FRAMEWORKS[fmi_version]
-    compiled = [*(native.MODELS[k] for k in kinds), *native.COMMON, "system.c", framework[0], "fmu_model.c"]
+    compiled = [*(components.get(k).native for k in kinds), *native.COMMON, "system.c", framework[0], "fmu_model.c"]
     with tempfile.TemporaryDirectory(prefix="crane_one_fmu_") as tmp:
         sources = Path(tmp) / "sources"
         native.copy_sources(copied_sources(kinds, fmi_version), sources)
@@ -315,18 +278,17 @@ def build_one_fmu(system, out_dir, fmi_version=2, name=None, tools=None):
 
 def build_one_fmus(out_dir, systems=None, kinds=None, log=print, record=None):
     """The one-FMUs (FMI 2.0 into ``build/native``, 3.0 into its ``fmi3``) of ``systems`` (names or System
-    objects; default: those of :data:`ONE_FMUS` made of the components ``kinds`` (default: any) whose
-    components are all native, with a note for the others); their paths. With a ``record``
+    objects; default: the built-in systems tagged ``one-fmu`` made of the components ``kinds`` (default:
+    any) whose components are all native, with a note for the others); their paths. With a ``record``
     (:class:`.incremental.Record`), a one-FMU made from the same inputs before is kept."""
-    from crane_fmu import systems as registry
     from crane_fmu.build_scripts import incremental
 
     record = record or incremental.Record()  # keeps nothing
 
     if systems is None:
         systems = []
-        for system_name in ONE_FMUS:
-            if kinds is not None and not set(instance_kinds(registry.get(system_name)).values()) <= set(kinds):
+        for system_name in registry.tagged("one-fmu"):
+            if kinds is not None and not set(registry.kinds(registry.get(system_name)).values()) <= set(kinds):
                 continue
             missing = not_native(registry.get(system_name))
             if missing:
@@ -337,7 +299,7 @@ def build_one_fmus(out_dir, systems=None, kinds=None, log=print, record=None):
     paths = []
     for system in systems:
         system = registry.get(system) if isinstance(system, str) else system
-        kinds_used = list(dict.fromkeys(instance_kinds(system).values()))
+        kinds_used = list(dict.fromkeys(registry.kinds(system).values()))
         for version in (2, 3):
             folder = native.native_dir(out_dir, version)
             paths.append(record.make(folder / f"{one_fmu_name(system.name)}.fmu",

@@ -64,7 +64,7 @@ def run_native_bench(stop_time=20.0, step=1e-3, repeat=5, out=print):
         shutil.copy(built / "BacksteppingController.fmu", mixed)
         anchor = [str(p) for p in build_anchor(tmp / "anchor")]
         host, libraries, vrs = _c_host(tmp, native)
-        paper = systems.at_step(systems.get("paper"), native, step)
+        paper = systems.prepare(systems.get("paper"), step, stop_time)
         command = Path(sys.executable).parent / "crane-fmu"
         command = [str(command)] if command.exists() else [sys.executable, "-m", "crane_fmu"]
         simulate = [*command, "simulate", "--fmu-dir", str(native), "--stop-time", repr(stop_time), "--step",
@@ -72,9 +72,8 @@ def run_native_bench(stop_time=20.0, step=1e-3, repeat=5, out=print):
         anchor_loop = [sys.executable, "-c", ANCHOR_LOOP, *anchor, str(n), repr(step)]
         times = {name: [] for name in ("with_python", "pair_csv", "c_host_pair", "process", "anchor_process")}
         for _ in range(repeat):  # alternate, so drifts in machine load hit all
-            with_python = systems.at_step(systems.get("paper"), mixed, step)
-            times["with_python"].append(_timed_run(with_python, mixed, stop_time, step, tmp / "mixed.csv")[0] / n)
-            times["pair_csv"].append(_timed_run(paper, native, stop_time, step, tmp / "pair.csv")[0] / n)
+            times["with_python"].append(_timed_run(paper, mixed, tmp / "mixed.csv")[0] / n)
+            times["pair_csv"].append(_timed_run(paper, native, tmp / "pair.csv")[0] / n)
             done = subprocess.run([str(host), "pair-bench", *libraries, str(n), repr(step), *vrs], check=True,
                                   capture_output=True, text=True)
             times["c_host_pair"].append(float(done.stdout))

@@ -89,8 +89,8 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), quick=False):
                                 "error": str(exc)})
                 continue
             for label, system, step, stop_time, x_d in runs:
-                system = systems.at_step(system, fmu_dir, step)
                 fmus, connections = systems.resolve(system, fmu_dir)
+                system = systems.prepare(system, step, stop_time, check=False)
                 hashes = {}
                 for name, path in fmus.items():
                     if path not in digests:  # each FMU file read once
@@ -104,7 +104,7 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), quick=False):
                         "keep_signals": sid in ANIMATE and len(runs) == 1}
                 case["case_id"] = hashlib.sha256(json.dumps(case, sort_keys=True).encode()).hexdigest()[:16]
                 try:
-                    systems.check_parameters(system, fmu_dir)
+                    systems.check_parameters(system)
                 except ValueError as exc:
                     refused.append({**_identity(case), "status": "invalid", "error": str(exc)})
                     continue

@@ -16,7 +16,7 @@ from fmpy import read_model_description
 from native_fmus import open_native
 
 from crane_fmu import components, systems
-from crane_fmu.build_scripts.build_fmus import CONTAINERS, container_name, containers_dir, fmi3_dir
+from crane_fmu.build_scripts.build_fmus import container_name, containers_dir, fmi3_dir
 from crane_fmu.build_scripts.native import MODELS, native_dir
 from crane_fmu.build_scripts.one_fmu import ONE_FMUS, not_native, one_fmu_name
 
@@ -33,7 +33,7 @@ def _paths(fmu_dir, kind, version):
         folder = fmu_dir if version == 2 else fmi3_dir(fmu_dir)
         return [folder / f"{c.model_identifier}.fmu" for c in components.registered() if c.role != "benchmark"]
     if kind == "container":
-        return [containers_dir(fmu_dir) / f"{container_name(name)}.fmu" for name in CONTAINERS]
+        return [containers_dir(fmu_dir) / f"{container_name(name)}.fmu" for name in systems.tagged("container")]
     folder = native_dir(fmu_dir, version)
     if not (folder / "CranePlant.fmu").exists():
         pytest.skip("no native FMUs were built (no C compiler)")

@@ -25,7 +25,7 @@ from native_fmus import close, compiler, messages, open_native, steps_after_rest
 from crane_fmu import components, systems
 from crane_fmu.analysis.scoreboard import Contender, systems_for
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
-from crane_fmu.build_scripts.native import FOLDERS, HOST, MINGW, MODELS_DIR, native_dir, source, variables_header
+from crane_fmu.build_scripts.native import FOLDERS, HOST, MINGW, MODELS_DIR, native_dir, source_path, variables_header
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cosim import System, run
 
@@ -99,7 +99,7 @@ def test_the_model_files_compile_without_warnings_under_strict_flags(tmp_path, o
     for name in NAMES:
         (tmp_path / f"{name}_variables.h").write_text(variables_header(components.get(name)))
     for name in ("planner.c", "energy.c", "gust.c", "sensor.c", "component.c", "portable_math.c"):
-        subprocess.run([compiler(), *flags, f"-I{tmp_path}", *(f"-I{folder}" for folder in FOLDERS), str(source(name)),
+        subprocess.run([compiler(), *flags, f"-I{tmp_path}", *(f"-I{folder}" for folder in FOLDERS), str(source_path(name)),
                         "-o", str(tmp_path / "m.o")], check=True)
 
 

@@ -28,7 +28,7 @@ def run_case(case, fmu_dir, csv_dir):
     recorder = ArrayRecorder()
     error = None
     try:
-        run(system.with_parameters(parameters), fmu_dir, recorder=recorder, stop_time=case.stop_time, step=case.step)
+        run(systems.prepare(system, case.step, case.stop_time, [parameters], check=False), fmu_dir, recorder=recorder)
     except FmiError as exc:
         error = str(exc)
     columns = recorder.columns()

@@ -147,7 +147,7 @@ def _serve(args, system):
         watchdog = None
         if args.external and not args.lock_step:
             watchdog = Watchdog(1.0 if args.watchdog is None else args.watchdog, args.hold)
-        master = Master(instances, connections, args.master)
+        master = Master(instances, connections, args.algorithm)
         runner = Runner(master, system.start_time, step, stop_time, system.parameters, lock_step=args.lock_step,
                         period_steps=period_steps, watchdog=watchdog, writable=args.writable, log=_say)
         if args.print_map:

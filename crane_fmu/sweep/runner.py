@@ -77,7 +77,7 @@ def run_case(case, system, settings, metric_names):
     recorder = ArrayRecorder()
     try:
         simulate(local_fmus(system["blobs"]), system["connections"], settings["stop_time"], settings["step"],
-                 settings["master"], case_parameters(case, system["parameters"]), recorder)
+                 settings["algorithm"], case_parameters(case, system["parameters"]), recorder)
     except FmiError as exc:
         row.update(status="failed", error=str(exc))
     values = dict.fromkeys(metric_names)
@@ -127,11 +127,11 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
         out_dir.mkdir(parents=True, exist_ok=True)  # only now: a refused study leaves no folder behind
         bar = Progress(len(cases), len(cases) - len(pending), failed=failed_before) if progress else None
         if pending:
-            shipped = shippable(systems.at_step(system, fmu_dir, study.step), fmu_dir)
+            shipped = shippable(systems.prepare(system, study.step, study.stop_time, check=False), fmu_dir)
             to_run, invalid = [], []
             for case in pending:  # the model's parameter rules, before anything is shipped
                 try:
-                    systems.check_parameters(system.with_parameters(case_parameters(case)), fmu_dir)
+                    systems.check_parameters(system.with_parameters(case_parameters(case)))
                     to_run.append(case)
                 except ValueError as exc:
                     invalid.append(_invalid_row(case, settings, str(exc), study.metrics))
