@@ -74,7 +74,7 @@ def _paced(system, fmu_dir, period, seconds, csv, priority=None):
 
 
 def _paced_run(system, fmu_dir, period, seconds, csv):
-    system = systems.at_step(system, fmu_dir, 1e-3)
+    system = systems.prepare(system, 1e-3, seconds)
     fmus, connections = system.resolve(fmu_dir)
     instances = {name: open_instance(path, name) for name, path in fmus.items()}
     try:
