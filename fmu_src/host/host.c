@@ -316,85 +316,121 @@ static int outputs3(const char *library, const char *token, int steps, double h,
     return ok;
 }
 
+/* ---- the modes: each gets its arguments after LIB GUID and returns the exit status ---------------------------- */
+
+#define VR(text) ((fmi2ValueReference)atoi(text))
+
+static int mode_outputs(const Api *api, const char *mode, int n, char **a) { /* STEPS H [VR=VALUE]... VR... */
+    (void)mode;
+    return n >= 2 && outputs(api, atoi(a[0]), atof(a[1]), n - 2, a + 2) ? 0 : 6;
+}
+
+static int mode_pair(const Api *api, const char *mode, int n, char **a) { /* CLIB CGUID STEPS H X U CX CU */
+    if (n != 8) return 2;
+    Api law = load(a[0], a[1]);
+    int bench = !strcmp(mode, "pair-bench");
+    double per_step = pair(api, &law, (Loop){VR(a[4]), VR(a[5]), VR(a[6]), VR(a[7])}, atoi(a[2]), atof(a[3]),
+                           bench ? NULL : stdout);
+    if (bench) printf("%.9g\n", per_step);
+    return 0;
+}
+
+static int mode_run(const Api *api, const char *mode, int n, char **a) { /* STEPS H X */
+    (void)mode;
+    if (n != 3) return 2;
+    int steps = atoi(a[0]);
+    double *rows = rows_for(steps);
+    fmi2Component c = start(api, 0, NULL, NULL);
+    if (!c || !run(api, c, VR(a[2]), steps, atof(a[1]), rows)) return 6;
+    api->free_instance(c);
+    print_rows(rows, steps);
+    return 0;
+}
+
+static int mode_cycles(const Api *api, const char *mode, int n, char **a) { /* N X */
+    (void)mode;
+    if (n != 2) return 2;
+    quiet = 1;
+    double rows[7 * 11];
+    for (int i = 1; i <= atoi(a[0]); i++) {
+        fmi2Component c = start(api, 0, NULL, NULL);
+        if (!c || !run(api, c, VR(a[1]), 10, 1e-3, rows)) return 6;
+        api->free_instance(c);
+        if (i % 1000 == 0) printf("%d,%ld\n", i, rss_kb());
+    }
+    return 0;
+}
+
+static int mode_after_failure(const Api *api, const char *mode, int n, char **a) { /* STEPS H X VR=VALUE */
+    (void)mode;
+    fmi2ValueReference bad_vr;
+    double bad;
+    size_t n_bad, n_get;
+    if (n != 4 || !parse_vrs(1, a + 3, &bad_vr, &bad, &n_bad, &bad_vr, &n_get) || n_bad != 1) return 2;
+    int steps = atoi(a[0]);
+    double *rows = rows_for(steps);
+    if (start(api, 1, &bad_vr, &bad) != NULL) return 8; /* must be refused */
+    fmi2Component c = start(api, 0, NULL, NULL);
+    if (!c || !run(api, c, VR(a[2]), steps, atof(a[1]), rows)) return 6;
+    api->free_instance(c);
+    print_rows(rows + 7 * steps, 0);
+    return 0;
+}
+
+#ifndef _WIN32
+static int mode_threads(const Api *api, const char *mode, int n, char **a) { /* STEPS H X */
+    (void)mode;
+    if (n != 3) return 2;
+    int steps = atoi(a[0]);
+    double h = atof(a[1]);
+    Job alone = {api, VR(a[2]), steps, h, rows_for(steps), 0}, jobs[2];
+    run_job(&alone);
+    pthread_t threads[2];
+    for (int i = 0; i < 2; i++) {
+        jobs[i] = (Job){api, VR(a[2]), steps, h, rows_for(steps), 0};
+        if (pthread_create(&threads[i], NULL, run_job, &jobs[i])) return 9;
+    }
+    for (int i = 0; i < 2; i++) pthread_join(threads[i], NULL);
+    size_t size = (size_t)(steps + 1) * 7 * sizeof(double);
+    int same = alone.ok && jobs[0].ok && jobs[1].ok && !memcmp(alone.rows, jobs[0].rows, size) &&
+               !memcmp(alone.rows, jobs[1].rows, size);
+    printf(same ? "same\n" : "differ\n");
+    return 0;
+}
+
+static int mode_maps(const Api *api, const char *mode, int n, char **a) {
+    (void)mode, (void)n, (void)a;
+    fmi2Component c = start(api, 0, NULL, NULL);
+    if (!c) return 6;
+    FILE *f = fopen("/proc/self/maps", "r");
+    char line[4096];
+    while (f && fgets(line, sizeof line, f))
+        if (strstr(line, "python")) fputs(line, stdout);
+    if (f) fclose(f);
+    api->free_instance(c);
+    return 0;
+}
+#endif
+
+static const struct {
+    const char *name;
+    int (*run)(const Api *api, const char *mode, int n, char **args);
+} MODES[] = {{"outputs", mode_outputs}, {"pair", mode_pair}, {"pair-bench", mode_pair}, {"run", mode_run},
+             {"cycles", mode_cycles}, {"after-failure", mode_after_failure},
+#ifndef _WIN32
+             {"threads", mode_threads}, {"maps", mode_maps},
+#endif
+};
+
 int main(int argc, char **argv) {
     if (argc < 4) return 2;
-    const char *command = argv[1];
-    if (!strcmp(command, "outputs3") && argc >= 7)
-        return outputs3(argv[2], argv[3], atoi(argv[4]), atof(argv[5]), argc - 6, argv + 6) ? 0 : 6;
-    Api api = load(argv[2], argv[3]);
-    if ((!strcmp(command, "pair") || !strcmp(command, "pair-bench")) && argc == 12) {
-        Api law = load(argv[4], argv[5]);
-        int bench = !strcmp(command, "pair-bench");
-        Loop vr = {(fmi2ValueReference)atoi(argv[8]), (fmi2ValueReference)atoi(argv[9]),
-                   (fmi2ValueReference)atoi(argv[10]), (fmi2ValueReference)atoi(argv[11])};
-        double per_step = pair(&api, &law, vr, atoi(argv[6]), atof(argv[7]), bench ? NULL : stdout);
-        if (bench) printf("%.9g\n", per_step);
-        return 0;
-    }
-    if (!strcmp(command, "outputs") && argc >= 7) return outputs(&api, atoi(argv[4]), atof(argv[5]), argc - 6, argv + 6) ? 0 : 6;
-    if (!strcmp(command, "run") && argc == 7) {
-        int steps = atoi(argv[4]);
-        double *rows = rows_for(steps);
-        fmi2Component c = start(&api, 0, NULL, NULL);
-        if (!c || !run(&api, c, (fmi2ValueReference)atoi(argv[6]), steps, atof(argv[5]), rows)) return 6;
-        api.free_instance(c);
-        print_rows(rows, steps);
-        return 0;
-    }
-    if (!strcmp(command, "cycles") && argc == 6) {
-        quiet = 1;
-        double rows[7 * 11];
-        for (int i = 1; i <= atoi(argv[4]); i++) {
-            fmi2Component c = start(&api, 0, NULL, NULL);
-            if (!c || !run(&api, c, (fmi2ValueReference)atoi(argv[5]), 10, 1e-3, rows)) return 6;
-            api.free_instance(c);
-            if (i % 1000 == 0) printf("%d,%ld\n", i, rss_kb());
+    const char *mode = argv[1];
+    if (!strcmp(mode, "outputs3"))
+        return argc >= 6 && outputs3(argv[2], argv[3], atoi(argv[4]), atof(argv[5]), argc - 6, argv + 6) ? 0 : 6;
+    for (size_t i = 0; i < sizeof MODES / sizeof *MODES; i++)
+        if (!strcmp(mode, MODES[i].name)) {
+            Api api = load(argv[2], argv[3]);
+            return MODES[i].run(&api, mode, argc - 4, argv + 4);
         }
-        return 0;
-    }
-    if (!strcmp(command, "after-failure") && argc == 8) {
-        int steps = atoi(argv[4]);
-        double h = atof(argv[5]), *rows = rows_for(steps), bad;
-        fmi2ValueReference bad_vr;
-        size_t n_bad, n_get;
-        if (!parse_vrs(1, argv + 7, &bad_vr, &bad, &n_bad, &bad_vr, &n_get) || n_bad != 1) return 2;
-        if (start(&api, 1, &bad_vr, &bad) != NULL) return 8; /* must be refused */
-        fmi2Component c = start(&api, 0, NULL, NULL);
-        if (!c || !run(&api, c, (fmi2ValueReference)atoi(argv[6]), steps, h, rows)) return 6;
-        api.free_instance(c);
-        print_rows(rows + 7 * steps, 0);
-        return 0;
-    }
-#ifndef _WIN32
-    if (!strcmp(command, "threads") && argc == 7) {
-        int steps = atoi(argv[4]);
-        double h = atof(argv[5]);
-        fmi2ValueReference x = (fmi2ValueReference)atoi(argv[6]);
-        Job alone = {&api, x, steps, h, rows_for(steps), 0}, jobs[2];
-        run_job(&alone);
-        pthread_t threads[2];
-        for (int i = 0; i < 2; i++) {
-            jobs[i] = (Job){&api, x, steps, h, rows_for(steps), 0};
-            if (pthread_create(&threads[i], NULL, run_job, &jobs[i])) return 9;
-        }
-        for (int i = 0; i < 2; i++) pthread_join(threads[i], NULL);
-        size_t size = (size_t)(steps + 1) * 7 * sizeof(double);
-        int same = alone.ok && jobs[0].ok && jobs[1].ok && !memcmp(alone.rows, jobs[0].rows, size) &&
-                   !memcmp(alone.rows, jobs[1].rows, size);
-        printf(same ? "same\n" : "differ\n");
-        return 0;
-    }
-    if (!strcmp(command, "maps")) {
-        fmi2Component c = start(&api, 0, NULL, NULL);
-        if (!c) return 6;
-        FILE *f = fopen("/proc/self/maps", "r");
-        char line[4096];
-        while (f && fgets(line, sizeof line, f))
-            if (strstr(line, "python")) fputs(line, stdout);
-        if (f) fclose(f);
-        api.free_instance(c);
-        return 0;
-    }
-#endif
     return 2;
 }
