@@ -33,6 +33,8 @@ from pathlib import Path
 
 import crane_fmu.fmu_src as fmu_src
 from crane_fmu import components
+from crane_fmu.build_scripts import incremental
+from crane_fmu.build_scripts.folders import fmi3_dir, native_dir
 from crane_fmu.build_scripts.model_description import _unit_definitions, postprocess, postprocess3
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.model.tables import DISPLAY_UNITS, xml_double
@@ -55,12 +57,6 @@ MINGW = "x86_64-w64-mingw32-gcc"
 
 class NativeUnavailable(RuntimeError):
     """No C compiler for the native FMUs here."""
-
-
-def native_dir(out_dir, fmi_version=2):
-    """Where the native FMUs go: ``build/native`` (FMI 2.0) and ``build/native/fmi3`` beside ``build/fmus``."""
-    base = Path(out_dir).parent / "native"
-    return base if fmi_version == 2 else base / "fmi3"
 
 
 def compilers():
@@ -337,9 +333,6 @@ def build_native(out_dir, kinds, required=False, log=print, record=None):
     C compiler: a warning and nothing built, or NativeUnavailable when ``required``. With a
     ``record`` (:class:`.incremental.Record`), an FMU made from the same inputs before is kept.
     """
-    from crane_fmu.build_scripts import incremental
-    from crane_fmu.build_scripts.build_fmus import fmi3_dir
-
     record = record or incremental.Record()  # keeps nothing
 
     if not set(kinds) & set(ported()):
@@ -359,7 +352,9 @@ def build_native(out_dir, kinds, required=False, log=print, record=None):
             folder, python = native_dir(out_dir, version), python_dir / f"{kind}.fmu"
             if components.get(kind).native:
                 component = components.get(kind)
-                paths.append(record.make(folder / f"{kind}.fmu", incremental.native_key(component, version, tools),
+                files = [source_path(name) for group in _sources(component, version) for name in group]
+                paths.append(record.make(folder / f"{kind}.fmu", incremental.native_key(component, version, tools,
+                                                                                        files),
                                          lambda c=component, v=version, f=folder: build_native_fmu(c, f, v, tools)))
             elif python.exists():  # not ported yet: the Python FMU
                 folder.mkdir(parents=True, exist_ok=True)

@@ -27,7 +27,7 @@ from types import SimpleNamespace
 
 from crane_fmu import closed_loop, components
 from crane_fmu import systems as registry
-from crane_fmu.build_scripts import native
+from crane_fmu.build_scripts import incremental, native
 from crane_fmu.build_scripts.model_description import system_dependencies
 from crane_fmu.cosim.connections import connect
 
@@ -281,8 +281,6 @@ def build_one_fmus(out_dir, systems=None, kinds=None, log=print, record=None):
     objects; default: the built-in systems tagged ``one-fmu`` made of the components ``kinds`` (default:
     any) whose components are all native, with a note for the others); their paths. With a ``record``
     (:class:`.incremental.Record`), a one-FMU made from the same inputs before is kept."""
-    from crane_fmu.build_scripts import incremental
-
     record = record or incremental.Record()  # keeps nothing
 
     if systems is None:
@@ -303,6 +301,7 @@ def build_one_fmus(out_dir, systems=None, kinds=None, log=print, record=None):
         for version in (2, 3):
             folder = native.native_dir(out_dir, version)
             paths.append(record.make(folder / f"{one_fmu_name(system.name)}.fmu",
-                                     incremental.one_fmu_key(system, kinds_used, version, tools),
+                                     incremental.one_fmu_key(system, kinds_used, version, tools, [
+                                         native.source_path(name) for name in copied_sources(kinds_used, version)]),
                                      lambda s=system, f=folder, v=version: build_one_fmu(s, f, v, tools=tools)))
     return paths

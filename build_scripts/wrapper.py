@@ -17,6 +17,8 @@ import sys
 import sysconfig
 from pathlib import Path
 
+import fmpy
+
 import crane_fmu.fmu_src as fmu_src
 
 SOURCES = Path(fmu_src.__file__).parent
@@ -31,8 +33,6 @@ class WrapperUnavailable(RuntimeError):
 
 def fmi_headers():
     """The folder of the official FMI 2.0 and 3.0 headers, as shipped by fmpy."""
-    import fmpy
-
     folder = Path(fmpy.__file__).parent / "c-code"
     if not (folder / "fmi2Functions.h").exists() or not (folder / "fmi3Functions.h").exists():
         raise WrapperUnavailable(f"fmpy's FMI headers are missing from {folder}")

@@ -14,12 +14,16 @@ import subprocess
 import sys
 import tempfile
 import time
+from array import array
+from contextlib import ExitStack
 from pathlib import Path
 
 from crane_fmu import components, systems
 from crane_fmu.build_scripts.build_fmus import build_all
 from crane_fmu.cosim import CsvRecorder, Master, open_instance
 from crane_fmu.cosim.master import communication_points
+from crane_fmu.sweep import spec
+from crane_fmu.sweep.runner import run_case, shippable
 
 
 def _open(system, fmu_dir):
@@ -128,7 +132,7 @@ print(time.perf_counter() - start, ys[0])
 
 def build_anchor(out_dir):
     """The anchor's two FMUs, built by stock pythonfmu with its own binary; ``(plant, controller)``."""
-    from pythonfmu import FmuBuilder
+    from pythonfmu import FmuBuilder  # build time only, as in build_fmus.py
 
     out_dir = Path(out_dir)
     paths = []
@@ -149,8 +153,6 @@ def _process_seconds(command):
 
 def _plain_loop(system, stop_time, step, csv_path):
     """The system's models called directly in a Python loop, recorded like the master's run; seconds."""
-    from array import array
-
     n = communication_points(0.0, stop_time, step)
     models, configs, states, names = {}, {}, {}, []
     for name, identifier in system.instances.items():
@@ -249,12 +251,8 @@ def run_sweep_bench(n_cases=16, stop_time=10.0, step=1e-3, repeat=3, out=print):
     overhead is the wall time per case with one worker minus the mean time the
     case itself took inside the worker.
     """
-    from contextlib import ExitStack
+    from distributed import Client, LocalCluster  # optional: the dask extra
 
-    from distributed import Client, LocalCluster
-
-    from crane_fmu.sweep import spec
-    from crane_fmu.sweep.runner import run_case, shippable
 
     study = spec.parse({"stop_time": stop_time, "step": step, "metrics": ["outcome", "max_theta1_deg"]})
     settings, metrics = study.settings(), study.metrics

@@ -11,6 +11,7 @@
 """
 
 import asyncio
+import os
 import re
 import select
 import signal
@@ -26,6 +27,8 @@ from crane_fmu.build_scripts.build_fmus import build_all
 from crane_fmu.cosim import CsvRecorder, Master, open_instance
 from crane_fmu.cosim.pacing import percentile
 from crane_fmu.cosim.realtime import Runner
+from crane_fmu.model import lqr
+from crane_fmu.serve.modbus import FIRST_HOLDING, float32_words, words_float32
 
 STATE = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2")
 RT_PRIORITY = 10  # as in the docs' example of serve --rt-priority
@@ -58,8 +61,6 @@ def run_realtime_bench(seconds=2.0, round_trips=500, out=print):
 def _paced(system, fmu_dir, period, seconds, csv, priority=None):
     """The lqr system in real time at cycles of ``period`` (its step 1 ms) for ``seconds``: the Timing; with a
     ``priority``, under SCHED_FIFO as ``serve --rt-priority`` runs it (None where that is not permitted)."""
-    import os
-
     if priority:
         try:
             before = (os.sched_getscheduler(0), os.sched_getparam(0))
@@ -125,9 +126,8 @@ def _round_trips(fmu_dir, tmp, n, out):
 
 
 async def _opcua_round_trips(url, n):
-    from asyncua import Client, ua
+    from asyncua import Client, ua  # optional: the serve extra
 
-    from crane_fmu.model import lqr
 
     law = lqr.COMPONENT.check({"h": 1e-3})
     async with Client(url) as client:
@@ -152,10 +152,8 @@ async def _opcua_round_trips(url, n):
 
 def _modbus_round_trips(host, port, first, n):
     """``first``: the input register of controller.x, the first of the six measured states."""
-    from pymodbus.client import ModbusTcpClient
+    from pymodbus.client import ModbusTcpClient  # optional: the serve extra
 
-    from crane_fmu.model import lqr
-    from crane_fmu.serve.modbus import FIRST_HOLDING, float32_words, words_float32
 
     law = lqr.COMPONENT.check({"h": 1e-3})
     client = ModbusTcpClient(host, port=port, timeout=10)

@@ -21,18 +21,18 @@ import tempfile
 import uuid
 from pathlib import Path
 
+import attrs
+from fmpy import read_model_description
+from fmpy.container_fmu import Configuration
+from fmpy.container_fmu.cli import create_container_fmu
+from fmpy.container_fmu.config import Component, Connection
+from fmpy.model_description import CoSimulation, DefaultExperiment, ModelDescription, ModelVariable, Unknown
+
 from crane_fmu import closed_loop
 
 
 def build_container(system, fmu_dir, path):
     """Write ``system`` (FMUs in ``fmu_dir`` or named by path) as one container FMU at ``path``; return it."""
-    import attrs
-    from fmpy import read_model_description
-    from fmpy.container_fmu import Configuration
-    from fmpy.container_fmu.cli import create_container_fmu
-    from fmpy.container_fmu.config import Component, Connection
-    from fmpy.model_description import CoSimulation, DefaultExperiment, ModelDescription, ModelVariable, Unknown
-
     fmus, connections = system.resolve(fmu_dir)
     components = {name: Component(name=name, filename=Path(path_), modelDescription=read_model_description(path_))
                   for name, path_ in fmus.items()}

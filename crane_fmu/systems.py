@@ -18,6 +18,7 @@ from pathlib import Path
 from crane_fmu import components
 from crane_fmu.controller_interface import MEASURED, TRACKED, told
 from crane_fmu.cosim.connections import Connection
+from crane_fmu.cosim.ssp import load_system
 from crane_fmu.cosim.system import System, read_fmu
 from crane_fmu.registry import Registry
 
@@ -35,8 +36,6 @@ def open_system(name_or_file):
     """Yield the system of a registered name or of an SSP file (``.ssp`` or ``.ssd``)."""
     text = str(name_or_file)
     if text.endswith((".ssp", ".ssd")):
-        from crane_fmu.cosim.ssp import load_system
-
         with load_system(text) as system:
             yield system
     else:

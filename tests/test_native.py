@@ -330,7 +330,8 @@ def test_the_model_and_framework_compile_without_warnings_under_strict_flags(tmp
     includes = [f"-I{tmp_path}", *(f"-I{folder}" for folder in FOLDERS), f"-I{fmi_headers()}"]
     for name in ("fmi2Functions.c", "fmi3Functions.c", "instance.c", "py_repr.c", "component.c", "crane_plant.c",
                  "backstepping.c", "lqr.c", "plant_equations.c", "linalg.c", "portable_math.c"):
-        subprocess.run([compiler(), *STRICT, *includes, str(source_path(name)), "-o", str(tmp_path / "f.o")], check=True)
+        subprocess.run([compiler(), *STRICT, *includes, str(source_path(name)), "-o", str(tmp_path / "f.o")],
+                       check=True)
 
 
 # ---- the build and the benchmark -----------------------------------------------------------------------------------

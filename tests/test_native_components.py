@@ -99,8 +99,8 @@ def test_the_model_files_compile_without_warnings_under_strict_flags(tmp_path, o
     for name in NAMES:
         (tmp_path / f"{name}_variables.h").write_text(variables_header(components.get(name)))
     for name in ("planner.c", "energy.c", "gust.c", "sensor.c", "component.c", "portable_math.c"):
-        subprocess.run([compiler(), *flags, f"-I{tmp_path}", *(f"-I{folder}" for folder in FOLDERS), str(source_path(name)),
-                        "-o", str(tmp_path / "m.o")], check=True)
+        subprocess.run([compiler(), *flags, f"-I{tmp_path}", *(f"-I{folder}" for folder in FOLDERS),
+                        str(source_path(name)), "-o", str(tmp_path / "m.o")], check=True)
 
 
 # ---- TrajectoryPlanner: outputs at random parameters and times ---------------------------------------------------

@@ -10,9 +10,9 @@ import math
 import os
 from collections import namedtuple
 
-from crane_fmu import systems
+from crane_fmu import components, systems
+from crane_fmu.batch import run_batch
 from crane_fmu.cosim import ArrayRecorder, FmiError, run
-from crane_fmu.sweep.batch import run_batch
 
 from . import metrics, scoreboard
 
@@ -92,8 +92,6 @@ def measure(r, fmu_dir):
     x_d = system.parameters.get("planner", {}).get("x_d", system.parameters.get("controller", {}).get("x_d", 0.0))
     move_end = 0.0
     if "planner" in system.instances:
-        from crane_fmu import components
-
         planner = components.get("TrajectoryPlanner")
         move_end = planner.check(system.parameters.get("planner", {})).end
     s = metrics.crane_signals(recorder.columns(), ("dx",))

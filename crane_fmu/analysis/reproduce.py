@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from crane_fmu import DEFAULT_FMU_DIR, systems
+from crane_fmu.batch import Progress, run_batch
 from crane_fmu.cosim import ArrayRecorder, FmiError, run, write_csv
-from crane_fmu.sweep.batch import Progress, run_batch
 
 from . import figures, metrics, paper_summary, report
 from .paper_cases import plan

@@ -1,7 +1,10 @@
 """``crane-fmu serve``: a system in real time or lock-step, reachable over OPC UA and Modbus TCP."""
 
+import gc
+import importlib.util
 import math
 import os
+import shutil
 import signal
 import sys
 import time
@@ -85,8 +88,6 @@ def timing_path(out):
 
 def _check(args, system):
     """The options' rules, before anything is loaded: ``(step, stop_time, period_steps, endpoints)``."""
-    import importlib.util
-
     from crane_fmu.cosim.master import communication_points
     from crane_fmu.serve import parse_endpoint
 
@@ -240,8 +241,6 @@ def _ready_for_real_time(out):
     """What keeps a cycle from stalling: the recorder's writer loaded now, not at its first chunk in a cycle
     (pyarrow's import takes 100 ms and more); the start-up's objects out of the garbage collector's way; and
     a thread that wakes (the runner at its deadline) given the GIL within 0.1 ms, not the default 5 ms."""
-    import gc
-
     if Path(out).suffix in (".csv", ".parquet"):
         import pyarrow.csv  # noqa: F401
     gc.collect()
@@ -319,8 +318,6 @@ class _LiveLine:
     shown = False  # a live line is on the terminal, not yet ended
 
     def __init__(self, runner):
-        import shutil
-
         self.runner, self.next = runner, 0.0
         self.width = max(20, shutil.get_terminal_size().columns - 1)
 

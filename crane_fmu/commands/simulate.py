@@ -72,8 +72,6 @@ def run(args):
 
 def _use(items, system):
     """``system`` with the FMUs of ``--use INSTANCE=FILE.fmu`` in place of its own (checked: one line each)."""
-    from pathlib import Path
-
     overrides = {}
     for item in items:
         instance, sep, path = item.partition("=")

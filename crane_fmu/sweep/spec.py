@@ -39,6 +39,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from crane_fmu import DEFAULT_SYSTEM
+from crane_fmu.cosim.algorithms import ALGORITHMS
+from crane_fmu.cosim.master import communication_points
 
 METRICS = ("outcome", "settling_band_s", "settling_0.5deg_s", "settling_0.1deg_s", "max_theta1_deg", "max_theta2_deg",
            "rms_theta1_deg", "residual_after_15s_deg", "trolley_excursion_m", "trolley_final_m", "peak_abs_u",
@@ -84,7 +86,7 @@ class Study:
     def _samples(self):
         if not self.sampled:
             return []
-        import numpy as np
+        import numpy as np  # only a sampled study needs them: scipy.stats takes about 2.5 s to import
         from scipy.stats import qmc
 
         bounds = list(self.sampled.values())
@@ -160,8 +162,6 @@ def parse(data, source="study"):
             raise ValueError(f"{source}: {key} is required")
     stop_time = _number("stop_time", data["stop_time"], "a number > 0")
     step = _number("step", data["step"], "a number > 0")
-    from crane_fmu.cosim.algorithms import ALGORITHMS
-    from crane_fmu.cosim.master import communication_points
 
     communication_points(0.0, stop_time, step)
     algorithm = data.get("algorithm", "gauss-seidel")
@@ -228,7 +228,7 @@ def load(path):
         raise ValueError(f"cannot read study file {path}: {exc.strerror}") from None
     if path.suffix in (".yaml", ".yml"):
         try:
-            import yaml
+            import yaml  # optional: PyYAML
         except ImportError:
             raise ValueError(f"{path}: YAML study files need PyYAML (pip install pyyaml)") from None
         try:
