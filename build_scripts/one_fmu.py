@@ -28,7 +28,6 @@ from types import SimpleNamespace
 from crane_fmu import closed_loop, components
 from crane_fmu import systems as registry
 from crane_fmu.build_scripts import incremental, native
-from crane_fmu.build_scripts.model_description import system_dependencies
 from crane_fmu.cosim.connections import connect
 
 
@@ -100,7 +99,7 @@ def plan(system):
     exchange += [("write", name) for name in order if not feedthrough[name]]
     exchange = [(op, name) for op, name in exchange if op == "read" or inputs[name]]
     variables, links = _interface(system, kinds, tables, inputs)
-    dependencies = system_dependencies(
+    dependencies = closed_loop.system_dependencies(
         {name: components.get(kind).dependencies() for name, kind in kinds.items()}, connections,
         {v.name: links[v.name][0] for v in variables if v.causality == "output"},
         {v.name: links[v.name] for v in variables if v.causality == "input"})

@@ -7,7 +7,8 @@ the first of them: hoist-transport's planner, designed for l1 = 1.5 m, keeps its
 that sets every parameter to its start value gets the system's own run), ``x_d`` (to the planner if
 there is one, else to the controller) and the plant's ``theta1_0``, whose start values are the system's;
 as inputs the plant's inputs that nothing inside feeds (``F1``, ``F2``, ``hoist``). The plant, controller
-and planner are the first instances of those roles (their components' ``role``), never found by name.
+and planner are the first instances of those roles (their components' ``role``), never found by name. Its
+model structure (which own inputs each own output reads at once) follows the instances' along the connections.
 """
 
 from collections import namedtuple
@@ -69,3 +70,36 @@ def interface(system, kinds, variables, fed):
     if controller and "u" in variables[controller]:
         exposed.append(Exposed("u", "output", [(controller, "u")], None))
     return exposed
+
+
+def system_dependencies(dependencies, connections, outputs, inputs):
+    """``{own output: (own input, ...)}`` of a system packed as one FMU (a one-FMU, a container).
+
+    An own output reads an own input at the same instant when a chain of direct feedthrough, along the
+    connections, leads from an instance input that the own input sets to the instance output it shows.
+
+    Parameters
+    ----------
+    dependencies : dict
+        ``{instance: {output: (input, ...)}}``: the inputs each instance's outputs read at the same instant.
+    connections : iterable of Connection
+    outputs : dict
+        ``{own output: (instance, output)}``: where each own output comes from.
+    inputs : dict
+        ``{own input: [(instance, input)]}``: what each own input sets, in the own inputs' order.
+    """
+    fed = {(c.target, c.input): (c.source, c.output) for c in connections}
+    result = {}
+    for name, source in outputs.items():
+        read, todo, seen = set(), [source], set()
+        while todo:
+            instance, output = todo.pop()
+            if (instance, output) in seen:
+                continue
+            seen.add((instance, output))
+            for variable in dependencies[instance][output]:
+                read.add((instance, variable))
+                if (instance, variable) in fed:
+                    todo.append(fed[(instance, variable)])
+        result[name] = tuple(own for own, targets in inputs.items() if read.intersection(targets))
+    return result

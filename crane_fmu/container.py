@@ -96,8 +96,6 @@ def _declare_dependencies(md, mappings, inner, connections):
 
     ``inner`` is ``{instance: its modelDescription}``; an inner output without a list reads every input.
     """
-    from crane_fmu.build_scripts.model_description import system_dependencies
-
     dependencies = {}
     for name, inner_md in inner.items():
         inputs = tuple(v.name for v in inner_md.modelVariables if v.causality == "input")
@@ -105,9 +103,9 @@ def _declare_dependencies(md, mappings, inner, connections):
                               tuple(v.name for v in u.dependencies) for u in inner_md.outputs}
     own = {v.name: v for v in md.modelVariables}
     targets = {v.name: [(c.name, t.name) for c, t in mapped] for v, mapped in mappings.items()}
-    read = system_dependencies(dependencies, connections,
-                               {n: targets[n][0] for n, v in own.items() if v.causality == "output"},
-                               {n: targets[n] for n, v in own.items() if v.causality == "input"})
+    read = closed_loop.system_dependencies(dependencies, connections,
+                                           {n: targets[n][0] for n, v in own.items() if v.causality == "output"},
+                                           {n: targets[n] for n, v in own.items() if v.causality == "input"})
     parameters = [v for v in md.modelVariables if v.causality == "parameter"]
     for unknown in md.outputs:
         unknown.dependencies = [own[n] for n in read[unknown.variable.name]]

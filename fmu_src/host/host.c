@@ -200,7 +200,7 @@ typedef struct {
 
 /* A closed loop on two FMUs, Gauss-Seidel as our master: the plant's states into the controller, its u into
    the plant, then both step. Rows "t,6 states,u" when `rows` is given; seconds per step returned. */
-static double pair(const Api *plant, const Api *law, Loop vr, int steps, double h, FILE *rows) {
+static double run_pair(const Api *plant, const Api *law, Loop vr, int steps, double h, FILE *rows) {
     const fmi2ValueReference states[6] = {vr.x, vr.x + 1, vr.x + 2, vr.x + 3, vr.x + 4, vr.x + 5}, u_vr = vr.u;
     const fmi2ValueReference cx = vr.cx, out_vr = vr.cu;
     const fmi2ValueReference measured[6] = {cx, cx + 1, cx + 2, cx + 3, cx + 4, cx + 5};
@@ -246,7 +246,7 @@ static int parse_vrs(int n_args, char **args, unsigned int set_vr[], double set_
 }
 
 /* Any FMU alone: the Real settings "VR=VALUE" of args, then rows "t,values" of the other args' VRs at each step. */
-static int outputs(const Api *api, int steps, double h, int n_args, char **args) {
+static int print_outputs(const Api *api, int steps, double h, int n_args, char **args) {
     fmi2ValueReference set_vr[MAX_VR], get_vr[MAX_VR];
     double set_v[MAX_VR], y[MAX_VR];
     size_t n_set, n_get;
@@ -271,8 +271,8 @@ static void logger3(fmi3InstanceEnvironment env, fmi3Status status, fmi3String c
     if (!quiet) fprintf(stderr, "[%d] %s\n", status, message);
 }
 
-/* outputs() for an FMI 3.0 co-simulation FMU: Float64 settings in initialization mode, then rows of Float64s. */
-static int outputs3(const char *library, const char *token, int steps, double h, int n_args, char **args) {
+/* print_outputs() for an FMI 3.0 co-simulation FMU: Float64 settings in initialization mode, then rows of Float64s. */
+static int print_outputs3(const char *library, const char *token, int steps, double h, int n_args, char **args) {
     void *lib = open_library(library);
     fmi3InstantiateCoSimulationTYPE *instantiate =
         (fmi3InstantiateCoSimulationTYPE *)SYMBOL(lib, "fmi3InstantiateCoSimulation");
@@ -322,14 +322,14 @@ static int outputs3(const char *library, const char *token, int steps, double h,
 
 static int mode_outputs(const Api *api, const char *mode, int n, char **a) { /* STEPS H [VR=VALUE]... VR... */
     (void)mode;
-    return n >= 2 && outputs(api, atoi(a[0]), atof(a[1]), n - 2, a + 2) ? 0 : 6;
+    return n >= 2 && print_outputs(api, atoi(a[0]), atof(a[1]), n - 2, a + 2) ? 0 : 6;
 }
 
 static int mode_pair(const Api *api, const char *mode, int n, char **a) { /* CLIB CGUID STEPS H X U CX CU */
     if (n != 8) return 2;
     Api law = load(a[0], a[1]);
     int bench = !strcmp(mode, "pair-bench");
-    double per_step = pair(api, &law, (Loop){VR(a[4]), VR(a[5]), VR(a[6]), VR(a[7])}, atoi(a[2]), atof(a[3]),
+    double per_step = run_pair(api, &law, (Loop){VR(a[4]), VR(a[5]), VR(a[6]), VR(a[7])}, atoi(a[2]), atof(a[3]),
                            bench ? NULL : stdout);
     if (bench) printf("%.9g\n", per_step);
     return 0;
@@ -426,7 +426,7 @@ int main(int argc, char **argv) {
     if (argc < 4) return 2;
     const char *mode = argv[1];
     if (!strcmp(mode, "outputs3"))
-        return argc >= 6 && outputs3(argv[2], argv[3], atoi(argv[4]), atof(argv[5]), argc - 6, argv + 6) ? 0 : 6;
+        return argc >= 6 && print_outputs3(argv[2], argv[3], atoi(argv[4]), atof(argv[5]), argc - 6, argv + 6) ? 0 : 6;
     for (size_t i = 0; i < sizeof MODES / sizeof *MODES; i++)
         if (!strcmp(mode, MODES[i].name)) {
             Api api = load(argv[2], argv[3]);
