@@ -1,7 +1,7 @@
 /*
  * The TrajectoryPlanner component in C: the native twin of crane_fmu/model/planner.py (its variables,
  * configure() rules and messages, the shapers, modes() on plant_equations.linearisation(), the
- * bang-coast-bang base and reference()) behind the model interface of model.h. Its variables come
+ * bang-coast-bang base and reference()), registered as a component (component.h). Its variables come
  * from TrajectoryPlanner_variables.h, generated from planner.VARIABLES. Its state is the time of its
  * outputs: 0 at first, then the end of the last step (time + step, the component's update()).
  */
@@ -10,10 +10,9 @@
 #include <string.h>
 
 #include "TrajectoryPlanner_variables.h"
-#include "model.h"
 #include "plant_math.h"
 #include "py_repr.h"
-#include "model_values.h"
+#include "rules.h"
 
 #define EI_TOLERANCE 0.05
 #define PI 3.141592653589793 /* math.pi */
@@ -31,24 +30,10 @@ typedef struct {
     int n_steps, n_impulses;
 } Config;
 
-struct Model {
-    double values[N_VARIABLES]; /* Real parameters by value reference */
-    char shaper[STRING_SIZE];
-    int initialised;
-    Config config; /* set when initialisation ends */
-    double time;   /* the state: the time the outputs are for */
-};
-
-MODEL_EXPORTS(1)
+STATE_IS_TIME
 
 #define V(name) (values[VR_##name])
 #define R(value) py_repr(value, (char[REPR_SIZE]){0})
-
-void model_defaults(Model *m) {
-    memset(m, 0, sizeof *m);
-    for (unsigned i = 0; i < N_VARIABLES; i++) m->values[i] = VARIABLE_TABLE[i].start;
-    snprintf(m->shaper, sizeof m->shaper, "%s", VARIABLE_TABLE[VR_shaper].text);
-}
 
 /* Python's sorted() of (time, value) tuples: by time, then value (insertion sort: at most 36 pairs). */
 static void sort_pairs(Pair p[], int n) {
@@ -138,7 +123,8 @@ static double peak(const Pair steps[], int n) {
 }
 
 /* The rules of planner.configure() in its order and words, then its plan. */
-static ModelStatus setup(const double values[], const char *kind, Config *c, const Reporter *r) {
+static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
+    const char *kind = strings[STRING_shaper];
     ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
     if (plant != MODEL_OK) return plant;
     double u_max = V(u_max), v_max = V(v_max);
@@ -211,47 +197,9 @@ static void reference(const Config *c, double t, double out[N_OUTPUTS]) {
     memcpy(out, result, sizeof result);
 }
 
-ModelStatus model_initialize(Model *m, const Reporter *r) {
-    ModelStatus status = setup(m->values, m->shaper, &m->config, r);
-    if (status != MODEL_OK) return status;
-    m->time = 0.0; /* initial_state() */
-    m->initialised = 1;
+static ModelStatus outputs(const double values[], const Config *c, const State *s, double out[], const Reporter *r) {
+    reference(c, s->time, out);
     return MODEL_OK;
 }
 
-ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r) {
-    double out[N_OUTPUTS];
-    int have_outputs = 0;
-    for (size_t i = 0; i < n; i++) {
-        if (vr[i] >= N_VARIABLES) return no_variable(r, vr[i]);
-        if (VARIABLE_TABLE[vr[i]].type == STRING) return not_real(r, vr[i]);
-        if (VARIABLE_TABLE[vr[i]].causality != OUTPUT) {
-            values[i] = m->values[vr[i]];
-            continue;
-        }
-        if (!have_outputs && m->initialised) {
-            reference(&m->config, m->time, out);
-        } else if (!have_outputs) { /* before initialisation ends the outputs follow the parameters, at time 0 */
-            Config c;
-            if (setup(m->values, m->shaper, &c, r) != MODEL_OK) return MODEL_ERROR;
-            reference(&c, 0.0, out);
-        }
-        have_outputs = 1;
-        values[i] = out[vr[i] - FIRST_OUTPUT];
-    }
-    return MODEL_OK;
-}
-
-ModelStatus model_set_strings(Model *m, const unsigned vr[], size_t n, const char *const values[], int fixed_allowed,
-                              const Reporter *r) {
-    return set_string_value(m->shaper, VR_shaper, "one of zv, zvd, ei, none", vr, n, values, fixed_allowed, r);
-}
-
-ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const char *values[], const Reporter *r) {
-    return get_string_value(m->shaper, VR_shaper, vr, n, values, r);
-}
-
-ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
-    m->time = time + step; /* update(): the outputs are for the end of the step */
-    return MODEL_OK;
-}
+STATEFUL_COMPONENT;

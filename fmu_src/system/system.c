@@ -1,9 +1,10 @@
 /*
- * A system of native component models as one model behind model.h, so that the FMI frameworks wrap it
- * unchanged: one model block per instance, the system's parameter values set after the defaults, the
+ * A system of native component models as one model (model.h), so that the FMI frameworks run it as they run
+ * any model: one model block per instance, the system's parameter values set after the start values, the
  * connections as copies by value reference in Gauss-Seidel order, and every instance stepped with the
- * system's step (crane_fmu.cosim's master, algorithm gauss-seidel). All of a system is in the generated
- * system_config.h (build_scripts/one_fmu.py); nothing here names a system or a component.
+ * system's step (crane_fmu.cosim's master, algorithm gauss-seidel). It reaches the instances' models only
+ * through their ModelTypes. All of a system is in the generated system_config.h (build_scripts/one_fmu.py);
+ * nothing here names a system or a component.
  */
 #include <math.h>
 #include <stdio.h>
@@ -11,21 +12,17 @@
 
 #include "system_config.h"
 #include "py_repr.h"
-#include "model_values.h"
 
-struct Model {
+/* The system's model: this header, then the instances' model blocks at `offsets`. Plain data. */
+typedef struct {
     double values[N_VARIABLES]; /* the system's own parameters and inputs, by value reference */
     int initialised, started, bad_defaults;
     double start;               /* the time of the first step: inner times are start + k * SYSTEM_STEP */
     double buffer[N_BUFFER];    /* every instance's outputs, as last read */
-    double blocks[N_BLOCKS];    /* the instances' models */
-};
+    size_t offsets[N_INSTANCES];
+} Model;
 
-const char *const MODEL_NAME = MODEL_IDENTIFIER;
-const char *const MODEL_TOKEN = INSTANTIATION_TOKEN;
-const size_t MODEL_SIZE = sizeof(Model);
-const unsigned MODEL_N_VARIABLES = N_VARIABLES;
-const unsigned MODEL_N_STRINGS = 0;
+#define ALIGN(n) (((n) + 15) / 16 * 16)
 
 #define R(value) py_repr(value, (char[REPR_SIZE]){0})
 
@@ -46,27 +43,43 @@ static void named_log(void *host, ModelStatus status, const char *function, cons
     Reporter inner_ = {named_log, &named_, r ? r->function : ""};                                    \
     const Reporter *ir = r ? &inner_ : NULL
 
-static void *block(Model *m, unsigned i) { return &m->blocks[INSTANCES[i].offset]; }
+static void *block(Model *m, unsigned i) { return (char *)m + m->offsets[i]; }
+
+static size_t system_size(const ModelType *type) {
+    size_t size = ALIGN(sizeof(Model));
+    for (unsigned i = 0; i < N_INSTANCES; i++) size += ALIGN(INSTANCES[i].type->size(INSTANCES[i].type));
+    return size;
+}
 
 /* The system's values of one instance; ERROR when one is refused (reported where `r` is given). */
 static ModelStatus apply_system_values(Model *m, unsigned i, const Reporter *r) {
     const InstanceRow *row = &INSTANCES[i];
     INNER(i, r);
-    if (row->n_reals && row->api->set_reals(block(m, i), row->real_vrs, row->n_reals, row->reals, 1, ir) > MODEL_WARNING)
+    if (row->n_reals &&
+        row->type->set_reals(row->type, block(m, i), row->real_vrs, row->n_reals, row->reals, 1, ir) > MODEL_WARNING)
         return MODEL_ERROR;
-    if (row->n_strings &&
-        row->api->set_strings(block(m, i), row->string_vrs, row->n_strings, row->strings, 1, ir) > MODEL_WARNING)
+    if (row->n_strings && row->type->set_strings(row->type, block(m, i), row->string_vrs, row->n_strings,
+                                                 row->strings, 1, ir) > MODEL_WARNING)
         return MODEL_ERROR;
     return MODEL_OK;
 }
 
-void model_defaults(Model *m) {
-    memset(m, 0, sizeof *m);
+/* The start values: every instance's, then the system's values for it (a refused one is reported when
+   initialisation ends, as the instances' own rules are). */
+static ModelStatus system_instantiate(const ModelType *type, void *model, const Instantiation *at, const Reporter *r) {
+    Model *m = model;
     for (unsigned i = 0; i < N_VARIABLES; i++) m->values[i] = VARIABLE_TABLE[i].start;
+    size_t offset = ALIGN(sizeof(Model));
     for (unsigned i = 0; i < N_INSTANCES; i++) {
-        INSTANCES[i].api->defaults(block(m, i));
+        m->offsets[i] = offset;
+        offset += ALIGN(INSTANCES[i].type->size(INSTANCES[i].type));
+        Instantiation inner = {INSTANCES[i].name, NULL, 0};
+        INNER(i, r);
+        ModelStatus status = INSTANCES[i].type->instantiate(INSTANCES[i].type, block(m, i), &inner, ir);
+        if (status > MODEL_WARNING) return status;
         if (apply_system_values(m, i, NULL) != MODEL_OK && !m->bad_defaults) m->bad_defaults = (int)i + 1;
     }
+    return MODEL_OK;
 }
 
 /* One exchange: every operation of EXCHANGE in order; the first status worse than a warning ends it. */
@@ -77,18 +90,20 @@ static ModelStatus exchange(Model *m, const Reporter *r) {
         INNER(i, r);
         ModelStatus status;
         if (EXCHANGE[k].operation == READ) {
-            status = row->api->get_reals(block(m, i), row->outputs, row->n_outputs, &m->buffer[row->buffer], ir);
+            status = row->type->get_reals(row->type, block(m, i), row->outputs, row->n_outputs,
+                                          &m->buffer[row->buffer], ir);
         } else {
             double values[MAX_INPUTS];
             for (unsigned j = 0; j < row->n_inputs; j++) values[j] = m->buffer[row->sources[j]];
-            status = row->api->set_reals(block(m, i), row->inputs, row->n_inputs, values, !m->initialised, ir);
+            status = row->type->set_reals(row->type, block(m, i), row->inputs, row->n_inputs, values, !m->initialised, ir);
         }
         if (status > MODEL_WARNING) return status;
     }
     return MODEL_OK;
 }
 
-ModelStatus model_initialize(Model *m, const Reporter *r) {
+static ModelStatus system_exit_initialization(const ModelType *type, void *model, const Reporter *r) {
+    Model *m = model;
     if (m->bad_defaults) { /* a system value was refused: say which, now that there is a reporter */
         apply_system_values(m, (unsigned)m->bad_defaults - 1, r);
         return MODEL_ERROR;
@@ -96,27 +111,32 @@ ModelStatus model_initialize(Model *m, const Reporter *r) {
     ModelStatus status = exchange(m, r); /* the master's initial exchange, in initialisation mode */
     for (unsigned i = 0; i < N_INSTANCES && status <= MODEL_WARNING; i++) {
         INNER(i, r);
-        status = INSTANCES[i].api->initialize(block(m, i), ir);
+        status = INSTANCES[i].type->exit_initialization(INSTANCES[i].type, block(m, i), ir);
     }
     if (status > MODEL_WARNING) return status;
     m->initialised = 1;
     return exchange(m, r); /* the outputs at the start time */
 }
 
-ModelStatus model_set_reals(Model *m, const unsigned vr[], size_t n, const double values[], int fixed_allowed,
-                            const Reporter *r) {
-    ModelStatus status = set_real_values(m->values, vr, n, values, fixed_allowed, r);
+static ModelStatus system_set_reals(const ModelType *type, void *model, const unsigned vr[], size_t n,
+                                    const double values[], int fixed_allowed, const Reporter *r) {
+    Model *m = model;
+    ModelStatus status = store_reals(MODEL_IDENTIFIER, VARIABLE_TABLE, N_VARIABLES, m->values, vr, n, values,
+                                     fixed_allowed, r);
     for (size_t k = 0; k < n && status <= MODEL_WARNING; k++)
         for (unsigned j = 0; j < N_LINKS && status <= MODEL_WARNING; j++)
             if (LINKS[j].vr == vr[k]) {
                 unsigned i = LINKS[j].instance;
                 INNER(i, r);
-                status = INSTANCES[i].api->set_reals(block(m, i), &LINKS[j].target, 1, &values[k], fixed_allowed, ir);
+                status = INSTANCES[i].type->set_reals(INSTANCES[i].type, block(m, i), &LINKS[j].target, 1, &values[k],
+                                                      fixed_allowed, ir);
             }
     return status;
 }
 
-ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r) {
+static ModelStatus system_get_reals(const ModelType *type, void *model, const unsigned vr[], size_t n,
+                                    double values[], const Reporter *r) {
+    Model *m = model;
     int read = m->initialised; /* before initialisation ends the outputs follow the parameters */
     for (size_t k = 0; k < n; k++) {
         if (vr[k] >= N_VARIABLES)
@@ -136,17 +156,6 @@ ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double valu
     return MODEL_OK;
 }
 
-ModelStatus model_set_strings(Model *m, const unsigned vr[], size_t n, const char *const values[], int fixed_allowed,
-                              const Reporter *r) {
-    (void)m, (void)vr, (void)n, (void)values, (void)fixed_allowed;
-    return report(r, MODEL_ERROR, "this FMU has no variables of this type");
-}
-
-ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const char *values[], const Reporter *r) {
-    (void)m, (void)vr, (void)n, (void)values;
-    return report(r, MODEL_ERROR, "this FMU has no variables of this type");
-}
-
 /* How far a communication step may lie from a whole number n >= 0 of system steps, in system steps, to be taken
    as n: a host's rounding. Hosts that add up their steps (OMSimulator, a loop of t += h) end a run with the
    remainder stop - t, the sum's rounding: 1.03e-13 s after 10,000 steps of 1 ms (1.0e-10 system steps), 1.1e-10 s
@@ -155,7 +164,8 @@ ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const cha
 
 /* A communication step of any whole number of system steps: at each, the exchange, then every instance steps
    (in dependency order); after the last, the exchange that gives the outputs at the new time. */
-ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
+static ModelStatus system_do_step(const ModelType *type, void *model, double time, double step, const Reporter *r) {
+    Model *m = model;
     double n_steps = nearbyint(step / SYSTEM_STEP);
     if (fabs(step / SYSTEM_STEP - n_steps) > STEP_ROUNDING)
         return report(r, MODEL_ERROR, "communication step %s s must be a whole multiple of the system step %s s",
@@ -169,7 +179,7 @@ ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r)
         for (unsigned s = 0; s < N_INSTANCES && status <= MODEL_WARNING; s++) {
             unsigned i = STEP_ORDER[s];
             INNER(i, r);
-            ModelStatus stepped = INSTANCES[i].api->do_step(block(m, i), t, SYSTEM_STEP, ir);
+            ModelStatus stepped = INSTANCES[i].type->do_step(INSTANCES[i].type, block(m, i), t, SYSTEM_STEP, ir);
             status = stepped > status ? stepped : status;
         }
         if (status > MODEL_WARNING) return status;
@@ -178,3 +188,12 @@ ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r)
     ModelStatus status = exchange(m, r);
     return status > worst ? status : worst;
 }
+
+const ModelType MODEL_TYPE = {.identifier = MODEL_IDENTIFIER,
+                              .token = INSTANTIATION_TOKEN,
+                              .size = system_size,
+                              .instantiate = system_instantiate,
+                              .exit_initialization = system_exit_initialization,
+                              .get_reals = system_get_reals,
+                              .set_reals = system_set_reals,
+                              .do_step = system_do_step};

@@ -1,6 +1,6 @@
 /*
  * The FMI 3.0 functions, one row each: X(return type, name, parameters, arguments), like
- * fmi2_functions.h: the loader forwards every row, the wrapper implements the first list and
+ * fmi2_calls.h: the loader forwards every row, the framework (fmi3Functions.c) implements the first list and
  * answers the second with fmi3Error. Checked against the official fmi3Functions.h by the compiler.
  * fmi3GetVersion, the three fmi3Instantiate* and fmi3FreeInstance are written out.
  */

@@ -1,19 +1,18 @@
 /*
- * The CranePlant component in C: the native twin of crane_fmu/model/plant.py (its variables,
- * configure() rules and messages, update()) behind the model interface of model.h. Its variables,
- * value references and start values come from CranePlant_variables.h, which `crane-fmu build`
- * generates from the same table (plant.VARIABLES) as the Python FMU's modelDescription.xml.
+ * The CranePlant component in C: the native twin of crane_fmu/model/plant.py (its configure() rules and
+ * messages, initial_state(), output() and update()), registered as a component (component.h). Its variables,
+ * value references and start values come from CranePlant_variables.h, which `crane-fmu build` generates from
+ * the same table (plant.VARIABLES) as the Python FMU's modelDescription.xml.
  */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "CranePlant_variables.h"
-#include "model.h"
 #include "plant_equations.h"
 #include "plant_math.h"
 #include "py_repr.h"
-#include "model_values.h"
+#include "rules.h"
 
 enum { DRIVE = N_SWING, ACCEL, N_STATE }; /* after the swing and hoist state: the drive's and the trolley's acceleration */
 #define MAX_SUBSTEPS 10000000            /* per communication step: a host must never hang in doStep */
@@ -26,26 +25,15 @@ typedef struct {
     double max_substep, u_max, v_max, tau, x_min, x_max, l1_min, l1_max, dl1_max;
 } Config;
 
-struct Model {
-    double values[N_VARIABLES]; /* parameters and inputs by value reference */
-    int initialised;
-    Config config;              /* set when initialisation ends */
-    double state[N_STATE];
-};
-
-MODEL_EXPORTS(0)
-MODEL_WITHOUT_STRINGS
+typedef struct {
+    double s[N_STATE];
+} State;
 
 #define V(name) (values[VR_##name])
 #define R(value) py_repr(value, (char[REPR_SIZE]){0})
 
-void model_defaults(Model *m) {
-    memset(m, 0, sizeof *m);
-    for (unsigned i = 0; i < N_VARIABLES; i++) m->values[i] = VARIABLE_TABLE[i].start;
-}
-
 /* The rules of plant.configure() and parameters.py, in their order and words. */
-static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
+static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
     if (!(isfinite(V(max_substep)) && V(max_substep) > 0)) return rule(r, "max_substep", "> 0 and finite", V(max_substep));
     ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
     if (plant != MODEL_OK) return plant;
@@ -78,47 +66,16 @@ static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
     return MODEL_OK;
 }
 
-static void initial_state(const double values[], const Config *c, double state[N_STATE]) {
+static void initial_state(const double values[], const Config *c, State *state) {
     double s[N_STATE] = {V(x0), V(dx0), V(theta1_0), V(dtheta1_0), V(theta2_0), V(dtheta2_0), c->p.l1, 0.0, 0.0, 0.0};
-    memcpy(state, s, sizeof s);
-}
-
-ModelStatus model_initialize(Model *m, const Reporter *r) {
-    ModelStatus status = setup(m->values, &m->config, r);
-    if (status != MODEL_OK) return status;
-    initial_state(m->values, &m->config, m->state);
-    m->initialised = 1;
-    return MODEL_OK;
+    memcpy(state->s, s, sizeof s);
 }
 
 /* Every output in table order: plant_outputs(), then l1_now, dl1_now, ddx. */
-static void outputs(const double state[N_STATE], const Config *c, double out[N_OUTPUTS]) {
-    plant_outputs(state, &c->p, out);
-    out[11] = state[L1], out[12] = state[DL1], out[13] = state[ACCEL];
-}
-
-ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r) {
-    double out[N_OUTPUTS];
-    int have_outputs = 0;
-    for (size_t i = 0; i < n; i++) {
-        if (vr[i] >= N_VARIABLES)
-            return report(r, MODEL_ERROR, "%s has no variable with value reference %u", MODEL_IDENTIFIER, vr[i]);
-        if (VARIABLE_TABLE[vr[i]].causality != OUTPUT) {
-            values[i] = m->values[vr[i]];
-            continue;
-        }
-        if (!have_outputs && m->initialised) {
-            outputs(m->state, &m->config, out);
-        } else if (!have_outputs) { /* before initialisation ends the outputs follow the parameters */
-            Config c;
-            double state[N_STATE];
-            if (setup(m->values, &c, r) != MODEL_OK) return MODEL_ERROR;
-            initial_state(m->values, &c, state);
-            outputs(state, &c, out);
-        }
-        have_outputs = 1;
-        values[i] = out[vr[i] - FIRST_OUTPUT];
-    }
+static ModelStatus outputs(const double values[], const Config *c, const State *state, double out[],
+                           const Reporter *r) {
+    plant_outputs(state->s, &c->p, out);
+    out[11] = state->s[L1], out[12] = state->s[DL1], out[13] = state->s[ACCEL];
     return MODEL_OK;
 }
 
@@ -134,9 +91,9 @@ static double within_speed(double accel, double speed, double speed_max, double 
     return clamp(accel, (-speed_max - speed) / dt, (speed_max - speed) / dt);
 }
 
-ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
-    const Config *c = &m->config;
-    const double *in = &m->values[VR_u];
+static ModelStatus update(const double values[], const Config *c, State *state, double time, double step,
+                          const Reporter *r) {
+    const double *in = &values[VR_u];
     double u = in[0], hoist = in[1], f1 = in[2], f2 = in[3];
     if (c->p.m2 == 0 && f2 != 0)
         return report(r, MODEL_DISCARD, "F2 = %s N acts on a payload of mass m2 = 0: the step is discarded", R(f2));
@@ -156,8 +113,8 @@ ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r)
     /* the drive's first-order lag over a sub-step, exactly: a(dt) = d + (a(0) - d) lag, its mean d + (a(0) - d) mean */
     double lag = 0.0, mean = 0.0;
     if (c->tau != 0) lag = EXP(-dt / c->tau), mean = c->tau / dt * (1.0 - lag);
-    double swing[N_SWING], drive = m->state[DRIVE], accel = demand;
-    memcpy(swing, m->state, sizeof swing);
+    double swing[N_SWING], drive = state->s[DRIVE], accel = demand;
+    memcpy(swing, state->s, sizeof swing);
     double reached[N_MESSAGES][3]; /* (l1, t, speed) where the cable reached a hoist limit */
     int n_reached = 0;
     for (long k = 0; k < n; k++) {
@@ -189,8 +146,8 @@ ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r)
             swing[L1] = held, swing[DL1] = 0.0;
         }
     }
-    memcpy(m->state, swing, sizeof swing);
-    m->state[DRIVE] = drive, m->state[ACCEL] = accel;
+    memcpy(state->s, swing, sizeof swing);
+    state->s[DRIVE] = drive, state->s[ACCEL] = accel;
     for (int i = 0; i < n_reached; i++) /* plant_limits.reached_limit(): at rest the end of a move, else a warning */
         if (reached[i][2] < AT_REST)
             report(r, MODEL_OK, "hoist: l1 reached %s m at t = %s s and is held there", R(reached[i][0]),
@@ -200,3 +157,5 @@ ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r)
                    R(reached[i][0]), R(reached[i][2]), R(reached[i][1]));
     return MODEL_OK;
 }
+
+STATEFUL_COMPONENT;

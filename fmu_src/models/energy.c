@@ -1,7 +1,7 @@
 /*
  * The EnergyController component in C: the native twin of crane_fmu/model/energy.py (its variables,
- * configure() rules and messages, control(): eqs (E2)-(E4) with limits.limited()) behind the model
- * interface of model.h. Its variables come from EnergyController_variables.h, generated from
+ * configure() rules and messages, control(): eqs (E2)-(E4) with limits.limited()), registered as a component
+ * (component.h). Its variables come from EnergyController_variables.h, generated from
  * energy.VARIABLES. No state: the output u follows the inputs of the same instant (direct feedthrough).
  */
 #include <math.h>
@@ -9,34 +9,19 @@
 #include <string.h>
 
 #include "EnergyController_variables.h"
-#include "model.h"
 #include "plant_math.h"
 #include "py_repr.h"
-#include "model_values.h"
+#include "rules.h"
 
 /* energy.Config */
 typedef struct {
     double mu, m2, l1, l2, k_c, k_p, k_d, x_d, u_max, v_max, h;
 } Config;
 
-struct Model {
-    double values[N_VARIABLES]; /* parameters and inputs by value reference */
-    int initialised;
-    Config config; /* set when initialisation ends */
-};
-
-MODEL_EXPORTS(0)
-MODEL_WITHOUT_STRINGS
-
 #define V(name) (values[VR_##name])
 
-void model_defaults(Model *m) {
-    memset(m, 0, sizeof *m);
-    for (unsigned i = 0; i < N_VARIABLES; i++) m->values[i] = VARIABLE_TABLE[i].start;
-}
-
 /* The rules of energy.configure() in its order and words: the plant model, the gains and h, x_d, the limits. */
-static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
+static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
     ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
     if (plant != MODEL_OK) return plant;
     static const unsigned positive[] = {VR_k_c, VR_k_p, VR_k_d, VR_h};
@@ -64,29 +49,10 @@ static double control(const Config *c, const double s[6]) {
     return limited(u, v, c->u_max, c->v_max, c->h);
 }
 
-ModelStatus model_initialize(Model *m, const Reporter *r) {
-    ModelStatus status = setup(m->values, &m->config, r);
-    if (status != MODEL_OK) return status;
-    m->initialised = 1;
+static ModelStatus outputs(const double values[], const Config *c, double out[], const Reporter *r) {
+    if (0.5 * c->u_max == 0) return ZERO_DIVISION(r); /* u_max below 1e-323: (E4) divides by a = 0 */
+    out[0] = control(c, &values[VR_x]);
     return MODEL_OK;
 }
 
-ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r) {
-    for (size_t i = 0; i < n; i++) {
-        if (vr[i] >= N_VARIABLES) return no_variable(r, vr[i]);
-        if (VARIABLE_TABLE[vr[i]].causality != OUTPUT) {
-            values[i] = m->values[vr[i]];
-            continue;
-        }
-        Config c = m->config;
-        if (!m->initialised && setup(m->values, &c, r) != MODEL_OK) return MODEL_ERROR; /* follows the parameters */
-        if (0.5 * c.u_max == 0) return ZERO_DIVISION(r); /* u_max below 1e-323: (E4) divides by a = 0 */
-        values[i] = control(&c, &m->values[VR_x]);
-    }
-    return MODEL_OK;
-}
-
-ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
-    (void)m, (void)time, (void)step, (void)r; /* no state */
-    return MODEL_OK;
-}
+STATELESS_COMPONENT;

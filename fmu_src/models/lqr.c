@@ -1,7 +1,7 @@
 /*
  * The LqrController component in C: the native twin of crane_fmu/model/lqr.py (its variables, configure()
- * rules and messages in their order, design(), the gain schedule, control() with limits.limited()) behind
- * the model interface of model.h. Its variables, value references and start values come from
+ * rules and messages in their order, design(), the gain schedule, control() with limits.limited()), registered
+ * as a component (component.h). Its variables, value references and start values come from
  * LqrController_variables.h, generated from lqr.VARIABLES. The design (ZOH discretisation, Riccati doubling,
  * gains; linalg.c) is done when initialisation ends; before that the output follows the parameters. No state:
  * u follows the inputs of the same instant (direct feedthrough).
@@ -11,10 +11,9 @@
 #include <string.h>
 
 #include "LqrController_variables.h"
-#include "model.h"
 #include "linalg.h"
 #include "py_repr.h"
-#include "model_values.h"
+#include "rules.h"
 
 enum { N_STATE = 6, SCHEDULE_POINTS = 21 }; /* s = (x, dx, theta1, dtheta1, theta2, dtheta2); lqr.SCHEDULE_POINTS */
 
@@ -26,23 +25,9 @@ typedef struct {
     double lengths[SCHEDULE_POINTS], table[SCHEDULE_POINTS][N_STATE];
 } Config;
 
-struct Model {
-    double values[N_VARIABLES]; /* parameters and inputs by value reference */
-    int initialised;
-    Config config; /* set when initialisation ends */
-};
-
-MODEL_EXPORTS(0)
-MODEL_WITHOUT_STRINGS
-
 #define V(name) (values[VR_##name])
 #define R(value) py_repr(value, (char[REPR_SIZE]){0})
 #define DIVISION_BY_ZERO "ZeroDivisionError: float division by zero" /* Python's, where C would give inf */
-
-void model_defaults(Model *m) {
-    memset(m, 0, sizeof *m);
-    for (unsigned i = 0; i < N_VARIABLES; i++) m->values[i] = VARIABLE_TABLE[i].start;
-}
 
 /* lqr.continuous_model(): s' = A s + B u with x'' = u (eq 12) and plant.linearisation() of eqs (8)-(9),
    q'' = -W q - w u with W = N^-1 diag((m1+m2) g, g), w = N^-1 (m1+m2, 1), N = [[(m1+m2) l1, m2 l2], [l1, l2]]. */
@@ -80,7 +65,7 @@ static const char *design(const double values[], double l1, double gains[N_STATE
 
 /* lqr.configure(): the rules of parameters.plant_parameters, the weights, r, h, x_d, limits.check and the
    schedule, in that order and in their words; then the schedule's designs and the design for l1. */
-static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
+static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
     ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
     if (plant != MODEL_OK) return plant;
     for (int i = 0; i < N_STATE; i++) {
@@ -125,40 +110,14 @@ static const char *scheduled_gains(const Config *c, double l1, double gains[N_ST
 }
 
 /* lqr.control(): u = ddx_ref - K (s - s_ref), s_ref = (x_ref + x_d, dx_ref, ...), within limits.limited(). */
-static const char *output(const Config *c, const double values[], double *u) {
+static ModelStatus outputs(const double values[], const Config *c, double out[], const Reporter *r) {
     double gains[N_STATE], error[N_STATE];
     const char *failure = scheduled_gains(c, V(l1_now), gains);
-    if (failure) return failure;
+    if (failure) return report(r, MODEL_ERROR, "%s", failure);
     for (int i = 0; i < N_STATE; i++) error[i] = values[VR_x + i] - values[VR_x_ref + i];
     error[0] -= c->x_d;
-    *u = limited(V(ddx_ref) - la_dot(gains, error, N_STATE), V(dx), c->u_max, c->v_max, c->h);
-    return NULL;
-}
-
-ModelStatus model_initialize(Model *m, const Reporter *r) {
-    ModelStatus status = setup(m->values, &m->config, r);
-    if (status != MODEL_OK) return status;
-    m->initialised = 1;
+    out[0] = limited(V(ddx_ref) - la_dot(gains, error, N_STATE), V(dx), c->u_max, c->v_max, c->h);
     return MODEL_OK;
 }
 
-ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r) {
-    for (size_t i = 0; i < n; i++) {
-        if (vr[i] >= N_VARIABLES)
-            return report(r, MODEL_ERROR, "%s has no variable with value reference %u", MODEL_IDENTIFIER, vr[i]);
-        if (VARIABLE_TABLE[vr[i]].causality != OUTPUT) {
-            values[i] = m->values[vr[i]];
-            continue;
-        }
-        Config before; /* before initialisation ends the output follows the parameters */
-        if (!m->initialised && setup(m->values, &before, r) != MODEL_OK) return MODEL_ERROR;
-        const char *error = output(m->initialised ? &m->config : &before, m->values, &values[i]);
-        if (error) return report(r, MODEL_ERROR, "%s", error);
-    }
-    return MODEL_OK;
-}
-
-ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
-    (void)m, (void)time, (void)step, (void)r; /* no state */
-    return MODEL_OK;
-}
+STATELESS_COMPONENT;

@@ -1,23 +1,20 @@
 /*
- * A C host for the native CranePlant FMU (FMI 2.0) and for any native FMU alone (FMI 2.0 or 3.0), for
- * the tests and `crane-fmu bench --native` (not part of any FMU): compiled for Linux (dlopen) and, with
- * mingw-w64, for Windows (LoadLibrary) to run under Wine. No Python anywhere.
+ * A C host for any native FMU alone (FMI 2.0 or 3.0) and for a plant and a controller exchanged as our master
+ * does, for the tests and `crane-fmu bench --native` (not part of any FMU): compiled for Linux (dlopen) and,
+ * with mingw-w64, for Windows (LoadLibrary) to run under Wine. No Python anywhere, and no model: what it reads
+ * and sets are value references given on the command line (X: the first of six consecutive ones, a plant's
+ * x, dx, theta1, dtheta1, theta2, dtheta2 or a controller's measured ones).
  *
- *   host run LIB GUID STEPS H                           free swing: rows "t,x,dx,theta1,dtheta1,theta2,dtheta2"
- *   host cycles LIB GUID N                              N instantiate/initialise/step/free cycles; RSS per 1000
- *   host after-failure LIB GUID STEPS H                 a run refused (l1 = -1), then a good one: its last row
- *   host threads LIB GUID STEPS H                       two instances in two threads vs one alone: "same" or "differ"
- *   host bench LIB GUID STEPS H                         seconds per step of the paper's loop, no recording
+ *   host run LIB GUID STEPS H X                         rows "t,the six Reals from X" after each step of H
+ *   host cycles LIB GUID N X                            N instantiate/initialise/step/free cycles; RSS per 1000
+ *   host after-failure LIB GUID STEPS H X VR=VALUE      a run refused (VR set to VALUE), then a good one: its last row
+ *   host threads LIB GUID STEPS H X                     two instances in two threads vs one alone: "same" or "differ"
  *   host maps LIB GUID                                  the libraries loaded in this process that name python
- *   host paper LIB GUID STEPS H                         Section V: the plant under the paper's backstepping law,
- *                                                       written in C here (rows "t,6 states,u"); see paper_law()
- *   host pair LIB GUID CLIB CGUID STEPS H [CX CU]       Section V on two FMUs: the plant and the native
- *                                                       BacksteppingController (CLIB), exchanged by value
- *                                                       references at each step as our master does (rows
- *                                                       "t,6 states,u"); another controller at its defaults
- *                                                       with CX, CU: the value references of its x (the first
- *                                                       of the six measured states) and of its u
- *   host pair-bench LIB GUID CLIB CGUID STEPS H         seconds per step of that loop, no recording
+ *   host pair LIB GUID CLIB CGUID STEPS H X U CX CU     a plant (LIB: its six states from X, its input U) and a
+ *                                                       controller (CLIB: its six measured inputs from CX, its
+ *                                                       output CU), exchanged by value references at each step as
+ *                                                       our master does: rows "t,6 states,u"
+ *   host pair-bench LIB GUID CLIB CGUID STEPS H X U CX CU  seconds per step of that loop, no recording
  *   host outputs LIB GUID STEPS H [VR=VALUE]... VR...    any FMI 2.0 FMU (e.g. a system as one FMU): Real
  *                                                       parameters set (and Strings: "VRs=TEXT"), then rows
  *                                                       "t,the Reals of VR..." at t = k H after k steps
@@ -25,9 +22,6 @@
  *                                                       instantiationToken): Float64 (and String) parameters set,
  *                                                       Float64s read
  *                                                       (its value references: FMI 2.0's plus one in ours)
- *
- * Value references are those of the CranePlant and BacksteppingController tables (checked against
- * modelDescription.xml by the tests), or given on the command line.
  */
 #include <stdarg.h>
 #include <stdio.h>
@@ -37,7 +31,6 @@
 
 #include "fmi2Functions.h"
 #include "fmi3Functions.h"
-#include "plant_math.h" /* SIN, COS: the C library's, or with CRANE_OWN_MATH the portable ones (Windows) */
 
 #ifdef _WIN32
 #include <windows.h>
@@ -49,9 +42,6 @@
 #define OPEN(path) dlopen(path, RTLD_NOW | RTLD_LOCAL)
 #define SYMBOL(lib, name) dlsym(lib, name)
 #endif
-
-enum { VR_L1 = 2, VR_U = 22, VR_X = 26 }; /* l1, u, and x: the first of the six states */
-enum { VR_C_X = 21, VR_C_U = 27 };        /* BacksteppingController's measured x (first of six) and its output u */
 
 typedef struct {
     fmi2InstantiateTYPE *instantiate;
@@ -134,9 +124,9 @@ static fmi2Component start(const Api *api, size_t n, const fmi2ValueReference vr
     return c;
 }
 
-/* `steps` steps of h with u = 0; the states after each step into rows (7 a row). */
-static int run(const Api *api, fmi2Component c, int steps, double h, double *rows) {
-    const fmi2ValueReference states[6] = {VR_X, VR_X + 1, VR_X + 2, VR_X + 3, VR_X + 4, VR_X + 5};
+/* `steps` steps of h; the six Reals from x after each step into rows (7 a row). */
+static int run(const Api *api, fmi2Component c, fmi2ValueReference x, int steps, double h, double *rows) {
+    const fmi2ValueReference states[6] = {x, x + 1, x + 2, x + 3, x + 4, x + 5};
     for (int k = 0; k <= steps; k++) {
         double t = k * h;
         rows[7 * k] = t;
@@ -145,30 +135,6 @@ static int run(const Api *api, fmi2Component c, int steps, double h, double *row
         if (api->step(c, t, h, fmi2True) > fmi2Warning) return 0;
     }
     return 1;
-}
-
-/* The BacksteppingController's u at its defaults (Section V: eqs (12), (14), (16)-(21), derived b3, W = I):
-   crane_fmu/model/backstepping.law() operation for operation, so that this host closes the paper's loop
-   without Python. The tests hold it equal to the Python controller FMU through our master. */
-static double paper_law(const double s[6]) {
-    const double m1 = 3.0, m2 = 7.0, l1 = 1.0, l2 = 0.5, g = 9.8;
-    const double k1x = 0.92, k2x = 0.84, k11 = 4.0, k21 = 2.0, k12 = 122.0, k22 = 310.0;
-    const double a = 2.0 * m1 + m2, ga = -g * a, gm2 = g * m2, two_m2 = 2.0 * m2, m12 = m1 + m2;
-    const double l2m2 = l2 * m2, m12g = m12 * g, two_m12 = 2.0 * m12, nk1x = -k1x, nk11 = -k11, nk12 = -k12;
-    double x = s[0], dx = s[1], theta1 = s[2], dtheta1 = s[3], theta2 = s[4], dtheta2 = s[5];
-    double d = theta1 - theta2, sd = SIN(d), cd = COS(d);
-    double den = a - m2 * COS(2.0 * d);
-    double w1s = dtheta1 * dtheta1, w2s = dtheta2 * dtheta2;
-    double f2 = (ga * SIN(theta1) - gm2 * SIN(theta1 - 2.0 * theta2) - two_m2 * (l1 * w1s * cd + l2 * w2s) * sd) /
-                (l1 * den);
-    double b2 = (-a * COS(theta1) + m2 * COS(theta1 - 2.0 * theta2)) / (l1 * den);
-    double f3 = 2.0 * (l1 * w1s * m12 + l2m2 * w2s * cd + m12g * COS(theta1)) * sd / (l2 * den);
-    double b3 = -(two_m12 * sd * SIN(theta1) / (l2 * den));
-    double e3x = nk1x * dx - k2x * (dx + k1x * (x - 0.0));
-    double e31 = nk11 * dtheta1 - k21 * (dtheta1 + k11 * (theta1 - 0.0));
-    double e32 = nk12 * dtheta2 - k22 * (dtheta2 + k12 * (theta2 - 0.0));
-    double num = 1.0 * e3x + 1.0 * b2 * (e31 - f2) + 1.0 * b3 * (e32 - f3);
-    return num / (1.0 + 1.0 * b2 * b2 + 1.0 * b3 * b3);
 }
 
 static void print_rows(const double *rows, int steps) {
@@ -210,6 +176,7 @@ static long rss_kb(void) {
 #ifndef _WIN32
 typedef struct {
     const Api *api;
+    fmi2ValueReference x;
     int steps;
     double h;
     double *rows;
@@ -219,17 +186,23 @@ typedef struct {
 static void *run_job(void *arg) {
     Job *job = arg;
     fmi2Component c = start(job->api, 0, NULL, NULL);
-    job->ok = c && run(job->api, c, job->steps, job->h, job->rows);
+    job->ok = c && run(job->api, c, job->x, job->steps, job->h, job->rows);
     if (c) job->api->free_instance(c);
     return NULL;
 }
 #endif
 
-/* The paper's loop on two FMUs, Gauss-Seidel as our master: the plant's states into the controller, its u
-   into the plant, then both step. Rows "t,6 states,u" when `rows` is given; seconds per step returned. */
-static double pair(const Api *plant, const Api *law, fmi2ValueReference cx, fmi2ValueReference out_vr, int steps,
-                   double h, FILE *rows) {
-    const fmi2ValueReference states[6] = {VR_X, VR_X + 1, VR_X + 2, VR_X + 3, VR_X + 4, VR_X + 5}, u_vr = VR_U;
+/* The value references of a closed loop: the plant's states (from x) and input u, the controller's measured
+   states (from cx) and output cu. */
+typedef struct {
+    fmi2ValueReference x, u, cx, cu;
+} Loop;
+
+/* A closed loop on two FMUs, Gauss-Seidel as our master: the plant's states into the controller, its u into
+   the plant, then both step. Rows "t,6 states,u" when `rows` is given; seconds per step returned. */
+static double run_pair(const Api *plant, const Api *law, Loop vr, int steps, double h, FILE *rows) {
+    const fmi2ValueReference states[6] = {vr.x, vr.x + 1, vr.x + 2, vr.x + 3, vr.x + 4, vr.x + 5}, u_vr = vr.u;
+    const fmi2ValueReference cx = vr.cx, out_vr = vr.cu;
     const fmi2ValueReference measured[6] = {cx, cx + 1, cx + 2, cx + 3, cx + 4, cx + 5};
     fmi2Component p = start(plant, 0, NULL, NULL);
     instance_name = "controller";
@@ -273,7 +246,7 @@ static int parse_vrs(int n_args, char **args, unsigned int set_vr[], double set_
 }
 
 /* Any FMU alone: the Real settings "VR=VALUE" of args, then rows "t,values" of the other args' VRs at each step. */
-static int outputs(const Api *api, int steps, double h, int n_args, char **args) {
+static int print_outputs(const Api *api, int steps, double h, int n_args, char **args) {
     fmi2ValueReference set_vr[MAX_VR], get_vr[MAX_VR];
     double set_v[MAX_VR], y[MAX_VR];
     size_t n_set, n_get;
@@ -298,8 +271,8 @@ static void logger3(fmi3InstanceEnvironment env, fmi3Status status, fmi3String c
     if (!quiet) fprintf(stderr, "[%d] %s\n", status, message);
 }
 
-/* outputs() for an FMI 3.0 co-simulation FMU: Float64 settings in initialization mode, then rows of Float64s. */
-static int outputs3(const char *library, const char *token, int steps, double h, int n_args, char **args) {
+/* print_outputs() for an FMI 3.0 co-simulation FMU: Float64 settings in initialization mode, then rows of Float64s. */
+static int print_outputs3(const char *library, const char *token, int steps, double h, int n_args, char **args) {
     void *lib = open_library(library);
     fmi3InstantiateCoSimulationTYPE *instantiate =
         (fmi3InstantiateCoSimulationTYPE *)SYMBOL(lib, "fmi3InstantiateCoSimulation");
@@ -343,115 +316,121 @@ static int outputs3(const char *library, const char *token, int steps, double h,
     return ok;
 }
 
+/* ---- the modes: each gets its arguments after LIB GUID and returns the exit status ---------------------------- */
+
+#define VR(text) ((fmi2ValueReference)atoi(text))
+
+static int mode_outputs(const Api *api, const char *mode, int n, char **a) { /* STEPS H [VR=VALUE]... VR... */
+    (void)mode;
+    return n >= 2 && print_outputs(api, atoi(a[0]), atof(a[1]), n - 2, a + 2) ? 0 : 6;
+}
+
+static int mode_pair(const Api *api, const char *mode, int n, char **a) { /* CLIB CGUID STEPS H X U CX CU */
+    if (n != 8) return 2;
+    Api law = load(a[0], a[1]);
+    int bench = !strcmp(mode, "pair-bench");
+    double per_step = run_pair(api, &law, (Loop){VR(a[4]), VR(a[5]), VR(a[6]), VR(a[7])}, atoi(a[2]), atof(a[3]),
+                           bench ? NULL : stdout);
+    if (bench) printf("%.9g\n", per_step);
+    return 0;
+}
+
+static int mode_run(const Api *api, const char *mode, int n, char **a) { /* STEPS H X */
+    (void)mode;
+    if (n != 3) return 2;
+    int steps = atoi(a[0]);
+    double *rows = rows_for(steps);
+    fmi2Component c = start(api, 0, NULL, NULL);
+    if (!c || !run(api, c, VR(a[2]), steps, atof(a[1]), rows)) return 6;
+    api->free_instance(c);
+    print_rows(rows, steps);
+    return 0;
+}
+
+static int mode_cycles(const Api *api, const char *mode, int n, char **a) { /* N X */
+    (void)mode;
+    if (n != 2) return 2;
+    quiet = 1;
+    double rows[7 * 11];
+    for (int i = 1; i <= atoi(a[0]); i++) {
+        fmi2Component c = start(api, 0, NULL, NULL);
+        if (!c || !run(api, c, VR(a[1]), 10, 1e-3, rows)) return 6;
+        api->free_instance(c);
+        if (i % 1000 == 0) printf("%d,%ld\n", i, rss_kb());
+    }
+    return 0;
+}
+
+static int mode_after_failure(const Api *api, const char *mode, int n, char **a) { /* STEPS H X VR=VALUE */
+    (void)mode;
+    fmi2ValueReference bad_vr;
+    double bad;
+    size_t n_bad, n_get;
+    if (n != 4 || !parse_vrs(1, a + 3, &bad_vr, &bad, &n_bad, &bad_vr, &n_get) || n_bad != 1) return 2;
+    int steps = atoi(a[0]);
+    double *rows = rows_for(steps);
+    if (start(api, 1, &bad_vr, &bad) != NULL) return 8; /* must be refused */
+    fmi2Component c = start(api, 0, NULL, NULL);
+    if (!c || !run(api, c, VR(a[2]), steps, atof(a[1]), rows)) return 6;
+    api->free_instance(c);
+    print_rows(rows + 7 * steps, 0);
+    return 0;
+}
+
+#ifndef _WIN32
+static int mode_threads(const Api *api, const char *mode, int n, char **a) { /* STEPS H X */
+    (void)mode;
+    if (n != 3) return 2;
+    int steps = atoi(a[0]);
+    double h = atof(a[1]);
+    Job alone = {api, VR(a[2]), steps, h, rows_for(steps), 0}, jobs[2];
+    run_job(&alone);
+    pthread_t threads[2];
+    for (int i = 0; i < 2; i++) {
+        jobs[i] = (Job){api, VR(a[2]), steps, h, rows_for(steps), 0};
+        if (pthread_create(&threads[i], NULL, run_job, &jobs[i])) return 9;
+    }
+    for (int i = 0; i < 2; i++) pthread_join(threads[i], NULL);
+    size_t size = (size_t)(steps + 1) * 7 * sizeof(double);
+    int same = alone.ok && jobs[0].ok && jobs[1].ok && !memcmp(alone.rows, jobs[0].rows, size) &&
+               !memcmp(alone.rows, jobs[1].rows, size);
+    printf(same ? "same\n" : "differ\n");
+    return 0;
+}
+
+static int mode_maps(const Api *api, const char *mode, int n, char **a) {
+    (void)mode, (void)n, (void)a;
+    fmi2Component c = start(api, 0, NULL, NULL);
+    if (!c) return 6;
+    FILE *f = fopen("/proc/self/maps", "r");
+    char line[4096];
+    while (f && fgets(line, sizeof line, f))
+        if (strstr(line, "python")) fputs(line, stdout);
+    if (f) fclose(f);
+    api->free_instance(c);
+    return 0;
+}
+#endif
+
+static const struct {
+    const char *name;
+    int (*run)(const Api *api, const char *mode, int n, char **args);
+} MODES[] = {{"outputs", mode_outputs}, {"pair", mode_pair}, {"pair-bench", mode_pair}, {"run", mode_run},
+             {"cycles", mode_cycles}, {"after-failure", mode_after_failure},
+#ifndef _WIN32
+             {"threads", mode_threads}, {"maps", mode_maps},
+#endif
+};
+
 int main(int argc, char **argv) {
     if (argc < 4) return 2;
-    const char *command = argv[1];
-    if (!strcmp(command, "outputs3") && argc >= 7)
-        return outputs3(argv[2], argv[3], atoi(argv[4]), atof(argv[5]), argc - 6, argv + 6) ? 0 : 6;
-    Api api = load(argv[2], argv[3]);
-    if ((!strcmp(command, "pair") || !strcmp(command, "pair-bench")) && (argc == 8 || argc == 10)) {
-        Api law = load(argv[4], argv[5]);
-        int bench = !strcmp(command, "pair-bench");
-        fmi2ValueReference cx = argc == 10 ? (fmi2ValueReference)atoi(argv[8]) : VR_C_X;
-        fmi2ValueReference cu = argc == 10 ? (fmi2ValueReference)atoi(argv[9]) : VR_C_U;
-        double per_step = pair(&api, &law, cx, cu, atoi(argv[6]), atof(argv[7]), bench ? NULL : stdout);
-        if (bench) printf("%.9g\n", per_step);
-        return 0;
-    }
-    if (!strcmp(command, "outputs") && argc >= 7) return outputs(&api, atoi(argv[4]), atof(argv[5]), argc - 6, argv + 6) ? 0 : 6;
-    if (!strcmp(command, "run") && argc == 6) {
-        int steps = atoi(argv[4]);
-        double *rows = rows_for(steps);
-        fmi2Component c = start(&api, 0, NULL, NULL);
-        if (!c || !run(&api, c, steps, atof(argv[5]), rows)) return 6;
-        api.free_instance(c);
-        print_rows(rows, steps);
-        return 0;
-    }
-    if (!strcmp(command, "paper") && argc == 6) {
-        int steps = atoi(argv[4]);
-        double h = atof(argv[5]), y[6], u;
-        const fmi2ValueReference states[6] = {VR_X, VR_X + 1, VR_X + 2, VR_X + 3, VR_X + 4, VR_X + 5}, u_vr = VR_U;
-        fmi2Component c = start(&api, 0, NULL, NULL);
-        if (!c) return 6;
-        for (int k = 0; k <= steps; k++) {
-            if (api.get(c, states, 6, y) > fmi2Warning) return 6;
-            u = paper_law(y);
-            if (api.set(c, &u_vr, 1, &u) > fmi2Warning) return 6;
-            printf("%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", k * h, y[0], y[1], y[2], y[3], y[4], y[5], u);
-            if (k < steps && api.step(c, k * h, h, fmi2True) > fmi2Warning) return 6;
+    const char *mode = argv[1];
+    if (!strcmp(mode, "outputs3"))
+        return argc >= 6 && print_outputs3(argv[2], argv[3], atoi(argv[4]), atof(argv[5]), argc - 6, argv + 6) ? 0 : 6;
+    for (size_t i = 0; i < sizeof MODES / sizeof *MODES; i++)
+        if (!strcmp(mode, MODES[i].name)) {
+            Api api = load(argv[2], argv[3]);
+            return MODES[i].run(&api, mode, argc - 4, argv + 4);
         }
-        api.free_instance(c);
-        return 0;
-    }
-    if (!strcmp(command, "cycles") && argc == 5) {
-        quiet = 1;
-        double rows[7 * 11];
-        for (int i = 1; i <= atoi(argv[4]); i++) {
-            fmi2Component c = start(&api, 0, NULL, NULL);
-            if (!c || !run(&api, c, 10, 1e-3, rows)) return 6;
-            api.free_instance(c);
-            if (i % 1000 == 0) printf("%d,%ld\n", i, rss_kb());
-        }
-        return 0;
-    }
-    if (!strcmp(command, "after-failure") && argc == 6) {
-        int steps = atoi(argv[4]);
-        double h = atof(argv[5]), bad = -1.0, *rows = rows_for(steps);
-        fmi2ValueReference l1 = VR_L1;
-        if (start(&api, 1, &l1, &bad) != NULL) return 8; /* must be refused */
-        fmi2Component c = start(&api, 0, NULL, NULL);
-        if (!c || !run(&api, c, steps, h, rows)) return 6;
-        api.free_instance(c);
-        print_rows(rows + 7 * steps, 0);
-        return 0;
-    }
-#ifndef _WIN32
-    if (!strcmp(command, "threads") && argc == 6) {
-        int steps = atoi(argv[4]);
-        double h = atof(argv[5]);
-        Job alone = {&api, steps, h, rows_for(steps), 0}, jobs[2];
-        run_job(&alone);
-        pthread_t threads[2];
-        for (int i = 0; i < 2; i++) {
-            jobs[i] = (Job){&api, steps, h, rows_for(steps), 0};
-            if (pthread_create(&threads[i], NULL, run_job, &jobs[i])) return 9;
-        }
-        for (int i = 0; i < 2; i++) pthread_join(threads[i], NULL);
-        size_t size = (size_t)(steps + 1) * 7 * sizeof(double);
-        int same = alone.ok && jobs[0].ok && jobs[1].ok && !memcmp(alone.rows, jobs[0].rows, size) &&
-                   !memcmp(alone.rows, jobs[1].rows, size);
-        printf(same ? "same\n" : "differ\n");
-        return 0;
-    }
-    if (!strcmp(command, "maps")) {
-        fmi2Component c = start(&api, 0, NULL, NULL);
-        if (!c) return 6;
-        FILE *f = fopen("/proc/self/maps", "r");
-        char line[4096];
-        while (f && fgets(line, sizeof line, f))
-            if (strstr(line, "python")) fputs(line, stdout);
-        if (f) fclose(f);
-        api.free_instance(c);
-        return 0;
-    }
-#endif
-    if (!strcmp(command, "bench") && argc == 6) {
-        int steps = atoi(argv[4]);
-        double h = atof(argv[5]), y[6], u;
-        const fmi2ValueReference states[6] = {VR_X, VR_X + 1, VR_X + 2, VR_X + 3, VR_X + 4, VR_X + 5}, u_vr = VR_U;
-        fmi2Component c = start(&api, 0, NULL, NULL);
-        if (!c) return 6;
-        double t0 = seconds();
-        for (int k = 0; k < steps; k++) {
-            api.get(c, states, 6, y);
-            u = paper_law(y);
-            api.set(c, &u_vr, 1, &u);
-            if (api.step(c, k * h, h, fmi2True) > fmi2Warning) return 6;
-        }
-        printf("%.9g\n", (seconds() - t0) / steps);
-        api.free_instance(c);
-        return 0;
-    }
     return 2;
 }

@@ -8,14 +8,14 @@ from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Slave, Fmi2Variability, Re
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
-from crane_fmu.fmu_src.runtime import AUTHOR, Runtime, SlaveCalls, register
+from crane_fmu.fmu_src.python.runtime import AUTHOR, Runtime, SlaveCalls, register
 
 
 def slave_base(component):
     """An ``Fmi2Slave`` subclass that runs ``component``."""
 
     class Base(SlaveCalls, Fmi2Slave):
-        WARNING, ERROR = Fmi2Status.warning, Fmi2Status.error
+        WARNING, DISCARD = Fmi2Status.warning, Fmi2Status.discard
         author = AUTHOR
         description = component.description
         default_experiment = (DefaultExperiment(*component.default_experiment)

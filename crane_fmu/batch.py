@@ -118,7 +118,7 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
 
 def _on_dask(task, items, extra, workers, scheduler, kwargs):
     """The results of ``task`` on Dask as they finish; ``extra`` (the shared data) scattered to every worker once."""
-    from distributed import Client, LocalCluster
+    from distributed import Client, LocalCluster  # optional: the dask extra
     from distributed import as_completed as finished
 
     if scheduler:

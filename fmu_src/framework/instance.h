@@ -1,16 +1,17 @@
 /*
- * What the FMI 2.0 and 3.0 frameworks share: one instance over one model (model.h), its state
- * machine as bit masks (the modes of co-simulation without event mode, FMI 2.0 section 4.2.4 and
- * FMI 3.0 section 4.2), the FMU states it made, and checked allocations. No globals: any number of
+ * What the FMI 2.0 and 3.0 frameworks share: one instance over one model (model.h), its state machine as bit
+ * masks (the modes of co-simulation without event mode, FMI 2.0 section 4.2.4 and FMI 3.0 section 4.2), the
+ * argument checks, the FMU states it made (any other pointer refused) and the log. No globals: any number of
  * instances, in any threads (one instance is called from one thread at a time, as FMI requires).
  */
-#ifndef FRAMEWORK_H
-#define FRAMEWORK_H
+#ifndef INSTANCE_H
+#define INSTANCE_H
 
 #include <stddef.h>
 
 #include "model.h"
 
+/* The modes; after an error the instance is FAILED until it is reset or a saved state is set back. */
 enum { INSTANTIATED = 1, INITIALIZATION = 2, STEPPING = 4, STEP_DISCARDED = 8, TERMINATED = 16, FAILED = 32 };
 #define ANY_MODE (INSTANTIATED | INITIALIZATION | STEPPING | STEP_DISCARDED | TERMINATED | FAILED)
 #define GETTABLE (INITIALIZATION | STEPPING | STEP_DISCARDED | TERMINATED | FAILED)
@@ -20,27 +21,26 @@ struct Instance;
 /* Passes one message to the host's logger (each FMI version has its own signature). */
 typedef void (*HostLog)(struct Instance *c, ModelStatus status, const char *category, const char *message);
 
-/* An FMU state: a copy of the model with the instance's mode and time. */
-typedef struct {
-    char magic[4]; /* "CRN1" */
-    int mode;
-    double time;
-} StateHeader;
+typedef struct SavedState SavedState;
 
 typedef struct Instance {
     char *name;
     int mode, logging_on;
     double time;                 /* the last successful communication point */
-    Model *model;
-    void **states;               /* the FMU states this instance made and has not freed */
+    const ModelType *type;
+    void *model;                 /* type->size(type) bytes */
+    Instantiation at;            /* kept for a reset */
+    SavedState **states;         /* the FMU states this instance made and has not freed */
     size_t n_states, states_size;
     const char *const *mode_names;
     HostLog host_log;
     void *host;                  /* the version's callbacks, kept by its framework */
 } Instance;
 
-Instance *instance_new(const char *function, const char *name, const char *const *mode_names, HostLog host_log,
-                       void *host, int logging_on);
+/* A new instance of the model `type`, instantiated; NULL (logged through `host_log`, which gets a bare instance
+   then) if that fails. `location` is the resources' URI (FMI 2.0) or path (FMI 3.0), or NULL. */
+Instance *instance_new(const char *function, const ModelType *type, const char *name, const char *location,
+                       int visible, int logging_on, const char *const *mode_names, HostLog host_log, void *host);
 void instance_free(Instance *c);
 /* Logs a message, an error's with the FMI function's name first ("fmi2DoStep: ..."); returns `status`. */
 int instance_log(Instance *c, ModelStatus status, const char *function, const char *message);
@@ -48,9 +48,10 @@ int instance_log(Instance *c, ModelStatus status, const char *function, const ch
 int allowed(Instance *c, const char *function, int modes);
 /* A refused call (bad arguments): an error and the reason, the mode unchanged. */
 int refuse(Instance *c, const char *function, const char *why);
-Reporter reporter(Instance *c, const char *function);
+int set_logging(Instance *c, const char *function, int on);
 
-int enter_initialization(Instance *c, const char *function, double start);
+int setup_experiment(Instance *c, const char *function, const Experiment *e);
+int enter_initialization(Instance *c, const char *function);
 int exit_initialization(Instance *c, const char *function);
 int terminate(Instance *c, const char *function);
 int reset(Instance *c, const char *function);

@@ -1,14 +1,14 @@
 /*
- * FMI 3.0 co-simulation over the model interface (model.h): the official fmi3Functions.h, each
- * call mapped to framework.c. Value reference 0 is the independent variable `time`; the model's
- * variables follow from 1 (the FMI 2.0 value reference plus one, as in the Python FMU).
+ * FMI 3.0 co-simulation over the model interface (model.h) of this FMU's model (FMU_MODEL): the official
+ * fmi3Functions.h, each call mapped to instance.c. Value reference 0 is the independent variable `time`,
+ * answered here; the model's variables follow from 1 (the FMI 2.0 value reference plus one).
  */
 #include <stdlib.h>
 #include <string.h>
 
 #include "fmi3Functions.h"
-#include "fmi3_functions.h"
-#include "framework.h"
+#include "fmi3_calls.h"
+#include "instance.h"
 
 static const char *const MODE_NAMES[] = {
     "instantiated", "in initialization mode", "in step mode", "in step mode after a discarded step", "terminated",
@@ -31,23 +31,24 @@ FMI3_Export fmi3Instance fmi3InstantiateCoSimulation(
     fmi3Boolean event_mode_used, fmi3Boolean early_return_allowed, const fmi3ValueReference required[],
     size_t n_required, fmi3InstanceEnvironment environment, fmi3LogMessageCallback log_message,
     fmi3IntermediateUpdateCallback intermediate_update) {
-    (void)resource_path, (void)visible, (void)early_return_allowed, (void)required, (void)n_required;
-    (void)intermediate_update;
+    (void)early_return_allowed, (void)required, (void)n_required, (void)intermediate_update;
     if (!name) return NULL;
     Host *h = calloc(1, sizeof *h);
     if (!h) return NULL;
     *h = (Host){environment, log_message};
-    Instance *c = instance_new("fmi3InstantiateCoSimulation", name, MODE_NAMES, host_log, h, logging_on);
-    if (c && event_mode_used) {
-        refuse(c, "fmi3InstantiateCoSimulation", "this FMU has no event mode");
-    } else if (c && token && strcmp(token, MODEL_TOKEN) != 0) {
-        refuse(c, "fmi3InstantiateCoSimulation", "the instantiation token is not this FMU's");
-    } else if (c) {
-        return c;
+    Instance bare = {.name = (char *)name, .logging_on = logging_on, .host = h}; /* logs before an instance exists */
+    Instance *c = NULL;
+    if (event_mode_used) {
+        host_log(&bare, MODEL_ERROR, "logStatusError", "fmi3InstantiateCoSimulation: this FMU has no event mode");
+    } else if (token && FMU_MODEL->token && strcmp(token, FMU_MODEL->token) != 0) {
+        host_log(&bare, MODEL_ERROR, "logStatusError",
+                 "fmi3InstantiateCoSimulation: the instantiation token is not this FMU's");
+    } else {
+        c = instance_new("fmi3InstantiateCoSimulation", FMU_MODEL, name, resource_path, visible, logging_on,
+                         MODE_NAMES, host_log, h);
     }
-    instance_free(c);
-    free(h);
-    return NULL;
+    if (!c) free(h);
+    return c;
 }
 
 FMI3_Export fmi3Instance fmi3InstantiateModelExchange(fmi3String name, fmi3String token, fmi3String resource_path,
@@ -78,15 +79,14 @@ FMI3_Export void fmi3FreeInstance(fmi3Instance c) {
 
 fmi3Status fmi3SetDebugLogging(fmi3Instance c, fmi3Boolean on, size_t n, const fmi3String cats[]) {
     (void)n, (void)cats;
-    if (!allowed(c, "fmi3SetDebugLogging", ANY_MODE)) return fmi3Error;
-    ((Instance *)c)->logging_on = on;
-    return fmi3OK;
+    return set_logging(c, "fmi3SetDebugLogging", on);
 }
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean tolerance_defined, fmi3Float64 tolerance,
                                        fmi3Float64 start, fmi3Boolean stop_defined, fmi3Float64 stop) {
-    (void)tolerance_defined, (void)tolerance, (void)stop_defined, (void)stop;
-    return enter_initialization(c, "fmi3EnterInitializationMode", start);
+    Experiment e = {start, stop, tolerance, stop_defined, tolerance_defined};
+    int status = setup_experiment(c, "fmi3EnterInitializationMode", &e);
+    return (fmi3Status)(status > MODEL_WARNING ? status : enter_initialization(c, "fmi3EnterInitializationMode"));
 }
 fmi3Status fmi3ExitInitializationMode(fmi3Instance c) { return exit_initialization(c, "fmi3ExitInitializationMode"); }
 fmi3Status fmi3Terminate(fmi3Instance c) { return terminate(c, "fmi3Terminate"); }

@@ -1,13 +1,13 @@
 /*
- * FMI 2.0 co-simulation over the model interface (model.h): the official fmi2Functions.h, each
- * call mapped to framework.c. The functions this FMU does not support answer fmi2Error.
+ * FMI 2.0 co-simulation over the model interface (model.h) of this FMU's model (FMU_MODEL): the official
+ * fmi2Functions.h, each call mapped to instance.c. The functions this FMU does not support answer fmi2Error.
  */
 #include <stdlib.h>
 #include <string.h>
 
 #include "fmi2Functions.h"
-#include "fmi2_functions.h"
-#include "framework.h"
+#include "fmi2_calls.h"
+#include "instance.h"
 
 static const char *const MODE_NAMES[] = {
     "instantiated", "in initialization mode", "in step-complete state",
@@ -29,22 +29,22 @@ FMI2_Export const char *fmi2GetVersion(void) { return fmi2Version; }
 FMI2_Export fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, fmi2String location,
                                           const fmi2CallbackFunctions *functions, fmi2Boolean visible,
                                           fmi2Boolean logging_on) {
-    (void)location, (void)visible;
-    if (!functions || !functions->logger || !name) return NULL;
+    if (!functions || !name) return NULL;
     Host *h = calloc(1, sizeof *h);
     if (!h) return NULL;
     h->cb = *functions;
-    Instance *c = instance_new("fmi2Instantiate", name, MODE_NAMES, host_log, h, logging_on);
-    if (c && type != fmi2CoSimulation) {
-        refuse(c, "fmi2Instantiate", "this FMU supports co-simulation only");
-    } else if (c && guid && strcmp(guid, MODEL_TOKEN) != 0) {
-        refuse(c, "fmi2Instantiate", "the GUID is not this FMU's (a modelDescription.xml of another build?)");
-    } else if (c) {
-        return c;
+    Instance bare = {.name = (char *)name, .logging_on = logging_on, .host = h}; /* logs before an instance exists */
+    Instance *c = NULL;
+    if (type != fmi2CoSimulation) {
+        host_log(&bare, MODEL_ERROR, "logStatusError", "fmi2Instantiate: this FMU supports co-simulation only");
+    } else if (guid && FMU_MODEL->token && strcmp(guid, FMU_MODEL->token) != 0) {
+        host_log(&bare, MODEL_ERROR, "logStatusError",
+                 "fmi2Instantiate: the GUID is not this FMU's (a modelDescription.xml of another build?)");
+    } else {
+        c = instance_new("fmi2Instantiate", FMU_MODEL, name, location, visible, logging_on, MODE_NAMES, host_log, h);
     }
-    instance_free(c);
-    free(h);
-    return NULL;
+    if (!c) free(h);
+    return c;
 }
 
 FMI2_Export void fmi2FreeInstance(fmi2Component c) {
@@ -56,21 +56,17 @@ FMI2_Export void fmi2FreeInstance(fmi2Component c) {
 
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n, const fmi2String cats[]) {
     (void)n, (void)cats;
-    if (!allowed(c, "fmi2SetDebugLogging", ANY_MODE)) return fmi2Error;
-    ((Instance *)c)->logging_on = on;
-    return fmi2OK;
+    return set_logging(c, "fmi2SetDebugLogging", on);
 }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolerance_defined, fmi2Real tolerance, fmi2Real start,
                                fmi2Boolean stop_defined, fmi2Real stop) {
-    (void)tolerance_defined, (void)tolerance, (void)stop_defined, (void)stop;
-    if (!allowed(c, "fmi2SetupExperiment", INSTANTIATED)) return fmi2Error;
-    ((Instance *)c)->time = start;
-    return fmi2OK;
+    Experiment e = {start, stop, tolerance, stop_defined, tolerance_defined};
+    return setup_experiment(c, "fmi2SetupExperiment", &e);
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-    return enter_initialization(c, "fmi2EnterInitializationMode", c ? ((Instance *)c)->time : 0.0);
+    return enter_initialization(c, "fmi2EnterInitializationMode");
 }
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) { return exit_initialization(c, "fmi2ExitInitializationMode"); }
 fmi2Status fmi2Terminate(fmi2Component c) { return terminate(c, "fmi2Terminate"); }
@@ -82,6 +78,12 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Real v[]) {
     return set_reals(c, "fmi2SetReal", vr, n, v);
 }
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2String v[]) {
+    return get_strings(c, "fmi2GetString", vr, n, v);
+}
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2String v[]) {
+    return set_strings(c, "fmi2SetString", vr, n, v);
+}
 
 #define NO_VALUES(Name, modes, ctype)                                                                        \
     fmi2Status Name(fmi2Component c, const fmi2ValueReference vr[], size_t n, ctype v[]) {                   \
@@ -92,13 +94,6 @@ NO_VALUES(fmi2GetInteger, GETTABLE, fmi2Integer)
 NO_VALUES(fmi2GetBoolean, GETTABLE, fmi2Boolean)
 NO_VALUES(fmi2SetInteger, SETTABLE, const fmi2Integer)
 NO_VALUES(fmi2SetBoolean, SETTABLE, const fmi2Boolean)
-
-fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2String v[]) {
-    return get_strings(c, "fmi2GetString", vr, n, v);
-}
-fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2String v[]) {
-    return set_strings(c, "fmi2SetString", vr, n, v);
-}
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean no_prior) {
     (void)no_prior;

@@ -1,11 +1,11 @@
 /*
  * The FMI 3.0 FMUs' Linux binary: the counterpart of fmi2_loader.c. fmi3InstantiateCoSimulation
- * finds a CPython (find_python.h), loads the wrapper (fmi3_wrapper.c, next to this file as
- * PythonWrapper.so) and every FMI call is forwarded to it.
+ * finds a CPython (find_python.h), loads the wrapper (the FMI 3.0 framework over the Python model,
+ * python_model.c, next to this file as PythonWrapper.so) and every FMI call is forwarded to it.
  */
 #include "find_python.h"
 #include "fmi3Functions.h"
-#include "fmi3_functions.h"
+#include "fmi3_calls.h"
 
 #define POINTER(ret, name, params, args) static name##TYPE *p_##name;
 FMI3_IMPLEMENTED(POINTER)

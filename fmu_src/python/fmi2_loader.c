@@ -1,13 +1,13 @@
 /*
  * The FMI 2.0 FMUs' Linux binary: a loader with no dependency on Python. fmi2Instantiate finds a
- * CPython (find_python.h), loads the wrapper (fmi2_wrapper.c, next to this file as
- * PythonWrapper.so) and every FMI call is forwarded to it. Where no Python is found, the host gets
+ * CPython (find_python.h), loads the wrapper (the FMI 2.0 framework over the Python model,
+ * python_model.c, next to this file as PythonWrapper.so) and every FMI call is forwarded to it. Where no Python is found, the host gets
  * NULL from fmi2Instantiate and a log message listing every place tried, never a failed dlopen of
  * the FMU or a crash.
  */
 #include "find_python.h"
 #include "fmi2Functions.h"
-#include "fmi2_functions.h"
+#include "fmi2_calls.h"
 
 /* Pointers into the wrapper; a call before a successful fmi2Instantiate gets fmi2Error. */
 #define POINTER(ret, name, params, args) static name##TYPE *p_##name;

@@ -1,7 +1,7 @@
 /*
  * The FMI 2.0 co-simulation functions, one row each: X(return type, name, parameters, arguments).
- * Shared by the loader (which forwards every row) and the wrapper (which implements the first list
- * and answers the second with fmi2Error). Both include the official fmi2Functions.h, so the
+ * Shared by the Python FMUs' loader (python/fmi2_loader.c, which forwards every row) and the framework
+ * (fmi2Functions.c, which answers the second list with fmi2Error). Both include the official fmi2Functions.h, so the
  * compiler checks every row against the standard's prototypes. The first parameter is always `c`.
  * fmi2GetTypesPlatform, fmi2GetVersion, fmi2Instantiate and fmi2FreeInstance are written out.
  */

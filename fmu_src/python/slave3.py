@@ -8,7 +8,7 @@ from pythonfmu3 import Float64, Fmi3Causality, Fmi3Initial, Fmi3Slave, Fmi3Statu
 from pythonfmu3.default_experiment import DefaultExperiment
 from pythonfmu3.unit import Unit
 
-from crane_fmu.fmu_src.runtime import AUTHOR, Runtime, SlaveCalls, register
+from crane_fmu.fmu_src.python.runtime import AUTHOR, Runtime, SlaveCalls, register
 from crane_fmu.model.tables import BASE_UNITS
 
 
@@ -26,7 +26,7 @@ def slave_base(component):
     """An ``Fmi3Slave`` subclass that runs ``component``."""
 
     class Base(SlaveCalls, Fmi3Slave):
-        WARNING, ERROR = Fmi3Status.warning, Fmi3Status.error
+        WARNING, DISCARD = Fmi3Status.warning, Fmi3Status.discard
 
         def __init__(self, **kwargs):
             super().__init__(**kwargs)

@@ -1,7 +1,7 @@
 /*
  * The Sensor component in C: the native twin of Sensor in crane_fmu/model/disturbances.py (its
  * variables, _sensor_configure() rules and messages, noise() on splitmix64 with Box-Muller, measure()
- * and the one-step delay) behind the model interface of model.h. Its variables come from
+ * and the one-step delay), registered as a component (component.h). Its variables come from
  * Sensor_variables.h, generated from disturbances.SENSOR. Its state is (k, held): the sample count and
  * the last sample, none at first.
  */
@@ -11,10 +11,9 @@
 #include <string.h>
 
 #include "Sensor_variables.h"
-#include "model.h"
 #include "plant_math.h"
 #include "py_repr.h"
-#include "model_values.h"
+#include "rules.h"
 
 #define PI 3.141592653589793 /* math.pi */
 #define TWO_53 9007199254740992.0
@@ -26,27 +25,16 @@ typedef struct {
     int delay;
 } Config;
 
-struct Model {
-    double values[N_VARIABLES]; /* parameters and inputs by value reference */
-    int initialised;
-    Config config;             /* set when initialisation ends */
-    uint64_t k;                /* the state: samples taken, */
-    int have_held;             /* whether there is one, */
-    double held[N_OUTPUTS];    /* and the last */
-};
-
-MODEL_EXPORTS(0)
-MODEL_WITHOUT_STRINGS
+typedef struct {
+    uint64_t k;             /* samples taken, */
+    int have_held;          /* whether there is one, */
+    double held[N_OUTPUTS]; /* and the last */
+} State;
 
 #define V(name) (values[VR_##name])
 
-void model_defaults(Model *m) {
-    memset(m, 0, sizeof *m);
-    for (unsigned i = 0; i < N_VARIABLES; i++) m->values[i] = VARIABLE_TABLE[i].start;
-}
-
 /* The rules of _sensor_configure() in its order and words. */
-static ModelStatus setup(const double values[], Config *c, const Reporter *r) {
+static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
     static const unsigned sigmas[] = {VR_sigma_x, VR_sigma_dx, VR_sigma_theta, VR_sigma_dtheta};
     for (unsigned i = 0; i < 4; i++) {
         double value = values[sigmas[i]];
@@ -83,45 +71,21 @@ static void measure(const Config *c, uint64_t k, const double state[N_OUTPUTS], 
         out[i] = c->sigmas[i] != 0 ? state[i] + c->sigmas[i] * noise(c->seed, k, i) : state[i];
 }
 
-ModelStatus model_initialize(Model *m, const Reporter *r) {
-    ModelStatus status = setup(m->values, &m->config, r);
-    if (status != MODEL_OK) return status;
-    m->k = 0, m->have_held = 0; /* initial_state(): (0, None) */
-    m->initialised = 1;
-    return MODEL_OK;
-}
+static void initial_state(const double values[], const Config *c, State *s) { s->k = 0, s->have_held = 0; } /* (0, None) */
 
 /* _sensor_output(): the held sample when delayed, else (and at first) a sample of the inputs now. */
-static void outputs(const Model *m, const Config *c, double out[N_OUTPUTS]) {
-    if (!c->delay || !m->have_held) measure(c, m->k, &m->values[VR_x], out);
-    else memcpy(out, m->held, sizeof m->held);
-}
-
-ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r) {
-    double out[N_OUTPUTS];
-    int have_outputs = 0;
-    for (size_t i = 0; i < n; i++) {
-        if (vr[i] >= N_VARIABLES) return no_variable(r, vr[i]);
-        if (VARIABLE_TABLE[vr[i]].causality != OUTPUT) {
-            values[i] = m->values[vr[i]];
-            continue;
-        }
-        if (!have_outputs && m->initialised) {
-            outputs(m, &m->config, out);
-        } else if (!have_outputs) { /* before initialisation ends the outputs follow the parameters, at k = 0 */
-            Config c;
-            if (setup(m->values, &c, r) != MODEL_OK) return MODEL_ERROR;
-            measure(&c, 0, &m->values[VR_x], out);
-        }
-        have_outputs = 1;
-        values[i] = out[vr[i] - FIRST_OUTPUT];
-    }
+static ModelStatus outputs(const double values[], const Config *c, const State *s, double out[], const Reporter *r) {
+    if (!c->delay || !s->have_held) measure(c, s->k, &values[VR_x], out);
+    else memcpy(out, s->held, sizeof s->held);
     return MODEL_OK;
 }
 
-ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
-    (void)time;
-    measure(&m->config, m->k, &m->values[VR_x], m->held); /* _sensor_update(): (k + 1, measure(k)) */
-    m->k++, m->have_held = 1;
+/* _sensor_update(): (k + 1, measure(k)) */
+static ModelStatus update(const double values[], const Config *c, State *s, double time, double step,
+                          const Reporter *r) {
+    measure(c, s->k, &values[VR_x], s->held);
+    s->k++, s->have_held = 1;
     return MODEL_OK;
 }
+
+STATEFUL_COMPONENT;

@@ -1,7 +1,7 @@
 /*
  * The BacksteppingController component in C: the native twin of crane_fmu/model/backstepping.py (its
- * variables, configure() rules and messages, law() and the output limiting of limits.limited()) behind
- * the model interface of model.h. Its variables, value references and start values come from
+ * configure() rules and messages, law() and the output limiting of limits.limited()), registered as a
+ * component (component.h). Its variables, value references and start values come from
  * BacksteppingController_variables.h, generated from backstepping.VARIABLES. No state: the output u
  * follows the inputs of the same instant (direct feedthrough).
  */
@@ -10,10 +10,9 @@
 #include <string.h>
 
 #include "BacksteppingController_variables.h"
-#include "model.h"
 #include "plant_math.h"
 #include "py_repr.h"
-#include "model_values.h"
+#include "rules.h"
 
 /* What law() computes once from the parameters, named as there. */
 typedef struct {
@@ -23,26 +22,12 @@ typedef struct {
     double u_max, v_max, h;
 } Config;
 
-struct Model {
-    double values[N_VARIABLES]; /* Real parameters and inputs by value reference */
-    char b3_form[STRING_SIZE];
-    int initialised;
-    Config config; /* set when initialisation ends */
-};
-
-MODEL_EXPORTS(1)
-
 #define V(name) (values[VR_##name])
 #define R(value) py_repr(value, (char[REPR_SIZE]){0})
 
-void model_defaults(Model *m) {
-    memset(m, 0, sizeof *m);
-    for (unsigned i = 0; i < N_VARIABLES; i++) m->values[i] = VARIABLE_TABLE[i].start;
-    snprintf(m->b3_form, sizeof m->b3_form, "%s", VARIABLE_TABLE[VR_b3_form].text);
-}
-
 /* The rules of backstepping.configure() in its order and words: h, the limits, the plant model, the gains. */
-static ModelStatus setup(const double values[], const char *b3_form, Config *c, const Reporter *r) {
+static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
+    const char *b3_form = strings[STRING_b3_form];
     if (!(isfinite(V(h)) && V(h) > 0)) return rule(r, "h", "> 0 and finite", V(h));
     if (!(V(u_max) > 0)) return rule(r, "u_max", "> 0 (inf: no limit)", V(u_max));
     if (!(V(v_max) > 0)) return rule(r, "v_max", "> 0 (inf: no limit)", V(v_max));
@@ -98,47 +83,11 @@ static double law(const Config *c, const double s[6]) {
     return num / (c->w_x + c->w_1 * b2 * b2 + c->w_2 * b3 * b3);
 }
 
-static double output(const Config *c, const double values[]) {
+static ModelStatus outputs(const double values[], const Config *c, double out[], const Reporter *r) {
     const double *in = &values[VR_x];
     double u = law(c, in);
-    if (c->u_max == INFINITY && c->v_max == INFINITY) return u;
-    return limited(u, in[1], c->u_max, c->v_max, c->h);
-}
-
-ModelStatus model_initialize(Model *m, const Reporter *r) {
-    ModelStatus status = setup(m->values, m->b3_form, &m->config, r);
-    if (status != MODEL_OK) return status;
-    m->initialised = 1;
+    out[0] = c->u_max == INFINITY && c->v_max == INFINITY ? u : limited(u, in[1], c->u_max, c->v_max, c->h);
     return MODEL_OK;
 }
 
-ModelStatus model_get_reals(Model *m, const unsigned vr[], size_t n, double values[], const Reporter *r) {
-    for (size_t i = 0; i < n; i++) {
-        if (vr[i] >= N_VARIABLES) return no_variable(r, vr[i]);
-        if (VARIABLE_TABLE[vr[i]].type == STRING) return not_real(r, vr[i]);
-        if (VARIABLE_TABLE[vr[i]].causality != OUTPUT) {
-            values[i] = m->values[vr[i]];
-        } else if (m->initialised) {
-            values[i] = output(&m->config, m->values);
-        } else { /* before initialisation ends the output follows the parameters */
-            Config c;
-            if (setup(m->values, m->b3_form, &c, r) != MODEL_OK) return MODEL_ERROR;
-            values[i] = output(&c, m->values);
-        }
-    }
-    return MODEL_OK;
-}
-
-ModelStatus model_set_strings(Model *m, const unsigned vr[], size_t n, const char *const values[], int fixed_allowed,
-                              const Reporter *r) {
-    return set_string_value(m->b3_form, VR_b3_form, "one of derived, printed", vr, n, values, fixed_allowed, r);
-}
-
-ModelStatus model_get_strings(Model *m, const unsigned vr[], size_t n, const char *values[], const Reporter *r) {
-    return get_string_value(m->b3_form, VR_b3_form, vr, n, values, r);
-}
-
-ModelStatus model_do_step(Model *m, double time, double step, const Reporter *r) {
-    (void)m, (void)time, (void)step, (void)r; /* no state */
-    return MODEL_OK;
-}
+STATELESS_COMPONENT;

@@ -151,10 +151,10 @@ def register(slave, runtime, real, string, causality, variability, initial, unit
 class SlaveCalls:
     """The FMI calls that every slave delegates to its :class:`Runtime` (``self.runtime``).
 
-    A slave class sets ``WARNING`` and ``ERROR`` to its FMI version's log statuses.
+    A slave class sets ``WARNING`` and ``DISCARD`` to its FMI version's log statuses.
     """
 
-    WARNING = ERROR = None
+    WARNING = DISCARD = None
 
     def _index_reals(self, real):
         """Prepare the readers and writers of the variables of class ``real`` (Real or Float64)."""
@@ -245,7 +245,7 @@ class SlaveCalls:
         for note in runtime.notes:
             self.log(note)  # status OK: the host sees it when it asks for every message
         if reason:
-            self.log(reason, self.ERROR)
+            self.log(reason, self.DISCARD)
         return reason is None
 
     def _get_fmu_state(self):
