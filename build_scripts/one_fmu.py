@@ -274,7 +274,8 @@ def build_one_fmu(system, out_dir, fmi_version=2, name=None, tools=None):
         guid = "{" + str(uuid.UUID(digest.hexdigest()[:32])) + "}"
         model = SimpleNamespace(model_identifier=name, variables=p.variables, dependencies=lambda: p.dependencies,
                                 description=f"{system.name} as one native FMU: {system.description}".rstrip(": "),
-                                default_experiment=(system.start_time, system.stop_time, system.step))
+                                default_experiment=(system.start_time, system.stop_time, system.step),
+                                continuous=None)  # a system is co-simulation only
         (sources / f"{name}_variables.h").write_text(native.variables_header(model, guid))
         build = native.build_description(model, compiled) if fmi_version == 3 else None
         return native.write_fmu(name, out_dir, sources, compiled,

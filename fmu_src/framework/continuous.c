@@ -66,7 +66,8 @@ int update_discrete_states(Instance *c, const char *function, int *terminate, in
 static int array_checks(Instance *c, const char *function, int modes, const void *array, size_t n, size_t expected) {
     if (!checked(c, function, modes)) return 0;
     if (n != expected) {
-        refuse(c, function, n < expected ? "the array is shorter than the model's" : "the array is longer than the model's");
+        refuse(c, function,
+               n < expected ? "the array is shorter than the model's" : "the array is longer than the model's");
         return 0;
     }
     if (n && !array) return refuse(c, function, "NULL array"), 0;
@@ -74,7 +75,8 @@ static int array_checks(Instance *c, const char *function, int modes, const void
 }
 
 int get_continuous_states(Instance *c, const char *function, double x[], size_t n) {
-    if (!array_checks(c, function, INITIALIZATION | AFTER_INITIALIZATION, x, n, number_of_states(c))) return MODEL_ERROR;
+    if (!array_checks(c, function, INITIALIZATION | AFTER_INITIALIZATION, x, n, number_of_states(c)))
+        return MODEL_ERROR;
     Reporter r = instance_reporter(c, function);
     return settled(c, c->type->continuous->get_states(c->type, c->model, x, &r));
 }

@@ -126,7 +126,8 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean no_prior, fm
                                        fmi2Boolean *terminate) {
     (void)no_prior;
     int enter = 0, end = 0;
-    fmi2Status status = completed_integrator_step(c, "fmi2CompletedIntegratorStep", event && terminate ? &enter : NULL, &end);
+    fmi2Status status =
+        completed_integrator_step(c, "fmi2CompletedIntegratorStep", event && terminate ? &enter : NULL, &end);
     if (event && terminate) *event = enter != 0, *terminate = end != 0;
     return status;
 }

@@ -1,8 +1,9 @@
 /*
- * The FMI 2.0 co-simulation functions, one row each: X(return type, name, parameters, arguments).
- * Shared by the Python FMUs' loader (python/fmi2_loader.c, which forwards every row) and the framework
- * (fmi2Functions.c, which implements FMI2_MODEL_EXCHANGE and answers FMI2_OTHERS with fmi2Error). Both include the official fmi2Functions.h, so the
- * compiler checks every row against the standard's prototypes. The first parameter is always `c`.
+ * The FMI 2.0 functions, one row each: X(return type, name, parameters, arguments). Shared by the Python FMUs'
+ * loader (python/fmi2_loader.c, which forwards every row) and the framework (fmi2Functions.c, which implements
+ * the first list and FMI2_MODEL_EXCHANGE, and answers FMI2_OTHERS with fmi2Error). Both include the official
+ * fmi2Functions.h, so the compiler checks every row against the standard's prototypes.
+ * The first parameter is always `c`.
  * fmi2GetTypesPlatform, fmi2GetVersion, fmi2Instantiate and fmi2FreeInstance are written out.
  */
 #define FMI2_IMPLEMENTED(X)                                                                                  \

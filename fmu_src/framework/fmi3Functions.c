@@ -238,7 +238,8 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance c, fmi3Boolean no_prior, fmi
                                        fmi3Boolean *terminate) {
     (void)no_prior;
     int enter = 0, end = 0;
-    fmi3Status status = completed_integrator_step(c, "fmi3CompletedIntegratorStep", event && terminate ? &enter : NULL, &end);
+    fmi3Status status =
+        completed_integrator_step(c, "fmi3CompletedIntegratorStep", event && terminate ? &enter : NULL, &end);
     if (event && terminate) *event = enter != 0, *terminate = end != 0;
     return status;
 }

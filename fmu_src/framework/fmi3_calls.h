@@ -1,7 +1,8 @@
 /*
  * The FMI 3.0 functions, one row each: X(return type, name, parameters, arguments), like
  * fmi2_calls.h: the loader forwards every row, the framework (fmi3Functions.c) implements the first list and
- * FMI3_MODEL_EXCHANGE, and answers FMI3_OTHERS with fmi3Error. Checked against the official fmi3Functions.h by the compiler.
+ * FMI3_MODEL_EXCHANGE, and answers FMI3_OTHERS with fmi3Error. Checked against the official fmi3Functions.h by
+ * the compiler.
  * fmi3GetVersion, the three fmi3Instantiate* and fmi3FreeInstance are written out.
  */
 #define VRS_ fmi3Instance c, const fmi3ValueReference vr[], size_t nvr

@@ -277,7 +277,8 @@ ModelStatus component_directional(const ModelType *type, void *m, const unsigned
     for (size_t j = 0; j < nk; j++) {
         int i = position(q->state_vrs, q->n_states, knowns[j]);
         if (i >= 0) ds[i] += seed[j];
-        else if (knowns[j] >= q->first_input && knowns[j] < q->first_input + q->n_inputs) din[knowns[j] - q->first_input] += seed[j];
+        else if (knowns[j] >= q->first_input && knowns[j] < q->first_input + q->n_inputs)
+            din[knowns[j] - q->first_input] += seed[j];
         else
             return report(r, MODEL_ERROR, "value reference %u is neither a continuous state nor an input of %s: "
                           "the derivatives are by those", knowns[j], type->identifier);
@@ -289,7 +290,8 @@ ModelStatus component_directional(const ModelType *type, void *m, const unsigned
     for (size_t j = 0; j < nu; j++) {
         int i = position(q->derivative_vrs, q->n_states, unknowns[j]);
         if (i >= 0) sensitivity[j] = df[i];
-        else if (unknowns[j] >= k->first_output && unknowns[j] < k->n_variables) sensitivity[j] = dout[unknowns[j] - k->first_output];
+        else if (unknowns[j] >= k->first_output && unknowns[j] < k->n_variables)
+            sensitivity[j] = dout[unknowns[j] - k->first_output];
         else
             return report(r, MODEL_ERROR, "value reference %u is neither a derivative nor an output of %s",
                           unknowns[j], type->identifier);

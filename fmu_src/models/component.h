@@ -136,7 +136,7 @@ ModelStatus store_reals(const char *model, const VariableRow table[], unsigned n
         return outputs(v, c, out, r);                                                                        \
     }                                                                                                        \
     static const Component COMPONENT_ = {VARIABLE_TABLE, N_VARIABLES, FIRST_OUTPUT, N_OUTPUTS, N_STRINGS,    \
-                                         sizeof(Config), 0, configure_, NULL, outputs_, NULL};               \
+                                         sizeof(Config), 0, configure_, NULL, outputs_, NULL, NULL};         \
     COMPONENT_MODEL_(COMPONENT_)
 
 /* The registration of a model file whose component has a state: Config, State, configure(), initial_state(),
@@ -156,7 +156,7 @@ ModelStatus store_reals(const char *model, const VariableRow table[], unsigned n
     }                                                                                                        \
     static const Component COMPONENT_ = {VARIABLE_TABLE, N_VARIABLES, FIRST_OUTPUT, N_OUTPUTS, N_STRINGS,    \
                                          sizeof(Config), sizeof(State), configure_, initial_state_, outputs_, \
-                                         update_};                                                           \
+                                         update_, NULL};                                                     \
     COMPONENT_MODEL_(COMPONENT_)
 
 /* The registration of a model file whose component a host can also integrate: besides STATEFUL_COMPONENT's,

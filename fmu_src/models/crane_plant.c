@@ -66,7 +66,8 @@ static ModelStatus configure(const double values[], const StringValue strings[],
                       R(V(l1_max)), R(V(l1)));
     *c = (Config){{V(m1), V(m2), V(l1), V(l2), V(g)}, {0.0, 0.0, 0.0, V(c1), V(c2)}, V(max_substep),
                   unlimited(V(u_max)), unlimited(V(v_max)), V(tau), unlimited(V(x_min)), unlimited(V(x_max)),
-                  V(l1_min), unlimited(V(l1_max)), unlimited(V(dl1_max))}; /* 1e60 and beyond: no limit */
+                  V(l1_min), unlimited(V(l1_max)), unlimited(V(dl1_max)), /* 1e60 and beyond: no limit */
+                  .continuous = {.c1 = 0.0}};                                /* below */
     c->continuous = (ContinuousPlant){c->p, V(c1), V(c2), c->u_max, c->v_max, c->tau, c->x_min, c->x_max, c->l1_min,
                                       c->l1_max, c->dl1_max};
     return MODEL_OK;
