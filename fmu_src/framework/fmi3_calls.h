@@ -34,7 +34,7 @@
 
 /* Model Exchange and the directional and adjoint derivatives: the framework implements them for a model that
    has a ContinuousModel (model.h) and refuses them otherwise. */
-#define FMI3_MODEL_EXCHANGE(X)                                                                           \
+#define FMI3_MODEL_EXCHANGE(X)                                                                               \
     X(fmi3Status, fmi3EnterEventMode, (fmi3Instance c), (c))                                                 \
     X(fmi3Status, fmi3GetDirectionalDerivative, (fmi3Instance c, const fmi3ValueReference unknowns[],        \
       size_t nu, const fmi3ValueReference knowns[], size_t nk, const fmi3Float64 seed[], size_t ns,          \
@@ -58,7 +58,7 @@
     X(fmi3Status, fmi3GetNumberOfEventIndicators, (fmi3Instance c, size_t *n), (c, n))                       \
     X(fmi3Status, fmi3GetNumberOfContinuousStates, (fmi3Instance c, size_t *n), (c, n))
 
-#define FMI3_OTHERS(X)                                                                                   \
+#define FMI3_OTHERS(X)                                                                                       \
     GET_(X, Float32) GET_(X, Int8) GET_(X, UInt8) GET_(X, Int16) GET_(X, UInt16) GET_(X, UInt32)                               \
     SET_(X, Float32) SET_(X, Int8) SET_(X, UInt8) SET_(X, Int16) SET_(X, UInt16) SET_(X, UInt32)                               \
     X(fmi3Status, fmi3GetBinary, (VRS_, size_t sizes[], fmi3Binary v[], size_t n), (c, vr, nvr, sizes, v, n)) \
