@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 from .common import UsageError, number, writable_file
-from .simulate import _use, prepare, run_options
+from .simulate import on_system, open_recorder, prepare, run_options
 
 NAME = "serve"
 HELP = "run a system in real time or lock-step for a PLC or any program, over OPC UA and Modbus TCP"
@@ -71,13 +71,7 @@ def arguments(p):
 
 
 def run(args):
-    from crane_fmu import systems
-
-    try:
-        with systems.open_system(args.system) as system:
-            return _serve(args, _use(args.use, system))
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
+    return on_system(args, _serve)
 
 
 def timing_path(out):
@@ -165,14 +159,7 @@ def _serve(args, system):
 
 
 def _run(args, system, runner, endpoints):
-    from crane_fmu.cosim import recorder_for
-
-    try:
-        recorder = recorder_for(args.out)
-    except OSError as exc:
-        raise UsageError(f"--out {args.out}: cannot be written ({exc.strerror})") from None
-    except ImportError as exc:
-        raise UsageError(f"--out {args.out}: writing it needs {exc.name} (pip install {exc.name})") from None
+    recorder = open_recorder(args.out)
     runner.observers.append(recorder)
     runner.start()
     previous = _stop_on_signals(runner)  # from here Ctrl-C stops the run cleanly, also while it starts
