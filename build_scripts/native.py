@@ -45,6 +45,7 @@ FOLDERS = tuple(SOURCES / folder for folder in ("framework", "models", "system")
 MODELS_DIR = SOURCES / "models"
 HOST = SOURCES / "host" / "host.c"  # a C host for tests and benchmarks, in no FMU
 DERIVATIVE_BENCH = SOURCES / "host" / "derivative_bench.c"  # the Model Exchange derivatives' cost (bench)
+FMI_DERIVATIVE_BENCH = SOURCES / "host" / "fmi_derivative_bench.c"  # the same through the FMU's FMI 2.0 calls
 # every native FMU's: the framework's files and what the model files share; besides them each FMU compiles the
 # generated fmu_model.c, which names the model its framework runs
 COMMON = ("instance.c", "continuous.c", "py_repr.c", "component.c", "plant_equations.c", "portable_math.c", "linalg.c")
