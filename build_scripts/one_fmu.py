@@ -242,8 +242,14 @@ static const Link LINKS[N_LINKS] = {{
 def copied_sources(kinds, fmi_version):
     """The C files of fmu_src a one-FMU of components ``kinds`` is compiled from, and its headers (besides the
     generated ones)."""
-    return [*(components.get(k).native for k in kinds), *native.COMMON, "system.c", native.FRAMEWORKS[fmi_version][0],
-            *native.HEADERS, "system.h", native.FRAMEWORKS[fmi_version][1]]
+    c_files, h_files = _continuous(kinds)
+    return [*(components.get(k).native for k in kinds), *native.COMMON, *c_files, "system.c",
+            native.FRAMEWORKS[fmi_version][0], *native.HEADERS, *h_files, "system.h", native.FRAMEWORKS[fmi_version][1]]
+
+
+def _continuous(kinds):
+    """The C files and headers a component of ``kinds`` needs for its Model Exchange equations (none if none has)."""
+    return native.CONTINUOUS if any(components.get(k).continuous for k in kinds) else ((), ())
 
 
 def build_one_fmu(system, out_dir, fmi_version=2, name=None, tools=None):
@@ -253,7 +259,8 @@ def build_one_fmu(system, out_dir, fmi_version=2, name=None, tools=None):
     p = plan(system)
     kinds = list(dict.fromkeys(p.kinds.values()))
     framework = native.FRAMEWORKS[fmi_version]
-    compiled = [*(components.get(k).native for k in kinds), *native.COMMON, "system.c", framework[0], "fmu_model.c"]
+    compiled = [*(components.get(k).native for k in kinds), *native.COMMON, *_continuous(kinds)[0], "system.c",
+                framework[0], "fmu_model.c"]
     with tempfile.TemporaryDirectory(prefix="crane_one_fmu_") as tmp:
         sources = Path(tmp) / "sources"
         native.copy_sources(copied_sources(kinds, fmi_version), sources)
@@ -267,7 +274,8 @@ def build_one_fmu(system, out_dir, fmi_version=2, name=None, tools=None):
         guid = "{" + str(uuid.UUID(digest.hexdigest()[:32])) + "}"
         model = SimpleNamespace(model_identifier=name, variables=p.variables, dependencies=lambda: p.dependencies,
                                 description=f"{system.name} as one native FMU: {system.description}".rstrip(": "),
-                                default_experiment=(system.start_time, system.stop_time, system.step))
+                                default_experiment=(system.start_time, system.stop_time, system.step),
+                                continuous=None)  # a system is co-simulation only
         (sources / f"{name}_variables.h").write_text(native.variables_header(model, guid))
         build = native.build_description(model, compiled) if fmi_version == 3 else None
         return native.write_fmu(name, out_dir, sources, compiled,

@@ -76,7 +76,7 @@ def compile_binaries(out_dir, libpython=None, fallback_sonames=FALLBACK_SONAMES)
               f'-DFALLBACK_SONAMES="{":".join(fallback_sonames)}"', str(source), "-o", str(loader), "-ldl",
               "-lpthread"], source)
         sources = [PYTHON / "python_model.c", *(FRAMEWORK / f for f in (
-            f"fmi{version}Functions.c", "instance.c", "py_repr.c"))]
+            f"fmi{version}Functions.c", "instance.c", "continuous.c", "py_repr.c"))]
         _run([compiler, *flags, f"-DFMI_VERSION={version}", "-I", sysconfig.get_paths()["include"],
               *map(str, sources), "-o", str(wrapper), "-lpthread", "-lm"], sources[0])
         binaries[version] = loader, wrapper

@@ -20,10 +20,18 @@ from pathlib import Path
 
 from fmpy import read_model_description
 
-from crane_fmu import systems
+from crane_fmu import components, systems
 from crane_fmu.bench import ANCHOR_LOOP, _process_seconds, _timed_run, build_anchor
 from crane_fmu.build_scripts.build_fmus import build_all
-from crane_fmu.build_scripts.native import DERIVATIVE_BENCH, HOST, MODELS_DIR, compilers, native_dir
+from crane_fmu.build_scripts.native import (
+    DERIVATIVE_BENCH,
+    FMI_DERIVATIVE_BENCH,
+    HOST,
+    MODELS_DIR,
+    build_native_fmu,
+    compilers,
+    native_dir,
+)
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cosim.master import communication_points
 
@@ -97,24 +105,46 @@ def run_native_bench(stop_time=20.0, step=1e-3, repeat=5, out=print):
 
 
 def run_derivative_bench(evaluations=1_000_000, repeat=5, out=print):
-    """The cost of the native plant's Model Exchange derivatives, medians of ``repeat`` runs of a C loop.
+    """The cost of the native plant's Model Exchange derivatives, medians of ``repeat`` runs of C loops.
 
     ``fmu_src/host/derivative_bench.c`` calls the model's C functions (no FMI layer) at Section V's
     plant swinging: the derivatives, one directional derivative (with the derivatives), and the
-    whole Jacobian (one per state and input); microseconds per evaluation.
+    whole Jacobian (one per state and input); ``fmi_derivative_bench.c`` makes the same calls through
+    the native CranePlant FMU's FMI 2.0 Model Exchange interface (states set, derivatives got; every
+    derivative and output along one state; the Jacobian of the derivatives and outputs). Microseconds
+    per evaluation.
     """
+    tools = {"linux": compilers()["linux"], "windows": None}
     with tempfile.TemporaryDirectory(prefix="crane_bench_derivatives_") as tmp:
-        program = Path(tmp) / "derivative_bench"
-        subprocess.run([compilers()["linux"], "-O2", "-ffp-contract=off", f"-I{MODELS_DIR}", str(DERIVATIVE_BENCH),
+        program, fmi_program = Path(tmp) / "derivative_bench", Path(tmp) / "fmi_derivative_bench"
+        subprocess.run([tools["linux"], "-O2", "-ffp-contract=off", f"-I{MODELS_DIR}", str(DERIVATIVE_BENCH),
                         *(str(MODELS_DIR / f) for f in ("plant_continuous.c", "plant_equations.c")),
                         "-o", str(program), "-lm"], check=True)
+        subprocess.run([tools["linux"], "-O2", f"-I{fmi_headers()}", str(FMI_DERIVATIVE_BENCH), "-o",
+                        str(fmi_program), "-ldl"], check=True)
+        fmu = build_native_fmu(components.get("CranePlant"), Path(tmp), 2, tools)
+        with zipfile.ZipFile(fmu) as z:
+            library = Path(z.extract("binaries/linux64/CranePlant.so", tmp))
+        md = read_model_description(str(fmu))
+        inputs = [v.valueReference for v in md.modelVariables if v.causality == "input"]
+        outputs = [u.variable.valueReference for u in md.outputs]
+        states = [d.variable.derivative.valueReference for d in md.derivatives]
+        derivatives = [d.variable.valueReference for d in md.derivatives]
+        arguments = [str(library), str(evaluations), *map(str, (len(states), len(inputs), len(outputs))),
+                     *map(str, states + inputs + derivatives + outputs)]
         runs = [subprocess.run([str(program), str(evaluations)], check=True, capture_output=True,
                                text=True).stdout.split() for _ in range(repeat)]
+        fmi_runs = [subprocess.run([str(fmi_program), *arguments], check=True, capture_output=True,
+                                   text=True).stdout.split() for _ in range(repeat)]
     names = ("derivatives_us", "directional_us", "jacobian_us")
     figures = {name: statistics.median(float(r[i]) for r in runs) for i, name in enumerate(names)}
-    out(f"native CranePlant, Model Exchange, the model's C functions ({evaluations} evaluations, medians of {repeat} "
-        f"runs):")
-    out(f"  derivatives {figures['derivatives_us']:.3f} us; with one directional derivative "
+    figures.update({f"fmi_{name}": statistics.median(float(r[i]) for r in fmi_runs) for i, name in enumerate(names)})
+    out(f"native CranePlant, Model Exchange ({evaluations} evaluations, medians of {repeat} runs):")
+    out(f"  through FMI 2.0: states set and derivatives got {figures['fmi_derivatives_us']:.3f} us; one directional "
+        f"derivative of the {len(derivatives)} derivatives and {len(outputs)} outputs "
+        f"{figures['fmi_directional_us']:.3f} us; the whole Jacobian ({len(states) + len(inputs)} calls) "
+        f"{figures['fmi_jacobian_us']:.3f} us")
+    out(f"  the model's C functions: derivatives {figures['derivatives_us']:.3f} us; with one directional derivative "
         f"{figures['directional_us']:.3f} us; the whole Jacobian (13 directional derivatives) "
         f"{figures['jacobian_us']:.3f} us")
     return figures

@@ -100,7 +100,8 @@ def _declare_dependencies(md, mappings, inner, connections):
     for name, inner_md in inner.items():
         inputs = tuple(v.name for v in inner_md.modelVariables if v.causality == "input")
         dependencies[name] = {u.variable.name: inputs if u.dependencies is None else
-                              tuple(v.name for v in u.dependencies) for u in inner_md.outputs}
+                              tuple(v.name for v in u.dependencies if v.causality == "input")
+                              for u in inner_md.outputs}  # a continuous state an output lists is no input
     own = {v.name: v for v in md.modelVariables}
     targets = {v.name: [(c.name, t.name) for c, t in mapped] for v, mapped in mappings.items()}
     read = closed_loop.system_dependencies(dependencies, connections,

@@ -44,12 +44,14 @@ def _paths(fmu_dir, kind, version):
 
 
 def _declared(md, initial):
-    """``{output: set of the inputs its (initial) unknown lists}``, and the parameters each lists."""
+    """``{output: set of the inputs its (initial) unknown lists}``, and the parameters each lists (an FMU with
+    Model Exchange also lists the continuous states an output depends on: neither)."""
     unknowns = md.initialUnknowns if initial else md.outputs
     names = {v.name for v in md.modelVariables if v.causality == "input"}
-    found = {u.variable.name: {v.name for v in u.dependencies} for u in unknowns}
+    states = {d.variable.derivative.name for d in md.derivatives}
+    found = {u.variable.name: {v.name for v in u.dependencies} for u in unknowns if u.variable.causality == "output"}
     assert all(u.dependencies is not None for u in unknowns), "an unknown without a list claims every input"
-    return {o: deps & names for o, deps in found.items()}, {o: deps - names for o, deps in found.items()}
+    return {o: deps & names for o, deps in found.items()}, {o: deps - names - states for o, deps in found.items()}
 
 
 def _moved(fmu, vr, set_, get, inputs, outputs):

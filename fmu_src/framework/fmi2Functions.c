@@ -1,18 +1,21 @@
 /*
- * FMI 2.0 co-simulation over the model interface (model.h) of this FMU's model (FMU_MODEL): the official
- * fmi2Functions.h, each call mapped to instance.c. The functions this FMU does not support answer fmi2Error.
+ * FMI 2.0 co-simulation, and Model Exchange for a model that has a ContinuousModel, over the model interface
+ * (model.h) of this FMU's model (FMU_MODEL): the official fmi2Functions.h, each call mapped to instance.c (and
+ * continuous.c). The functions this FMU does not support answer fmi2Error.
  */
 #include <stdlib.h>
 #include <string.h>
 
 #include "fmi2Functions.h"
 #include "fmi2_calls.h"
+#include "continuous.h"
 #include "instance.h"
 
 static const char *const MODE_NAMES[] = {
     "instantiated", "in initialization mode", "in step-complete state",
     "in step-failed state (its last step was discarded)", "terminated",
-    "in error state (after an fmi2Error; fmi2Reset or fmi2SetFMUstate recover it)"};
+    "in error state (after an fmi2Error; fmi2Reset or fmi2SetFMUstate recover it)", "in event mode",
+    "in continuous-time mode"};
 
 typedef struct {
     fmi2CallbackFunctions cb;
@@ -35,13 +38,14 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2St
     h->cb = *functions;
     Instance bare = {.name = (char *)name, .logging_on = logging_on, .host = h}; /* logs before an instance exists */
     Instance *c = NULL;
-    if (type != fmi2CoSimulation) {
+    if (type != fmi2CoSimulation && !(type == fmi2ModelExchange && FMU_MODEL->continuous)) {
         host_log(&bare, MODEL_ERROR, "logStatusError", "fmi2Instantiate: this FMU supports co-simulation only");
     } else if (guid && FMU_MODEL->token && strcmp(guid, FMU_MODEL->token) != 0) {
         host_log(&bare, MODEL_ERROR, "logStatusError",
                  "fmi2Instantiate: the GUID is not this FMU's (a modelDescription.xml of another build?)");
     } else {
-        c = instance_new("fmi2Instantiate", FMU_MODEL, name, location, visible, logging_on, MODE_NAMES, host_log, h);
+        c = (type == fmi2ModelExchange ? instance_new_model_exchange : instance_new)(
+            "fmi2Instantiate", FMU_MODEL, name, location, visible, logging_on, MODE_NAMES, host_log, h);
     }
     if (!c) free(h);
     return c;
@@ -100,6 +104,55 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean no_pr
     return do_step(c, "fmi2DoStep", t, h);
 }
 
+/* ---- Model Exchange (continuous.c) ---- */
+
+fmi2Status fmi2EnterEventMode(fmi2Component c) { return enter_event_mode(c, "fmi2EnterEventMode"); }
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
+    return enter_continuous_time_mode(c, "fmi2EnterContinuousTimeMode");
+}
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) { return set_time(c, "fmi2SetTime", time); }
+
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
+    if (!info) return c ? refuse(c, "fmi2NewDiscreteStates", "NULL event info") : fmi2Error;
+    int terminate = 0, changed = 0;
+    fmi2Status status = update_discrete_states(c, "fmi2NewDiscreteStates", &terminate, &changed);
+    *info = (fmi2EventInfo){.newDiscreteStatesNeeded = fmi2False, .terminateSimulation = terminate != 0,
+                            .nominalsOfContinuousStatesChanged = fmi2False,
+                            .valuesOfContinuousStatesChanged = changed != 0, .nextEventTimeDefined = fmi2False};
+    return status;
+}
+
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean no_prior, fmi2Boolean *event,
+                                       fmi2Boolean *terminate) {
+    (void)no_prior;
+    int enter = 0, end = 0;
+    fmi2Status status =
+        completed_integrator_step(c, "fmi2CompletedIntegratorStep", event && terminate ? &enter : NULL, &end);
+    if (event && terminate) *event = enter != 0, *terminate = end != 0;
+    return status;
+}
+
+fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t n) {
+    return set_continuous_states(c, "fmi2SetContinuousStates", x, n);
+}
+fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t n) {
+    return get_continuous_states(c, "fmi2GetContinuousStates", x, n);
+}
+fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t n) {
+    return get_derivatives(c, "fmi2GetDerivatives", dx, n);
+}
+fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real z[], size_t n) {
+    return get_event_indicators(c, "fmi2GetEventIndicators", z, n);
+}
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x[], size_t n) {
+    return get_nominals(c, "fmi2GetNominalsOfContinuousStates", x, n);
+}
+
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[], size_t nu,
+                                        const fmi2ValueReference z[], size_t nz, const fmi2Real dv[], fmi2Real dz[]) {
+    return directional_derivative(c, "fmi2GetDirectionalDerivative", u, nu, z, nz, dv, dz);
+}
+
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Real *v) {
     if (!allowed(c, "fmi2GetRealStatus", STEPPING | STEP_DISCARDED | TERMINATED)) return fmi2Error;
     if (kind != fmi2LastSuccessfulTime || !v) return refuse(c, "fmi2GetRealStatus", "only fmi2LastSuccessfulTime is known");
@@ -131,4 +184,4 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte data[], size_
     ret name params {                                                                                        \
         return c ? refuse(c, #name, "not supported by this FMU") : fmi2Error;                                \
     }
-FMI2_UNSUPPORTED(UNSUPPORTED)
+FMI2_OTHERS(UNSUPPORTED)

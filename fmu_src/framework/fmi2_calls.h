@@ -1,8 +1,10 @@
 /*
- * The FMI 2.0 co-simulation functions, one row each: X(return type, name, parameters, arguments).
- * Shared by the Python FMUs' loader (python/fmi2_loader.c, which forwards every row) and the framework
- * (fmi2Functions.c, which answers the second list with fmi2Error). Both include the official fmi2Functions.h, so the
- * compiler checks every row against the standard's prototypes. The first parameter is always `c`.
+ * The FMI 2.0 functions, one row each: X(return type, name, parameters, arguments). Shared by the Python FMUs'
+ * loader (python/fmi2_loader.c, which forwards every row) and the framework (fmi2Functions.c, which implements
+ * the first list and FMI2_DERIVATIVES, and answers FMI2_OTHERS with fmi2Error; its Model Exchange functions,
+ * which the co-simulation-only Python FMUs do not export, are written out there). Both include the official
+ * fmi2Functions.h, so the compiler checks every row against the standard's prototypes.
+ * The first parameter is always `c`.
  * fmi2GetTypesPlatform, fmi2GetVersion, fmi2Instantiate and fmi2FreeInstance are written out.
  */
 #define FMI2_IMPLEMENTED(X)                                                                                  \
@@ -45,9 +47,13 @@
     X(fmi2Status, fmi2GetBooleanStatus, (fmi2Component c, const fmi2StatusKind kind, fmi2Boolean *v),        \
       (c, kind, v))
 
-#define FMI2_UNSUPPORTED(X)                                                                                  \
+/* The directional derivatives: the framework implements them for a model that has a ContinuousModel (model.h)
+   and refuses them otherwise. */
+#define FMI2_DERIVATIVES(X)                                                                                  \
     X(fmi2Status, fmi2GetDirectionalDerivative, (fmi2Component c, const fmi2ValueReference u[], size_t nu,   \
-      const fmi2ValueReference z[], size_t nz, const fmi2Real dv[], fmi2Real dz[]), (c, u, nu, z, nz, dv, dz))\
+      const fmi2ValueReference z[], size_t nz, const fmi2Real dv[], fmi2Real dz[]), (c, u, nu, z, nz, dv, dz))
+
+#define FMI2_OTHERS(X)                                                                                       \
     X(fmi2Status, fmi2SetRealInputDerivatives, (fmi2Component c, const fmi2ValueReference vr[], size_t n,    \
       const fmi2Integer order[], const fmi2Real v[]), (c, vr, n, order, v))                                  \
     X(fmi2Status, fmi2GetRealOutputDerivatives, (fmi2Component c, const fmi2ValueReference vr[], size_t n,   \
@@ -58,3 +64,5 @@
       (c, kind, v))                                                                                          \
     X(fmi2Status, fmi2GetStringStatus, (fmi2Component c, const fmi2StatusKind kind, fmi2String *v),          \
       (c, kind, v))
+
+#define FMI2_UNSUPPORTED(X) FMI2_OTHERS(X) FMI2_DERIVATIVES(X) /* what the Python FMUs' loader forwards */

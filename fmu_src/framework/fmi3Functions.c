@@ -1,6 +1,7 @@
 /*
- * FMI 3.0 co-simulation over the model interface (model.h) of this FMU's model (FMU_MODEL): the official
- * fmi3Functions.h, each call mapped to instance.c. Value reference 0 is the independent variable `time`,
+ * FMI 3.0 co-simulation, and Model Exchange for a model that has a ContinuousModel, over the model interface
+ * (model.h) of this FMU's model (FMU_MODEL): the official fmi3Functions.h, each call mapped to instance.c (and
+ * continuous.c). Value reference 0 is the independent variable `time`,
  * answered here; the model's variables follow from 1 (the FMI 2.0 value reference plus one).
  */
 #include <stdlib.h>
@@ -8,11 +9,13 @@
 
 #include "fmi3Functions.h"
 #include "fmi3_calls.h"
+#include "continuous.h"
 #include "instance.h"
 
 static const char *const MODE_NAMES[] = {
     "instantiated", "in initialization mode", "in step mode", "in step mode after a discarded step", "terminated",
-    "in error state (after an fmi3Error; fmi3Reset or fmi3SetFMUState recover it)"};
+    "in error state (after an fmi3Error; fmi3Reset or fmi3SetFMUState recover it)", "in event mode",
+    "in continuous-time mode"};
 
 typedef struct {
     fmi3InstanceEnvironment environment;
@@ -55,9 +58,25 @@ FMI3_Export fmi3Instance fmi3InstantiateModelExchange(fmi3String name, fmi3Strin
                                                       fmi3Boolean visible, fmi3Boolean logging_on,
                                                       fmi3InstanceEnvironment environment,
                                                       fmi3LogMessageCallback log_message) {
-    (void)name, (void)token, (void)resource_path, (void)visible, (void)logging_on;
-    if (log_message) log_message(environment, fmi3Error, "logStatusError", "this FMU supports co-simulation only");
-    return NULL;
+    if (!name) return NULL;
+    if (!FMU_MODEL->continuous) {
+        if (log_message) log_message(environment, fmi3Error, "logStatusError", "this FMU supports co-simulation only");
+        return NULL;
+    }
+    Host *h = calloc(1, sizeof *h);
+    if (!h) return NULL;
+    *h = (Host){environment, log_message};
+    Instance bare = {.name = (char *)name, .logging_on = logging_on, .host = h}; /* logs before an instance exists */
+    Instance *c = NULL;
+    if (token && FMU_MODEL->token && strcmp(token, FMU_MODEL->token) != 0) {
+        host_log(&bare, MODEL_ERROR, "logStatusError",
+                 "fmi3InstantiateModelExchange: the instantiation token is not this FMU's");
+    } else {
+        c = instance_new_model_exchange("fmi3InstantiateModelExchange", FMU_MODEL, name, resource_path, visible,
+                                        logging_on, MODE_NAMES, host_log, h);
+    }
+    if (!c) free(h);
+    return c;
 }
 
 FMI3_Export fmi3Instance fmi3InstantiateScheduledExecution(
@@ -195,6 +214,97 @@ fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 t, fmi3Float64 h, fmi3Boolean 
     return status;
 }
 
+/* ---- Model Exchange (continuous.c) ---- */
+
+fmi3Status fmi3EnterEventMode(fmi3Instance c) { return enter_event_mode(c, "fmi3EnterEventMode"); }
+fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance c) {
+    return enter_continuous_time_mode(c, "fmi3EnterContinuousTimeMode");
+}
+fmi3Status fmi3SetTime(fmi3Instance c, fmi3Float64 time) { return set_time(c, "fmi3SetTime", time); }
+
+fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean *update, fmi3Boolean *terminate,
+                                    fmi3Boolean *nominals_changed, fmi3Boolean *values_changed,
+                                    fmi3Boolean *next_defined, fmi3Float64 *next_time) {
+    if (!update || !terminate || !nominals_changed || !values_changed || !next_defined || !next_time)
+        return c ? refuse(c, "fmi3UpdateDiscreteStates", "NULL output pointer") : fmi3Error;
+    int end = 0, changed = 0;
+    fmi3Status status = update_discrete_states(c, "fmi3UpdateDiscreteStates", &end, &changed);
+    *update = *nominals_changed = *next_defined = fmi3False;
+    *terminate = end != 0, *values_changed = changed != 0, *next_time = 0.0;
+    return status;
+}
+
+fmi3Status fmi3CompletedIntegratorStep(fmi3Instance c, fmi3Boolean no_prior, fmi3Boolean *event,
+                                       fmi3Boolean *terminate) {
+    (void)no_prior;
+    int enter = 0, end = 0;
+    fmi3Status status =
+        completed_integrator_step(c, "fmi3CompletedIntegratorStep", event && terminate ? &enter : NULL, &end);
+    if (event && terminate) *event = enter != 0, *terminate = end != 0;
+    return status;
+}
+
+fmi3Status fmi3SetContinuousStates(fmi3Instance c, const fmi3Float64 x[], size_t n) {
+    return set_continuous_states(c, "fmi3SetContinuousStates", x, n);
+}
+fmi3Status fmi3GetContinuousStates(fmi3Instance c, fmi3Float64 x[], size_t n) {
+    return get_continuous_states(c, "fmi3GetContinuousStates", x, n);
+}
+fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance c, fmi3Float64 dx[], size_t n) {
+    return get_derivatives(c, "fmi3GetContinuousStateDerivatives", dx, n);
+}
+fmi3Status fmi3GetEventIndicators(fmi3Instance c, fmi3Float64 z[], size_t n) {
+    return get_event_indicators(c, "fmi3GetEventIndicators", z, n);
+}
+fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance c, fmi3Float64 x[], size_t n) {
+    return get_nominals(c, "fmi3GetNominalsOfContinuousStates", x, n);
+}
+fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance c, size_t *n) {
+    if (!is_model_exchange(c, "fmi3GetNumberOfContinuousStates")) return fmi3Error;
+    if (!n) return refuse(c, "fmi3GetNumberOfContinuousStates", "NULL pointer");
+    *n = number_of_states(c);
+    return fmi3OK;
+}
+fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance c, size_t *n) {
+    if (!is_model_exchange(c, "fmi3GetNumberOfEventIndicators")) return fmi3Error;
+    if (!n) return refuse(c, "fmi3GetNumberOfEventIndicators", "NULL pointer");
+    *n = number_of_indicators(c);
+    return fmi3OK;
+}
+
+/* The directional or adjoint derivative with FMI 3.0's value references (time, 0, is neither known nor unknown). */
+static fmi3Status derivative(fmi3Instance c, const char *function, int adjoint, const fmi3ValueReference unknowns[],
+                             size_t nu, const fmi3ValueReference knowns[], size_t nk, const fmi3Float64 seed[],
+                             size_t ns, fmi3Float64 sensitivity[], size_t nsens) {
+    if (!is_model_exchange(c, function)) return fmi3Error;
+    if (ns != (adjoint ? nu : nk) || nsens != (adjoint ? nk : nu))
+        return refuse(c, function, "arrays are not supported (the seed and sensitivity lengths must match)");
+    if ((nu && !unknowns) || (nk && !knowns)) return refuse(c, function, "NULL array");
+    unsigned small_u[SMALL], small_k[SMALL], *u, *k;
+    size_t n_u, n_k;
+    static const char *const TIME = "time (value reference 0) has no derivatives here";
+    if (!map_vrs(c, function, unknowns, nu, TIME, small_u, &u, &n_u)) return fmi3Error;
+    fmi3Status status = fmi3Error;
+    if (map_vrs(c, function, knowns, nk, TIME, small_k, &k, &n_k)) {
+        status = (adjoint ? adjoint_derivative : directional_derivative)(c, function, u, nu, k, nk, seed, sensitivity);
+        if (k != small_k) free(k);
+    }
+    if (u != small_u) free(u);
+    return status;
+}
+
+fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference unknowns[], size_t nu,
+                                        const fmi3ValueReference knowns[], size_t nk, const fmi3Float64 seed[],
+                                        size_t ns, fmi3Float64 sensitivity[], size_t nsens) {
+    return derivative(c, "fmi3GetDirectionalDerivative", 0, unknowns, nu, knowns, nk, seed, ns, sensitivity, nsens);
+}
+
+fmi3Status fmi3GetAdjointDerivative(fmi3Instance c, const fmi3ValueReference unknowns[], size_t nu,
+                                    const fmi3ValueReference knowns[], size_t nk, const fmi3Float64 seed[], size_t ns,
+                                    fmi3Float64 sensitivity[], size_t nsens) {
+    return derivative(c, "fmi3GetAdjointDerivative", 1, unknowns, nu, knowns, nk, seed, ns, sensitivity, nsens);
+}
+
 fmi3Status fmi3GetFMUState(fmi3Instance c, fmi3FMUState *s) { return get_fmu_state(c, "fmi3GetFMUState", s); }
 fmi3Status fmi3SetFMUState(fmi3Instance c, fmi3FMUState s) { return set_fmu_state(c, "fmi3SetFMUState", s); }
 fmi3Status fmi3FreeFMUState(fmi3Instance c, fmi3FMUState *s) { return free_fmu_state(c, "fmi3FreeFMUState", s); }
@@ -212,4 +322,4 @@ fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte data[], size_t
     ret name params {                                                                                        \
         return c ? refuse(c, #name, "not supported by this FMU") : fmi3Error;                                \
     }
-FMI3_UNSUPPORTED(UNSUPPORTED)
+FMI3_OTHERS(UNSUPPORTED)

@@ -36,12 +36,13 @@ ModelStatus report(const Reporter *r, ModelStatus status, const char *format, ..
 }
 
 static Reporter reporter(Instance *c, const char *function) { return (Reporter){log_for_model, c, function}; }
+Reporter instance_reporter(Instance *c, const char *function) { return reporter(c, function); }
 
 int refuse(Instance *c, const char *function, const char *why) { return instance_log(c, MODEL_ERROR, function, why); }
 
 static const char *mode_name(const Instance *c) {
     int bit = 0;
-    while (bit < 5 && !(c->mode & (1 << bit))) bit++;
+    while (bit < 7 && !(c->mode & (1 << bit))) bit++;
     return c->mode_names[bit];
 }
 
@@ -54,10 +55,11 @@ int allowed(Instance *c, const char *function, int modes) {
     return 0;
 }
 
-/* The status of a model call; an error puts the instance in its error state, a discard in the discarded one. */
+/* The status of a model call; an error puts the instance in its error state, a discard in the discarded one
+   (co-simulation's: Model Exchange's host retries with another state). */
 static int settle(Instance *c, ModelStatus status, int next_mode) {
     if (status == MODEL_ERROR) c->mode = FAILED;
-    else if (status == MODEL_DISCARD) c->mode = STEP_DISCARDED;
+    else if (status == MODEL_DISCARD && !c->model_exchange) c->mode = STEP_DISCARDED;
     else if (next_mode) c->mode = next_mode;
     return status;
 }
@@ -85,12 +87,13 @@ static char *resource_folder(const char *location) {
     return out;
 }
 
-Instance *instance_new(const char *function, const ModelType *type, const char *name, const char *location,
-                       int visible, int logging_on, const char *const *mode_names, HostLog host_log, void *host) {
+static Instance *new_instance(const char *function, const ModelType *type, const char *name, const char *location,
+                              int visible, int logging_on, const char *const *mode_names, HostLog host_log,
+                              void *host, int model_exchange) {
     Instance *c = calloc(1, sizeof *c);
     if (!c) return NULL;
     *c = (Instance){.mode = INSTANTIATED, .logging_on = logging_on, .type = type, .mode_names = mode_names,
-                    .host_log = host_log, .host = host};
+                    .host_log = host_log, .host = host, .model_exchange = model_exchange};
     c->name = malloc(strlen(name) + 1);
     char *resources = location ? resource_folder(location) : NULL;
     c->model = calloc(1, type->size(type));
@@ -101,13 +104,24 @@ Instance *instance_new(const char *function, const ModelType *type, const char *
         return NULL;
     }
     strcpy(c->name, name);
-    c->at = (Instantiation){c->name, resources, visible};
+    c->at = (Instantiation){c->name, resources, visible, model_exchange};
     Reporter r = reporter(c, function);
     if (type->instantiate(type, c->model, &c->at, &r) > MODEL_WARNING) {
         instance_free(c);
         return NULL;
     }
     return c;
+}
+
+Instance *instance_new(const char *function, const ModelType *type, const char *name, const char *location,
+                       int visible, int logging_on, const char *const *mode_names, HostLog host_log, void *host) {
+    return new_instance(function, type, name, location, visible, logging_on, mode_names, host_log, host, 0);
+}
+
+Instance *instance_new_model_exchange(const char *function, const ModelType *type, const char *name,
+                                      const char *location, int visible, int logging_on,
+                                      const char *const *mode_names, HostLog host_log, void *host) {
+    return new_instance(function, type, name, location, visible, logging_on, mode_names, host_log, host, 1);
 }
 
 /* ---- FMU states: a saved model (its block copied, or its own object) with the instance's mode and time ---- */
@@ -169,11 +183,11 @@ int enter_initialization(Instance *c, const char *function) {
 int exit_initialization(Instance *c, const char *function) {
     if (!allowed(c, function, INITIALIZATION)) return MODEL_ERROR;
     Reporter r = reporter(c, function);
-    return settle(c, c->type->exit_initialization(c->type, c->model, &r), STEPPING);
+    return settle(c, c->type->exit_initialization(c->type, c->model, &r), c->model_exchange ? EVENT_MODE : STEPPING);
 }
 
 int terminate(Instance *c, const char *function) {
-    if (!allowed(c, function, STEPPING | STEP_DISCARDED)) return MODEL_ERROR;
+    if (!allowed(c, function, RUNNING)) return MODEL_ERROR;
     Reporter r = reporter(c, function);
     return settle(c, c->type->terminate ? c->type->terminate(c->type, c->model, &r) : MODEL_OK, TERMINATED);
 }
@@ -203,11 +217,14 @@ int get_reals(Instance *c, const char *function, const unsigned vr[], size_t n, 
     return status != GO_ON ? status : settle(c, c->type->get_reals(c->type, c->model, vr, n, v, &r), 0);
 }
 
+/* Parameters may change until initialisation ends. */
+static int fixed_allowed(const Instance *c) { return (c->mode & (INSTANTIATED | INITIALIZATION)) != 0; }
+
 int set_reals(Instance *c, const char *function, const unsigned vr[], size_t n, const double v[]) {
     int status = first_checks(c, function, SETTABLE, n, vr, v);
     Reporter r = reporter(c, function);
     return status != GO_ON ? status
-                           : settle(c, c->type->set_reals(c->type, c->model, vr, n, v, c->mode != STEPPING, &r), 0);
+                           : settle(c, c->type->set_reals(c->type, c->model, vr, n, v, fixed_allowed(c), &r), 0);
 }
 
 int get_strings(Instance *c, const char *function, const unsigned vr[], size_t n, const char *v[]) {
@@ -222,7 +239,7 @@ int set_strings(Instance *c, const char *function, const unsigned vr[], size_t n
     int status = first_checks(c, function, SETTABLE, n, vr, v);
     Reporter r = reporter(c, function);
     return status != GO_ON ? status
-                           : settle(c, c->type->set_strings(c->type, c->model, vr, n, v, c->mode != STEPPING, &r), 0);
+                           : settle(c, c->type->set_strings(c->type, c->model, vr, n, v, fixed_allowed(c), &r), 0);
 }
 
 int no_such_values(Instance *c, const char *function, int modes, size_t n) {

@@ -11,11 +11,14 @@
 
 #include "model.h"
 
-/* The modes; after an error the instance is FAILED until it is reset or a saved state is set back. */
-enum { INSTANTIATED = 1, INITIALIZATION = 2, STEPPING = 4, STEP_DISCARDED = 8, TERMINATED = 16, FAILED = 32 };
-#define ANY_MODE (INSTANTIATED | INITIALIZATION | STEPPING | STEP_DISCARDED | TERMINATED | FAILED)
-#define GETTABLE (INITIALIZATION | STEPPING | STEP_DISCARDED | TERMINATED | FAILED)
-#define SETTABLE (INSTANTIATED | INITIALIZATION | STEPPING)
+/* The modes; after an error the instance is FAILED until it is reset or a saved state is set back. Model Exchange
+   has EVENT_MODE and CONTINUOUS_TIME where co-simulation has STEPPING and STEP_DISCARDED. */
+enum { INSTANTIATED = 1, INITIALIZATION = 2, STEPPING = 4, STEP_DISCARDED = 8, TERMINATED = 16, FAILED = 32,
+       EVENT_MODE = 64, CONTINUOUS_TIME = 128 };
+#define RUNNING (STEPPING | STEP_DISCARDED | EVENT_MODE | CONTINUOUS_TIME)
+#define ANY_MODE (INSTANTIATED | INITIALIZATION | TERMINATED | FAILED | RUNNING)
+#define GETTABLE (INITIALIZATION | TERMINATED | FAILED | RUNNING)
+#define SETTABLE (INSTANTIATED | INITIALIZATION | STEPPING | EVENT_MODE | CONTINUOUS_TIME)
 
 struct Instance;
 /* Passes one message to the host's logger (each FMI version has its own signature). */
@@ -35,12 +38,20 @@ typedef struct Instance {
     const char *const *mode_names;
     HostLog host_log;
     void *host;                  /* the version's callbacks, kept by its framework */
+    int model_exchange;          /* the host integrates the model (model.h's ContinuousModel) */
 } Instance;
 
 /* A new instance of the model `type`, instantiated; NULL (logged through `host_log`, which gets a bare instance
-   then) if that fails. `location` is the resources' URI (FMI 2.0) or path (FMI 3.0), or NULL. */
+   then) if that fails. `location` is the resources' URI (FMI 2.0) or path (FMI 3.0), or NULL. `mode_names`
+   names the modes in the order of their bits. */
 Instance *instance_new(const char *function, const ModelType *type, const char *name, const char *location,
                        int visible, int logging_on, const char *const *mode_names, HostLog host_log, void *host);
+/* The same for Model Exchange (type->continuous not NULL): the instance goes to event mode, not step mode. */
+Instance *instance_new_model_exchange(const char *function, const ModelType *type, const char *name,
+                                      const char *location, int visible, int logging_on,
+                                      const char *const *mode_names, HostLog host_log, void *host);
+/* What a model call reports through: the instance's log, with the FMI function's name. */
+Reporter instance_reporter(Instance *c, const char *function);
 void instance_free(Instance *c);
 /* Logs a message, an error's with the FMI function's name first ("fmi2DoStep: ..."); returns `status`. */
 int instance_log(Instance *c, ModelStatus status, const char *function, const char *message);

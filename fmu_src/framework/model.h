@@ -9,12 +9,9 @@
  * references are the FMI 2.0 ones, the positions in the model's variable table (the FMI 3.0 framework maps its
  * own, one higher: 0 is the independent variable time, which the framework answers itself).
  *
- * Room for Model Exchange: a model that a host integrates gets an optional `const ContinuousModel *continuous`
- * here (NULL for co-simulation only): its number of continuous states and event indicators, get/set of the
- * states, the derivatives, the event indicators, event updates and directional derivatives, each a function
- * of (type, model, ...) like those below. The frameworks then add the Model Exchange modes (event mode,
- * continuous-time mode) to the state machine of instance.c and offer the entry points where it is not NULL;
- * nothing below changes.
+ * Model Exchange: a model that a host integrates has a ContinuousModel (`continuous`, NULL for co-simulation
+ * only): its continuous states, their derivatives, event indicators, event updates and directional derivatives.
+ * The frameworks offer the Model Exchange modes (event mode, continuous-time mode) where it is not NULL.
  */
 #ifndef MODEL_H
 #define MODEL_H
@@ -43,6 +40,7 @@ typedef struct {
     const char *instance_name;
     const char *resources; /* the FMU's resources folder as a path, or NULL if the host gave none */
     int visible;
+    int model_exchange; /* the host integrates the model (ModelType.continuous), no do_step */
 } Instantiation;
 
 /* What fmi2SetupExperiment (fmi3EnterInitializationMode) gives. */
@@ -66,6 +64,21 @@ typedef struct {
     ModelStatus (*deserialize)(const ModelType *type, void *m, const unsigned char bytes[], size_t size, void **saved,
                                const Reporter *r);
 } StateFunctions;
+
+/* What a host that integrates a model calls (Model Exchange), each function like those of ModelType. */
+typedef struct {
+    size_t n_states, n_indicators;
+    ModelStatus (*get_states)(const ModelType *type, void *m, double x[], const Reporter *r);
+    ModelStatus (*set_states)(const ModelType *type, void *m, const double x[], const Reporter *r);
+    ModelStatus (*derivatives)(const ModelType *type, void *m, double dx[], const Reporter *r);
+    ModelStatus (*indicators)(const ModelType *type, void *m, double z[], const Reporter *r);
+    /* The event update at `time` (also the first one, after initialisation); *terminate: the simulation ends. */
+    ModelStatus (*event_update)(const ModelType *type, void *m, double time, int *terminate, const Reporter *r);
+    /* sensitivity[i] = sum over j of d unknowns[i] / d knowns[j] * seed[j] (value references as get_reals'). */
+    ModelStatus (*directional)(const ModelType *type, void *m, const unsigned unknowns[], size_t nu,
+                               const unsigned knowns[], size_t nk, const double seed[], double sensitivity[],
+                               const Reporter *r);
+} ContinuousModel;
 
 /* A model: its identity and its functions. Every function gets its type first, then the model's block; a
    function left NULL where it says so does nothing (or, for the String functions, means no String variables). */
@@ -96,6 +109,7 @@ struct ModelType {
     /* One communication step from `time` of length `step` (> 0 and finite: the framework checks it). */
     ModelStatus (*do_step)(const ModelType *type, void *m, double time, double step, const Reporter *r);
     const StateFunctions *states; /* NULL: the model is plain data */
+    const ContinuousModel *continuous; /* NULL: co-simulation only */
 };
 
 /* The model of this FMU, defined once per library (a generated fmu_model.c, or python_model.c). */

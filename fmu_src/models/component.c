@@ -18,7 +18,8 @@
 
 typedef struct {
     int initialised;
-    double values[]; /* n_variables */
+    int model_exchange; /* the host integrates the component: its outputs are the continuous ones */
+    double values[];    /* n_variables */
 } Block;
 
 #define ALIGN(n) (((n) + 15) / 16 * 16)
@@ -47,10 +48,11 @@ static unsigned slot(const Component *k, unsigned vr) {
 }
 
 ModelStatus component_instantiate(const ModelType *type, void *m, const Instantiation *at, const Reporter *r) {
-    (void)at, (void)r;
+    (void)r;
     const Component *k = type->kind;
     Block *b = m;
     b->initialised = 0;
+    b->model_exchange = at->model_exchange && k->continuous;
     for (unsigned i = 0; i < k->n_variables; i++) {
         b->values[i] = k->variables[i].start;
         if (k->variables[i].type == STRING) snprintf(strings(k, b)[slot(k, i)], STRING_SIZE, "%s", k->variables[i].text);
@@ -70,13 +72,25 @@ ModelStatus component_exit_initialization(const ModelType *type, void *m, const 
 
 /* Every output into the block's values; before initialisation ends, from the parameters (configure() and
    initial_state() into the block's config and state, unused until then). */
-static ModelStatus compute_outputs(const Component *k, Block *b, const Reporter *r) {
+/* Before initialisation ends: the config and initial state from the parameters, into the block's scratch. */
+static ModelStatus from_parameters(const Component *k, Block *b, const Reporter *r) {
     if (!b->initialised) {
         if (k->configure(b->values, read_strings(k, b), config(k, b), r) != MODEL_OK) return MODEL_ERROR;
         if (k->initial_state) k->initial_state(b->values, config(k, b), state(k, b));
     }
+    return MODEL_OK;
+}
+
+static ModelStatus compute_outputs(const Component *k, Block *b, const Reporter *r) {
+    if (from_parameters(k, b, r) != MODEL_OK) return MODEL_ERROR;
+    if (b->model_exchange) {
+        k->continuous->outputs(b->values, config(k, b), state(k, b), NULL, NULL, &b->values[k->first_output], NULL);
+        return MODEL_OK;
+    }
     return k->outputs(b->values, config(k, b), state(k, b), &b->values[k->first_output], r);
 }
+
+static ModelStatus local_value(const ModelType *type, Block *b, unsigned vr, double *v, const Reporter *r);
 
 static ModelStatus no_variable(const char *model, unsigned vr, const Reporter *r) {
     return report(r, MODEL_ERROR, "%s has no variable with value reference %u", model, vr);
@@ -88,6 +102,11 @@ ModelStatus component_get_reals(const ModelType *type, void *m, const unsigned v
     Block *b = m;
     int have_outputs = 0;
     for (size_t i = 0; i < n; i++) {
+        if (vr[i] >= k->n_variables && k->continuous && vr[i] < k->n_variables + k->continuous->n_locals) {
+            ModelStatus status = local_value(type, b, vr[i], &v[i], r);
+            if (status != MODEL_OK) return status;
+            continue;
+        }
         if (vr[i] >= k->n_variables) return no_variable(type->identifier, vr[i], r);
         const VariableRow *row = &k->variables[vr[i]];
         if (row->type == STRING)
@@ -167,4 +186,115 @@ ModelStatus component_do_step(const ModelType *type, void *m, double time, doubl
     const Component *k = type->kind;
     Block *b = m;
     return k->update ? k->update(b->values, config(k, b), state(k, b), time, step, r) : MODEL_OK;
+}
+
+/* ---- Model Exchange (component.h's ContinuousComponent behind model.h's ContinuousModel) ---- */
+
+#define MOST 64 /* continuous states, inputs and outputs a component may have */
+
+/* The position of `vr` among `n` value references, or -1. */
+static int position(const unsigned vrs[], unsigned n, unsigned vr) {
+    for (unsigned i = 0; i < n; i++)
+        if (vrs[i] == vr) return (int)i;
+    return -1;
+}
+
+static ModelStatus derivatives_now(const Component *k, Block *b, double f[], const Reporter *r) {
+    if (from_parameters(k, b, r) != MODEL_OK) return MODEL_ERROR;
+    return k->continuous->derivatives(b->values, config(k, b), state(k, b), NULL, NULL, f, NULL, r);
+}
+
+static ModelStatus indicators_now(const Component *k, Block *b, double z[], const Reporter *r) {
+    if (from_parameters(k, b, r) != MODEL_OK) return MODEL_ERROR;
+    k->continuous->indicators(b->values, config(k, b), state(k, b), z);
+    return MODEL_OK;
+}
+
+/* A Model Exchange variable: a state, a derivative or an event indicator. */
+static ModelStatus local_value(const ModelType *type, Block *b, unsigned vr, double *v, const Reporter *r) {
+    const Component *k = type->kind;
+    const ContinuousComponent *q = k->continuous;
+    double values[MOST];
+    int i;
+    if (from_parameters(k, b, r) != MODEL_OK) return MODEL_ERROR;
+    if ((i = position(q->state_vrs, q->n_states, vr)) >= 0) {
+        *v = q->states(state(k, b))[i];
+    } else if ((i = position(q->derivative_vrs, q->n_states, vr)) >= 0) {
+        ModelStatus status = derivatives_now(k, b, values, r);
+        if (status != MODEL_OK) return status;
+        *v = values[i];
+    } else if ((i = position(q->indicator_vrs, q->n_indicators, vr)) >= 0) {
+        indicators_now(k, b, values, r);
+        *v = values[i];
+    } else {
+        return no_variable(type->identifier, vr, r);
+    }
+    return MODEL_OK;
+}
+
+ModelStatus component_get_states(const ModelType *type, void *m, double x[], const Reporter *r) {
+    const Component *k = type->kind;
+    if (from_parameters(k, m, r) != MODEL_OK) return MODEL_ERROR;
+    memcpy(x, k->continuous->states(state(k, m)), k->continuous->n_states * sizeof *x);
+    return MODEL_OK;
+}
+
+ModelStatus component_set_states(const ModelType *type, void *m, const double x[], const Reporter *r) {
+    const Component *k = type->kind;
+    for (unsigned i = 0; i < k->continuous->n_states; i++)
+        if (!isfinite(x[i]))
+            return report(r, MODEL_ERROR, "continuous state %u of %s must be finite, got %s", i, type->identifier,
+                          R(x[i]));
+    memcpy(k->continuous->states(state(k, m)), x, k->continuous->n_states * sizeof *x);
+    return MODEL_OK;
+}
+
+ModelStatus component_derivatives(const ModelType *type, void *m, double dx[], const Reporter *r) {
+    return derivatives_now(type->kind, m, dx, r);
+}
+
+ModelStatus component_indicators(const ModelType *type, void *m, double z[], const Reporter *r) {
+    return indicators_now(type->kind, m, z, r);
+}
+
+ModelStatus component_event_update(const ModelType *type, void *m, double time, int *terminate, const Reporter *r) {
+    const Component *k = type->kind;
+    Block *b = m;
+    return k->continuous->event_update(b->values, config(k, b), state(k, b), time, terminate, r);
+}
+
+/* d unknowns / d knowns along `seed`: the knowns are continuous states or inputs, the unknowns derivatives or
+   outputs; one forward-mode evaluation of the derivatives and the outputs. */
+ModelStatus component_directional(const ModelType *type, void *m, const unsigned unknowns[], size_t nu,
+                                  const unsigned knowns[], size_t nk, const double seed[], double sensitivity[],
+                                  const Reporter *r) {
+    const Component *k = type->kind;
+    const ContinuousComponent *q = k->continuous;
+    Block *b = m;
+    double ds[MOST] = {0}, din[MOST] = {0}, f[MOST], df[MOST], out[MOST], dout[MOST];
+    if (q->n_states > MOST || q->n_inputs > MOST || k->n_outputs > MOST)
+        return report(r, MODEL_ERROR, "%s has more than %d states, inputs or outputs", type->identifier, MOST);
+    for (size_t j = 0; j < nk; j++) {
+        int i = position(q->state_vrs, q->n_states, knowns[j]);
+        if (i >= 0) ds[i] += seed[j];
+        else if (knowns[j] >= q->first_input && knowns[j] < q->first_input + q->n_inputs)
+            din[knowns[j] - q->first_input] += seed[j];
+        else
+            return report(r, MODEL_ERROR, "value reference %u is neither a continuous state nor an input of %s: "
+                          "the derivatives are by those", knowns[j], type->identifier);
+    }
+    if (from_parameters(k, b, r) != MODEL_OK) return MODEL_ERROR;
+    ModelStatus status = q->derivatives(b->values, config(k, b), state(k, b), ds, din, f, df, r);
+    if (status != MODEL_OK) return status;
+    q->outputs(b->values, config(k, b), state(k, b), ds, din, out, dout);
+    for (size_t j = 0; j < nu; j++) {
+        int i = position(q->derivative_vrs, q->n_states, unknowns[j]);
+        if (i >= 0) sensitivity[j] = df[i];
+        else if (unknowns[j] >= k->first_output && unknowns[j] < k->n_variables)
+            sensitivity[j] = dout[unknowns[j] - k->first_output];
+        else
+            return report(r, MODEL_ERROR, "value reference %u is neither a derivative nor an output of %s",
+                          unknowns[j], type->identifier);
+    }
+    return MODEL_OK;
 }

@@ -1,6 +1,7 @@
 /*
  * The CranePlant component in C: the native twin of crane_fmu/model/plant.py (its configure() rules and
- * messages, initial_state(), output() and update()), registered as a component (component.h). Its variables,
+ * messages, initial_state(), output() and update()), registered as a component (component.h) that a host can
+ * also integrate (Model Exchange: plant_continuous.c's derivatives, event indicators and event updates). Its variables,
  * value references and start values come from CranePlant_variables.h, which `crane-fmu build` generates from
  * the same table (plant.VARIABLES) as the Python FMU's modelDescription.xml.
  */
@@ -9,6 +10,7 @@
 #include <string.h>
 
 #include "CranePlant_variables.h"
+#include "plant_continuous.h"
 #include "plant_equations.h"
 #include "plant_math.h"
 #include "py_repr.h"
@@ -23,10 +25,12 @@ typedef struct {
     PlantParameters p;
     Load damping; /* c1, c2 (hoist and forces are the inputs) */
     double max_substep, u_max, v_max, tau, x_min, x_max, l1_min, l1_max, dl1_max;
+    ContinuousPlant continuous; /* the same parameters, for Model Exchange */
 } Config;
 
 typedef struct {
-    double s[N_STATE];
+    double s[N_STATE]; /* the continuous state is its first N_CONTINUOUS values */
+    PlantMode mode;    /* Model Exchange: the limits that hold */
 } State;
 
 #define V(name) (values[VR_##name])
@@ -62,13 +66,17 @@ static ModelStatus configure(const double values[], const StringValue strings[],
                       R(V(l1_max)), R(V(l1)));
     *c = (Config){{V(m1), V(m2), V(l1), V(l2), V(g)}, {0.0, 0.0, 0.0, V(c1), V(c2)}, V(max_substep),
                   unlimited(V(u_max)), unlimited(V(v_max)), V(tau), unlimited(V(x_min)), unlimited(V(x_max)),
-                  V(l1_min), unlimited(V(l1_max)), unlimited(V(dl1_max))}; /* 1e60 and beyond: no limit */
+                  V(l1_min), unlimited(V(l1_max)), unlimited(V(dl1_max)), /* 1e60 and beyond: no limit */
+                  .continuous = {.c1 = 0.0}};                                /* below */
+    c->continuous = (ContinuousPlant){c->p, V(c1), V(c2), c->u_max, c->v_max, c->tau, c->x_min, c->x_max, c->l1_min,
+                                      c->l1_max, c->dl1_max};
     return MODEL_OK;
 }
 
 static void initial_state(const double values[], const Config *c, State *state) {
     double s[N_STATE] = {V(x0), V(dx0), V(theta1_0), V(dtheta1_0), V(theta2_0), V(dtheta2_0), c->p.l1, 0.0, 0.0, 0.0};
     memcpy(state->s, s, sizeof s);
+    state->mode = (PlantMode){0, 0, 0};
 }
 
 /* Every output in table order: plant_outputs(), then l1_now, dl1_now, ddx. */
@@ -158,4 +166,48 @@ static ModelStatus update(const double values[], const Config *c, State *state, 
     return MODEL_OK;
 }
 
-STATEFUL_COMPONENT;
+/* ---- Model Exchange: plant_continuous.c on the state's first N_CONTINUOUS values ---- */
+
+static double *continuous_states(State *state) { return state->s; }
+
+static ModelStatus derivatives(const double values[], const Config *c, const State *state, const double *ds,
+                               const double *din, double f[], double *df, const Reporter *r) {
+    int why = plant_derivatives(&c->continuous, state->s, &values[VR_u], state->mode, ds, din, f, df);
+    if (why == PLANT_F2_WITHOUT_MASS)
+        return report(r, MODEL_DISCARD, "F2 = %s N acts on a payload of mass m2 = 0", R(values[VR_F2]));
+    if (why == PLANT_NOT_FINITE) return report(r, MODEL_DISCARD, "the plant's derivatives are not finite at this state");
+    return MODEL_OK;
+}
+
+static void continuous_outputs(const double values[], const Config *c, const State *state, const double *ds,
+                               const double *din, double out[], double *dout) {
+    plant_continuous_outputs(&c->continuous, state->s, &values[VR_u], state->mode, ds, din, out, dout);
+}
+
+static void indicators(const double values[], const Config *c, const State *state, double z[]) {
+    plant_event_indicators(&c->continuous, state->s, &values[VR_u], state->mode, z);
+}
+
+/* plant_continuous.event_update(): a rail end ends the simulation; a cable that reached a hoist limit is logged
+   as the co-simulation logs it (plant_limits.reached_limit). */
+static ModelStatus event_update(const double values[], const Config *c, State *state, double time, int *terminate,
+                                const Reporter *r) {
+    PlantEvent event;
+    plant_event_update(&c->continuous, state->s, &values[VR_u], &state->mode, &event);
+    if (event.rail_end) {
+        *terminate = 1;
+        int high = event.rail_end > 0;
+        report(r, MODEL_WARNING, "the trolley reached the rail end %s = %s m (x = %s m) at t = %s s",
+               high ? "x_max" : "x_min", R(high ? c->x_max : c->x_min), R(state->s[X]), R(time));
+    } else if (event.cable_reached) {
+        double speed = (event.cable_rate < 0 ? -event.cable_rate : event.cable_rate) + 0.0;
+        if (speed < AT_REST)
+            report(r, MODEL_OK, "hoist: l1 reached %s m at t = %s s and is held there", R(event.cable_at), R(time));
+        else
+            report(r, MODEL_WARNING, "hoist: l1 hit the limit %s m at %s m/s at t = %s s and is held there",
+                   R(event.cable_at), R(speed), R(time));
+    }
+    return MODEL_OK;
+}
+
+CONTINUOUS_COMPONENT;

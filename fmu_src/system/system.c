@@ -73,7 +73,7 @@ static ModelStatus system_instantiate(const ModelType *type, void *model, const 
     for (unsigned i = 0; i < N_INSTANCES; i++) {
         m->offsets[i] = offset;
         offset += ALIGN(INSTANCES[i].type->size(INSTANCES[i].type));
-        Instantiation inner = {INSTANCES[i].name, NULL, 0};
+        Instantiation inner = {INSTANCES[i].name, NULL, 0, 0}; /* co-simulation inside */
         INNER(i, r);
         ModelStatus status = INSTANCES[i].type->instantiate(INSTANCES[i].type, block(m, i), &inner, ir);
         if (status > MODEL_WARNING) return status;
