@@ -18,10 +18,13 @@ import time
 from pathlib import Path
 
 from crane_fmu import components, systems
-from crane_fmu.analysis import scoreboard
+from crane_fmu.analysis import metrics, score_plots, scoreboard
 from crane_fmu.analysis.scoreboard import SCENARIOS, Contender
-from crane_fmu.sweep.batch import JOURNAL, Progress, read_journal, run_batch
-from crane_fmu.sweep.runner import write_table
+from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch
+from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
+from crane_fmu.cosim.system import read_fmu
+from crane_fmu.model import planner
+from crane_fmu.sweep.runner import local_fmus, write_table
 
 SIGNALS = ("time", "x", "theta1", "theta2", "u", "x1", "y1", "x2", "y2", "l1_now")  # crane_signals() names
 SIGNAL_EVERY = 0.02  # s: the signals kept for plots and animations
@@ -45,8 +48,6 @@ def contenders(chosen=(), fmu_dir="build/fmus", only=False):
         One line: an unknown name, an FMU that cannot be read, two controllers of one name, or what a
         controller misses of the interface (and which scenarios need it).
     """
-    from crane_fmu.cosim.system import read_fmu
-
     builtin = [c.model_identifier for c in components.registered("controller")]
     items = list(chosen) + ([] if only and chosen else builtin)
     result = {}
@@ -89,8 +90,8 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), quick=False):
                                 "error": str(exc)})
                 continue
             for label, system, step, stop_time, x_d in runs:
-                system = systems.at_step(system, fmu_dir, step)
                 fmus, connections = systems.resolve(system, fmu_dir)
+                system = systems.prepare(system, step, stop_time, check=False)
                 hashes = {}
                 for name, path in fmus.items():
                     if path not in digests:  # each FMU file read once
@@ -104,7 +105,7 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), quick=False):
                         "keep_signals": sid in ANIMATE and len(runs) == 1}
                 case["case_id"] = hashlib.sha256(json.dumps(case, sort_keys=True).encode()).hexdigest()[:16]
                 try:
-                    systems.check_parameters(system, fmu_dir)
+                    systems.check_parameters(system)
                 except ValueError as exc:
                     refused.append({**_identity(case), "status": "invalid", "error": str(exc)})
                     continue
@@ -118,10 +119,6 @@ def _identity(case):
 
 def run_score_case(case, blobs):
     """Co-simulate one case on a worker; return its row: identity, status, error, metrics (and signals)."""
-    from crane_fmu.analysis import metrics
-    from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
-    from crane_fmu.sweep.runner import local_fmus
-
     row = {**_identity(case), "status": "ok", "error": None}
     start = time.perf_counter()
     fmus = local_fmus({name: (digest, blobs[digest]) for name, digest in case["fmus"].items()})
@@ -135,8 +132,6 @@ def run_score_case(case, blobs):
     if columns and len(columns["time"]) > 1:
         move_end = 0.0
         if "planner" in case["fmus"]:
-            from crane_fmu.model import planner
-
             move_end = planner.configure({**planner.COMPONENT.defaults(), **case["parameters"]["planner"]}).end
         s = metrics.crane_signals(columns, ("dx",) + SIGNALS[5:])
         row.update(metrics.move_metrics(s["time"], s["x"], s["dx"], s["theta1"], s["theta2"], s["u"], case["x_d"],
@@ -169,8 +164,6 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     list of dict
         The rows of the board: one per contender, scenario and case.
     """
-    from crane_fmu.analysis import score_plots
-
     start = time.perf_counter()
     if sys._getframe(1).f_globals.get("__name__") == "__mp_main__":  # called by a script a worker imports
         raise RuntimeError("compare() was called while a Dask worker process imported your script again: call it "

@@ -18,7 +18,7 @@ For test writers (keep new tests fast):
 - ``plant_dir``: the FMI 2.0 folder of each kind in turn (a test taking it runs once per kind).
 - ``wine_env``: the environment of the run's one Wine prefix (made once, deleted when the run ends);
   the test skips without Wine and mingw-w64 (and fails in CI, see required_checks.py). ``windows_host``:
-  ``fmu_src/native/host.c`` compiled for Windows once per run (copy it beside the DLLs it loads).
+  ``fmu_src/host/host.c`` compiled for Windows once per run (copy it beside the DLLs it loads).
 - ``dask_scheduler``: a local Dask cluster kept for the run; give it as ``scheduler=`` to compare, sweeps and
   ``run_batch`` unless the test is about starting a cluster (``workers=2`` starts one at every call).
 - ``builtin_quick_board``: the quick board of every built-in controller (Python FMUs), made once per run; its
@@ -227,17 +227,16 @@ def builtin_quick_board(fmu_dir, dask_scheduler, tmp_path_factory):
 
 
 def _compile_windows_host(folder):
-    from crane_fmu.build_scripts.native import NATIVE
+    from crane_fmu.build_scripts.native import HOST
     from crane_fmu.build_scripts.wrapper import fmi_headers
 
-    subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", "-static-libgcc",
-                    f"-I{fmi_headers()}", f"-I{NATIVE}", str(NATIVE / "host.c"), str(NATIVE / "portable_math.c"),
-                    "-o", str(folder / "host.exe")], check=True)
+    subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-static-libgcc", f"-I{fmi_headers()}", str(HOST), "-o",
+                    str(folder / "host.exe")], check=True)
 
 
 @pytest.fixture(scope="session")
 def windows_host(wine_env, tmp_path_factory):
-    """``host.exe``: ``fmu_src/native/host.c`` for Windows x64 (mingw-w64, the portable math), made once per run."""
+    """``host.exe``: ``fmu_src/host/host.c`` for Windows x64 (mingw-w64), made once per run."""
     return made_once(tmp_path_factory, "windows_host", _compile_windows_host) / "host.exe"
 
 

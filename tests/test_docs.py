@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
+from crane_fmu.batch import JOURNAL
 from crane_fmu.cli import main
-from crane_fmu.sweep.batch import JOURNAL
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs"

@@ -25,7 +25,7 @@ from native_fmus import close, compiler, messages, open_native, steps_after_rest
 from crane_fmu import components, systems
 from crane_fmu.analysis.scoreboard import Contender, systems_for
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
-from crane_fmu.build_scripts.native import NATIVE, native_dir, variables_header
+from crane_fmu.build_scripts.native import FOLDERS, HOST, native_dir, source_path, variables_header
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cosim import System, run
 
@@ -98,9 +98,9 @@ def test_the_model_files_compile_without_warnings_under_strict_flags(tmp_path, o
     flags = [*STRICT, "-DCRANE_OWN_MATH"] if own_math else STRICT
     for name in NAMES:
         (tmp_path / f"{name}_variables.h").write_text(variables_header(components.get(name)))
-    for source in ("planner.c", "energy.c", "gust.c", "sensor.c", "portable_math.c"):
-        subprocess.run([compiler(), *flags, f"-I{tmp_path}", f"-I{NATIVE}", str(NATIVE / source), "-o",
-                        str(tmp_path / "m.o")], check=True)
+    for name in ("planner.c", "energy.c", "gust.c", "sensor.c", "component.c", "portable_math.c"):
+        subprocess.run([compiler(), *flags, f"-I{tmp_path}", *(f"-I{folder}" for folder in FOLDERS),
+                        str(source_path(name)), "-o", str(tmp_path / "m.o")], check=True)
 
 
 # ---- TrajectoryPlanner: outputs at random parameters and times ---------------------------------------------------
@@ -436,8 +436,8 @@ def _run_host(command, *args, cwd=None, env=None):
 @pytest.fixture(scope="module")
 def host(tmp_path_factory):
     host = tmp_path_factory.mktemp("host") / "host"
-    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", f"-I{NATIVE}",
-                    str(NATIVE / "host.c"), "-o", str(host), "-ldl", "-lpthread", "-lm"], check=True)
+    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", str(HOST), "-o",
+                    str(host), "-ldl", "-lpthread", "-lm"], check=True)
     return host
 
 
@@ -505,8 +505,8 @@ def test_the_same_math_source_on_linux_gives_the_windows_bits(native, unpacked, 
     sources = unpacked[name] / "sources"
     library = tmp_path / f"{name}.so"
     subprocess.run([compiler(), "-shared", "-fPIC", "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH",
-                    f"-I{sources}", f"-I{fmi_headers()}", *[str(f) for f in sorted(sources.glob("*.c"))
-                                                             if f.name != "fmi3_framework.c"], "-o", str(library)],
+                    f"-I{sources}", f"-I{fmi_headers()}", *map(str, sorted(sources.glob("*.c"))), "-o", str(library),
+                    "-lm"],  # sqrt: the C library's also with the portable math
                    check=True)
     linux = _run_host([str(host), "outputs"], library, guid, *rest)
     windows = _run_host([*command, "outputs"], f"{name}.dll", guid, *rest, cwd=folder, env=env)

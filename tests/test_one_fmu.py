@@ -1,7 +1,7 @@
 """A system of native components as one native FMU (build_scripts/one_fmu.py), against our master.
 
-Each built-in system of :data:`ONE_FMUS` whose components are all native (today ``paper``; the
-others join by themselves once their models are in ``native.MODELS``) is built by ``crane-fmu build``
+Each built-in system tagged ``one-fmu`` whose components are all native (today ``paper``; the
+others join by themselves once their components declare a native model) is built by ``crane-fmu build``
 into ``build/native`` as one FMU, FMI 2.0 and 3.0. Run in fmpy, and in the C host without Python and
 under Wine (FMI 2.0 and 3.0 alike: the host's ``outputs`` and ``outputs3``), it must give
 ``crane-fmu simulate --system NAME --fmu-dir build/native`` (our master, Gauss-Seidel, over the
@@ -19,13 +19,13 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 
 from crane_fmu import systems
-from crane_fmu.build_scripts.native import NATIVE, native_dir
-from crane_fmu.build_scripts.one_fmu import ONE_FMUS, not_native, one_fmu_name, plan
+from crane_fmu.build_scripts.native import HOST, native_dir
+from crane_fmu.build_scripts.one_fmu import not_native, one_fmu_name, plan
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cli import main
 from crane_fmu.cosim import FmiError, open_instance, read_result
 
-SYSTEMS = [name for name in ONE_FMUS if not not_native(systems.get(name))]
+SYSTEMS = [name for name in systems.tagged("one-fmu") if not not_native(systems.get(name))]
 CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # no venv, no pyenv: no Python to be found
 SAME = 1e-9  # the same C models, the same calls: any difference is another order of operations
 
@@ -246,8 +246,8 @@ def host(tmp_path_factory):
     if compiler is None:
         pytest.skip("no C compiler")
     out = tmp_path_factory.mktemp("host") / "host"
-    subprocess.run([compiler, "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", f"-I{NATIVE}",
-                    str(NATIVE / "host.c"), "-o", str(out), "-ldl", "-lpthread", "-lm"], check=True)
+    subprocess.run([compiler, "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", str(HOST), "-o",
+                    str(out), "-ldl", "-lpthread", "-lm"], check=True)
     return out
 
 
@@ -330,9 +330,9 @@ def test_build_one_fmu_from_an_ssp_file_gives_the_built_in_systems_run(fmu_dir, 
 @pytest.mark.quick
 def test_build_one_fmu_refuses_a_system_with_python_only_components_in_one_line(tmp_path, capsys):
     from crane_fmu import components
-    from crane_fmu.build_scripts.native import MODELS
+    from crane_fmu.build_scripts.native import ported
 
-    other = next((c.model_identifier for c in components.registered() if c.model_identifier not in MODELS), None)
+    other = next((c.model_identifier for c in components.registered() if c.model_identifier not in ported()), None)
     if other is None:
         pytest.skip("every component is native")
     system = next((s for s in systems.registered() if other in s.instances.values()), None)
@@ -345,16 +345,17 @@ def test_build_one_fmu_refuses_a_system_with_python_only_components_in_one_line(
 
 
 def test_build_writes_the_built_in_one_fmus_whose_components_are_native_and_notes_the_others(build_record, native):
-    """The run's one ``crane-fmu build`` (the session's build, conftest.py): the one-FMU of each system of
-    ONE_FMUS whose components are all native, FMI 2.0 and 3.0, and a note naming each of the others."""
+    """The run's one ``crane-fmu build`` (the session's build, conftest.py): the one-FMU of each system tagged
+    one-fmu whose components are all native, FMI 2.0 and 3.0, and a note naming each of the others."""
     code, printed = build_record
-    ones = {one_fmu_name(name) for name in ONE_FMUS}
+    tagged = systems.tagged("one-fmu")
+    ones = {one_fmu_name(name) for name in tagged}
     written = sorted(Path(line).relative_to(native.parent) for line in printed
                      if Path(line).parent in (native, native / "fmi3") and Path(line).stem in ones)
     assert written == sorted(Path(folder) / f"{one_fmu_name(name)}.fmu" for name in SYSTEMS
                              for folder in ("native", "native/fmi3"))
     assert all((native.parent / path).is_file() for path in written)
     notes = [line for line in printed if line.startswith("note:")]
-    others = [name for name in ONE_FMUS if name not in SYSTEMS]
+    others = [name for name in tagged if name not in SYSTEMS]
     assert [note.split()[1] for note in notes] == [one_fmu_name(name) for name in others]
     assert all("has no native model yet" in note for note in notes)

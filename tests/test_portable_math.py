@@ -25,9 +25,9 @@ import numpy as np
 import pytest
 from native_fmus import compiler
 
-from crane_fmu.build_scripts.native import NATIVE
+from crane_fmu.build_scripts.native import MODELS_DIR
 
-DECLARED = re.findall(r"double crane_(\w+)\(double x\);", (NATIVE / "plant_math.h").read_text())
+DECLARED = re.findall(r"double crane_(\w+)\(double x\);", (MODELS_DIR / "plant_math.h").read_text())
 # function: (most ULP from glibc's, most ULP from the exact value)
 BOUNDS = {"sin": (1, 1), "cos": (1, 1), "exp": (1, 1), "log": (1, 1), "tanh": (3, 3)}
 AGREE = 0.8  # of the arguments at least, ours is glibc's: a systematic bias in the last bit shows at about half
@@ -75,8 +75,8 @@ int main(void) {
 def _ours_and_glibc(name, xs, folder):
     """``(ours, glibc's)`` at ``xs``: portable_math.c compiled as the Windows build compiles it, on Linux."""
     (folder / "harness.c").write_text(HARNESS % {"name": name})
-    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", f"-I{NATIVE}",
-                    str(folder / "harness.c"), str(NATIVE / "portable_math.c"), "-o", str(folder / "h"), "-lm"],
+    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", f"-I{MODELS_DIR}",
+                    str(folder / "harness.c"), str(MODELS_DIR / "portable_math.c"), "-o", str(folder / "h"), "-lm"],
                    check=True)
     out = subprocess.run([str(folder / "h")], input="\n".join(x.hex() for x in xs), capture_output=True, text=True,
                          check=True).stdout

@@ -28,6 +28,7 @@ import math
 from collections import namedtuple
 
 from crane_fmu.controller_interface import MEASURED, MOVE_NEEDS, misses, told
+from crane_fmu.cosim import Connection, System
 
 DRIVE = {"u_max": 2.0, "v_max": 1.0}
 DISTANCE = 2.0
@@ -187,8 +188,6 @@ def systems_for(contender, scenario, quick=False):
     ValueError
         When the contender cannot be given the scenario's target.
     """
-    from crane_fmu.cosim import Connection, System
-
     c = contender
 
     def regulation(step, extra=None, connections=()):
