@@ -140,9 +140,25 @@ def component_data(component):
     every field that is data, whatever fields the descriptor gains, and the output dependencies."""
     import dataclasses
 
-    data = [(f.name, getattr(component, f.name)) for f in dataclasses.fields(component)
+    data = [(f.name, _data(getattr(component, f.name))) for f in dataclasses.fields(component)
             if not callable(getattr(component, f.name))]
     return data + [("dependencies", component.dependencies())] if hasattr(component, "dependencies") else data
+
+
+def _data(value):
+    """``value`` with each function in it (e.g. in the plant's ``continuous``) by its name, not by its repr: the
+    repr holds the function's address, another in every process, and would make every build anew."""
+    import dataclasses
+
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return type(value).__name__, tuple((f.name, _data(getattr(value, f.name))) for f in dataclasses.fields(value))
+    if isinstance(value, (list, tuple)):
+        return tuple(_data(item) for item in value)
+    if isinstance(value, dict):
+        return tuple((key, _data(item)) for key, item in value.items())
+    if callable(value) and not isinstance(value, type):
+        return f"{getattr(value, '__module__', '')}.{getattr(value, '__qualname__', repr(type(value)))}"
+    return value
 
 
 @functools.cache
