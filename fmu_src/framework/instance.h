@@ -70,7 +70,7 @@ int get_reals(Instance *c, const char *function, const unsigned vr[], size_t n, 
 int set_reals(Instance *c, const char *function, const unsigned vr[], size_t n, const double v[]);
 int get_strings(Instance *c, const char *function, const unsigned vr[], size_t n, const char *v[]);
 int set_strings(Instance *c, const char *function, const unsigned vr[], size_t n, const char *const v[]);
-/* Values of a type this FMU has none of: only an empty call succeeds; another is an error (the instance in error). */
+/* Values of a type this FMU has none of: only an empty call succeeds. */
 int no_such_values(Instance *c, const char *function, int modes, size_t n);
 int do_step(Instance *c, const char *function, double t, double h);
 
