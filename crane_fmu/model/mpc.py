@@ -52,6 +52,7 @@ REACHED = 1e-3  # the plan reaches the target when every state is this close (m,
 LONGEST_PLAN = 6.0  # s: a move that needs longer is not planned (the tracking QP regulates alone)
 SCHEDULE_POINTS = 11
 REPLAN_GAP = 0.25  # s: the least time between two plans made because the state left the plan
+RETRY_GAP = 6.0  # s: ... after no move within LONGEST_PLAN was found (each attempt costs a bisection of QPs)
 WELL_POSED = 1e-2  # ... and gives a model when no pivot of its normal equations falls below this share
 MISFIT = 1e-5  # ... that explains the data to this share of their squares (0.3 % RMS): clean measurements
 PLAUSIBLE = 2.0  # ... within this factor of the configured cable lengths
@@ -442,8 +443,10 @@ def solve(config, state, measured, l1_now):
         plan_u, plan_s = plan_move(d, measured, target, c.u_max * shrink, c.v_max * shrink, c.interval,
                                    int(LONGEST_PLAN / c.interval))
         plan_start, step = at, 0
-        if plan_u or max(abs(a - b) for a, b in zip(measured, target)) > REACHED:
-            plan_after = at + round(REPLAN_GAP / c.interval)  # a move, or none possible: the next one waits
+        if plan_u:  # a move: the next one (for a deviation) waits REPLAN_GAP
+            plan_after = at + round(REPLAN_GAP / c.interval)
+        elif max(abs(a - b) for a, b in zip(measured, target)) > REACHED:  # none within LONGEST_PLAN:
+            plan_after = at + round(RETRY_GAP / c.interval)  # the tracking QP regulates alone a while
     ref_u = [plan_u[step + k] if step + k < len(plan_u) else 0.0 for k in range(n)]
     ref_s = plan_s[step] if step < len(plan_s) else target
     e0 = [a - b for a, b in zip(measured, ref_s)]
