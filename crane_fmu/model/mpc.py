@@ -338,6 +338,11 @@ def integrate(h, integrals, before, now):
             c1 + half * (c1a + c1b), c2 + half * (c2a + c2b), s1 + half * (s1a + s1b), s2 + half * (s2a + s2b))
 
 
+def _identifying(config, state):
+    """Whether the model is still to be identified (identification on, no model found yet)."""
+    return config.samples > 0 and state[HEADER.l1] == 0.0
+
+
 def identify(config, state, measured):
     """The identification's normal equations with the interval that ends now, and the model they give (or None).
 
@@ -363,6 +368,8 @@ def identify(config, state, measured):
     c, s = config, state
     first = HEADER.n11
     sums = list(s[first:first + 11])
+    if not _identifying(c, s):  # off, or done: nothing more to add
+        return sums, None
     if s[HEADER.count] > 0:
         d1, d2, a1, a2, c1, c2, s1, s2 = integrate(c.h, s[HEADER.d1:HEADER.s2 + 1], s[HEADER.w1:HEADER.sin2 + 1],
                                                    _sample(measured))
@@ -379,7 +386,7 @@ def identify(config, state, measured):
         sums[9] += y1 * y1 + y2 * y2
         sums[10] += 1.0
     model = None
-    if c.samples and sums[10] >= c.samples and s[HEADER.l1] == 0.0:
+    if sums[10] >= c.samples:
         n11, n12, n13, n22, n23, n33, z1, z2, z3, yy, _ = sums
         normal = [[n11, n12, n13], [n12, n22, n23], [n13, n23, n33]]
         try:
@@ -518,6 +525,8 @@ def update(config, state, inputs, time, step):
     """Count the step and add it to the identification's integrals; after a solve keep its input (held until the
     next), its solution, the plan and the identification's sums."""
     if not _due(config, state):
+        if not _identifying(config, state):
+            return (state[HEADER.count] + 1.0,) + state[1:]
         now = _sample(inputs[IN.x:IN.dtheta2 + 1])
         integrals = integrate(config.h, state[HEADER.d1:HEADER.s2 + 1], state[HEADER.w1:HEADER.sin2 + 1], now)
         return (state[HEADER.count] + 1.0,) + state[1:HEADER.w1] + now + integrals + state[HEADER.s2 + 1:]
