@@ -443,7 +443,8 @@ def solve(config, state, measured, l1_now):
     step = at - plan_start
     ref_s = plan_s[step] if count and step < len(plan_s) else target
     trolley, swing = deviation(d, measured, ref_s)
-    moved = trolley > c.replan_x or swing > c.replan_angle or d.l1 != state[HEADER.plan_l1]  # or the schedule's l1
+    rescheduled = len(c.designs) > 1 and d.l1 != state[HEADER.plan_l1]  # the schedule's design changed
+    moved = trolley > c.replan_x or swing > c.replan_angle or rescheduled
     replan = count == 0 or model is not None or (moved and at >= plan_after)
     if replan:
         shrink = 1.0 - c.margin
