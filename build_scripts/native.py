@@ -46,9 +46,10 @@ HOST = SOURCES / "host" / "host.c"  # a C host for tests and benchmarks, in no F
 DERIVATIVE_BENCH = SOURCES / "host" / "derivative_bench.c"  # the Model Exchange derivatives' cost (bench)
 # every native FMU's: the framework's files and what the model files share; besides them each FMU compiles the
 # generated fmu_model.c, which names the model its framework runs
-COMMON = ("instance.c", "py_repr.c", "component.c", "plant_equations.c", "portable_math.c", "linalg.c")
+COMMON = ("instance.c", "py_repr.c", "component.c", "plant_equations.c", "portable_math.c", "linalg.c",
+          "lqr_design.c")
 HEADERS = ("model.h", "instance.h", "py_repr.h", "component.h", "rules.h", "plant_equations.h", "plant_math.h",
-           "linalg.h")
+           "linalg.h", "lqr_design.h", "noise.h")
 FRAMEWORKS = {2: ("fmi2Functions.c", "fmi2_calls.h"), 3: ("fmi3Functions.c", "fmi3_calls.h")}
 PLATFORMS = {2: {"linux": "linux64", "windows": "win64"}, 3: {"linux": "x86_64-linux", "windows": "x86_64-windows"}}
 FLAGS = ["-shared", "-O2", "-Wall", "-Werror", "-ffp-contract=off"]
