@@ -22,7 +22,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from crane_fmu import systems
+from crane_fmu import components, systems
 from crane_fmu.build_scripts.build_fmus import build_all
 from crane_fmu.cosim import CsvRecorder, Master, open_instance
 from crane_fmu.cosim.pacing import percentile
@@ -92,7 +92,8 @@ def _paced_run(system, fmu_dir, period, seconds, csv):
 
 
 def _round_trips(fmu_dir, tmp, n, out):
-    command = [sys.executable, "-m", "crane_fmu", "serve", "--system", "lqr", "--external", "controller",
+    controller = components.by_role(systems.get("lqr").instances)["controller"]  # the instance a client replaces
+    command = [sys.executable, "-m", "crane_fmu", "serve", "--system", "lqr", "--external", controller,
                "--lock-step", "--fmu-dir", str(fmu_dir), "--out", str(tmp / "served.csv"), "--opcua", "127.0.0.1:0",
                "--modbus", "127.0.0.1:0"]
     server = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -103,10 +104,10 @@ def _round_trips(fmu_dir, tmp, n, out):
         modbus = re.search(r"Modbus TCP (\S+?):(\d+)", line)
         if not (url and modbus):
             raise RuntimeError(f"crane-fmu serve did not start: {line!r} {server.stderr.read()[-1000:]}")
-        opcua = asyncio.run(_opcua_round_trips(url.group(1), n))
+        opcua = asyncio.run(_opcua_round_trips(url.group(1), n, controller))
         printed = subprocess.run([*command[:command.index("--out")], "--print-map"], capture_output=True, text=True,
                                  check=True).stdout
-        first = int(re.search(r"\| input \| (\d+)-\d+ \| `controller\.x`", printed).group(1))
+        first = int(re.search(rf"\| input \| (\d+)-\d+ \| `{re.escape(controller)}\.x`", printed).group(1))
         mb = _modbus_round_trips(modbus.group(1), int(modbus.group(2)), first, n)
     finally:
         server.send_signal(signal.SIGINT)
@@ -125,7 +126,7 @@ def _round_trips(fmu_dir, tmp, n, out):
     return figures
 
 
-async def _opcua_round_trips(url, n):
+async def _opcua_round_trips(url, n, controller):
     from asyncua import Client, ua  # optional: the serve extra
 
 
@@ -133,7 +134,7 @@ async def _opcua_round_trips(url, n):
     async with Client(url) as client:
         ns = await client.get_namespace_index("urn:crane-fmu")
         node = lambda name: client.get_node(ua.NodeId(name, ns))  # noqa: E731
-        inputs, u, step = [node(f"controller.{s}") for s in STATE], node("controller.u"), node("Step")
+        inputs, u, step = [node(f"{controller}.{s}") for s in STATE], node(f"{controller}.u"), node("Step")
         system = await step.get_parent()
         times = {"write_read": [], "cycle": []}
         for _ in range(n):
@@ -151,7 +152,7 @@ async def _opcua_round_trips(url, n):
 
 
 def _modbus_round_trips(host, port, first, n):
-    """``first``: the input register of controller.x, the first of the six measured states."""
+    """``first``: the input register of the controller's x, the first of the six measured states."""
     from pymodbus.client import ModbusTcpClient  # optional: the serve extra
 
 

@@ -17,8 +17,8 @@ from native_fmus import open_native
 
 from crane_fmu import components, systems
 from crane_fmu.build_scripts.build_fmus import container_name, containers_dir, fmi3_dir
-from crane_fmu.build_scripts.native import MODELS, native_dir
-from crane_fmu.build_scripts.one_fmu import ONE_FMUS, not_native, one_fmu_name
+from crane_fmu.build_scripts.native import native_dir, ported
+from crane_fmu.build_scripts.one_fmu import not_native, one_fmu_name
 
 # Parameters under which every declared dependency acts: the LQR and the MPC read l1_now only with a schedule
 # (the MPC takes its nearest design: designs 1 mm apart, so that the test's change of l1_now picks another).
@@ -38,8 +38,9 @@ def _paths(fmu_dir, kind, version):
     if not (folder / "CranePlant.fmu").exists():
         pytest.skip("no native FMUs were built (no C compiler)")
     if kind == "native":
-        return [folder / f"{name}.fmu" for name in MODELS]
-    return [folder / f"{one_fmu_name(name)}.fmu" for name in ONE_FMUS if not not_native(systems.get(name))]
+        return [folder / f"{name}.fmu" for name in ported()]
+    return [folder / f"{one_fmu_name(name)}.fmu" for name in systems.tagged("one-fmu")
+            if not not_native(systems.get(name))]
 
 
 def _declared(md, initial):

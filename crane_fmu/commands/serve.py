@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 from .common import UsageError, number, writable_file
-from .simulate import _use, prepare, run_options
+from .simulate import on_system, prepare, run_options
 
 NAME = "serve"
 HELP = "run a system in real time or lock-step for a PLC or any program, over OPC UA and Modbus TCP"
@@ -71,13 +71,7 @@ def arguments(p):
 
 
 def run(args):
-    from crane_fmu import systems
-
-    try:
-        with systems.open_system(args.system) as system:
-            return _serve(args, _use(args.use, system))
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
+    return on_system(args, _serve)
 
 
 def timing_path(out):

@@ -61,11 +61,17 @@ def run_options(p, stop_time_help):
 
 
 def run(args):
+    return on_system(args, _simulate)
+
+
+def on_system(args, command):
+    """``command(args, system)`` on the system of ``--system`` with the FMUs of ``--use`` in its place (simulate,
+    serve); a system or FMU it refuses is one line (UsageError)."""
     from crane_fmu import systems
 
     try:
         with systems.open_system(args.system) as system:
-            return _simulate(args, _use(args.use, system))
+            return command(args, _use(args.use, system))
     except ValueError as exc:
         raise UsageError(str(exc)) from None
 
