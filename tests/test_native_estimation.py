@@ -140,7 +140,8 @@ def _hard_hit_parameters(rng, i):
     p = {"m1": rng.uniform(0.5, 20), "m2": rng.choice([0.0, rng.uniform(0.1, 20)]), "l1": rng.uniform(0.2, 5),
          "l2": rng.uniform(0.1, 3), "g": rng.uniform(1, 25), "r": 10 ** rng.uniform(-3, 0),
          "r_far": 10 ** rng.uniform(-2, 1), "q_x_far": 10 ** rng.uniform(-1, 2), "h": 10 ** rng.uniform(-4, -1.5),
-         "x_d": rng.uniform(-3, 3), "u_max": (INF, rng.uniform(0.5, 3))[i % 2], "v_max": (INF, rng.uniform(0.3, 2))[i % 2]}
+         "x_d": rng.uniform(-3, 3), "u_max": (INF, rng.uniform(0.5, 3))[i % 2],
+         "v_max": (INF, rng.uniform(0.3, 2))[i % 2]}
     p["theta_near"] = rng.uniform(0.02, 0.5)
     p["theta_far"] = rng.uniform(p["theta_near"] + 0.01, 1.5)
     return p
