@@ -63,7 +63,13 @@ import os
 import sys
 
 # The core and pythonfmu are in resources/python.zip with their bytecode (only this script is loose).
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "python.zip"))
+_zip = os.path.join(os.path.dirname(os.path.abspath(__file__)), "python.zip")
+sys.path.insert(0, _zip)
+# Another FMU of this core, run earlier in this process, may have imported the core from its own folder, which
+# its host has removed since: the modules it did not import are looked for in this FMU's copy first.
+_core = sys.modules.get("{core}")
+if _core is not None and os.path.join(_zip, "{core}") not in _core.__path__:
+    _core.__path__.insert(0, os.path.join(_zip, "{core}"))
 
 from {core}.component import find  # noqa: E402
 from {core}.slave{version} import slave_base  # noqa: E402

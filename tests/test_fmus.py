@@ -246,6 +246,25 @@ print(*folders)
 
 
 @pytest.mark.parametrize("folder", ["fmus", "fmi3"])
+def test_an_fmu_runs_after_another_of_its_core_whose_folder_is_gone(fmu_dir, folder):
+    """Python FMUs of one core share its modules in a host's interpreter: after fmpy ran Gust (whose folder it
+    then removed), MpcController, whose model module Gust never imported, must still start (a fresh process:
+    in this one an earlier test may have imported every module already)."""
+    import subprocess
+    import sys
+
+    script = """
+import sys
+from fmpy import simulate_fmu
+simulate_fmu(sys.argv[1], stop_time=0.01, output_interval=1e-3)
+simulate_fmu(sys.argv[2], stop_time=0.01, output_interval=1e-3)
+"""
+    fmus = [str(fmu_dir.parent / folder / f"{name}.fmu") for name in ("Gust", "MpcController")]
+    done = subprocess.run([sys.executable, "-c", script, *fmus], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+
+
+@pytest.mark.parametrize("folder", ["fmus", "fmi3"])
 def test_the_python_code_is_one_archive_with_checked_bytecode_for_this_python(fmu_dir, folder):
     """A host unpacks the FMU afresh each time: few files, and .pyc that spare the compile (refused if the
     source changes: hash-based, checked, PEP 552)."""

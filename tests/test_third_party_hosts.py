@@ -69,8 +69,8 @@ def _ours(fmu_dir, kind, name, path, stop_time):
         outputs = [v.name for v in plan(system).variables if v.causality == "output"]
         return columns, [(own, "{}.{}".format(*links[own][0])) for own in outputs]
     md = read_model_description(str(path))
-    columns = run(System(name, {"it": str(path)}), fmu_dir, stop_time=stop_time,
-                  step=float(md.defaultExperiment.stepSize)).columns()
+    columns = run(System(name, {"it": str(path)}, step=float(md.defaultExperiment.stepSize)), fmu_dir,
+                  stop_time=stop_time).columns()
     return columns, [(v.name, f"it.{v.name}") for v in md.modelVariables if v.causality == "output"]
 
 

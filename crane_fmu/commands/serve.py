@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 from .common import UsageError, number, writable_file
-from .simulate import on_system, prepare, run_options
+from .simulate import on_system, open_recorder, prepare, run_options
 
 NAME = "serve"
 HELP = "run a system in real time or lock-step for a PLC or any program, over OPC UA and Modbus TCP"
@@ -159,14 +159,7 @@ def _serve(args, system):
 
 
 def _run(args, system, runner, endpoints):
-    from crane_fmu.cosim import recorder_for
-
-    try:
-        recorder = recorder_for(args.out)
-    except OSError as exc:
-        raise UsageError(f"--out {args.out}: cannot be written ({exc.strerror})") from None
-    except ImportError as exc:
-        raise UsageError(f"--out {args.out}: writing it needs {exc.name} (pip install {exc.name})") from None
+    recorder = open_recorder(args.out)
     runner.observers.append(recorder)
     runner.start()
     previous = _stop_on_signals(runner)  # from here Ctrl-C stops the run cleanly, also while it starts

@@ -148,7 +148,7 @@ def _parameter_file(path, variables):
 
 def _simulate(args, system):
     """Run a system, writing the CSV (and plot) of ``args``; ``--parameters`` and ``--set`` override its values."""
-    from crane_fmu.cosim import FmiError, ProgressLine, read_result, recorder_for, simulate
+    from crane_fmu.cosim import FmiError, ProgressLine, read_result, simulate
     from crane_fmu.cosim.master import communication_points
     from crane_fmu.cosim.recorder import RESULT_SUFFIXES
 
@@ -159,12 +159,7 @@ def _simulate(args, system):
     writable_file(args.out, "--out", RESULT_SUFFIXES)
     if args.plot:
         writable_file(args.plot, "--plot", ".png")
-    try:
-        recorder = recorder_for(args.out)
-    except OSError as exc:
-        raise UsageError(f"--out {args.out}: cannot be written ({exc.strerror})") from None
-    except ImportError as exc:
-        raise UsageError(f"--out {args.out}: writing it needs {exc.name} (pip install {exc.name})") from None
+    recorder = open_recorder(args.out)
     progress = [ProgressLine(system.start_time, stop_time, sys.stderr)] if sys.stderr.isatty() else []
     try:
         simulate(fmus, connections, stop_time, step, args.algorithm, system.parameters, recorder, system.start_time,
@@ -199,6 +194,18 @@ def _simulate(args, system):
         os.replace(partial, args.plot)
         print(f"wrote {args.plot}")
     return 0
+
+
+def open_recorder(out):
+    """The recorder of the result file ``--out`` (simulate, serve); one line if it cannot be written."""
+    from crane_fmu.cosim import recorder_for
+
+    try:
+        return recorder_for(out)
+    except OSError as exc:
+        raise UsageError(f"--out {out}: cannot be written ({exc.strerror})") from None
+    except ImportError as exc:
+        raise UsageError(f"--out {out}: writing it needs {exc.name} (pip install {exc.name})") from None
 
 
 def _end(progress):
