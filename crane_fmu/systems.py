@@ -223,18 +223,18 @@ register(System("lqg", {"plant": "CranePlant", "controller": "LqrController", "s
                 connections=MEASURING, parameters={"plant": {"u_max": 2.0, "v_max": 1.0}},
                 description="Section V regulation from theta1(0) = 10 deg with only x and theta1 measured (1 mm, "
                             "0.1 deg noise, one step late): a Kalman filter in front of the LQR, |u| <= 2 m/s2, "
-                            "|v| <= 1 m/s"))
+                            "|v| <= 1 m/s", tags=("one-fmu",)))
 register(System("lqg-transport", {"plant": "CranePlant", "planner": "TrajectoryPlanner", "controller": "LqrController",
                                   "sensor": "CraneSensor", "estimator": "StateEstimator"},
                 connections=MEASURING,
                 parameters={"plant": {"theta1_0": 0.0, "u_max": 2.0, "v_max": 1.0}, "planner": {"x_d": 2.0}},
                 stop_time=10.0,
                 description="the 2 m move of transport with only x and theta1 measured: a Kalman filter in front of "
-                            "the LQR"))
+                            "the LQR", tags=("one-fmu",)))
 register(System("hard-hit", {"plant": "CranePlant", "controller": "HardHitController"},
                 parameters={"plant": {"theta1_0": 1.0471975511965976, "u_max": 2.0, "v_max": 1.0}},
                 description="a hard hit: regulation from theta1(0) = 60 deg by LQR gains scheduled on the swing "
-                            "energy, |u| <= 2 m/s2, |v| <= 1 m/s"))
+                            "energy, |u| <= 2 m/s2, |v| <= 1 m/s", tags=("one-fmu",)))
 register(System("mpc", {"plant": "CranePlant", "controller": "MpcController"},
                 parameters={"plant": {"u_max": 2.0, "v_max": 1.0}},
                 description="Section V regulation from theta1(0) = 10 deg by the constrained MPC: the shortest move "

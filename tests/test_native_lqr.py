@@ -271,8 +271,16 @@ def test_closed_loops_with_the_native_lqr_equal_the_python_fmus_runs(fmu_dir, na
 
 # ---- linalg.c on its own ----------------------------------------------------------------------------------------
 
+def _la_max():
+    import re
+
+    from crane_fmu.build_scripts.native import MODELS_DIR
+
+    return int(re.search(r"#define LA_MAX (\d+)", (MODELS_DIR / "linalg.h").read_text()).group(1))
+
+
 class _Matrix(ctypes.Structure):
-    _fields_ = [("rows", ctypes.c_int), ("cols", ctypes.c_int), ("v", (ctypes.c_double * 7) * 7)]
+    _fields_ = [("rows", ctypes.c_int), ("cols", ctypes.c_int), ("v", (ctypes.c_double * _la_max()) * _la_max())]
 
 
 @pytest.fixture(scope="module")
@@ -313,16 +321,17 @@ def test_ceil_log2_without_libm_is_pythons_ceil_of_log2(linalg_c):
 
 
 def test_expm_equals_linalg_py_bit_for_bit(linalg_c):
-    """Random 7x7 matrices of entries up to about 30 (0 to 9 squarings): linalg.expm's bits."""
+    """Random 7x7 and 9x9 matrices (the LQR's and the estimator's ZOH) of entries up to about 30 (0 to 9 squarings):
+    linalg.expm's bits."""
     from crane_fmu.model import linalg
 
     rng = random.Random(4)
-    for _ in range(200):
-        scale = 10 ** rng.uniform(-3, 1.5)
-        a = [[rng.gauss(0, scale) if rng.random() < 0.6 else 0.0 for _ in range(7)] for _ in range(7)]
-        matrix, out = _Matrix(7, 7), _Matrix()
-        for i in range(7):
-            for j in range(7):
+    for k in range(200):
+        n, scale = (7, 9)[k % 2], 10 ** rng.uniform(-3, 1.5)
+        a = [[rng.gauss(0, scale) if rng.random() < 0.6 else 0.0 for _ in range(n)] for _ in range(n)]
+        matrix, out = _Matrix(n, n), _Matrix()
+        for i in range(n):
+            for j in range(n):
                 matrix.v[i][j] = a[i][j]
         assert linalg_c.la_expm(matrix, ctypes.byref(out)) is None
-        assert [[out.v[i][j] for j in range(7)] for i in range(7)] == linalg.expm(a)
+        assert [[out.v[i][j] for j in range(n)] for i in range(n)] == linalg.expm(a)

@@ -166,5 +166,5 @@ CRANE_SENSOR = Component(
      output("theta1_meas", "rad", "measured hook swing angle"),
      output("theta2_meas", "rad", "measured payload swing angle (a camera)")),
     _crane_sensor_configure, _crane_sensor_output, feedthrough=True,
-    initial_state=lambda config: (0, []), update=_crane_sensor_update,
+    initial_state=lambda config: (0, []), update=_crane_sensor_update, native="crane_sensor.c",
     depends_on={name + "_meas": (name,) for name in MEASURED})  # each channel its own (at once: delay 0, first sample)

@@ -170,4 +170,4 @@ COMPONENT = Component(
     "Discrete Kalman filter of the crane linearised about rest, designed from its parameters at initialisation: "
     "the controllers' inputs x, dx, theta1, dtheta1, theta2, dtheta2 from x_meas, theta1_meas (theta2_meas) and u",
     VARIABLES, configure, lambda config, state, inputs: tuple(state[3]),
-    initial_state=initial_state, update=update, report=report)
+    initial_state=initial_state, update=update, report=report, native="estimator.c")

@@ -118,4 +118,4 @@ COMPONENT = Component(
     "HardHitController", "controller",
     "Two discrete LQR designs blended by the swing energy (gentle far out, the LQR near rest), for large swings; "
     "tracks x_ref, dx_ref, ddx_ref; output: trolley acceleration u, direct feedthrough",
-    VARIABLES, configure, _output, feedthrough=True, report=report)
+    VARIABLES, configure, _output, feedthrough=True, report=report, native="hard_hit.c")

@@ -9,7 +9,7 @@
 #ifndef LINALG_H
 #define LINALG_H
 
-#define LA_MAX 7 /* the ZOH's augmented matrix of 6 states and 1 input */
+#define LA_MAX 9 /* the ZOH's augmented matrix of 6 states and 3 inputs (the estimator's noise model) */
 
 typedef struct {
     int rows, cols;

@@ -1,21 +1,21 @@
 /*
  * The LqrController component in C: the native twin of crane_fmu/model/lqr.py (its variables, configure()
- * rules and messages in their order, design(), the gain schedule, control() with limits.limited()), registered
- * as a component (component.h). Its variables, value references and start values come from
- * LqrController_variables.h, generated from lqr.VARIABLES. The design (ZOH discretisation, Riccati doubling,
- * gains; linalg.c) is done when initialisation ends; before that the output follows the parameters. No state:
- * u follows the inputs of the same instant (direct feedthrough).
+ * rules and messages in their order, the gain schedule, control() with limits.limited()), registered as a
+ * component (component.h). Its variables, value references and start values come from
+ * LqrController_variables.h, generated from lqr.VARIABLES. The designs (ZOH discretisation, Riccati doubling,
+ * gains: lqr_design.c over linalg.c) are done when initialisation ends; before that the output follows the
+ * parameters. No state: u follows the inputs of the same instant (direct feedthrough).
  */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "LqrController_variables.h"
-#include "linalg.h"
+#include "lqr_design.h"
 #include "py_repr.h"
 #include "rules.h"
 
-enum { N_STATE = 6, SCHEDULE_POINTS = 21 }; /* s = (x, dx, theta1, dtheta1, theta2, dtheta2); lqr.SCHEDULE_POINTS */
+enum { SCHEDULE_POINTS = 21 }; /* lqr.SCHEDULE_POINTS */
 
 /* lqr.Config: the gains for l1, the limits and the schedule (designs over [l1_low, l1_high]), fixed-size so that
    an FMU state is a plain copy of the model. */
@@ -27,40 +27,11 @@ typedef struct {
 
 #define V(name) (values[VR_##name])
 #define R(value) py_repr(value, (char[REPR_SIZE]){0})
-#define DIVISION_BY_ZERO "ZeroDivisionError: float division by zero" /* Python's, where C would give inf */
 
-/* lqr.continuous_model(): s' = A s + B u with x'' = u (eq 12) and plant.linearisation() of eqs (8)-(9),
-   q'' = -W q - w u with W = N^-1 diag((m1+m2) g, g), w = N^-1 (m1+m2, 1), N = [[(m1+m2) l1, m2 l2], [l1, l2]]. */
-static const char *continuous_model(const double values[], double l1, Matrix *a, Matrix *b) {
-    double m12 = V(m1) + V(m2), g = V(g);
-    double na = m12 * l1, nb = V(m2) * V(l2), nc = l1, nd = V(l2);
-    double det = na * nd - nb * nc;
-    if (det == 0.0) return DIVISION_BY_ZERO;
-    double inv[2][2] = {{nd / det, -nb / det}, {-nc / det, na / det}}; /* N^-1 */
-    *a = la_zeros(N_STATE, N_STATE), *b = la_zeros(N_STATE, 1);
-    a->v[0][1] = a->v[2][3] = a->v[4][5] = 1.0;
-    b->v[1][0] = 1.0;
-    for (int i = 0; i < 2; i++) { /* rows dtheta1 (3) and dtheta2 (5) */
-        a->v[3 + 2 * i][2] = -(inv[i][0] * m12 * g), a->v[3 + 2 * i][4] = -(inv[i][1] * g);
-        b->v[3 + 2 * i][0] = -(inv[i][0] * m12 + inv[i][1]);
-    }
-    return NULL;
-}
-
-/* lqr.design(): K = (r + Bd' P Bd)^-1 Bd' P Ad for the ZOH discretisation (Ad, Bd) at step h, Q = diag(q_*),
-   P from the discrete algebraic Riccati equation. NULL, or the Python exception's text. */
+/* lqr.design() for the controller's crane model with the cable length l1 (lqr_design.c). */
 static const char *design(const double values[], double l1, double gains[N_STATE]) {
-    Matrix a, b, ad, bd, p, q = la_zeros(N_STATE, N_STATE), r = la_zeros(1, 1);
-    for (int i = 0; i < N_STATE; i++) q.v[i][i] = values[VR_q_x + i];
-    r.v[0][0] = V(r);
-    const char *error = continuous_model(values, l1, &a, &b);
-    if (error || (error = la_zoh(a, b, V(h), &ad, &bd)) || (error = la_dare(ad, bd, q, r, &p))) return error;
-    Matrix pb = la_matmul(p, bd), bd_t = la_transpose(bd), pb_t = la_transpose(pb);
-    double bt_p_b = la_dot(bd_t.v[0], pb_t.v[0], N_STATE);
-    Matrix bt_p_a = la_matmul(pb_t, ad);
-    if (V(r) + bt_p_b == 0.0) return DIVISION_BY_ZERO;
-    for (int j = 0; j < N_STATE; j++) gains[j] = bt_p_a.v[0][j] / (V(r) + bt_p_b);
-    return NULL;
+    PlantParameters p = {V(m1), V(m2), l1, V(l2), V(g)};
+    return lqr_design(&p, &values[VR_q_x], V(r), V(h), gains);
 }
 
 /* lqr.configure(): the rules of parameters.plant_parameters, the weights, r, h, x_d, limits.check and the

@@ -27,4 +27,15 @@ double crane_log(double x);
 #define LOG log
 #endif
 
+/* Python's x ** 2: the C library's pow(x, 2.0), which glibc's does not always round as x * x, kept from being
+   folded into x * x by the compiler; the portable math's is x * x. */
+#ifdef CRANE_OWN_MATH
+static inline double square(double x) { return x * x; }
+#else
+static inline double square(double x) {
+    volatile double two = 2.0;
+    return pow(x, two);
+}
+#endif
+
 #endif

@@ -1,6 +1,6 @@
 /*
  * The Sensor component in C: the native twin of Sensor in crane_fmu/model/disturbances.py (its
- * variables, _sensor_configure() rules and messages, noise() on splitmix64 with Box-Muller, measure()
+ * variables, _sensor_configure() rules and messages, measure() with noise.h's noise()
  * and the one-step delay), registered as a component (component.h). Its variables come from
  * Sensor_variables.h, generated from disturbances.SENSOR. Its state is (k, held): the sample count and
  * the last sample, none at first.
@@ -11,12 +11,10 @@
 #include <string.h>
 
 #include "Sensor_variables.h"
+#include "noise.h"
 #include "plant_math.h"
 #include "py_repr.h"
 #include "rules.h"
-
-#define PI 3.141592653589793 /* math.pi */
-#define TWO_53 9007199254740992.0
 
 /* disturbances.SensorConfig */
 typedef struct {
@@ -48,21 +46,6 @@ static ModelStatus configure(const double values[], const StringValue strings[],
     memcpy(c->sigmas, s, sizeof s);
     c->seed = (uint64_t)seed, c->delay = V(delay) == 1.0;
     return MODEL_OK;
-}
-
-/* disturbances._mix(): splitmix64 (Python's & 0xFFFFFFFFFFFFFFFF is C's unsigned wrap-around). */
-static uint64_t mix(uint64_t z) {
-    z += 0x9E3779B97F4A7C15u;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9u;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBu;
-    return z ^ (z >> 31);
-}
-
-/* disturbances.noise(): a standard normal sample of (seed, k, channel), Box-Muller on splitmix64. */
-static double noise(uint64_t seed, uint64_t k, uint64_t channel) {
-    uint64_t a = mix((seed << 40) ^ (k << 4) ^ channel), b = mix(a); /* _mix keeps the low 64 bits alike */
-    double u1 = ((double)(a >> 11) + 0.5) / TWO_53, u2 = (double)(b >> 11) / TWO_53;
-    return sqrt(-2.0 * LOG(u1)) * COS(2.0 * PI * u2);
 }
 
 /* disturbances.measure(): the true state plus independent normal noise at sample k. */

@@ -1,0 +1,79 @@
+/*
+ * The CraneSensor component in C: the native twin of CraneSensor in crane_fmu/model/disturbances.py (its
+ * variables, _crane_sensor_configure() rules and messages, crane_measure() with noise.h's noise() on channels
+ * 8-10, and the delay of whole steps), registered as a component (component.h). Its variables come from
+ * CraneSensor_variables.h, generated from disturbances.CRANE_SENSOR. Its state is (k, history): the sample
+ * count and the last `delay` samples, oldest first, none at first.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "CraneSensor_variables.h"
+#include "noise.h"
+#include "py_repr.h"
+#include "rules.h"
+
+enum { MAX_DELAY = 100 }; /* the rule on delay */
+
+/* disturbances.CraneSensorConfig */
+typedef struct {
+    double sigmas[N_OUTPUTS];
+    uint64_t seed;
+    int delay;
+} Config;
+
+typedef struct {
+    uint64_t k;                               /* samples taken, */
+    int held;                                 /* how many of the last ones are kept (at most delay), */
+    double history[MAX_DELAY][N_OUTPUTS];     /* and they, oldest first */
+} State;
+
+#define V(name) (values[VR_##name])
+
+/* The rules of _crane_sensor_configure() in its order and words. */
+static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
+    static const unsigned sigmas[] = {VR_sigma_x, VR_sigma_theta1, VR_sigma_theta2};
+    for (unsigned i = 0; i < N_OUTPUTS; i++) {
+        double value = values[sigmas[i]];
+        if (!(value >= 0 && isfinite(value))) return rule(r, VARIABLE_TABLE[sigmas[i]].name, ">= 0 and finite", value);
+        c->sigmas[i] = value;
+    }
+    double seed = V(seed), delay = V(delay);
+    if (!(isfinite(seed) && seed == trunc(seed) && 0 <= seed && seed < 4294967296.0))
+        return rule(r, "seed", "a whole number in [0, 2^32)", seed);
+    if (!(isfinite(delay) && delay == trunc(delay) && 0 <= delay && delay <= MAX_DELAY))
+        return rule(r, "delay", "a whole number of steps in [0, 100]", delay);
+    c->seed = (uint64_t)seed, c->delay = (int)delay;
+    return MODEL_OK;
+}
+
+/* disturbances.crane_measure(): (x, theta1, theta2) plus independent normal noise at sample k. */
+static void measure(const Config *c, uint64_t k, const double true_values[N_OUTPUTS], double out[N_OUTPUTS]) {
+    for (unsigned i = 0; i < N_OUTPUTS; i++)
+        out[i] = c->sigmas[i] != 0 ? true_values[i] + c->sigmas[i] * noise(c->seed, k, 8 + i) : true_values[i];
+}
+
+static void initial_state(const double values[], const Config *c, State *s) { s->k = 0, s->held = 0; } /* (0, []) */
+
+/* _crane_sensor_output(): the sample delay steps ago (the oldest kept until there is one that old); without a
+   delay, and at first, a sample of the inputs now. */
+static ModelStatus outputs(const double values[], const Config *c, const State *s, double out[], const Reporter *r) {
+    if (c->delay == 0 || s->held == 0) measure(c, s->k, &values[VR_x], out);
+    else memcpy(out, s->history[0], sizeof s->history[0]);
+    return MODEL_OK;
+}
+
+/* _crane_sensor_update(): (k + 1, (history + [crane_measure(k)])[-delay:]) */
+static ModelStatus update(const double values[], const Config *c, State *s, double time, double step,
+                          const Reporter *r) {
+    if (c->delay > 0) {
+        if (s->held == c->delay) memmove(s->history[0], s->history[1], (size_t)--s->held * sizeof s->history[0]);
+        measure(c, s->k, &values[VR_x], s->history[s->held++]);
+    }
+    s->k++;
+    return MODEL_OK;
+}
+
+STATEFUL_COMPONENT;
