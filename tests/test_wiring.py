@@ -92,7 +92,7 @@ def test_the_containers_run_is_our_masters_with_x_d_set_on_its_holder(containers
     step, stop_time = system.step, 5.0  # the move and the regulation are under way
     result = simulate_fmu(str(containers[name]), stop_time=stop_time, step_size=step, output_interval=step,
                           start_values=start, output=["x", "theta1"])
-    ours = run(system, fmu_dir, mode="jacobi", initial_exchange=False, stop_time=stop_time).columns()
+    ours = run(system, fmu_dir, algorithm="jacobi", initial_exchange=False, stop_time=stop_time).columns()
     for signal in ("x", "theta1"):
         assert np.abs(result[signal] - ours["plant." + signal]).max() <= 1e-9, signal
     assert np.abs(ours["plant.x"]).max() > 0.05  # the trolley moved: x_d acted
