@@ -199,6 +199,12 @@ def build_fmu(component, out_dir, binaries=None, fmi_version=2):
         partial = out_dir / f".{name}.fmu.partial"
         process = postprocess3 if fmi_version == 3 else postprocess
         linux = "binaries/x86_64-linux" if fmi_version == 3 else "binaries/linux64"
+        with zipfile.ZipFile(raw) as src:
+            if f"{linux}/{name}.so" not in src.namelist():  # never an FMU without its Linux binary
+                builder = sys.modules[FmuBuilder3.__module__ if fmi_version == 3 else FmuBuilder.__module__].__file__
+                raise RuntimeError(f"{name}: pythonfmu built no {linux} binary: this process imported pythonfmu from "
+                                   f"{builder}, without its binaries (an FMU's bundled copy, imported when a Python "
+                                   "FMU ran in this process); build in a fresh process")
         with zipfile.ZipFile(raw) as src, zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as dst:
             python = {}  # the core and pythonfmu, for resources/python.zip
             for item in src.infolist():

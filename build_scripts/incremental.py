@@ -21,6 +21,7 @@ import shutil
 import subprocess
 import sys
 import sysconfig
+import threading
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -50,6 +51,7 @@ class Record:
         """``root``: the build's folder, where the record is kept (None: a build that keeps nothing)."""
         self.root, self.force = (Path(root).resolve() if root is not None else None), force
         self.made, self.kept, self.entries = [], [], {}
+        self._lock = threading.Lock()  # the native builds run on threads (native.in_parallel)
         try:
             record = json.loads((self.root / RECORD).read_text()) if root is not None else {}
             if record.get("format") == FORMAT:
@@ -72,13 +74,15 @@ class Record:
     def make(self, path, key, produce):
         """``path`` as it is when fresh (:meth:`fresh`), else made by ``produce()`` (which returns it) and recorded."""
         if self.fresh(path, key):
-            self.kept.append(Path(path))
+            with self._lock:
+                self.kept.append(Path(path))
             return Path(path)
         made = Path(produce())
-        self.made.append(made)
-        if self.root is not None:
-            self.entries[self._name(made)] = {"key": key, "output": file_digest(made)}
-            self._write()
+        with self._lock:
+            self.made.append(made)
+            if self.root is not None:
+                self.entries[self._name(made)] = {"key": key, "output": file_digest(made)}
+                self._write()
         return made
 
     def _write(self):
@@ -136,9 +140,25 @@ def component_data(component):
     every field that is data, whatever fields the descriptor gains, and the output dependencies."""
     import dataclasses
 
-    data = [(f.name, getattr(component, f.name)) for f in dataclasses.fields(component)
+    data = [(f.name, _data(getattr(component, f.name))) for f in dataclasses.fields(component)
             if not callable(getattr(component, f.name))]
     return data + [("dependencies", component.dependencies())] if hasattr(component, "dependencies") else data
+
+
+def _data(value):
+    """``value`` with each function in it (e.g. in the plant's ``continuous``) by its name, not by its repr: the
+    repr holds the function's address, another in every process, and would make every build anew."""
+    import dataclasses
+
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return type(value).__name__, tuple((f.name, _data(getattr(value, f.name))) for f in dataclasses.fields(value))
+    if isinstance(value, (list, tuple)):
+        return tuple(_data(item) for item in value)
+    if isinstance(value, dict):
+        return tuple((key, _data(item)) for key, item in value.items())
+    if callable(value) and not isinstance(value, type):
+        return f"{getattr(value, '__module__', '')}.{getattr(value, '__qualname__', repr(type(value)))}"
+    return value
 
 
 @functools.cache

@@ -29,13 +29,14 @@ import tempfile
 import uuid
 import xml.etree.ElementTree as ET
 import zipfile
+from concurrent.futures import ThreadPoolExecutor
+from functools import partial
 from pathlib import Path
 
 import crane_fmu.fmu_src as fmu_src
 from crane_fmu import components
-from crane_fmu.build_scripts import incremental
+from crane_fmu.build_scripts import incremental, model_exchange
 from crane_fmu.build_scripts.folders import fmi3_dir, native_dir
-from crane_fmu.build_scripts import model_exchange
 from crane_fmu.build_scripts.model_description import _unit_definitions, postprocess, postprocess3
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.model.tables import DISPLAY_UNITS, xml_double
@@ -354,18 +355,25 @@ def build_native(out_dir, kinds, required=False, log=print, record=None):
         return []
     if tools["windows"] is None:
         log(f"warning: {MINGW} not found; the native FMUs have no Windows binary")
-    paths = []
+    builds = []
     for version, python_dir in ((2, Path(out_dir)), (3, fmi3_dir(out_dir))):
+        native_dir(out_dir, version).mkdir(parents=True, exist_ok=True)
         for kind in kinds:
             folder, python = native_dir(out_dir, version), python_dir / f"{kind}.fmu"
             if components.get(kind).native:
                 component = components.get(kind)
                 files = [source_path(name) for group in _sources(component, version) for name in group]
-                paths.append(record.make(folder / f"{kind}.fmu", incremental.native_key(component, version, tools,
-                                                                                        files),
-                                         lambda c=component, v=version, f=folder: build_native_fmu(c, f, v, tools)))
+                builds.append(partial(record.make, folder / f"{kind}.fmu",
+                                      incremental.native_key(component, version, tools, files),
+                                      partial(build_native_fmu, component, folder, version, tools)))
             elif python.exists():  # not ported yet: the Python FMU
-                folder.mkdir(parents=True, exist_ok=True)
-                paths.append(record.make(folder / python.name, incremental.key("copy", python),
-                                         lambda p=python, f=folder: Path(shutil.copy(p, f))))
-    return paths
+                builds.append(partial(record.make, folder / python.name, incremental.key("copy", python),
+                                      lambda p=python, f=folder: Path(shutil.copy(p, f))))
+    return in_parallel(builds)
+
+
+def in_parallel(calls):
+    """Each of ``calls`` (builds that wait on compiler processes) on a thread of its own, as many at once as
+    there are cores; their results in the order of the calls."""
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
+        return list(pool.map(lambda call: call(), calls))

@@ -22,6 +22,7 @@ import re
 import tempfile
 import uuid
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -301,14 +302,14 @@ def build_one_fmus(out_dir, systems=None, kinds=None, log=print, record=None):
             else:
                 systems.append(system_name)
     tools = native.compilers()
-    paths = []
+    builds = []
     for system in systems:
         system = registry.get(system) if isinstance(system, str) else system
         kinds_used = list(dict.fromkeys(registry.kinds(system).values()))
         for version in (2, 3):
             folder = native.native_dir(out_dir, version)
-            paths.append(record.make(folder / f"{one_fmu_name(system.name)}.fmu",
-                                     incremental.one_fmu_key(system, kinds_used, version, tools, [
-                                         native.source_path(name) for name in copied_sources(kinds_used, version)]),
-                                     lambda s=system, f=folder, v=version: build_one_fmu(s, f, v, tools=tools)))
-    return paths
+            builds.append(partial(record.make, folder / f"{one_fmu_name(system.name)}.fmu",
+                                  incremental.one_fmu_key(system, kinds_used, version, tools, [
+                                      native.source_path(name) for name in copied_sources(kinds_used, version)]),
+                                  partial(build_one_fmu, system, folder, version, tools=tools)))
+    return native.in_parallel(builds)

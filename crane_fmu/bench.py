@@ -206,7 +206,8 @@ def run_bench(stop_time=20.0, step=1e-3, repeat=5, out=print):
         tmp = Path(tmp)
         built = tmp / "fmus"
         paper = systems.get("paper")
-        build_all(built, set(paper.instances.values()), systems=(), fmi3=False, log=lambda _: None)
+        build_all(built, set(paper.instances.values()), systems=(), fmi3=False, native=False,
+                  log=lambda _: None)
         anchor = [str(p) for p in build_anchor(tmp / "anchor")]
         timed = systems.prepare(paper, step, stop_time)
         command = Path(sys.executable).parent / "crane-fmu"  # the installed command, else the module
@@ -260,7 +261,8 @@ def run_sweep_bench(n_cases=16, stop_time=10.0, step=1e-3, repeat=3, out=print):
     walls, case_times = {1: [], 2: []}, []
     with tempfile.TemporaryDirectory(prefix="crane_bench_") as tmp, ExitStack() as stack:
         paper = systems.get("paper")
-        build_all(Path(tmp) / "fmus", paper.instances.values(), systems=(), fmi3=False, log=lambda _: None)
+        build_all(Path(tmp) / "fmus", paper.instances.values(), systems=(), fmi3=False, native=False,
+                  log=lambda _: None)
         system = shippable(paper, Path(tmp) / "fmus")
         clients = {}
         for workers in (1, 2):
@@ -325,7 +327,8 @@ def run_endurance(stop_time=3600.0, step=1e-3, out=print):
     with tempfile.TemporaryDirectory(prefix="crane_endurance_") as tmp:
         built = Path(tmp) / "fmus"
         paper = systems.get("paper")
-        build_all(built, paper.instances.values(), systems=(), fmi3=False, log=lambda _: None)
+        build_all(built, paper.instances.values(), systems=(), fmi3=False, native=False,
+                  log=lambda _: None)
         instances, connections = _open(paper, built)
         probe = _MemoryProbe(max(1, round(60.0 / step)))
         csv_path = Path(tmp) / "endurance.csv"

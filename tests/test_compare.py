@@ -1,12 +1,14 @@
 """crane-fmu compare: a user's controller FMU (built from examples/) scored next to the built-in ones on Dask."""
 
 import math
+import pickle
 import re
 from pathlib import Path
 
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
+from once import made_once
 
 from crane_fmu import components, systems
 from crane_fmu.analysis import scoreboard
@@ -18,31 +20,44 @@ from crane_fmu.sweep.runner import JOURNAL
 ROOT = Path(__file__).resolve().parent.parent
 
 
-@pytest.fixture(scope="module")
+# The boards are made once per run (once.made_once); the tests that add to a board run in this module's order, on one
+# worker (--dist loadscope keeps a module on one worker).
+
+@pytest.fixture(scope="session")
 def template_fmu(tmp_path_factory):
     """examples/my_controller built with pythonfmu alone, as its README recipe does."""
     from pythonfmu import FmuBuilder
 
-    out = tmp_path_factory.mktemp("mine")
-    return FmuBuilder.build_FMU(ROOT / "examples" / "my_controller" / "my_controller.py", dest=out)
+    def make(folder):
+        FmuBuilder.build_FMU(ROOT / "examples" / "my_controller" / "my_controller.py", dest=folder)
+
+    return made_once(tmp_path_factory, "template_fmu", make) / "MyController.fmu"
 
 
-@pytest.fixture(scope="module")
-def quick_board(template_fmu, fmu_dir, tmp_path_factory):
-    """The template and the LQR alone (--only), quick: the board is in OUT/quick."""
-    out = tmp_path_factory.mktemp("compare")
-    log = []
-    rows = compare(out, [str(template_fmu), "LqrController"], fmu_dir, workers=2, quick=True, progress=False,
-                   animate=(), only=True, log=log.append)
-    return out / "quick", rows, log
+@pytest.fixture(scope="session")
+def quick_board(template_fmu, fmu_dir, dask_scheduler, tmp_path_factory):
+    """The template and the LQR alone (--only), quick: ``(OUT/quick, rows, log)``."""
+    def make(out):
+        log = []
+        rows = compare(out, [str(template_fmu), "LqrController"], fmu_dir, scheduler=dask_scheduler, quick=True,
+                       progress=False, animate=(), only=True, log=log.append)
+        (out / "made.pickle").write_bytes(pickle.dumps((rows, log)))
+
+    out = made_once(tmp_path_factory, "compare_quick_board", make)
+    return (out / "quick", *pickle.loads((out / "made.pickle").read_bytes()))
 
 
-@pytest.fixture(scope="module")
-def full_board(fmu_dir, tmp_path_factory):
-    """Every built-in controller on the full board."""
-    out = tmp_path_factory.mktemp("full")
-    rows = compare(out, (), fmu_dir, workers=2, progress=False, animate=(), log=lambda _: None)
-    return out, rows
+@pytest.fixture(scope="session")
+def full_board(native_dirs, dask_scheduler, tmp_path_factory):
+    """Every built-in controller on the full board, scored with the native FMUs (``compare --fmu-dir
+    build/native``): the Python FMUs' figures (test_the_native_fmus_give_the_python_board) in less time."""
+    def make(out):
+        rows = compare(out, (), native_dirs[2], scheduler=dask_scheduler, progress=False, animate=(),
+                       log=lambda _: None)
+        (out.parent / "compare_full_board.pickle").write_bytes(pickle.dumps(rows))
+
+    out = made_once(tmp_path_factory, "compare_full_board", make)
+    return out, pickle.loads((out.parent / "compare_full_board.pickle").read_bytes())
 
 
 def test_every_controller_scenario_and_case_is_a_row(quick_board):
@@ -70,15 +85,16 @@ def test_a_quick_board_cannot_be_mistaken_for_a_full_one(quick_board):
     assert not (out.parent / "scoreboard.md").exists()  # the quick board has a folder of its own
 
 
-def test_a_full_board_survives_a_quick_run_in_the_same_folder(full_board, fmu_dir):
+def test_a_full_board_survives_a_quick_run_in_the_same_folder(full_board, native_dirs, dask_scheduler):
     out, rows = full_board
     before = {name: (out / name).read_bytes() for name in ("scoreboard.md", "scores.parquet", JOURNAL)}
-    compare(out, ["LqrController"], fmu_dir, workers=2, quick=True, only=True, progress=False, animate=(),
-            log=lambda _: None)
+    compare(out, ["LqrController"], native_dirs[2], scheduler=dask_scheduler, quick=True, only=True, progress=False,
+            animate=(), log=lambda _: None)
     assert {name: (out / name).read_bytes() for name in before} == before
     assert (out / "quick" / "scoreboard.md").read_text().startswith("# Controller scoreboard (QUICK")
     table = pq.read_table(out / "scores.parquet").to_pylist()
-    assert not any(r["quick"] for r in table) and len(table) == 4 * 64  # S1-S7: 35 cases; S8: 2; S9: 27
+    cases = 64  # of each controller: S1-S7: 35; S8: 2; S9: 27
+    assert not any(r["quick"] for r in table) and len(table) == cases * len(components.registered("controller"))
     assert {r["scenario_plants"] for r in table if r["scenario"] == "S3"} == {27}
 
 
@@ -122,17 +138,19 @@ def test_the_board_marks_your_controller(quick_board):
     assert "`MyController` (yours):" in board and "`LqrController` (yours)" not in board
 
 
-def test_animations_are_drawn_only_when_their_run_changed(quick_board, template_fmu, fmu_dir):
+def test_animations_are_drawn_only_when_their_run_changed(quick_board, template_fmu, fmu_dir, dask_scheduler):
     out, _, _ = quick_board
     chosen = [str(template_fmu), "LqrController"]
     logs = []
     for _ in range(2):
-        compare(out.parent, chosen, fmu_dir, workers=2, quick=True, only=True, progress=False, animate=("S2",),
+        compare(out.parent, chosen, fmu_dir, scheduler=dask_scheduler, quick=True, only=True, progress=False,
+                animate=("S2",),
                 log=logs.append)
     assert logs[0].endswith("4 plots and 2 animations drawn now") and "32 already done" in logs[0]
     assert logs[1].endswith("4 plots and 0 animations drawn now")
     (out / "animations" / "S2_LqrController.gif").unlink()
-    compare(out.parent, chosen, fmu_dir, workers=2, quick=True, only=True, progress=False, animate=("S2",),
+    compare(out.parent, chosen, fmu_dir, scheduler=dask_scheduler, quick=True, only=True, progress=False,
+                animate=("S2",),
             log=logs.append)
     assert logs[2].endswith("4 plots and 1 animations drawn now")
     assert (out / "animations" / "S2_LqrController.gif").stat().st_size > 10_000
@@ -177,10 +195,10 @@ def test_the_harness_runs_the_same_system_as_simulate(quick_board, fmu_dir):
     assert row["arrival_s"] == arrival and row["residual_deg"] == pytest.approx(residual, rel=1e-12)
 
 
-def test_a_rerun_resumes(quick_board, template_fmu, fmu_dir):
+def test_a_rerun_resumes(quick_board, template_fmu, fmu_dir, dask_scheduler):
     out, rows, _ = quick_board
     log = []
-    again = compare(out.parent, [str(template_fmu), "LqrController"], fmu_dir, workers=2, quick=True,
+    again = compare(out.parent, [str(template_fmu), "LqrController"], fmu_dir, scheduler=dask_scheduler, quick=True,
                     progress=False, animate=(), only=True, log=log.append)
     assert log[-1].startswith("32 cases: 0 run now, 32 already done")
     assert [r["case_id"] for r in again] == [r["case_id"] for r in rows]
@@ -256,7 +274,8 @@ def test_a_gif_plays_in_real_time_from_any_output_interval(fmu_dir, tmp_path, ev
 
 
 def test_readme_shows_the_current_scoreboard(full_board):
-    """Doc-sync only: the full suite of every built-in controller, run now, gives the README's table.
+    """Doc-sync only: the full suite of every built-in controller, run now (on the native FMUs, which score as the
+    Python FMUs do: test_the_native_fmus_give_the_python_board), gives the README's table.
 
     The table's figures are this code's output (regenerate with ``crane-fmu compare``); the behaviour
     behind them is held by requirement tests: the LQR's targets (test_controllers.py), the documented
@@ -295,22 +314,17 @@ def _close(a, b):
     return a == b
 
 
-def test_the_native_fmus_give_the_python_board(full_board, fmu_dir, tmp_path):
+def test_the_native_fmus_give_the_python_board(full_board, builtin_quick_board):
     """Issue 27: ``compare --fmu-dir build/native`` (the components ported to C native, the others the Python FMUs
-    copied beside them) scores every controller as the Python FMUs do: every figure to 1e-9, the same statuses
-    and board. (Not the case identities, which hash the FMU files, nor run times, nor the failed runs' log text.)"""
-    from crane_fmu.build_scripts.native import native_dir
-
-    native = native_dir(fmu_dir)
-    if not (native / "LqrController.fmu").exists():
-        pytest.skip("no native FMUs were built (no C compiler)")
-    _, python_rows = full_board
-    rows = compare(tmp_path, (), native, workers=2, progress=False, animate=(), log=lambda _: None)
+    copied beside them) scores every controller as the Python FMUs do: every figure to 1e-9 and the same status in
+    every case of the quick board (each a case of the full one). (Not the case identities, which hash the FMU
+    files, nor run times, nor the failed runs' log text, nor how much of its scenario each board runs.)"""
     key = lambda r: (r["scenario"], r["controller"], r["case"])  # noqa: E731
-    theirs = {key(r): r for r in python_rows}
-    assert sorted(map(key, rows)) == sorted(theirs)
-    for row in rows:
-        ours, other = ({k: v for k, v in r.items() if k not in ("case_id", "duration_s", "error")}
-                       for r in (row, theirs[key(row)]))
+    python_board = builtin_quick_board[1]
+    native = {key(r): r for r in full_board[1]}
+    assert {key(r) for r in python_board} <= set(native)
+    assert {r["controller"] for r in python_board} == {c.model_identifier for c in components.registered("controller")}
+    skip = ("case_id", "duration_s", "error", "quick", "scenario_plants", "scenario_steps", "scenario_cases")
+    for row in python_board:
+        ours, other = ({k: v for k, v in r.items() if k not in skip} for r in (native[key(row)], row))
         assert _close(ours, other), key(row)
-    assert scoreboard.render_summary(rows) == scoreboard.render_summary(python_rows)

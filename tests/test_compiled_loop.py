@@ -91,6 +91,7 @@ def test_an_iterative_algorithm_has_no_fixed_plan_and_steps_in_python(fmu_dir):
     assert compiled is None and len(columns["time"]) == 2001
 
 
+@pytest.mark.quick
 def test_the_environment_can_turn_the_compiled_loop_off():
     code = "from crane_fmu.cosim.compiled_loop import library; print(library() is None)"
     for value, off in (("python", "True"), ("", "False")):
@@ -99,11 +100,13 @@ def test_the_environment_can_turn_the_compiled_loop_off():
         assert done.stdout.strip() == off
 
 
+@pytest.mark.quick
 def test_an_unknown_loop_is_refused():
     with pytest.raises(ValueError, match="^loop must be auto or python, got 'c'$"):
         Master({}, [], loop="c")
 
 
+@pytest.mark.quick
 def test_without_a_writable_cache_the_master_steps_in_python(tmp_path):
     blocked = tmp_path / "file"
     blocked.write_text("not a folder")

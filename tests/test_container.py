@@ -6,14 +6,16 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 from crane_fmu import systems
+from crane_fmu.build_scripts.build_fmus import containers_dir
 from crane_fmu.cli import main
 from crane_fmu.container import build_container
 from crane_fmu.cosim import run
 
 
 @pytest.fixture(scope="module")
-def paper_container(fmu_dir, tmp_path_factory):
-    return build_container(systems.get("paper"), fmu_dir, tmp_path_factory.mktemp("containers") / "CranePaper.fmu")
+def paper_container(fmu_dir):
+    """The paper system's container, as ``crane-fmu build`` (the session's build) writes it."""
+    return containers_dir(fmu_dir) / "CranePaper.fmu"
 
 
 def test_the_container_is_a_valid_fmi3_fmu_with_the_crane_interface(paper_container):
@@ -41,8 +43,8 @@ def test_section5_from_the_container_equals_our_master(paper_container, fmu_dir)
     assert np.abs(result["theta1"][:2001] - gauss_seidel["plant.theta1"]).max() > 1e-4  # a different master
 
 
-def test_a_container_parameter_reaches_plant_and_controller(fmu_dir, tmp_path):
-    container = build_container(systems.get("lqr"), fmu_dir, tmp_path / "CraneLqr.fmu")
+def test_a_container_parameter_reaches_plant_and_controller(fmu_dir):
+    container = containers_dir(fmu_dir) / "CraneLqr.fmu"
     result = simulate_fmu(str(container), stop_time=3.0, output_interval=1e-3, start_values={"l1": 1.5})
     both = systems.get("lqr").with_parameters({"plant": {"l1": 1.5}, "controller": {"l1": 1.5}})
     ours = run(both, fmu_dir, algorithm="jacobi", initial_exchange=False, stop_time=3.0).columns()

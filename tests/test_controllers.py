@@ -33,6 +33,7 @@ def _jacobian(p):
     return a, b[:, None]
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("p", [PlantParameters(), PlantParameters(l1=1.5, m2=3.0), PlantParameters(m2=0.0)])
 def test_linearisation_is_the_jacobian_of_eqs_8_9(p):
     a, b = _jacobian(p)
@@ -41,6 +42,7 @@ def test_linearisation_is_the_jacobian_of_eqs_8_9(p):
     assert np.abs(got_b - b).max() < 1e-7
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("p, weights, r, h", [
     (PlantParameters(), WEIGHTS, 0.05, 1e-3),
     (PlantParameters(l1=1.5), WEIGHTS, 0.05, 1e-3),
@@ -117,6 +119,7 @@ def test_lqr_regulation_meets_its_targets(fmu_dir):
     assert m["peak_abs_u"] <= 2.0 and m["peak_abs_v"] <= 1.0
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("u, dx, expected", [
     (5.0, 0.0, 2.0), (-5.0, 0.0, -2.0), (1.0, 0.0, 1.0),
     (2.0, 0.999, 1.0),  # 1 ms from the speed limit: only what reaches it exactly
@@ -128,6 +131,7 @@ def test_limits(u, dx, expected):
     assert limits.limited(u, dx, math.inf, math.inf, 1e-3) == u
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("values, message", [
     ({"u_max": 0.0}, "u_max must be > 0 (inf: no limit), got 0.0"),
     ({"v_max": -1.0}, "v_max must be > 0 (inf: no limit), got -1.0"),
@@ -149,6 +153,7 @@ def _linear_swing(p, accel, t_end):
     return sol.sol
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("shaper", ["zv", "zvd", "ei", "none"])
 def test_planner_reference_is_a_consistent_move_within_the_limits(shaper):
     c = planner.configure({**planner.COMPONENT.defaults(), "x_d": 2.0, "shaper": shaper})
@@ -192,6 +197,7 @@ def _relative_energy(s, p):
     return 0.5 * (p.m1 * v1 @ v1 + p.m2 * v2 @ v2) + potential
 
 
+@pytest.mark.quick
 def test_energy_law_lyapunov_function_never_increases():
     """Eq (E5): along the continuous-time closed loop from 40 deg, V(t) is non-increasing and |u| <= u_max."""
     p = PlantParameters()
@@ -254,6 +260,7 @@ def test_runs_at_another_step_get_designs_for_it():
         systems.prepare(systems.get("lqr"), values=[{"controller": {"h": -1.0}}])
 
 
+@pytest.mark.quick
 def test_lqr_gains_follow_the_measured_cable_length():
     c = lqr.configure({**lqr.COMPONENT.defaults(), "l1_low": 1.0, "l1_high": 2.0})
     at_1_5 = lqr.design(PlantParameters(l1=1.5), WEIGHTS, 0.05, 1e-3)

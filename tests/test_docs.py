@@ -1,12 +1,14 @@
 """The README and the documentation site (docs/) agree with the code and with CI; the site builds."""
 
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
+from crane_fmu.batch import JOURNAL
 from crane_fmu.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -14,6 +16,7 @@ DOCS = ROOT / "docs"
 PAGES = [ROOT / "README.md"] + sorted(DOCS.rglob("*.md"))  # every page a user reads
 
 
+@pytest.mark.quick
 def test_the_variable_tables_are_generated_from_the_tables(capsys):
     """docs/reference/variables.md holds what `crane-fmu info --markdown` prints (the one generator)."""
     main(["info", "--markdown"])
@@ -23,12 +26,14 @@ def test_the_variable_tables_are_generated_from_the_tables(capsys):
     assert section.strip() == generated
 
 
+@pytest.mark.quick
 def test_ci_runs_the_readme_test_command():
     readme = (ROOT / "README.md").read_text()
     command = re.search(r"## Run the tests\n\n(?:<!-- test: [^\n]*-->\n)?```\n(.*?)\n```", readme, re.S).group(1)
     assert command in (ROOT / ".ci" / "run").read_text()
 
 
+@pytest.mark.quick
 def test_the_quick_start_plot_says_what_it_compares():
     """The README's quick start, in short lines, installs what the five tasks need and ends with a titled plot
     that says only the LQR limits u; the tutorial runs the same simulate and plot commands."""
@@ -72,6 +77,7 @@ def test_every_command_of_the_readme_tasks_is_run():
         assert command in ran or command in not_run, command
 
 
+@pytest.mark.quick
 def test_the_stop_times_the_docs_state_are_the_systems():
     """"Built-in systems run 20 s" was wrong (transport runs 10 s): the command line page names each exception."""
     from crane_fmu import systems
@@ -136,25 +142,29 @@ def test_every_block_of_the_docs_says_how_it_is_tested():
                 assert f"def {found.group(3)}(" in (ROOT / found.group(2)).read_text(), marker
 
 
-def _clone(tmp_path, fmu_dir):
-    """A folder laid out as a user's clone after `crane-fmu build`: examples/, and build/ (this session's)."""
-    (tmp_path / "build").symlink_to(fmu_dir.parent)
+def _clone(tmp_path, fmu_dir, copy=False):
+    """A folder laid out as a user's clone after `crane-fmu build`: examples/, and build/ (this session's, or
+    a copy of it when what runs there may write into build/)."""
+    if copy:
+        shutil.copytree(fmu_dir.parent, tmp_path / "build", symlinks=True)
+    else:
+        (tmp_path / "build").symlink_to(fmu_dir.parent)
     (tmp_path / "examples").symlink_to(ROOT / "examples")
 
 
 def test_every_marked_block_runs_as_written(fmu_dir, tmp_path):
     """The marked blocks of the README and of every docs page, in page order, as a user runs them after
-    `crane-fmu build`, in a folder laid out as a clone whose build/ is this session's: ``run`` blocks (shell
-    blocks line by line with the installed commands on PATH, `set -e`: any failing line fails; Python blocks
-    with this interpreter), and ``transcript`` blocks: ``$ command`` and the first line of its answer, with
-    ``...`` for what varies."""
+    `crane-fmu build`, in a folder laid out as a clone whose build/ is a copy of this session's (a block may
+    write into build/; the session's build is shared by every test): ``run`` blocks (shell blocks line by line
+    with the installed commands on PATH, `set -e`: any failing line fails; Python blocks with this interpreter),
+    and ``transcript`` blocks: ``$ command`` and the first line of its answer, with ``...`` for what varies."""
     import os
 
     blocks = [(marker, language, code) for page in PAGES for marker, language, code in _blocks(page.read_text())
               if marker in ("<!-- test: run -->", "<!-- test: transcript -->")]
     assert sum(marker.endswith("run -->") for marker, _, _ in blocks) >= 8
     assert sum(marker.endswith("transcript -->") for marker, _, _ in blocks) >= 2
-    _clone(tmp_path, fmu_dir)
+    _clone(tmp_path, fmu_dir, copy=True)
     env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}")
     for marker, language, code in blocks:
         if marker.endswith("transcript -->"):
@@ -172,9 +182,12 @@ def test_every_marked_block_runs_as_written(fmu_dir, tmp_path):
             assert done.stdout.startswith("20000 samples, theta1 = ") and done.stdout.endswith(" rad at 20.0 s\n")
 
 
-def test_the_controller_example_is_built_simulated_and_scored(fmu_dir, tmp_path, monkeypatch, capsys):
+def test_the_controller_example_is_built_simulated_and_scored(fmu_dir, builtin_quick_board, tmp_path, monkeypatch,
+                                                             capsys):
     """The controller example of the controller interface page (the README's task 3 and the tutorial's section 6
-    name the same commands), as a user runs it in a clone: build, simulate, compare, and the Python script."""
+    name the same commands), as a user runs it in a clone: build, simulate, compare, and the Python script. The
+    compare starts from the journal of the run's quick board of the built-in controllers (the very same runs):
+    it runs only the example's cases."""
     import shlex
 
     from crane_fmu.cosim import read_csv
@@ -196,6 +209,8 @@ def test_the_controller_example_is_built_simulated_and_scored(fmu_dir, tmp_path,
     (tmp_path / "examples" / "my_controller" / "pd_sway.py").write_text(module)
     (tmp_path / "build").mkdir()
     (tmp_path / "build" / "fmus").symlink_to(fmu_dir)  # the built-in FMUs, as `crane-fmu build` leaves them
+    (tmp_path / "results" / "mine" / "quick").mkdir(parents=True)
+    shutil.copy(builtin_quick_board[0] / JOURNAL, tmp_path / "results" / "mine" / "quick" / JOURNAL)
     for command in commands:
         assert main(shlex.split(command)[1:]) == 0, capsys.readouterr().err
     written = sorted(str(p.relative_to(tmp_path / "build")) for p in (tmp_path / "build").rglob("*.fmu")
@@ -232,6 +247,7 @@ def test_the_site_builds_strictly(tmp_path):
     assert set(nav) == {str(p.relative_to(DOCS)) for p in DOCS.rglob("*.md")}  # every page is in the navigation
 
 
+@pytest.mark.quick
 def test_readme_and_docs_link_only_to_files_that_exist():
     """The README's links (into docs/) and the docs' relative links resolve."""
     for page in PAGES:
@@ -239,6 +255,7 @@ def test_readme_and_docs_link_only_to_files_that_exist():
             assert (page.parent / target).exists(), f"{page.name}: {target}"
 
 
+@pytest.mark.quick
 def test_license_and_ignored_outputs():
     """The LICENSE is the MIT text pyproject names; every output the README and the docs make is ignored by git."""
     import shutil

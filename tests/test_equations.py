@@ -1,7 +1,13 @@
-"""The model's equations against a symbolic Lagrangian derivation of eqs (4)-(7)."""
+"""The model's equations against a symbolic Lagrangian derivation of eqs (4)-(7).
 
+The derivations run on first use, not when the module is imported (every test process collects it): other
+test modules import ``ACCEL``, ``INPUT_GAIN`` and ``EXT_ACCEL`` from here.
+"""
+
+import functools
 import math
 import random
+from types import SimpleNamespace
 
 import pytest
 
@@ -10,6 +16,8 @@ sympy = pytest.importorskip("sympy")
 from crane_fmu.model import backstepping as controller  # noqa: E402
 from crane_fmu.model import plant  # noqa: E402
 from crane_fmu.model.parameters import PlantParameters  # noqa: E402
+
+pytestmark = pytest.mark.quick  # no build: in the quick subset
 
 t = sympy.symbols("t")
 m1, m2, l1, l2, g, u = sympy.symbols("m1 m2 l1 l2 g u", positive=True)
@@ -29,7 +37,6 @@ def _lagrange_equations():
     return [e.subs(xt.diff(t, 2), u) for e in eqs]
 
 
-EQS = _lagrange_equations()
 a1, a2, w1, w2, dd1, dd2 = sympy.symbols("a1 a2 w1 w2 dd1 dd2")
 
 
@@ -39,10 +46,24 @@ def _plain(expr):
         {th1.diff(t): w1, th2.diff(t): w2}).subs({th1: a1, th2: a2})
 
 
-SOLUTION = sympy.solve([_plain(e) for e in EQS], [dd1, dd2], dict=True)[0]
-ACCEL = sympy.lambdify((a1, w1, a2, w2, u, m1, m2, l1, l2, g), (SOLUTION[dd1], SOLUTION[dd2]))
-# d(accelerations)/du: the input gains b2, b3 of eq (11), from the derivation alone
-INPUT_GAIN = sympy.lambdify((a1, w1, a2, w2, m1, m2, l1, l2, g), [sympy.diff(SOLUTION[d], u) for d in (dd1, dd2)])
+@functools.cache
+def _paper():
+    """``EQS``, ``SOLUTION``, ``ACCEL``, ``INPUT_GAIN``: eqs (8)-(9) derived, solved for the angular accelerations, and
+    the accelerations and their input gains (b2, b3 of eq (11)) as functions, from the derivation alone."""
+    eqs = _lagrange_equations()
+    solution = sympy.solve([_plain(e) for e in eqs], [dd1, dd2], dict=True)[0]
+    accel = sympy.lambdify((a1, w1, a2, w2, u, m1, m2, l1, l2, g), (solution[dd1], solution[dd2]))
+    gain = sympy.lambdify((a1, w1, a2, w2, m1, m2, l1, l2, g), [sympy.diff(solution[d], u) for d in (dd1, dd2)])
+    return SimpleNamespace(EQS=eqs, SOLUTION=solution, ACCEL=accel, INPUT_GAIN=gain)
+
+
+def __getattr__(name):
+    """``EQS``, ``SOLUTION``, ``ACCEL``, ``INPUT_GAIN``, ``EXT`` and ``EXT_ACCEL``, derived on first use."""
+    if name in ("EQS", "SOLUTION", "ACCEL", "INPUT_GAIN"):
+        return getattr(_paper(), name)
+    if name in ("EXT", "EXT_ACCEL"):
+        return getattr(_extended(), name)
+    raise AttributeError(name)
 
 
 def _random_cases(n=40, seed=1):
@@ -59,14 +80,14 @@ def test_paper_eqs_8_9_are_the_lagrange_equations():
            + l1 * l2 * m2 * dd2 * sympy.cos(a1 - a2) + l1 * l2 * m2 * w2 ** 2 * sympy.sin(a1 - a2))
     eq9 = (l2 * m2 * u * sympy.cos(a2) + l1 * l2 * m2 * dd1 * sympy.cos(a1 - a2) + l2 ** 2 * m2 * dd2
            - l1 * l2 * m2 * w1 ** 2 * sympy.sin(a1 - a2) + l2 * m2 * g * sympy.sin(a2))
-    assert sympy.simplify(eq8 - _plain(EQS[0])) == 0
-    assert sympy.simplify(eq9 - _plain(EQS[1])) == 0
+    assert sympy.simplify(eq8 - _plain(_paper().EQS[0])) == 0
+    assert sympy.simplify(eq9 - _plain(_paper().EQS[1])) == 0
 
 
 def test_code_accelerations_equal_symbolic_solution():
     # Both sides are double-precision evaluations of the same closed form: 1e-9 relative.
     for p, (q1, r1, q2, r2), acc in _random_cases():
-        expected = ACCEL(q1, r1, q2, r2, acc, p.m1, p.m2, p.l1, p.l2, p.g)
+        expected = _paper().ACCEL(q1, r1, q2, r2, acc, p.m1, p.m2, p.l1, p.l2, p.g)
         got = plant.angular_accelerations(q1, r1, q2, r2, acc, p)
         assert got == pytest.approx(expected, rel=1e-9, abs=1e-9)
 
@@ -74,11 +95,11 @@ def test_code_accelerations_equal_symbolic_solution():
 @pytest.mark.parametrize("form", ["derived", "printed"])
 def test_f_and_b_of_eq_14_against_the_derivation(form):
     """f = accelerations at u = 0 and b = d(accel)/du; only the printed b3 disagrees (sign)."""
-    b_sym = [sympy.diff(SOLUTION[d], u) for d in (dd1, dd2)]
+    b_sym = [sympy.diff(_paper().SOLUTION[d], u) for d in (dd1, dd2)]
     b_fn = sympy.lambdify((a1, w1, a2, w2, m1, m2, l1, l2, g), b_sym)
     for p, (q1, r1, q2, r2), _ in _random_cases():
         (f1, f2, f3), (b1, b2, b3) = controller.drift_and_input_gain(q1, r1, q2, r2, p, form)
-        f_expected = ACCEL(q1, r1, q2, r2, 0.0, p.m1, p.m2, p.l1, p.l2, p.g)
+        f_expected = _paper().ACCEL(q1, r1, q2, r2, 0.0, p.m1, p.m2, p.l1, p.l2, p.g)
         b_expected = b_fn(q1, r1, q2, r2, p.m1, p.m2, p.l1, p.l2, p.g)
         assert (f1, b1) == (0.0, 1.0)
         assert (f2, f3) == pytest.approx(f_expected, rel=1e-9, abs=1e-9)
@@ -135,13 +156,17 @@ def _solve_linear(eqs):
     return (b[0] * a[1, 1] - a[0, 1] * b[1]) / det, (a[0, 0] * b[1] - a[1, 0] * b[0]) / det
 
 
-EXT = _extended_equations()
-EXT_ACCEL = sympy.lambdify((a1, w1, a2, w2, u, m1, m2, l1, l2, g, dL, ddL, F1, F2, c1, c2), _solve_linear(EXT))
+@functools.cache
+def _extended():
+    """``EXT``, ``EXT_ACCEL``: the extended equations and their angular accelerations as a function."""
+    ext = _extended_equations()
+    return SimpleNamespace(EXT=ext, EXT_ACCEL=sympy.lambdify((a1, w1, a2, w2, u, m1, m2, l1, l2, g, dL, ddL, F1, F2,
+                                                              c1, c2), _solve_linear(ext)))
 
 
 def test_extended_equations_reduce_to_eqs_8_9_without_hoisting_forces_and_damping():
     at_rest = {dL: 0, ddL: 0, F1: 0, F2: 0, c1: 0, c2: 0}
-    for extended, paper in zip(EXT, (_plain(e) for e in EQS)):
+    for extended, paper in zip(_extended().EXT, (_plain(e) for e in _paper().EQS)):
         assert sympy.trigsimp(sympy.expand(sympy.expand_trig(extended.subs(at_rest) - paper))) == 0
 
 
@@ -151,15 +176,20 @@ def test_code_accelerations_equal_the_extended_derivation():
         load = (rng.uniform(-1, 1), rng.uniform(-2, 2), rng.uniform(-50, 50), rng.uniform(-50, 50),
                 rng.uniform(0, 5), rng.uniform(0, 5))
         length = rng.uniform(0.3, 3)
-        expected = EXT_ACCEL(q1, r1, q2, r2, acc, p.m1, p.m2, length, p.l2, p.g, *load)
+        expected = _extended().EXT_ACCEL(q1, r1, q2, r2, acc, p.m1, p.m2, length, p.l2, p.g, *load)
         got = plant.angular_accelerations(q1, r1, q2, r2, acc, p, length, load)
         assert got == pytest.approx(expected, rel=1e-9, abs=1e-9)
 
 
 # the differentiated variables of plant_equations.accelerations_tangent's seed, in its order
 _SEEDED = (a1, w1, a2, w2, u, l1, dL, ddL, F1, F2)
-EXT_JACOBIAN = sympy.lambdify((a1, w1, a2, w2, u, m1, m2, l1, l2, g, dL, ddL, F1, F2, c1, c2),
-                              [[sympy.diff(e, v) for v in _SEEDED] for e in _solve_linear(EXT)])
+
+
+@functools.cache
+def _ext_jacobian():
+    """The extended accelerations differentiated by the seeded variables (derived on first use)."""
+    return sympy.lambdify((a1, w1, a2, w2, u, m1, m2, l1, l2, g, dL, ddL, F1, F2, c1, c2),
+                          [[sympy.diff(e, v) for v in _SEEDED] for e in _solve_linear(_extended().EXT)])
 
 
 def test_code_directional_derivatives_equal_the_derivation_differentiated():
@@ -169,7 +199,7 @@ def test_code_directional_derivatives_equal_the_derivation_differentiated():
         load = (rng.uniform(-1, 1), rng.uniform(-2, 2), rng.uniform(-50, 50), rng.uniform(-50, 50),
                 rng.uniform(0, 5), rng.uniform(0, 5))
         length = rng.uniform(0.3, 3)
-        expected = EXT_JACOBIAN(q1, r1, q2, r2, acc, p.m1, p.m2, length, p.l2, p.g, *load)
+        expected = _ext_jacobian()(q1, r1, q2, r2, acc, p.m1, p.m2, length, p.l2, p.g, *load)
         for k in range(len(_SEEDED)):
             seed = tuple(float(j == k) for j in range(len(_SEEDED)))
             _, got = plant.accelerations_tangent(q1, r1, q2, r2, acc, p, length, load, seed)

@@ -32,6 +32,7 @@ def _scipy_filter(p, h, sigma_x, sigma_theta, sigma_u, sigma_swing, camera):
     return big_p, big_p @ c.T @ np.linalg.inv(c @ big_p @ c.T + r), ad, c
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("p, h, noises, camera", [
     (PlantParameters(), 1e-3, (1e-3, math.radians(0.1), 0.5, 2.0), False),  # the documented defaults
     (PlantParameters(l1=1.5, m2=3.0), 1e-3, (2e-3, 0.003, 0.1, 0.5), False),
@@ -47,6 +48,7 @@ def test_estimator_design_equals_scipy_riccati(p, h, noises, camera):
     assert np.abs(np.linalg.eigvals(ad - ad @ gain @ c)).max() < 1  # the error dynamics it designs are stable
 
 
+@pytest.mark.quick
 def test_estimator_step_is_the_kalman_filter():
     """One step corrects with the measurement and predicts with u: ``Ad (s + M (y - C s)) + Bd u`` (no delay)."""
     values = {**estimator.COMPONENT.defaults(), "delay": 0.0}
@@ -62,6 +64,7 @@ def test_estimator_step_is_the_kalman_filter():
     assert got[3] == got[1]  # no delay: the output is the prediction itself
 
 
+@pytest.mark.quick
 def test_estimator_with_delay_predicts_forward_with_the_inputs_applied_since():
     """Measurements d steps late: corrected on their own time, then d predictions with the inputs applied since."""
     config = estimator.configure({**estimator.COMPONENT.defaults(), "delay": 2.0})
@@ -74,6 +77,7 @@ def test_estimator_with_delay_predicts_forward_with_the_inputs_applied_since():
     assert np.abs(np.array(out) - (ad @ (ad @ z_expected + bd * -0.4) + bd * 0.5)).max() < 1e-12
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("values, message", [
     ({"sigma_x": 0.0}, "sigma_x must be > 0 and finite, got 0.0"),
     ({"sigma_swing": math.inf}, "sigma_swing must be > 0 and finite, got inf"),
@@ -88,6 +92,7 @@ def test_estimator_parameter_rules(values, message):
     assert str(info.value) == message
 
 
+@pytest.mark.quick
 def test_crane_sensor_noise_and_delay():
     """Documented defaults: 1 mm and 0.1 deg standard deviation, seed 1, one step late; a delay of d whole steps
     gives at step k the sample of step k - d (the first sample until there is one that old)."""

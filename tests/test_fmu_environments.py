@@ -265,6 +265,7 @@ def test_pointers_that_are_not_the_fmus_states_are_refused_not_followed(hosts, f
     assert sum("not an FMU state of this instance (or one already freed)" in r for r in refusals) == 11
 
 
+@pytest.mark.quick
 def test_the_bundled_core_calls_no_sum():
     """``sum()`` of floats is compensated from CPython 3.12 on: the core adds with ``linalg.total``."""
     import ast

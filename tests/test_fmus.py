@@ -70,7 +70,7 @@ def test_every_fmus_default_experiment_runs_at_its_systems_step(fmu_dir):
     assert (md.defaultExperiment.startTime, md.defaultExperiment.stopTime) == ("0.0", "20.0")
 
 
-def test_free_swing_matches_dop853_on_the_symbolic_equations(crane_fmus):
+def test_free_swing_matches_dop853_on_the_symbolic_equations(plant_dir):
     """RK4 at 1 ms sub-steps (h = 10 ms) vs DOP853 at rtol = atol = 1e-12 over 20 s on the equations that
     sympy derives from the Lagrangian (tests/test_equations.py): no code shared with the plant.
 
@@ -82,7 +82,7 @@ def test_free_swing_matches_dop853_on_the_symbolic_equations(crane_fmus):
     from test_equations import ACCEL
 
     p = PlantParameters()
-    result = simulate({"plant": crane_fmus["plant"]}, [], 20.0, 0.01).columns()
+    result = simulate({"plant": plant_dir / "CranePlant.fmu"}, [], 20.0, 0.01).columns()
 
     def field(t, s):
         dd1, dd2 = ACCEL(s[2], s[3], s[4], s[5], 0.0, p.m1, p.m2, p.l1, p.l2, p.g)
@@ -96,9 +96,9 @@ def test_free_swing_matches_dop853_on_the_symbolic_equations(crane_fmus):
     assert np.abs(got[:, :2]).max() == 0.0  # u = 0: the trolley stays put exactly
 
 
-def test_free_swing_conserves_energy(crane_fmus):
+def test_free_swing_conserves_energy(plant_dir):
     """Over 100 s the energy output drifts by 4.5e-10 J (of 131 J); bound 1e-8 J."""
-    result = simulate({"plant": crane_fmus["plant"]}, [], 100.0, 0.01).columns()
+    result = simulate({"plant": plant_dir / "CranePlant.fmu"}, [], 100.0, 0.01).columns()
     energy = result["plant.energy"]
     assert np.abs(energy - energy[0]).max() < 1e-8
     assert energy[0] == pytest.approx(plant.energy(PAPER_X0, PlantParameters()), rel=1e-15)

@@ -13,6 +13,7 @@ from crane_fmu.model import hard_hit, lqr
 ANGLES = range(0, 65, 5)  # issue 28: every initial hook angle 0-60 deg in 5-deg steps, payload in line, at rest
 
 
+@pytest.mark.quick
 def test_near_rest_it_is_the_lqr():
     """Below the energy of theta_near the law is the LqrController with its default weights, bit for bit."""
     c, ref = hard_hit.COMPONENT.check({}), lqr.COMPONENT.check({})
@@ -23,6 +24,7 @@ def test_near_rest_it_is_the_lqr():
     assert hard_hit.blend(c, (0.0, 0.0, math.radians(14.0), 0.0, math.radians(14.0), 0.0)) == pytest.approx(1.0)
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("values, message", [
     ({"theta_far": math.radians(10.0)}, "theta_far must be > theta_near = 0.1832595714594046 and < pi/2, got "
                                         "0.17453292519943295"),

@@ -10,6 +10,8 @@ from crane_fmu.cosim.connections import Connection
 from crane_fmu.cosim.master import Master, communication_points
 from crane_fmu.cosim.recorder import ArrayRecorder
 
+pytestmark = pytest.mark.quick  # no build: in the quick subset
+
 
 class FakeInstance:
     """Python stand-in for an FMU instance: ``outputs(values)`` computes outputs from inputs and state."""

@@ -8,6 +8,8 @@ import pytest
 from crane_fmu.analysis import linear, metrics
 from crane_fmu.model.parameters import ControllerGains, PlantParameters
 
+pytestmark = pytest.mark.quick  # no build: in the quick subset
+
 T = np.arange(0, 60, 0.01)
 
 

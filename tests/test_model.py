@@ -10,6 +10,8 @@ from crane_fmu.model import backstepping as controller
 from crane_fmu.model import plant, tables
 from crane_fmu.model.parameters import ControllerGains, PlantParameters
 
+pytestmark = pytest.mark.quick  # no build: in the quick subset
+
 
 @pytest.mark.parametrize("field, value, rule", [
     ("l1", -1.0, "l1 must be > 0 and finite, got -1.0"),

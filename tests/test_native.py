@@ -144,6 +144,7 @@ def _random_cases(n, seed):
     return cases
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("math_library", ["libm", "portable"])
 def test_native_accelerations_equal_the_python_model_at_random_states(accel_harnesses, math_library):
     """Eqs (8)-(9) with hoisting, forces and damping, 2000 random states: 1e-12 relative (glibc's libm: bit for bit)."""

@@ -25,7 +25,7 @@ from native_fmus import close, compiler, messages, open_native, steps_after_rest
 from crane_fmu import components, systems
 from crane_fmu.analysis.scoreboard import Contender, systems_for
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
-from crane_fmu.build_scripts.native import FOLDERS, HOST, MINGW, MODELS_DIR, native_dir, source_path, variables_header
+from crane_fmu.build_scripts.native import FOLDERS, HOST, native_dir, source_path, variables_header
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cosim import System, run
 
@@ -383,40 +383,7 @@ def test_the_scoreboards_gust_and_sensor_cases_on_native_fmus_equal_the_python_f
         assert np.max(np.abs(theirs["sensor.x_m"] - theirs["plant.x"])) > 1e-4
 
 
-# ---- the portable math of the Windows build, and a C host with no Python, on Linux and under Wine ---------------
-
-MATH_HARNESS = r"""
-#include <math.h>
-#include <stdio.h>
-double crane_tanh(double), crane_log(double);
-int main(void) {
-    double x;
-    while (scanf("%lf", &x) == 1) printf("%.17g %.17g %.17g %.17g\n", crane_tanh(x), tanh(x), crane_log(fabs(x)),
-                                         log(fabs(x)));
-    return 0;
-}
-"""
-
-
-def test_the_portable_tanh_and_log_agree_with_glibcs(tmp_path):
-    """The EnergyController's tanh and the Sensor's log in the Windows build: within 3 (tanh) and 1 (log) ULP of
-    glibc's at 200000 random points, equal at most (fdlibm's methods; glibc's log is nearly correctly rounded)."""
-    (tmp_path / "harness.c").write_text(MATH_HARNESS)
-    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", f"-I{MODELS_DIR}",
-                    str(tmp_path / "harness.c"), str(MODELS_DIR / "portable_math.c"), "-o", str(tmp_path / "h"), "-lm"],
-                   check=True)
-    rng = random.Random(31)
-    xs = [rng.uniform(-1, 1) * 10 ** rng.uniform(-20, 1.7) for _ in range(100_000)]
-    xs += [((rng.getrandbits(53) >> 11) + 0.5) / 2 ** 53 for _ in range(100_000)]  # the Sensor's u1
-    xs += [5e-324, 1e-310, 0.5, 1.0, 2.0, 22.0, -22.0, 1e300]
-    out = subprocess.run([str(tmp_path / "h")], input="\n".join(map(repr, xs)), capture_output=True, text=True,
-                         check=True).stdout
-    values = np.array([[float(v) for v in line.split()] for line in out.splitlines()])
-    assert values.shape == (len(xs), 4)
-    for ours, glibc, most_ulps in ((0, 1, 3), (2, 3, 1)):
-        ulps = np.abs(values[:, ours].view(np.int64) - values[:, glibc].view(np.int64))
-        assert ulps.max() <= most_ulps and np.count_nonzero(ulps) < 0.1 * len(xs)
-
+# ---- a C host with no Python, on Linux and under Wine (the portable math itself: test_portable_math.py) ----------
 
 HOST_CASES = {  # component: (parameters and inputs set by the host, steps of 1 ms)
     "TrajectoryPlanner": ({"x_d": 2.0, "t0": 0.1}, 5000),
@@ -487,20 +454,13 @@ def test_the_c_host_without_python_gives_the_python_models_outputs(native, unpac
 
 
 @pytest.fixture(scope="module")
-def wine(unpacked, tmp_path_factory):
-    """``(wine command, folder with host.exe and the four DLLs, environment)``; the prefix is deleted afterwards."""
-    if shutil.which(MINGW) is None or shutil.which("wine") is None:
-        pytest.skip("needs mingw-w64 (gcc-mingw-w64-x86-64) and Wine (wine64, wine): .ci/run installs them")
+def wine(unpacked, windows_host, wine_env, tmp_path_factory):
+    """``(wine command, folder with host.exe and the four DLLs, environment)``."""
     folder = tmp_path_factory.mktemp("windows")
-    subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-static-libgcc", f"-I{fmi_headers()}", str(HOST), "-o",
-                    str(folder / "host.exe")], check=True)
+    shutil.copy(windows_host, folder)
     for name, unzipped in unpacked.items():
         shutil.copy(unzipped / "binaries" / "win64" / f"{name}.dll", folder)
-    prefix = tmp_path_factory.mktemp("wineprefix")
-    env = {**CLEAN_ENV, "HOME": str(prefix), "WINEPREFIX": str(prefix), "WINEDEBUG": "-all"}
-    yield ["wine", str(folder / "host.exe")], folder, env
-    subprocess.run(["wineserver", "-w"], env=env, timeout=120)
-    shutil.rmtree(prefix, ignore_errors=True)
+    return ["wine", str(folder / "host.exe")], folder, wine_env
 
 
 OTHER_SHAPERS = [s for s in SHAPERS if s != PLANNER.defaults()["shaper"]]

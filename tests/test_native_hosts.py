@@ -20,13 +20,14 @@ from fmpy import read_model_description
 from native_fmus import compiler
 
 from crane_fmu import systems
-from crane_fmu.build_scripts.native import HOST, MINGW, native_dir
+from crane_fmu.build_scripts.native import HOST, native_dir
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cosim import run
 from crane_fmu.model.tables import STATE
 
 CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # what `env -i PATH=/usr/bin:/bin` leaves: no venv, no pyenv
 FREE_SWING_MAX_THETA2_DEG = 15.5976  # the Python FMU's
+
 
 
 @pytest.fixture(scope="module")
@@ -214,21 +215,14 @@ def test_two_instances_in_two_threads_give_the_results_of_one(host, plant):
 # ---- Windows x64 under Wine -------------------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
-def wine(plant, controller, lqr, tmp_path_factory):
-    """``(wine command, folder with host.exe and CranePlant.dll, environment)``; the prefix is deleted afterwards."""
-    if shutil.which(MINGW) is None or shutil.which("wine") is None:
-        pytest.skip("needs mingw-w64 (gcc-mingw-w64-x86-64) and Wine (wine64, wine): .ci/run installs them")
+def wine(plant, controller, lqr, windows_host, wine_env, tmp_path_factory):
+    """``(wine command, folder with host.exe and the DLLs of the plant, controller and LQR, environment)``."""
     folder = tmp_path_factory.mktemp("windows")
-    subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-static-libgcc", f"-I{fmi_headers()}", str(HOST), "-o",
-                    str(folder / "host.exe")], check=True)
+    shutil.copy(windows_host, folder)
     shutil.copy(plant[0] / "binaries" / "win64" / "CranePlant.dll", folder)
     shutil.copy(controller[0] / "binaries" / "win64" / "BacksteppingController.dll", folder)
     shutil.copy(lqr[0] / "binaries" / "win64" / "LqrController.dll", folder)
-    prefix = tmp_path_factory.mktemp("wineprefix")
-    env = {**CLEAN_ENV, "HOME": str(prefix), "WINEPREFIX": str(prefix), "WINEDEBUG": "-all"}
-    yield ["wine"], folder, env
-    subprocess.run(["wineserver", "-w"], env=env, timeout=120)
-    shutil.rmtree(prefix, ignore_errors=True)
+    return ["wine"], folder, wine_env
 
 
 def test_the_windows_dll_needs_only_system_dlls(plant):

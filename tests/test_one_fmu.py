@@ -12,13 +12,14 @@ another order of operations (in practice the bits are equal on Linux).
 import shutil
 import subprocess
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
 from crane_fmu import systems
-from crane_fmu.build_scripts.native import HOST, MINGW, native_dir
+from crane_fmu.build_scripts.native import HOST, native_dir
 from crane_fmu.build_scripts.one_fmu import not_native, one_fmu_name, plan
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cli import main
@@ -121,6 +122,19 @@ def test_a_host_that_adds_up_its_steps_runs_to_the_end_like_our_master(native, t
         inst.free()
 
 
+@pytest.mark.parametrize("version", [2, 3])
+def test_a_step_of_more_than_ten_million_system_steps_is_refused_not_run(native, version):
+    """As the plant refuses a step of more than 10^7 RK4 sub-steps: a host must never hang in doStep."""
+    inst = _instance(_fmu(native, "paper", version))
+    try:
+        inst.do_step(0.0, 1.0)  # 1000 system steps: taken
+        with pytest.raises(FmiError, match=r"communication step 20000\.0 s needs more than 10000000 system steps "
+                                            r"of 0\.001 s"):
+            inst.do_step(1.0, 20_000.0)
+    finally:
+        inst.free()
+
+
 def test_an_inner_models_message_names_its_instance(native):
     inst = open_instance(_fmu(native, "paper"), "one")
     inst.setup(0.0, 20.0)
@@ -133,6 +147,7 @@ def test_an_inner_models_message_names_its_instance(native):
         inst.free()
 
 
+@pytest.mark.quick
 def test_paper_interface_is_the_containers():
     links = plan(systems.get("paper")).links
     assert links["m1"] == [("plant", "m1"), ("controller", "m1")]
@@ -141,15 +156,40 @@ def test_paper_interface_is_the_containers():
     assert {v.name for v in plan(systems.get("paper")).variables if v.causality == "input"} == {"F1", "F2", "hoist"}
 
 
+# The instances each parameter of the one-FMU sets, written out here from the rule (the module docstring of
+# build_scripts/one_fmu.py, as the container's): m1, m2, l1, l2 to the plant, controller and planner that
+# have them and agree on the value (hoist-transport's planner keeps its l1 of 1.5 m, its hoist planner
+# is none of the three); x_d to the planner if there is one, else to the controller; theta1_0 to the plant.
+# Not from plan(), the code under test.
+PAIR, TRIO = {"plant", "controller"}, {"plant", "controller", "planner"}
+REACHES = {
+    **{name: {"m1": PAIR, "m2": PAIR, "l1": PAIR, "l2": PAIR, "x_d": {"controller"}, "theta1_0": {"plant"},
+              "F1": {"plant"}, "F2": {"plant"}, "hoist": {"plant"}} for name in ("paper", "lqr", "energy")},
+    "transport": {"m1": TRIO, "m2": TRIO, "l1": TRIO, "l2": TRIO, "x_d": {"planner"}, "theta1_0": {"plant"},
+                  "F1": {"plant"}, "F2": {"plant"}, "hoist": {"plant"}},
+    "hoist-transport": {"m1": TRIO, "m2": TRIO, "l1": PAIR, "l2": TRIO, "x_d": {"planner"}, "theta1_0": {"plant"},
+                        "F1": {"plant"}, "F2": {"plant"}},
+}
+
+
+@pytest.mark.quick
+@pytest.mark.parametrize("name", SYSTEMS)
+def test_each_parameter_and_input_reaches_the_instances_the_rule_names(name):
+    p = plan(systems.get(name))
+    settable = {v.name for v in p.variables if v.causality in ("parameter", "input")}
+    assert settable == set(REACHES[name])
+    for own, instances in REACHES[name].items():
+        assert sorted(p.links[own]) == sorted((instance, own) for instance in instances), own
+
+
 SETTINGS = [{"m1": 4.0, "l1": 1.2}, {"theta1_0": 0.1, "x_d": 0.5}, {"F1": 2.0, "F2": -1.0}]
 
 
 @pytest.mark.parametrize("values", SETTINGS, ids=lambda s: ",".join(s))
 @pytest.mark.parametrize("name", SYSTEMS)
 def test_values_set_on_the_one_fmu_reach_every_instance_that_has_them(native, tmp_path_factory, name, values):
-    """As our master with the same values set on each instance the one-FMU maps them to; and they act."""
-    links = plan(systems.get(name)).links
-    settings = [f"{instance}.{target}={value!r}" for own, value in values.items() for instance, target in links[own]]
+    """As our master with the same values set on each instance the rule names (REACHES); and they act."""
+    settings = [f"{instance}.{own}={value!r}" for own, value in values.items() for instance in REACHES[name][own]]
     stop_time = 5.0
     columns = _master(native, name, settings, stop_time, tmp=tmp_path_factory.mktemp("runs"))
     plain = _master(native, name, (), stop_time, tmp=tmp_path_factory.mktemp("runs"))
@@ -253,30 +293,20 @@ def test_the_c_host_runs_the_one_fmu_without_python(native, host, tmp_path, name
 
 @pytest.mark.parametrize("version", [2, 3])
 @pytest.mark.parametrize("name", SYSTEMS)
-def test_the_windows_dll_under_wine_gives_the_linux_run(native, host, tmp_path_factory, name, version):
+def test_the_windows_dll_under_wine_gives_the_linux_run(native, windows_host, wine_env, tmp_path, name, version):
     """The DLL uses the portable sin, cos and exp, Linux glibc's: as for the plant alone (test_native_hosts), the
     states agree to 1e-9 and u to 1e-9 relative."""
-    if shutil.which(MINGW) is None or shutil.which("wine") is None:
-        pytest.skip("needs mingw-w64 (gcc-mingw-w64-x86-64) and Wine (wine64, wine): .ci/run installs them")
-    folder = tmp_path_factory.mktemp("windows")
-    guid, vrs = _unpacked(native, name, folder, version)
-    dll = folder / "binaries" / BINARIES[version][1] / f"{one_fmu_name(name)}.dll"
+    guid, vrs = _unpacked(native, name, tmp_path, version)
+    dll = tmp_path / "binaries" / BINARIES[version][1] / f"{one_fmu_name(name)}.dll"
     if not dll.exists():
         pytest.skip("the one-FMU has no Windows binary (mingw-w64 missing at build time)")
-    subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-static-libgcc", f"-I{fmi_headers()}", str(HOST), "-o",
-                    str(folder / "host.exe")], check=True)
-    shutil.copy(dll, folder)
-    prefix = tmp_path_factory.mktemp("wineprefix")
-    env = {**CLEAN_ENV, "HOME": str(prefix), "WINEPREFIX": str(prefix), "WINEDEBUG": "-all"}
+    shutil.copy(windows_host, tmp_path)
+    shutil.copy(dll, tmp_path)
     system = systems.get(name)
     steps = round((system.stop_time - system.start_time) / system.step)
-    try:
-        windows = _run(["wine", folder / "host.exe", HOST_COMMAND[version]], dll.name, guid, steps, system.step,
-                       *vrs, env=env, cwd=folder)
-    finally:
-        subprocess.run(["wineserver", "-w"], env=env, timeout=120)
-        shutil.rmtree(prefix, ignore_errors=True)
-    expected = _columns(_master(native, name, tmp=folder), name)
+    windows = _run(["wine", tmp_path / "host.exe", HOST_COMMAND[version]], dll.name, guid, steps, system.step,
+                   *vrs, env=wine_env, cwd=tmp_path)
+    expected = _columns(_master(native, name, tmp=tmp_path), name)
     assert windows.shape == expected.shape
     assert np.max(np.abs(windows[:, :4] - expected[:, :4])) <= SAME
     assert np.max(np.abs(windows[:, 4] - expected[:, 4]) / np.maximum(np.abs(expected[:, 4]), 1.0)) <= SAME
@@ -297,6 +327,7 @@ def test_build_one_fmu_from_an_ssp_file_gives_the_built_in_systems_run(fmu_dir, 
         assert all(np.array_equal(ours[v], built_in[v]) for v in OBSERVED)
 
 
+@pytest.mark.quick
 def test_build_one_fmu_refuses_a_system_with_python_only_components_in_one_line(tmp_path, capsys):
     from crane_fmu import components
     from crane_fmu.build_scripts.native import ported
@@ -313,14 +344,18 @@ def test_build_one_fmu_refuses_a_system_with_python_only_components_in_one_line(
     assert not (tmp_path / "native").exists()  # nothing written: every system is checked first
 
 
-def test_build_writes_the_built_in_one_fmus_whose_components_are_native_and_notes_the_others(fmu_dir):
-    from crane_fmu.build_scripts.one_fmu import build_one_fmus
-
-    notes = []
-    paths = build_one_fmus(fmu_dir.parent / "again" / "fmus", log=notes.append)
-    assert sorted(p.name for p in paths) == sorted(2 * [f"{one_fmu_name(n)}.fmu" for n in SYSTEMS])
-    others = [n for n in systems.tagged("one-fmu") if n not in SYSTEMS]
-    assert [note.split()[1] for note in notes] == [one_fmu_name(n) for n in others]
+def test_build_writes_the_built_in_one_fmus_whose_components_are_native_and_notes_the_others(build_record, native):
+    """The run's one ``crane-fmu build`` (the session's build, conftest.py): the one-FMU of each system tagged
+    one-fmu whose components are all native, FMI 2.0 and 3.0, and a note naming each of the others."""
+    code, printed = build_record
+    tagged = systems.tagged("one-fmu")
+    ones = {one_fmu_name(name) for name in tagged}
+    written = sorted(Path(line).relative_to(native.parent) for line in printed
+                     if Path(line).parent in (native, native / "fmi3") and Path(line).stem in ones)
+    assert written == sorted(Path(folder) / f"{one_fmu_name(name)}.fmu" for name in SYSTEMS
+                             for folder in ("native", "native/fmi3"))
+    assert all((native.parent / path).is_file() for path in written)
+    notes = [line for line in printed if line.startswith("note:")]
+    others = [name for name in tagged if name not in SYSTEMS]
+    assert [note.split()[1] for note in notes] == [one_fmu_name(name) for name in others]
     assert all("has no native model yet" in note for note in notes)
-    for name in SYSTEMS:  # and crane-fmu build (the session's build) wrote them
-        assert _fmu(native_dir(fmu_dir), name, 2).is_file() and _fmu(native_dir(fmu_dir), name, 3).is_file()

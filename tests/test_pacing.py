@@ -35,6 +35,7 @@ class FakeClock:
         self.now += seconds
 
 
+@pytest.mark.quick
 def test_deadlines_stay_on_the_absolute_grid_whatever_the_sleep_overshoots():
     """Each sleep overshoots by 1/4 s: a loop of sleep(period) would drift 3/8 s a cycle; the pacer's
     deadlines stay at t0 + j*period and each cycle starts exactly 1/4 s late."""
@@ -51,6 +52,7 @@ def test_deadlines_stay_on_the_absolute_grid_whatever_the_sleep_overshoots():
     assert pacer.timing.misses == 0
 
 
+@pytest.mark.quick
 def test_a_late_cycle_is_a_miss_and_the_next_ones_catch_up_on_the_grid():
     """Cycle 1 works 2.5 periods: it misses, cycle 2 starts at once 1.5 late and misses too, cycle 3 starts
     at once 0.75 late and ends exactly at its next deadline (on time), cycle 4 starts on its deadline: no
@@ -67,6 +69,7 @@ def test_a_late_cycle_is_a_miss_and_the_next_ones_catch_up_on_the_grid():
     assert summary["cycles"] == 6 and summary["misses"] == 2 and summary["lateness_max"] == 1.5
 
 
+@pytest.mark.quick
 def test_a_sleep_that_says_stop_ends_the_pacing_without_the_work():
     stop = threading.Event()
     clock = FakeClock()
@@ -83,6 +86,7 @@ def test_a_sleep_that_says_stop_ends_the_pacing_without_the_work():
     assert ran == [1] and len(pacer.timing) == 1
 
 
+@pytest.mark.quick
 def test_timing_percentiles_summary_and_csv(tmp_path):
     timing = Timing(0.01)
     lateness = [0.001 * i for i in range(100)]  # 0 to 99 ms: cycles 10 to 99 end after their next deadline
@@ -109,6 +113,7 @@ def test_timing_percentiles_summary_and_csv(tmp_path):
     assert float(rows[100].split(",")[5]) == pytest.approx(2.99)
 
 
+@pytest.mark.quick
 def test_watchdog_holds_after_the_timeout_and_resumes_on_a_write():
     dog = Watchdog(0.5, "zero")
     assert dog.check(10.5, 10.0) is None  # exactly the timeout: not yet silent

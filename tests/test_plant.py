@@ -1,4 +1,8 @@
-"""The extended CranePlant FMU: hoisting, forces, damping, drive limits and rail ends, against physics."""
+"""The extended CranePlant FMU: hoisting, forces, damping, drive limits and rail ends, against physics.
+
+Each physics check runs on every kind of plant FMU (``plant_dir``: the Python FMU and the native one), so
+the native plant has checks of its own that share no code with it, beside its equality with the Python one.
+"""
 
 import math
 
@@ -20,23 +24,23 @@ def _run(fmu_dir, values, stop_time, step=1e-3):
     return {name.removeprefix("plant."): values for name, values in result.items()}
 
 
-def test_static_deflection_under_constant_forces_with_damping(fmu_dir):
+def test_static_deflection_under_constant_forces_with_damping(plant_dir):
     """Equilibrium of the hanging loads under horizontal forces, in closed form:
     ``tan theta2 = F2 / (m2 g)`` (the payload's cable) and ``tan theta1 = (F1 + F2) / ((m1 + m2) g)`` (the hook's)."""
     f1, f2 = 4.0, 10.0
-    c = _run(fmu_dir, {"theta1_0": 0.0, "F1": f1, "F2": f2, "c1": 20.0, "c2": 5.0}, 60.0, 0.01)
+    c = _run(plant_dir, {"theta1_0": 0.0, "F1": f1, "F2": f2, "c1": 20.0, "c2": 5.0}, 60.0, 0.01)
     assert c["theta2"][-1] == pytest.approx(math.atan(f2 / (P.m2 * P.g)), abs=1e-9)
     assert c["theta1"][-1] == pytest.approx(math.atan((f1 + f2) / ((P.m1 + P.m2) * P.g)), abs=1e-9)
     assert np.abs(np.diff(c["theta1"][:500])).max() > 1e-4  # it did swing on its way there
 
 
-def test_hoisting_run_equals_scipy_on_the_symbolic_equations(fmu_dir):
+def test_hoisting_run_equals_scipy_on_the_symbolic_equations(plant_dir):
     """Lowering at 0.3 m/s2 while the trolley accelerates, forces and damping on: DOP853 on the
     sympy-derived equations (tests/test_equations.py). RK4 at 1 ms: measured 3e-11 rad; bound 1e-8."""
     from test_equations import EXT_ACCEL
 
     values = {"theta1_0": 0.1, "theta2_0": -0.05, "u": 0.5, "hoist": 0.3, "F1": 1.0, "F2": -2.0, "c1": 0.5, "c2": 0.2}
-    c = _run(fmu_dir, values, 2.0)
+    c = _run(plant_dir, values, 2.0)
 
     def field(t, s):
         q1, w1, q2, w2, length, dl = s
@@ -50,7 +54,7 @@ def test_hoisting_run_equals_scipy_on_the_symbolic_equations(fmu_dir):
     assert c["dl1_now"][-1] == pytest.approx(0.6, rel=1e-12)
 
 
-def test_power_balance(fmu_dir):
+def test_power_balance(plant_dir):
     """dE/dt (the energy output) = trolley + hoist + forces - damping, with every new input in use.
 
     The drives' powers are their generalised forces times their rates: ``H = m1 x1'' + m2 x2'' - F1 - F2``
@@ -62,7 +66,7 @@ def test_power_balance(fmu_dir):
     u, hoist, f1, f2, c1, c2 = 0.7, -0.2, 3.0, -5.0, 0.8, 0.3
     values = {"l1": 1.5, "theta1_0": 0.3, "theta2_0": -0.2, "u": u, "hoist": hoist, "F1": f1, "F2": f2,
               "c1": c1, "c2": c2}
-    c = _run(fmu_dir, values, 2.0)
+    c = _run(plant_dir, values, 2.0)
     t, m1, m2, l2, g = c["time"], P.m1, P.m2, P.l2, P.g
     q1, w1, q2, w2, length, dl, v = (c[n] for n in ("theta1", "dtheta1", "theta2", "dtheta2", "l1_now", "dl1_now",
                                                      "dx"))
@@ -86,9 +90,9 @@ def test_power_balance(fmu_dir):
     assert np.abs(power).max() > 10.0
 
 
-def test_drive_limits_and_lag(fmu_dir):
+def test_drive_limits_and_lag(plant_dir):
     """u = 5 m/s2 demanded; u_max 2, v_max 1, lag tau = 0.2 s: v(t) = 2 (t - tau (1 - exp(-t/tau))) until 1 m/s."""
-    c = _run(fmu_dir, {"theta1_0": 0.0, "u": 5.0, "u_max": 2.0, "v_max": 1.0, "tau": 0.2}, 2.0)
+    c = _run(plant_dir, {"theta1_0": 0.0, "u": 5.0, "u_max": 2.0, "v_max": 1.0, "tau": 0.2}, 2.0)
     t, v = c["time"], c["dx"]
     early = t <= 0.5
     assert np.abs(v[early] - 2 * (t[early] - 0.2 * (1 - np.exp(-t[early] / 0.2)))).max() < 1e-12
@@ -96,23 +100,23 @@ def test_drive_limits_and_lag(fmu_dir):
     assert c["ddx"].max() <= 2.0 and c["ddx"][-1] == pytest.approx(0.0, abs=1e-12)
 
 
-def test_a_rail_end_discards_the_step_with_position_and_time(fmu_dir):
+def test_a_rail_end_discards_the_step_with_position_and_time(plant_dir):
     """u = 1 m/s2 from rest: x = t^2 / 2 passes x_max = 0.3 m at t = sqrt(0.6) = 0.7746 s, in the 10 ms step
     from 0.77 s; the plant checks the rail after each 1 ms sub-step, first past it at t = 0.775 s, where
     x = 0.775^2 / 2 = 0.3003125 m (the message's x = 0.300312...)."""
     with pytest.raises(FmiError) as err:
-        _run(fmu_dir, {"theta1_0": 0.0, "u": 1.0, "x_max": 0.3}, 2.0, 0.01)
+        _run(plant_dir, {"theta1_0": 0.0, "u": 1.0, "x_max": 0.3}, 2.0, 0.01)
     assert err.value.status == "discard"
     message = str(err.value)
     assert "the trolley would pass the rail end x_max = 0.3 m (x = 0.300312" in message
     assert "at t = 0.775 s" in message
 
 
-def test_the_hoist_holds_l1_at_its_limit_and_says_so(fmu_dir):
+def test_the_hoist_holds_l1_at_its_limit_and_says_so(plant_dir):
     """l1'' = 1 m/s2 from l1 = 1 m at rest: l1 = 1 + t^2 / 2 reaches l1_max = 1.2 m at t = sqrt(0.4) = 0.632 s, at
     l1' = 0.632 m/s: a limit that stops a moving cable, a warning with the speed (first past it after the 1 ms
     sub-step to 0.633 s)."""
-    inst = open_instance(fmu_dir / "CranePlant.fmu", "plant")
+    inst = open_instance(plant_dir / "CranePlant.fmu", "plant")
     try:
         inst.setup(0.0)
         for name, value in {"theta1_0": 0.0, "l1_max": 1.2, "hoist": 1.0}.items():
@@ -131,6 +135,7 @@ def test_the_hoist_holds_l1_at_its_limit_and_says_so(fmu_dir):
         inst.free()
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("values, message", [
     ({"c1": -1.0}, "c1 must be >= 0 and finite, got -1.0"),
     ({"m2": 0.0, "c2": 1.0}, "c2 must be 0 when m2 = 0"),
@@ -145,6 +150,7 @@ def test_new_parameter_rules(values, message):
     assert message in str(err.value)
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("name", ["x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0"])
 def test_initial_state_must_be_finite(name):
     """Found by the fuzz test: a NaN initial velocity was accepted when initialisation ended."""

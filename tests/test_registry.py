@@ -27,13 +27,14 @@ PD = System("pd", {"plant": "CranePlant", "controller": "PdController"},
             parameters={"controller": {"x_d": 0.5}}, stop_time=5.0, description="test: PD on the trolley")
 
 
+
 @pytest.fixture(scope="module")
 def pd_build(tmp_path_factory):
     components.register(pd_controller.COMPONENT)
     systems.register(PD)
     try:
         out = tmp_path_factory.mktemp("pd") / "fmus"
-        build_all(out, ["CranePlant", "PdController"], systems=["pd"], log=lambda _: None)
+        build_all(out, ["CranePlant", "PdController"], systems=["pd"], native=False, log=lambda _: None)
         yield out
     finally:
         components.unregister("PdController")
@@ -91,6 +92,7 @@ def test_swept_on_dask(pd_build, tmp_path):
     assert rows[1]["error"] == "controller: k_v must be > 0 and finite, got -1.0"
 
 
+@pytest.mark.quick
 def test_descriptors_are_checked():
     table = pd_controller.COMPONENT.variables
     with pytest.raises(ValueError, match="role must be one of plant, controller, planner, disturbance, sensor, "):
@@ -101,6 +103,7 @@ def test_descriptors_are_checked():
         components.register(Component("CranePlant", "plant", "", table, pd_controller.configure, lambda *a: ()))
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("name, text, message", [
     ("nothing.py", "X = 1\n", "--component {path}: defines no Component (crane_fmu.model.component.Component)"),
     ("broken.py", "import no_such_module_here\n",

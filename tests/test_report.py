@@ -7,6 +7,8 @@ import pytest
 from crane_fmu.analysis.paper_cases import ALTERNATIVE, PAPER_LAW
 from crane_fmu.analysis.report import CLAIMS
 
+pytestmark = pytest.mark.quick  # no build: in the quick subset
+
 FORMS = (*PAPER_LAW, ALTERNATIVE)
 NOT, PARTLY, ONLY_ALTERNATIVE = "not reproduced", "partly", "partly (only without the theta2 row)"
 

@@ -17,6 +17,7 @@ from crane_fmu.model.parameters import ControllerGains, PlantParameters
 VERDICTS = ("reproduced", "partly", "not reproduced")
 
 
+
 @pytest.fixture(scope="module")
 def quick(fmu_dir, tmp_path_factory):
     out = tmp_path_factory.mktemp("reproduce")

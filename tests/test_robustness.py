@@ -6,6 +6,7 @@ import sys
 import textwrap
 
 import pytest
+from fmu_kinds import FMU_KINDS
 
 from crane_fmu.cli import main
 from crane_fmu.cosim import FmiError, open_instance, simulate
@@ -177,7 +178,7 @@ FUZZ = textwrap.dedent("""
                                                         math.inf, 1e300])),
         st.tuples(st.sampled_from(["setup", "enter", "exit", "reset", "terminate", "get_state", "status"])),
         st.just(("advance",)), st.just(("advance",)),  # twice: sessions get to step mode, and past it
-        *[st.tuples(st.sampled_from(["diverge", "warning"]))] * (3 if plant else 0),  # the plant's own paths
+        *[st.tuples(st.sampled_from(["diverge", "warning"]))] * (6 if plant else 0),  # the plant's own paths, often
     )
     counts = dict(valid=0, wrong_state=0, bad_value=0, long_step=0, diverging=0, warning=0)
 
@@ -343,17 +344,18 @@ FUZZ_MINIMUM = 10  # calls per class and FMU: every path taken several times, no
 
 
 @pytest.mark.parametrize("name", ["CranePlant", "BacksteppingController", "TrajectoryPlanner"])
-def test_random_fmi_call_sequences_get_the_status_their_class_requires(fmu_dir, name, tmp_path):
+@pytest.mark.parametrize("kind", FMU_KINDS)
+def test_random_fmi_call_sequences_get_the_status_their_class_requires(fmu_kinds, kind, name, tmp_path):
     """Hypothesis drives FMI 2.0 call sequences through fmpy's binding in a subprocess (so that a crash is a
     failed test, not a dead run); each call must get the one status its class allows (see FUZZ). Discards
     and warnings come only from the plant: the controller and the planner cannot diverge or warn."""
     pytest.importorskip("hypothesis")
-    proc = subprocess.run([sys.executable, "-c", FUZZ, str(fmu_dir / f"{name}.fmu"), "300"], cwd=tmp_path,
+    proc = subprocess.run([sys.executable, "-c", FUZZ, str(fmu_kinds[kind][2] / f"{name}.fmu"), "300"], cwd=tmp_path,
                           capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, f"host died or failed (status {proc.returncode}): {proc.stderr[-3000:]}"
     words = proc.stdout.split()
     assert words[0] == "classes", proc.stdout
     counts = {k: int(v) for k, v in (item.split("=") for item in words[1:])}
-    print(f"FMI 2.0 {name}:", counts)
+    print(f"FMI 2.0 {kind} {name}:", counts)
     required = list(counts) if name == "CranePlant" else ["valid", "wrong_state", "bad_value", "long_step"]
     assert all(counts[k] >= FUZZ_MINIMUM for k in required), (f"fewer than {FUZZ_MINIMUM} calls in a class", counts)

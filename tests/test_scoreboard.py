@@ -13,6 +13,8 @@ import scipy.linalg
 from crane_fmu.analysis import scoreboard
 from crane_fmu.analysis.scoreboard import SCENARIOS, Contender
 
+pytestmark = pytest.mark.quick  # no build: in the quick subset
+
 
 def _row(controller, scenario="S2", case="nominal", status="ok", **metrics):
     """A case row as compare writes it; metrics default to None (never)."""

@@ -483,6 +483,27 @@ def test_a_missing_protocol_package_is_one_line(fmu_dir, capsys, monkeypatch):
     assert "--opcua needs asyncua, which is not installed: pip install -e '.[serve]'" in capsys.readouterr().err
 
 
+@pytest.mark.quick
+def test_the_register_map_and_the_float32_words_of_a_value():
+    """The map's rule (crane_fmu/serve/modbus.py): the variables in their order, read-only ones from input
+    register 8, writable ones from holding register 2, two registers each; a value is its IEEE 754 float32,
+    high word first (1.0 is 0x3F80 0x0000), read back as that float32; beyond float32 it is +-inf."""
+    from types import SimpleNamespace
+
+    from crane_fmu.serve import parse_endpoint
+
+    served = [SimpleNamespace(name=name, unit="1", description="", writable=writable)
+              for name, writable in (("plant.x", False), ("controller.u", True), ("plant.theta1", False))]
+    placed = [(r.table, r.address, r.name) for r in register_map(served) if r.type == "float32"]
+    assert placed == [("input", FIRST_INPUT, "plant.x"), ("holding", FIRST_HOLDING, "controller.u"),
+                      ("input", FIRST_INPUT + 2, "plant.theta1")] and (FIRST_INPUT, FIRST_HOLDING) == (8, 2)
+    assert float32_words(1.0) == [0x3F80, 0x0000] and words_float32(0x3F80, 0x0000) == 1.0
+    assert words_float32(*float32_words(0.1)) == float(np.float32(0.1))
+    assert float32_words(-1e39) == float32_words(-math.inf)
+    assert parse_endpoint(":4840", "--opcua") == ("127.0.0.1", 4840)
+
+
+@pytest.mark.quick
 def test_the_core_imports_no_protocol_package():
     """asyncua (LGPL-3.0) and pymodbus are an optional extra: importing the toolkit, its master, its real-time
     runner and its command line loads neither."""

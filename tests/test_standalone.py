@@ -61,6 +61,7 @@ def test_fmu_runs_where_crane_fmu_is_not_importable(crane_fmus, tmp_path, name, 
     assert core.startswith("crane_core2_") and "resources" in path  # the FMU's bundled core ran
 
 
+@pytest.mark.quick
 def test_importing_crane_fmu_imports_no_numeric_library():
     code = ("import sys, crane_fmu, crane_fmu.model; "
             "print([m for m in ('fmpy', 'numpy', 'scipy', 'pythonfmu') if m in sys.modules])")
@@ -68,6 +69,7 @@ def test_importing_crane_fmu_imports_no_numeric_library():
     assert out.stdout.strip() == "[]"
 
 
+@pytest.mark.quick
 def test_runtime_core_imports_only_the_standard_library():
     import ast
     from pathlib import Path

@@ -41,6 +41,7 @@ def _study(tmp_path, text, name="study.toml"):
     return spec.load(path)
 
 
+@pytest.mark.quick
 def test_minimal_study_is_a_full_grid(tmp_path):
     cases = _study(tmp_path, MINIMAL).cases()
     assert len(cases) == 12
@@ -48,6 +49,7 @@ def test_minimal_study_is_a_full_grid(tmp_path):
         (a, w, l1) for a in (0.0349, 0.0873, 0.1745) for w in (0.0, 1.0) for l1 in (1.0, -1.0)}
 
 
+@pytest.mark.quick
 def test_ranges_linked_axes_and_fixed_values(tmp_path):
     study = _study(tmp_path, SMALL.replace('[0.8, -1.0]', '{start = 0.5, stop = 1.5, num = 3}'))
     cases = study.cases()
@@ -56,6 +58,7 @@ def test_ranges_linked_axes_and_fixed_values(tmp_path):
     assert all(c["plant.l1"] == c["controller.l1"] and c["controller.K1_x"] == 1.0 for c in cases)
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("method", ["latin-hypercube", "random"])
 def test_sampling_is_seeded_and_within_bounds(tmp_path, method):
     text = (f'stop_time = 1.0\nstep = 0.01\n[parameters]\n"plant.l1" = [1.0, 2.0]\n'
@@ -85,22 +88,24 @@ def test_sampling_is_seeded_and_within_bounds(tmp_path, method):
      "y = 'plant.l1'", "plot.x must be a varied parameter"),
     ("stop_time = [", "not valid TOML"),
 ])
+@pytest.mark.quick
 def test_study_mistakes_are_one_line_errors(tmp_path, text, message):
     with pytest.raises(ValueError, match=message) as err:
         _study(tmp_path, text)
     assert "\n" not in str(err.value)
 
 
+@pytest.mark.quick
 def test_builtin_studies_load():
     assert len(spec.load("builtin:region-of-attraction").cases()) == 20 * 3 * 2 * 2
     assert len(spec.load("builtin:theta2-gain-sensitivity").cases()) == 25
 
 
 @pytest.fixture(scope="module")
-def small_run(fmu_dir, tmp_path_factory):
+def small_run(fmu_dir, dask_scheduler, tmp_path_factory):
     out = tmp_path_factory.mktemp("sweep")
     study = _study(out, SMALL)
-    summary = run_study(study, out / "results", fmu_dir, workers=2, progress=False)
+    summary = run_study(study, out / "results", fmu_dir, scheduler=dask_scheduler, progress=False)
     return study, out / "results", summary
 
 
@@ -130,13 +135,13 @@ def test_failing_cases_are_rows_with_their_message(small_run):
     assert all(r["end_time_s"] < 2.0 and r["outcome"] == "diverges" for r in failed)
 
 
-def test_rerun_resumes_and_skips_finished_cases(small_run, fmu_dir):
+def test_rerun_resumes_and_skips_finished_cases(small_run, fmu_dir, dask_scheduler):
     study, out, _ = small_run
     before = pq.read_table(out / "results.parquet").to_pylist()
     journal = out / JOURNAL
     lines = journal.read_text().splitlines()
     journal.write_text("\n".join(lines[:5]) + "\n" + lines[5][:20])  # 3 cases lost, one line torn
-    summary = run_study(study, out, fmu_dir, workers=2, progress=False)
+    summary = run_study(study, out, fmu_dir, scheduler=dask_scheduler, progress=False)
     assert (summary["skipped"], summary["ran"]) == (5, 3)
     after = pq.read_table(out / "results.parquet").to_pylist()
     strip = [{k: v for k, v in r.items() if k != "duration_s"} for r in before]
@@ -202,6 +207,7 @@ def test_cli_sweep_names_are_checked_against_the_system(fmu_dir, tmp_path, capsy
     assert not (tmp_path / "o").exists()  # a refused study leaves no empty folder (issue 29)
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("argv, message", [
     (["sweep", "missing.toml", "--out", "o"], "cannot read study file missing.toml"),
     (["sweep", "builtin:nothing", "--out", "o"], "no built-in study 'nothing'"),
@@ -213,6 +219,7 @@ def test_cli_sweep_mistakes(capsys, argv, message):
     assert err.count("\n") == 1 and message in err
 
 
+@pytest.mark.quick
 def test_an_unreachable_scheduler_fails_fast_in_one_line(tmp_path, capsys):
     """Nothing listens on port 9: one line and status 2 within seconds (Dask alone: 30 s, then a traceback)."""
     start = time.monotonic()
@@ -227,12 +234,12 @@ def test_an_unreachable_scheduler_fails_fast_in_one_line(tmp_path, capsys):
     assert "expected an address tcp://HOST:PORT" in capsys.readouterr().err
 
 
-def test_a_resumed_study_counts_its_earlier_failures_in_the_progress_bar(small_run, fmu_dir, capsys):
+def test_a_resumed_study_counts_its_earlier_failures_in_the_progress_bar(small_run, fmu_dir, dask_scheduler, capsys):
     """The bar's "not ok" agrees with the summary's when cases come from the journal (issue 29: 47 vs 70)."""
     study, out, _ = small_run
     journal = out / JOURNAL
     journal.write_text("\n".join(journal.read_text().splitlines()[:5]) + "\n")
-    summary = run_study(study, out, fmu_dir, workers=2, progress=True)
+    summary = run_study(study, out, fmu_dir, scheduler=dask_scheduler, progress=True)
     last = capsys.readouterr().err.strip().splitlines()[-1]
     assert f"{summary['cases']}/{summary['cases']} cases, {summary['not_ok']} not ok" in last, last
     assert summary["not_ok"] > 0 and summary["skipped"] == 5
@@ -273,6 +280,7 @@ def _nap(item):
     return {"case_id": item, "status": "ok"}
 
 
+@pytest.mark.quick
 def test_ctrl_c_in_a_process_pool_batch_drops_the_items_not_begun():
     """The pool's workers ignore Ctrl-C; the parent stops at once, not after every queued item."""
     from crane_fmu.batch import run_batch

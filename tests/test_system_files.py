@@ -14,7 +14,6 @@ from crane_fmu import systems
 from crane_fmu.build_scripts.build_fmus import systems_dir
 from crane_fmu.cli import main
 from crane_fmu.cosim import ArrayRecorder, Connection, System, connect, read_csv, simulate
-from crane_fmu.cosim.osp import write_osp
 from crane_fmu.cosim.ssp import load_parameters, load_system, write_ssp, write_ssv
 from crane_fmu.model import backstepping, plant
 
@@ -23,12 +22,14 @@ CRANE = {"plant": (["u"], ["x", "dx", "theta1", "dtheta1", "theta2", "dtheta2", 
          "controller": (["x", "dx", "theta1", "dtheta1", "theta2", "dtheta2"], ["u"])}
 
 
+@pytest.mark.quick
 def test_matching_names_connects_the_crane_pair():
     found = connect(CRANE)
     assert sorted(found) == sorted([Connection("plant", s, "controller", s) for s in CRANE["controller"][0]]
                                    + [Connection("controller", "u", "plant", "u")])
 
 
+@pytest.mark.quick
 def test_written_out_connections_win_and_ambiguity_is_refused():
     interfaces = {**CRANE, "planner": ([], ["x"])}
     with pytest.raises(ValueError, match="input controller.x matches the outputs of plant, planner: connect it"):
@@ -39,6 +40,7 @@ def test_written_out_connections_win_and_ambiguity_is_refused():
     assert connect(interfaces, [], match_names=False) == []
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("conn, message", [
     (Connection("plant", "x", "nobody", "x"), "unknown instance 'nobody'"),
     (Connection("plant", "u", "controller", "x"), "plant.u is not an output"),
@@ -51,9 +53,8 @@ def test_bad_connections_are_named(conn, message):
 
 @pytest.fixture(scope="module")
 def system_files(fmu_dir):
-    paper = systems.get("paper")
-    return (write_ssp(paper, fmu_dir, systems_dir(fmu_dir) / "paper.ssp"),
-            write_osp(paper, fmu_dir, fmu_dir / "paper.OspSystemStructure.xml"))
+    """The paper system's SSP and OSP files, as ``crane-fmu build`` (the session's build) writes them."""
+    return systems_dir(fmu_dir) / "paper.ssp", fmu_dir / "paper.OspSystemStructure.xml"
 
 
 def test_ssp_describes_the_paper_system(system_files, fmu_dir):
@@ -138,6 +139,7 @@ def test_ssd_with_parameters_in_ssv_files_bound_to_components_and_system(system_
         assert system.parameters["plant"]["l2"] == 0.25 and system.parameters["plant"]["l1"] == 1.0
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("content, message", [(b"not a zip", "is not an SSP package"), (None, "not found")])
 def test_bad_system_files_are_one_line_errors(tmp_path, capsys, content, message):
     path = tmp_path / "broken.ssp"
@@ -223,7 +225,8 @@ def _ecos_run(ssp, tmp_path):
 
 @pytest.fixture(scope="module")
 def transport_ssp(fmu_dir):
-    return write_ssp(systems.get("transport"), fmu_dir, systems_dir(fmu_dir) / "transport.ssp")
+    """The transport system's SSP file, as ``crane-fmu build`` (the session's build) writes it."""
+    return systems_dir(fmu_dir) / "transport.ssp"
 
 
 def test_every_component_has_one_parameter_set_of_the_one_name_every_engine_reads(transport_ssp):

@@ -10,13 +10,13 @@ Tolerance: 5 mm, the position band of an arrival (crane_fmu.analysis.metrics.mov
 arrive within it seconds before their runs end (the transport targets arrival by 3.8 s of a 10 s run).
 """
 
+import numpy as np
 import pytest
 from fmpy import simulate_fmu
 
 from crane_fmu import systems
-from crane_fmu.build_scripts.build_fmus import systems_dir
+from crane_fmu.build_scripts.build_fmus import container_name, containers_dir, systems_dir
 from crane_fmu.cli import main
-from crane_fmu.container import build_container
 from crane_fmu.cosim import ArrayRecorder, read_csv, run
 from crane_fmu.cosim.ssp import write_ssp
 
@@ -62,9 +62,9 @@ def test_the_system_files_of_the_moves_end_at_x_d(fmu_dir, name, x_d, tmp_path, 
 
 
 @pytest.fixture(scope="module")
-def containers(fmu_dir, tmp_path_factory):
-    folder = tmp_path_factory.mktemp("containers")
-    return {name: build_container(systems.get(name), fmu_dir, folder / f"{name}.fmu") for name in ("transport", "lqr")}
+def containers(fmu_dir):
+    """The container FMUs of ``crane-fmu build`` (the session's build)."""
+    return {name: containers_dir(fmu_dir) / f"{container_name(name)}.fmu" for name in ("transport", "lqr")}
 
 
 @pytest.mark.parametrize("x_d", TARGETS)
@@ -76,3 +76,23 @@ def test_the_containers_end_at_x_d(containers, name, x_d):
     result = simulate_fmu(str(containers[name]), stop_time=systems.get(name).stop_time, output_interval=0.01,
                           start_values=start, output=["x", "dx"])
     _check_end(result["x"], result["dx"], _target(name, x_d))
+
+
+@pytest.mark.parametrize("x_d", TARGETS)
+@pytest.mark.parametrize("name", ["transport", "lqr"])
+def test_the_containers_run_is_our_masters_with_x_d_set_on_its_holder(containers, fmu_dir, name, x_d):
+    """The container with x_d set is our master (Jacobi without the initial exchange, as the container steps:
+    test_container.py) with x_d set on the instance that holds it (HOLDER, written here, not read from the
+    container): the whole run to 1e-9, so an x_d that reaches another instance shows, even where the loop ends
+    at the same place (the LQR regulates to its own x_d)."""
+    system = systems.get(name)
+    start = {} if x_d is None else {"x_d": x_d}
+    if x_d is not None:
+        system = system.with_parameters({HOLDER[name]: {"x_d": x_d}})
+    step, stop_time = system.step, 5.0  # the move and the regulation are under way
+    result = simulate_fmu(str(containers[name]), stop_time=stop_time, step_size=step, output_interval=step,
+                          start_values=start, output=["x", "theta1"])
+    ours = run(system, fmu_dir, algorithm="jacobi", initial_exchange=False, stop_time=stop_time).columns()
+    for signal in ("x", "theta1"):
+        assert np.abs(result[signal] - ours["plant." + signal]).max() <= 1e-9, signal
+    assert np.abs(ours["plant.x"]).max() > 0.05  # the trolley moved: x_d acted

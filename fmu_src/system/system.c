@@ -25,6 +25,7 @@ typedef struct {
 #define ALIGN(n) (((n) + 15) / 16 * 16)
 
 #define R(value) py_repr(value, (char[REPR_SIZE]){0})
+#define MAX_SYSTEM_STEPS 10000000 /* per communication step, as the plant's RK4 sub-steps: doStep never hangs */
 
 /* An inner model's messages go to the system's reporter, prefixed with the instance's name. */
 typedef struct {
@@ -170,6 +171,9 @@ static ModelStatus system_do_step(const ModelType *type, void *model, double tim
     if (fabs(step / SYSTEM_STEP - n_steps) > STEP_ROUNDING)
         return report(r, MODEL_ERROR, "communication step %s s must be a whole multiple of the system step %s s",
                       R(step), R(SYSTEM_STEP));
+    if (n_steps > MAX_SYSTEM_STEPS)
+        return report(r, MODEL_ERROR, "communication step %s s needs more than %d system steps of %s s", R(step),
+                      MAX_SYSTEM_STEPS, R(SYSTEM_STEP));
     if (!m->started) m->start = time, m->started = 1;
     double first = nearbyint((time - m->start) / SYSTEM_STEP); /* time as the master's: start + k * step */
     ModelStatus worst = MODEL_OK;
