@@ -25,7 +25,7 @@ from crane_fmu.sweep.runner import write_table
 
 SIGNALS = ("time", "x", "theta1", "theta2", "u", "x1", "y1", "x2", "y2", "l1_now")  # crane_signals() names
 SIGNAL_EVERY = 0.02  # s: the signals kept for plots and animations
-ROW_FORMAT = 3  # the version of what a row holds: a journal of another format is not reused
+ROW_FORMAT = 4  # the version of what a row holds: a journal of another format is not reused
 ANIMATE = ("S1", "S2", "S7")  # the scenarios whose nominal runs keep their signals
 
 
@@ -78,7 +78,13 @@ def contenders(chosen=(), fmu_dir="build/fmus", only=False):
 
 
 def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), quick=False):
-    """``(cases, blobs, refused)``: the cases to run, the FMU bytes by hash, and rows of cases that cannot run."""
+    """``(cases, blobs, refused)``: the cases to run, the FMU bytes by hash, and rows of cases that cannot run.
+
+    A case's id covers the metric module's version (:data:`crane_fmu.analysis.metrics.VERSION`): rows a journal
+    holds from another version are run again, never mixed into the board.
+    """
+    from crane_fmu.analysis.metrics import VERSION
+
     cases, blobs, refused, digests = [], {}, [], {}
     for contender in chosen:
         for sid in scenarios:
@@ -88,7 +94,7 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), quick=False):
                 refused.append({"controller": contender.name, "scenario": sid, "case": "all", "status": "failed",
                                 "error": str(exc)})
                 continue
-            for label, system, step, stop_time, x_d in runs:
+            for label, system, step, stop_time, x_d, residual_from in runs:
                 system = systems.at_step(system, fmu_dir, step)
                 fmus, connections = systems.resolve(system, fmu_dir)
                 hashes = {}
@@ -100,8 +106,9 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), quick=False):
                     hashes[name] = digests[path]
                 case = {"controller": contender.name, "scenario": sid, "case": label, "fmus": hashes,
                         "connections": [list(c) for c in connections], "parameters": system.parameters,
-                        "step": step, "stop_time": stop_time, "x_d": x_d, "format": ROW_FORMAT,
-                        "keep_signals": sid in ANIMATE and len(runs) == 1}
+                        "step": step, "stop_time": stop_time, "x_d": x_d, "residual_from": residual_from,
+                        "bounds": {**scoreboard.DRIVE, **scoreboard.RAIL}, "format": ROW_FORMAT,
+                        "metrics_version": VERSION, "keep_signals": sid in ANIMATE and len(runs) == 1}
                 case["case_id"] = hashlib.sha256(json.dumps(case, sort_keys=True).encode()).hexdigest()[:16]
                 try:
                     systems.check_parameters(system, fmu_dir)
@@ -113,7 +120,7 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), quick=False):
 
 
 def _identity(case):
-    return {k: case[k] for k in ("case_id", "controller", "scenario", "case")}
+    return {k: case[k] for k in ("case_id", "controller", "scenario", "case", "metrics_version")}
 
 
 def run_score_case(case, blobs):
@@ -133,14 +140,9 @@ def run_score_case(case, blobs):
         row.update(status="failed", error=str(exc))
     columns = recorder.columns() if recorder.names else None
     if columns and len(columns["time"]) > 1:
-        move_end = 0.0
-        if "planner" in case["fmus"]:
-            from crane_fmu.model import planner
-
-            move_end = planner.configure({**planner.COMPONENT.defaults(), **case["parameters"]["planner"]}).end
         s = metrics.crane_signals(columns, ("dx",) + SIGNALS[5:])
         row.update(metrics.move_metrics(s["time"], s["x"], s["dx"], s["theta1"], s["theta2"], s["u"], case["x_d"],
-                                        move_end))
+                                        case["residual_from"], bounds=case["bounds"]))
         row["outcome"] = metrics.classify(s["time"], s["theta1"], s["theta2"], row["status"] == "ok")
         if case["keep_signals"]:
             every = max(1, round(SIGNAL_EVERY / case["step"]))
@@ -170,6 +172,7 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
         The rows of the board: one per contender, scenario and case.
     """
     from crane_fmu.analysis import score_plots
+    from crane_fmu.analysis.metrics import VERSION
 
     start = time.perf_counter()
     if sys._getframe(1).f_globals.get("__name__") == "__mp_main__":  # called by a script a worker imports
@@ -184,6 +187,10 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     cases, blobs, refused = plan(chosen, fmu_dir, quick=quick)
     out_dir.mkdir(parents=True, exist_ok=True)  # only now: a refused board leaves no folder behind
     done = read_journal(out_dir)
+    other = sum(r.get("metrics_version") != VERSION for r in done.values())
+    if other:
+        log(f"{out_dir / JOURNAL}: {other} rows were measured by another version of the metrics "
+            f"(crane_fmu/analysis/metrics.py is now {VERSION}): not used, their cases run again")
     pending = [c for c in cases if c["case_id"] not in done]
     failed_before = sum(done[c["case_id"]]["status"] != "ok" for c in cases if c["case_id"] in done)
     bar = Progress(len(cases), len(cases) - len(pending), failed=failed_before) if progress else None

@@ -158,7 +158,8 @@ def test_the_harness_runs_the_same_system_as_simulate(quick_board, fmu_dir):
     The expected figures are computed here from the recorded run, by their definitions, without
     crane_fmu.analysis.metrics (which the harness uses): the arrival is the first sample from which on the
     trolley stays within 5 mm of x_d = 2 m and both angles within 0.5 deg; the residual is the largest swing
-    of either angle from the later of the arrival and the planned move's end.
+    of either angle from one slow period (2.368 s, Section V) after the planned move's end on; the bounds
+    (|u| <= 2 m/s2, |v| <= 1 m/s, the trolley within -1 m and 3 m) held.
     """
     _, rows, _ = quick_board
     row = next(r for r in rows if r["controller"] == "LqrController" and r["scenario"] == "S2")
@@ -172,9 +173,28 @@ def test_the_harness_runs_the_same_system_as_simulate(quick_board, fmu_dir):
     inside = (np.abs(c["plant.x"] - 2.0) <= 0.005) & (np.abs(theta1) <= half_degree) & (np.abs(theta2) <= half_degree)
     assert inside[-1]
     arrival = t[np.nonzero(~inside)[0][-1] + 1]
-    after = t >= max(arrival, end)
+    after = t >= end + 2.368248427087636
     residual = math.degrees(max(np.abs(theta1[after]).max(), np.abs(theta2[after]).max()))
     assert row["arrival_s"] == arrival and row["residual_deg"] == pytest.approx(residual, rel=1e-12)
+    held = (np.abs(c["controller.u"]).max() <= 2.0 and np.abs(c["plant.dx"]).max() <= 1.0 + 1e-9
+            and -1.0 <= c["plant.x"].min() and c["plant.x"].max() <= 3.0)
+    assert held and row["bounds_held"] is True and row["bounds_broken"] == ""
+
+
+def test_every_row_records_the_metric_module_that_measured_it(quick_board, fmu_dir, monkeypatch):
+    """Each row and the board name the metrics' version; under another version every case has another id, so
+    a journal's rows of the old one are never taken into the new board."""
+    from crane_fmu import compare as harness
+    from crane_fmu.analysis import metrics
+
+    out, rows, _ = quick_board
+    table = pq.read_table(out / "scores.parquet").to_pylist()
+    assert {r["metrics_version"] for r in table if r["case_id"] is not None} == {metrics.VERSION}
+    assert f"version {metrics.VERSION}" in (out / "scoreboard.md").read_text()
+    chosen = contenders(["LqrController"], fmu_dir, only=True)
+    ids = {c["case_id"] for c in harness.plan(chosen, fmu_dir, ("S1", "S2"))[0]}
+    monkeypatch.setattr(metrics, "VERSION", "another version")
+    assert ids.isdisjoint(c["case_id"] for c in harness.plan(chosen, fmu_dir, ("S1", "S2"))[0])
 
 
 def test_a_rerun_resumes(quick_board, template_fmu, fmu_dir):
