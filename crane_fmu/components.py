@@ -6,7 +6,18 @@ parameter rules are applied before a run. Nothing else in the toolkit names a
 component.
 """
 
-from crane_fmu.model import backstepping, benchmark, disturbances, energy, estimator, hard_hit, lqr, planner, plant
+from crane_fmu.model import (
+    backstepping,
+    benchmark,
+    disturbances,
+    energy,
+    estimator,
+    hard_hit,
+    lqr,
+    planner,
+    plant,
+    wind,
+)
 from crane_fmu.registry import Registry
 
 _COMPONENTS = Registry("component", lambda c: c.model_identifier)
@@ -35,6 +46,6 @@ def check_parameters(model_identifier, values):
 
 for _component in (plant.COMPONENT, backstepping.COMPONENT, lqr.COMPONENT, energy.COMPONENT, hard_hit.COMPONENT,
                    planner.COMPONENT,
-                   disturbances.GUST, disturbances.SENSOR, disturbances.CRANE_SENSOR,
+                   disturbances.GUST, disturbances.SENSOR, disturbances.CRANE_SENSOR, wind.COMPONENT,
                    estimator.COMPONENT, benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
     register(_component)
