@@ -139,7 +139,6 @@ def plot_summary(rows, path, users=(), stats=None):
         top = 1.15 * max([v for v in finite if not scale or v <= 8 * scale] + [limit or 0.0, 1e-3])
         for y, name in enumerate(names):
             c, hatch, marker = style(name, names)
-            edge = "k" if name in users else c
             if name not in lines:
                 ax.text(0.02 * top, y, "n/a" if name in not_applicable(rows, sid) else "", va="center", fontsize=8,
                         color="0.4")
@@ -150,7 +149,7 @@ def plot_summary(rows, path, users=(), stats=None):
                 ax.text(top / 2, y, "failed" if lines[name]["failed"] else "never", ha="center", va="center",
                         fontsize=8, bbox={"facecolor": "white", "edgecolor": "none", "pad": 1})
             else:
-                ax.barh(y, min(f[0], top), color=c, hatch=hatch, edgecolor=edge, lw=1.5 if name in users else 0.5)
+                ax.barh(y, min(f[0], top), color=c, hatch=hatch, edgecolor="0.15", lw=2.0 if name in users else 0.5)
                 if f[0] > top:
                     ax.text(top / 2, y, f"{f[0]:.3g} {unit}", ha="center", va="center", fontsize=8,
                             bbox={"facecolor": "white", "edgecolor": "none", "pad": 1})
@@ -173,8 +172,8 @@ def plot_summary(rows, path, users=(), stats=None):
         target = "" if limit is None else f"; target <= {limit:g}"
         ax.set_title(f"{sid}: {key} [{unit}]\n{what}{target}", fontsize=8)
         ax.tick_params(axis="x", labelsize=7)
-    handles = [Patch(facecolor=style(n, names)[0], hatch=style(n, names)[1], edgecolor="k" if n in users else
-                     style(n, names)[0], label=_label(n, users)) for n in names]
+    handles = [Patch(facecolor=style(n, names)[0], hatch=style(n, names)[1], edgecolor="0.15",
+                     lw=2.0 if n in users else 0.5, label=_label(n, users)) for n in names]
     handles += [Patch(facecolor=NEVER["color"], edgecolor=NEVER["edgecolor"], hatch=NEVER["hatch"],
                       label="never within the run, or failed"),
                 Line2D([], [], color="k", ls="--", lw=0.9, label="target"),
@@ -184,7 +183,7 @@ def plot_summary(rows, path, users=(), stats=None):
     fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 4), fontsize=8, frameon=False)
     quick = any(r.get("quick") for r in rows)
     fig.suptitle(("QUICK board: " if quick else "") + "each scenario's ranking figure; lower is better; the rank "
-                 "right of each bar (= a tie); " + ", ".join(sorted(set(PAIRED) & set(scenarios))) + " on the paired "
+                 "right of each bar (= a tie); " + ", ".join(s for s in PAIRED if s in scenarios) + " on the paired "
                  "design", fontsize=10)
     fig.savefig(path, dpi=100)
     plt.close(fig)
