@@ -139,10 +139,10 @@ def test_lqg_transport_meets_the_issue_targets(fmu_dir):
 
 
 def test_lqg_transport_on_the_mismatch_grid(fmu_dir):
-    """Issue 28: on the scoreboard's 27 plants (l1 +-10 %, l2 +-20 %, m2 +-50 %), unknown to estimator and
+    """Issue 28: on the 27 plants of ``crane-fmu targets`` (l1 +-10 %, l2 +-20 %, m2 +-50 %), unknown to estimator and
     controller, every plant arrives and the worst residual swing (measured as the scoreboard does, from one slow
     period of the plant after the planned move's end) is within issue 28's 1 deg. The scoreboard's S9 asks more
-    (0.1 deg: the swing stopped), which this loop misses on the light payloads; the board shows it."""
+    (0.1 deg: the swing stopped), which this loop misses with light payloads; the board shows it."""
     system = systems.get("lqg-transport")
     worst = 0.0
     for plant in MISMATCH:
