@@ -20,7 +20,8 @@ def test_build_writes_every_component_and_every_builtin_system(tmp_path, capsys)
     code, out, _ = _run(capsys, "build", "--out", str(tmp_path / "fmus"))
     assert code == 0
     fmus = ["BacksteppingController.fmu", "CranePlant.fmu", "CraneSensor.fmu", "EnergyController.fmu", "Gust.fmu",
-            "HardHitController.fmu", "LqrController.fmu", "Sensor.fmu", "StateEstimator.fmu", "TrajectoryPlanner.fmu"]
+            "HardHitController.fmu", "LqrController.fmu", "Sensor.fmu", "StateEstimator.fmu", "TrajectoryPlanner.fmu",
+            "Wind.fmu"]
     names = ["energy", "free", "hard-hit", "hoist-transport", "lqg", "lqg-transport", "lqr", "paper", "transport"]
     assert sorted(p.name for p in (tmp_path / "fmus").iterdir()) == sorted(
         fmus + [f"{n}.OspSystemStructure.xml" for n in names])
