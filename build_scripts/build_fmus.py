@@ -226,13 +226,22 @@ def container_name(system_name):
     return "Crane" + "".join(part.capitalize() for part in system_name.replace("-", "_").split("_"))
 
 
-def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, containers=None, native=None, log=print):
-    """Build FMUs and system files; return their paths.
+class Built(list):
+    """The paths of a build's outputs (a list), with ``made`` and ``kept``: those made now and those up to date."""
+
+    def __init__(self, paths, made=(), kept=()):
+        super().__init__(paths)
+        self.made, self.kept = list(made), list(kept)
+
+
+def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, containers=None, native=None, log=print,
+              force=False, fmi3_out=None):
+    """Build FMUs and system files, each only when what it is made from changed; return their paths.
 
     Parameters
     ----------
     out_dir : path
-        The FMI 2.0 FMUs go here, the FMI 3.0 ones to :func:`fmi3_dir`, the
+        The FMI 2.0 FMUs go here, the FMI 3.0 ones to :func:`fmi3_dir` (or ``fmi3_out``), the
         systems to :func:`systems_dir`.
     kinds : iterable of str, optional
         Model identifiers of the components to build (default: every registered
@@ -247,42 +256,82 @@ def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, cont
         Also build the native (C) FMUs into ``build/native`` (:mod:`.native`), with the built-in
         systems as one native FMU each (:mod:`.one_fmu`): True requires a C compiler, False skips
         them, None (default) builds them when a C compiler is found.
+    force : bool
+        Make every output again, up to date or not.
+    fmi3_out : path, optional
+        Where the FMI 3.0 FMUs go (default :func:`fmi3_dir`).
+
+    Returns
+    -------
+    Built
+        Every output's path; ``made`` and ``kept`` say which were made now and which were up to date
+        (:mod:`.incremental`: content hashes of what each is made from, recorded in the build's folder).
     """
+    from crane_fmu.build_scripts import incremental
+
+    fmi3_out = Path(fmi3_out) if fmi3_out is not None else fmi3_dir(out_dir)
+    root = Path(os.path.commonpath([Path(out_dir).resolve(), fmi3_out.resolve()]))
+    with incremental.building(root, force) as record:
+        paths = _build_all(record, out_dir, kinds, systems, fmi3, containers, native, log, fmi3_out)
+    return Built(paths, record.made, record.kept)
+
+
+def _build_all(record, out_dir, kinds, systems, fmi3, containers, native, log, fmi3_out):
     from crane_fmu import systems as registry
+    from crane_fmu.build_scripts.incremental import python_fmu_key, system_file_key
+    from crane_fmu.cosim import osp, ssp
     from crane_fmu.cosim.osp import write_osp
     from crane_fmu.cosim.ssp import write_ssp
 
     if kinds is None:
         kinds = [c.model_identifier for c in components.registered() if c.role != "benchmark"]
     chosen = [components.get(kind) for kind in kinds]
+    versions = [(2, Path(out_dir))] + ([(3, fmi3_out)] if fmi3 else [])
     with tempfile.TemporaryDirectory(prefix="crane_wrapper_") as tmp:
-        try:
-            binaries = compile_binaries(tmp)
-        except WrapperUnavailable as exc:
-            log(f"warning: {exc}; the FMUs keep pythonfmu's binary, which loads only in Python hosts "
-                "and reports no error messages")
-            binaries = None
-        paths = [build_fmu(c, out_dir, binaries and binaries[2]) for c in chosen]
-        if fmi3:
-            paths += [build_fmu(c, fmi3_dir(out_dir), binaries and binaries[3], fmi_version=3) for c in chosen]
+        compiled = {}
+
+        def binaries(version):  # compiled once, when the first FMU is made
+            if "binaries" not in compiled:
+                try:
+                    compiled["binaries"] = compile_binaries(tmp)
+                except WrapperUnavailable as exc:
+                    log(f"warning: {exc}; the FMUs keep pythonfmu's binary, which loads only in Python hosts "
+                        "and reports no error messages")
+                    compiled["binaries"] = None
+            return compiled["binaries"] and compiled["binaries"][version]
+
+        paths = [record.make(folder / f"{c.model_identifier}.fmu",
+                             python_fmu_key(c, version, _sources(c, version).values()),
+                             lambda c=c, version=version, folder=folder: build_fmu(c, folder, binaries(version),
+                                                                                  fmi_version=version))
+                 for version, folder in versions for c in chosen]
     if native is not False:
         from crane_fmu.build_scripts.native import build_native
 
-        built = build_native(out_dir, kinds, required=native is True, log=log)
+        built = build_native(out_dir, kinds, required=native is True, log=log, record=record)
         paths += built
         if built:  # a C compiler was found: the built-in systems whose components are all native, as one FMU
             from crane_fmu.build_scripts.one_fmu import build_one_fmus
 
-            paths += build_one_fmus(out_dir, kinds=kinds, log=log)
+            paths += build_one_fmus(out_dir, kinds=kinds, log=log, record=record)
     names = systems if systems is not None else [
         s.name for s in registry.registered() if set(s.instances.values()) <= set(kinds)]
     for name in names:
         system = registry.get(name)
-        paths.append(write_ssp(system, out_dir, systems_dir(out_dir) / f"{name}.ssp"))
-        paths.append(write_osp(system, out_dir, Path(out_dir) / f"{name}.OspSystemStructure.xml"))
+        fmus = system.fmus(out_dir).values()
+        target = systems_dir(out_dir) / f"{name}.ssp"
+        paths.append(record.make(target, system_file_key("ssp", system, fmus, Path(ssp.__file__)),
+                                 lambda system=system, target=target: write_ssp(system, out_dir, target)))
+        target = Path(out_dir) / f"{name}.OspSystemStructure.xml"
+        paths.append(record.make(target, system_file_key("osp", system, fmus, Path(osp.__file__)),
+                                 lambda system=system, target=target: write_osp(system, out_dir, target)))
+    from crane_fmu import container
     from crane_fmu.container import build_container
 
     for name in containers if containers is not None else [n for n in CONTAINERS if n in names]:
         system = registry.get(name)
-        paths.append(build_container(system, out_dir, containers_dir(out_dir) / f"{container_name(name)}.fmu"))
+        target = containers_dir(out_dir) / f"{container_name(name)}.fmu"
+        paths.append(record.make(target, system_file_key("container", system, system.fmus(out_dir).values(),
+                                                         Path(container.__file__)),
+                                 lambda system=system, target=target: build_container(system, out_dir, target)))
     return paths

@@ -264,11 +264,16 @@ def build_native_fmu(component, out_dir, fmi_version=2, tools=None):
                          fmi_version, tools)
 
 
+def source_path(file):
+    """The path of a source file named in fmu_src/native or fmu_src."""
+    return NATIVE / file if (NATIVE / file).exists() else NATIVE.parent / file
+
+
 def copy_sources(files, folder):
     """Copy ``files`` (names in fmu_src/native or fmu_src) into ``folder``, made if missing."""
     folder.mkdir(parents=True, exist_ok=True)
     for file in files:
-        shutil.copy(NATIVE / file if (NATIVE / file).exists() else NATIVE.parent / file, folder / file)
+        shutil.copy(source_path(file), folder / file)
 
 
 def write_fmu(name, out_dir, sources, c_files, description, build, fmi_version, tools=None):
@@ -299,15 +304,19 @@ def write_fmu(name, out_dir, sources, c_files, description, build, fmi_version, 
     return final
 
 
-def build_native(out_dir, kinds, required=False, log=print):
+def build_native(out_dir, kinds, required=False, log=print, record=None):
     """The native FMUs of those ``kinds`` that are ported, FMI 2.0 and 3.0, in :func:`native_dir`; their paths.
 
     The other kinds' Python FMUs (already built in ``out_dir`` and its ``fmi3`` sibling) are
     copied beside them, so that ``--fmu-dir build/native`` runs every built-in system. Without a
-    C compiler: a warning and nothing built, or NativeUnavailable when ``required``.
+    C compiler: a warning and nothing built, or NativeUnavailable when ``required``. With a
+    ``record`` (:class:`.incremental.Record`), an FMU made from the same inputs before is kept.
     """
     from crane_fmu import components
+    from crane_fmu.build_scripts import incremental
     from crane_fmu.build_scripts.build_fmus import fmi3_dir
+
+    record = record or incremental.Record()  # keeps nothing
 
     if not any(kind in MODELS for kind in kinds):
         return []
@@ -323,9 +332,13 @@ def build_native(out_dir, kinds, required=False, log=print):
     paths = []
     for version, python_dir in ((2, Path(out_dir)), (3, fmi3_dir(out_dir))):
         for kind in kinds:
+            folder, python = native_dir(out_dir, version), python_dir / f"{kind}.fmu"
             if kind in MODELS:
-                paths.append(build_native_fmu(components.get(kind), native_dir(out_dir, version), version, tools))
-            elif (python_dir / f"{kind}.fmu").exists():  # not ported yet: the Python FMU
-                native_dir(out_dir, version).mkdir(parents=True, exist_ok=True)
-                paths.append(Path(shutil.copy(python_dir / f"{kind}.fmu", native_dir(out_dir, version))))
+                component = components.get(kind)
+                paths.append(record.make(folder / f"{kind}.fmu", incremental.native_key(component, version, tools),
+                                         lambda c=component, v=version, f=folder: build_native_fmu(c, f, v, tools)))
+            elif python.exists():  # not ported yet: the Python FMU
+                folder.mkdir(parents=True, exist_ok=True)
+                paths.append(record.make(folder / python.name, incremental.key("copy", python),
+                                         lambda p=python, f=folder: Path(shutil.copy(p, f))))
     return paths

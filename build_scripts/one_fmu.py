@@ -314,6 +314,12 @@ def _model_size(compiler, sources, kind):
     return int(found.group(1))
 
 
+def copied_sources(kinds, fmi_version):
+    """The C files of fmu_src a one-FMU of components ``kinds`` is compiled from (besides the generated ones)."""
+    return [*(native.MODELS[k] for k in kinds), *native.COMMON, *native.HEADERS, "system.c", "system.h",
+            *native.FRAMEWORKS[fmi_version]]
+
+
 def build_one_fmu(system, out_dir, fmi_version=2, name=None, tools=None):
     """Write ``system`` as one native FMU ``out_dir/<name>.fmu`` (default name :func:`one_fmu_name`); its path."""
     tools = tools or native.compilers()
@@ -324,8 +330,7 @@ def build_one_fmu(system, out_dir, fmi_version=2, name=None, tools=None):
     compiled = [f"{kind}_unit.c" for kind in kinds] + [*native.COMMON, "system.c", framework[0]]
     with tempfile.TemporaryDirectory(prefix="crane_one_fmu_") as tmp:
         sources = Path(tmp) / "sources"
-        native.copy_sources([*(native.MODELS[k] for k in kinds), *native.COMMON, *native.HEADERS, "system.c",
-                             "system.h", *framework], sources)
+        native.copy_sources(copied_sources(kinds, fmi_version), sources)
         for kind in kinds:
             (sources / f"{kind}_variables.h").write_text(native.variables_header(components.get(kind)))
             (sources / f"{kind}_unit.c").write_text(unit_file(kind))
@@ -346,11 +351,15 @@ def build_one_fmu(system, out_dir, fmi_version=2, name=None, tools=None):
                                 tools)
 
 
-def build_one_fmus(out_dir, systems=None, kinds=None, log=print):
+def build_one_fmus(out_dir, systems=None, kinds=None, log=print, record=None):
     """The one-FMUs (FMI 2.0 into ``build/native``, 3.0 into its ``fmi3``) of ``systems`` (names or System
     objects; default: those of :data:`ONE_FMUS` made of the components ``kinds`` (default: any) whose
-    components are all native, with a note for the others); their paths."""
+    components are all native, with a note for the others); their paths. With a ``record``
+    (:class:`.incremental.Record`), a one-FMU made from the same inputs before is kept."""
     from crane_fmu import systems as registry
+    from crane_fmu.build_scripts import incremental
+
+    record = record or incremental.Record()  # keeps nothing
 
     if systems is None:
         systems = []
@@ -366,6 +375,10 @@ def build_one_fmus(out_dir, systems=None, kinds=None, log=print):
     paths = []
     for system in systems:
         system = registry.get(system) if isinstance(system, str) else system
+        kinds_used = list(dict.fromkeys(instance_kinds(system).values()))
         for version in (2, 3):
-            paths.append(build_one_fmu(system, native.native_dir(out_dir, version), version, tools=tools))
+            folder = native.native_dir(out_dir, version)
+            paths.append(record.make(folder / f"{one_fmu_name(system.name)}.fmu",
+                                     incremental.one_fmu_key(system, kinds_used, version, tools),
+                                     lambda s=system, f=folder, v=version: build_one_fmu(s, f, v, tools=tools)))
     return paths

@@ -93,3 +93,27 @@ def run_native_bench(stop_time=20.0, step=1e-3, repeat=5, out=print):
     out(f"4. whole processes: crane-fmu simulate --fmu-dir build/native (paper, both native) {med['process']:.2f} s, "
         f"anchor {med['anchor_process']:.2f} s: ratio {figures['process_ratio']:.2f}  (target <= 1.0)")
     return figures
+
+
+def run_derivative_bench(evaluations=1_000_000, repeat=5, out=print):
+    """The cost of the native plant's Model Exchange derivatives, medians of ``repeat`` runs of a C loop.
+
+    ``fmu_src/native/derivative_bench.c`` calls the model's C functions (no FMI layer) at Section V's
+    plant swinging: the derivatives, one directional derivative (with the derivatives), and the
+    whole Jacobian (one per state and input); microseconds per evaluation.
+    """
+    with tempfile.TemporaryDirectory(prefix="crane_bench_derivatives_") as tmp:
+        program = Path(tmp) / "derivative_bench"
+        subprocess.run([compilers()["linux"], "-O2", "-ffp-contract=off", f"-I{NATIVE}",
+                        *(str(NATIVE / f) for f in ("derivative_bench.c", "plant_continuous.c", "plant_equations.c")),
+                        "-o", str(program), "-lm"], check=True)
+        runs = [subprocess.run([str(program), str(evaluations)], check=True, capture_output=True,
+                               text=True).stdout.split() for _ in range(repeat)]
+    names = ("derivatives_us", "directional_us", "jacobian_us")
+    figures = {name: statistics.median(float(r[i]) for r in runs) for i, name in enumerate(names)}
+    out(f"native CranePlant, Model Exchange, the model's C functions ({evaluations} evaluations, medians of {repeat} "
+        f"runs):")
+    out(f"  derivatives {figures['derivatives_us']:.3f} us; with one directional derivative "
+        f"{figures['directional_us']:.3f} us; the whole Jacobian (13 directional derivatives) "
+        f"{figures['jacobian_us']:.3f} us")
+    return figures

@@ -260,6 +260,7 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
         One line: a mistake in the arguments, or a controller that no chosen scenario applies to.
     """
     from crane_fmu.analysis import board_page, score_plots
+    from crane_fmu.analysis.floor import scenario_floors
     from crane_fmu.analysis.metrics import VERSION
 
     start = time.perf_counter()
@@ -313,7 +314,8 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     _write(out_dir / MANIFEST, json.dumps(manifest, indent=1))
     board = out_dir / "scoreboard.md"
     stats = scoreboard.board_statistics(rows)
-    _write(board, scoreboard.render(rows, chosen, quick, cases, _provenance_lines(manifest), stats))
+    _write(board, scoreboard.render(rows, chosen, quick, cases, _provenance_lines(manifest), stats,
+                                    scenario_floors()))
     paths = score_plots.plot_all(rows, out_dir, {c.name for c in chosen if c.user}, stats)
     drawn = 0
     for sid in animate:

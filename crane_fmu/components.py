@@ -14,6 +14,7 @@ from crane_fmu.model import (
     estimator,
     hard_hit,
     lqr,
+    mpc,
     planner,
     plant,
     wind,
@@ -45,7 +46,7 @@ def check_parameters(model_identifier, values):
 
 
 for _component in (plant.COMPONENT, backstepping.COMPONENT, lqr.COMPONENT, energy.COMPONENT, hard_hit.COMPONENT,
-                   planner.COMPONENT,
+                   mpc.COMPONENT, planner.COMPONENT,
                    disturbances.GUST, disturbances.SENSOR, disturbances.CRANE_SENSOR, wind.COMPONENT,
                    estimator.COMPONENT, benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
     register(_component)

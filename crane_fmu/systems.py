@@ -7,8 +7,11 @@ which instances exist.
 """
 
 import contextlib
+import math
+from pathlib import Path
 
 from crane_fmu import components
+from crane_fmu.controller_interface import MEASURED, TRACKED, told
 from crane_fmu.cosim.connections import Connection
 from crane_fmu.cosim.system import System, read_fmu
 from crane_fmu.registry import Registry
@@ -31,11 +34,78 @@ def open_system(name_or_file):
 
 
 def resolve(system, fmu_dir):
-    """``system.resolve(fmu_dir)``, with a hint where a built FMU is missing."""
+    """``system.resolve(fmu_dir)``, with a hint where a built FMU is missing: the one check of a system's wiring.
+
+    Every connection the system was designed with keeps both ends in the FMUs used, and an FMU that
+    replaced an instance's (``--use``) fits its place: a registered component of another role (a plant
+    in the controller's place) is refused, and a controller keeps the measured-state inputs (the rest
+    of a controller's inputs, the references and ``l1_now``, are its own choice).
+
+    Raises
+    ------
+    ValueError
+        One line naming the instance, the variable and the FMU:
+        ``"controller: mine/PdTypo.fmu has no output u, which the system connects to plant.u"``.
+    """
     for path in system.fmus(fmu_dir).values():
         if not path.is_file():
             raise ValueError(f"{path} not found: build the FMUs first (crane-fmu build)")
-    return system.resolve(fmu_dir)
+    fmus, optional = system.fmus(fmu_dir), {}
+    for name, designed in system.replaced.items():
+        place, used = _component(designed), _component(fmus[name])
+        if place is None:
+            continue
+        if used is not None and used.role != place.role:
+            raise ValueError(f"{name}: {fmus[name]} is a {used.role} ({used.model_identifier}), where the system "
+                             f"has a {place.role} ({place.model_identifier})")
+        if place.role == "controller":
+            optional[name] = [n for n in place.names("input") if n not in MEASURED]
+    return system.resolve(fmu_dir, optional)
+
+
+def _component(source):
+    """The registered component of an instance's source (a model identifier or an ``.fmu`` file), or None."""
+    if str(source).endswith(".fmu"):
+        return components.find(read_fmu(source).coSimulation.modelIdentifier)
+    return components.find(str(source))
+
+
+def tell_controllers(system, fmu_dir):
+    """``(system, notes)``: each controller told what :func:`crane_fmu.controller_interface.told` gives it.
+
+    A system moves the load when its design feeds a controller's ``x_ref`` (from a planner); the move's
+    target is that planner's ``x_d``. A controller with the planner's inputs gets them (as connected); one
+    with a parameter ``x_d`` instead gets the target there (a note says so); one with neither is refused.
+    A controller is an instance whose place (its component as designed) has the role ``controller``.
+
+    Raises
+    ------
+    ValueError
+        One line naming the instance, the FMU and what it misses.
+    """
+    fmus, notes = system.fmus(fmu_dir), []
+    moves = {c.target: c.source for c in system.designed(fmu_dir) if c.input == "x_ref"}
+    for name in system.instances:
+        place = _component(system.replaced.get(name, system.instances[name]))
+        if place is None or place.role != "controller":
+            continue
+        variables = read_fmu(fmus[name]).modelVariables
+        names = {causality: [v.name for v in variables if v.causality == causality]
+                 for causality in ("input", "output", "parameter")}
+        target = None
+        if name in moves:  # the planner's x_d (a planner without one: only its references can tell the move)
+            starts = {v.name: v.start for v in read_fmu(fmus[moves[name]]).modelVariables}
+            target = float(system.parameters.get(moves[name], {}).get("x_d", starts.get("x_d", math.inf)))
+        try:
+            move = told(f"{name} ({fmus[name]})", names["input"], names["output"], names["parameter"], target)
+        except ValueError as exc:
+            where = f" (system {system.name} moves it to {moves[name]}.x_d)" if name in moves else ""
+            raise ValueError(f"{exc}{where}") from None
+        if move.x_d is not None:
+            system = system.with_parameters({name: {"x_d": move.x_d}})
+            notes.append(f"{name} ({Path(fmus[name]).name}) has no inputs {', '.join(TRACKED)}: it is told the "
+                         f"move's target, {name}.x_d = {move.x_d:g} m ({moves[name]}.x_d)")
+    return system, notes
 
 
 def at_step(system, fmu_dir, step):
@@ -119,3 +189,12 @@ register(System("hard-hit", {"plant": "CranePlant", "controller": "HardHitContro
                 parameters={"plant": {"theta1_0": 1.0471975511965976, "u_max": 2.0, "v_max": 1.0}},
                 description="a hard hit: regulation from theta1(0) = 60 deg by LQR gains scheduled on the swing "
                             "energy, |u| <= 2 m/s2, |v| <= 1 m/s"))
+register(System("mpc", {"plant": "CranePlant", "controller": "MpcController"},
+                parameters={"plant": {"u_max": 2.0, "v_max": 1.0}},
+                description="Section V regulation from theta1(0) = 10 deg by the constrained MPC: the shortest move "
+                            "to rest within |u| <= 2 m/s2, |v| <= 1 m/s, tracked by a QP every 50 ms"))
+register(System("mpc-transport", {"plant": "CranePlant", "controller": "MpcController"},
+                parameters={"plant": {"theta1_0": 0.0, "u_max": 2.0, "v_max": 1.0}, "controller": {"x_d": 2.0}},
+                stop_time=10.0,
+                description="a 2 m move from rest by the constrained MPC: its own shortest move within the drive's "
+                            "limits, tracked by a QP every 50 ms"))

@@ -1,6 +1,7 @@
 """What the benchmark compares is comparable: its plain Python loop computes what the master does."""
 
 import numpy as np
+import pytest
 
 from crane_fmu import systems
 from crane_fmu.bench import _plain_loop
@@ -17,3 +18,19 @@ def test_plain_loop_records_the_masters_numbers(crane_fmus, connections, tmp_pat
     assert list(plain) == list(master)
     for name in master:
         assert np.array_equal(plain[name], master[name]), name
+
+
+def test_derivative_bench_prints_the_cost_of_the_native_derivatives():
+    """A short run: each figure measured, the whole Jacobian (13 directional derivatives) dearer than one."""
+    from crane_fmu.bench_native import run_derivative_bench
+    from crane_fmu.build_scripts.native import NativeUnavailable, compilers
+
+    try:
+        compilers()
+    except NativeUnavailable as exc:
+        pytest.skip(f"a C compiler: {exc}")
+    lines = []
+    figures = run_derivative_bench(evaluations=20000, repeat=1, out=lines.append)
+    assert all(value > 0 for value in figures.values())
+    assert figures["jacobian_us"] > figures["directional_us"]
+    assert "the whole Jacobian" in lines[-1]

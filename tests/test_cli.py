@@ -20,9 +20,10 @@ def test_build_writes_every_component_and_every_builtin_system(tmp_path, capsys)
     code, out, _ = _run(capsys, "build", "--out", str(tmp_path / "fmus"))
     assert code == 0
     fmus = ["BacksteppingController.fmu", "CranePlant.fmu", "CraneSensor.fmu", "EnergyController.fmu", "Gust.fmu",
-            "HardHitController.fmu", "LqrController.fmu", "Sensor.fmu", "StateEstimator.fmu", "TrajectoryPlanner.fmu",
-            "Wind.fmu"]
-    names = ["energy", "free", "hard-hit", "hoist-transport", "lqg", "lqg-transport", "lqr", "paper", "transport"]
+            "HardHitController.fmu", "LqrController.fmu", "MpcController.fmu", "Sensor.fmu", "StateEstimator.fmu",
+            "TrajectoryPlanner.fmu", "Wind.fmu"]
+    names = ["energy", "free", "hard-hit", "hoist-transport", "lqg", "lqg-transport", "lqr", "mpc", "mpc-transport",
+             "paper", "transport"]
     assert sorted(p.name for p in (tmp_path / "fmus").iterdir()) == sorted(
         fmus + [f"{n}.OspSystemStructure.xml" for n in names])
     assert sorted(p.name for p in (tmp_path / "fmi3").iterdir()) == fmus
@@ -74,6 +75,8 @@ def test_simulate_free_swing_and_settings(fmu_dir, tmp_path, capsys):
     (["--stop-time", "-1"], "stop time must be > start time 0.0, got -1.0"),
     (["--step", "x"], "argument --step: 'x' is not a number"),
     (["--master", "euler"], "argument --master: invalid choice: 'euler'"),
+    (["--parameters", "my.ssv"], "--parameters my.ssv: not found (an SSP parameter set, e.g. "
+                                 "examples/parameters.ssv)"),
 ])
 def test_simulate_user_errors_give_one_line_and_status_2(fmu_dir, tmp_path, capsys, argv, message):
     out_file = tmp_path / "keep.csv"
@@ -281,6 +284,10 @@ def test_targets_measures_every_controller_against_its_targets(fmu_dir, capsys):
     # sustained oscillation in its own 10-degree regulation run
     energy = next(line for line in out.splitlines() if line.startswith("  energy   0.5 deg from"))
     assert energy.endswith(("converges", "decaying")), energy
+    # the floors with their method, and the MPC's figures against its targets as ratios to them
+    assert "  S2: 2.70 s  2 m from rest to rest" in out and "LP feasibility (scipy HiGHS)" in out
+    s2 = next(line for line in out.splitlines() if line.startswith("  S2: arrival (5 mm, 0.5 deg): "))
+    assert "x floor) (target <= 2.95 s, ambition 2.85 s): " in s2, s2
 
 
 @pytest.mark.parametrize("argv, message", [

@@ -154,3 +154,23 @@ def test_code_accelerations_equal_the_extended_derivation():
         expected = EXT_ACCEL(q1, r1, q2, r2, acc, p.m1, p.m2, length, p.l2, p.g, *load)
         got = plant.angular_accelerations(q1, r1, q2, r2, acc, p, length, load)
         assert got == pytest.approx(expected, rel=1e-9, abs=1e-9)
+
+
+# the differentiated variables of plant_equations.accelerations_tangent's seed, in its order
+_SEEDED = (a1, w1, a2, w2, u, l1, dL, ddL, F1, F2)
+EXT_JACOBIAN = sympy.lambdify((a1, w1, a2, w2, u, m1, m2, l1, l2, g, dL, ddL, F1, F2, c1, c2),
+                              [[sympy.diff(e, v) for v in _SEEDED] for e in _solve_linear(EXT)])
+
+
+def test_code_directional_derivatives_equal_the_derivation_differentiated():
+    """accelerations_tangent along each unit seed against sympy's derivative of the extended derivation."""
+    rng = random.Random(11)
+    for p, (q1, r1, q2, r2), acc in _random_cases(20):
+        load = (rng.uniform(-1, 1), rng.uniform(-2, 2), rng.uniform(-50, 50), rng.uniform(-50, 50),
+                rng.uniform(0, 5), rng.uniform(0, 5))
+        length = rng.uniform(0.3, 3)
+        expected = EXT_JACOBIAN(q1, r1, q2, r2, acc, p.m1, p.m2, length, p.l2, p.g, *load)
+        for k in range(len(_SEEDED)):
+            seed = tuple(float(j == k) for j in range(len(_SEEDED)))
+            _, got = plant.accelerations_tangent(q1, r1, q2, r2, acc, p, length, load, seed)
+            assert got == pytest.approx((expected[0][k], expected[1][k]), rel=1e-9, abs=1e-9), _SEEDED[k]

@@ -127,5 +127,5 @@ def test_build_component_leaves_another_module_of_that_name_alone(tmp_path):
     text = Path(pd_controller.__file__).read_text().replace('"PdController"', '"PdTwo"')
     (tmp_path / "pd_controller.py").write_text(text)
     assert main(["build", "--component", str(tmp_path / "pd_controller.py"), "--out", str(tmp_path / "fmus")]) == 0
-    assert (tmp_path / "fmus" / "PdTwo.fmu").is_file() and (tmp_path / "fmi3" / "PdTwo.fmu").is_file()
+    assert (tmp_path / "fmus" / "PdTwo.fmu").is_file() and (tmp_path / "fmus" / "fmi3" / "PdTwo.fmu").is_file()
     assert sys.modules["pd_controller"] is pd_controller and components.find("PdTwo") is None

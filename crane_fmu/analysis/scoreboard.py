@@ -33,8 +33,8 @@ Seering's zero-vibration shapers) achieve. None is set from a controller's resul
 import math
 from collections import namedtuple
 
-MEASURED = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2")
-REFERENCE = ("x_ref", "dx_ref", "ddx_ref", "theta1_ref", "dtheta1_ref", "theta2_ref", "dtheta2_ref")
+from crane_fmu.controller_interface import MEASURED, MOVE_NEEDS, misses, told
+
 DRIVE = {"u_max": 2.0, "v_max": 1.0}
 DISTANCE = 2.0
 RAIL = {"x_min": -1.0, "x_max": DISTANCE + 1.0}  # checked, not enforced: 1 m of track beyond either end of the move
@@ -43,6 +43,7 @@ MISMATCH = [{"l1": l1, "l2": l2, "m2": m2}  # a grid of plants unknown to the co
 STEPS = (1e-3, 1e-2, 5e-2)
 TRANSPORT = ("S2", "S3", "S4", "S5", "S7", "S8", "S9", "S10")  # the scenarios that give the controller a target
 HOIST = {"from": 2.0, "to": 1.0, "u_max": 0.5, "v_max": 0.5}  # S7's hoist: l1 [m], its drive [m/s2, m/s]
+GUST = {"F2_peak": 10.0, "start": 1.5, "duration": 0.5}  # S4's gust on the payload [N, s, s]
 
 # The paired design of the scenarios whose plant the controller does not know: every controller runs the same cases
 Factor = namedtuple("Factor", "name low high unit reason")
@@ -226,17 +227,27 @@ def check_interface(name, inputs, outputs, parameters=()):
     What only the transport scenarios need (a target position) makes those scenarios not applicable
     (:func:`applicable`), not the controller unusable.
     """
-    missing = [n for n in MEASURED if n not in inputs] + (["output u"] if "u" not in outputs else [])
+    missing, _ = misses(inputs, outputs, parameters)
     if missing:
         raise ValueError(f"{name} is not a crane controller: it misses {', '.join(missing)} (every scenario; the "
-                         f"interface: inputs {', '.join(MEASURED)}; output u; for a target position a parameter x_d "
-                         f"or the planner's inputs {', '.join(REFERENCE[:3])})")
+                         f"interface: inputs {', '.join(MEASURED)}; output u; for a target position {MOVE_NEEDS})")
+
+
+def _told(contender, scenario):
+    """What the contender is told in the scenario (:func:`crane_fmu.controller_interface.told`, the rule simulate
+    applies too); ValueError when it cannot be told the move."""
+    target = DISTANCE if scenario in TRANSPORT else None
+    return told(contender.name, contender.inputs, ["u"], contender.parameters, target)
 
 
 def applicable(contender, scenario):
-    """None when the contender can run the scenario, else why not (:data:`NOT_APPLICABLE`)."""
-    moves = "x_d" in contender.parameters or all(n in contender.inputs for n in REFERENCE[:3])
-    return None if moves or scenario not in TRANSPORT else NOT_APPLICABLE
+    """None when the contender can run the scenario, else why not (:data:`NOT_APPLICABLE`): it cannot be told the
+    scenario's move."""
+    try:
+        _told(contender, scenario)
+    except ValueError:
+        return NOT_APPLICABLE
+    return None
 
 
 def scope(scenario, cases=CASES):
@@ -285,7 +296,6 @@ def systems_for(contender, scenario, cases=CASES):
         raise ValueError(f"no scenario {scenario!r}; scenarios: {', '.join(SCENARIOS)}")
     if applicable(c, scenario):
         raise ValueError(f"{c.name}: {scenario} {applicable(c, scenario)}")
-    tracking = all(n in c.inputs for n in REFERENCE[:3])
 
     def regulation(step, extra=None, connections=()):
         instances, parameters = {"plant": "CranePlant", "controller": c.source}, {"plant": dict(DRIVE)}
@@ -306,14 +316,14 @@ def systems_for(contender, scenario, cases=CASES):
         parameters = {"plant": {**DRIVE, "theta1_0": 0.0, **(plant or {})}, "controller": {}}
         if l1 is not None and "l1" in c.parameters:
             parameters["controller"]["l1"] = l1
-        if tracking:
+        move = _told(c, scenario)
+        if move.references:
             instances["planner"] = "TrajectoryPlanner"
             parameters["planner"] = dict(HOIST_PLAN if hoist else PLAN)
             if hoist:
-                connections = connections + tuple(Connection("planner", n, "controller", n) for n in REFERENCE
-                                                   if n in c.inputs)
+                connections = connections + tuple(Connection("planner", n, "controller", n) for n in move.references)
         else:
-            parameters["controller"]["x_d"] = DISTANCE
+            parameters["controller"]["x_d"] = move.x_d
         for name, (kind, values) in (extra or {}).items():
             instances[name] = kind
             parameters[name] = values
@@ -344,7 +354,7 @@ def systems_for(contender, scenario, cases=CASES):
     if scenario == "S3":
         return paired(lambda plant, seed: transport(plant), seeded=False)
     if scenario == "S4":
-        gust = {"gust": ("Gust", {"F2_peak": 10.0, "start": 1.5, "duration": 0.5})}
+        gust = {"gust": ("Gust", dict(GUST))}
         return [moved("F2 10 N at 1.5 s", transport(extra=gust))]
     if scenario == "S5":
         sensor = {"sensor": ("Sensor", {"seed": 1.0, "delay": 1.0})}
@@ -517,10 +527,17 @@ def _ranked_by(sid):
     return f"{s.rank_by}, median, paired Wilcoxon" if sid in PAIRED else s.rank_by
 
 
-def render_summary(rows, users=(), quick=False, cases=CASES, stats=None):
-    """One table: per scenario the controllers by rank, with their ranking figure (the worst case; on the paired
-    design the median with its 95 % interval), the targets they met and ties; then those it does not apply to."""
+def floor_ratio(value, floor):
+    """`` (1.32x floor)``: a time as a multiple of the scenario's floor (:mod:`.floor`), or nothing."""
+    return "" if floor is None or value is None else f" ({value / floor.seconds:.2f}x floor)"
+
+
+def render_summary(rows, users=(), quick=False, cases=CASES, stats=None, floors=None):
+    """One table: per scenario the controllers by rank, with their ranking figure (the worst case, and its ratio to
+    the scenario's floor where ``floors`` gives one; on the paired design the median with its 95 % interval), the
+    targets they met and ties; then those it does not apply to."""
     stats = board_statistics(rows) if stats is None else stats
+    floors = floors or {}
     lines = []
     for sid, s in SCENARIOS.items():
         ranked, absent = summarise(rows, sid), not_applicable(rows, sid)
@@ -536,7 +553,7 @@ def render_summary(rows, users=(), quick=False, cases=CASES, stats=None):
                 d = stats[sid]["describe"][line["controller"]][s.rank_by]
                 figure = f"median {_cell(d.median, digits, unit)} {_interval(d.median_low, d.median_high, digits)}"
             else:
-                figure = _cell(line[s.rank_by], digits, unit)
+                figure = _cell(line[s.rank_by], digits, unit) + floor_ratio(line[s.rank_by], floors.get(sid))
             verdict = "all targets met" if all(line["targets"]) and not line["failed"] else (
                 f"{sum(line['targets'])} of {len(line['targets'])} targets met")
             cells.append(f"{line['rank']}. {_name(line['controller'], users)}: {figure}, {verdict}"
@@ -578,14 +595,19 @@ def _statistics_section(sid, stats, users):
     return out + [""]
 
 
-def render(rows, contenders, quick=False, cases=CASES, provenance=None, stats=None):
+def render(rows, contenders, quick=False, cases=CASES, provenance=None, stats=None, floors=None):
     """scoreboard.md: per scenario a table ranked by :data:`RULES`, with each target met or missed and its source;
     on the paired design the statistics (``stats``: :func:`board_statistics`, computed when not given); the
-    provenance of the figures."""
+    provenance of the figures.
+
+    ``floors``: ``{scenario: floor.Floor}``, the least time the crane needs there, shown with its method and as
+    each ranking figure's ratio to it.
+    """
     from crane_fmu.analysis import metrics, statistics
 
     users = {c.name for c in contenders if c.user}
     stats = board_statistics(rows) if stats is None else stats
+    floors = floors or {}
     title = "# Controller scoreboard" + (" (QUICK: fewer cases of the paired design, not the full board)"
                                          if quick else "")
     out = [title, "",
@@ -603,13 +625,18 @@ def render(rows, contenders, quick=False, cases=CASES, provenance=None, stats=No
             f"(scipy.stats.bootstrap, {statistics.RESAMPLES} resamples, seed {statistics.SEED}); {statistics.RULE} "
             "(scipy.stats.wilcoxon; each pair on its own, at 5 %).", "",
            "Controllers: " + ", ".join(_name(c.name, users) for c in sorted(contenders, key=lambda c: c.name)), "",
-           render_summary(rows, users, quick, cases, stats), ""]
+           render_summary(rows, users, quick, cases, stats, floors), ""]
+    if floors:
+        method = next(iter(floors.values())).method
+        out += [f"The floor of a scenario is the least time the crane needs for its task: {method}.", ""]
     for sid, s in SCENARIOS.items():
         lines, absent = summarise(rows, sid), not_applicable(rows, sid)
         if not lines and not absent:
             continue
         out += [f"## {_scenario_label(sid, cases, quick)}", "", "Targets:", ""]
         out += [f"- {t.text} ({t.source})" for t in s.targets] + [""]
+        if sid in floors:
+            out += [f"Floor: {floors[sid].seconds:.2f} s ({floors[sid].task})", ""]
         if lines:
             out.append("| rank | controller | " + " | ".join(header for header, _, _, _ in FIGURES)
                        + " | bounds | targets |")

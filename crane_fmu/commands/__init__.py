@@ -6,6 +6,6 @@ A command module has ``NAME``, ``HELP``, ``EXAMPLES`` (and optionally ``DESCRIPT
 Imports of the heavy parts (fmpy, numpy, matplotlib, Dask) happen inside ``run``.
 """
 
-from . import animate, bench, build, compare, info, plot, reproduce, serve, simulate, sweep, targets
+from . import animate, bench, build, compare, info, linearize, plot, reproduce, serve, simulate, sweep, targets
 
-COMMANDS = (build, simulate, info, reproduce, sweep, compare, targets, plot, animate, bench, serve)
+COMMANDS = (build, simulate, info, linearize, reproduce, sweep, compare, targets, plot, animate, bench, serve)

@@ -12,7 +12,9 @@ EXAMPLES = (
     "  crane-fmu bench --repeat 7 --stop-time 20\n"
     "  crane-fmu bench --sweep\n"
     "  crane-fmu bench --endurance            # one simulated hour at 1 ms\n"
-    "  crane-fmu bench --realtime             # the real-time loop, OPC UA and Modbus round trips"
+    "  crane-fmu bench --realtime             # the real-time loop, OPC UA and Modbus round trips\n"
+    "  crane-fmu bench --mpc                  # the MPC's solve and its whole process against transport's\n"
+    "  crane-fmu bench --derivatives          # the native plant's Model Exchange derivatives"
 )
 
 
@@ -28,11 +30,16 @@ def arguments(p):
     p.add_argument("--native", action="store_true",
                    help="instead: the native (C) plant and controller FMUs in our master, in a C host and as a "
                         "whole process")
+    p.add_argument("--mpc", action="store_true",
+                   help="instead: the MpcController's solve times and whole simulate process against transport's")
     p.add_argument("--endurance", action="store_true",
                    help="instead: one long run (default one simulated hour) recorded to CSV, memory sampled")
     p.add_argument("--realtime", action="store_true",
                    help="instead: the real-time loop at 1 ms and 10 ms (default 2 s each) and the round trips of "
                         "crane-fmu serve over OPC UA and Modbus TCP (needs the 'serve' extra)")
+    p.add_argument("--derivatives", action="store_true",
+                   help="instead: the cost of the native plant's derivatives and directional derivatives (Model "
+                        "Exchange), in a C loop")
 
 
 def run(args):
@@ -43,12 +50,21 @@ def run(args):
     if args.cases < 2:
         raise UsageError(f"--cases must be >= 2, got {args.cases}")
     try:
-        if args.sweep + args.endurance + args.native + args.realtime > 1:
-            raise UsageError("--sweep, --endurance, --native and --realtime are separate benchmarks: choose one")
-        if args.realtime:
+        if args.sweep + args.endurance + args.native + args.realtime + args.mpc + args.derivatives > 1:
+            raise UsageError("--sweep, --endurance, --native, --realtime, --mpc and --derivatives are separate "
+                             "benchmarks: choose one")
+        if args.derivatives:
+            from crane_fmu.bench_native import run_derivative_bench
+
+            run_derivative_bench(repeat=args.repeat)
+        elif args.realtime:
             from crane_fmu.bench_realtime import run_realtime_bench
 
             run_realtime_bench(args.stop_time or 2.0)
+        elif args.mpc:
+            from crane_fmu.bench_mpc import run_mpc_bench
+
+            run_mpc_bench(args.repeat)
         elif args.native:
             from crane_fmu.bench_native import run_native_bench
 

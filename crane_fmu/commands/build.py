@@ -12,12 +12,14 @@ NAME = "build"
 HELP = "build the FMUs of every component and the files of every built-in system"
 EXAMPLES = (
     "examples:\n"
-    "  crane-fmu build\n"
+    "  crane-fmu build                 # makes again only what changed since the last build\n"
+    "  crane-fmu build --force         # makes everything again\n"
     "  crane-fmu build --out my/fmus --bench\n"
     "  crane-fmu build --container transport       # build/containers/CraneTransport.fmu\n"
     "  crane-fmu build --container my_system.ssp\n"
     "  crane-fmu build --one-fmu lqr transport      # build/native/CraneLqr.fmu (FMI 3.0: build/native/fmi3)\n"
-    "  crane-fmu build --component my_controller.py --out build/mine   # a component of your own"
+    "  crane-fmu build --component pd_sway.py --out build/mine        # a component of your own: build/mine,\n"
+    "                                                                  # FMI 3.0 in build/mine/fmi3"
 )
 
 
@@ -25,6 +27,9 @@ def arguments(p):
     p.add_argument("--out", default=DEFAULT_FMU_DIR,
                    help=f"FMI 2.0 FMUs (default: {DEFAULT_FMU_DIR}); FMI 3.0 ones and systems/ go beside it")
     p.add_argument("--bench", action="store_true", help="also build the benchmark's trivial FMUs")
+    p.add_argument("--force", action="store_true",
+                   help="make every file again (by default a file is made again only when what it is made from "
+                        "changed: sources, tables, the build's tools)")
     p.add_argument("--native", action=argparse.BooleanOptionalAction, default=None,
                    help="also build the native (C) FMUs into build/native (default: when a C compiler is found)")
     p.add_argument("--container", metavar="SYSTEM|FILE.ssp",
@@ -34,7 +39,7 @@ def arguments(p):
                         "FMU each, FMI 2.0 into build/native and 3.0 into build/native/fmi3 (repeatable)")
     p.add_argument("--component", metavar="MODULE.py",
                    help="instead: build the components (Component objects) defined in your Python module, "
-                        "FMI 2.0 into --out and FMI 3.0 beside it")
+                        "FMI 2.0 into --out and FMI 3.0 into its fmi3 folder")
 
 
 def run(args):
@@ -49,8 +54,7 @@ def run(args):
             print(path)
         return 0
     if args.component:
-        for path in _build_component(args.component, args.out):
-            print(path)
+        _report(_build_component(args.component, args.out, args.force), args.out)
         return 0
     if args.container:
         try:
@@ -66,12 +70,19 @@ def run(args):
     from crane_fmu.build_scripts.native import NativeUnavailable
 
     try:
-        built = build_all(args.out, kinds, native=args.native)
+        built = build_all(args.out, kinds, native=args.native, force=args.force)
     except NativeUnavailable as exc:
         raise UsageError(f"--native: {exc}") from None
-    for path in built:
-        print(path)
+    _report(built, Path(args.out).parent)
     return 0
+
+
+def _report(built, folder):
+    """Each file made now, then one line: how many were made and how many were up to date."""
+    for path in built.made:
+        print(path)
+    print(f"{len(built.made)} made, {len(built.kept)} up to date in {folder}"
+          + (" (--force makes every file again)" if built.kept else ""))
 
 
 def _build_one_fmus(items, out):
@@ -100,7 +111,7 @@ def _build_one_fmus(items, out):
     return paths
 
 
-def _build_component(module_path, out):
+def _build_component(module_path, out, force=False):
     """Import a user's module by its file and build the FMUs of the components it defines."""
     import importlib.util
 
@@ -121,7 +132,7 @@ def _build_component(module_path, out):
             spec.loader.exec_module(module)
         except Exception as exc:  # the user's code: report it in one line
             raise UsageError(f"--component {module_path}: importing it failed: {type(exc).__name__}: {exc}") from None
-        return _build_components(module, module_path, out)
+        return _build_components(module, module_path, out, force)
     finally:
         if saved is None:
             sys.modules.pop(name, None)
@@ -129,8 +140,9 @@ def _build_component(module_path, out):
             sys.modules[name] = saved
 
 
-def _build_components(module, module_path, out):
-    """Register the components a user's module defines, build their FMUs, unregister them."""
+def _build_components(module, module_path, out, force=False):
+    """Register the components a user's module defines, build their FMUs into ``out`` (FMI 3.0: ``out/fmi3``),
+    unregister them."""
     from crane_fmu import components
     from crane_fmu.build_scripts.build_fmus import build_all
     from crane_fmu.model.component import Component
@@ -147,7 +159,8 @@ def _build_components(module, module_path, out):
     try:
         for component in found:
             components.register(component)
-        return build_all(out, [c.model_identifier for c in found], systems=[], containers=[])
+        return build_all(out, [c.model_identifier for c in found], systems=[], containers=[], force=force,
+                         fmi3_out=Path(out) / "fmi3")
     except ValueError as exc:
         raise UsageError(f"--component {module_path}: {exc}") from None
     finally:

@@ -21,7 +21,7 @@ EXAMPLES = (
     "  crane-fmu simulate --system build/systems/paper.ssp --parameters my.ssv\n"
     "  crane-fmu simulate --master jacobi --step 0.01 --set controller.w_theta2=0\n"
     "  crane-fmu simulate --set plant.l1=1.5 --set controller.l1=1.5 --set plant.theta1_0=0.2\n"
-    "  crane-fmu simulate --system lqr --use controller=build/mine/MyController.fmu --out mine.csv\n"
+    "  crane-fmu simulate --system transport --use controller=build/mine/PdSway.fmu --out mine.csv\n"
     "  crane-fmu simulate --system transport --out move.mat          # for MATLAB: columns and data\n"
     "On a terminal a long run shows its progress on stderr; Ctrl-C stops it and keeps the rows so far."
 )
@@ -112,12 +112,18 @@ def prepare(args, system, step):
     from crane_fmu.cosim.system import settable, split_name
 
     fmus, connections = systems.resolve(system, args.fmu_dir)
-    system = _keep_known(system, fmus, [item.partition("=")[0] for item in args.use])
+    system = _keep_known(system, fmus, list(system.replaced))
+    system, notes = systems.tell_controllers(system, args.fmu_dir)
+    for note in notes:
+        print(f"crane-fmu: note: {note}", file=sys.stderr)
     system = systems.at_step(system, args.fmu_dir, step)
     variables = settable(fmus)
     if args.parameters:
         from crane_fmu.cosim.ssp import load_parameters
 
+        if not Path(args.parameters).is_file():
+            raise UsageError(f"--parameters {args.parameters}: not found (an SSP parameter set, e.g. "
+                             "examples/parameters.ssv)")
         loaded = load_parameters(args.parameters)
         for instance, values in loaded.items():
             for name in values:
@@ -178,7 +184,8 @@ def _simulate(args, system):
         partial = args.plot + ".partial.png"
         Path(partial).parent.mkdir(parents=True, exist_ok=True)
         settings = ", ".join(item.split("=", 1)[0] + "=" + item.split("=", 1)[1] for item in args.set)
-        plot_run(read_result(args.out), partial, f"{system.name} ({args.master}, h={step:g} s)"
+        used = "".join(f" with {name}={Path(system.instances[name]).name}" for name in system.replaced)
+        plot_run(read_result(args.out), partial, f"{system.name}{used} ({args.master}, h={step:g} s)"
                  + (f"\n{settings}" if settings else ""))
         os.replace(partial, args.plot)
         print(f"wrote {args.plot}")

@@ -52,3 +52,33 @@ def connect(interfaces, connections=(), match_names=True):
                 if sources:
                     result.append(Connection(sources[0], name, target, name))
     return result
+
+
+def check_both_ends(designed, interfaces, fmus, optional=None):
+    """Every connection of a system's design keeps both ends in the FMUs used; else one line.
+
+    Parameters
+    ----------
+    designed : iterable of Connection
+        The connections of the system as designed (with its own FMUs).
+    interfaces : dict
+        ``{instance: (input names, output names)}`` of the FMUs used.
+    fmus : dict
+        ``{instance: path}`` of the FMUs used, named in the message.
+    optional : dict, optional
+        ``{instance: input names}`` that the FMU used may lack: a connection into one is left out.
+
+    Raises
+    ------
+    ValueError
+        ``"controller: mine/PdTypo.fmu has no output u, which the system connects to plant.u"``.
+    """
+    for c in designed:
+        if c.input not in interfaces[c.target][0]:
+            if c.input in (optional or {}).get(c.target, ()):
+                continue
+            raise ValueError(f"{c.target}: {fmus[c.target]} has no input {c.input}, which the system feeds from "
+                             f"{c.source}.{c.output}")
+        if c.output not in interfaces[c.source][1]:
+            raise ValueError(f"{c.source}: {fmus[c.source]} has no output {c.output}, which the system connects to "
+                             f"{c.target}.{c.input}")

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from .adapters import open_instance
-from .connections import connect
+from .connections import check_both_ends, connect
 from .instance import FmiError, read_fmu
 from .master import Master, communication_points
 from .recorder import ArrayRecorder
@@ -35,6 +35,10 @@ class System:
     stop_time, step, start_time : float
         The default experiment [s].
     description : str
+    replaced : dict
+        ``{instance: model identifier or .fmu path}``: what the system was designed with, for the
+        instances whose FMU :meth:`with_instances` replaced. The connections the design has must keep
+        both ends in the FMUs used (:meth:`resolve`).
     """
 
     name: str
@@ -46,6 +50,7 @@ class System:
     step: float = 1e-3
     start_time: float = 0.0
     description: str = ""
+    replaced: dict = field(default_factory=dict)
 
     def fmus(self, fmu_dir):
         """``{instance: Path}`` of the FMU files; a model identifier names ``fmu_dir/<identifier>.fmu``."""
@@ -65,28 +70,56 @@ class System:
         """A copy with some instances' FMUs replaced: ``{instance: model identifier or .fmu path}``.
 
         The system's parameter values for a replaced instance are kept; connections are matched again
-        when the copy is resolved.
+        when the copy is resolved, and those of the original design must keep both ends (:meth:`resolve`).
         """
         unknown = [name for name in overrides if name not in self.instances]
         if unknown:
             raise ValueError(f"unknown instance {unknown[0]!r}; instances: {', '.join(self.instances)}")
-        return replace(self, instances={**self.instances, **overrides})
+        designed = {name: self.instances[name] for name in overrides if name not in self.replaced}
+        return replace(self, instances={**self.instances, **overrides}, replaced={**self.replaced, **designed})
 
-    def resolve(self, fmu_dir):
+    def designed(self, fmu_dir):
+        """Every connection of the system as designed: with the FMUs it had before :meth:`with_instances`."""
+        original = replace(self, instances={**self.instances, **self.replaced})
+        return connect(_interfaces(original.fmus(fmu_dir)), self.connections, self.match_names)
+
+    def resolve(self, fmu_dir, optional=None):
         """``(fmus, connections)``: the checked FMU paths and every connection, matched ones included.
+
+        An FMU that replaced an instance's (:meth:`with_instances`) must keep both ends of every
+        connection the design has: the inputs it feeds and the outputs it is fed from.
+
+        Parameters
+        ----------
+        fmu_dir : path
+        optional : dict, optional
+            ``{instance: input names}`` that an FMU replacing the instance may lack (the design's
+            connections into them are left out).
 
         Raises
         ------
         ValueError
-            One line: a missing or unreadable FMU, an unknown variable, an ambiguous match.
+            One line: a missing or unreadable FMU, an unknown variable, an ambiguous match, an end of the
+            design's connections missing in the FMUs used (naming the instance, the variable and the FMU).
         """
         fmus = self.fmus(fmu_dir)
-        interfaces = {}
-        for name, path in fmus.items():
-            md = read_fmu(path)
-            interfaces[name] = ([v.name for v in md.modelVariables if v.causality == "input"],
-                                [v.name for v in md.modelVariables if v.causality == "output"])
-        return fmus, connect(interfaces, self.connections, self.match_names)
+        interfaces = _interfaces(fmus)
+        connections = self.connections
+        if self.replaced:
+            check_both_ends(self.designed(fmu_dir), interfaces, fmus, optional)
+            connections = tuple(c for c in connections if c.target not in self.replaced
+                                or c.input in interfaces[c.target][0])
+        return fmus, connect(interfaces, connections, self.match_names)
+
+
+def _interfaces(fmus):
+    """``{instance: (input names, output names)}`` of the FMUs ``{instance: path}``."""
+    interfaces = {}
+    for name, path in fmus.items():
+        md = read_fmu(path)
+        interfaces[name] = ([v.name for v in md.modelVariables if v.causality == "input"],
+                            [v.name for v in md.modelVariables if v.causality == "output"])
+    return interfaces
 
 
 def settable(fmus):

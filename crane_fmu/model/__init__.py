@@ -21,6 +21,7 @@ from . import (  # noqa: F401
     parameters,
     planner,
     plant,
+    plant_continuous,
     tables,
     wind,
 )

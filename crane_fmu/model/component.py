@@ -30,6 +30,47 @@ class Discard(Exception):
 
 
 @dataclass(frozen=True)
+class Continuous:
+    """What a host needs to integrate a component itself (FMI Model Exchange).
+
+    Attributes
+    ----------
+    states, derivatives : tuple of str
+        The variables that are the continuous states, and those that are their time derivatives,
+        in the same order; each names an output or one of :attr:`variables`.
+    variables : tuple of tables.Variable
+        The variables Model Exchange adds to the table (causality ``local``): states that are no
+        output, and derivatives.
+    indicators : tuple of str
+        What each event indicator watches, in order (for the documentation and the logs).
+    initial : callable
+        ``initial(config) -> state``: the continuous state at the start, before the first event update.
+    derivatives_of : callable
+        ``derivatives_of(config, state, inputs, mode, seed=None)``: the derivatives, and with a seed
+        ``(d_state, d_inputs)`` also their derivative along it.
+    outputs_of : callable
+        ``outputs_of(config, state, inputs, mode, seed=None)``: the outputs in table order, likewise.
+    indicators_of : callable
+        ``indicators_of(config, state, inputs, mode)``: the event indicators.
+    event_update : callable
+        ``event_update(config, state, inputs, mode, time) -> (state, mode, messages, terminate)``.
+    free_mode : object
+        The mode before the first event update.
+    """
+
+    states: tuple
+    derivatives: tuple
+    variables: tuple
+    indicators: tuple
+    initial: Callable
+    derivatives_of: Callable
+    outputs_of: Callable
+    indicators_of: Callable
+    event_update: Callable
+    free_mode: object
+
+
+@dataclass(frozen=True)
 class Component:
     """One FMU kind.
 
@@ -71,6 +112,8 @@ class Component:
     report : callable, optional
         ``report(config) -> {name: value}``: what ``configure`` derived from the
         parameters (gains, shaper impulses), shown by ``crane-fmu info``.
+    continuous : Continuous, optional
+        For a component that a host may integrate itself (Model Exchange).
     """
 
     model_identifier: str
@@ -85,6 +128,7 @@ class Component:
     default_experiment: tuple = (0.0, 20.0, 1e-3)
     report: Callable | None = None
     depends_on: dict | None = None
+    continuous: Continuous | None = None
 
     def __post_init__(self):
         if not self.model_identifier.isidentifier():

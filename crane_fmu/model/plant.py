@@ -10,7 +10,9 @@ mean acceleration over the last sub-step (positions :data:`DRIVE`, :data:`ACCEL`
 import math
 from collections import namedtuple
 
-from .component import Component, Discard, Step
+from . import plant_continuous
+from .component import Component, Continuous, Discard, Step
+from .limits import NO_LIMIT, unlimited
 from .linalg import total
 from .parameters import finite, plant_parameters, positive
 from .plant_equations import (  # noqa: F401 (the plant's equations, importable from here)
@@ -21,6 +23,7 @@ from .plant_equations import (  # noqa: F401 (the plant's equations, importable 
     NO_LOAD,
     THETA1,
     X,
+    accelerations_tangent,
     advance,
     angular_accelerations,
     derivative,
@@ -31,11 +34,10 @@ from .plant_equations import (  # noqa: F401 (the plant's equations, importable 
     rk4_step,
     substeps,
 )
-from .limits import NO_LIMIT, unlimited
 from .plant_limits import clamp, drive_factors, held_cable, past_rail_end, reached_limit, within_speed
-from .tables import PLANT_MODEL, input_, output, parameter
+from .tables import PLANT_MODEL, input_, local, output, parameter
 
-DRIVE, ACCEL = DL1 + 1, DL1 + 2  # after the swing and hoist state: the drive's and the trolley's mean acceleration
+DRIVE, ACCEL = plant_continuous.DRIVE, plant_continuous.DRIVE + 1  # the drive's and the trolley's mean acceleration
 INITIAL_STATE = ("x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0")
 
 INF = NO_LIMIT  # no limit, as a finite start value (limits.py says why); configure() makes it inf
@@ -225,9 +227,29 @@ def _outputs(config, state, inputs):
     return outputs(state, config.params) + (state[L1], state[DL1], state[ACCEL])
 
 
+CONTINUOUS = Continuous(
+    states=plant_continuous.STATES,
+    derivatives=("dx", "ddx", "dtheta1", "der(dtheta1)", "dtheta2", "der(dtheta2)", "dl1_now", "der(dl1_now)",
+                 "der(drive)"),
+    variables=(
+        local("drive", "m/s2", "trolley drive's acceleration, after its lag tau, before the speed limit"),
+        local("der(dtheta1)", "rad/s2", "hook swing acceleration, eqs (8)-(9)"),
+        local("der(dtheta2)", "rad/s2", "payload swing acceleration, eqs (8)-(9)"),
+        local("der(dl1_now)", "m/s2", "hoist acceleration applied (0 while the cable or its speed is held)"),
+        local("der(drive)", "m/s3", "rate of the drive's acceleration, (demand - drive) / tau"),
+    ),
+    indicators=plant_continuous.INDICATORS,
+    initial=plant_continuous.initial,
+    derivatives_of=plant_continuous.derivatives,
+    outputs_of=plant_continuous.output_values,
+    indicators_of=plant_continuous.event_indicators,
+    event_update=plant_continuous.event_update,
+    free_mode=plant_continuous.FREE,
+)
+
 COMPONENT = Component(
     "CranePlant", "plant",
     "Overhead crane with a double-pendulum payload (hook m1 on cable l1, payload m2 on cable l2); "
     "inputs: trolley and hoist accelerations, horizontal forces; fixed-step RK4 inside doStep",
     VARIABLES, configure, _outputs,
-    initial_state=lambda config: config.state0, update=update)
+    initial_state=lambda config: config.state0, update=update, continuous=CONTINUOUS)

@@ -82,6 +82,57 @@ def angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p, l1=None, load=
     return (e * r1 - b * r2) / det, (a * r2 - c * r1) / det
 
 
+def accelerations_tangent(theta1, dtheta1, theta2, dtheta2, u, p, l1, load, seed):
+    """:func:`angular_accelerations` and their directional derivative along ``seed``, exactly.
+
+    Parameters
+    ----------
+    theta1, dtheta1, theta2, dtheta2, u, p, l1, load
+        As for :func:`angular_accelerations`.
+    seed : tuple
+        The direction: the changes of ``(theta1, dtheta1, theta2, dtheta2, u, l1, dl1, ddl1, F1, F2)``
+        (``l1`` counts only when given; the damping is a parameter).
+
+    Returns
+    -------
+    ((float, float), (float, float))
+        ``(ddtheta1, ddtheta2)`` and their derivative along ``seed``.
+
+    Notes
+    -----
+    Forward-mode differentiation by hand of the two equations of :func:`angular_accelerations`,
+    ``M(q, L) dd = r``: ``M dd' = r' - M' dd``, solved with the same determinant.
+    """
+    dd1, dd2 = angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p, l1, load)
+    t1, tw1, t2, tw2, tu, tl, tdl, tddl, tf1, tf2 = seed
+    m1m2, m2l2 = p.m1 + p.m2, p.m2 * p.l2
+    l2, g = p.l2, p.g
+    big_l = p.l1 if l1 is None else l1
+    tl = 0.0 if l1 is None else tl
+    dl1, ddl1, f1, f2, c1, c2 = load
+    s1, co1 = math.sin(theta1), math.cos(theta1)
+    s2, co2 = math.sin(theta2), math.cos(theta2)
+    d, td = theta1 - theta2, t1 - t2
+    sd, cd = math.sin(d), math.cos(d)
+    q1 = -c1 * dtheta1 + c2 * (dtheta2 - dtheta1)
+    tq1 = -c1 * tw1 + c2 * (tw2 - tw1)
+    tr1 = (-m1m2 * (tu * co1 + (g * co1 - u * s1) * t1) - m2l2 * dtheta2 * (2.0 * tw2 * sd + dtheta2 * cd * td)
+           - 2.0 * m1m2 * (tdl * dtheta1 + dl1 * tw1) + (tf1 + tf2) * co1 - (f1 + f2) * s1 * t1
+           + tq1 / big_l - q1 * tl / (big_l * big_l))
+    tr2 = (-tu * co2 + (u * s2 - g * co2) * t2
+           + dtheta1 * (tl * dtheta1 * sd + big_l * (2.0 * tw1 * sd + dtheta1 * cd * td))
+           - tddl * sd - ddl1 * cd * td - 2.0 * (tdl * dtheta1 * cd + dl1 * tw1 * cd - dl1 * dtheta1 * sd * td))
+    if p.m2 > 0:
+        tr2 += (tf2 * co2 - f2 * s2 * t2 - c2 * (tw2 - tw1) / l2) / p.m2
+    a, b = m1m2 * big_l, m2l2 * cd
+    c, e = big_l * cd, l2
+    # M' dd moved to the right-hand side; M' = [[m1m2 L', -m2 l2 sin(d) d'], [L' cos(d) - L sin(d) d', 0]]
+    rhs1 = tr1 - m1m2 * tl * dd1 + m2l2 * sd * td * dd2
+    rhs2 = tr2 - (tl * cd - big_l * sd * td) * dd1
+    det = a * e - b * c
+    return (dd1, dd2), ((e * rhs1 - b * rhs2) / det, (a * rhs2 - c * rhs1) / det)
+
+
 def paper_stepper(p):
     """:func:`rk4_step` of the 8-element state when l1 is at rest and nothing but u acts: the same numbers, faster.
 
@@ -262,3 +313,26 @@ def outputs(state, p):
     kinetic = 0.5 * (m1 * (vx1 * vx1 + vy1 * vy1) + m2 * (vx2 * vx2 + vy2 * vy2))
     return (x, dx, theta1, dtheta1, theta2, dtheta2, x1, y1, x2, y2,
             kinetic + p.g * (m1 * y1 + m2 * y2))
+
+
+def outputs_tangent(state, p, seed):
+    """The derivative of :func:`outputs` along ``seed`` (a change of the 8-element ``state``), exactly.
+
+    Notes
+    -----
+    Eqs (4)-(7) as in :func:`outputs`, differentiated by hand (forward mode).
+    """
+    x, dx, theta1, dtheta1, theta2, dtheta2, l1, dl1 = state[:DL1 + 1]
+    tx, tdx, t1, tw1, t2, tw2, tl, tdl = seed[:DL1 + 1]
+    m1, m2, l2 = p.m1, p.m2, p.l2
+    s1, c1, s2, c2 = math.sin(theta1), math.cos(theta1), math.sin(theta2), math.cos(theta2)
+    tx1, ty1 = tx + tl * s1 + l1 * c1 * t1, -tl * c1 + l1 * s1 * t1
+    tx2, ty2 = tx1 + l2 * c2 * t2, ty1 + l2 * s2 * t2
+    vx1, vy1 = dx + l1 * dtheta1 * c1 + dl1 * s1, l1 * dtheta1 * s1 - dl1 * c1
+    vx2, vy2 = vx1 + l2 * dtheta2 * c2, vy1 + l2 * dtheta2 * s2
+    tvx1 = tdx + (tl * dtheta1 + l1 * tw1) * c1 - l1 * dtheta1 * s1 * t1 + tdl * s1 + dl1 * c1 * t1
+    tvy1 = (tl * dtheta1 + l1 * tw1) * s1 + l1 * dtheta1 * c1 * t1 - tdl * c1 + dl1 * s1 * t1
+    tvx2 = tvx1 + l2 * (tw2 * c2 - dtheta2 * s2 * t2)
+    tvy2 = tvy1 + l2 * (tw2 * s2 + dtheta2 * c2 * t2)
+    tkinetic = m1 * (vx1 * tvx1 + vy1 * tvy1) + m2 * (vx2 * tvx2 + vy2 * tvy2)
+    return (tx, tdx, t1, tw1, t2, tw2, tx1, ty1, tx2, ty2, tkinetic + p.g * (m1 * ty1 + m2 * ty2))

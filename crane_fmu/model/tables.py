@@ -23,6 +23,7 @@ BASE_UNITS = {
     "m": {"m": 1},
     "m/s": {"m": 1, "s": -1},
     "m/s2": {"m": 1, "s": -2},
+    "m/s3": {"m": 1, "s": -3},
     "m2": {"m": 2},
     "kg": {"kg": 1},
     "kg/m3": {"kg": 1, "m": -3},
@@ -68,6 +69,11 @@ def input_(name, unit, description, start=0.0):
 
 def output(name, unit, description):
     return Variable(name, "output", "continuous", None, unit, description)
+
+
+def local(name, unit, description):
+    """A variable of Model Exchange only (a state that is no output, a derivative): see ``Continuous``."""
+    return Variable(name, "local", "continuous", None, unit, description)
 
 
 _PP = PlantParameters()  # defaults live in the dataclass

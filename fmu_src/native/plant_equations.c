@@ -103,3 +103,52 @@ void plant_outputs(const double s[N_SWING], const PlantParameters *p, double out
                          kinetic + p->g * (m1 * y1 + m2 * y2)}; /* + eq (7) */
     for (int i = 0; i < 11; i++) out[i] = values[i];
 }
+
+void accelerations_tangent(double theta1, double dtheta1, double theta2, double dtheta2, double u,
+                           const PlantParameters *p, double big_l, double dl1, const Load *load, const double seed[10],
+                           double dd[2], double tdd[2]) {
+    /* Forward-mode differentiation by hand of M(q, L) dd = r: M dd' = r' - M' dd, the same determinant
+       (plant_equations.accelerations_tangent, operation for operation). */
+    angular_accelerations(theta1, dtheta1, theta2, dtheta2, u, p, big_l, dl1, load, dd);
+    double t1 = seed[0], tw1 = seed[1], t2 = seed[2], tw2 = seed[3], tu = seed[4], tl = seed[5], tdl = seed[6],
+           tddl = seed[7], tf1 = seed[8], tf2 = seed[9];
+    double m1m2 = p->m1 + p->m2, m2l2 = p->m2 * p->l2, l2 = p->l2, g = p->g;
+    double ddl1 = load->hoist, f1 = load->f1, f2 = load->f2, c1 = load->c1, c2 = load->c2;
+    double s1 = SIN(theta1), co1 = COS(theta1), s2 = SIN(theta2), co2 = COS(theta2);
+    double d = theta1 - theta2, td = t1 - t2, sd = SIN(d), cd = COS(d);
+    double q1 = -c1 * dtheta1 + c2 * (dtheta2 - dtheta1);
+    double tq1 = -c1 * tw1 + c2 * (tw2 - tw1);
+    double tr1 = (-m1m2 * (tu * co1 + (g * co1 - u * s1) * t1) - m2l2 * dtheta2 * (2.0 * tw2 * sd + dtheta2 * cd * td)
+                  - 2.0 * m1m2 * (tdl * dtheta1 + dl1 * tw1) + (tf1 + tf2) * co1 - (f1 + f2) * s1 * t1
+                  + tq1 / big_l - q1 * tl / (big_l * big_l));
+    double tr2 = (-tu * co2 + (u * s2 - g * co2) * t2
+                  + dtheta1 * (tl * dtheta1 * sd + big_l * (2.0 * tw1 * sd + dtheta1 * cd * td))
+                  - tddl * sd - ddl1 * cd * td - 2.0 * (tdl * dtheta1 * cd + dl1 * tw1 * cd - dl1 * dtheta1 * sd * td));
+    if (p->m2 > 0) tr2 += (tf2 * co2 - f2 * s2 * t2 - c2 * (tw2 - tw1) / l2) / p->m2;
+    double a = m1m2 * big_l, b = m2l2 * cd, c = big_l * cd, e = l2;
+    /* M' dd moved to the right-hand side; M' = [[m1m2 L', -m2 l2 sin(d) d'], [L' cos(d) - L sin(d) d', 0]] */
+    double rhs1 = tr1 - m1m2 * tl * dd[0] + m2l2 * sd * td * dd[1];
+    double rhs2 = tr2 - (tl * cd - big_l * sd * td) * dd[0];
+    double det = a * e - b * c;
+    tdd[0] = (e * rhs1 - b * rhs2) / det;
+    tdd[1] = (a * rhs2 - c * rhs1) / det;
+}
+
+void outputs_tangent(const double s[N_SWING], const PlantParameters *p, const double t[N_SWING], double out[11]) {
+    double dx = s[DX], theta1 = s[THETA1], dtheta1 = s[DTHETA1], theta2 = s[THETA2], dtheta2 = s[DTHETA2];
+    double l1 = s[L1], dl1 = s[DL1], m1 = p->m1, m2 = p->m2, l2 = p->l2;
+    double tx = t[X], tdx = t[DX], t1 = t[THETA1], tw1 = t[DTHETA1], t2 = t[THETA2], tw2 = t[DTHETA2], tl = t[L1],
+           tdl = t[DL1];
+    double s1 = SIN(theta1), c1 = COS(theta1), s2 = SIN(theta2), c2 = COS(theta2);
+    double tx1 = tx + tl * s1 + l1 * c1 * t1, ty1 = -tl * c1 + l1 * s1 * t1;
+    double tx2 = tx1 + l2 * c2 * t2, ty2 = ty1 + l2 * s2 * t2;
+    double vx1 = dx + l1 * dtheta1 * c1 + dl1 * s1, vy1 = l1 * dtheta1 * s1 - dl1 * c1;
+    double vx2 = vx1 + l2 * dtheta2 * c2, vy2 = vy1 + l2 * dtheta2 * s2;
+    double tvx1 = tdx + (tl * dtheta1 + l1 * tw1) * c1 - l1 * dtheta1 * s1 * t1 + tdl * s1 + dl1 * c1 * t1;
+    double tvy1 = (tl * dtheta1 + l1 * tw1) * s1 + l1 * dtheta1 * c1 * t1 - tdl * c1 + dl1 * s1 * t1;
+    double tvx2 = tvx1 + l2 * (tw2 * c2 - dtheta2 * s2 * t2);
+    double tvy2 = tvy1 + l2 * (tw2 * s2 + dtheta2 * c2 * t2);
+    double tkinetic = m1 * (vx1 * tvx1 + vy1 * tvy1) + m2 * (vx2 * tvx2 + vy2 * tvy2);
+    double values[11] = {tx, tdx, t1, tw1, t2, tw2, tx1, ty1, tx2, ty2, tkinetic + p->g * (m1 * ty1 + m2 * ty2)};
+    for (int i = 0; i < 11; i++) out[i] = values[i];
+}

@@ -32,4 +32,13 @@ void rk4_step(double state[N_SWING], double u, double dt, const PlantParameters 
 /* The swing state, hook and payload positions x1, y1, x2, y2 (eqs 4-5) and the energy (eqs 6-7). */
 void plant_outputs(const double state[N_SWING], const PlantParameters *p, double out[11]);
 
+/* angular_accelerations() into dd and its derivative along `seed` into tdd, exactly: seed is the change of
+   (theta1, dtheta1, theta2, dtheta2, u, l1, dl1, l1'', F1, F2). */
+void accelerations_tangent(double theta1, double dtheta1, double theta2, double dtheta2, double u,
+                           const PlantParameters *p, double l1, double dl1, const Load *load, const double seed[10],
+                           double dd[2], double tdd[2]);
+
+/* The derivative of plant_outputs() along a change t of the state. */
+void outputs_tangent(const double state[N_SWING], const PlantParameters *p, const double t[N_SWING], double out[11]);
+
 #endif
