@@ -71,7 +71,7 @@ def check_both_ends(designed, interfaces, fmus, optional=None):
     Raises
     ------
     ValueError
-        ``"controller: mine/PdTypo.fmu has no output u, which the system connects to plant.u"``.
+        ``"ctl: mine/Typo.fmu has no output y, which the system connects to sys.y"``.
     """
     for c in designed:
         if c.input not in interfaces[c.target][0]:

@@ -4,8 +4,8 @@
 FMU's interface (its modelDescription.xml: names, value references, feedthrough), so
 the wiring, the connections and their check stay the system's own: every connection
 from the instance's outputs has its source, which is whatever the program last set.
-Stepping it does nothing; time is the master's. This is how a PLC takes a controller's
-place in ``crane-fmu serve --external controller``.
+Stepping it does nothing; time is the master's. This is how a PLC takes an FMU's place
+in ``serve --external NAME``.
 """
 
 import math

@@ -166,6 +166,6 @@ class Watchdog:
         return None
 
     def describe(self, silent_for, what):
-        """The line that says the watchdog holds ``what`` (e.g. ``"controller's outputs"``)."""
+        """The line that says the watchdog holds ``what`` (e.g. ``"the external instance's outputs"``)."""
         held = "at zero" if self.hold == "zero" else "at their last values"
         return f"no client write for {silent_for:.3g} s (watchdog {self.timeout:g} s): {what} held {held}"
