@@ -52,7 +52,7 @@ def quick_board(template_fmu, fmu_dir, tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def full_board(fmu_dir, tmp_path_factory):
-    """Every built-in controller on every scenario, 4 cases of the paired design."""
+    """Every built-in controller on every scenario, FULL_CASES cases of the paired design."""
     out = tmp_path_factory.mktemp("full")
     rows = compare(out, (), fmu_dir, workers=2, progress=False, animate=(), log=lambda _: None, cases=FULL_CASES)
     return out, rows
@@ -92,7 +92,11 @@ def test_a_full_board_survives_a_quick_run_in_the_same_folder(full_board, fmu_di
     assert {name: (out / name).read_bytes() for name in before} == before
     assert (out / "quick" / "scoreboard.md").read_text().startswith("# Controller scoreboard (QUICK")
     table = pq.read_table(out / "scores.parquet").to_pylist()
-    assert not any(r["quick"] for r in table) and len(table) == 4 * (10 + 3 * FULL_CASES)  # S1-S8: 10; S3, S9, S10
+    controllers = {r["controller"] for r in table}
+    assert controllers == {c.model_identifier for c in components.registered("controller")}
+    assert not any(r["quick"] for r in table)
+    # each controller: 10 cases of S1, S2 and S4-S8; FULL_CASES each of S3, S9 and S10
+    assert len(table) == len(controllers) * (10 + 3 * FULL_CASES)
     assert {r["scenario_plants"] for r in table if r["scenario"] == "S3"} == {FULL_CASES}
 
 
