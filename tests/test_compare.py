@@ -389,7 +389,7 @@ def test_a_regulation_only_controller_is_scored_where_its_interface_allows(user_
     absent = {r["scenario"]: r["error"] for r in table if r["status"] == "n/a"}
     assert absent == {sid: "n/a (needs x_d or x_ref)" for sid in scoreboard.SCENARIOS if sid not in ("S1", "S6")}
     board = (user_board / "scoreboard.md").read_text()
-    assert "| 1. `UserLqr` (yours): 3.03 s, all targets met |" in board
+    assert "| 1. `UserLqr` (yours): 3.03 s (1.50x floor), all targets met |" in board  # S1: the LQR's figure
     assert "| `UserLqr` (yours): n/a (needs x_d or x_ref) |" in board
 
 
