@@ -2,7 +2,7 @@
 
 Every FMU is made the same way from its component descriptor
 (``crane_fmu.model.component.Component``): a generated script whose one class
-is the generic slave of ``fmu_src/slave2.py`` (or ``slave3.py``) for that
+is the generic slave of ``fmu_src/python/slave2.py`` (or ``slave3.py``) for that
 component, the bundled runtime core, and a modelDescription.xml post-processed
 from the component's variable table (units, display units, dependencies).
 
@@ -32,15 +32,27 @@ import tempfile
 import zipfile
 from pathlib import Path
 
-import crane_fmu.fmu_src
+import crane_fmu.fmu_src.python
 import crane_fmu.model
-from crane_fmu import DEFAULT_FMU_DIR, components
+from crane_fmu import DEFAULT_FMU_DIR, components, container
+from crane_fmu import systems as registry  # build_all's argument `systems` is names
+from crane_fmu.build_scripts import incremental
+from crane_fmu.build_scripts.folders import container_name, containers_dir, fmi3_dir, systems_dir
+from crane_fmu.build_scripts.incremental import python_fmu_key, system_file_key
 from crane_fmu.build_scripts.model_description import postprocess, postprocess3
+from crane_fmu.build_scripts.native import build_native
+from crane_fmu.build_scripts.one_fmu import build_one_fmus
 from crane_fmu.build_scripts.wrapper import WrapperUnavailable, compile_binaries
+from crane_fmu.container import build_container
+from crane_fmu.cosim import osp, ssp
+from crane_fmu.cosim.osp import write_osp
+from crane_fmu.cosim.ssp import write_ssp
 from crane_fmu.model.tables import DISPLAY_UNITS
 
+__all__ = ["build_all", "build_fmu", "core_name", "fmi3_dir", "systems_dir", "containers_dir", "container_name"]
+
 MODEL_DIR = Path(crane_fmu.model.__file__).parent
-SLAVE_DIR = Path(crane_fmu.fmu_src.__file__).parent
+SLAVE_DIR = Path(crane_fmu.fmu_src.python.__file__).parent
 # bundled with the core, by FMI version
 SUPPORT = {2: [SLAVE_DIR / "runtime.py", SLAVE_DIR / "slave2.py"],
            3: [SLAVE_DIR / "runtime.py", SLAVE_DIR / "slave3.py"]}
@@ -51,7 +63,13 @@ import os
 import sys
 
 # The core and pythonfmu are in resources/python.zip with their bytecode (only this script is loose).
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "python.zip"))
+_zip = os.path.join(os.path.dirname(os.path.abspath(__file__)), "python.zip")
+sys.path.insert(0, _zip)
+# Another FMU of this core, run earlier in this process, may have imported the core from its own folder, which
+# its host has removed since: the modules it did not import are looked for in this FMU's copy first.
+_core = sys.modules.get("{core}")
+if _core is not None and os.path.join(_zip, "{core}") not in _core.__path__:
+    _core.__path__.insert(0, os.path.join(_zip, "{core}"))
 
 from {core}.component import find  # noqa: E402
 from {core}.slave{version} import slave_base  # noqa: E402
@@ -95,7 +113,7 @@ def core_name(component, fmi_version=2):
 
 def _bundled(source, core, name):
     """``source`` with this project's imports renamed to the bundled core package."""
-    source = source.replace("crane_fmu.fmu_src", core).replace("crane_fmu.model", core)
+    source = source.replace("crane_fmu.fmu_src.python", core).replace("crane_fmu.model", core)
     if "crane_fmu" in source:
         raise ValueError(f"{name} imports a part of crane_fmu that is not bundled (only crane_fmu.model is)")
     return source
@@ -203,29 +221,6 @@ def build_fmu(component, out_dir, binaries=None, fmi_version=2):
     return final
 
 
-def fmi3_dir(out_dir):
-    """Where the FMI 3.0 FMUs go: ``build/fmi3`` next to ``build/fmus``."""
-    return Path(out_dir).parent / "fmi3"
-
-
-def systems_dir(out_dir):
-    """Where the system files go: ``build/systems`` next to ``build/fmus``."""
-    return Path(out_dir).parent / "systems"
-
-
-CONTAINERS = ("paper", "lqr", "energy", "transport")  # the built-in closed loops packed as one FMU each
-
-
-def containers_dir(out_dir):
-    """Where the container FMUs go: ``build/containers`` next to ``build/fmus``."""
-    return Path(out_dir).parent / "containers"
-
-
-def container_name(system_name):
-    """``paper`` -> ``CranePaper``: the container FMU's file and model name."""
-    return "Crane" + "".join(part.capitalize() for part in system_name.replace("-", "_").split("_"))
-
-
 class Built(list):
     """The paths of a build's outputs (a list), with ``made`` and ``kept``: those made now and those up to date."""
 
@@ -251,7 +246,7 @@ def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, cont
         every registered system whose components are all built).
     containers : iterable of str, optional
         Registered systems to pack each into one container FMU in
-        :func:`containers_dir` (default: those of :data:`CONTAINERS` that are built).
+        :func:`containers_dir` (default: the built ones tagged ``container``).
     native : bool, optional
         Also build the native (C) FMUs into ``build/native`` (:mod:`.native`), with the built-in
         systems as one native FMU each (:mod:`.one_fmu`): True requires a C compiler, False skips
@@ -267,8 +262,6 @@ def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, cont
         Every output's path; ``made`` and ``kept`` say which were made now and which were up to date
         (:mod:`.incremental`: content hashes of what each is made from, recorded in the build's folder).
     """
-    from crane_fmu.build_scripts import incremental
-
     fmi3_out = Path(fmi3_out) if fmi3_out is not None else fmi3_dir(out_dir)
     root = Path(os.path.commonpath([Path(out_dir).resolve(), fmi3_out.resolve()]))
     with incremental.building(root, force) as record:
@@ -277,12 +270,6 @@ def build_all(out_dir=DEFAULT_FMU_DIR, kinds=None, systems=None, fmi3=True, cont
 
 
 def _build_all(record, out_dir, kinds, systems, fmi3, containers, native, log, fmi3_out):
-    from crane_fmu import systems as registry
-    from crane_fmu.build_scripts.incremental import python_fmu_key, system_file_key
-    from crane_fmu.cosim import osp, ssp
-    from crane_fmu.cosim.osp import write_osp
-    from crane_fmu.cosim.ssp import write_ssp
-
     if kinds is None:
         kinds = [c.model_identifier for c in components.registered() if c.role != "benchmark"]
     chosen = [components.get(kind) for kind in kinds]
@@ -306,13 +293,9 @@ def _build_all(record, out_dir, kinds, systems, fmi3, containers, native, log, f
                                                                                   fmi_version=version))
                  for version, folder in versions for c in chosen]
     if native is not False:
-        from crane_fmu.build_scripts.native import build_native
-
         built = build_native(out_dir, kinds, required=native is True, log=log, record=record)
         paths += built
         if built:  # a C compiler was found: the built-in systems whose components are all native, as one FMU
-            from crane_fmu.build_scripts.one_fmu import build_one_fmus
-
             paths += build_one_fmus(out_dir, kinds=kinds, log=log, record=record)
     names = systems if systems is not None else [
         s.name for s in registry.registered() if set(s.instances.values()) <= set(kinds)]
@@ -325,10 +308,7 @@ def _build_all(record, out_dir, kinds, systems, fmi3, containers, native, log, f
         target = Path(out_dir) / f"{name}.OspSystemStructure.xml"
         paths.append(record.make(target, system_file_key("osp", system, fmus, Path(osp.__file__)),
                                  lambda system=system, target=target: write_osp(system, out_dir, target)))
-    from crane_fmu import container
-    from crane_fmu.container import build_container
-
-    for name in containers if containers is not None else [n for n in CONTAINERS if n in names]:
+    for name in containers if containers is not None else [n for n in registry.tagged("container") if n in names]:
         system = registry.get(name)
         target = containers_dir(out_dir) / f"{container_name(name)}.fmu"
         paths.append(record.make(target, system_file_key("container", system, system.fmus(out_dir).values(),

@@ -26,6 +26,7 @@ from pathlib import Path
 
 import crane_fmu
 import crane_fmu.fmu_src
+from crane_fmu import components
 
 RECORD = ".crane-build.json"
 FORMAT = 1  # the version of the keys: another one makes every output again
@@ -170,7 +171,7 @@ def python_tools():
 
 def python_fmu_key(component, fmi_version, sources):
     """A Python FMU: the core it bundles (``sources``), its table, the wrapper's C sources, the build, the tools."""
-    wrapper_sources = _files(FMU_SRC, skip=("native",))
+    wrapper_sources = [*_files(FMU_SRC / "framework"), *_files(FMU_SRC / "python")]
     build = [HERE / name for name in ("build_fmus.py", "model_description.py", "wrapper.py")]
     return key("python", fmi_version, component_data(component), *sources, *wrapper_sources, *build,
                python_tools())
@@ -180,23 +181,17 @@ def _compilers(tools):
     return {platform: compiler and tool(compiler) for platform, compiler in tools.items()}
 
 
-def native_key(component, fmi_version, tools):
-    """A native FMU: its table, the C sources it is compiled from, the tables its XML is written with, the build,
-    the compilers."""
-    from crane_fmu.build_scripts import native
-
-    files = [native.source_path(name) for group in native._sources(component, fmi_version) for name in group]
+def native_key(component, fmi_version, tools, files):
+    """A native FMU: its table, the C sources it is compiled from (``files``), the tables its XML is written with,
+    the build, the compilers."""
     build = [HERE / name for name in ("native.py", "model_description.py", "wrapper.py")]
     return key("native", fmi_version, component_data(component), *files, MODEL / "tables.py", *build,
                _compilers(tools), _version("fmpy"))
 
 
-def one_fmu_key(system, kinds, fmi_version, tools):
-    """A system as one native FMU: the system's data, its components' tables, the C sources it is compiled from."""
-    from crane_fmu import components
-    from crane_fmu.build_scripts import native, one_fmu
-
-    files = [native.source_path(name) for name in one_fmu.copied_sources(kinds, fmi_version)]
+def one_fmu_key(system, kinds, fmi_version, tools, files):
+    """A system as one native FMU: the system's data, its components' tables, the C sources it is compiled from
+    (``files``)."""
     build = [HERE / name for name in ("one_fmu.py", "native.py", "model_description.py", "wrapper.py")]
     return key("one-fmu", fmi_version, repr(system), [component_data(components.get(k)) for k in kinds], *files,
                MODEL / "tables.py", *build, _compilers(tools), _version("fmpy"))

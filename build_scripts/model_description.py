@@ -126,36 +126,3 @@ def postprocess3(xml_bytes, table, display_units, dependencies):
             unknown.attrib.update(_joined(sorted(read + parameters)))
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
-
-
-def system_dependencies(dependencies, connections, outputs, inputs):
-    """``{own output: (own input, ...)}`` of a system packed as one FMU (a one-FMU, a container).
-
-    An own output reads an own input at the same instant when a chain of direct feedthrough, along the
-    connections, leads from an instance input that the own input sets to the instance output it shows.
-
-    Parameters
-    ----------
-    dependencies : dict
-        ``{instance: {output: (input, ...)}}``: the inputs each instance's outputs read at the same instant.
-    connections : iterable of Connection
-    outputs : dict
-        ``{own output: (instance, output)}``: where each own output comes from.
-    inputs : dict
-        ``{own input: [(instance, input)]}``: what each own input sets, in the own inputs' order.
-    """
-    fed = {(c.target, c.input): (c.source, c.output) for c in connections}
-    result = {}
-    for name, source in outputs.items():
-        read, todo, seen = set(), [source], set()
-        while todo:
-            instance, output = todo.pop()
-            if (instance, output) in seen:
-                continue
-            seen.add((instance, output))
-            for variable in dependencies[instance][output]:
-                read.add((instance, variable))
-                if (instance, variable) in fed:
-                    todo.append(fed[(instance, variable)])
-        result[name] = tuple(own for own, targets in inputs.items() if read.intersection(targets))
-    return result

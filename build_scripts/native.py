@@ -1,4 +1,7 @@
-"""Native FMUs: the components ported to C (``fmu_src/native``), built without any Python inside.
+"""Native FMUs: the components ported to C (``fmu_src/models``), built without any Python inside.
+
+Each is its model file behind the FMI framework every FMU of this project shares (``fmu_src/framework``),
+which runs the model named by a generated ``fmu_model.c``.
 
 One FMU per ported component and FMI version, with the Python FMU's model identifier,
 variables, value references, units and start values: its modelDescription.xml and the C
@@ -15,7 +18,7 @@ built from. Each FMU holds
 Both are compiled with ``-ffp-contract=off`` (no fused multiply-adds: the same operations as
 the Python model). The Linux binary uses glibc's libm, as CPython does, so it gives the Python
 FMU's numbers; mingw-w64's libm differs, so the Windows binary (and a build from the sources)
-uses the portable sin, cos, exp, tanh and log of ``fmu_src/native/portable_math.c``.
+uses the portable sin, cos, exp, tanh and log of ``fmu_src/models/portable_math.c``.
 """
 
 import hashlib
@@ -29,17 +32,27 @@ import zipfile
 from pathlib import Path
 
 import crane_fmu.fmu_src as fmu_src
+from crane_fmu import components
+from crane_fmu.build_scripts import incremental
+from crane_fmu.build_scripts.folders import fmi3_dir, native_dir
+from crane_fmu.build_scripts import model_exchange
 from crane_fmu.build_scripts.model_description import _unit_definitions, postprocess, postprocess3
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.model.tables import DISPLAY_UNITS, xml_double
 
-NATIVE = Path(fmu_src.__file__).parent / "native"
-# the ported components: model identifier -> its model file in fmu_src/native
-MODELS = {"CranePlant": "crane_plant.c", "BacksteppingController": "backstepping.c", "LqrController": "lqr.c",
-          "TrajectoryPlanner": "planner.c", "EnergyController": "energy.c", "Gust": "gust.c", "Sensor": "sensor.c"}
-COMMON = ("plant_equations.c", "py_repr.c", "portable_math.c", "linalg.c", "framework.c")
-HEADERS = ("model.h", "model_values.h", "framework.h", "plant_equations.h", "plant_math.h", "py_repr.h", "linalg.h")
-FRAMEWORKS = {2: ("fmi2_framework.c", "fmi2_functions.h"), 3: ("fmi3_framework.c", "fmi3_functions.h")}
+SOURCES = Path(fmu_src.__file__).parent
+FOLDERS = tuple(SOURCES / folder for folder in ("framework", "models", "system"))  # where copy_sources looks
+MODELS_DIR = SOURCES / "models"
+HOST = SOURCES / "host" / "host.c"  # a C host for tests and benchmarks, in no FMU
+DERIVATIVE_BENCH = SOURCES / "host" / "derivative_bench.c"  # the Model Exchange derivatives' cost (bench)
+FMI_DERIVATIVE_BENCH = SOURCES / "host" / "fmi_derivative_bench.c"  # the same through the FMU's FMI 2.0 calls
+# every native FMU's: the framework's files and what the model files share; besides them each FMU compiles the
+# generated fmu_model.c, which names the model its framework runs
+COMMON = ("instance.c", "continuous.c", "py_repr.c", "component.c", "plant_equations.c", "portable_math.c", "linalg.c")
+HEADERS = ("model.h", "instance.h", "continuous.h", "py_repr.h", "component.h", "rules.h", "plant_equations.h", "plant_math.h",
+           "linalg.h")
+CONTINUOUS = (("plant_continuous.c",), ("plant_continuous.h",))  # what a component with Model Exchange adds
+FRAMEWORKS = {2: ("fmi2Functions.c", "fmi2_calls.h"), 3: ("fmi3Functions.c", "fmi3_calls.h")}
 PLATFORMS = {2: {"linux": "linux64", "windows": "win64"}, 3: {"linux": "x86_64-linux", "windows": "x86_64-windows"}}
 FLAGS = ["-shared", "-O2", "-Wall", "-Werror", "-ffp-contract=off"]
 MINGW = "x86_64-w64-mingw32-gcc"
@@ -47,12 +60,6 @@ MINGW = "x86_64-w64-mingw32-gcc"
 
 class NativeUnavailable(RuntimeError):
     """No C compiler for the native FMUs here."""
-
-
-def native_dir(out_dir, fmi_version=2):
-    """Where the native FMUs go: ``build/native`` (FMI 2.0) and ``build/native/fmi3`` beside ``build/fmus``."""
-    base = Path(out_dir).parent / "native"
-    return base if fmi_version == 2 else base / "fmi3"
 
 
 def compilers():
@@ -63,17 +70,33 @@ def compilers():
     return {"linux": cc, "windows": shutil.which(MINGW)}
 
 
+def ported():
+    """The model identifiers of the registered components that have a native model (``Component.native``)."""
+    return [c.model_identifier for c in components.registered() if c.native]
+
+
 def _sources(component, fmi_version):
-    """The C files of the component's FMU (without the generated header)."""
+    """The C files of fmu_src the component's FMU is compiled from, and its headers (not the generated ones)."""
     framework, functions = FRAMEWORKS[fmi_version]
-    return [MODELS[component.model_identifier], *COMMON, framework], [*HEADERS, functions]
+    extra_c, extra_h = CONTINUOUS if component.continuous else ((), ())
+    return [component.native, *COMMON, *extra_c, framework], [*HEADERS, *extra_h, functions]
+
+
+def compiled(component, fmi_version):
+    """The C files the component's FMU is compiled from: those of fmu_src and the generated fmu_model.c."""
+    return [*_sources(component, fmi_version)[0], "fmu_model.c"]
+
+
+def source_path(name):
+    """The path of a C file of ``fmu_src`` (framework, models or system) by its name."""
+    return next(folder / name for folder in FOLDERS if (folder / name).exists())
 
 
 def token(component):
     """The GUID / instantiation token: a hash of the variable table and of every C source."""
     digest = hashlib.sha256(repr(component.variables).encode())
     for name in sorted({*_sources(component, 2)[0], *_sources(component, 3)[0], *HEADERS}):
-        digest.update(name.encode() + (NATIVE / name).read_bytes())
+        digest.update(name.encode() + source_path(name).read_bytes())
     return "{" + str(uuid.UUID(digest.hexdigest()[:32])) + "}"
 
 
@@ -81,6 +104,7 @@ def variables_header(component, guid=None):
     """``<model>_variables.h``: the value references, causalities and start values, from the table."""
     rows, enum = [], []
     causality = {"parameter": "PARAMETER", "input": "INPUT", "output": "OUTPUT"}
+    strings = [v.name for v in component.variables if v.type == "String"]
     for vr, v in enumerate(component.variables):
         if v.type not in ("Real", "String") or (v.type == "String" and v.causality != "parameter"):
             raise ValueError(f"{component.model_identifier}.{v.name}: the native framework has Reals and String "
@@ -93,10 +117,12 @@ def variables_header(component, guid=None):
             start = {"INF": "INFINITY", "-INF": "-INFINITY"}.get(start, start)
             rows.append(f'    {{"{v.name}", {causality[v.causality]}, REAL, {start}, NULL}},')
         enum.append(f"VR_{v.name} = {vr},")
+    enum += [f"STRING_{name} = {i}, /* its place among the Strings */" for i, name in enumerate(strings)]
     outputs = [i for i, v in enumerate(component.variables) if v.causality == "output"]
     if outputs != list(range(outputs[0], len(component.variables))):
         raise ValueError(f"{component.model_identifier}: the native model expects the outputs last in the table")
     name = component.model_identifier
+    continuous = model_exchange.header(component) if component.continuous else ""
     return f"""/* Generated by crane-fmu build from the variable table of {name} (crane_fmu/model); do not edit. */
 #ifndef VARIABLES_H
 #define VARIABLES_H
@@ -104,31 +130,35 @@ def variables_header(component, guid=None):
 #include <math.h>
 #include <stddef.h>
 
+#include "component.h"
+
 #define MODEL_IDENTIFIER "{name}"
 #define INSTANTIATION_TOKEN "{guid or token(component)}"
-
-typedef enum {{ PARAMETER, INPUT, OUTPUT }} Causality;
-typedef enum {{ REAL, STRING }} VariableType;
-typedef struct {{
-    const char *name;
-    Causality causality;
-    VariableType type;
-    double start;     /* a Real's */
-    const char *text; /* a String's start value */
-}} VariableRow;
+#define MODEL_TYPE {name}_MODEL /* the ModelType a model file registers */
 
 enum {{
 {chr(10).join("    " + line for line in enum)}
     N_VARIABLES = {len(component.variables)},
     FIRST_OUTPUT = {outputs[0]},
-    N_OUTPUTS = {len(outputs)}
+    N_OUTPUTS = {len(outputs)},
+    N_STRINGS = {len(strings)}
 }};
 
 static const VariableRow VARIABLE_TABLE[N_VARIABLES] = {{
 {chr(10).join(rows)}
 }};
-
+{continuous}
 #endif
+"""
+
+
+def fmu_model(name):
+    """``fmu_model.c``: the model the FMU's framework runs, ``<name>_MODEL`` (model.h's FMU_MODEL)."""
+    return f"""/* Generated by crane-fmu build; do not edit. The model this FMU runs. */
+#include "model.h"
+
+extern const ModelType {name}_MODEL;
+const ModelType *const FMU_MODEL = &{name}_MODEL;
 """
 
 
@@ -219,10 +249,12 @@ def model_description(component, fmi_version=2, sources=None, guid=None):
     """
     guid = guid or token(component)
     if fmi_version == 3:
-        return postprocess3(_skeleton3(component, guid), component.variables, DISPLAY_UNITS, component.dependencies())
-    sources = sources or _sources(component, 2)[0]
-    return postprocess(_skeleton2(component, sources, guid), component.variables, DISPLAY_UNITS,
-                       component.dependencies())
+        xml = postprocess3(_skeleton3(component, guid), component.variables, DISPLAY_UNITS, component.dependencies())
+        return model_exchange.add_to_fmi3(xml, component) if component.continuous else xml
+    sources = sources or compiled(component, 2)
+    xml = postprocess(_skeleton2(component, sources, guid), component.variables, DISPLAY_UNITS,
+                      component.dependencies())
+    return model_exchange.add_to_fmi2(xml, component, sources) if component.continuous else xml
 
 
 def build_description(component, sources=None):
@@ -230,7 +262,7 @@ def build_description(component, sources=None):
     root = ET.Element("fmiBuildDescription", fmiVersion="3.0")
     config = ET.SubElement(root, "BuildConfiguration", modelIdentifier=component.model_identifier)
     files = ET.SubElement(config, "SourceFileSet", language="C99")
-    for source in sources or _sources(component, 3)[0]:
+    for source in sources or compiled(component, 3):
         ET.SubElement(files, "SourceFile", name=source)
     ET.SubElement(files, "PreprocessorDefinition", name="CRANE_OWN_MATH")
     ET.indent(root)
@@ -259,18 +291,14 @@ def build_native_fmu(component, out_dir, fmi_version=2, tools=None):
         sources = Path(tmp) / "sources"
         copy_sources([*c_files, *h_files], sources)
         (sources / f"{name}_variables.h").write_text(variables_header(component))
+        (sources / "fmu_model.c").write_text(fmu_model(name))
         build = build_description(component) if fmi_version == 3 else None
-        return write_fmu(name, out_dir, sources, c_files, model_description(component, fmi_version), build,
-                         fmi_version, tools)
-
-
-def source_path(file):
-    """The path of a source file named in fmu_src/native or fmu_src."""
-    return NATIVE / file if (NATIVE / file).exists() else NATIVE.parent / file
+        return write_fmu(name, out_dir, sources, compiled(component, fmi_version),
+                         model_description(component, fmi_version), build, fmi_version, tools)
 
 
 def copy_sources(files, folder):
-    """Copy ``files`` (names in fmu_src/native or fmu_src) into ``folder``, made if missing."""
+    """Copy ``files`` (names in fmu_src/framework, models or system) into ``folder``, made if missing."""
     folder.mkdir(parents=True, exist_ok=True)
     for file in files:
         shutil.copy(source_path(file), folder / file)
@@ -312,13 +340,9 @@ def build_native(out_dir, kinds, required=False, log=print, record=None):
     C compiler: a warning and nothing built, or NativeUnavailable when ``required``. With a
     ``record`` (:class:`.incremental.Record`), an FMU made from the same inputs before is kept.
     """
-    from crane_fmu import components
-    from crane_fmu.build_scripts import incremental
-    from crane_fmu.build_scripts.build_fmus import fmi3_dir
-
     record = record or incremental.Record()  # keeps nothing
 
-    if not any(kind in MODELS for kind in kinds):
+    if not set(kinds) & set(ported()):
         return []
     try:
         tools = compilers()
@@ -333,9 +357,11 @@ def build_native(out_dir, kinds, required=False, log=print, record=None):
     for version, python_dir in ((2, Path(out_dir)), (3, fmi3_dir(out_dir))):
         for kind in kinds:
             folder, python = native_dir(out_dir, version), python_dir / f"{kind}.fmu"
-            if kind in MODELS:
+            if components.get(kind).native:
                 component = components.get(kind)
-                paths.append(record.make(folder / f"{kind}.fmu", incremental.native_key(component, version, tools),
+                files = [source_path(name) for group in _sources(component, version) for name in group]
+                paths.append(record.make(folder / f"{kind}.fmu", incremental.native_key(component, version, tools,
+                                                                                        files),
                                          lambda c=component, v=version, f=folder: build_native_fmu(c, f, v, tools)))
             elif python.exists():  # not ported yet: the Python FMU
                 folder.mkdir(parents=True, exist_ok=True)

@@ -14,12 +14,16 @@ import subprocess
 import sys
 import tempfile
 import time
+from array import array
+from contextlib import ExitStack
 from pathlib import Path
 
-from crane_fmu import systems
+from crane_fmu import components, systems
 from crane_fmu.build_scripts.build_fmus import build_all
 from crane_fmu.cosim import CsvRecorder, Master, open_instance
 from crane_fmu.cosim.master import communication_points
+from crane_fmu.sweep import spec
+from crane_fmu.sweep.runner import run_case, shippable
 
 
 def _open(system, fmu_dir):
@@ -28,13 +32,14 @@ def _open(system, fmu_dir):
     return {name: open_instance(path, name) for name, path in fmus.items()}, connections
 
 
-def _timed_run(system, fmu_dir, stop_time, step, csv_path):
+def _timed_run(system, fmu_dir, csv_path):
+    """The prepared system through the master, every step to CSV: ``(seconds, steps)``."""
     instances, connections = _open(system, fmu_dir)
     try:
         recorder = CsvRecorder(csv_path)
         master = Master(instances, connections)
         start = time.perf_counter()
-        n = master.run(0.0, stop_time, step, [recorder])
+        n = master.run(system.start_time, system.stop_time, system.step, [recorder])
         recorder.close()
         elapsed = time.perf_counter() - start
         master.terminate()
@@ -127,7 +132,7 @@ print(time.perf_counter() - start, ys[0])
 
 def build_anchor(out_dir):
     """The anchor's two FMUs, built by stock pythonfmu with its own binary; ``(plant, controller)``."""
-    from pythonfmu import FmuBuilder
+    from pythonfmu import FmuBuilder  # build time only, as in build_fmus.py
 
     out_dir = Path(out_dir)
     paths = []
@@ -148,22 +153,17 @@ def _process_seconds(command):
 
 def _plain_loop(system, stop_time, step, csv_path):
     """The system's models called directly in a Python loop, recorded like the master's run; seconds."""
-    from array import array
-
-    from crane_fmu import components
-
     n = communication_points(0.0, stop_time, step)
     models, configs, states, names = {}, {}, {}, []
     for name, identifier in system.instances.items():
         c = models[name] = components.get(identifier)
         values = {v.name: v.start for v in c.variables if v.causality == "parameter"}
         values.update(system.parameters.get(name, {}))
-        if "h" in values:
-            values["h"] = step
         configs[name] = c.configure(values)
         states[name] = c.initial_state(configs[name]) if c.stateful else None
         names += [f"{name}.{o}" for o in c.names("output")]
-    plant, ctrl = models["plant"], models["controller"]
+    roles = components.by_role(system.instances)
+    plant, ctrl = models[roles["plant"]], models[roles["controller"]]
     p_out, c_in = plant.names("output"), ctrl.names("input")
     feed = [p_out.index(i) for i in c_in]  # controller inputs from the plant's outputs, by name
     p_inputs = list(v.start for v in plant.variables if v.causality == "input")
@@ -173,7 +173,8 @@ def _plain_loop(system, stop_time, step, csv_path):
     recorder = CsvRecorder(csv_path)
     start = time.perf_counter()
     recorder.start(names)
-    pc, cc, ps, cs = configs["plant"], configs["controller"], states["plant"], states["controller"]
+    pc, cc = configs[roles["plant"]], configs[roles["controller"]]
+    ps, cs = states[roles["plant"]], states[roles["controller"]]
     width = len(p_out)
     for k in range(n + 1):
         t = k * step
@@ -207,7 +208,7 @@ def run_bench(stop_time=20.0, step=1e-3, repeat=5, out=print):
         paper = systems.get("paper")
         build_all(built, set(paper.instances.values()), systems=(), fmi3=False, log=lambda _: None)
         anchor = [str(p) for p in build_anchor(tmp / "anchor")]
-        timed = systems.at_step(paper, built, step)
+        timed = systems.prepare(paper, step, stop_time)
         command = Path(sys.executable).parent / "crane-fmu"  # the installed command, else the module
         command = [str(command)] if command.exists() else [sys.executable, "-m", "crane_fmu"]
         simulate = [*command, "simulate", "--fmu-dir", str(built), "--stop-time",
@@ -215,8 +216,8 @@ def run_bench(stop_time=20.0, step=1e-3, repeat=5, out=print):
         anchor_loop = [sys.executable, "-c", ANCHOR_LOOP, *anchor, str(n), repr(step)]
         times = {name: [] for name in ("crane", "plain", "anchor", "crane_process", "anchor_process")}
         for _ in range(repeat):  # alternate, so drifts in machine load hit all
-            times["crane"].append(_timed_run(timed, built, stop_time, step, tmp / "crane.csv")[0])
-            times["plain"].append(_plain_loop(paper, stop_time, step, tmp / "plain.csv")[0])
+            times["crane"].append(_timed_run(timed, built, tmp / "crane.csv")[0])
+            times["plain"].append(_plain_loop(timed, stop_time, step, tmp / "plain.csv")[0])
             done = subprocess.run(anchor_loop, check=True, capture_output=True, text=True)
             times["anchor"].append(float(done.stdout.split()[0]))
             times["crane_process"].append(_process_seconds(simulate))
@@ -250,12 +251,8 @@ def run_sweep_bench(n_cases=16, stop_time=10.0, step=1e-3, repeat=3, out=print):
     overhead is the wall time per case with one worker minus the mean time the
     case itself took inside the worker.
     """
-    from contextlib import ExitStack
+    from distributed import Client, LocalCluster  # optional: the dask extra
 
-    from distributed import Client, LocalCluster
-
-    from crane_fmu.sweep import spec
-    from crane_fmu.sweep.runner import run_case, shippable
 
     study = spec.parse({"stop_time": stop_time, "step": step, "metrics": ["outcome", "max_theta1_deg"]})
     settings, metrics = study.settings(), study.metrics
@@ -337,7 +334,8 @@ def run_endurance(stop_time=3600.0, step=1e-3, out=print):
             master = Master(instances, connections)
             # the weighted law (1, 1, 0) converges, so the run stays finite for the whole hour
             start = time.perf_counter()
-            master.run(0.0, stop_time, step, [recorder, probe], {"controller": {"w_theta2": 0.0}})
+            controller = components.by_role(paper.instances)["controller"]
+            master.run(0.0, stop_time, step, [recorder, probe], {controller: {"w_theta2": 0.0}})
             recorder.close()
             wall = time.perf_counter() - start
         finally:

@@ -27,8 +27,9 @@ def solve_times(system_name="mpc-transport", step=1e-3):
 
     system = systems.get(system_name)
     plant, mpc = components.get("CranePlant"), components.get("MpcController")
-    pc = plant.check({**system.parameters.get("plant", {})})
-    cc = mpc.check({**system.parameters.get("controller", {}), "h": step})
+    roles = components.by_role(system.instances)
+    pc = plant.check({**system.parameters.get(roles["plant"], {})})
+    cc = mpc.check({**system.parameters.get(roles["controller"], {}), "h": step})
     ps, cs = plant.initial_state(pc), mpc.initial_state(cc)
     inputs_at = [plant.names("output").index(name) for name in mpc.names("input")]
     times = []

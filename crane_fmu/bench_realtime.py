@@ -11,6 +11,7 @@
 """
 
 import asyncio
+import os
 import re
 import select
 import signal
@@ -21,11 +22,13 @@ import tempfile
 import time
 from pathlib import Path
 
-from crane_fmu import systems
+from crane_fmu import components, systems
 from crane_fmu.build_scripts.build_fmus import build_all
 from crane_fmu.cosim import CsvRecorder, Master, open_instance
 from crane_fmu.cosim.pacing import percentile
 from crane_fmu.cosim.realtime import Runner
+from crane_fmu.model import lqr
+from crane_fmu.serve.modbus import FIRST_HOLDING, float32_words, words_float32
 
 STATE = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2")
 RT_PRIORITY = 10  # as in the docs' example of serve --rt-priority
@@ -58,8 +61,6 @@ def run_realtime_bench(seconds=2.0, round_trips=500, out=print):
 def _paced(system, fmu_dir, period, seconds, csv, priority=None):
     """The lqr system in real time at cycles of ``period`` (its step 1 ms) for ``seconds``: the Timing; with a
     ``priority``, under SCHED_FIFO as ``serve --rt-priority`` runs it (None where that is not permitted)."""
-    import os
-
     if priority:
         try:
             before = (os.sched_getscheduler(0), os.sched_getparam(0))
@@ -74,7 +75,7 @@ def _paced(system, fmu_dir, period, seconds, csv, priority=None):
 
 
 def _paced_run(system, fmu_dir, period, seconds, csv):
-    system = systems.at_step(system, fmu_dir, 1e-3)
+    system = systems.prepare(system, 1e-3, seconds)
     fmus, connections = system.resolve(fmu_dir)
     instances = {name: open_instance(path, name) for name, path in fmus.items()}
     try:
@@ -91,7 +92,8 @@ def _paced_run(system, fmu_dir, period, seconds, csv):
 
 
 def _round_trips(fmu_dir, tmp, n, out):
-    command = [sys.executable, "-m", "crane_fmu", "serve", "--system", "lqr", "--external", "controller",
+    controller = components.by_role(systems.get("lqr").instances)["controller"]  # the instance a client replaces
+    command = [sys.executable, "-m", "crane_fmu", "serve", "--system", "lqr", "--external", controller,
                "--lock-step", "--fmu-dir", str(fmu_dir), "--out", str(tmp / "served.csv"), "--opcua", "127.0.0.1:0",
                "--modbus", "127.0.0.1:0"]
     server = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -102,10 +104,10 @@ def _round_trips(fmu_dir, tmp, n, out):
         modbus = re.search(r"Modbus TCP (\S+?):(\d+)", line)
         if not (url and modbus):
             raise RuntimeError(f"crane-fmu serve did not start: {line!r} {server.stderr.read()[-1000:]}")
-        opcua = asyncio.run(_opcua_round_trips(url.group(1), n))
+        opcua = asyncio.run(_opcua_round_trips(url.group(1), n, controller))
         printed = subprocess.run([*command[:command.index("--out")], "--print-map"], capture_output=True, text=True,
                                  check=True).stdout
-        first = int(re.search(r"\| input \| (\d+)-\d+ \| `controller\.x`", printed).group(1))
+        first = int(re.search(rf"\| input \| (\d+)-\d+ \| `{re.escape(controller)}\.x`", printed).group(1))
         mb = _modbus_round_trips(modbus.group(1), int(modbus.group(2)), first, n)
     finally:
         server.send_signal(signal.SIGINT)
@@ -124,16 +126,15 @@ def _round_trips(fmu_dir, tmp, n, out):
     return figures
 
 
-async def _opcua_round_trips(url, n):
-    from asyncua import Client, ua
+async def _opcua_round_trips(url, n, controller):
+    from asyncua import Client, ua  # optional: the serve extra
 
-    from crane_fmu.model import lqr
 
     law = lqr.COMPONENT.check({"h": 1e-3})
     async with Client(url) as client:
         ns = await client.get_namespace_index("urn:crane-fmu")
         node = lambda name: client.get_node(ua.NodeId(name, ns))  # noqa: E731
-        inputs, u, step = [node(f"controller.{s}") for s in STATE], node("controller.u"), node("Step")
+        inputs, u, step = [node(f"{controller}.{s}") for s in STATE], node(f"{controller}.u"), node("Step")
         system = await step.get_parent()
         times = {"write_read": [], "cycle": []}
         for _ in range(n):
@@ -151,11 +152,9 @@ async def _opcua_round_trips(url, n):
 
 
 def _modbus_round_trips(host, port, first, n):
-    """``first``: the input register of controller.x, the first of the six measured states."""
-    from pymodbus.client import ModbusTcpClient
+    """``first``: the input register of the controller's x, the first of the six measured states."""
+    from pymodbus.client import ModbusTcpClient  # optional: the serve extra
 
-    from crane_fmu.model import lqr
-    from crane_fmu.serve.modbus import FIRST_HOLDING, float32_words, words_float32
 
     law = lqr.COMPONENT.check({"h": 1e-3})
     client = ModbusTcpClient(host, port=port, timeout=10)

@@ -9,14 +9,13 @@ import argparse
 import os
 import sys
 
+from crane_fmu import __version__
 from crane_fmu.commands import COMMANDS
 from crane_fmu.commands.common import Parser, UsageError
 
 
 def parser():
     """The argument parser, built from the commands."""
-    from crane_fmu import __version__
-
     top = Parser(prog="crane-fmu", description="Build, simulate, sweep, score and benchmark the crane's FMUs.")
     top.add_argument("--version", action="version", version=f"crane-fmu {__version__}")
     sub = top.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)

@@ -17,16 +17,27 @@ the script again (the ``spawn`` start method), as ``multiprocessing`` does.
 """
 
 import hashlib
+import importlib.metadata
 import json
+import platform
 import sys
 import time
+from datetime import datetime, timezone
 from pathlib import Path
 
+import fmpy
+import numpy as np
+import scipy
+
 from crane_fmu import components, systems
-from crane_fmu.analysis import scoreboard
+from crane_fmu.analysis import board_page, metrics, score_plots, scoreboard
+from crane_fmu.analysis.floor import scenario_floors
+from crane_fmu.analysis.metrics import VERSION
 from crane_fmu.analysis.scoreboard import SCENARIOS, Contender
-from crane_fmu.sweep.batch import JOURNAL, Progress, read_journal, run_batch
-from crane_fmu.sweep.runner import write_table
+from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch
+from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
+from crane_fmu.cosim.system import read_fmu
+from crane_fmu.sweep.runner import local_fmus, write_table
 
 SIGNALS = ("time", "x", "theta1", "theta2", "u", "x1", "y1", "x2", "y2", "l1_now")  # crane_signals() names
 SIGNAL_EVERY = 0.02  # s: the signals kept for plots and animations
@@ -50,8 +61,6 @@ def contenders(chosen=(), fmu_dir="build/fmus", only=False):
         One line: an unknown name, an FMU that cannot be read, two controllers of one name, or what a
         controller misses of the interface (and which scenarios need it).
     """
-    from crane_fmu.cosim.system import read_fmu
-
     builtin = [c.model_identifier for c in components.registered("controller")]
     items = list(chosen) + ([] if only and chosen else builtin)
     result = {}
@@ -88,15 +97,8 @@ MANIFEST = "board.json"
 
 def versions():
     """The versions that make a figure: this project, Python, fmpy, numpy, scipy."""
-    import importlib.metadata
-    import platform
-
-    import fmpy
-    import numpy
-    import scipy
-
     return {"crane-antisway-cosim": importlib.metadata.version("crane-antisway-cosim"),
-            "python": platform.python_version(), "fmpy": fmpy.__version__, "numpy": numpy.__version__,
+            "python": platform.python_version(), "fmpy": fmpy.__version__, "numpy": np.__version__,
             "scipy": scipy.__version__}
 
 
@@ -107,8 +109,6 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), cases=scoreboard.CASES):
     A case's id covers the metric module's version (:data:`crane_fmu.analysis.metrics.VERSION`): rows a journal
     holds from another version are never mixed into the board.
     """
-    from crane_fmu.analysis.metrics import VERSION
-
     planned, blobs, refused, digests = [], {}, [], {}
     for contender in chosen:
         for sid in scenarios:
@@ -119,8 +119,8 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), cases=scoreboard.CASES):
                 continue
             runs = scoreboard.systems_for(contender, sid, cases)
             for label, system, step, stop_time, x_d, residual_from in runs:
-                system = systems.at_step(system, fmu_dir, step)
                 fmus, connections = systems.resolve(system, fmu_dir)
+                system = systems.prepare(system, step, stop_time, check=False)
                 hashes = {}
                 for name, path in fmus.items():
                     if path not in digests:  # each FMU file read once
@@ -139,7 +139,7 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), cases=scoreboard.CASES):
                         "keep_signals": sid in ANIMATE and len(runs) == 1}
                 case["case_id"] = hashlib.sha256(json.dumps(case, sort_keys=True).encode()).hexdigest()[:16]
                 try:
-                    systems.check_parameters(system, fmu_dir)
+                    systems.check_parameters(system)
                 except ValueError as exc:
                     refused.append({**_identity(case), "status": "invalid", "error": str(exc)})
                     continue
@@ -166,10 +166,6 @@ def _identity(case):
 def run_score_case(case, blobs):
     """Co-simulate one case on a worker; return its row: identity, provenance, status, error, metrics (and
     signals)."""
-    from crane_fmu.analysis import metrics
-    from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
-    from crane_fmu.sweep.runner import local_fmus
-
     row = {**_identity(case), "status": "ok", "error": None, **provenance(case),
            "versions": json.dumps(versions(), sort_keys=True), "date": _now()}
     start = time.perf_counter()
@@ -194,8 +190,6 @@ def run_score_case(case, blobs):
 
 
 def _now():
-    from datetime import datetime, timezone
-
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
 
 
@@ -259,10 +253,6 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     ValueError
         One line: a mistake in the arguments, or a controller that no chosen scenario applies to.
     """
-    from crane_fmu.analysis import board_page, score_plots
-    from crane_fmu.analysis.floor import scenario_floors
-    from crane_fmu.analysis.metrics import VERSION
-
     start = time.perf_counter()
     if sys._getframe(1).f_globals.get("__name__") == "__mp_main__":  # called by a script a worker imports
         raise RuntimeError("compare() was called while a Dask worker process imported your script again: call it "
@@ -372,7 +362,6 @@ def check(out_dir, sample=5, workers=None, scheduler=None, log=print, seed=None)
     ValueError
         One line: no board in ``out_dir``, or FMUs that differ from the board's.
     """
-    import numpy as np
     import pyarrow.parquet as pq
 
     out_dir = Path(out_dir)

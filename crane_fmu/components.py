@@ -30,6 +30,17 @@ def registered(role=None):
     return [c for c in _COMPONENTS.registered() if role is None or c.role == role]
 
 
+def by_role(kinds):
+    """``{role: instance}``: the first instance of each role, from ``{instance: model identifier}`` in the
+    system's order (an instance whose component is not registered has no role)."""
+    found = {}
+    for name, kind in kinds.items():
+        component = find(kind)
+        if component is not None:
+            found.setdefault(component.role, name)
+    return found
+
+
 def check_parameters(model_identifier, values):
     """Apply a registered component's parameter rules to its defaults overridden by ``values``.
 

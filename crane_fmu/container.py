@@ -8,12 +8,12 @@ step it copies outputs to inputs along the connections, like this project's
 ``jacobi`` master without the initial exchange (the first step runs with the
 inputs' start values); the two give identical results (``tests/test_container.py``).
 
-The container exposes the plant's outputs and the controller's ``u``; as its
-own parameters the masses and cable lengths (mapped to the ``plant``,
-``controller`` and ``planner`` instances that have them, so plant and models
-agree), ``x_d`` (to the planner when there is one, else to the controller)
-and the plant's initial swing ``theta1_0``; as inputs the plant's inputs that
-nothing inside feeds (``F1``, ``F2``, ``hoist``).
+What the container exposes is the closed loop's interface (``closed_loop.py``, the
+one-FMU's too): the plant's outputs and the controller's ``u``; the masses and
+cable lengths, ``x_d`` and ``theta1_0`` as parameters; the plant's inputs that
+nothing inside feeds as inputs. fmpy's container sets an inner FMU's variable only
+through what it exposes: a system with values beyond those (hoist-transport's
+planners) is refused; the native one-FMU (``build_scripts/one_fmu.py``) carries them.
 """
 
 import shutil
@@ -21,24 +21,31 @@ import tempfile
 import uuid
 from pathlib import Path
 
-SHARED = ("m1", "m2", "l1", "l2")
+import attrs
+from fmpy import read_model_description
+from fmpy.container_fmu import Configuration
+from fmpy.container_fmu.cli import create_container_fmu
+from fmpy.container_fmu.config import Component, Connection
+from fmpy.model_description import CoSimulation, DefaultExperiment, ModelDescription, ModelVariable, Unknown
+
+from crane_fmu import closed_loop
 
 
 def build_container(system, fmu_dir, path):
     """Write ``system`` (FMUs in ``fmu_dir`` or named by path) as one container FMU at ``path``; return it."""
-    import attrs
-    from fmpy import read_model_description
-    from fmpy.container_fmu import Configuration
-    from fmpy.container_fmu.cli import create_container_fmu
-    from fmpy.container_fmu.config import Component, Connection
-    from fmpy.model_description import CoSimulation, DefaultExperiment, ModelDescription, ModelVariable, Unknown
-
     fmus, connections = system.resolve(fmu_dir)
-    if "plant" not in fmus:
-        raise ValueError(f"system {system.name} has no instance named plant to expose")
     components = {name: Component(name=name, filename=Path(path_), modelDescription=read_model_description(path_))
                   for name, path_ in fmus.items()}
     variables = {name: {v.name: v for v in c.modelDescription.modelVariables} for name, c in components.items()}
+    kinds = {name: c.modelDescription.coSimulation.modelIdentifier for name, c in components.items()}
+    exposed = closed_loop.interface(system, kinds, {name: {n: (v.causality, _number(v)) for n, v in table.items()}
+                                                    for name, table in variables.items()},
+                                    {(c.target, c.input) for c in connections})
+    carried = {target for e in exposed if e.causality != "output" for target in e.targets}
+    lost = [f"{i}.{n}" for i, values in system.parameters.items() for n in values if (i, n) not in carried]
+    if lost:
+        raise ValueError(f"system {system.name}: fmpy's container sets only the variables it exposes, not "
+                         f"{', '.join(lost)}; build it as one native FMU instead (crane-fmu build --one-fmu)")
 
     def float64(v):  # FMPy 0.3.32 writes a connection's type as declared; its container needs FMI 3.0 names
         return attrs.evolve(v, type="Float64") if v.type == "Real" else v
@@ -59,39 +66,17 @@ def build_container(system, fmu_dir, path):
     md.modelVariables.append(ModelVariable(name="time", causality="independent", variability="continuous",
                                            type="Float64", description="simulation time"))
     mappings = {}
-
-    def expose(name, causality, targets, start=None, description=None):
-        first = variables[targets[0][0]][targets[0][1]]
-        v = ModelVariable(name=name, causality=causality, type="Float64", start=start,
-                          variability="fixed" if causality == "parameter" else "continuous",
-                          description=description or first.description, unit=first.unit)
+    for e in exposed:
+        first = variables[e.targets[0][0]][e.targets[0][1]]
+        v = ModelVariable(name=e.name, causality=e.causality, type="Float64",
+                          start=None if e.start is None else repr(float(e.start)),
+                          variability="fixed" if e.causality == "parameter" else "continuous",
+                          description=first.description, unit=first.unit)
         md.modelVariables.append(v)
-        mappings[v] = [(components[i], variables[i][n]) for i, n in targets]
-        if causality == "output":
+        mappings[v] = [(components[i], variables[i][n]) for i, n in e.targets]
+        if e.causality == "output":
             md.outputs.append(Unknown(index=len(md.modelVariables), variable=v))
             md.initialUnknowns.append(Unknown(index=len(md.modelVariables), variable=v))
-
-    def start(instance, name):
-        value = system.parameters.get(instance, {}).get(name, variables[instance][name].start)
-        return repr(float(value))
-
-    for name in SHARED:  # to the built-in instances that model the crane
-        holders = [i for i in ("plant", "controller", "planner")
-                   if i in fmus and name in variables[i] and variables[i][name].causality == "parameter"]
-        expose(name, "parameter", [(i, name) for i in holders], start("plant", name))
-    target = "planner" if "planner" in fmus else "controller" if "controller" in fmus else None
-    if target and "x_d" in variables[target]:
-        expose("x_d", "parameter", [(target, "x_d")], start(target, "x_d"))
-    expose("theta1_0", "parameter", [("plant", "theta1_0")], start("plant", "theta1_0"))
-    fed = {(c.target, c.input) for c in connections}
-    for name, v in variables["plant"].items():
-        if v.causality == "input" and ("plant", name) not in fed:
-            expose(name, "input", [("plant", name)], start("plant", name))
-    for name, v in variables["plant"].items():
-        if v.causality == "output":
-            expose(name, "output", [("plant", name)])
-    if "controller" in fmus and "u" in variables["controller"]:
-        expose("u", "output", [("controller", "u")])
     _declare_dependencies(md, mappings, {name: c.modelDescription for name, c in components.items()}, connections)
     config = Configuration(parallelDoStep=False, modelDescription=md, components=list(components.values()),
                            connections=links, variableMappings=mappings)
@@ -111,18 +96,17 @@ def _declare_dependencies(md, mappings, inner, connections):
 
     ``inner`` is ``{instance: its modelDescription}``; an inner output without a list reads every input.
     """
-    from crane_fmu.build_scripts.model_description import system_dependencies
-
     dependencies = {}
     for name, inner_md in inner.items():
         inputs = tuple(v.name for v in inner_md.modelVariables if v.causality == "input")
         dependencies[name] = {u.variable.name: inputs if u.dependencies is None else
-                              tuple(v.name for v in u.dependencies) for u in inner_md.outputs}
+                              tuple(v.name for v in u.dependencies if v.causality == "input")
+                              for u in inner_md.outputs}  # a continuous state an output lists is no input
     own = {v.name: v for v in md.modelVariables}
     targets = {v.name: [(c.name, t.name) for c, t in mapped] for v, mapped in mappings.items()}
-    read = system_dependencies(dependencies, connections,
-                               {n: targets[n][0] for n, v in own.items() if v.causality == "output"},
-                               {n: targets[n] for n, v in own.items() if v.causality == "input"})
+    read = closed_loop.system_dependencies(dependencies, connections,
+                                           {n: targets[n][0] for n, v in own.items() if v.causality == "output"},
+                                           {n: targets[n] for n, v in own.items() if v.causality == "input"})
     parameters = [v for v in md.modelVariables if v.causality == "parameter"]
     for unknown in md.outputs:
         unknown.dependencies = [own[n] for n in read[unknown.variable.name]]
@@ -131,3 +115,8 @@ def _declare_dependencies(md, mappings, inner, connections):
         unknown.dependencies = sorted([own[n] for n in read[unknown.variable.name]] + parameters,
                                       key=md.modelVariables.index)
         unknown.dependenciesKind = ["dependent"] * len(unknown.dependencies) or None
+
+
+def _number(v):
+    """A Real's start value as a float (fmpy reads it as text), any other's as it is."""
+    return float(v.start) if v.type in ("Real", "Float64") and v.start is not None else v.start

@@ -3,16 +3,22 @@
 A system is data (``crane_fmu.cosim.System``): instances named by component
 model identifiers, connections matched by signal name, parameter values, times.
 Every command takes a system by name or as an SSP file; nothing else knows
-which instances exist.
+which instances exist. A built-in system's tags say what else is made of it:
+
+- ``container``: packed as one FMU by ``crane-fmu build`` (fmpy's container, ``container.py``);
+- ``one-fmu``: built as one native FMU once its components are all native (``build_scripts/one_fmu.py``);
+- ``regulation``: a closed loop regulating from a swing, run by ``crane-fmu targets``.
 """
 
 import contextlib
 import math
+from dataclasses import replace
 from pathlib import Path
 
 from crane_fmu import components
 from crane_fmu.controller_interface import MEASURED, TRACKED, told
 from crane_fmu.cosim.connections import Connection
+from crane_fmu.cosim.ssp import load_system
 from crane_fmu.cosim.system import System, read_fmu
 from crane_fmu.registry import Registry
 
@@ -20,13 +26,16 @@ _SYSTEMS = Registry("system", lambda s: s.name, " (or an .ssp/.ssd file)")
 register, unregister, get, registered = _SYSTEMS.register, _SYSTEMS.unregister, _SYSTEMS.get, _SYSTEMS.registered
 
 
+def tagged(tag):
+    """The names of the registered systems with ``tag``, in registration order."""
+    return [s.name for s in registered() if tag in s.tags]
+
+
 @contextlib.contextmanager
 def open_system(name_or_file):
     """Yield the system of a registered name or of an SSP file (``.ssp`` or ``.ssd``)."""
     text = str(name_or_file)
     if text.endswith((".ssp", ".ssd")):
-        from crane_fmu.cosim.ssp import load_system
-
         with load_system(text) as system:
             yield system
     else:
@@ -108,22 +117,57 @@ def tell_controllers(system, fmu_dir):
     return system, notes
 
 
-def at_step(system, fmu_dir, step):
-    """``system`` with ``h`` set to ``step`` on every instance whose component has that parameter, unless set.
+def kinds(system):
+    """``{instance: model identifier}``; an instance given as an ``.fmu`` file is named by its modelDescription."""
+    return {name: read_fmu(source).coSimulation.modelIdentifier if str(source).endswith(".fmu") else source
+            for name, source in system.instances.items()}
 
-    A component's parameter ``h`` is the communication step it is designed for
-    (the LQR's discrete design, the speed guards); a run at another step gets a
-    design for its own step.
+
+def prepare(system, step=None, stop_time=None, values=(), check=True):
+    """The system as it runs, prepared in one place for every run (simulate, compare, sweep, targets, the
+    reproduction, the benchmarks, the one-FMU generator): what a command gives over the system's own.
+
+    Parameters
+    ----------
+    system : System
+    step, stop_time : float, optional
+        The communication step and stop time [s] (default: the system's).
+    values : sequence of dict
+        ``{instance: {variable: value}}`` set over the system's values, in order (a parameter file's,
+        then ``--set``'s).
+    check : bool
+        Check the values by the components' rules (:func:`check_parameters`); a command that reports a
+        refused case as a row of its table checks later.
+
+    Returns
+    -------
+    System
+        With that step and stop time, those values, and ``h`` set to the step on every instance whose
+        component has that parameter (the communication step it is designed for: the LQR's discrete
+        design, the speed guards) where nothing set it; every value checked by its component's rules.
+
+    Raises
+    ------
+    ValueError
+        One line: an unknown instance, a value a component's rules refuse (``"plant: l1 must be > 0 and
+        finite, got -1.0"``). Whether the step divides the interval is the run's check (the master's).
     """
-    overrides = {}
-    for name, path in system.fmus(fmu_dir).items():
-        component = components.find(read_fmu(path).coSimulation.modelIdentifier)
+    step = system.step if step is None else step
+    system = replace(system, step=step, stop_time=system.stop_time if stop_time is None else stop_time)
+    for overrides in values:
+        system = system.with_parameters(overrides)
+    designed = {}
+    for name, kind in kinds(system).items():
+        component = components.find(kind)
         if component and "h" in component.names("parameter") and "h" not in system.parameters.get(name, {}):
-            overrides[name] = {"h": step}
-    return system.with_parameters(overrides)
+            designed[name] = {"h": step}
+    system = system.with_parameters(designed)
+    if check:
+        check_parameters(system)
+    return system
 
 
-def check_parameters(system, fmu_dir):
+def check_parameters(system):
     """Apply each instance's component rules (by model identifier, never by instance name).
 
     Raises
@@ -131,27 +175,29 @@ def check_parameters(system, fmu_dir):
     ValueError
         ``"plant: l1 must be > 0 and finite, got -1.0"``.
     """
-    for name, path in system.fmus(fmu_dir).items():
-        identifier = read_fmu(path).coSimulation.modelIdentifier
+    for name, identifier in kinds(system).items():
         try:
             components.check_parameters(identifier, system.parameters.get(name, {}))
         except ValueError as exc:
             raise ValueError(f"{name}: {exc}") from None
 
 
+LOOP = ("container", "one-fmu")  # a closed loop packed as one FMU both ways
+
 register(System("paper", {"plant": "CranePlant", "controller": "BacksteppingController"},
                 description="Section V: the plant and the paper's backstepping controller (eq 21, derived b3), "
-                            "theta1(0) = 10 deg"))
+                            "theta1(0) = 10 deg", tags=(*LOOP, "regulation")))
 register(System("free", {"plant": "CranePlant"}, description="the plant alone, u = 0: free swing from 10 deg"))
 register(System("lqr", {"plant": "CranePlant", "controller": "LqrController"},
                 description="Section V regulation from theta1(0) = 10 deg by the discrete LQR, |u| <= 2 m/s2, "
-                            "|v| <= 1 m/s"))
+                            "|v| <= 1 m/s", tags=(*LOOP, "regulation")))
 register(System("energy", {"plant": "CranePlant", "controller": "EnergyController"},
                 description="Section V regulation from theta1(0) = 10 deg by the energy-coupling law (proof in "
-                            "crane_fmu/model/energy.py)"))
+                            "crane_fmu/model/energy.py)", tags=(*LOOP, "regulation")))
 register(System("transport", {"plant": "CranePlant", "planner": "TrajectoryPlanner", "controller": "LqrController"},
                 parameters={"plant": {"theta1_0": 0.0}, "planner": {"x_d": 2.0}}, stop_time=10.0,
-                description="a 2 m move from rest: ZV-shaped reference (planner.x_d) tracked by the LQR"))
+                description="a 2 m move from rest: ZV-shaped reference (planner.x_d) tracked by the LQR",
+                tags=LOOP))
 register(System("hoist-transport",
                 {"plant": "CranePlant", "planner": "TrajectoryPlanner", "hoist": "TrajectoryPlanner",
                  "controller": "LqrController"},
@@ -164,7 +210,7 @@ register(System("hoist-transport",
                             "controller": {"l1": 2.0, "l1_low": 1.0, "l1_high": 2.0}},
                 stop_time=12.0,
                 description="a 2 m move while the hoist lifts the load from l1 = 2 m to 1 m; the LQR's gains "
-                            "follow the measured cable length"))
+                            "follow the measured cable length", tags=("one-fmu",)))
 
 # What a crane measures: the sensor sees the plant's true x, theta1, theta2 and outputs x_meas, theta1_meas,
 # theta2_meas (to the estimator by name); the estimator's x, ..., dtheta2 feed the controller (written out: the

@@ -21,7 +21,8 @@ def test_plain_loop_records_the_masters_numbers(crane_fmus, connections, tmp_pat
 
 
 def test_derivative_bench_prints_the_cost_of_the_native_derivatives():
-    """A short run: each figure measured, the whole Jacobian (13 directional derivatives) dearer than one."""
+    """A short run: each figure measured, of the model's C functions and through the FMU's FMI 2.0 interface; the
+    whole Jacobian (13 directional derivatives) dearer than one."""
     from crane_fmu.bench_native import run_derivative_bench
     from crane_fmu.build_scripts.native import NativeUnavailable, compilers
 
@@ -33,4 +34,5 @@ def test_derivative_bench_prints_the_cost_of_the_native_derivatives():
     figures = run_derivative_bench(evaluations=20000, repeat=1, out=lines.append)
     assert all(value > 0 for value in figures.values())
     assert figures["jacobian_us"] > figures["directional_us"]
-    assert "the whole Jacobian" in lines[-1]
+    assert figures["fmi_jacobian_us"] > figures["fmi_directional_us"]  # through the FMU's FMI 2.0 calls
+    assert "through FMI 2.0" in lines[-2] and "the whole Jacobian" in lines[-1]

@@ -14,7 +14,8 @@ machine (FMI 2.0 section 4.2.4, FMI 3.0 section 4.2) to classify each call befor
   OK, with a warning message.
 
 Every error status must come with an error message and no other status with one. The driver prints
-the count per class; each class must be reached at least MINIMUM times. Discards and warnings come
+the count per class; each class must be reached at least MINIMUM times. The Python, native and one-FMU
+(a system of native models) kinds all answer through the one C framework. Discards and warnings come
 only from the plant (the controllers and the planner have no state that can diverge and no limits
 that warn), so they are required of the plant alone.
 """
@@ -25,6 +26,7 @@ import pytest
 from test_c_host import compile_hosts, unpack_fmu
 
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
+from crane_fmu.build_scripts.native import native_dir
 
 DRIVER = r"""
 #include <dlfcn.h>
@@ -126,14 +128,15 @@ static void expect(int status, int expected, int cls, int mode) {
 int main(int argc, char **argv) {
     /* library token resources seed calls, then name=value: in=VR (inputs, repeated), out=VR (outputs,
        repeated), get=VR (other reals to get, repeated), param=VR (refused NaN at the end of initialisation),
-       default=VALUE (its default), and for the plant u=VR hoist=VR l1_now=VR l1_min=VR l1_max=VR */
+       default=VALUE (its default), for the plant u=VR hoist=VR l1_now=VR l1_min=VR l1_max=VR, and calm=1 for a
+       system whose inputs are disturbances of its plant (set only to values near zero) */
     so = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
     if (!so) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 3; }
     const char *token = argv[2], *resources = argv[3];
     rng = strtoull(argv[4], NULL, 10) | 1;
     long calls = atol(argv[5]);
     unsigned in[64], out[64], get[64], param = 0, u = 0, hoist = 0, l1_now = 0, l1_min = 0, l1_max = 0;
-    int n_in = 0, n_out = 0, n_get = 0, plant = 0;
+    int n_in = 0, n_out = 0, n_get = 0, plant = 0, calm = 0;
     double param_default = 0.0;
     for (int i = 6; i < argc; i++) {
         char *eq = strchr(argv[i], '=');
@@ -145,6 +148,7 @@ int main(int argc, char **argv) {
         else if (!strcmp(key, "get") && n_get < 64) get[n_get++] = atoi(value);
         else if (!strcmp(key, "param")) param = atoi(value);
         else if (!strcmp(key, "default")) param_default = atof(value);
+        else if (!strcmp(key, "calm")) calm = atoi(value);
         else if (!strcmp(key, "u")) u = atoi(value), plant = 1;
         else if (!strcmp(key, "hoist")) hoist = atoi(value);
         else if (!strcmp(key, "l1_now")) l1_now = atoi(value);
@@ -155,9 +159,12 @@ int main(int argc, char **argv) {
     /* inputs the fuzzer sets with any value: every input of a controller; the plant's u, kept small so that
        only the diverging call diverges (hoist and forces are set by the warning call alone). Finite inputs
        near the largest double (1e308) are left out: the laws' arithmetic overflows on them and their
-       outputs then fail with Python's math error, which no class here predicts. */
+       outputs then fail with Python's math error, which no class here predicts. A system's inputs (hoist,
+       forces on its plant) stay near zero: larger ones may make its closed loop diverge, which is the
+       system's answer, not a class here. */
     static const double finite[] = {0.0, -0.0, 5e-324, 1e-3, 0.5, -1.0, 3.0, 1e6, -1e6, -1e-300};
     static const double small[] = {0.0, -0.0, 1e-3, 0.5, -1.0, 3.0, -3.0};
+    static const double near_zero[] = {0.0, -0.0, 1e-3, -1e-3};
     static const double non_finite[] = {NAN, INFINITY, -INFINITY};
     static const double steps[] = {1e-3, 0.01, 0.1};
     static const double long_steps[] = {0.5, 2.0};
@@ -208,7 +215,8 @@ int main(int argc, char **argv) {
         case 4: {
             if (n_in == 0) continue;
             int bad = next(4) == 0;
-            double value = bad ? non_finite[next(3)] : plant ? small[next(7)] : finite[next(10)];
+            double value = bad ? non_finite[next(3)] : plant ? small[next(7)] : calm ? near_zero[next(4)]
+                           : finite[next(10)];
             status = SET(plant ? u : in[next(n_in)], value);
             if (!SETTABLE(m)) expect(status, 3, WRONG_STATE, m);
             else if (bad) expect(status, 3, BAD_VALUE, m), mode = ERR;
@@ -318,10 +326,19 @@ def drivers(tmp_path_factory):
     return compile_hosts(DRIVER, tmp_path_factory.mktemp("fuzz"))
 
 
-@pytest.mark.parametrize("name", ["CranePlant", "LqrController", "BacksteppingController", "TrajectoryPlanner"])
+MODELS = ["CranePlant", "LqrController", "BacksteppingController", "TrajectoryPlanner"]
+# every kind of FMU over the one C framework: the Python model, the native models, a system of them as one FMU
+FMUS = [("python", name) for name in MODELS] + [("native", name) for name in MODELS] + [("one-fmu", "CraneLqr")]
+
+
+@pytest.mark.parametrize(("kind", "name"), FMUS)
 @pytest.mark.parametrize("version", [2, 3])
-def test_random_calls_from_a_c_host_get_the_status_their_class_requires(drivers, fmu_dir, name, version, tmp_path):
-    fmu = (fmu_dir if version == 2 else fmi3_dir(fmu_dir)) / f"{name}.fmu"
+def test_random_calls_from_a_c_host_get_the_status_their_class_requires(drivers, fmu_dir, kind, name, version,
+                                                                       tmp_path):
+    folder = (fmu_dir if version == 2 else fmi3_dir(fmu_dir)) if kind == "python" else native_dir(fmu_dir, version)
+    fmu = folder / f"{name}.fmu"
+    if kind != "python" and not fmu.exists():
+        pytest.skip("no native FMUs were built (no C compiler)")
     md, library, token, resources = unpack_fmu(fmu, tmp_path)
     reals = {v.name: v for v in md.modelVariables if v.type in ("Real", "Float64")}
     args = [f"in={v.valueReference}" for v in reals.values() if v.causality == "input"]
@@ -331,12 +348,14 @@ def test_random_calls_from_a_c_host_get_the_status_their_class_requires(drivers,
     plant = name == "CranePlant"
     if plant:
         args += [f"{n}={reals[n].valueReference}" for n in ("u", "hoist", "l1_now", "l1_min", "l1_max")]
+    if kind == "one-fmu":
+        args.append("calm=1")
     proc = subprocess.run([str(drivers[version]), library, token, resources, "12345", "4000", *args],
                           capture_output=True, text=True, timeout=900, cwd=tmp_path)
     assert proc.returncode == 0, f"status {proc.returncode}: {proc.stdout[-2000:]} {proc.stderr[-2000:]}"
     words = proc.stdout.split()
     counts = dict(zip(words[::2], map(int, words[1::2])))
-    print(f"FMI {version}.0 {name}:", counts)
+    print(f"FMI {version}.0 {kind} {name}:", counts)
     required = CLASSES if plant else CLASSES[:4]
     assert all(counts[k] >= MINIMUM for k in required), (f"fewer than {MINIMUM} calls in a class", counts)
     assert plant or counts["diverging"] == counts["warning"] == 0, counts

@@ -49,7 +49,7 @@ def test_simulate_free_swing_and_settings(fmu_dir, tmp_path, capsys):
     csv = tmp_path / "free.csv"
     code, _, _ = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--system", "free", "--stop-time", "0.5",
                       "--step", "0.05", "--set", "plant.theta1_0=0.2", "--set", "plant.l2=0.25",
-                      "--master", "jacobi", "--out", str(csv))
+                      "--algorithm", "jacobi", "--out", str(csv))
     assert code == 0
     data = read_csv(csv)
     assert "controller.u" not in data
@@ -74,7 +74,7 @@ def test_simulate_free_swing_and_settings(fmu_dir, tmp_path, capsys):
     (["--step", "0"], "step must be > 0, got 0.0"),
     (["--stop-time", "-1"], "stop time must be > start time 0.0, got -1.0"),
     (["--step", "x"], "argument --step: 'x' is not a number"),
-    (["--master", "euler"], "argument --master: invalid choice: 'euler'"),
+    (["--algorithm", "euler"], "argument --algorithm: invalid choice: 'euler'"),
     (["--parameters", "my.ssv"], "--parameters my.ssv: not found (an SSP parameter set, e.g. "
                                  "examples/parameters.ssv)"),
 ])
@@ -339,11 +339,11 @@ def test_simulate_writes_parquet_with_the_csv_numbers(fmu_dir, tmp_path, capsys)
 
 
 def test_the_iterative_jacobi_master_is_a_choice_and_settles_like_gauss_seidel(fmu_dir, tmp_path, capsys):
-    """Selectable by --master; on the paper's loop (no algebraic loop) its fixed point is Gauss-Seidel's
+    """Selectable by --algorithm; on the paper's loop (no algebraic loop) its fixed point is Gauss-Seidel's
     exchange, so the CSV is the same byte for byte, while plain Jacobi (u one step late) differs."""
     common = ["simulate", "--fmu-dir", str(fmu_dir), "--stop-time", "0.5"]
     for master in ("gauss-seidel", "iterative-jacobi", "jacobi"):
-        assert main(common + ["--master", master, "--out", str(tmp_path / f"{master}.csv")]) == 0
+        assert main(common + ["--algorithm", master, "--out", str(tmp_path / f"{master}.csv")]) == 0
     assert (tmp_path / "iterative-jacobi.csv").read_bytes() == (tmp_path / "gauss-seidel.csv").read_bytes()
     assert (tmp_path / "jacobi.csv").read_bytes() != (tmp_path / "gauss-seidel.csv").read_bytes()
 

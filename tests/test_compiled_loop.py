@@ -14,20 +14,21 @@ import pytest
 
 from crane_fmu import systems
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
-from crane_fmu.build_scripts.native import MODELS, native_dir
+from crane_fmu.build_scripts.native import native_dir, ported
 from crane_fmu.cosim import FmiError
 from crane_fmu.cosim.adapters import open_instance
 from crane_fmu.cosim.master import Master
 from crane_fmu.cosim.recorder import ArrayRecorder
 
 
-def _run(system, folder, loop, mode="gauss-seidel", step=1e-3, stop_time=2.0, observers=()):
+def _run(system, folder, loop, algorithm="gauss-seidel", step=1e-3, stop_time=2.0, observers=()):
     """``(the master's compiled loop or None, columns, error message or None)`` of a run of ``system``."""
-    fmus, connections = systems.at_step(system, folder, step).resolve(folder)
+    system = systems.prepare(system, step, stop_time)
+    fmus, connections = system.resolve(folder)
     instances = {name: open_instance(path, name) for name, path in fmus.items()}
     recorder, error = ArrayRecorder(), None
     try:
-        master = Master(instances, connections, mode, loop=loop)
+        master = Master(instances, connections, algorithm, loop=loop)
         try:
             master.run(0.0, stop_time, step, [recorder, *observers], system.parameters)
         except FmiError as exc:
@@ -45,16 +46,16 @@ def _folders(fmu_dir):
     return folders
 
 
-@pytest.mark.parametrize("mode", ["gauss-seidel", "jacobi"])
+@pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
 @pytest.mark.parametrize("name", ["paper", "transport"])  # transport's controller copies inputs of two instances
-def test_the_compiled_loop_gives_the_python_loops_numbers_bit_for_bit(fmu_dir, name, mode):
+def test_the_compiled_loop_gives_the_python_loops_numbers_bit_for_bit(fmu_dir, name, algorithm):
     for label, folder in _folders(fmu_dir).items():
-        compiled, fast, _ = _run(systems.get(name), folder, "auto", mode)
+        compiled, fast, _ = _run(systems.get(name), folder, "auto", algorithm)
         # called holding the GIL where some FMU runs Python in this interpreter (as the Python loop calls it):
         # (the native folder holds Python FMUs of the components not ported to C)
-        python_inside = label.startswith("python") or not set(systems.get(name).instances.values()) <= set(MODELS)
+        python_inside = label.startswith("python") or not set(systems.get(name).instances.values()) <= set(ported())
         assert isinstance(compiled.lib, ctypes.PyDLL) == python_inside, label
-        used, slow, _ = _run(systems.get(name), folder, "python", mode)
+        used, slow, _ = _run(systems.get(name), folder, "python", algorithm)
         assert used is None
         assert fast.keys() == slow.keys() and len(fast["time"]) == 2001
         for column in fast:

@@ -32,7 +32,7 @@ def test_the_container_is_a_valid_fmi3_fmu_with_the_crane_interface(paper_contai
 def test_section5_from_the_container_equals_our_master(paper_container, fmu_dir):
     """fmpy simulates the container; our master in Jacobi mode without the initial exchange: bit for bit."""
     result = simulate_fmu(str(paper_container), stop_time=20.0, output_interval=1e-3)
-    ours = run(systems.get("paper"), fmu_dir, mode="jacobi", initial_exchange=False).columns()
+    ours = run(systems.get("paper"), fmu_dir, algorithm="jacobi", initial_exchange=False).columns()
     for name in ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2"):
         assert np.abs(result[name] - ours["plant." + name]).max() <= 1e-9, name  # measured: 0.0
     # the container reports u after its exchange, our master before the next one: one step apart
@@ -45,7 +45,7 @@ def test_a_container_parameter_reaches_plant_and_controller(fmu_dir, tmp_path):
     container = build_container(systems.get("lqr"), fmu_dir, tmp_path / "CraneLqr.fmu")
     result = simulate_fmu(str(container), stop_time=3.0, output_interval=1e-3, start_values={"l1": 1.5})
     both = systems.get("lqr").with_parameters({"plant": {"l1": 1.5}, "controller": {"l1": 1.5}})
-    ours = run(both, fmu_dir, mode="jacobi", initial_exchange=False, stop_time=3.0).columns()
+    ours = run(both, fmu_dir, algorithm="jacobi", initial_exchange=False, stop_time=3.0).columns()
     assert np.array_equal(result["theta1"], ours["plant.theta1"])
 
 
@@ -57,3 +57,26 @@ def test_build_container_command(fmu_dir, tmp_path, capsys):
     assert (tmp_path / "build" / "containers" / "CraneTransport.fmu").is_file()
     assert main(["build", "--out", str(out), "--container", "nowhere"]) == 2
     assert "no system 'nowhere'" in capsys.readouterr().err
+
+
+def test_setting_every_parameter_to_its_start_value_changes_nothing(fmu_dir, tmp_path):
+    """What many tools do (Simulink sets every parameter): the container's run must be the system's own. With
+    the plant's l1 at 1.2 m and the LQR's at its 1 m, the shared l1 (start 1.2) goes to the plant only, as in the
+    one-FMU (closed_loop.py): set on both, it would redesign the LQR."""
+    system = systems.get("lqr").with_parameters({"plant": {"l1": 1.2}})
+    container = build_container(system, fmu_dir, tmp_path / "CraneLqr.fmu")
+    starts = {v.name: float(v.start) for v in read_model_description(str(container)).modelVariables
+              if v.causality == "parameter"}
+    assert starts["l1"] == 1.2
+    result = simulate_fmu(str(container), stop_time=3.0, output_interval=1e-3, start_values=starts)
+    ours = run(system, fmu_dir, algorithm="jacobi", initial_exchange=False, stop_time=3.0).columns()
+    for name in ("x", "theta1"):
+        assert np.array_equal(result[name], ours["plant." + name]), name
+
+
+def test_a_system_with_values_the_container_cannot_set_is_refused(fmu_dir, tmp_path):
+    """hoist-transport's planners have values of their own (the hoist's move, the shaper): fmpy's container could
+    not set them and would run another system."""
+    with pytest.raises(ValueError, match="hoist.x0") as refused:
+        build_container(systems.get("hoist-transport"), fmu_dir, tmp_path / "CraneHoistTransport.fmu")
+    assert "\n" not in str(refused.value) and not (tmp_path / "CraneHoistTransport.fmu").exists()

@@ -244,11 +244,14 @@ def test_transport_through_the_fmus_arrives(fmu_dir):
     assert max(abs(result["plant.theta1"][-1]), abs(result["plant.theta2"][-1])) < math.radians(0.1)
 
 
-def test_runs_at_another_step_get_designs_for_it(fmu_dir):
-    adapted = systems.at_step(systems.get("transport"), fmu_dir, 0.01)
-    assert adapted.parameters["controller"]["h"] == 0.01 and "h" not in adapted.parameters.get("planner", {})
-    kept = systems.at_step(systems.get("lqr").with_parameters({"controller": {"h": 0.002}}), fmu_dir, 0.01)
+def test_runs_at_another_step_get_designs_for_it():
+    adapted = systems.prepare(systems.get("transport"), 0.01)
+    assert adapted.step == 0.01 and adapted.parameters["controller"]["h"] == 0.01
+    assert "h" not in adapted.parameters.get("planner", {})
+    kept = systems.prepare(systems.get("lqr"), 0.01, values=[{"controller": {"h": 0.002}}])
     assert kept.parameters["controller"]["h"] == 0.002  # what the user set stays
+    with pytest.raises(ValueError, match="controller: h must be > 0"):
+        systems.prepare(systems.get("lqr"), values=[{"controller": {"h": -1.0}}])
 
 
 def test_lqr_gains_follow_the_measured_cable_length():

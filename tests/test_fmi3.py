@@ -37,10 +37,10 @@ def test_fmi3_fmus_validate_and_declare_units(fmi3_fmus, instance, table):
     assert units["rad"].displayUnits[0].factor == pytest.approx(180 / math.pi, rel=1e-15)
 
 
-@pytest.mark.parametrize("mode", ["gauss-seidel", "jacobi"])
-def test_fmi3_pair_gives_the_fmi2_results(crane_fmus, fmi3_fmus, connections, mode):
-    fmi2 = simulate(crane_fmus, connections, 2.0, 1e-3, mode).columns()
-    fmi3 = simulate(fmi3_fmus, connections, 2.0, 1e-3, mode).columns()
+@pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
+def test_fmi3_pair_gives_the_fmi2_results(crane_fmus, fmi3_fmus, connections, algorithm):
+    fmi2 = simulate(crane_fmus, connections, 2.0, 1e-3, algorithm).columns()
+    fmi3 = simulate(fmi3_fmus, connections, 2.0, 1e-3, algorithm).columns()
     assert list(fmi2) == list(fmi3)
     for name in fmi2:
         assert np.array_equal(fmi2[name], fmi3[name]), name  # same Python code: bit for bit

@@ -129,35 +129,35 @@ def test_controller_fmu_equals_the_law_at_random_states(crane_fmus):
             inst.free()
 
 
-@pytest.mark.parametrize("mode", ["gauss-seidel", "jacobi"])
-def test_closed_loop_equals_sampled_data_reference(crane_fmus, connections, mode):
+@pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
+def test_closed_loop_equals_sampled_data_reference(crane_fmus, connections, algorithm):
     """Plant and controller FMUs through the master vs u held per step, plant by DOP853.
 
     With the theta2 row weighted 0 the loop is well damped: measured 1.7e-10 rad
     on the angles, 1.5e-9 rad/s on the rates over 20 s at h = 10 ms.
     """
     params = {"controller": {"w_theta2": 0.0}}
-    result = simulate(crane_fmus, connections, 20.0, 0.01, mode, params).columns()
+    result = simulate(crane_fmus, connections, 20.0, 0.01, algorithm, params).columns()
     gains = ControllerGains(w_theta2=0.0)
-    ref, u = sampled_closed_loop(PAPER_X0, PlantParameters(), gains, 0.01, 2000, mode)
+    ref, u = sampled_closed_loop(PAPER_X0, PlantParameters(), gains, 0.01, 2000, algorithm)
     got = _states(result)
     assert np.abs(got[:, [0, 2, 4]] - ref[:, [0, 2, 4]]).max() < 1e-9
     assert np.abs(got[:, [1, 3, 5]] - ref[:, [1, 3, 5]]).max() < 1e-8
     assert np.abs(result["controller.u"][:-1] - u).max() < 1e-8
     other, _ = sampled_closed_loop(PAPER_X0, PlantParameters(), gains, 0.01, 2000,
-                                   "jacobi" if mode == "gauss-seidel" else "gauss-seidel")
+                                   "jacobi" if algorithm == "gauss-seidel" else "gauss-seidel")
     assert np.abs(got[:, 2] - other[:, 2]).max() > 1e-5  # the two modes are told apart
 
 
-@pytest.mark.parametrize("mode", ["gauss-seidel", "jacobi"])
-def test_papers_law_closed_loop_equals_reference(crane_fmus, connections, mode):
+@pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
+def test_papers_law_closed_loop_equals_reference(crane_fmus, connections, algorithm):
     """The paper's law (W = I, K2_theta2 = 310) at h = 1 ms over 2 s.
 
     Its high loop gain amplifies the RK4 error: measured 1.0e-7 m on x, 9.5e-8
     rad on the angles, 4.8e-6 on the rates; bounds 1e-6 and 5e-5.
     """
-    result = simulate(crane_fmus, connections, 2.0, 0.001, mode).columns()
-    ref, _ = sampled_closed_loop(PAPER_X0, PlantParameters(), ControllerGains(), 0.001, 2000, mode)
+    result = simulate(crane_fmus, connections, 2.0, 0.001, algorithm).columns()
+    ref, _ = sampled_closed_loop(PAPER_X0, PlantParameters(), ControllerGains(), 0.001, 2000, algorithm)
     got = _states(result)
     assert np.abs(got[:, [0, 2, 4]] - ref[:, [0, 2, 4]]).max() < 1e-6
     assert np.abs(got[:, [1, 3, 5]] - ref[:, [1, 3, 5]]).max() < 5e-5
@@ -243,6 +243,25 @@ print(*folders)
     assert done.returncode == 0, done.stderr
     folders = done.stdout.split()
     assert len(folders) == 2 and not any(Path(f).exists() for f in folders)
+
+
+@pytest.mark.parametrize("folder", ["fmus", "fmi3"])
+def test_an_fmu_runs_after_another_of_its_core_whose_folder_is_gone(fmu_dir, folder):
+    """Python FMUs of one core share its modules in a host's interpreter: after fmpy ran Gust (whose folder it
+    then removed), MpcController, whose model module Gust never imported, must still start (a fresh process:
+    in this one an earlier test may have imported every module already)."""
+    import subprocess
+    import sys
+
+    script = """
+import sys
+from fmpy import simulate_fmu
+simulate_fmu(sys.argv[1], stop_time=0.01, output_interval=1e-3)
+simulate_fmu(sys.argv[2], stop_time=0.01, output_interval=1e-3)
+"""
+    fmus = [str(fmu_dir.parent / folder / f"{name}.fmu") for name in ("Gust", "MpcController")]
+    done = subprocess.run([sys.executable, "-c", script, *fmus], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
 
 
 @pytest.mark.parametrize("folder", ["fmus", "fmi3"])

@@ -16,9 +16,9 @@ from fmpy import read_model_description
 from native_fmus import open_native
 
 from crane_fmu import components, systems
-from crane_fmu.build_scripts.build_fmus import CONTAINERS, container_name, containers_dir, fmi3_dir
-from crane_fmu.build_scripts.native import MODELS, native_dir
-from crane_fmu.build_scripts.one_fmu import ONE_FMUS, not_native, one_fmu_name
+from crane_fmu.build_scripts.build_fmus import container_name, containers_dir, fmi3_dir
+from crane_fmu.build_scripts.native import native_dir, ported
+from crane_fmu.build_scripts.one_fmu import not_native, one_fmu_name
 
 # Parameters under which every declared dependency acts: the LQR and the MPC read l1_now only with a schedule
 # (the MPC takes its nearest design: designs 1 mm apart, so that the test's change of l1_now picks another).
@@ -33,22 +33,25 @@ def _paths(fmu_dir, kind, version):
         folder = fmu_dir if version == 2 else fmi3_dir(fmu_dir)
         return [folder / f"{c.model_identifier}.fmu" for c in components.registered() if c.role != "benchmark"]
     if kind == "container":
-        return [containers_dir(fmu_dir) / f"{container_name(name)}.fmu" for name in CONTAINERS]
+        return [containers_dir(fmu_dir) / f"{container_name(name)}.fmu" for name in systems.tagged("container")]
     folder = native_dir(fmu_dir, version)
     if not (folder / "CranePlant.fmu").exists():
         pytest.skip("no native FMUs were built (no C compiler)")
     if kind == "native":
-        return [folder / f"{name}.fmu" for name in MODELS]
-    return [folder / f"{one_fmu_name(name)}.fmu" for name in ONE_FMUS if not not_native(systems.get(name))]
+        return [folder / f"{name}.fmu" for name in ported()]
+    return [folder / f"{one_fmu_name(name)}.fmu" for name in systems.tagged("one-fmu")
+            if not not_native(systems.get(name))]
 
 
 def _declared(md, initial):
-    """``{output: set of the inputs its (initial) unknown lists}``, and the parameters each lists."""
+    """``{output: set of the inputs its (initial) unknown lists}``, and the parameters each lists (an FMU with
+    Model Exchange also lists the continuous states an output depends on: neither)."""
     unknowns = md.initialUnknowns if initial else md.outputs
     names = {v.name for v in md.modelVariables if v.causality == "input"}
-    found = {u.variable.name: {v.name for v in u.dependencies} for u in unknowns}
+    states = {d.variable.derivative.name for d in md.derivatives}
+    found = {u.variable.name: {v.name for v in u.dependencies} for u in unknowns if u.variable.causality == "output"}
     assert all(u.dependencies is not None for u in unknowns), "an unknown without a list claims every input"
-    return {o: deps & names for o, deps in found.items()}, {o: deps - names for o, deps in found.items()}
+    return {o: deps & names for o, deps in found.items()}, {o: deps - names - states for o, deps in found.items()}
 
 
 def _moved(fmu, vr, set_, get, inputs, outputs):

@@ -23,7 +23,8 @@ from native_fmus import close, compiler, messages, open_native, steps_after_rest
 
 from crane_fmu import components, systems
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
-from crane_fmu.build_scripts.native import NATIVE, native_dir
+from crane_fmu.build_scripts.model_exchange import me_variables
+from crane_fmu.build_scripts.native import FOLDERS, MODELS_DIR, native_dir, source_path
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cosim import run
 from crane_fmu.model import plant
@@ -65,12 +66,16 @@ def _units(path):
 
 @pytest.mark.parametrize("version", [2, 3])
 def test_native_model_description_has_the_python_fmus_variables(fmu_dir, native, version):
-    """Names, value references, causalities, start values, units, display units, descriptions: identical."""
+    """Names, value references, causalities, start values, units, display units, descriptions: identical, then
+    the Model Exchange variables (locals) that only the native FMU has."""
     ours, md = _variables(native[version] / "CranePlant.fmu")
     theirs, py_md = _variables(_python_fmu(fmu_dir, version))
-    assert ours == theirs
+    assert ours[:len(theirs)] == theirs
+    assert [v[0] for v in ours[len(theirs):]] == [v.name for v in me_variables(plant.COMPONENT)]
+    assert {v[2] for v in ours[len(theirs):]} == {"local"}
     assert md.coSimulation.modelIdentifier == py_md.coSimulation.modelIdentifier == "CranePlant"
-    assert _units(native[version] / "CranePlant.fmu") == _units(_python_fmu(fmu_dir, version))
+    native_units = _units(native[version] / "CranePlant.fmu")
+    assert all(unit in native_units for unit in _units(_python_fmu(fmu_dir, version)))
     assert (md.defaultExperiment.stopTime, md.defaultExperiment.stepSize) == \
         (py_md.defaultExperiment.stopTime, py_md.defaultExperiment.stepSize)
     assert [u.variable.name for u in md.outputs] == [u.variable.name for u in py_md.outputs]
@@ -86,7 +91,7 @@ def test_the_c_variable_header_is_generated_from_the_table(native):
         assert f"VR_{v.name} = {vr}," in header
     assert sorted(names) == ["binaries/linux64/CranePlant.so"] + (
         ["binaries/win64/CranePlant.dll"] if shutil.which("x86_64-w64-mingw32-gcc") else [])
-    assert not (NATIVE / "CranePlant_variables.h").exists()  # generated, never committed
+    assert not any((folder / "CranePlant_variables.h").exists() for folder in FOLDERS)  # generated, never committed
 
 
 # ---- the equations: accelerations at random states --------------------------------------------------------------
@@ -117,8 +122,9 @@ def accel_harnesses(tmp_path_factory):
     built = {}
     for name, flags in (("libm", []), ("portable", ["-DCRANE_OWN_MATH"])):
         built[name] = folder / name
-        subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", *flags, f"-I{NATIVE}",
-                        str(folder / "harness.c"), str(NATIVE / "plant_equations.c"), str(NATIVE / "portable_math.c"),
+        subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", *flags, f"-I{MODELS_DIR}",
+                        str(folder / "harness.c"), str(MODELS_DIR / "plant_equations.c"),
+                        str(MODELS_DIR / "portable_math.c"),
                         "-o", str(built[name]), "-lm"], check=True)
     return built
 
@@ -326,13 +332,12 @@ def test_the_model_and_framework_compile_without_warnings_under_strict_flags(tmp
     (tmp_path / "CranePlant_variables.h").write_text(variables_header(PLANT))
     for name in ("BacksteppingController", "LqrController"):
         (tmp_path / f"{name}_variables.h").write_text(variables_header(components.get(name)))
-    for framework in ("fmi2_framework.c", "fmi3_framework.c"):
-        subprocess.run([compiler(), *STRICT, f"-I{tmp_path}", f"-I{NATIVE}", f"-I{NATIVE.parent}",
-                        f"-I{fmi_headers()}", str(NATIVE / framework), "-o", str(tmp_path / "f.o")], check=True)
-    for source in ("crane_plant.c", "backstepping.c", "lqr.c", "plant_equations.c", "linalg.c", "framework.c",
-                   "py_repr.c", "portable_math.c"):
-        subprocess.run([compiler(), *STRICT, f"-I{tmp_path}", f"-I{NATIVE}", str(NATIVE / source), "-o",
-                        str(tmp_path / "m.o")], check=True)
+    includes = [f"-I{tmp_path}", *(f"-I{folder}" for folder in FOLDERS), f"-I{fmi_headers()}"]
+    for name in ("fmi2Functions.c", "fmi3Functions.c", "instance.c", "continuous.c", "py_repr.c", "component.c",
+                 "crane_plant.c", "plant_continuous.c", "backstepping.c", "lqr.c", "plant_equations.c", "linalg.c",
+                 "portable_math.c"):
+        subprocess.run([compiler(), *STRICT, *includes, str(source_path(name)), "-o", str(tmp_path / "f.o")],
+                       check=True)
 
 
 # ---- the build and the benchmark -----------------------------------------------------------------------------------

@@ -25,7 +25,7 @@ from native_fmus import close, compiler, messages, open_native, steps_after_rest
 from crane_fmu import components, systems
 from crane_fmu.analysis.scoreboard import Contender, systems_for
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
-from crane_fmu.build_scripts.native import MINGW, NATIVE, native_dir, variables_header
+from crane_fmu.build_scripts.native import FOLDERS, HOST, MINGW, MODELS_DIR, native_dir, source_path, variables_header
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cosim import System, run
 
@@ -98,9 +98,9 @@ def test_the_model_files_compile_without_warnings_under_strict_flags(tmp_path, o
     flags = [*STRICT, "-DCRANE_OWN_MATH"] if own_math else STRICT
     for name in NAMES:
         (tmp_path / f"{name}_variables.h").write_text(variables_header(components.get(name)))
-    for source in ("planner.c", "energy.c", "gust.c", "sensor.c", "portable_math.c"):
-        subprocess.run([compiler(), *flags, f"-I{tmp_path}", f"-I{NATIVE}", str(NATIVE / source), "-o",
-                        str(tmp_path / "m.o")], check=True)
+    for name in ("planner.c", "energy.c", "gust.c", "sensor.c", "component.c", "portable_math.c"):
+        subprocess.run([compiler(), *flags, f"-I{tmp_path}", *(f"-I{folder}" for folder in FOLDERS),
+                        str(source_path(name)), "-o", str(tmp_path / "m.o")], check=True)
 
 
 # ---- TrajectoryPlanner: outputs at random parameters and times ---------------------------------------------------
@@ -402,8 +402,8 @@ def test_the_portable_tanh_and_log_agree_with_glibcs(tmp_path):
     """The EnergyController's tanh and the Sensor's log in the Windows build: within 3 (tanh) and 1 (log) ULP of
     glibc's at 200000 random points, equal at most (fdlibm's methods; glibc's log is nearly correctly rounded)."""
     (tmp_path / "harness.c").write_text(MATH_HARNESS)
-    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", f"-I{NATIVE}",
-                    str(tmp_path / "harness.c"), str(NATIVE / "portable_math.c"), "-o", str(tmp_path / "h"), "-lm"],
+    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", f"-I{MODELS_DIR}",
+                    str(tmp_path / "harness.c"), str(MODELS_DIR / "portable_math.c"), "-o", str(tmp_path / "h"), "-lm"],
                    check=True)
     rng = random.Random(31)
     xs = [rng.uniform(-1, 1) * 10 ** rng.uniform(-20, 1.7) for _ in range(100_000)]
@@ -469,8 +469,8 @@ def _run_host(command, *args, cwd=None, env=None):
 @pytest.fixture(scope="module")
 def host(tmp_path_factory):
     host = tmp_path_factory.mktemp("host") / "host"
-    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", f"-I{NATIVE}",
-                    str(NATIVE / "host.c"), "-o", str(host), "-ldl", "-lpthread", "-lm"], check=True)
+    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", str(HOST), "-o",
+                    str(host), "-ldl", "-lpthread", "-lm"], check=True)
     return host
 
 
@@ -492,8 +492,7 @@ def wine(unpacked, tmp_path_factory):
     if shutil.which(MINGW) is None or shutil.which("wine") is None:
         pytest.skip("needs mingw-w64 (gcc-mingw-w64-x86-64) and Wine (wine64, wine): .ci/run installs them")
     folder = tmp_path_factory.mktemp("windows")
-    subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", "-static-libgcc",
-                    f"-I{fmi_headers()}", f"-I{NATIVE}", str(NATIVE / "host.c"), str(NATIVE / "portable_math.c"), "-o",
+    subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-static-libgcc", f"-I{fmi_headers()}", str(HOST), "-o",
                     str(folder / "host.exe")], check=True)
     for name, unzipped in unpacked.items():
         shutil.copy(unzipped / "binaries" / "win64" / f"{name}.dll", folder)
@@ -546,8 +545,8 @@ def test_the_same_math_source_on_linux_gives_the_windows_bits(native, unpacked, 
     sources = unpacked[name] / "sources"
     library = tmp_path / f"{name}.so"
     subprocess.run([compiler(), "-shared", "-fPIC", "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH",
-                    f"-I{sources}", f"-I{fmi_headers()}", *[str(f) for f in sorted(sources.glob("*.c"))
-                                                             if f.name != "fmi3_framework.c"], "-o", str(library)],
+                    f"-I{sources}", f"-I{fmi_headers()}", *map(str, sorted(sources.glob("*.c"))), "-o", str(library),
+                    "-lm"],  # sqrt: the C library's also with the portable math
                    check=True)
     linux = _run_host([str(host), "outputs"], library, guid, *rest)
     windows = _run_host([*command, "outputs"], f"{name}.dll", guid, *rest, cwd=folder, env=env)

@@ -12,7 +12,7 @@ import sys
 import pytest
 from test_plant_continuous import _cases  # the same random cases as the Python model's tests)
 
-from crane_fmu.build_scripts.native import NATIVE, NativeUnavailable, compilers
+from crane_fmu.build_scripts.native import MODELS_DIR, NativeUnavailable, compilers
 from crane_fmu.model import plant
 from crane_fmu.model import plant_continuous as me
 from crane_fmu.model.plant_continuous import FREE, Mode
@@ -49,7 +49,8 @@ def lib(tmp_path_factory):
         pytest.skip(f"a C compiler: {exc}")
     out = tmp_path_factory.mktemp("continuous") / "libplant_continuous.so"
     subprocess.run([cc, "-shared", "-fPIC", "-O2", "-Wall", "-Werror", "-ffp-contract=off",
-                    str(NATIVE / "plant_continuous.c"), str(NATIVE / "plant_equations.c"), "-o", str(out), "-lm"],
+                    str(MODELS_DIR / "plant_continuous.c"), str(MODELS_DIR / "plant_equations.c"), "-o", str(out),
+                    "-lm"],
                    check=True)
     return ctypes.CDLL(str(out))
 

@@ -1,11 +1,11 @@
 """The native FMUs where they will run: a C host with no Python, Windows x64 under Wine, long-lived hosts.
 
-``fmu_src/native/host.c`` is compiled for Linux and, with mingw-w64, for Windows. It runs Section V
-without Python two ways: the native plant closed by the paper's law written in C inside the host,
-and the native plant with the native BacksteppingController FMU (``pair``), exchanged by value
-references at each step as our master does; likewise the ``lqr`` system with the native LqrController.
-On Linux they give our master's run of the Python FMUs. Tests that need mingw-w64 or Wine skip where
-they are missing; ``.ci/run`` installs both.
+``fmu_src/host/host.c`` (a host with no model of its own: it reads and sets the value references it is
+given) is compiled for Linux and, with mingw-w64, for Windows. It runs Section V without Python: the
+native plant with the native BacksteppingController FMU (``pair``), exchanged by value references at
+each step as our master does; likewise the ``lqr`` system with the native LqrController. On Linux they
+give our master's run of the Python FMUs. Tests that need mingw-w64 or Wine skip where they are
+missing; ``.ci/run`` installs both.
 """
 
 import glob
@@ -20,12 +20,11 @@ from fmpy import read_model_description
 from native_fmus import compiler
 
 from crane_fmu import systems
-from crane_fmu.build_scripts.native import MINGW, NATIVE, native_dir
+from crane_fmu.build_scripts.native import HOST, MINGW, native_dir
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cosim import run
 from crane_fmu.model.tables import STATE
 
-HOST = NATIVE / "host.c"
 CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # what `env -i PATH=/usr/bin:/bin` leaves: no venv, no pyenv
 FREE_SWING_MAX_THETA2_DEG = 15.5976  # the Python FMU's
 
@@ -41,13 +40,13 @@ def plant(fmu_dir, tmp_path_factory):
         z.extractall(folder)
     md = read_model_description(str(fmu))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    assert (vr["l1"], vr["u"], *[vr[s] for s in STATE]) == (2, 22, 26, 27, 28, 29, 30, 31)  # host.c's
-    return folder, md.guid
+    assert [vr[s] for s in STATE] == list(range(vr["x"], vr["x"] + 6))  # what the host reads from X
+    return folder, md.guid, vr
 
 
 @pytest.fixture(scope="module")
 def controller(fmu_dir, tmp_path_factory):
-    """The unpacked native BacksteppingController (FMI 2.0): ``(folder, guid)``; host.c's value references checked."""
+    """The unpacked native BacksteppingController (FMI 2.0): ``(folder, guid, x, u)``; its measured states checked."""
     fmu = native_dir(fmu_dir) / "BacksteppingController.fmu"
     folder = tmp_path_factory.mktemp("controller")
     with zipfile.ZipFile(fmu) as z:
@@ -56,8 +55,8 @@ def controller(fmu_dir, tmp_path_factory):
         pytest.skip("no native BacksteppingController was built (no C compiler)")
     md = read_model_description(str(fmu))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    assert ([vr[s] for s in STATE], vr["u"]) == ([21, 22, 23, 24, 25, 26], 27)  # host.c's
-    return folder, md.guid
+    assert [vr[s] for s in STATE] == list(range(vr["x"], vr["x"] + 6))  # what the host's pair expects
+    return folder, md.guid, vr["x"], vr["u"]
 
 
 @pytest.fixture(scope="module")
@@ -85,13 +84,18 @@ def lqr_run(fmu_dir):
 @pytest.fixture(scope="module")
 def host(tmp_path_factory):
     out = tmp_path_factory.mktemp("host") / "host"
-    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", f"-I{NATIVE}",
-                    str(HOST), "-o", str(out), "-ldl", "-lpthread", "-lm"], check=True)
+    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", str(HOST), "-o",
+                    str(out), "-ldl", "-lpthread", "-lm"], check=True)
     return out
 
 
 def _rows(text):
     return np.array([[float(x) for x in line.split(",")] for line in text.replace("\r", "").splitlines()])
+
+
+def _loop(plant, controller):
+    """The host's ``pair`` arguments after STEPS and H: the plant's x and u, the controller's x and u."""
+    return plant[2]["x"], plant[2]["u"], controller[2], controller[3]
 
 
 def _host(host, *args, env=None, cwd=None, wine=None, timeout=300):
@@ -124,10 +128,10 @@ def test_the_linux_binary_needs_no_libpython(plant):
 
 def test_c_host_without_python_runs_the_free_swing(host, plant):
     """``env -i PATH=/usr/bin:/bin``, no libpython loaded in the process; max theta2 15.5976 deg as the Python FMU."""
-    folder, guid = plant
+    folder, guid, vr = plant
     library = folder / "binaries" / "linux64" / "CranePlant.so"
     assert _host(host, "maps", library, guid, env=CLEAN_ENV) == ""  # no library naming python in the process
-    rows = _rows(_host(host, "run", library, guid, 20_000, 1e-3, env=CLEAN_ENV))
+    rows = _rows(_host(host, "run", library, guid, 20_000, 1e-3, vr["x"], env=CLEAN_ENV))
     assert rows.shape == (20_001, 7)
     assert np.degrees(rows[:, 5].max()) == pytest.approx(FREE_SWING_MAX_THETA2_DEG, abs=5e-5)
 
@@ -147,10 +151,10 @@ def test_c_host_runs_with_every_libpython_hidden(host, plant, tmp_path):
     hidden = _libpythons()
     if not hidden or shutil.which("unshare") is None or os.geteuid() != 0:
         pytest.skip("needs root, unshare and a libpython to hide")
-    folder, guid = plant
+    folder, guid, vr = plant
     library = folder / "binaries" / "linux64" / "CranePlant.so"
     script = "".join(f"mount --bind /dev/null '{path}' && [ ! -s '{path}' ] && " for path in hidden)  # now empty
-    script += f"exec '{host}' run '{library}' '{guid}' 20000 0.001"
+    script += f"exec '{host}' run '{library}' '{guid}' 20000 0.001 {vr['x']}"
     done = subprocess.run(["unshare", "--mount", "--propagation", "private", "sh", "-c", script],
                           capture_output=True, text=True, env=CLEAN_ENV, timeout=300)
     if done.returncode != 0 and "unshare" in done.stderr:
@@ -160,29 +164,20 @@ def test_c_host_runs_with_every_libpython_hidden(host, plant, tmp_path):
     assert np.degrees(rows[:, 5].max()) == pytest.approx(FREE_SWING_MAX_THETA2_DEG, abs=5e-5)
 
 
-def test_c_host_runs_section5_like_our_master(host, plant, section5):
-    """Native plant + the law in C, no Python: the master's run (Python controller FMU) to 1e-9 at every step."""
-    folder, guid = plant
-    rows = _rows(_host(host, "paper", folder / "binaries" / "linux64" / "CranePlant.so", guid, 20_000, 1e-3,
-                       env=CLEAN_ENV))
-    assert rows.shape == section5.shape
-    assert np.max(np.abs(rows - section5)) <= 1e-9  # the same libm, the same operations: in practice 0
-
-
 def test_c_host_runs_section5_on_the_native_plant_and_controller_fmus(host, plant, controller, section5):
     """The two native FMUs exchanged by value references in the C host, no Python: the Python pair's run, 1e-9."""
     rows = _rows(_host(host, "pair", plant[0] / "binaries" / "linux64" / "CranePlant.so", plant[1],
                        controller[0] / "binaries" / "linux64" / "BacksteppingController.so", controller[1], 20_000,
-                       1e-3, env=CLEAN_ENV))
+                       1e-3, *_loop(plant, controller), env=CLEAN_ENV))
     assert rows.shape == section5.shape
     assert np.max(np.abs(rows - section5)) <= 1e-9  # in practice 0
 
 
 def test_c_host_runs_the_lqr_system_on_the_native_plant_and_lqr_fmus(host, plant, lqr, lqr_run):
     """The LQR designed inside its FMU, no Python in the process: the Python FMUs' run through our master, 1e-9."""
-    folder, guid, x, u = lqr
     rows = _rows(_host(host, "pair", plant[0] / "binaries" / "linux64" / "CranePlant.so", plant[1],
-                       folder / "binaries" / "linux64" / "LqrController.so", guid, 20_000, 1e-3, x, u, env=CLEAN_ENV))
+                       lqr[0] / "binaries" / "linux64" / "LqrController.so", lqr[1], 20_000, 1e-3, *_loop(plant, lqr),
+                       env=CLEAN_ENV))
     assert rows.shape == lqr_run.shape
     assert np.max(np.abs(rows - lqr_run)) <= 1e-9  # in practice 0
 
@@ -194,8 +189,8 @@ def test_ten_thousand_instances_in_one_process_leave_memory_flat(host, plant):
 
     From 2,000 on: the host's first line of output (at 1,000) allocates stdout's buffer, a one-off step.
     """
-    folder, guid = plant
-    out = _host(host, "cycles", folder / "binaries" / "linux64" / "CranePlant.so", guid, 10_000)
+    folder, guid, vr = plant
+    out = _host(host, "cycles", folder / "binaries" / "linux64" / "CranePlant.so", guid, 10_000, vr["x"])
     rss = dict(tuple(map(int, line.split(","))) for line in out.splitlines())
     assert len(rss) == 10
     # an instance is about 0.5 kB: a leak of one per cycle would add 4 MB over 8,000 cycles
@@ -203,16 +198,17 @@ def test_ten_thousand_instances_in_one_process_leave_memory_flat(host, plant):
 
 
 def test_a_run_after_a_failed_run_in_the_same_process_is_a_fresh_run(host, plant):
-    folder, guid = plant
+    folder, guid, vr = plant
     library = folder / "binaries" / "linux64" / "CranePlant.so"
-    after = _rows(_host(host, "after-failure", library, guid, 1000, 1e-3))
-    fresh = _rows(_host(host, "run", library, guid, 1000, 1e-3))
+    after = _rows(_host(host, "after-failure", library, guid, 1000, 1e-3, vr["x"], f"{vr['l1']}=-1"))
+    fresh = _rows(_host(host, "run", library, guid, 1000, 1e-3, vr["x"]))
     assert np.array_equal(after[-1], fresh[-1])
 
 
 def test_two_instances_in_two_threads_give_the_results_of_one(host, plant):
-    folder, guid = plant
-    assert _host(host, "threads", folder / "binaries" / "linux64" / "CranePlant.so", guid, 20_000, 1e-3) == "same\n"
+    folder, guid, vr = plant
+    assert _host(host, "threads", folder / "binaries" / "linux64" / "CranePlant.so", guid, 20_000, 1e-3,
+                 vr["x"]) == "same\n"
 
 
 # ---- Windows x64 under Wine -------------------------------------------------------------------------------------
@@ -223,8 +219,7 @@ def wine(plant, controller, lqr, tmp_path_factory):
     if shutil.which(MINGW) is None or shutil.which("wine") is None:
         pytest.skip("needs mingw-w64 (gcc-mingw-w64-x86-64) and Wine (wine64, wine): .ci/run installs them")
     folder = tmp_path_factory.mktemp("windows")
-    subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", "-static-libgcc",
-                    f"-I{fmi_headers()}", f"-I{NATIVE}", str(HOST), str(NATIVE / "portable_math.c"), "-o",
+    subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-static-libgcc", f"-I{fmi_headers()}", str(HOST), "-o",
                     str(folder / "host.exe")], check=True)
     shutil.copy(plant[0] / "binaries" / "win64" / "CranePlant.dll", folder)
     shutil.copy(controller[0] / "binaries" / "win64" / "BacksteppingController.dll", folder)
@@ -245,69 +240,61 @@ def test_the_windows_dll_needs_only_system_dlls(plant):
     assert dlls <= {"kernel32.dll", "msvcrt.dll"}, dlls
 
 
-def test_windows_dll_under_wine_gives_the_linux_section5_run(wine, plant, section5, tmp_path):
-    """Section V in the Windows host under Wine: the Linux results to 1e-9 at every step of the 20 s.
+def test_windows_dlls_under_wine_give_the_linux_section5_run(wine, plant, controller, section5, tmp_path):
+    """Section V on the plant and controller DLLs in the Windows host under Wine: the Linux results to 1e-9 at
+    every step of the 20 s.
 
     The Windows build uses the portable sin, cos and exp (mingw-w64's libm is the x87's), the Linux
     one glibc's: they differ in a rare last bit, which the run carries to about 1e-11 in the states
     and 1.2e-9 in u (|u| reaches 810 m/s2: 4e-10 relative). Built from the same math source (the
-    FMU's sources with CRANE_OWN_MATH, the host likewise), Linux gives Windows' bits exactly.
+    FMUs' sources with CRANE_OWN_MATH), Linux gives Windows' bits exactly.
     """
     command, folder, env = wine
-    guid = plant[1]
-    windows = _rows(_host(folder / "host.exe", "paper", "CranePlant.dll", guid, 20_000, 1e-3, env=env, cwd=folder,
-                          wine=command))
+    windows = _rows(_host(folder / "host.exe", "pair", "CranePlant.dll", plant[1], "BacksteppingController.dll",
+                          controller[1], 20_000, 1e-3, *_loop(plant, controller), env=env, cwd=folder, wine=command))
     assert windows.shape == section5.shape
     assert np.max(np.abs(windows[:, :7] - section5[:, :7])) <= 1e-9
     assert np.max(np.abs(windows[:, 7] - section5[:, 7]) / np.maximum(np.abs(section5[:, 7]), 1.0)) <= 1e-9
     # the same math source on Linux: bit for bit
-    sources = plant[0] / "sources"
-    own = tmp_path / "own_math.so"
-    subprocess.run([compiler(), "-shared", "-fPIC", "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH",
-                    f"-I{sources}", f"-I{fmi_headers()}", *[str(sources / f) for f in (
-                        "crane_plant.c", "plant_equations.c", "py_repr.c", "portable_math.c", "framework.c",
-                        "fmi2_framework.c")], "-o", str(own)], check=True)
-    own_host = tmp_path / "own_host"
-    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH",
-                    f"-I{fmi_headers()}", f"-I{NATIVE}", str(HOST), str(NATIVE / "portable_math.c"), "-o",
-                    str(own_host), "-ldl", "-lpthread"], check=True)
-    assert np.array_equal(_rows(_host(own_host, "paper", own, guid, 20_000, 1e-3)), windows)
+    own = {}
+    for name, unpacked in (("CranePlant", plant[0]), ("BacksteppingController", controller[0])):
+        sources = unpacked / "sources"
+        own[name] = tmp_path / f"{name}.so"
+        subprocess.run([compiler(), "-shared", "-fPIC", "-O2", "-Wall", "-Werror", "-ffp-contract=off",
+                        "-DCRANE_OWN_MATH", f"-I{sources}", f"-I{fmi_headers()}",
+                        *map(str, sorted(sources.glob("*.c"))), "-o", str(own[name]), "-lm"], check=True)
+    linux = _rows(_host(_linux_host(tmp_path), "pair", own["CranePlant"], plant[1], own["BacksteppingController"],
+                        controller[1], 20_000, 1e-3, *_loop(plant, controller)))
+    assert np.array_equal(linux, windows)
 
 
-def test_windows_dlls_of_both_native_fmus_under_wine_give_the_linux_section5_run(wine, plant, controller, section5):
-    """The plant and controller DLLs in the Windows host: the host's own law's bits, and Linux's run to 1e-9.
-
-    Both DLLs and the host use the portable math, the same operations: the pair gives exactly the
-    Windows run with the law written in the host, and the Linux run within the bound above.
-    """
-    command, folder, env = wine
-    pair = _rows(_host(folder / "host.exe", "pair", "CranePlant.dll", plant[1], "BacksteppingController.dll",
-                       controller[1], 20_000, 1e-3, env=env, cwd=folder, wine=command))
-    law_in_host = _rows(_host(folder / "host.exe", "paper", "CranePlant.dll", plant[1], 20_000, 1e-3, env=env,
-                              cwd=folder, wine=command))
-    assert np.array_equal(pair, law_in_host)
-    assert np.max(np.abs(pair[:, :7] - section5[:, :7])) <= 1e-9
-    assert np.max(np.abs(pair[:, 7] - section5[:, 7]) / np.maximum(np.abs(section5[:, 7]), 1.0)) <= 1e-9
+def _linux_host(folder):
+    """The host compiled for Linux into ``folder``."""
+    out = folder / "host"
+    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", str(HOST), "-o",
+                    str(out), "-ldl", "-lpthread"], check=True)
+    return out
 
 
 def test_windows_dlls_of_the_native_plant_and_lqr_under_wine_give_the_lqr_run(wine, plant, lqr, lqr_run):
     """The lqr system in the Windows host: the LQR designed under Wine (portable math in the plant, mingw's
     log2 in the design's scaling), the Python FMUs' run through our master to 1e-9 at every step."""
     command, folder, env = wine
-    _, guid, x, u = lqr
-    rows = _rows(_host(folder / "host.exe", "pair", "CranePlant.dll", plant[1], "LqrController.dll", guid, 20_000,
-                       1e-3, x, u, env=env, cwd=folder, wine=command))
+    rows = _rows(_host(folder / "host.exe", "pair", "CranePlant.dll", plant[1], "LqrController.dll", lqr[1], 20_000,
+                       1e-3, *_loop(plant, lqr), env=env, cwd=folder, wine=command))
     assert rows.shape == lqr_run.shape
     assert np.max(np.abs(rows - lqr_run)) <= 1e-9
 
 
 def test_windows_dll_under_wine_free_swing_and_long_lived_host(wine, plant):
     command, folder, env = wine
-    rows = _rows(_host(folder / "host.exe", "run", "CranePlant.dll", plant[1], 20_000, 1e-3, env=env, cwd=folder,
+    x, l1 = plant[2]["x"], plant[2]["l1"]
+    rows = _rows(_host(folder / "host.exe", "run", "CranePlant.dll", plant[1], 20_000, 1e-3, x, env=env, cwd=folder,
                        wine=command))
     assert np.degrees(rows[:, 5].max()) == pytest.approx(FREE_SWING_MAX_THETA2_DEG, abs=5e-5)
-    after = _rows(_host(folder / "host.exe", "after-failure", "CranePlant.dll", plant[1], 1000, 1e-3, env=env,
-                        cwd=folder, wine=command))
+    after = _rows(_host(folder / "host.exe", "after-failure", "CranePlant.dll", plant[1], 1000, 1e-3, x, f"{l1}=-1",
+                        env=env, cwd=folder, wine=command))
     assert np.array_equal(after[-1], rows[1000])
-    out = _host(folder / "host.exe", "cycles", "CranePlant.dll", plant[1], 10_000, env=env, cwd=folder, wine=command)
+    out = _host(folder / "host.exe", "cycles", "CranePlant.dll", plant[1], 10_000, x, env=env, cwd=folder,
+                wine=command)
     assert len(out.splitlines()) == 10  # 10,000 cycles completed (Windows' memory is not read here)

@@ -277,18 +277,18 @@ class _Matrix(ctypes.Structure):
 
 @pytest.fixture(scope="module")
 def linalg_c(tmp_path_factory):
-    """fmu_src/native/linalg.c as a shared library (CRANE_OWN_MATH, no libm linked: it needs none)."""
+    """fmu_src/models/linalg.c as a shared library (CRANE_OWN_MATH, no libm linked: it needs none)."""
     import shutil
     import subprocess
 
-    from crane_fmu.build_scripts.native import NATIVE
+    from crane_fmu.build_scripts.native import MODELS_DIR
 
     compiler = shutil.which("cc") or shutil.which("gcc")
     if compiler is None:
         pytest.skip("no C compiler")
     out = tmp_path_factory.mktemp("linalg") / "linalg.so"
     subprocess.run([compiler, "-shared", "-fPIC", "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH",
-                    str(NATIVE / "linalg.c"), "-o", str(out)], check=True)
+                    str(MODELS_DIR / "linalg.c"), "-o", str(out)], check=True)
     library = ctypes.CDLL(str(out))
     library.la_ceil_log2.restype, library.la_ceil_log2.argtypes = ctypes.c_int, [ctypes.c_double]
     library.la_expm.restype = ctypes.c_char_p

@@ -1,7 +1,7 @@
 """A system of native components as one native FMU (build_scripts/one_fmu.py), against our master.
 
-Each built-in system of :data:`ONE_FMUS` whose components are all native (today ``paper``; the
-others join by themselves once their models are in ``native.MODELS``) is built by ``crane-fmu build``
+Each built-in system tagged ``one-fmu`` whose components are all native (today ``paper``; the
+others join by themselves once their components declare a native model) is built by ``crane-fmu build``
 into ``build/native`` as one FMU, FMI 2.0 and 3.0. Run in fmpy, and in the C host without Python and
 under Wine (FMI 2.0 and 3.0 alike: the host's ``outputs`` and ``outputs3``), it must give
 ``crane-fmu simulate --system NAME --fmu-dir build/native`` (our master, Gauss-Seidel, over the
@@ -18,13 +18,13 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 
 from crane_fmu import systems
-from crane_fmu.build_scripts.native import MINGW, NATIVE, native_dir
-from crane_fmu.build_scripts.one_fmu import ONE_FMUS, not_native, one_fmu_name, plan
+from crane_fmu.build_scripts.native import HOST, MINGW, native_dir
+from crane_fmu.build_scripts.one_fmu import not_native, one_fmu_name, plan
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cli import main
 from crane_fmu.cosim import FmiError, open_instance, read_result
 
-SYSTEMS = [name for name in ONE_FMUS if not not_native(systems.get(name))]
+SYSTEMS = [name for name in systems.tagged("one-fmu") if not not_native(systems.get(name))]
 CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # no venv, no pyenv: no Python to be found
 SAME = 1e-9  # the same C models, the same calls: any difference is another order of operations
 
@@ -206,8 +206,8 @@ def host(tmp_path_factory):
     if compiler is None:
         pytest.skip("no C compiler")
     out = tmp_path_factory.mktemp("host") / "host"
-    subprocess.run([compiler, "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", f"-I{NATIVE}",
-                    str(NATIVE / "host.c"), "-o", str(out), "-ldl", "-lpthread", "-lm"], check=True)
+    subprocess.run([compiler, "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", str(HOST), "-o",
+                    str(out), "-ldl", "-lpthread", "-lm"], check=True)
     return out
 
 
@@ -263,8 +263,7 @@ def test_the_windows_dll_under_wine_gives_the_linux_run(native, host, tmp_path_f
     dll = folder / "binaries" / BINARIES[version][1] / f"{one_fmu_name(name)}.dll"
     if not dll.exists():
         pytest.skip("the one-FMU has no Windows binary (mingw-w64 missing at build time)")
-    subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", "-static-libgcc",
-                    f"-I{fmi_headers()}", f"-I{NATIVE}", str(NATIVE / "host.c"), str(NATIVE / "portable_math.c"), "-o",
+    subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-static-libgcc", f"-I{fmi_headers()}", str(HOST), "-o",
                     str(folder / "host.exe")], check=True)
     shutil.copy(dll, folder)
     prefix = tmp_path_factory.mktemp("wineprefix")
@@ -300,9 +299,9 @@ def test_build_one_fmu_from_an_ssp_file_gives_the_built_in_systems_run(fmu_dir, 
 
 def test_build_one_fmu_refuses_a_system_with_python_only_components_in_one_line(tmp_path, capsys):
     from crane_fmu import components
-    from crane_fmu.build_scripts.native import MODELS
+    from crane_fmu.build_scripts.native import ported
 
-    other = next((c.model_identifier for c in components.registered() if c.model_identifier not in MODELS), None)
+    other = next((c.model_identifier for c in components.registered() if c.model_identifier not in ported()), None)
     if other is None:
         pytest.skip("every component is native")
     system = next((s for s in systems.registered() if other in s.instances.values()), None)
@@ -320,7 +319,7 @@ def test_build_writes_the_built_in_one_fmus_whose_components_are_native_and_note
     notes = []
     paths = build_one_fmus(fmu_dir.parent / "again" / "fmus", log=notes.append)
     assert sorted(p.name for p in paths) == sorted(2 * [f"{one_fmu_name(n)}.fmu" for n in SYSTEMS])
-    others = [n for n in ONE_FMUS if n not in SYSTEMS]
+    others = [n for n in systems.tagged("one-fmu") if n not in SYSTEMS]
     assert [note.split()[1] for note in notes] == [one_fmu_name(n) for n in others]
     assert all("has no native model yet" in note for note in notes)
     for name in SYSTEMS:  # and crane-fmu build (the session's build) wrote them

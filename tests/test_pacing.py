@@ -127,7 +127,7 @@ def test_watchdog_holds_after_the_timeout_and_resumes_on_a_write():
 
 def _lqr_master(fmu_dir, external=True):
     """The lqr system at its step, its controller an ExternalInstance (or the FMU): ``(master, parameters)``."""
-    system = systems.at_step(systems.get("lqr"), fmu_dir, 1e-3)
+    system = systems.prepare(systems.get("lqr"), 1e-3)
     fmus, connections = system.resolve(fmu_dir)
     instances = {name: ExternalInstance(path, name) if external and name == "controller" else open_instance(path, name)
                  for name, path in fmus.items()}

@@ -21,9 +21,10 @@ def test_wheel_adds_only_crane_fmu_to_site_packages(tmp_path):
     (wheel,) = (tmp_path / "wheel").glob("*.whl")
     names = zipfile.ZipFile(wheel).namelist()
     assert {n.split("/")[0] for n in names if ".dist-info/" not in n} == {"crane_fmu"}
-    c_sources = [f"crane_fmu/fmu_src/{p.name}" for p in (ROOT / "fmu_src").iterdir() if p.suffix in (".c", ".h")]
-    assert len(c_sources) == 8  # two loaders, two wrappers, their four headers
-    for path in ("crane_fmu/fmu_src/slave2.py", *c_sources, "crane_fmu/build_scripts/build_fmus.py",
+    c_sources = [f"crane_fmu/{p.relative_to(ROOT).as_posix()}" for p in (ROOT / "fmu_src").rglob("*")
+                 if p.suffix in (".c", ".h")]
+    assert {path.split("/")[2] for path in c_sources} == {"framework", "models", "python", "system", "host"}
+    for path in ("crane_fmu/fmu_src/python/slave2.py", *c_sources, "crane_fmu/build_scripts/build_fmus.py",
                  "crane_fmu/sweep/builtin/region_of_attraction.toml"):
         assert path in names
     packages = [p.parent.relative_to(ROOT).as_posix() for p in (ROOT / "crane_fmu").rglob("__init__.py")]

@@ -64,7 +64,7 @@ def test_simulated_by_name_equals_the_python_loop(pd_build, tmp_path, capsys):
     got = np.column_stack([result[f"plant.{n}"] for n in ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2")])
     assert np.array_equal(got, expected)  # the same Python code on both sides: bit for bit
     assert abs(result["plant.x"][-1] - 0.5) < 0.02  # the PD law moves the trolley to x_d
-    fmi3 = run(PD, pd_build.parent / "fmi3", recorder=ArrayRecorder(), step=0.01).columns()
+    fmi3 = run(systems.prepare(PD, 0.01), pd_build.parent / "fmi3", recorder=ArrayRecorder()).columns()
     assert np.array_equal(fmi3["plant.x"], result["plant.x"])
 
 
@@ -76,7 +76,7 @@ def test_its_parameter_rules_apply_by_model_identifier(pd_build, tmp_path, capsy
 
 def test_the_ssp_file_runs_in_libcosim_like_our_jacobi_master(pd_build):
     theirs = libcosim_run("ssp", systems_dir(pd_build) / "pd.ssp")
-    ours = run(PD, pd_build, mode="jacobi", recorder=ArrayRecorder(), stop_time=1.0).columns()
+    ours = run(PD, pd_build, algorithm="jacobi", recorder=ArrayRecorder(), stop_time=1.0).columns()
     assert_libcosim_matches(theirs, ours)
 
 

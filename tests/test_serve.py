@@ -67,7 +67,7 @@ class Server:
 
 def _offline(fmu_dir, stop_time):
     """The lqr system run offline with the LQR FMU, as `crane-fmu simulate --system lqr` runs it."""
-    system = systems.at_step(systems.get("lqr"), fmu_dir, 1e-3)
+    system = systems.prepare(systems.get("lqr"), 1e-3)
     return simulate(*system.resolve(fmu_dir), stop_time, 1e-3, parameters=system.parameters).columns()
 
 

@@ -292,7 +292,7 @@ def _nap(item):
 
 def test_ctrl_c_in_a_process_pool_batch_drops_the_items_not_begun():
     """The pool's workers ignore Ctrl-C; the parent stops at once, not after every queued item."""
-    from crane_fmu.sweep.batch import run_batch
+    from crane_fmu.batch import run_batch
 
     class Interrupt:
         def update(self, result):

@@ -30,13 +30,13 @@ from third_party_hosts import (
 
 from crane_fmu import components, systems
 from crane_fmu.build_scripts.build_fmus import fmi3_dir, systems_dir
-from crane_fmu.build_scripts.native import MODELS, native_dir
-from crane_fmu.build_scripts.one_fmu import ONE_FMUS, not_native, one_fmu_name, plan
+from crane_fmu.build_scripts.native import native_dir, ported
+from crane_fmu.build_scripts.one_fmu import not_native, one_fmu_name, plan
 from crane_fmu.cosim import System, run
 from crane_fmu.cosim.ssp import load_system, write_ssp
 
 KINDS = ("python", "native", "one-fmu")
-ONE_FMU_SYSTEMS = [name for name in ONE_FMUS if not not_native(systems.get(name))]
+ONE_FMU_SYSTEMS = [name for name in systems.tagged("one-fmu") if not not_native(systems.get(name))]
 SHORT = 1.0  # s: the stop time where the run's length tests nothing (the step, the outputs, the log do)
 
 
@@ -48,7 +48,7 @@ def _fmus(fmu_dir, kind, version):
                 for c in components.registered() if c.role != "benchmark"}
     folder = _native(fmu_dir, version)
     if kind == "native":
-        return {name: folder / f"{name}.fmu" for name in MODELS}
+        return {name: folder / f"{name}.fmu" for name in ported()}
     return {name: folder / f"{one_fmu_name(name)}.fmu" for name in ONE_FMU_SYSTEMS}
 
 
@@ -69,8 +69,8 @@ def _ours(fmu_dir, kind, name, path, stop_time):
         outputs = [v.name for v in plan(system).variables if v.causality == "output"]
         return columns, [(own, "{}.{}".format(*links[own][0])) for own in outputs]
     md = read_model_description(str(path))
-    columns = run(System(name, {"it": str(path)}), fmu_dir, stop_time=stop_time,
-                  step=float(md.defaultExperiment.stepSize)).columns()
+    columns = run(System(name, {"it": str(path)}, step=float(md.defaultExperiment.stepSize)), fmu_dir,
+                  stop_time=stop_time).columns()
     return columns, [(v.name, f"it.{v.name}") for v in md.modelVariables if v.causality == "output"]
 
 

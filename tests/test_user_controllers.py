@@ -109,7 +109,7 @@ def test_simulate_and_compare_give_a_controller_without_references_the_same_move
     contender, = contenders([str(mine)], fmu_dir, only=True)
     (_, system, step, *_), = scoreboard.systems_for(contender, "S2")
     assert system.parameters["controller"]["x_d"] == systems.get("transport").parameters["planner"]["x_d"]
-    scored = run(systems.at_step(system, fmu_dir, step), fmu_dir, recorder=ArrayRecorder(), stop_time=stop).columns()
+    scored = run(systems.prepare(system, step), fmu_dir, recorder=ArrayRecorder(), stop_time=stop).columns()
     assert simulated["plant.x"][-1] > 0.2  # moving towards 2 m (untold, it would stay at 0)
     np.testing.assert_array_equal(simulated["plant.x"], scored["plant.x"])
     np.testing.assert_array_equal(simulated["plant.theta1"], scored["plant.theta1"])

@@ -10,15 +10,14 @@ import math
 import os
 from collections import namedtuple
 
-from crane_fmu import systems
+from crane_fmu import components, systems
+from crane_fmu.batch import run_batch
 from crane_fmu.cosim import ArrayRecorder, FmiError, run
-from crane_fmu.sweep.batch import run_batch
 
 from . import metrics, scoreboard
 
 Run = namedtuple("Run", "group label system parameters step stop_time")
 Run.__doc__ = "One co-simulation: its group and label, a system (a registered name or a System), its settings."
-REGULATORS = ("lqr", "energy", "paper")
 SHAPERS = ("zv", "zvd", "ei", "none")
 ROA_ANGLES = tuple(range(5, 65, 5))
 MISMATCH, DISTANCE = scoreboard.MISMATCH, scoreboard.DISTANCE  # a grid of plants unknown to the controller, S2's move
@@ -66,7 +65,7 @@ def mpc_runs(quick=False):
 
 def plan(quick=False):
     # regulation runs 40 s: the energy law's swing decays too slowly to classify in 10 s
-    runs = [Run("regulation", name, name, {}, 1e-3, 40.0) for name in REGULATORS]
+    runs = [Run("regulation", name, name, {}, 1e-3, 40.0) for name in systems.tagged("regulation")]
     runs += [Run("transport", shaper, "transport", {"planner": {"shaper": shaper, "x_d": DISTANCE}}, 1e-3, 10.0)
              for shaper in SHAPERS]
     runs.append(Run("hoist", "hoist-transport", "hoist-transport", {}, 1e-3, 12.0))
@@ -77,7 +76,7 @@ def plan(quick=False):
         runs += [Run(f"roa_{name}", str(angle), name, {"plant": {"theta1_0": math.radians(angle)}}, 1e-3, 30.0)
                  for angle in (ROA_ANGLES[::4] if quick else ROA_ANGLES)]
     for h in (1e-2, 5e-2):
-        runs += [Run(f"step_{h:g}", name, name, {}, h, 40.0) for name in REGULATORS]
+        runs += [Run(f"step_{h:g}", name, name, {}, h, 40.0) for name in systems.tagged("regulation")]
         runs.append(Run(f"step_{h:g}", "transport", "transport", {}, h, 10.0))
     return runs + mpc_runs(quick)
 
@@ -85,10 +84,10 @@ def plan(quick=False):
 def measure(r, fmu_dir):
     """Co-simulate one run; return its move metrics and outcome."""
     system = r.system if not isinstance(r.system, str) else systems.get(r.system)
-    system = systems.at_step(system, fmu_dir, r.step).with_parameters(r.parameters)
+    system = systems.prepare(system, r.step, r.stop_time, [r.parameters])
     recorder, error = ArrayRecorder(), None
     try:
-        run(system, fmu_dir, recorder=recorder, stop_time=r.stop_time, step=r.step)
+        run(system, fmu_dir, recorder=recorder)
     except FmiError as exc:
         error = str(exc)
     x_d = system.parameters.get("planner", {}).get("x_d", system.parameters.get("controller", {}).get("x_d", 0.0))

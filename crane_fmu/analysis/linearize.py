@@ -19,6 +19,8 @@ The operating point is the FMU's initial state (after initialisation with the gi
 values) and its inputs' start values, with the values of ``at`` in place of those named there.
 """
 
+import xml.etree.ElementTree as ET
+import zipfile
 from collections import namedtuple
 
 import numpy as np
@@ -143,7 +145,8 @@ class _Model:
 
     def derivatives(self):
         dx = np.zeros(self.n)
-        self._call("GetDerivatives", self.fmu.getDerivatives, self._ptr(dx), self.n)
+        get = self.fmu.getContinuousStateDerivatives if self.fmi3 else self.fmu.getDerivatives
+        self._call("GetContinuousStateDerivatives" if self.fmi3 else "GetDerivatives", get, self._ptr(dx), self.n)
         return dx
 
     def get(self, vrs):
@@ -172,14 +175,22 @@ class _Model:
         return array.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
 
 
+def _provides_directional_derivatives(path, md):
+    """The ModelExchange element's flag; fmpy reads FMI 2.0's and not FMI 3.0's ``providesDirectionalDerivatives``."""
+    if not md.fmiVersion.startswith("3"):
+        return bool(md.modelExchange.providesDirectionalDerivative)
+    with zipfile.ZipFile(path) as fmu:
+        me = ET.fromstring(fmu.read("modelDescription.xml")).find("ModelExchange")
+    return me.get("providesDirectionalDerivatives") in ("true", "1")
+
+
 def _model_exchange(path, md, at, values):
     states = [d.variable.derivative for d in md.derivatives]
     derivatives = [d.variable.valueReference for d in md.derivatives]
     inputs, outputs = _reals(md, "input"), _reals(md, "output")
     names = [s.name for s in states], [v.name for v in inputs], [v.name for v in outputs]
     at_states, at_inputs = _split_point(at, names[0], names[1])
-    flag = "providesDirectionalDerivatives" if md.fmiVersion.startswith("3") else "providesDirectionalDerivative"
-    exact = bool(getattr(md.modelExchange, flag, False))
+    exact = _provides_directional_derivatives(path, md)
     model = _Model(path, md, values)
     try:
         x = model.states()

@@ -2,11 +2,13 @@
 
 import math
 
+from .metrics import crane_signals, u_column
+
 MAX_PANELS = 8
 
 
 def pyplot():
-    """matplotlib's pyplot on the Agg backend (no screen), imported on first use."""
+    """matplotlib's pyplot on the Agg backend (no screen), imported on first use (the plot extra)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -39,7 +41,6 @@ def plot_overlay(runs, path, title=""):
     """
     plt = pyplot()
 
-    from .metrics import crane_signals, u_column
 
     demanded = {label: u_column(columns) for label, columns in runs.items()}
     panels = 4 if any(demanded.values()) else 3
@@ -92,7 +93,6 @@ def plot_run(columns, path, title=""):
     """
     plt = pyplot()
 
-    from .metrics import crane_signals
 
     t = columns["time"]
     try:

@@ -14,12 +14,12 @@ from crane_fmu.model import backstepping, plant
 RTOL = ATOL = 1e-12
 
 
-def sampled_closed_loop(state0, p, gains, step, n_steps, mode="gauss-seidel"):
+def sampled_closed_loop(state0, p, gains, step, n_steps, algorithm="gauss-seidel"):
     """Exact sampled-data closed loop: u from the law, held over each step.
 
     Parameters
     ----------
-    mode : {"gauss-seidel", "jacobi"}
+    algorithm : {"gauss-seidel", "jacobi"}
         ``gauss-seidel``: ``u_k = law(state_k)``. ``jacobi``: ``u_k =
         law(state_{k-1})`` (``u_0 = law(state_0)``), the one-step lag of a
         Jacobi master on the controller's feedthrough.
@@ -35,7 +35,7 @@ def sampled_closed_loop(state0, p, gains, step, n_steps, mode="gauss-seidel"):
     states[0] = state0
     previous = state0
     for k in range(n_steps):
-        measured = states[k] if mode == "gauss-seidel" else previous
+        measured = states[k] if algorithm == "gauss-seidel" else previous
         u = backstepping.control(tuple(measured), p, gains)
         sol = solve_ivp(lambda t, s, u=u: plant.derivative(s, u, p), (0.0, step), states[k],
                         method="DOP853", rtol=RTOL, atol=ATOL)

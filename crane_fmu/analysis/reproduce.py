@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from crane_fmu import DEFAULT_FMU_DIR, systems
+from crane_fmu.batch import Progress, run_batch
 from crane_fmu.cosim import ArrayRecorder, FmiError, run, write_csv
-from crane_fmu.sweep.batch import Progress, run_batch
 
 from . import figures, metrics, paper_summary, report
 from .paper_cases import plan
@@ -28,7 +28,7 @@ def run_case(case, fmu_dir, csv_dir):
     recorder = ArrayRecorder()
     error = None
     try:
-        run(system.with_parameters(parameters), fmu_dir, recorder=recorder, stop_time=case.stop_time, step=case.step)
+        run(systems.prepare(system, case.step, case.stop_time, [parameters], check=False), fmu_dir, recorder=recorder)
     except FmiError as exc:
         error = str(exc)
     columns = recorder.columns()

@@ -1,14 +1,19 @@
 """The scoreboard's pictures: comparison plots and animations of the crane (matplotlib, Agg)."""
 
+import json
 import math
 import shutil
+import subprocess
 import sys
+import zlib
 from pathlib import Path
 
 import numpy as np
 
+from crane_fmu import components
+
 from .plots import pyplot
-from .scoreboard import SCENARIOS
+from .scoreboard import PAIRED, SCENARIOS, board_statistics, not_applicable, summarise
 
 COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink", "tab:gray",
            "tab:olive", "tab:cyan")
@@ -17,10 +22,6 @@ COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:
 def colour(name):
     """A controller's colour, the same on every board: the registered controllers' in registration order, any
     other's from its name (a CRC-32 of it) among the colours left."""
-    import zlib
-
-    from crane_fmu import components
-
     builtin = [c.model_identifier for c in components.registered("controller")]
     if name in builtin:
         return COLOURS[builtin.index(name) % len(COLOURS)]
@@ -110,10 +111,8 @@ def plot_summary(rows, path, users=(), stats=None):
     90th percentile as a marker. *never* and *failed* are hatched bars to the edge with the word; a figure far
     beyond the target (over four times it) runs to the edge with its value written on it.
     """
-    from matplotlib.lines import Line2D
+    from matplotlib.lines import Line2D  # optional: the plot extra
     from matplotlib.patches import Patch
-
-    from .scoreboard import PAIRED, board_statistics, not_applicable, summarise
 
     plt = pyplot()
     stats = board_statistics(rows) if stats is None else stats
@@ -281,7 +280,7 @@ def frame_delay(fps):
 
 def _write_gif(images, path, delay_cs):
     """A GIF of RGB frames, each shown ``delay_cs`` centiseconds."""
-    from PIL import Image
+    from PIL import Image  # Pillow comes with matplotlib: the plot extra
 
     sample = np.concatenate([images[0], images[len(images) // 2], images[-1]])  # every colour that moves
     palette = Image.fromarray(sample).quantize(colors=64, method=Image.Quantize.MEDIANCUT)
@@ -291,8 +290,6 @@ def _write_gif(images, path, delay_cs):
 
 def _write_mp4(images, path, fps):
     """An MP4 (H.264) of RGB frames through ffmpeg."""
-    import subprocess
-
     height, width = images[0].shape[:2]
     command = ["ffmpeg", "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s",
                f"{width}x{height}", "-r", f"{fps:.6g}", "-i", "-", "-pix_fmt", "yuv420p", "-vf",
@@ -306,8 +303,6 @@ def animate_all(rows, scenario, out_dir, fps=15):
     An animation is drawn again only when its run changed: ``.drawn.json`` in ``out_dir`` keeps the
     case id each file was drawn from. Returns the paths drawn now.
     """
-    import json
-
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     ledger = out_dir / ".drawn.json"

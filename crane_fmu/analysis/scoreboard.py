@@ -34,6 +34,7 @@ import math
 from collections import namedtuple
 
 from crane_fmu.controller_interface import MEASURED, MOVE_NEEDS, misses, told
+from crane_fmu.cosim import Connection, System
 
 DRIVE = {"u_max": 2.0, "v_max": 1.0}
 DISTANCE = 2.0
@@ -289,8 +290,6 @@ def systems_for(contender, scenario, cases=CASES):
     ValueError
         When the scenario does not apply to the contender (:func:`applicable`), or there is no such scenario.
     """
-    from crane_fmu.cosim import Connection, System
-
     c = contender
     if scenario not in SCENARIOS:
         raise ValueError(f"no scenario {scenario!r}; scenarios: {', '.join(SCENARIOS)}")

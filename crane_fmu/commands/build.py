@@ -1,6 +1,7 @@
 """``crane-fmu build``: build the FMUs of every component and the files of every built-in system."""
 
 import argparse
+import importlib.util
 import sys
 from pathlib import Path
 
@@ -113,8 +114,6 @@ def _build_one_fmus(items, out):
 
 def _build_component(module_path, out, force=False):
     """Import a user's module by its file and build the FMUs of the components it defines."""
-    import importlib.util
-
     path = Path(module_path)
     if path.suffix != ".py" or not path.is_file():
         raise UsageError(f"--component {module_path}: expected a Python file (MODULE.py) that defines a Component")

@@ -1,8 +1,10 @@
 """What the commands share: the one-line usage error, number and value parsing, file checks."""
 
 import argparse
+import importlib.util
 import math
 import os
+import socket
 import sys
 from pathlib import Path
 
@@ -118,8 +120,6 @@ def check_scheduler(address, timeout=3.0):
     Dask itself retries a refused connection for 30 s and then raises a long ``OSError``; this asks once.
     Other protocols (``tls://``, ``ucx://``, ...) are left to Dask.
     """
-    import socket
-
     protocol, sep, rest = address.rpartition("://")
     if sep and protocol != "tcp":
         return
@@ -146,8 +146,6 @@ def check_workers(args):
 
 def require_dask(command):
     """One line, exit 2, when Dask (the ``dask`` extra) is not installed: before anything is written."""
-    import importlib.util
-
     if importlib.util.find_spec("distributed") is None:
         raise UsageError(f"{command} runs its cases on Dask, which is not installed: "
                          "pip install -e '.[dask]' (in this project's venv)")

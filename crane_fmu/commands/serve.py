@@ -1,14 +1,17 @@
 """``crane-fmu serve``: a system in real time or lock-step, reachable over OPC UA and Modbus TCP."""
 
+import gc
+import importlib.util
 import math
 import os
+import shutil
 import signal
 import sys
 import time
 from pathlib import Path
 
 from .common import UsageError, number, writable_file
-from .simulate import _use, prepare, run_options
+from .simulate import on_system, open_recorder, prepare, run_options
 
 NAME = "serve"
 HELP = "run a system in real time or lock-step for a PLC or any program, over OPC UA and Modbus TCP"
@@ -68,13 +71,7 @@ def arguments(p):
 
 
 def run(args):
-    from crane_fmu import systems
-
-    try:
-        with systems.open_system(args.system) as system:
-            return _serve(args, _use(args.use, system))
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
+    return on_system(args, _serve)
 
 
 def timing_path(out):
@@ -85,8 +82,6 @@ def timing_path(out):
 
 def _check(args, system):
     """The options' rules, before anything is loaded: ``(step, stop_time, period_steps, endpoints)``."""
-    import importlib.util
-
     from crane_fmu.cosim.master import communication_points
     from crane_fmu.serve import parse_endpoint
 
@@ -147,7 +142,7 @@ def _serve(args, system):
         watchdog = None
         if args.external and not args.lock_step:
             watchdog = Watchdog(1.0 if args.watchdog is None else args.watchdog, args.hold)
-        master = Master(instances, connections, args.master)
+        master = Master(instances, connections, args.algorithm)
         runner = Runner(master, system.start_time, step, stop_time, system.parameters, lock_step=args.lock_step,
                         period_steps=period_steps, watchdog=watchdog, writable=args.writable, log=_say)
         if args.print_map:
@@ -164,14 +159,7 @@ def _serve(args, system):
 
 
 def _run(args, system, runner, endpoints):
-    from crane_fmu.cosim import recorder_for
-
-    try:
-        recorder = recorder_for(args.out)
-    except OSError as exc:
-        raise UsageError(f"--out {args.out}: cannot be written ({exc.strerror})") from None
-    except ImportError as exc:
-        raise UsageError(f"--out {args.out}: writing it needs {exc.name} (pip install {exc.name})") from None
+    recorder = open_recorder(args.out)
     runner.observers.append(recorder)
     runner.start()
     previous = _stop_on_signals(runner)  # from here Ctrl-C stops the run cleanly, also while it starts
@@ -240,8 +228,6 @@ def _ready_for_real_time(out):
     """What keeps a cycle from stalling: the recorder's writer loaded now, not at its first chunk in a cycle
     (pyarrow's import takes 100 ms and more); the start-up's objects out of the garbage collector's way; and
     a thread that wakes (the runner at its deadline) given the GIL within 0.1 ms, not the default 5 ms."""
-    import gc
-
     if Path(out).suffix in (".csv", ".parquet"):
         import pyarrow.csv  # noqa: F401
     gc.collect()
@@ -319,8 +305,6 @@ class _LiveLine:
     shown = False  # a live line is on the terminal, not yet ended
 
     def __init__(self, runner):
-        import shutil
-
         self.runner, self.next = runner, 0.0
         self.width = max(20, shutil.get_terminal_size().columns - 1)
 

@@ -1,5 +1,6 @@
 """``crane-fmu simulate``: co-simulate a system of FMUs."""
 
+import argparse
 import os
 import sys
 from dataclasses import replace
@@ -19,7 +20,7 @@ EXAMPLES = (
     "  crane-fmu simulate --out results/section5.csv --plot results/section5.png\n"
     "  crane-fmu simulate --system free --stop-time 10 --out free.csv\n"
     "  crane-fmu simulate --system build/systems/paper.ssp --parameters my.ssv\n"
-    "  crane-fmu simulate --master jacobi --step 0.01 --set controller.w_theta2=0\n"
+    "  crane-fmu simulate --algorithm jacobi --step 0.01 --set controller.w_theta2=0\n"
     "  crane-fmu simulate --set plant.l1=1.5 --set controller.l1=1.5 --set plant.theta1_0=0.2\n"
     "  crane-fmu simulate --system transport --use controller=build/mine/PdSway.fmu --out mine.csv\n"
     "  crane-fmu simulate --system transport --out move.mat          # for MATLAB: columns and data\n"
@@ -38,16 +39,17 @@ def arguments(p):
 
 
 def run_options(p, stop_time_help):
-    """The options that set up a run (system, FMUs, times, master, values), for the commands that run one."""
+    """The options that set up a run (system, FMUs, times, algorithm, values), for the commands that run one."""
     p.add_argument("--system", default=DEFAULT_SYSTEM,
                    help=f"a built-in system's name (crane-fmu info lists them) or an SSP file "
                         f"(default: {DEFAULT_SYSTEM})")
     p.add_argument("--fmu-dir", default=DEFAULT_FMU_DIR, help=f"folder of the built FMUs (default: {DEFAULT_FMU_DIR})")
     p.add_argument("--stop-time", type=number, help=stop_time_help)
     p.add_argument("--step", type=number, help="communication step [s] (default: the system's, 1 ms built in)")
-    p.add_argument("--master", choices=tuple(ALGORITHMS), default="gauss-seidel",
-                   help="master algorithm (default gauss-seidel; iterative-jacobi repeats the Jacobi exchange "
+    p.add_argument("--algorithm", choices=tuple(ALGORITHMS), default="gauss-seidel",
+                   help="the master algorithm (default gauss-seidel; iterative-jacobi repeats the Jacobi exchange "
                         "until the inputs are consistent)")
+    p.add_argument("--master", choices=tuple(ALGORITHMS), dest="algorithm", help=argparse.SUPPRESS)  # its old name
     p.add_argument("--parameters", metavar="FILE.ssv",
                    help="SSP parameter set with names INSTANCE.VARIABLE, applied before --set")
     p.add_argument("--set", action="append", default=[], metavar="INSTANCE.VARIABLE=VALUE",
@@ -59,19 +61,23 @@ def run_options(p, stop_time_help):
 
 
 def run(args):
+    return on_system(args, _simulate)
+
+
+def on_system(args, command):
+    """``command(args, system)`` on the system of ``--system`` with the FMUs of ``--use`` in its place (simulate,
+    serve); a system or FMU it refuses is one line (UsageError)."""
     from crane_fmu import systems
 
     try:
         with systems.open_system(args.system) as system:
-            return _simulate(args, _use(args.use, system))
+            return command(args, _use(args.use, system))
     except ValueError as exc:
         raise UsageError(str(exc)) from None
 
 
 def _use(items, system):
     """``system`` with the FMUs of ``--use INSTANCE=FILE.fmu`` in place of its own (checked: one line each)."""
-    from pathlib import Path
-
     overrides = {}
     for item in items:
         instance, sep, path = item.partition("=")
@@ -106,40 +112,43 @@ def _keep_known(system, fmus, replaced):
 
 def prepare(args, system, step):
     """``(system, fmus, connections)`` of a run of ``system`` at ``step`` as ``args`` set it up: the FMUs of
-    ``--use`` (the system's values kept where they fit), the step's designs, ``--parameters`` then ``--set``
-    applied and every instance's parameters checked. A mistake raises UsageError or ValueError (one line)."""
+    ``--use`` (the system's values kept where they fit), then the run prepared as every run is
+    (``systems.prepare``: ``--parameters`` then ``--set`` applied, the step's designs, every instance's
+    parameters checked). A mistake raises UsageError or ValueError (one line)."""
     from crane_fmu import systems
-    from crane_fmu.cosim.system import settable, split_name
+    from crane_fmu.cosim.system import settable
 
     fmus, connections = systems.resolve(system, args.fmu_dir)
     system = _keep_known(system, fmus, list(system.replaced))
     system, notes = systems.tell_controllers(system, args.fmu_dir)
     for note in notes:
         print(f"crane-fmu: note: {note}", file=sys.stderr)
-    system = systems.at_step(system, args.fmu_dir, step)
     variables = settable(fmus)
-    if args.parameters:
-        from crane_fmu.cosim.ssp import load_parameters
-
-        if not Path(args.parameters).is_file():
-            raise UsageError(f"--parameters {args.parameters}: not found (an SSP parameter set, e.g. "
-                             "examples/parameters.ssv)")
-        loaded = load_parameters(args.parameters)
-        for instance, values in loaded.items():
-            for name in values:
-                try:
-                    split_name(f"{instance}.{name}", variables)
-                except ValueError as exc:
-                    raise UsageError(f"--parameters {args.parameters}: {instance}.{name}: {exc}") from None
-        system = system.with_parameters(loaded)
-    system = system.with_parameters(parse_sets(args.set, variables))
-    systems.check_parameters(system, args.fmu_dir)
+    values = [_parameter_file(args.parameters, variables)] if args.parameters else []
+    system = systems.prepare(system, step, values=values + [parse_sets(args.set, variables)])
     return system, fmus, connections
+
+
+def _parameter_file(path, variables):
+    """``{instance: {variable: value}}`` of an SSP parameter set, every name checked against ``variables``."""
+    from crane_fmu.cosim.ssp import load_parameters
+    from crane_fmu.cosim.system import split_name
+
+    if not Path(path).is_file():
+        raise UsageError(f"--parameters {path}: not found (an SSP parameter set, e.g. examples/parameters.ssv)")
+    loaded = load_parameters(path)
+    for instance, values in loaded.items():
+        for name in values:
+            try:
+                split_name(f"{instance}.{name}", variables)
+            except ValueError as exc:
+                raise UsageError(f"--parameters {path}: {instance}.{name}: {exc}") from None
+    return loaded
 
 
 def _simulate(args, system):
     """Run a system, writing the CSV (and plot) of ``args``; ``--parameters`` and ``--set`` override its values."""
-    from crane_fmu.cosim import FmiError, ProgressLine, read_result, recorder_for, simulate
+    from crane_fmu.cosim import FmiError, ProgressLine, read_result, simulate
     from crane_fmu.cosim.master import communication_points
     from crane_fmu.cosim.recorder import RESULT_SUFFIXES
 
@@ -150,15 +159,10 @@ def _simulate(args, system):
     writable_file(args.out, "--out", RESULT_SUFFIXES)
     if args.plot:
         writable_file(args.plot, "--plot", ".png")
-    try:
-        recorder = recorder_for(args.out)
-    except OSError as exc:
-        raise UsageError(f"--out {args.out}: cannot be written ({exc.strerror})") from None
-    except ImportError as exc:
-        raise UsageError(f"--out {args.out}: writing it needs {exc.name} (pip install {exc.name})") from None
+    recorder = open_recorder(args.out)
     progress = [ProgressLine(system.start_time, stop_time, sys.stderr)] if sys.stderr.isatty() else []
     try:
-        simulate(fmus, connections, stop_time, step, args.master, system.parameters, recorder, system.start_time,
+        simulate(fmus, connections, stop_time, step, args.algorithm, system.parameters, recorder, system.start_time,
                  not args.no_initial_exchange, observers=progress)
     except FmiError as exc:
         # Bad parameter values are refused when initialisation ends: the user's mistake.
@@ -185,11 +189,23 @@ def _simulate(args, system):
         Path(partial).parent.mkdir(parents=True, exist_ok=True)
         settings = ", ".join(item.split("=", 1)[0] + "=" + item.split("=", 1)[1] for item in args.set)
         used = "".join(f" with {name}={Path(system.instances[name]).name}" for name in system.replaced)
-        plot_run(read_result(args.out), partial, f"{system.name}{used} ({args.master}, h={step:g} s)"
+        plot_run(read_result(args.out), partial, f"{system.name}{used} ({args.algorithm}, h={step:g} s)"
                  + (f"\n{settings}" if settings else ""))
         os.replace(partial, args.plot)
         print(f"wrote {args.plot}")
     return 0
+
+
+def open_recorder(out):
+    """The recorder of the result file ``--out`` (simulate, serve); one line if it cannot be written."""
+    from crane_fmu.cosim import recorder_for
+
+    try:
+        return recorder_for(out)
+    except OSError as exc:
+        raise UsageError(f"--out {out}: cannot be written ({exc.strerror})") from None
+    except ImportError as exc:
+        raise UsageError(f"--out {out}: writing it needs {exc.name} (pip install {exc.name})") from None
 
 
 def _end(progress):

@@ -5,7 +5,7 @@ algorithm another. An algorithm is bound once to a wiring, then called at every
 communication point ``t``: :meth:`Algorithm.exchange` brings every connected input up to
 date, the observers see the outputs, and :meth:`Algorithm.step` steps every instance and
 returns the step it took. Algorithms are registered by name (:data:`ALGORITHMS`, the
-command line's ``--master`` choices); a new one is a subclass and :func:`register`.
+command line's ``--algorithm`` choices); a new one is a subclass and :func:`register`.
 """
 
 from .instance import FmiError

@@ -15,6 +15,9 @@ named by a checksum of its source; ``CRANE_FMU_LOOP=python`` turns it off.
 import ctypes
 import functools
 import os
+import shutil
+import subprocess
+import tempfile
 import zlib
 from pathlib import Path
 
@@ -59,10 +62,6 @@ def library(hold_gil=False):
 def _compile(path):
     """Compile the loop into ``path`` (aside, then renamed: never a half-written library); False without a
     C compiler or a writable cache folder."""
-    import shutil
-    import subprocess
-    import tempfile
-
     cc = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
     if cc is None:
         return False

@@ -11,6 +11,7 @@ grid, so the cycles catch up with the wall clock instead of drifting behind it.
 """
 
 import math
+import os
 import time
 from array import array
 
@@ -76,8 +77,6 @@ class Timing:
     def write_csv(self, path, start_time=0.0):
         """Every cycle as a CSV row: ``cycle, deadline_s, lateness_s, work_s, missed, time`` (the simulated time
         the cycle started from, with cycles of ``period`` from ``start_time``), written aside and renamed."""
-        import os
-
         partial = f"{path}.partial"
         with open(partial, "w") as f:
             f.write("cycle,deadline_s,lateness_s,work_s,missed,time\n")

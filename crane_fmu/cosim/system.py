@@ -39,6 +39,9 @@ class System:
         ``{instance: model identifier or .fmu path}``: what the system was designed with, for the
         instances whose FMU :meth:`with_instances` replaced. The connections the design has must keep
         both ends in the FMUs used (:meth:`resolve`).
+    tags : tuple of str
+        Words that say what else a toolkit does with the system (which of its systems it packs as one
+        FMU, say); the master ignores them.
     """
 
     name: str
@@ -51,6 +54,7 @@ class System:
     start_time: float = 0.0
     description: str = ""
     replaced: dict = field(default_factory=dict)
+    tags: tuple = ()
 
     def fmus(self, fmu_dir):
         """``{instance: Path}`` of the FMU files; a model identifier names ``fmu_dir/<identifier>.fmu``."""
@@ -142,7 +146,7 @@ def split_name(name, variables):
     return instance, variable
 
 
-def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters=None,
+def simulate(fmus, connections, stop_time, step, algorithm="gauss-seidel", parameters=None,
              recorder=None, start_time=0.0, initial_exchange=True, observers=()):
     """Co-simulate FMUs with the fixed-step master.
 
@@ -153,7 +157,7 @@ def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters
     connections : list of Connection
     stop_time, step : float
         Stop time and communication step [s]; the step must divide the interval.
-    mode : str or Algorithm
+    algorithm : str or Algorithm
         The master algorithm: a registered name (``crane_fmu.cosim.algorithms``) or object.
     parameters : dict, optional
         ``{instance: {variable: value}}`` set before initialisation.
@@ -182,7 +186,7 @@ def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters
     try:
         for name, path in fmus.items():
             instances[name] = open_instance(path, name)
-        master = Master(instances, connections, mode, initial_exchange)
+        master = Master(instances, connections, algorithm, initial_exchange)
         master.run(start_time, stop_time, step, [recorder, *observers], parameters)
         master.terminate()
     except FmiError as exc:
@@ -197,9 +201,13 @@ def simulate(fmus, connections, stop_time, step, mode="gauss-seidel", parameters
     return recorder
 
 
-def run(system, fmu_dir, mode="gauss-seidel", recorder=None, stop_time=None, step=None, initial_exchange=True):
-    """Co-simulate a :class:`System` whose FMUs are in ``fmu_dir`` (or named by path); return the recorder."""
+def run(system, fmu_dir, algorithm="gauss-seidel", recorder=None, stop_time=None, initial_exchange=True):
+    """Co-simulate a :class:`System` whose FMUs are in ``fmu_dir`` (or named by path); return the recorder.
+
+    It runs at the system's own step, with its own values: a system to be run at another step is made by
+    the toolkit's one preparation of a run (``crane_fmu.systems.prepare``), which also tells every
+    component designed for a step (its parameter ``h``) the new one.
+    """
     fmus, connections = system.resolve(fmu_dir)
-    return simulate(fmus, connections, system.stop_time if stop_time is None else stop_time,
-                    system.step if step is None else step, mode, system.parameters, recorder, system.start_time,
-                    initial_exchange)
+    return simulate(fmus, connections, system.stop_time if stop_time is None else stop_time, system.step, algorithm,
+                    system.parameters, recorder, system.start_time, initial_exchange)

@@ -169,4 +169,4 @@ COMPONENT = Component(
     "BacksteppingController", "controller",
     "Backstepping anti-swing controller for a double-pendulum crane payload "
     "(least-squares eq 21); output: trolley acceleration u, direct feedthrough",
-    VARIABLES, configure, _output, feedthrough=True)
+    VARIABLES, configure, _output, feedthrough=True, native="backstepping.c")

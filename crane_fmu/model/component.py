@@ -114,6 +114,9 @@ class Component:
         parameters (gains, shaper impulses), shown by ``crane-fmu info``.
     continuous : Continuous, optional
         For a component that a host may integrate itself (Model Exchange).
+    native : str, optional
+        The file of the component's C twin in ``fmu_src/models`` (``crane_plant.c``): ``crane-fmu
+        build`` then builds its native FMU too, and systems of such components as one native FMU.
     """
 
     model_identifier: str
@@ -129,6 +132,7 @@ class Component:
     report: Callable | None = None
     depends_on: dict | None = None
     continuous: Continuous | None = None
+    native: str | None = None
 
     def __post_init__(self):
         if not self.model_identifier.isidentifier():

@@ -37,7 +37,8 @@ GUST = Component(
      output("F1", "N", "horizontal force on the hook"),
      output("F2", "N", "horizontal force on the payload")),
     _gust_configure, lambda config, state, inputs: gust(config, state[0]),
-    initial_state=lambda config: (0.0,), update=lambda config, state, inputs, time, step: (time + step,))
+    initial_state=lambda config: (0.0,), update=lambda config, state, inputs, time, step: (time + step,),
+    native="gust.c")
 
 
 # --- Sensor: noise and a one-step delay on the measured state ------------------------------
@@ -104,7 +105,7 @@ SENSOR = Component(
      ) + tuple(input_(v.name, v.unit, v.description.replace("measured ", "true ")) for v in MEASURED_STATE)
     + tuple(output(name + "_m", v.unit, v.description) for name, v in zip(STATE, MEASURED_STATE)),
     _sensor_configure, _sensor_output, feedthrough=True,
-    initial_state=lambda config: (0, None), update=_sensor_update,
+    initial_state=lambda config: (0, None), update=_sensor_update, native="sensor.c",
     depends_on={name + "_m": (name,) for name in STATE})  # each channel its own (at once: delay 0, first sample)
 
 

@@ -101,4 +101,5 @@ COMPONENT = Component(
     "EnergyController", "controller",
     "Energy-coupling anti-swing law with a Lyapunov/LaSalle proof (saturated, |u| <= u_max); "
     "output: trolley acceleration u, direct feedthrough",
-    VARIABLES, configure, lambda config, state, inputs: (control(config, inputs),), feedthrough=True)
+    VARIABLES, configure, lambda config, state, inputs: (control(config, inputs),), feedthrough=True,
+    native="energy.c")

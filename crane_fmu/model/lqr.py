@@ -150,4 +150,4 @@ COMPONENT = Component(
     "LqrController", "controller",
     "Discrete-time LQR of the double-pendulum crane about the hanging equilibrium, designed from its parameters "
     "at initialisation; tracks x_ref, dx_ref, ddx_ref; output: trolley acceleration u, direct feedthrough",
-    VARIABLES, configure, _output, feedthrough=True, report=report)
+    VARIABLES, configure, _output, feedthrough=True, report=report, native="lqr.c")

@@ -3,7 +3,7 @@
 Two optimisations on the crane linearised about the hanging equilibrium (the LQR's
 model, :func:`.lqr.continuous_model`, held over the control interval ``T``):
 
-1. **The plan**, once, at the first solve: the shortest move from the measured state
+1. **The plan**, at the first solve (and again when the state leaves it): the shortest move from the measured state
    to rest at ``x_d`` (bisection on the number of intervals ``n``; a move is
    possible when the QP ``min rho |s_n - s_target|^2 + |U|^2`` reaches the target),
    within ``(1 - margin)`` of the drive's limits: the whole move is seen at once.
@@ -24,6 +24,13 @@ best feasible input and the FMU warns once). With ``l1_low < l1_high`` the desig
 are made for cable lengths across that range and the one nearest the measured
 ``l1_now`` is used (as the LQR schedules its gains).
 
+The plant may differ from the configured model (S3's unknown cables and payload): the swing's
+equations of motion (8)-(9), integrated over each interval, are linear in ``(l1, l2, m2 / (m1 + m2))``;
+after ``identify`` seconds of data their least-squares solution (when well posed, plausible and
+explaining the data) replaces the model, and the move is planned again with it (:func:`identify`).
+The move is planned again too when the measured state leaves the plan by ``replan_x`` (trolley) or
+``replan_angle`` (swing, as a modal amplitude; :func:`deviation`), at most every :data:`REPLAN_GAP`.
+
 What is claimed is measured, not proven: ``crane-fmu targets`` and the scoreboard
 give its figures; the plan is only as good as the linear model (a few tenths of a
 degree at the end of a fast move on the nominal plant, degrees on a plant the model
@@ -34,7 +41,7 @@ import dataclasses
 import math
 from collections import namedtuple
 
-from . import limits, linalg, qp
+from . import limits, linalg, planner, qp
 from .component import Component, Step
 from .lqr import DEFAULT_WEIGHTS, WEIGHTS, continuous_model
 from .parameters import finite, plant_parameters, positive
@@ -44,20 +51,37 @@ RHO = 1e6  # the plan's weight on missing the target state
 REACHED = 1e-3  # the plan reaches the target when every state is this close (m, m/s, rad, rad/s)
 LONGEST_PLAN = 6.0  # s: a move that needs longer is not planned (the tracking QP regulates alone)
 SCHEDULE_POINTS = 11
+REPLAN_GAP = 0.25  # s: the least time between two plans made because the state left the plan
+RETRY_GAP = 6.0  # s: ... after no move within LONGEST_PLAN was found (each attempt costs a bisection of QPs)
+WELL_POSED = 1e-2  # ... and gives a model when no pivot of its normal equations falls below this share
+MISFIT = 1e-5  # ... that explains the data to this share of their squares (0.3 % RMS): clean measurements
+PLAUSIBLE = 2.0  # ... within this factor of the configured cable lengths
+TOLERANCE = 0.01  # ... and the controller plans again with it when a swing mode's frequency differs by more
 
-Design = namedtuple("Design", "l1 ad bd gain qp")
-Design.__doc__ = ("The tracking QP for one cable length: the model ``(Ad, Bd)`` over the interval, ``F`` (N x 6) "
-                  "of the linear term ``f = F e0``, and the prepared QP (:func:`.qp.prepare`).")
+Design = namedtuple("Design", "l1 ad bd gain qp omegas shapes")
+Design.__doc__ = ("The tracking QP for one model: its cable length, ``(Ad, Bd)`` over the interval, ``F`` (N x 6) "
+                  "of the linear term ``f = F e0``, the prepared QP (:func:`.qp.prepare`) and the slow swing "
+                  "and the fast swing modes' angular frequencies [rad/s] and shapes (:func:`.planner.modes`).")
 
-Config = namedtuple("Config", "designs x_d u_max v_max margin h every interval steps max_iterations memo")
+Config = namedtuple("Config", "designs x_d u_max v_max margin h every interval steps max_iterations plant weights r "
+                              "samples replan_x replan_angle memo")
 Config.__doc__ = ("The designs (one, or one per scheduled cable length), the target, the limits, the plan's "
                   "margin, the communication step ``h``, the steps per interval (``every``), the interval, the "
-                  "horizon in intervals, the QP's cap, and ``memo``: the last solve, which the FMU's output and "
-                  "its step share.")
+                  "horizon in intervals, the QP's cap, the configured model and weights (for the identified "
+                  "model's design), the intervals the identification needs (0: none), the deviations that make "
+                  "a new plan, and ``memo``: the last solve, which the FMU's output and its step share, and the "
+                  "identified model's design.")
 
 # The state: a header, then the last solution du (N), the rows it held at a bound (2N codes: 0, +1 upper,
-# -1 lower), the plan's inputs u* (n) and its states s* ((n + 1) x 6).
-HEADER = namedtuple("Header", "count u iterations warned plan_steps")(*range(5))
+# -1 lower), the plan's inputs u* (n) and its states s* ((n + 1) x 6). The header: the step count, the held
+# input, the QP's iterations, whether it warned, the plan's length, the interval it starts at, the first interval
+# a plan for a deviation may be made at, the cable length of the design it was made with, the identified model
+# (l1, l2, m2; 0: the configured one), and the identification's data (see identify): the last step's sample
+# (_sample), the integrals since the last solve (integrate), the normal equations (n11 n12 n13 n22 n23 n33, z,
+# the data's squares yy) and the intervals in them.
+HEADER = namedtuple("Header", "count u iterations warned plan_steps plan_start plan_after plan_l1 l1 l2 "
+                              "m2 w1 w2 cos_d sin_d cos1 sin1 cos2 sin2 d1 d2 a1 a2 c1 c2 s1 s2 "
+                              "n11 n12 n13 n22 n23 n33 z1 z2 z3 yy samples")(*range(38))
 
 
 def predict_rows(ad, bd, steps):
@@ -108,7 +132,8 @@ def design(p, weights, r, interval, steps):
         hessian[i][i] += r
         for j in range(i + 1, steps):
             hessian[j][i] = hessian[i][j]
-    return Design(p.l1, ad, bd, gain, qp.prepare(hessian, constraint_rows(steps, interval)))
+    return Design(p.l1, ad, bd, gain, qp.prepare(hessian, constraint_rows(steps, interval)),
+                  *planner.modes(p)[:2])
 
 
 def speed_envelope(v0, v_max, u_max, interval, k):
@@ -190,12 +215,12 @@ def plan_move(d, s0, target, u_max, v_max, interval, max_intervals):
         reach = [linalg.dot(c, solution.x) for c in zip(*columns)]
         return all(abs(r - m) <= REACHED for r, m in zip(reach, miss)), solution.x
 
-    high = max(8, low + 1 + int(0.15 * low) + 4)
+    high = min(max(8, low + 1 + int(0.15 * low) + 4), max_intervals)
     ok, inputs = attempt(high)
     while not ok:
-        low, high = high, 2 * high
-        if high > max_intervals:
+        if high >= max_intervals:
             return (), ()
+        low, high = high, min(2 * high, max_intervals)
         ok, inputs = attempt(high)
     while high - low > 1:
         mid = (low + high) // 2
@@ -218,7 +243,7 @@ def configure(values):
         value = values[name]
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < math.inf:
             raise ValueError(f"{name} must be >= 0 and finite, got {value!r}")
-    for name in ("r", "h", "interval", "horizon"):
+    for name in ("r", "h", "interval", "horizon", "replan_x", "replan_angle"):
         positive(name, values[name])
     margin = values["margin"]
     if not 0 <= margin < 1:
@@ -226,6 +251,9 @@ def configure(values):
     cap = values["max_iterations"]
     if not (cap >= 1 and cap == int(cap)):
         raise ValueError(f"max_iterations must be a whole number >= 1, got {cap!r}")
+    identify = values["identify"]
+    if not 0 <= identify < math.inf:
+        raise ValueError(f"identify must be >= 0 and finite, got {identify!r}")
     finite("x_d", values["x_d"])
     u_max, v_max = limits.check(values)
     if not (math.isfinite(u_max) and math.isfinite(v_max)):
@@ -248,8 +276,10 @@ def configure(values):
         lengths = [low + (high - low) * i / (SCHEDULE_POINTS - 1) for i in range(SCHEDULE_POINTS)]
     designs = tuple(design(dataclasses.replace(p, l1=length), weights, values["r"], interval, steps)
                     for length in lengths)
+    samples = max(1, round(identify / interval)) if identify > 0 and len(designs) == 1 else 0
     return Config(designs=designs, x_d=values["x_d"], u_max=u_max, v_max=v_max, margin=margin, h=h, every=every,
-                  interval=interval, steps=steps, max_iterations=int(cap), memo={})
+                  interval=interval, steps=steps, max_iterations=int(cap), plant=p, weights=weights, r=values["r"],
+                  samples=samples, replan_x=values["replan_x"], replan_angle=values["replan_angle"], memo={})
 
 
 def nearest_design(config, l1):
@@ -260,9 +290,19 @@ def nearest_design(config, l1):
     return min(designs, key=lambda d: abs(d.l1 - l1))
 
 
+def identified_design(config, model):
+    """The design for the identified model ``(l1, l2, m2)`` (the configured ``m1 + m2`` kept), made once."""
+    cache = config.memo.setdefault("designs", {})
+    if model not in cache:
+        mu = config.plant.m1 + config.plant.m2
+        p = dataclasses.replace(config.plant, l1=model[0], l2=model[1], m2=model[2], m1=mu - model[2])
+        cache[model] = design(p, config.weights, config.r, config.interval, config.steps)
+    return cache[model]
+
+
 def initial_state(config):
     n = config.steps
-    return (0.0, 0.0, 0.0, 0.0, 0.0) + (0.0,) * n + (0.0,) * (2 * n)
+    return (0.0,) * len(HEADER) + (0.0,) * n + (0.0,) * (2 * n)
 
 
 def _plan_of(config, state):
@@ -273,22 +313,150 @@ def _plan_of(config, state):
     return inputs, [flat[6 * k:6 * k + 6] for k in range(len(flat) // 6)]
 
 
+def _sample(measured):
+    """What the identification keeps of a measured state: ``w1, w2, cos d, sin d, cos th1, sin th1, cos th2, sin th2``
+    with ``d = th1 - th2``."""
+    theta1, w1, theta2, w2 = measured[2:6]
+    d = theta1 - theta2
+    return (w1, w2, math.cos(d), math.sin(d), math.cos(theta1), math.sin(theta1), math.cos(theta2), math.sin(theta2))
+
+
+def integrate(h, integrals, before, now):
+    """The identification's integrals over an interval, one communication step further (trapezoidal rule).
+
+    ``integrals``: ``(D1, D2, A1, A2, C1, C2, S1, S2)``, see :func:`identify`; ``before`` and
+    ``now``: :func:`_sample` of the step's two ends.
+    """
+    w1a, w2a, cda, sda, c1a, s1a, c2a, s2a = before
+    w1b, w2b, cdb, sdb, c1b, s1b, c2b, s2b = now
+    half = 0.5 * h
+    cd = 0.5 * (cda + cdb)
+    d1, d2, a1, a2, c1, c2, s1, s2 = integrals
+    return (d1 + (w1b - w1a), d2 + (w2b - w2a),
+            a1 + (cd * (w1b - w1a) - half * (w1a * w1a * sda + w1b * w1b * sdb)),
+            a2 + (cd * (w2b - w2a) + half * (w2a * w2a * sda + w2b * w2b * sdb)),
+            c1 + half * (c1a + c1b), c2 + half * (c2a + c2b), s1 + half * (s1a + s1b), s2 + half * (s2a + s2b))
+
+
+def _identifying(config, state):
+    """Whether the model is still to be identified (identification on, no model found yet)."""
+    return config.samples > 0 and state[HEADER.l1] == 0.0
+
+
+def identify(config, state, measured):
+    """The identification's normal equations with the interval that ends now, and the model they give (or None).
+
+    Notes
+    -----
+    Eqs (8)-(9) (eq (8) divided by ``m1 + m2``) are linear in ``(l1, l2, k)``, ``k = l2 m2 / (m1 + m2)``::
+
+        l1 w1' + k (cos d w2' + w2^2 sin d) = -u cos th1 - g sin th1
+        l1 (cos d w1' - w1^2 sin d) + l2 w2' = -u cos th2 - g sin th2,    d = th1 - th2
+
+    Integrated over an interval, in which ``u`` is held, with ``D1``, ``D2`` the rates' changes,
+    ``A1 = int (cos d w1' - w1^2 sin d) dt``, ``A2 = int (cos d w2' + w2^2 sin d) dt``,
+    ``C_i = int cos th_i dt`` and ``S_i = int sin th_i dt`` (trapezoidal sums over the
+    communication steps, :func:`integrate`), each interval gives two rows::
+
+        (D1, 0, A2) (l1, l2, k)' = -u C1 - g S1,     (A1, D2, 0) (l1, l2, k)' = -u C2 - g S2
+
+    The model is the least-squares solution of the intervals so far, given once
+    :attr:`Config.samples` intervals are in and no pivot of the normal equations' Cholesky
+    factor falls below :data:`WELL_POSED` of its diagonal, when plausible: each length within a
+    factor :data:`PLAUSIBLE` of the configured one and ``0 < k < l2``.
+    """
+    c, s = config, state
+    first = HEADER.n11
+    sums = list(s[first:first + 11])
+    if not _identifying(c, s):  # off, or done: nothing more to add
+        return sums, None
+    if s[HEADER.count] > 0:
+        d1, d2, a1, a2, c1, c2, s1, s2 = integrate(c.h, s[HEADER.d1:HEADER.s2 + 1], s[HEADER.w1:HEADER.sin2 + 1],
+                                                   _sample(measured))
+        u, g = s[HEADER.u], c.plant.g
+        y1, y2 = -u * c1 - g * s1, -u * c2 - g * s2
+        sums[0] += d1 * d1 + a1 * a1
+        sums[1] += a1 * d2
+        sums[2] += d1 * a2
+        sums[3] += d2 * d2
+        sums[5] += a2 * a2
+        sums[6] += d1 * y1 + a1 * y2
+        sums[7] += d2 * y2
+        sums[8] += a2 * y1
+        sums[9] += y1 * y1 + y2 * y2
+        sums[10] += 1.0
+    model = None
+    if sums[10] >= c.samples:
+        n11, n12, n13, n22, n23, n33, z1, z2, z3, yy, _ = sums
+        normal = [[n11, n12, n13], [n12, n22, n23], [n13, n23, n33]]
+        try:
+            factor = qp.cholesky(normal)
+        except ArithmeticError:
+            factor = None
+        if factor is not None and min(factor[i][i] * factor[i][i] / normal[i][i] for i in range(3)) >= WELL_POSED:
+            l1, l2, k = qp.cholesky_solve(factor, [z1, z2, z3])
+            misfit = (yy - (l1 * z1 + l2 * z2 + k * z3)) / yy  # the residual's share of the data's squares
+            p = c.plant
+            plausible = all(b / PLAUSIBLE <= a <= b * PLAUSIBLE for a, b in ((l1, p.l1), (l2, p.l2)))
+            if misfit <= MISFIT and plausible and 0.0 < k < l2:
+                model = (l1, l2, (p.m1 + p.m2) * k / l2)
+    return sums, model
+
+
+def deviation(d, measured, ref):
+    """How far the measured state is from the plan's: ``(trolley [m], swing [rad])``.
+
+    The trolley's: the amplitude ``sqrt(e^2 + (e' / w)^2)`` of its position and speed errors
+    taken as a swing of the slow mode's frequency ``w``. The swing's: the angles' and rates'
+    errors split into the design's two swing modes, each mode's amplitude on the angle it moves
+    most, added: the largest swing the deviation would make left alone (linear model).
+    """
+    e = [a - b for a, b in zip(measured, ref)]
+    w = d.omegas[0]
+    trolley = math.sqrt(e[0] * e[0] + (e[1] / w) * (e[1] / w))
+    (s11, s21), (s12, s22) = d.shapes
+    det = s11 * s22 - s12 * s21
+    swing = 0.0
+    for k, (a, b) in enumerate(((s22, -s12), (-s21, s11))):  # rows of the shapes' inverse
+        eta, rate = (a * e[2] + b * e[4]) / det, (a * e[3] + b * e[5]) / det
+        swing += math.sqrt(eta * eta + (rate / d.omegas[k]) * (rate / d.omegas[k])) * max(abs(s) for s in d.shapes[k])
+    return trolley, swing
+
+
 def solve(config, state, measured, l1_now):
     """One solve: ``(u, new state without the count, messages)`` from the measured state."""
     c, n = config, config.steps
-    d = nearest_design(c, l1_now)
-    target = (c.x_d, 0.0, 0.0, 0.0, 0.0, 0.0)
     count = int(state[HEADER.count])
-    if count == 0:
+    at = count // c.every  # this interval's number
+    sums, model = identify(c, state, measured)
+    known = (state[HEADER.l1], state[HEADER.l2], state[HEADER.m2])
+    d = identified_design(c, known) if known[0] > 0.0 else nearest_design(c, l1_now)
+    if model is not None:  # identified: a new design and plan when a swing mode's frequency moved
+        found = identified_design(c, model)
+        known = model
+        if max(abs(a - b) / b for a, b in zip(found.omegas, d.omegas)) <= TOLERANCE:
+            model = None
+        d = found
+    target = (c.x_d, 0.0, 0.0, 0.0, 0.0, 0.0)
+    plan_u, plan_s = _plan_of(c, state)
+    plan_start, plan_after = int(state[HEADER.plan_start]), int(state[HEADER.plan_after])
+    step = at - plan_start
+    ref_s = plan_s[step] if count and step < len(plan_s) else target
+    trolley, swing = deviation(d, measured, ref_s)
+    rescheduled = len(c.designs) > 1 and d.l1 != state[HEADER.plan_l1]  # the schedule's design changed
+    moved = trolley > c.replan_x or swing > c.replan_angle or rescheduled
+    replan = count == 0 or model is not None or (moved and at >= plan_after)
+    if replan:
         shrink = 1.0 - c.margin
         plan_u, plan_s = plan_move(d, measured, target, c.u_max * shrink, c.v_max * shrink, c.interval,
                                    int(LONGEST_PLAN / c.interval))
-        start_at = 0
-    else:
-        plan_u, plan_s = _plan_of(c, state)
-        start_at = count // c.every  # intervals since the plan began
-    ref_u = [plan_u[start_at + k] if start_at + k < len(plan_u) else 0.0 for k in range(n)]
-    ref_s = plan_s[start_at] if start_at < len(plan_s) else target
+        plan_start, step = at, 0
+        if plan_u:  # a move: the next one (for a deviation) waits REPLAN_GAP
+            plan_after = at + round(REPLAN_GAP / c.interval)
+        elif max(abs(a - b) for a, b in zip(measured, target)) > REACHED:  # none within LONGEST_PLAN:
+            plan_after = at + round(RETRY_GAP / c.interval)  # the tracking QP regulates alone a while
+    ref_u = [plan_u[step + k] if step + k < len(plan_u) else 0.0 for k in range(n)]
+    ref_s = plan_s[step] if step < len(plan_s) else target
     e0 = [a - b for a, b in zip(measured, ref_s)]
     f = [linalg.dot(row, e0) for row in d.gain]
     v0 = measured[1]
@@ -301,14 +469,16 @@ def solve(config, state, measured, l1_now):
         lower.append(low_v - planned)
         upper.append(high_v - planned)
     previous = state[len(HEADER):len(HEADER) + n]
-    guess = [ref_u[k] + (previous[k + 1] if k + 1 < n else 0.0) for k in range(n)] if count else ref_u
+    shifted = count and not replan
+    guess = [ref_u[k] + (previous[k + 1] if k + 1 < n else 0.0) for k in range(n)] if shifted else ref_u
     absolute = feasible_start(guess, v0, [-c.u_max] * n, [c.u_max] * n, c.v_max, c.u_max, c.interval)
     start = [a - b for a, b in zip(absolute, ref_u)]
-    codes = state[len(HEADER) + n:len(HEADER) + 3 * n]
     hint = []
-    for row, code in enumerate(codes):  # each row one interval later: row k+1 of the last solve is row k now
-        if code and row % n:
-            hint.append((row - 1, int(code)))
+    if shifted:
+        codes = state[len(HEADER) + n:len(HEADER) + 3 * n]
+        for row, code in enumerate(codes):  # each row one interval later: row k+1 of the last solve is row k now
+            if code and row % n:
+                hint.append((row - 1, int(code)))
     solution = qp.solve(d.qp, f, lower, upper, start, hint, c.max_iterations)
     new_codes = [0.0] * (2 * n)
     for row, side in solution.active:
@@ -320,11 +490,11 @@ def solve(config, state, measured, l1_now):
         warned = 1.0
         messages = (f"MpcController: the QP stopped at its iteration cap ({c.max_iterations}) at t = "
                     f"{count * c.h!r} s; u is its best feasible input (warned once)",)
-    plan_part = (tuple(plan_u) + tuple(v for s in plan_s for v in s)) if count == 0 else \
+    plan_part = (tuple(plan_u) + tuple(v for s in plan_s for v in s)) if replan else \
         state[len(HEADER) + 3 * n:]
-    rest = ((u, float(solution.iterations), warned, float(len(plan_u))) + tuple(solution.x) + tuple(new_codes)
-            + plan_part)
-    return u, rest, messages
+    header = (u, float(solution.iterations), warned, float(len(plan_u)), float(plan_start), float(plan_after),
+              d.l1 if replan else state[HEADER.plan_l1], *known, *_sample(measured), *(0.0,) * 8, *sums)
+    return u, header + tuple(solution.x) + tuple(new_codes) + plan_part, messages
 
 
 def _solved(config, state, inputs):
@@ -341,20 +511,26 @@ def _due(config, state):
 
 
 def _plan_end(config, state):
-    return state[HEADER.plan_steps] * config.interval
+    return (state[HEADER.plan_start] + state[HEADER.plan_steps]) * config.interval if state[HEADER.plan_steps] \
+        else 0.0
 
 
 def _output(config, state, inputs):
     if _due(config, state):
-        u, rest, _ = _solved(config, state, inputs)
-        return u, rest[1], rest[3] * config.interval
+        _, rest, _ = _solved(config, state, inputs)
+        state = (state[HEADER.count],) + rest
     return state[HEADER.u], state[HEADER.iterations], _plan_end(config, state)
 
 
 def update(config, state, inputs, time, step):
-    """Count the step; after a solve keep its input (held until the next), its solution and the plan."""
+    """Count the step and add it to the identification's integrals; after a solve keep its input (held until the
+    next), its solution, the plan and the identification's sums."""
     if not _due(config, state):
-        return (state[HEADER.count] + 1.0,) + state[1:]
+        if not _identifying(config, state):
+            return (state[HEADER.count] + 1.0,) + state[1:]
+        now = _sample(inputs[IN.x:IN.dtheta2 + 1])
+        integrals = integrate(config.h, state[HEADER.d1:HEADER.s2 + 1], state[HEADER.w1:HEADER.sin2 + 1], now)
+        return (state[HEADER.count] + 1.0,) + state[1:HEADER.w1] + now + integrals + state[HEADER.s2 + 1:]
     _, rest, messages = _solved(config, state, inputs)
     new = (state[HEADER.count] + 1.0,) + rest
     return Step(new, list(messages)) if messages else new
@@ -374,6 +550,12 @@ VARIABLES = controller_model() + tuple(
                                      "(a whole number of communication steps)"),
     parameter("horizon", 2.0, "s", "tracking QP's prediction horizon (the plan sees the whole move)"),
     parameter("margin", 0.05, "1", "share of u_max and v_max the plan leaves to the tracking QP"),
+    parameter("identify", 0.3, "s", "swing data the plant's model is identified from (then planned again with "
+                                    "it); 0: never (nor with a schedule of l1)"),
+    parameter("replan_x", 0.03, "m", "the trolley's deviation from the plan (as a swing amplitude) that makes a "
+                                     "new plan"),
+    parameter("replan_angle", math.radians(2.0), "rad", "a swing angle's deviation from the plan (as an amplitude) "
+                                                       "that makes a new plan"),
     parameter("max_iterations", 200.0, "1", "QP iteration cap: at the cap u is the best feasible input (warned "
                                             "once)"),
     parameter("h", 1e-3, "s", "communication step (the interval is a whole number of them)"),

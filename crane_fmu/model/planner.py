@@ -192,4 +192,4 @@ COMPONENT = Component(
     "outputs: the reference x_ref, dx_ref, ddx_ref and the swing it induces",
     VARIABLES, configure, lambda config, state, inputs: reference(config, state[0]),
     initial_state=lambda config: (0.0,), update=lambda config, state, inputs, time, step: (time + step,),
-    report=report, default_experiment=(0.0, 10.0, 1e-3))  # the transport system's move
+    report=report, default_experiment=(0.0, 10.0, 1e-3), native="planner.c")  # the transport system's move

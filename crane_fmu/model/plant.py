@@ -252,4 +252,5 @@ COMPONENT = Component(
     "Overhead crane with a double-pendulum payload (hook m1 on cable l1, payload m2 on cable l2); "
     "inputs: trolley and hoist accelerations, horizontal forces; fixed-step RK4 inside doStep",
     VARIABLES, configure, _outputs,
-    initial_state=lambda config: config.state0, update=update, continuous=CONTINUOUS)
+    initial_state=lambda config: config.state0, update=update, continuous=CONTINUOUS,
+    native="crane_plant.c")

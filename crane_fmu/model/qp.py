@@ -170,8 +170,8 @@ def _append(factor, working, s, row):
     return True
 
 
-def _multipliers(factor, rhs):
-    """``lam`` with ``L L' lam = rhs``."""
+def cholesky_solve(factor, rhs):
+    """``y`` with ``L L' y = rhs`` for the Cholesky factor ``L`` (:func:`cholesky`)."""
     m = len(factor)
     y = [0.0] * m
     for i in range(m):
@@ -228,7 +228,7 @@ def solve(prepared, f, lower, upper, start, hint=(), max_iterations=100):
         if working:
             if rxu is None:
                 rxu = row_products(prepared, xu)
-            lam = _multipliers(factor, [rxu[row] - (upper[row] if side > 0 else lower[row])
+            lam = cholesky_solve(factor, [rxu[row] - (upper[row] if side > 0 else lower[row])
                                         for row, side in zip(working, sides)])
             for li, row in zip(lam, working):
                 target = [t - li * gj for t, gj in zip(target, g[row])]

@@ -101,7 +101,7 @@ class ModbusServer:
 
     async def start(self):
         """Listen; returns ``host:port`` (with the port the OS chose)."""
-        from pymodbus.server import ModbusTcpServer
+        from pymodbus.server import ModbusTcpServer  # optional: the serve extra
         from pymodbus.simulator import DataType, SimData, SimDevice
 
         n_input = FIRST_INPUT + 2 * len(self._inputs)
@@ -132,7 +132,7 @@ class ModbusServer:
 
     async def _action(self, function, start, address, count, registers, written):
         """Every request: fill the registers read from the latest snapshot; check and carry out writes."""
-        from pymodbus.constants import ExcCodes
+        from pymodbus.constants import ExcCodes  # optional: the serve extra
 
         if function not in (3, 4, 6, 16):  # coils, discrete inputs, the rarer register functions
             return ExcCodes.ILLEGAL_FUNCTION

@@ -2,6 +2,8 @@
 
 import math
 
+import numpy as np
+
 OUTCOME_CODES = {"converges": 0, "decaying": 1, "sustained oscillation": 2, "diverges": 3}
 
 
@@ -34,11 +36,10 @@ def plot_study(rows, study, path, max_panels=12, units=None):
     Each combination of the other grid axes gets its own panel. On a grid the
     panel is a heat map; with sampled parameters it is a scatter.
     """
-    import matplotlib
+    import matplotlib  # optional: the plot extra
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    import numpy as np
 
     units = units or {}
     axes_names = [names[0] for names, *_ in list(study.grid.values()) + list(study.sampled.values())]

@@ -15,9 +15,14 @@ import tempfile
 import time
 from pathlib import Path
 
-from crane_fmu import DEFAULT_FMU_DIR
+from crane_fmu import DEFAULT_FMU_DIR, systems
+from crane_fmu.analysis import metrics
+from crane_fmu.analysis.metrics import CRANE_OUTPUTS, VERSION
+from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch
+from crane_fmu.cosim import ArrayRecorder, FmiError, simulate
+from crane_fmu.cosim.system import read_fmu, settable, split_name
 
-from .batch import JOURNAL, Progress, read_journal, run_batch
+from .plots import plot_study
 from .spec import case_id
 
 
@@ -69,16 +74,13 @@ def run_case(case, system, settings, metric_names):
     Status is ``ok`` (ran to the stop time) or ``failed`` (an FMU stopped the
     run; the metrics cover the run up to there).
     """
-    from crane_fmu.analysis import metrics
-    from crane_fmu.cosim import ArrayRecorder, FmiError, simulate
-
     row = {"case_id": case_id(case, settings), **case, "status": "ok", "error": None,
            "metrics_version": settings.get("metrics_version")}
     start = time.perf_counter()
     recorder = ArrayRecorder()
     try:
         simulate(local_fmus(system["blobs"]), system["connections"], settings["stop_time"], settings["step"],
-                 settings["master"], case_parameters(case, system["parameters"]), recorder)
+                 settings["algorithm"], case_parameters(case, system["parameters"]), recorder)
     except FmiError as exc:
         row.update(status="failed", error=str(exc))
     values = dict.fromkeys(metric_names)
@@ -112,9 +114,6 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
     dict
         ``cases``, ``skipped`` (done before), ``ran``, ``not_ok`` and ``seconds``.
     """
-    from crane_fmu import systems
-    from crane_fmu.analysis.metrics import VERSION
-
     out_dir = Path(out_dir)
     settings = {**study.settings(), "metrics_version": VERSION}  # in every case's id: rows of other metrics rerun
     cases = study.cases()
@@ -129,11 +128,11 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
         out_dir.mkdir(parents=True, exist_ok=True)  # only now: a refused study leaves no folder behind
         bar = Progress(len(cases), len(cases) - len(pending), failed=failed_before) if progress else None
         if pending:
-            shipped = shippable(systems.at_step(system, fmu_dir, study.step), fmu_dir)
+            shipped = shippable(systems.prepare(system, study.step, study.stop_time, check=False), fmu_dir)
             to_run, invalid = [], []
             for case in pending:  # the model's parameter rules, before anything is shipped
                 try:
-                    systems.check_parameters(system.with_parameters(case_parameters(case)), fmu_dir)
+                    systems.check_parameters(system.with_parameters(case_parameters(case)))
                     to_run.append(case)
                 except ValueError as exc:
                     invalid.append(_invalid_row(case, settings, str(exc), study.metrics))
@@ -146,8 +145,6 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
     if csv:
         write_table(rows, out_dir / "results.csv")
     if study.plot or len(study.grid) + len(study.sampled) >= 2:
-        from .plots import plot_study
-
         plot_study(rows, study, out_dir / "plot.png", units=units)
     return {"cases": len(cases), "skipped": len(cases) - len(pending), "ran": len(rows_ran),
             "not_ok": sum(r["status"] != "ok" for r in rows), "seconds": time.perf_counter() - start}
@@ -156,9 +153,6 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
 def _check_names(study, system, fmu_dir):
     """Check that every varied or fixed variable is a parameter or input of its instance, and that the
     system has a crane; return ``{"instance.variable": unit}`` of the varied and fixed variables."""
-    from crane_fmu.analysis.metrics import CRANE_OUTPUTS
-    from crane_fmu.cosim.system import read_fmu, settable, split_name
-
     fmus = system.fmus(fmu_dir)
     known = settable(fmus)
     names = list(study.fixed) + [n for names, *_ in list(study.grid.values()) + list(study.sampled.values())
@@ -178,7 +172,7 @@ def _check_names(study, system, fmu_dir):
 
 def write_table(rows, path):
     """Write the rows as Parquet (``.parquet``) or CSV, under a temporary name then renamed."""
-    import pyarrow as pa
+    import pyarrow as pa  # start-up: pyarrow takes about 0.4 s to import
 
     path = Path(path)
     table = pa.Table.from_pylist(rows)

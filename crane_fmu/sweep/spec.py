@@ -5,7 +5,7 @@ A study is a TOML (or, with PyYAML installed, YAML) file::
     system = "paper"                 # a built-in system's name or an SSP file (default paper)
     stop_time = 10.0                 # [s], required
     step = 0.002                     # communication step [s], required
-    master = "gauss-seidel"          # or "jacobi"
+    algorithm = "gauss-seidel"       # the master algorithm, or "jacobi", "iterative-jacobi"
     metrics = ["outcome", "settling_0.5deg_s"]   # default: every metric
     settling_band_deg = 0.25         # band of the metric "settling_band_s" (default 0.5)
 
@@ -39,6 +39,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from crane_fmu import DEFAULT_SYSTEM
+from crane_fmu.cosim.algorithms import ALGORITHMS
+from crane_fmu.cosim.master import communication_points
 
 METRICS = ("outcome", "settling_band_s", "settling_0.5deg_s", "settling_0.1deg_s", "max_theta1_deg", "max_theta2_deg",
            "rms_theta1_deg", "residual_after_15s_deg", "trolley_excursion_m", "trolley_final_m", "peak_abs_u",
@@ -53,7 +55,7 @@ class Study:
 
     stop_time: float
     step: float
-    master: str = "gauss-seidel"
+    algorithm: str = "gauss-seidel"
     system: str = DEFAULT_SYSTEM
     metrics: tuple = METRICS
     settling_band_deg: float = 0.5
@@ -84,7 +86,7 @@ class Study:
     def _samples(self):
         if not self.sampled:
             return []
-        import numpy as np
+        import numpy as np  # only a sampled study needs them: scipy.stats takes about 2.5 s to import
         from scipy.stats import qmc
 
         bounds = list(self.sampled.values())
@@ -95,7 +97,7 @@ class Study:
         return [tuple(float(lo + u * (hi - lo)) for u, (_, lo, hi) in zip(row, bounds)) for row in unit]
 
     def settings(self):
-        return {"system": self.system, "stop_time": self.stop_time, "step": self.step, "master": self.master,
+        return {"system": self.system, "stop_time": self.stop_time, "step": self.step, "algorithm": self.algorithm,
                 "settling_band_deg": self.settling_band_deg}
 
 
@@ -145,8 +147,10 @@ def _axis(key, value):
 
 def parse(data, source="study"):
     """Build a :class:`Study` from the loaded file contents (a dict)."""
-    known = {"system", "stop_time", "step", "master", "metrics", "parameters", "sampling", "fixed", "plot",
+    known = {"system", "stop_time", "step", "algorithm", "metrics", "parameters", "sampling", "fixed", "plot",
              "settling_band_deg"}
+    if "master" in data and "algorithm" not in data:  # the key's former name
+        data = {("algorithm" if key == "master" else key): value for key, value in data.items()}
     if "controller" in data:
         raise ValueError(f"{source}: the key controller is gone: name the system instead, system = \"free\" for the "
                          "plant alone (controller = false) or system = \"paper\" (controller = true)")
@@ -158,13 +162,11 @@ def parse(data, source="study"):
             raise ValueError(f"{source}: {key} is required")
     stop_time = _number("stop_time", data["stop_time"], "a number > 0")
     step = _number("step", data["step"], "a number > 0")
-    from crane_fmu.cosim.algorithms import ALGORITHMS
-    from crane_fmu.cosim.master import communication_points
 
     communication_points(0.0, stop_time, step)
-    master = data.get("master", "gauss-seidel")
-    if master not in ALGORITHMS:
-        raise ValueError(f"master must be one of {', '.join(ALGORITHMS)}, got {master!r}")
+    algorithm = data.get("algorithm", "gauss-seidel")
+    if algorithm not in ALGORITHMS:
+        raise ValueError(f"algorithm must be one of {', '.join(ALGORITHMS)}, got {algorithm!r}")
     system = data.get("system", DEFAULT_SYSTEM)
     if not isinstance(system, str) or not system:
         raise ValueError(f"system must be a system's name or an SSP file, got {system!r}")
@@ -206,7 +208,7 @@ def parse(data, source="study"):
             if plot.get(axis) not in axes:
                 raise ValueError(f"plot.{axis} must be a varied parameter ({', '.join(sorted(axes))}), "
                                  f"got {plot.get(axis)!r}")
-    return Study(stop_time, step, master, system, metrics, band, grid, sampled, method, samples, seed, fixed,
+    return Study(stop_time, step, algorithm, system, metrics, band, grid, sampled, method, samples, seed, fixed,
                  plot)
 
 
@@ -226,7 +228,7 @@ def load(path):
         raise ValueError(f"cannot read study file {path}: {exc.strerror}") from None
     if path.suffix in (".yaml", ".yml"):
         try:
-            import yaml
+            import yaml  # optional: PyYAML
         except ImportError:
             raise ValueError(f"{path}: YAML study files need PyYAML (pip install pyyaml)") from None
         try:

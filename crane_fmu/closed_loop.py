@@ -1,0 +1,105 @@
+"""What a host sees of a closed loop packed as one FMU: chosen here for fmpy's container (``container.py``)
+and for our native one-FMU (``build_scripts/one_fmu.py``) alike.
+
+The plant's outputs and the controller's ``u``; as parameters the crane model's ``m1``, ``m2``, ``l1``,
+``l2`` (each set on the plant, the controller and the planner that have it and agree on its value with
+the first of them: hoist-transport's planner, designed for l1 = 1.5 m, keeps its own l1, so that a host
+that sets every parameter to its start value gets the system's own run), ``x_d`` (to the planner if
+there is one, else to the controller) and the plant's ``theta1_0``, whose start values are the system's;
+as inputs the plant's inputs that nothing inside feeds (``F1``, ``F2``, ``hoist``). The plant, controller
+and planner are the first instances of those roles (their components' ``role``), never found by name. Its
+model structure (which own inputs each own output reads at once) follows the instances' along the connections.
+"""
+
+from collections import namedtuple
+
+from crane_fmu import components
+
+SHARED = ("m1", "m2", "l1", "l2")
+MODELERS = ("plant", "controller", "planner")  # the roles that model the crane
+
+Exposed = namedtuple("Exposed", "name causality targets start")
+Exposed.__doc__ = """One variable of the packed FMU: ``targets`` is ``[(instance, variable)]``, the first of which
+it takes its unit and description from; ``start`` is the system's value (None for an output)."""
+
+
+def interface(system, kinds, variables, fed):
+    """The packed FMU's variables, in order: a list of :class:`Exposed`.
+
+    Parameters
+    ----------
+    system : System
+        Its parameter values are the start values.
+    kinds : dict
+        ``{instance: model identifier}``.
+    variables : dict
+        ``{instance: {variable: (causality, start)}}``.
+    fed : set
+        ``{(instance, input)}`` of the inputs a connection inside feeds.
+
+    Raises
+    ------
+    ValueError
+        The system has no plant.
+    """
+    by_role = components.by_role(kinds)
+    if "plant" not in by_role:
+        raise ValueError(f"system {system.name} has no instance whose component is a plant to expose")
+    plant, exposed = by_role["plant"], []
+
+    def start(instance, name):
+        return system.parameters.get(instance, {}).get(name, variables[instance][name][1])
+
+    for name in SHARED:
+        holders = [by_role[role] for role in MODELERS
+                   if role in by_role and variables[by_role[role]].get(name, ("",))[0] == "parameter"]
+        if holders:  # those that agree with the first: a host setting the start value then changes nothing
+            value = start(holders[0], name)
+            exposed.append(Exposed(name, "parameter", [(i, name) for i in holders if start(i, name) == value], value))
+    target = by_role.get("planner", by_role.get("controller"))
+    if target and "x_d" in variables[target]:
+        exposed.append(Exposed("x_d", "parameter", [(target, "x_d")], start(target, "x_d")))
+    exposed.append(Exposed("theta1_0", "parameter", [(plant, "theta1_0")], start(plant, "theta1_0")))
+    for name, (causality, _) in variables[plant].items():
+        if causality == "input" and (plant, name) not in fed:
+            exposed.append(Exposed(name, "input", [(plant, name)], start(plant, name)))
+    for name, (causality, _) in variables[plant].items():
+        if causality == "output":
+            exposed.append(Exposed(name, "output", [(plant, name)], None))
+    controller = by_role.get("controller")
+    if controller and "u" in variables[controller]:
+        exposed.append(Exposed("u", "output", [(controller, "u")], None))
+    return exposed
+
+
+def system_dependencies(dependencies, connections, outputs, inputs):
+    """``{own output: (own input, ...)}`` of a system packed as one FMU (a one-FMU, a container).
+
+    An own output reads an own input at the same instant when a chain of direct feedthrough, along the
+    connections, leads from an instance input that the own input sets to the instance output it shows.
+
+    Parameters
+    ----------
+    dependencies : dict
+        ``{instance: {output: (input, ...)}}``: the inputs each instance's outputs read at the same instant.
+    connections : iterable of Connection
+    outputs : dict
+        ``{own output: (instance, output)}``: where each own output comes from.
+    inputs : dict
+        ``{own input: [(instance, input)]}``: what each own input sets, in the own inputs' order.
+    """
+    fed = {(c.target, c.input): (c.source, c.output) for c in connections}
+    result = {}
+    for name, source in outputs.items():
+        read, todo, seen = set(), [source], set()
+        while todo:
+            instance, output = todo.pop()
+            if (instance, output) in seen:
+                continue
+            seen.add((instance, output))
+            for variable in dependencies[instance][output]:
+                read.add((instance, variable))
+                if (instance, variable) in fed:
+                    todo.append(fed[(instance, variable)])
+        result[name] = tuple(own for own, targets in inputs.items() if read.intersection(targets))
+    return result

@@ -1,0 +1,436 @@
+/*
+ * A C host for any native FMU alone (FMI 2.0 or 3.0) and for a plant and a controller exchanged as our master
+ * does, for the tests and `crane-fmu bench --native` (not part of any FMU): compiled for Linux (dlopen) and,
+ * with mingw-w64, for Windows (LoadLibrary) to run under Wine. No Python anywhere, and no model: what it reads
+ * and sets are value references given on the command line (X: the first of six consecutive ones, a plant's
+ * x, dx, theta1, dtheta1, theta2, dtheta2 or a controller's measured ones).
+ *
+ *   host run LIB GUID STEPS H X                         rows "t,the six Reals from X" after each step of H
+ *   host cycles LIB GUID N X                            N instantiate/initialise/step/free cycles; RSS per 1000
+ *   host after-failure LIB GUID STEPS H X VR=VALUE      a run refused (VR set to VALUE), then a good one: its last row
+ *   host threads LIB GUID STEPS H X                     two instances in two threads vs one alone: "same" or "differ"
+ *   host maps LIB GUID                                  the libraries loaded in this process that name python
+ *   host pair LIB GUID CLIB CGUID STEPS H X U CX CU     a plant (LIB: its six states from X, its input U) and a
+ *                                                       controller (CLIB: its six measured inputs from CX, its
+ *                                                       output CU), exchanged by value references at each step as
+ *                                                       our master does: rows "t,6 states,u"
+ *   host pair-bench LIB GUID CLIB CGUID STEPS H X U CX CU  seconds per step of that loop, no recording
+ *   host outputs LIB GUID STEPS H [VR=VALUE]... VR...    any FMI 2.0 FMU (e.g. a system as one FMU): Real
+ *                                                       parameters set (and Strings: "VRs=TEXT"), then rows
+ *                                                       "t,the Reals of VR..." at t = k H after k steps
+ *   host outputs3 LIB TOKEN STEPS H [VR=VALUE]... VR... the same for any FMI 3.0 co-simulation FMU (TOKEN: its
+ *                                                       instantiationToken): Float64 (and String) parameters set,
+ *                                                       Float64s read
+ *                                                       (its value references: FMI 2.0's plus one in ours)
+ */
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "fmi2Functions.h"
+#include "fmi3Functions.h"
+
+#ifdef _WIN32
+#include <windows.h>
+#define OPEN(path) ((void *)LoadLibraryA(path))
+#define SYMBOL(lib, name) ((void *)GetProcAddress((HMODULE)(lib), name))
+#else
+#include <dlfcn.h>
+#include <pthread.h>
+#define OPEN(path) dlopen(path, RTLD_NOW | RTLD_LOCAL)
+#define SYMBOL(lib, name) dlsym(lib, name)
+#endif
+
+typedef struct {
+    fmi2InstantiateTYPE *instantiate;
+    fmi2FreeInstanceTYPE *free_instance;
+    fmi2SetupExperimentTYPE *setup;
+    fmi2EnterInitializationModeTYPE *enter;
+    fmi2ExitInitializationModeTYPE *exit_init;
+    fmi2GetRealTYPE *get;
+    fmi2SetRealTYPE *set;
+    fmi2DoStepTYPE *step;
+    fmi2SetStringTYPE *set_string;
+    const char *guid;
+} Api;
+
+static int quiet;
+static const char *instance_name = "plant";
+
+static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
+                   fmi2String format, ...) {
+    (void)env, (void)name, (void)category;
+    if (quiet) return;
+    va_list args;
+    va_start(args, format);
+    fprintf(stderr, "[%d] ", status);
+    vfprintf(stderr, format, args);
+    fputc('\n', stderr);
+    va_end(args);
+}
+
+static const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
+
+static void *open_library(const char *library) {
+    void *lib = OPEN(library);
+    if (!lib) {
+        fprintf(stderr, "cannot load %s\n", library);
+        exit(3);
+    }
+    return lib;
+}
+
+static Api load(const char *library, const char *guid) {
+    void *lib = open_library(library);
+    Api api = {(fmi2InstantiateTYPE *)SYMBOL(lib, "fmi2Instantiate"),
+               (fmi2FreeInstanceTYPE *)SYMBOL(lib, "fmi2FreeInstance"),
+               (fmi2SetupExperimentTYPE *)SYMBOL(lib, "fmi2SetupExperiment"),
+               (fmi2EnterInitializationModeTYPE *)SYMBOL(lib, "fmi2EnterInitializationMode"),
+               (fmi2ExitInitializationModeTYPE *)SYMBOL(lib, "fmi2ExitInitializationMode"),
+               (fmi2GetRealTYPE *)SYMBOL(lib, "fmi2GetReal"),
+               (fmi2SetRealTYPE *)SYMBOL(lib, "fmi2SetReal"),
+               (fmi2DoStepTYPE *)SYMBOL(lib, "fmi2DoStep"),
+               (fmi2SetStringTYPE *)SYMBOL(lib, "fmi2SetString"),
+               guid};
+    if (!api.instantiate || !api.step) {
+        fprintf(stderr, "missing FMI functions in %s\n", library);
+        exit(3);
+    }
+    return api;
+}
+
+enum { MAX_VR = 64 };
+
+/* The String settings ("VRs=TEXT") of the `outputs` and `outputs3` modes, set after the Reals. */
+static struct {
+    unsigned int vr[MAX_VR];
+    const char *value[MAX_VR];
+    size_t n;
+} strings;
+
+/* An initialised instance with the given parameter settings (and `strings`), or NULL (the FMU logged why). */
+static fmi2Component start(const Api *api, size_t n, const fmi2ValueReference vr[], const fmi2Real v[]) {
+    fmi2Component c = api->instantiate(instance_name, fmi2CoSimulation, api->guid, "", &callbacks, fmi2False, fmi2False);
+    if (!c) return NULL;
+    if (api->setup(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) > fmi2Warning || api->enter(c) > fmi2Warning ||
+        (n && api->set(c, vr, n, v) > fmi2Warning) ||
+        (strings.n && (!api->set_string || api->set_string(c, strings.vr, strings.n, strings.value) > fmi2Warning)) ||
+        api->exit_init(c) > fmi2Warning) {
+        api->free_instance(c);
+        return NULL;
+    }
+    return c;
+}
+
+/* `steps` steps of h; the six Reals from x after each step into rows (7 a row). */
+static int run(const Api *api, fmi2Component c, fmi2ValueReference x, int steps, double h, double *rows) {
+    const fmi2ValueReference states[6] = {x, x + 1, x + 2, x + 3, x + 4, x + 5};
+    for (int k = 0; k <= steps; k++) {
+        double t = k * h;
+        rows[7 * k] = t;
+        if (api->get(c, states, 6, rows + 7 * k + 1) > fmi2Warning) return 0;
+        if (k == steps) break;
+        if (api->step(c, t, h, fmi2True) > fmi2Warning) return 0;
+    }
+    return 1;
+}
+
+static void print_rows(const double *rows, int steps) {
+    for (int k = 0; k <= steps; k++)
+        for (int i = 0; i < 7; i++) printf(i < 6 ? "%.17g," : "%.17g\n", rows[7 * k + i]);
+}
+
+static double *rows_for(int steps) {
+    double *rows = calloc((size_t)(steps + 1) * 7, sizeof *rows);
+    if (!rows) exit(5);
+    return rows;
+}
+
+static double seconds(void) {
+#ifdef _WIN32
+    LARGE_INTEGER count, frequency;
+    QueryPerformanceCounter(&count);
+    QueryPerformanceFrequency(&frequency);
+    return (double)count.QuadPart / (double)frequency.QuadPart;
+#else
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+#endif
+}
+
+static long rss_kb(void) {
+#ifdef _WIN32
+    return -1;
+#else
+    long pages = -1, resident = -1;
+    FILE *f = fopen("/proc/self/statm", "r");
+    if (f && fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = -1;
+    if (f) fclose(f);
+    return resident * 4;
+#endif
+}
+
+#ifndef _WIN32
+typedef struct {
+    const Api *api;
+    fmi2ValueReference x;
+    int steps;
+    double h;
+    double *rows;
+    int ok;
+} Job;
+
+static void *run_job(void *arg) {
+    Job *job = arg;
+    fmi2Component c = start(job->api, 0, NULL, NULL);
+    job->ok = c && run(job->api, c, job->x, job->steps, job->h, job->rows);
+    if (c) job->api->free_instance(c);
+    return NULL;
+}
+#endif
+
+/* The value references of a closed loop: the plant's states (from x) and input u, the controller's measured
+   states (from cx) and output cu. */
+typedef struct {
+    fmi2ValueReference x, u, cx, cu;
+} Loop;
+
+/* A closed loop on two FMUs, Gauss-Seidel as our master: the plant's states into the controller, its u into
+   the plant, then both step. Rows "t,6 states,u" when `rows` is given; seconds per step returned. */
+static double run_pair(const Api *plant, const Api *law, Loop vr, int steps, double h, FILE *rows) {
+    const fmi2ValueReference states[6] = {vr.x, vr.x + 1, vr.x + 2, vr.x + 3, vr.x + 4, vr.x + 5}, u_vr = vr.u;
+    const fmi2ValueReference cx = vr.cx, out_vr = vr.cu;
+    const fmi2ValueReference measured[6] = {cx, cx + 1, cx + 2, cx + 3, cx + 4, cx + 5};
+    fmi2Component p = start(plant, 0, NULL, NULL);
+    instance_name = "controller";
+    fmi2Component c = start(law, 0, NULL, NULL);
+    if (!p || !c) exit(6);
+    double y[6], u, t0 = seconds();
+    for (int k = 0; k <= steps; k++) {
+        if (plant->get(p, states, 6, y) > fmi2Warning || law->set(c, measured, 6, y) > fmi2Warning ||
+            law->get(c, &out_vr, 1, &u) > fmi2Warning || plant->set(p, &u_vr, 1, &u) > fmi2Warning)
+            exit(6);
+        if (rows) fprintf(rows, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", k * h, y[0], y[1], y[2], y[3], y[4],
+                          y[5], u);
+        if (k == steps) break;
+        if (plant->step(p, k * h, h, fmi2True) > fmi2Warning || law->step(c, k * h, h, fmi2True) > fmi2Warning) exit(6);
+    }
+    double per_step = (seconds() - t0) / steps;
+    plant->free_instance(p);
+    law->free_instance(c);
+    return per_step;
+}
+
+/* The "VR=VALUE" settings of args (into set_vr, set_v), the "VRs=TEXT" ones (into `strings`) and the other args'
+   VRs to read (into get_vr). */
+static int parse_vrs(int n_args, char **args, unsigned int set_vr[], double set_v[], size_t *n_set,
+                     unsigned int get_vr[], size_t *n_get) {
+    *n_set = *n_get = strings.n = 0;
+    for (int i = 0; i < n_args; i++) {
+        char *end;
+        unsigned int vr = (unsigned int)strtoul(args[i], &end, 10);
+        if (end[0] == 's' && end[1] == '=') {
+            if (strings.n == MAX_VR) return 0;
+            strings.vr[strings.n] = vr, strings.value[strings.n++] = end + 2;
+            continue;
+        }
+        const char *eq = strchr(args[i], '=');
+        if ((eq ? *n_set : *n_get) == MAX_VR) return 0;
+        if (eq) set_vr[*n_set] = vr, set_v[(*n_set)++] = strtod(eq + 1, NULL);
+        else get_vr[(*n_get)++] = vr;
+    }
+    return 1;
+}
+
+/* Any FMU alone: the Real settings "VR=VALUE" of args, then rows "t,values" of the other args' VRs at each step. */
+static int print_outputs(const Api *api, int steps, double h, int n_args, char **args) {
+    fmi2ValueReference set_vr[MAX_VR], get_vr[MAX_VR];
+    double set_v[MAX_VR], y[MAX_VR];
+    size_t n_set, n_get;
+    if (!parse_vrs(n_args, args, set_vr, set_v, &n_set, get_vr, &n_get)) return 0;
+    fmi2Component c = start(api, n_set, set_vr, set_v);
+    if (!c) return 0;
+    for (int k = 0; k <= steps; k++) {
+        if (api->get(c, get_vr, n_get, y) > fmi2Warning) return 0;
+        printf("%.17g", k * h);
+        for (size_t i = 0; i < n_get; i++) printf(",%.17g", y[i]);
+        putchar('\n');
+        if (k < steps && api->step(c, k * h, h, fmi2True) > fmi2Warning) return 0;
+    }
+    api->free_instance(c);
+    return 1;
+}
+
+/* ---- FMI 3.0: the `outputs3` mode ---------------------------------------------------------------------------- */
+
+static void logger3(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category, fmi3String message) {
+    (void)env, (void)category;
+    if (!quiet) fprintf(stderr, "[%d] %s\n", status, message);
+}
+
+/* print_outputs() for an FMI 3.0 co-simulation FMU: Float64 settings in initialization mode, then rows of Float64s. */
+static int print_outputs3(const char *library, const char *token, int steps, double h, int n_args, char **args) {
+    void *lib = open_library(library);
+    fmi3InstantiateCoSimulationTYPE *instantiate =
+        (fmi3InstantiateCoSimulationTYPE *)SYMBOL(lib, "fmi3InstantiateCoSimulation");
+    fmi3FreeInstanceTYPE *free_instance = (fmi3FreeInstanceTYPE *)SYMBOL(lib, "fmi3FreeInstance");
+    fmi3EnterInitializationModeTYPE *enter =
+        (fmi3EnterInitializationModeTYPE *)SYMBOL(lib, "fmi3EnterInitializationMode");
+    fmi3ExitInitializationModeTYPE *exit_init =
+        (fmi3ExitInitializationModeTYPE *)SYMBOL(lib, "fmi3ExitInitializationMode");
+    fmi3SetFloat64TYPE *set = (fmi3SetFloat64TYPE *)SYMBOL(lib, "fmi3SetFloat64");
+    fmi3GetFloat64TYPE *get = (fmi3GetFloat64TYPE *)SYMBOL(lib, "fmi3GetFloat64");
+    fmi3DoStepTYPE *step = (fmi3DoStepTYPE *)SYMBOL(lib, "fmi3DoStep");
+    fmi3SetStringTYPE *set_string = (fmi3SetStringTYPE *)SYMBOL(lib, "fmi3SetString");
+    if (!instantiate || !free_instance || !enter || !exit_init || !set || !get || !step || !set_string) {
+        fprintf(stderr, "missing FMI 3.0 functions in %s\n", library);
+        exit(3);
+    }
+    fmi3ValueReference set_vr[MAX_VR], get_vr[MAX_VR];
+    double set_v[MAX_VR], y[MAX_VR];
+    size_t n_set, n_get;
+    if (!parse_vrs(n_args, args, set_vr, set_v, &n_set, get_vr, &n_get)) return 0;
+    fmi3Instance c = instantiate(instance_name, token, "", fmi3False, fmi3False, fmi3False, fmi3False, NULL, 0, NULL,
+                                 logger3, NULL);
+    if (!c) return 0;
+    int ok = enter(c, fmi3False, 0.0, 0.0, fmi3False, 0.0) <= fmi3Warning &&
+             (!n_set || set(c, set_vr, n_set, set_v, n_set) <= fmi3Warning) &&
+             (!strings.n || set_string(c, strings.vr, strings.n, strings.value, strings.n) <= fmi3Warning) &&
+             exit_init(c) <= fmi3Warning;
+    for (int k = 0; ok && k <= steps; k++) {
+        fmi3Boolean event, terminate, early;
+        fmi3Float64 last;
+        if (get(c, get_vr, n_get, y, n_get) > fmi3Warning) ok = 0;
+        else {
+            printf("%.17g", k * h);
+            for (size_t i = 0; i < n_get; i++) printf(",%.17g", y[i]);
+            putchar('\n');
+            if (k < steps && (step(c, k * h, h, fmi3True, &event, &terminate, &early, &last) > fmi3Warning || terminate))
+                ok = 0;
+        }
+    }
+    free_instance(c);
+    return ok;
+}
+
+/* ---- the modes: each gets its arguments after LIB GUID and returns the exit status ---------------------------- */
+
+#define VR(text) ((fmi2ValueReference)atoi(text))
+
+static int mode_outputs(const Api *api, const char *mode, int n, char **a) { /* STEPS H [VR=VALUE]... VR... */
+    (void)mode;
+    return n >= 2 && print_outputs(api, atoi(a[0]), atof(a[1]), n - 2, a + 2) ? 0 : 6;
+}
+
+static int mode_pair(const Api *api, const char *mode, int n, char **a) { /* CLIB CGUID STEPS H X U CX CU */
+    if (n != 8) return 2;
+    Api law = load(a[0], a[1]);
+    int bench = !strcmp(mode, "pair-bench");
+    double per_step = run_pair(api, &law, (Loop){VR(a[4]), VR(a[5]), VR(a[6]), VR(a[7])}, atoi(a[2]), atof(a[3]),
+                           bench ? NULL : stdout);
+    if (bench) printf("%.9g\n", per_step);
+    return 0;
+}
+
+static int mode_run(const Api *api, const char *mode, int n, char **a) { /* STEPS H X */
+    (void)mode;
+    if (n != 3) return 2;
+    int steps = atoi(a[0]);
+    double *rows = rows_for(steps);
+    fmi2Component c = start(api, 0, NULL, NULL);
+    if (!c || !run(api, c, VR(a[2]), steps, atof(a[1]), rows)) return 6;
+    api->free_instance(c);
+    print_rows(rows, steps);
+    return 0;
+}
+
+static int mode_cycles(const Api *api, const char *mode, int n, char **a) { /* N X */
+    (void)mode;
+    if (n != 2) return 2;
+    quiet = 1;
+    double rows[7 * 11];
+    for (int i = 1; i <= atoi(a[0]); i++) {
+        fmi2Component c = start(api, 0, NULL, NULL);
+        if (!c || !run(api, c, VR(a[1]), 10, 1e-3, rows)) return 6;
+        api->free_instance(c);
+        if (i % 1000 == 0) printf("%d,%ld\n", i, rss_kb());
+    }
+    return 0;
+}
+
+static int mode_after_failure(const Api *api, const char *mode, int n, char **a) { /* STEPS H X VR=VALUE */
+    (void)mode;
+    fmi2ValueReference bad_vr;
+    double bad;
+    size_t n_bad, n_get;
+    if (n != 4 || !parse_vrs(1, a + 3, &bad_vr, &bad, &n_bad, &bad_vr, &n_get) || n_bad != 1) return 2;
+    int steps = atoi(a[0]);
+    double *rows = rows_for(steps);
+    if (start(api, 1, &bad_vr, &bad) != NULL) return 8; /* must be refused */
+    fmi2Component c = start(api, 0, NULL, NULL);
+    if (!c || !run(api, c, VR(a[2]), steps, atof(a[1]), rows)) return 6;
+    api->free_instance(c);
+    print_rows(rows + 7 * steps, 0);
+    return 0;
+}
+
+#ifndef _WIN32
+static int mode_threads(const Api *api, const char *mode, int n, char **a) { /* STEPS H X */
+    (void)mode;
+    if (n != 3) return 2;
+    int steps = atoi(a[0]);
+    double h = atof(a[1]);
+    Job alone = {api, VR(a[2]), steps, h, rows_for(steps), 0}, jobs[2];
+    run_job(&alone);
+    pthread_t threads[2];
+    for (int i = 0; i < 2; i++) {
+        jobs[i] = (Job){api, VR(a[2]), steps, h, rows_for(steps), 0};
+        if (pthread_create(&threads[i], NULL, run_job, &jobs[i])) return 9;
+    }
+    for (int i = 0; i < 2; i++) pthread_join(threads[i], NULL);
+    size_t size = (size_t)(steps + 1) * 7 * sizeof(double);
+    int same = alone.ok && jobs[0].ok && jobs[1].ok && !memcmp(alone.rows, jobs[0].rows, size) &&
+               !memcmp(alone.rows, jobs[1].rows, size);
+    printf(same ? "same\n" : "differ\n");
+    return 0;
+}
+
+static int mode_maps(const Api *api, const char *mode, int n, char **a) {
+    (void)mode, (void)n, (void)a;
+    fmi2Component c = start(api, 0, NULL, NULL);
+    if (!c) return 6;
+    FILE *f = fopen("/proc/self/maps", "r");
+    char line[4096];
+    while (f && fgets(line, sizeof line, f))
+        if (strstr(line, "python")) fputs(line, stdout);
+    if (f) fclose(f);
+    api->free_instance(c);
+    return 0;
+}
+#endif
+
+static const struct {
+    const char *name;
+    int (*run)(const Api *api, const char *mode, int n, char **args);
+} MODES[] = {{"outputs", mode_outputs}, {"pair", mode_pair}, {"pair-bench", mode_pair}, {"run", mode_run},
+             {"cycles", mode_cycles}, {"after-failure", mode_after_failure},
+#ifndef _WIN32
+             {"threads", mode_threads}, {"maps", mode_maps},
+#endif
+};
+
+int main(int argc, char **argv) {
+    if (argc < 4) return 2;
+    const char *mode = argv[1];
+    if (!strcmp(mode, "outputs3"))
+        return argc >= 6 && print_outputs3(argv[2], argv[3], atoi(argv[4]), atof(argv[5]), argc - 6, argv + 6) ? 0 : 6;
+    for (size_t i = 0; i < sizeof MODES / sizeof *MODES; i++)
+        if (!strcmp(mode, MODES[i].name)) {
+            Api api = load(argv[2], argv[3]);
+            return MODES[i].run(&api, mode, argc - 4, argv + 4);
+        }
+    return 2;
+}

@@ -1,0 +1,205 @@
+/*
+ * The TrajectoryPlanner component in C: the native twin of crane_fmu/model/planner.py (its variables,
+ * configure() rules and messages, the shapers, modes() on plant_equations.linearisation(), the
+ * bang-coast-bang base and reference()), registered as a component (component.h). Its variables come
+ * from TrajectoryPlanner_variables.h, generated from planner.VARIABLES. Its state is the time of its
+ * outputs: 0 at first, then the end of the last step (time + step, the component's update()).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "TrajectoryPlanner_variables.h"
+#include "plant_math.h"
+#include "py_repr.h"
+#include "rules.h"
+
+#define EI_TOLERANCE 0.05
+#define PI 3.141592653589793 /* math.pi */
+#define MAX_IMPULSES 9               /* a shaper of at most 3 impulses per mode, convolved */
+#define MAX_STEPS (4 * MAX_IMPULSES) /* four jumps of the base acceleration per impulse */
+
+typedef struct {
+    double t, value; /* an impulse (time, amplitude) or a jump of the acceleration (time, jump) */
+} Pair;
+
+/* planner.Config */
+typedef struct {
+    double x0, distance, t0, end, omegas[2], shapes[2][2], gains[2];
+    Pair steps[MAX_STEPS], impulses[MAX_IMPULSES];
+    int n_steps, n_impulses;
+} Config;
+
+STATE_IS_TIME
+
+#define V(name) (values[VR_##name])
+#define R(value) py_repr(value, (char[REPR_SIZE]){0})
+
+/* Python's sorted() of (time, value) tuples: by time, then value (insertion sort: at most 36 pairs). */
+static void sort_pairs(Pair p[], int n) {
+    for (int i = 1; i < n; i++) {
+        Pair key = p[i];
+        int j = i - 1;
+        for (; j >= 0 && (p[j].t > key.t || (p[j].t == key.t && p[j].value > key.value)); j--) p[j + 1] = p[j];
+        p[j + 1] = key;
+    }
+}
+
+/* planner.shaper(): one mode's impulses; returns their number. */
+static int shaper(const char *kind, double period, Pair out[3]) {
+    if (strcmp(kind, "zv") == 0) {
+        out[0] = (Pair){0.0, 0.5}, out[1] = (Pair){period / 2, 0.5};
+        return 2;
+    }
+    if (strcmp(kind, "zvd") == 0) {
+        out[0] = (Pair){0.0, 0.25}, out[1] = (Pair){period / 2, 0.5}, out[2] = (Pair){period, 0.25};
+        return 3;
+    }
+    if (strcmp(kind, "ei") == 0) {
+        double v = EI_TOLERANCE;
+        out[0] = (Pair){0.0, (1 + v) / 4}, out[1] = (Pair){period / 2, (1 - v) / 2};
+        out[2] = (Pair){period, (1 + v) / 4};
+        return 3;
+    }
+    out[0] = (Pair){0.0, 1.0};
+    return 1;
+}
+
+/* planner.modes() on plant_equations.linearisation(): the swing modes of q'' = -W q - w u. */
+static ModelStatus modes(double m1, double m2, double l1, double l2, double g, Config *c, const Reporter *r) {
+    double m12 = m1 + m2;
+    double na = m12 * l1, nb = m2 * l2, nc = l1, nd = l2; /* N of linearisation() */
+    double ndet = na * nd - nb * nc;
+    if (ndet == 0) return ZERO_DIVISION(r);
+    double inv[2][2] = {{nd / ndet, -nb / ndet}, {-nc / ndet, na / ndet}};
+    double a = inv[0][0] * m12 * g, b = inv[0][1] * g, cc = inv[1][0] * m12 * g, d = inv[1][1] * g; /* W */
+    double w[2] = {inv[0][0] * m12 + inv[0][1], inv[1][0] * m12 + inv[1][1]};
+    double half_trace = (a + d) / 2, det = a * d - b * cc;
+    double discriminant = half_trace * half_trace - det;
+    if (discriminant < 0) return DOMAIN_ERROR(r);
+    double root = sqrt(discriminant);
+    double lambdas[2] = {half_trace - root, half_trace + root};
+    for (int k = 0; k < 2; k++) { /* (W - lam I) v = 0 */
+        if (b != 0) c->shapes[k][0] = b, c->shapes[k][1] = lambdas[k] - a;
+        else c->shapes[k][0] = lambdas[k] - d, c->shapes[k][1] = cc;
+    }
+    double v11 = c->shapes[0][0], v21 = c->shapes[0][1], v12 = c->shapes[1][0], v22 = c->shapes[1][1];
+    double det_v = v11 * v22 - v12 * v21;
+    if (det_v == 0) return ZERO_DIVISION(r); /* the modes coincide (m2 = 0, l1 = l2) */
+    c->gains[0] = (v22 * w[0] - v12 * w[1]) / det_v, c->gains[1] = (-v21 * w[0] + v11 * w[1]) / det_v;
+    if (lambdas[0] < 0 || lambdas[1] < 0) return DOMAIN_ERROR(r);
+    c->omegas[0] = sqrt(lambdas[0]), c->omegas[1] = sqrt(lambdas[1]);
+    if (c->omegas[0] == 0 || c->omegas[1] == 0) return ZERO_DIVISION(r); /* the shapers' periods 2 pi / omega */
+    return MODEL_OK;
+}
+
+/* planner._base(): the accelerating and cruising times of the bang-coast-bang move. */
+static void base(double distance, double accel, double speed, double *t_a, double *t_c) {
+    *t_a = speed / accel;
+    if (distance < speed * *t_a) { /* no cruise: a triangle */
+        *t_a = sqrt(distance / accel), *t_c = 0.0;
+        return;
+    }
+    *t_c = distance / speed - *t_a;
+}
+
+/* planner._accel_steps(): the shaped acceleration as sorted jumps; returns their number. */
+static int accel_steps(const Config *c, double accel, double t_a, double t_c, Pair steps[MAX_STEPS]) {
+    int n = 0;
+    for (int i = 0; i < c->n_impulses; i++) {
+        double t = c->impulses[i].t, amp = c->impulses[i].value;
+        steps[n++] = (Pair){t, amp * accel}, steps[n++] = (Pair){t + t_a, -amp * accel};
+        steps[n++] = (Pair){t + t_a + t_c, -amp * accel}, steps[n++] = (Pair){t + 2 * t_a + t_c, amp * accel};
+    }
+    sort_pairs(steps, n);
+    return n;
+}
+
+/* planner._peak(): the largest |shaped acceleration|. */
+static double peak(const Pair steps[], int n) {
+    double level = 0.0, top = 0.0;
+    for (int i = 0; i < n; i++) level += steps[i].value, top = py_max(top, fabs(level));
+    return top;
+}
+
+/* The rules of planner.configure() in its order and words, then its plan. */
+static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
+    const char *kind = strings[STRING_shaper];
+    ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
+    if (plant != MODEL_OK) return plant;
+    double u_max = V(u_max), v_max = V(v_max);
+    if (!(u_max > 0)) return rule(r, "u_max", "> 0 (inf: no limit)", u_max);
+    if (!(v_max > 0)) return rule(r, "v_max", "> 0 (inf: no limit)", v_max);
+    u_max = unlimited(u_max), v_max = unlimited(v_max);
+    if (strcmp(kind, "zv") && strcmp(kind, "zvd") && strcmp(kind, "ei") && strcmp(kind, "none"))
+        return report(r, MODEL_ERROR, "shaper must be one of zv, zvd, ei, none, got %s",
+                      str_repr(kind, (char[STR_REPR_SIZE]){0}));
+    static const unsigned finite[] = {VR_x0, VR_x_d, VR_t0};
+    for (unsigned i = 0; i < 3; i++)
+        if (!isfinite(values[finite[i]])) return rule(r, VARIABLE_TABLE[finite[i]].name, "finite", values[finite[i]]);
+    if (!(isfinite(u_max) && isfinite(v_max)))
+        return report(r, MODEL_ERROR, "u_max and v_max must be finite for a planned move, got %s, %s", R(u_max),
+                      R(v_max));
+    memset(c, 0, sizeof *c);
+    ModelStatus status = modes(V(m1), V(m2), V(l1), V(l2), V(g), c, r);
+    if (status != MODEL_OK) return status;
+    Pair a[3], b[3];
+    int na = shaper(kind, 2 * PI / c->omegas[0], a), nb = shaper(kind, 2 * PI / c->omegas[1], b);
+    for (int i = 0; i < na; i++) /* planner.convolve() */
+        for (int j = 0; j < nb; j++) c->impulses[c->n_impulses++] = (Pair){a[i].t + b[j].t, a[i].value * b[j].value};
+    sort_pairs(c->impulses, c->n_impulses);
+    double distance = V(x_d) - V(x0);
+    double sign = distance >= 0 ? 1.0 : -1.0, distance_abs = fabs(distance);
+    double t_a = 0.0, t_c = 0.0;
+    Pair steps[MAX_STEPS];
+    if (distance_abs > 0) {
+        /* the largest base acceleration whose shaped acceleration stays within u_max (bisection) */
+        double smallest = c->impulses[0].value;
+        for (int i = 1; i < c->n_impulses; i++) smallest = py_min(smallest, c->impulses[i].value);
+        double low = u_max, high = u_max / smallest;
+        for (int i = 0; i < 60; i++) {
+            double mid = 0.5 * (low + high);
+            base(distance_abs, mid, v_max, &t_a, &t_c);
+            if (peak(steps, accel_steps(c, mid, t_a, t_c, steps)) <= u_max * (1 + 1e-12)) low = mid;
+            else high = mid;
+        }
+        base(distance_abs, low, v_max, &t_a, &t_c);
+        c->n_steps = accel_steps(c, low, t_a, t_c, c->steps);
+        for (int i = 0; i < c->n_steps; i++) c->steps[i].t = V(t0) + c->steps[i].t, c->steps[i].value *= sign;
+    }
+    c->end = c->n_steps ? V(t0) + c->impulses[c->n_impulses - 1].t + 2 * t_a + t_c : V(t0);
+    c->x0 = V(x0), c->distance = distance, c->t0 = V(t0);
+    return MODEL_OK;
+}
+
+/* planner.reference(): x_ref, dx_ref, ddx_ref and the induced swing at time t, the same arithmetic in its order. */
+static void reference(const Config *c, double t, double out[N_OUTPUTS]) {
+    double x = c->x0, v = 0.0, a = 0.0, eta[2] = {0.0, 0.0}, deta[2] = {0.0, 0.0};
+    int moving = t < c->end;
+    double rounding = 1e-9 * (t > 1.0 ? t : t < -1.0 ? -t : 1.0); /* TIME_ROUNDING * max(1.0, abs(t)) */
+    for (int i = 0; i < c->n_steps; i++) {
+        double dt = t - c->steps[i].t, jump = c->steps[i].value;
+        if (dt <= rounding) break;
+        a += jump;
+        v += jump * dt;
+        x += 0.5 * jump * dt * dt;
+        if (moving)
+            for (int k = 0; k < 2; k++) { /* eta_k'' = -w_k^2 eta_k - g_k u, answering a step */
+                double w = c->omegas[k];
+                eta[k] -= c->gains[k] * jump * (1.0 - COS(w * dt)) / (w * w);
+                deta[k] -= c->gains[k] * jump * SIN(w * dt) / w;
+            }
+    }
+    if (!moving && c->n_steps) x = c->x0 + c->distance, v = 0.0, a = 0.0; /* rest at the target */
+    double s11 = c->shapes[0][0], s21 = c->shapes[0][1], s12 = c->shapes[1][0], s22 = c->shapes[1][1];
+    double result[N_OUTPUTS] = {x, v, a, s11 * eta[0] + s12 * eta[1], s11 * deta[0] + s12 * deta[1],
+                                s21 * eta[0] + s22 * eta[1], s21 * deta[0] + s22 * deta[1]};
+    memcpy(out, result, sizeof result);
+}
+
+static ModelStatus outputs(const double values[], const Config *c, const State *s, double out[], const Reporter *r) {
+    reference(c, s->time, out);
+    return MODEL_OK;
+}
+
+STATEFUL_COMPONENT;

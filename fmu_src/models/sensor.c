@@ -1,0 +1,91 @@
+/*
+ * The Sensor component in C: the native twin of Sensor in crane_fmu/model/disturbances.py (its
+ * variables, _sensor_configure() rules and messages, noise() on splitmix64 with Box-Muller, measure()
+ * and the one-step delay), registered as a component (component.h). Its variables come from
+ * Sensor_variables.h, generated from disturbances.SENSOR. Its state is (k, held): the sample count and
+ * the last sample, none at first.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "Sensor_variables.h"
+#include "plant_math.h"
+#include "py_repr.h"
+#include "rules.h"
+
+#define PI 3.141592653589793 /* math.pi */
+#define TWO_53 9007199254740992.0
+
+/* disturbances.SensorConfig */
+typedef struct {
+    double sigmas[N_OUTPUTS];
+    uint64_t seed;
+    int delay;
+} Config;
+
+typedef struct {
+    uint64_t k;             /* samples taken, */
+    int have_held;          /* whether there is one, */
+    double held[N_OUTPUTS]; /* and the last */
+} State;
+
+#define V(name) (values[VR_##name])
+
+/* The rules of _sensor_configure() in its order and words. */
+static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
+    static const unsigned sigmas[] = {VR_sigma_x, VR_sigma_dx, VR_sigma_theta, VR_sigma_dtheta};
+    for (unsigned i = 0; i < 4; i++) {
+        double value = values[sigmas[i]];
+        if (!(value >= 0 && isfinite(value))) return rule(r, VARIABLE_TABLE[sigmas[i]].name, ">= 0 and finite", value);
+    }
+    double seed = V(seed);
+    if (!(isfinite(seed) && seed == trunc(seed) && 0 <= seed && seed < 4294967296.0))
+        return rule(r, "seed", "a whole number in [0, 2^32)", seed);
+    if (!(V(delay) == 0.0 || V(delay) == 1.0)) return rule(r, "delay", "0 or 1 (communication steps)", V(delay));
+    double s[6] = {V(sigma_x), V(sigma_dx), V(sigma_theta), V(sigma_dtheta), V(sigma_theta), V(sigma_dtheta)};
+    memcpy(c->sigmas, s, sizeof s);
+    c->seed = (uint64_t)seed, c->delay = V(delay) == 1.0;
+    return MODEL_OK;
+}
+
+/* disturbances._mix(): splitmix64 (Python's & 0xFFFFFFFFFFFFFFFF is C's unsigned wrap-around). */
+static uint64_t mix(uint64_t z) {
+    z += 0x9E3779B97F4A7C15u;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9u;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBu;
+    return z ^ (z >> 31);
+}
+
+/* disturbances.noise(): a standard normal sample of (seed, k, channel), Box-Muller on splitmix64. */
+static double noise(uint64_t seed, uint64_t k, uint64_t channel) {
+    uint64_t a = mix((seed << 40) ^ (k << 4) ^ channel), b = mix(a); /* _mix keeps the low 64 bits alike */
+    double u1 = ((double)(a >> 11) + 0.5) / TWO_53, u2 = (double)(b >> 11) / TWO_53;
+    return sqrt(-2.0 * LOG(u1)) * COS(2.0 * PI * u2);
+}
+
+/* disturbances.measure(): the true state plus independent normal noise at sample k. */
+static void measure(const Config *c, uint64_t k, const double state[N_OUTPUTS], double out[N_OUTPUTS]) {
+    for (unsigned i = 0; i < N_OUTPUTS; i++)
+        out[i] = c->sigmas[i] != 0 ? state[i] + c->sigmas[i] * noise(c->seed, k, i) : state[i];
+}
+
+static void initial_state(const double values[], const Config *c, State *s) { s->k = 0, s->have_held = 0; } /* (0, None) */
+
+/* _sensor_output(): the held sample when delayed, else (and at first) a sample of the inputs now. */
+static ModelStatus outputs(const double values[], const Config *c, const State *s, double out[], const Reporter *r) {
+    if (!c->delay || !s->have_held) measure(c, s->k, &values[VR_x], out);
+    else memcpy(out, s->held, sizeof s->held);
+    return MODEL_OK;
+}
+
+/* _sensor_update(): (k + 1, measure(k)) */
+static ModelStatus update(const double values[], const Config *c, State *s, double time, double step,
+                          const Reporter *r) {
+    measure(c, s->k, &values[VR_x], s->held);
+    s->k++, s->have_held = 1;
+    return MODEL_OK;
+}
+
+STATEFUL_COMPONENT;

@@ -1,0 +1,254 @@
+"""The native CranePlant as a host integrates it (Model Exchange), in hosts nobody here wrote and in fmpy.
+
+One FMU holds both interfaces; its co-simulation (RK4 at 1 ms sub-steps, within about 1e-12 rad of the
+ODE over these runs) is the reference for the Model Exchange runs with the hosts' solver at a relative
+tolerance of 1e-10: the angles agree within 1e-6 rad. A rail end ends the simulation at its state event,
+which the host locates within 1e-6 s of the exact time. The directional derivatives are the Python
+model's exact tangents (plant_continuous.jacobians) and central differences of the derivatives agree.
+"""
+
+import ctypes
+import math
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import fmpy
+import numpy as np
+import pytest
+from fmpy.fmi2 import FMU2Model
+from fmpy.fmi3 import FMU3Model
+from fmpy.validation import validate_fmu
+from third_party_hosts import CLEAN_ENV, FMUCHECK, FMUSIM, OMSIMULATOR, read_oms_mat, run_tool, tool
+
+from crane_fmu.analysis.linearize import linearize
+from crane_fmu.build_scripts.folders import native_dir
+from crane_fmu.model import plant
+from crane_fmu.model import plant_continuous as me
+
+RTOL = 1e-10     # the hosts' solver tolerance
+ANGLES = 1e-6    # rad: Model Exchange against co-simulation
+EVENT = 1e-6     # s: the rail end's state event
+CASES = {        # name: (start values, stop time)
+    "free swing": ({}, 2.0),  # Section V: released at theta1 = 10 deg
+    "hoisting": ({"hoist": 0.3, "u": 0.2}, 1.0),
+}
+RAIL = ({"u": 1.0, "x_max": 0.5}, 2.0)  # x = t^2 / 2 reaches x_max = 0.5 m at t = 1 s exactly
+
+
+@pytest.fixture(scope="module", params=[2, 3], ids=["FMI 2.0", "FMI 3.0"])
+def plant_fmu(request, fmu_dir):
+    path = native_dir(fmu_dir, request.param) / "CranePlant.fmu"
+    if not path.exists():
+        pytest.skip("no native FMUs were built (no C compiler)")
+    return path
+
+
+def _run(path, interface, start, stop, step=0.05):
+    kwargs = {"solver": "CVode", "relative_tolerance": RTOL} if interface == "ModelExchange" else {}
+    return fmpy.simulate_fmu(str(path), fmi_type=interface, start_values=start, stop_time=stop,
+                             output_interval=step, output=["x", "theta1", "theta2"], **kwargs)
+
+
+def _co_simulation(path, start, stop, step):
+    return _run(path, "CoSimulation", start, stop, step)
+
+
+def test_the_fmu_is_valid_and_declares_model_exchange(plant_fmu):
+    assert validate_fmu(str(plant_fmu)) == []
+    md = fmpy.read_model_description(str(plant_fmu))
+    assert md.modelExchange is not None and md.coSimulation is not None
+    assert [d.variable.derivative.name for d in md.derivatives] == list(me.STATES)
+    assert len(md.eventIndicators if md.fmiVersion.startswith("3") else range(md.numberOfEventIndicators)) == 8
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_fmpy_integrates_it_as_the_co_simulation_steps_it(plant_fmu, case):
+    start, stop = CASES[case]
+    ours, theirs = _co_simulation(plant_fmu, start, stop, 0.05), _run(plant_fmu, "ModelExchange", start, stop)
+    assert np.allclose(theirs["time"], ours["time"])
+    for angle in ("theta1", "theta2"):
+        assert np.abs(theirs[angle] - ours[angle]).max() < ANGLES, (case, angle)
+    assert np.abs(ours["theta1"]).max() > 0.1  # it swings
+
+
+def test_a_rail_end_ends_the_run_at_its_state_event(plant_fmu):
+    start, stop = RAIL
+    result = _run(plant_fmu, "ModelExchange", start, stop, step=0.01)
+    assert abs(result["time"][-1] - 1.0) < EVENT
+    assert abs(result["x"][-1] - 0.5) < EVENT
+
+
+def test_the_cable_is_held_from_the_state_event_at_its_limit(plant_fmu):
+    """Hoisting at 0.3 m/s2 from l1 = 1 m reaches l1_max = 1.1 m at t = sqrt(2 * 0.1 / 0.3) s; from that event the
+    cable is held there at rest (the hoist still pulls)."""
+    result = fmpy.simulate_fmu(str(plant_fmu), fmi_type="ModelExchange", solver="CVode", relative_tolerance=RTOL,
+                               start_values={"hoist": 0.3, "l1_max": 1.1}, stop_time=1.5, output_interval=0.05,
+                               output=["l1_now", "dl1_now"])
+    held = np.flatnonzero(result["l1_now"] == 1.1)
+    assert abs(result["time"][held[0]] - math.sqrt(2 * 0.1 / 0.3)) < EVENT
+    assert result["l1_now"].max() == 1.1 and np.all(result["l1_now"][held[0]:] == 1.1)
+    assert np.all(result["dl1_now"][held[0] + 1:] == 0.0)  # the first row at the event is before its update
+
+
+def _fmusim(path, start, stop, tmp_path, step=0.05):
+    out = tmp_path / f"{path.parent.name}.csv"
+    command = [tool(FMUSIM), "--interface-type", "me", "--solver", "cvode", "--tolerance", repr(RTOL),
+               "--stop-time", repr(stop), "--output-interval", repr(step), "--output-file", out]
+    for name, value in start.items():
+        command += ["--start-value", name, repr(value)]
+    code, log = run_tool([*command, path], tmp_path, CLEAN_ENV)
+    assert code == 0 and "[Error]" not in log, log[-2000:]
+    table = np.genfromtxt(out, delimiter=",", names=True, deletechars="", dtype=float)
+    return {name: table[name] for name in table.dtype.names}
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_fmusim_integrates_it_with_cvode(plant_fmu, case, tmp_path):
+    start, stop = CASES[case]
+    theirs, ours = _fmusim(plant_fmu, start, stop, tmp_path), _co_simulation(plant_fmu, start, stop, 0.05)
+    assert np.allclose(theirs["time"], ours["time"])
+    for angle in ("theta1", "theta2"):
+        assert np.abs(theirs[angle] - ours[angle]).max() < ANGLES, (case, angle)
+
+
+def test_fmusim_stops_at_the_rail_end(plant_fmu, tmp_path):
+    start, stop = RAIL
+    theirs = _fmusim(plant_fmu, start, stop, tmp_path, step=0.01)
+    assert abs(theirs["time"][-1] - 1.0) < EVENT and abs(theirs["x"][-1] - 0.5) < EVENT
+
+
+def test_omsimulator_integrates_the_fmi2_plant(fmu_dir, tmp_path):
+    """OMSimulator takes a lone FMU as Model Exchange (CVODE); its FMI 3.0 import crashes (tools README)."""
+    path = native_dir(fmu_dir, 2) / "CranePlant.fmu"
+    if not path.exists():
+        pytest.skip("no native FMUs were built (no C compiler)")
+    code, log = run_tool([tool(OMSIMULATOR), "--stopTime=2", f"--tolerance={RTOL!r}", "--resultFile=out.mat",
+                          f"--tempDir={tmp_path}", path], tmp_path)
+    assert code == 0 and "0 errors" in log and "NumRhsEvals" in log, log[-2000:]  # CVODE: Model Exchange
+    theirs = read_oms_mat(tmp_path / "out.mat", 1e-3)  # its results every 1 ms (its default step)
+    ours = _co_simulation(path, {}, 2.0, 0.05)
+    on_grid = theirs["k"] % 50 == 0
+    assert on_grid.sum() == len(ours["time"]) == 41
+    for angle in ("theta1", "theta2"):
+        assert np.abs(theirs[angle][on_grid] - ours[angle]).max() < ANGLES
+
+
+def test_fmucheck_reports_nothing(fmu_dir, tmp_path):
+    path = native_dir(fmu_dir, 2) / "CranePlant.fmu"
+    if not path.exists():
+        pytest.skip("no native FMUs were built (no C compiler)")
+    code, log = run_tool([tool(FMUCHECK), "-h", "1e-3", "-s", "2", "-o", tmp_path / "out.csv", path], tmp_path)
+    assert code == 0, log[-2000:]
+    assert "Version returned from ME FMU" in log  # the Model Exchange interface was checked
+    assert "0 warning(s) and error(s)" in log and "\t0 Warning(s)" in log and "\t0 Error(s)" in log, log[-2000:]
+
+
+# ---- directional derivatives ----
+
+STATE = (0.1, 0.2, 0.15, -0.3, -0.05, 0.4, 1.2, 0.1, 0.0)
+INPUTS = (0.4, 0.2, 0.3, -0.1)
+PARAMETERS = {"c1": 0.05, "c2": 0.02, "tau": 0.0}
+
+
+class _Instance:
+    """An instance of the plant in continuous-time mode at STATE and INPUTS (its mode free)."""
+
+    def __init__(self, path, parameters):
+        md = fmpy.read_model_description(str(path))
+        self.fmi3 = md.fmiVersion.startswith("3")
+        self.vr = {v.name: v.valueReference for v in md.modelVariables}
+        self.derivatives = [d.variable.valueReference for d in md.derivatives]
+        self.states = [d.variable.derivative.valueReference for d in md.derivatives]
+        self.inputs = [self.vr[n] for n in me.INPUTS]
+        self.outputs = [u.variable.valueReference for u in md.outputs]
+        kind = FMU3Model if self.fmi3 else FMU2Model
+        token = md.instantiationToken if self.fmi3 else md.guid
+        self.fmu = kind(guid=token, unzipDirectory=fmpy.extract(str(path)),
+                        modelIdentifier=md.modelExchange.modelIdentifier, instanceName="me")
+        self.fmu.instantiate()
+        set_ = self.fmu.setFloat64 if self.fmi3 else self.fmu.setReal
+        if self.fmi3:
+            self.fmu.enterInitializationMode(startTime=0.0)
+        else:
+            self.fmu.setupExperiment(startTime=0.0)
+            self.fmu.enterInitializationMode()
+        set_([self.vr[k] for k in parameters], list(parameters.values()))
+        self.fmu.exitInitializationMode()
+        (self.fmu.updateDiscreteStates if self.fmi3 else self.fmu.newDiscreteStates)()
+        self.fmu.enterContinuousTimeMode()
+        set_(self.inputs, list(INPUTS))
+        self.set_ = set_
+        self.x = (ctypes.c_double * len(STATE))(*STATE)
+        self.fmu.setContinuousStates(self.x, len(STATE))
+
+    def derivatives_at(self, x, u):
+        self.fmu.setContinuousStates((ctypes.c_double * len(x))(*x), len(x))
+        self.set_(self.inputs, list(u))
+        dx = (ctypes.c_double * len(x))()
+        self.fmu.getDerivatives(dx, len(x)) if not self.fmi3 else self.fmu.getContinuousStateDerivatives(dx, len(x))
+        return np.array(dx)
+
+    def jacobian(self):
+        unknowns, knowns = self.derivatives + self.outputs, self.states + self.inputs
+        return np.array([self.fmu.getDirectionalDerivative(unknowns, [k], [1.0]) for k in knowns]).T
+
+
+@pytest.fixture
+def instance(plant_fmu):
+    made = _Instance(plant_fmu, PARAMETERS)
+    yield made
+    made.fmu.terminate()
+    made.fmu.freeInstance()
+
+
+def test_directional_derivatives_are_the_models_exact_jacobians(instance):
+    config = plant.COMPONENT.check(PARAMETERS)
+    a, b, c, d = (np.array(m) for m in me.jacobians(config, STATE, INPUTS, me.FREE))
+    want = np.block([[a, b], [c, d]])
+    assert np.abs(instance.jacobian() - want).max() <= 1e-12 * max(1.0, np.abs(want).max())
+
+
+def test_directional_derivatives_agree_with_central_differences(instance):
+    jac, h = instance.jacobian(), 1e-6
+    n = len(STATE)
+    for k in range(n + len(INPUTS)):
+        x, u = np.array(STATE), np.array(INPUTS)
+        plus, minus = (x.copy(), u.copy()), (x.copy(), u.copy())
+        (plus[0] if k < n else plus[1])[k % n if k < n else k - n] += h
+        (minus[0] if k < n else minus[1])[k % n if k < n else k - n] -= h
+        difference = (instance.derivatives_at(*plus) - instance.derivatives_at(*minus)) / (2 * h)
+        assert np.abs(jac[:n, k] - difference).max() < 1e-6, k
+
+
+def test_the_adjoint_is_the_transposed_directional_derivative(instance):
+    if not instance.fmi3:
+        pytest.skip("adjoint derivatives are FMI 3.0's")
+    unknowns, knowns = instance.derivatives + instance.outputs, instance.states + instance.inputs
+    seed = [math.sin(i + 1.0) for i in range(len(unknowns))]
+    adjoint = instance.fmu.getAdjointDerivative(unknowns, knowns, seed, len(knowns))  # fmpy's default is len(unknowns)
+    assert np.abs(np.array(adjoint) - instance.jacobian().T @ seed).max() < 1e-12 * max(1.0, np.abs(adjoint).max())
+
+
+def test_linearize_uses_the_directional_derivatives_and_at_rest_is_the_linearisation(plant_fmu):
+    lin = linearize(plant_fmu, {"theta1": 0.0})
+    assert lin.method == "directional derivatives (Model Exchange)"
+    assert lin.states == list(me.STATES)
+    big_w, small_w = plant.linearisation(plant.COMPONENT.check({}).params)
+    assert np.abs(lin.A[np.ix_([3, 5], [2, 4])] + np.array(big_w)).max() < 1e-9
+    assert np.abs(lin.B[[3, 5], 0] + np.array(small_w)).max() < 1e-9
+
+
+def test_the_documented_fmpy_recipe_stops_at_the_rail_end(fmu_dir, tmp_path):
+    """The interoperability page's fmpy recipe, run as written in a clone's layout: it stops where x = u t^2 / 2
+    reaches x_max, at the time it prints."""
+    page = (Path(__file__).parent.parent / "docs" / "guide" / "interoperability.md").read_text()
+    block = re.search(r"## Model Exchange.*?```python\n(.*?)```", page, re.S).group(1)
+    (tmp_path / "build").symlink_to(fmu_dir.parent)
+    (tmp_path / "recipe.py").write_text(block)
+    done = subprocess.run([sys.executable, "recipe.py"], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    last = done.stdout.splitlines()[-1]  # after fmpy's log of the FMU's warning (the rail end)
+    printed = re.fullmatch(r"stopped at the rail end x_max = 2 m at t = (\d+\.\d{6}) s", last)
+    assert printed and abs(float(printed.group(1)) - math.sqrt(2 * 2.0 / 0.5)) < 1e-6, done.stdout
