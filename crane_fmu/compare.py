@@ -32,7 +32,6 @@ import scipy
 from crane_fmu import components, systems
 from crane_fmu.analysis import board_page, metrics, score_plots, scoreboard
 from crane_fmu.analysis.floor import scenario_floors
-from crane_fmu.analysis.metrics import VERSION
 from crane_fmu.analysis.scoreboard import SCENARIOS, Contender
 from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch
 from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
@@ -135,7 +134,7 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), cases=scoreboard.CASES):
                         "connections": [list(c) for c in connections], "parameters": system.parameters,
                         "step": step, "stop_time": stop_time, "master": MASTER, "x_d": x_d,
                         "residual_from": residual_from, "bounds": {**scoreboard.DRIVE, **scoreboard.RAIL},
-                        "format": ROW_FORMAT, "metrics_version": VERSION,
+                        "format": ROW_FORMAT, "metrics_version": metrics.VERSION,
                         "keep_signals": sid in ANIMATE and len(runs) == 1}
                 case["case_id"] = hashlib.sha256(json.dumps(case, sort_keys=True).encode()).hexdigest()[:16]
                 try:
@@ -173,7 +172,7 @@ def run_score_case(case, blobs):
     recorder = ArrayRecorder()
     try:
         simulate(fmus, [Connection(*c) for c in case["connections"]], case["stop_time"], case["step"],
-                 mode=case["master"], parameters=case["parameters"], recorder=recorder)
+                 case["master"], parameters=case["parameters"], recorder=recorder)
     except FmiError as exc:
         row.update(status="failed", error=str(exc))
     columns = recorder.columns() if recorder.names else None
@@ -299,7 +298,7 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
                 "scenarios": scenarios, "cases": cases, "quick": quick, "fmu_dir": str(Path(fmu_dir).resolve()),
                 "fmus": dict(sorted({f: d for c in planned for f, d in json.loads(provenance(c)["fmus_sha256"])
                                      .items()}.items())),
-                "versions": versions(), "master": MASTER, "metrics_version": VERSION, "design_seed":
+                "versions": versions(), "master": MASTER, "metrics_version": metrics.VERSION, "design_seed":
                 scoreboard.DESIGN_SEED, "date": _now()}
     _write(out_dir / MANIFEST, json.dumps(manifest, indent=1))
     board = out_dir / "scoreboard.md"

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from crane_fmu import DEFAULT_FMU_DIR, systems
 from crane_fmu.analysis import metrics
-from crane_fmu.analysis.metrics import CRANE_OUTPUTS, VERSION
+from crane_fmu.analysis.metrics import CRANE_OUTPUTS
 from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch
 from crane_fmu.cosim import ArrayRecorder, FmiError, simulate
 from crane_fmu.cosim.system import read_fmu, settable, split_name
@@ -115,7 +115,7 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
         ``cases``, ``skipped`` (done before), ``ran``, ``not_ok`` and ``seconds``.
     """
     out_dir = Path(out_dir)
-    settings = {**study.settings(), "metrics_version": VERSION}  # in every case's id: rows of other metrics rerun
+    settings = {**study.settings(), "metrics_version": metrics.VERSION}  # in every case's id: rows of other metrics rerun
     cases = study.cases()
     done = read_journal(out_dir)
     pending = [c for c in cases if case_id(c, settings) not in done]
