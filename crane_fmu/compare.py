@@ -3,8 +3,13 @@
 Cases run through the sweep runner (journal, resume, progress bar). Each case
 is a system as data; its FMUs travel to the workers once, by content hash. A
 case's id is the hash of everything that makes its row (the FMUs' bytes, the
-connections, the parameters, the step, the stop time, :data:`ROW_FORMAT`), so
-the journal reuses a row only for the very same run.
+connections, the parameters, the step, the stop time, the master, the metrics'
+version, :data:`ROW_FORMAT`), so the journal reuses a row only for the very
+same run. A journal that holds another run of one of the board's cases (other
+FMUs, other metrics) is not resumed: it is kept aside and the board starts
+again, saying why. Every row records its provenance (:func:`provenance`), and
+``OUT/board.json`` what the board was made of, so that :func:`check` can run a
+sample of its cases again and confirm their figures bit for bit.
 
 From a script, call :func:`compare` under ``if __name__ == "__main__":``: the
 local Dask cluster starts its workers as fresh Python processes, which import
@@ -12,23 +17,30 @@ the script again (the ``spawn`` start method), as ``multiprocessing`` does.
 """
 
 import hashlib
+import importlib.metadata
 import json
+import platform
 import sys
 import time
+from datetime import datetime, timezone
 from pathlib import Path
 
+import fmpy
+import numpy as np
+import scipy
+
 from crane_fmu import components, systems
-from crane_fmu.analysis import metrics, score_plots, scoreboard
+from crane_fmu.analysis import board_page, metrics, score_plots, scoreboard
+from crane_fmu.analysis.floor import scenario_floors
 from crane_fmu.analysis.scoreboard import SCENARIOS, Contender
 from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch
 from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
 from crane_fmu.cosim.system import read_fmu
-from crane_fmu.model import planner
 from crane_fmu.sweep.runner import local_fmus, write_table
 
 SIGNALS = ("time", "x", "theta1", "theta2", "u", "x1", "y1", "x2", "y2", "l1_now")  # crane_signals() names
 SIGNAL_EVERY = 0.02  # s: the signals kept for plots and animations
-ROW_FORMAT = 3  # the version of what a row holds: a journal of another format is not reused
+ROW_FORMAT = 4  # the version of what a row holds: a journal of another format is not reused
 ANIMATE = ("S1", "S2", "S7")  # the scenarios whose nominal runs keep their signals
 
 
@@ -78,30 +90,51 @@ def contenders(chosen=(), fmu_dir="build/fmus", only=False):
     return [result[name] for name in sorted(result)]
 
 
-def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), quick=False):
-    """``(cases, blobs, refused)``: the cases to run, the FMU bytes by hash, and rows of cases that cannot run."""
-    cases, blobs, refused, digests = [], {}, [], {}
+MASTER = "gauss-seidel"  # the master algorithm of every case
+MANIFEST = "board.json"
+
+
+def versions():
+    """The versions that make a figure: this project, Python, fmpy, numpy, scipy."""
+    return {"crane-antisway-cosim": importlib.metadata.version("crane-antisway-cosim"),
+            "python": platform.python_version(), "fmpy": fmpy.__version__, "numpy": np.__version__,
+            "scipy": scipy.__version__}
+
+
+def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), cases=scoreboard.CASES):
+    """``(cases, blobs, refused)``: the cases to run, the FMU bytes by hash, and rows of cases that cannot run
+    (not applicable to a contender: status ``n/a``; refused by a parameter rule: ``invalid``).
+
+    A case's id covers the metric module's version (:data:`crane_fmu.analysis.metrics.VERSION`): rows a journal
+    holds from another version are never mixed into the board.
+    """
+    planned, blobs, refused, digests = [], {}, [], {}
     for contender in chosen:
         for sid in scenarios:
-            try:
-                runs = scoreboard.systems_for(contender, sid, quick)
-            except ValueError as exc:
-                refused.append({"controller": contender.name, "scenario": sid, "case": "all", "status": "failed",
-                                "error": str(exc)})
+            why = scoreboard.applicable(contender, sid)
+            if why:
+                refused.append({"controller": contender.name, "scenario": sid, "case": "all", "status": "n/a",
+                                "error": why})
                 continue
-            for label, system, step, stop_time, x_d in runs:
+            runs = scoreboard.systems_for(contender, sid, cases)
+            for label, system, step, stop_time, x_d, residual_from in runs:
                 fmus, connections = systems.resolve(system, fmu_dir)
                 system = systems.prepare(system, step, stop_time, check=False)
                 hashes = {}
                 for name, path in fmus.items():
                     if path not in digests:  # each FMU file read once
                         data = Path(path).read_bytes()
-                        digests[path] = hashlib.sha256(data).hexdigest()[:20]
-                        blobs[digests[path]] = data
+                        digests[path] = hashlib.sha256(data).hexdigest()
+                        blobs[digests[path][:20]] = data
                     hashes[name] = digests[path]
-                case = {"controller": contender.name, "scenario": sid, "case": label, "fmus": hashes,
+                case = {"controller": contender.name, "scenario": sid, "case": label,
+                        "fmus": {name: digest[:20] for name, digest in hashes.items()},
+                        "sha256": {name: hashes[name] for name in sorted(hashes)},
+                        "files": {name: Path(fmus[name]).name for name in sorted(fmus)},
                         "connections": [list(c) for c in connections], "parameters": system.parameters,
-                        "step": step, "stop_time": stop_time, "x_d": x_d, "format": ROW_FORMAT,
+                        "step": step, "stop_time": stop_time, "master": MASTER, "x_d": x_d,
+                        "residual_from": residual_from, "bounds": {**scoreboard.DRIVE, **scoreboard.RAIL},
+                        "format": ROW_FORMAT, "metrics_version": metrics.VERSION,
                         "keep_signals": sid in ANIMATE and len(runs) == 1}
                 case["case_id"] = hashlib.sha256(json.dumps(case, sort_keys=True).encode()).hexdigest()[:16]
                 try:
@@ -109,33 +142,44 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), quick=False):
                 except ValueError as exc:
                     refused.append({**_identity(case), "status": "invalid", "error": str(exc)})
                     continue
-                cases.append(case)
-    return cases, blobs, refused
+                planned.append(case)
+    return planned, blobs, refused
+
+
+def provenance(case):
+    """What a case's figures were made of, for its row: the sha256 of every FMU, the seeds, the master, the
+    step (and, added when it runs, the versions and the date)."""
+    seeds = {f"{instance}.seed": values["seed"] for instance, values in sorted(case["parameters"].items())
+             if "seed" in values}
+    plant = case["parameters"].get("plant", {})
+    return {"fmus_sha256": json.dumps({case["files"][n]: case["sha256"][n] for n in case["sha256"]},
+                                      sort_keys=True),
+            "seeds": json.dumps(seeds, sort_keys=True), "master": case["master"], "step": case["step"],
+            **{f"plant_{k}": plant.get(k) for k in ("l1", "l2", "m1", "m2")}}
 
 
 def _identity(case):
-    return {k: case[k] for k in ("case_id", "controller", "scenario", "case")}
+    return {k: case[k] for k in ("case_id", "controller", "scenario", "case", "metrics_version")}
 
 
 def run_score_case(case, blobs):
-    """Co-simulate one case on a worker; return its row: identity, status, error, metrics (and signals)."""
-    row = {**_identity(case), "status": "ok", "error": None}
+    """Co-simulate one case on a worker; return its row: identity, provenance, status, error, metrics (and
+    signals)."""
+    row = {**_identity(case), "status": "ok", "error": None, **provenance(case),
+           "versions": json.dumps(versions(), sort_keys=True), "date": _now()}
     start = time.perf_counter()
     fmus = local_fmus({name: (digest, blobs[digest]) for name, digest in case["fmus"].items()})
     recorder = ArrayRecorder()
     try:
         simulate(fmus, [Connection(*c) for c in case["connections"]], case["stop_time"], case["step"],
-                 parameters=case["parameters"], recorder=recorder)
+                 case["master"], parameters=case["parameters"], recorder=recorder)
     except FmiError as exc:
         row.update(status="failed", error=str(exc))
     columns = recorder.columns() if recorder.names else None
     if columns and len(columns["time"]) > 1:
-        move_end = 0.0
-        if "planner" in case["fmus"]:
-            move_end = planner.configure({**planner.COMPONENT.defaults(), **case["parameters"]["planner"]}).end
         s = metrics.crane_signals(columns, ("dx",) + SIGNALS[5:])
         row.update(metrics.move_metrics(s["time"], s["x"], s["dx"], s["theta1"], s["theta2"], s["u"], case["x_d"],
-                                        move_end))
+                                        case["residual_from"], bounds=case["bounds"]))
         row["outcome"] = metrics.classify(s["time"], s["theta1"], s["theta2"], row["status"] == "ok")
         if case["keep_signals"]:
             every = max(1, round(SIGNAL_EVERY / case["step"]))
@@ -144,25 +188,69 @@ def run_score_case(case, blobs):
     return row
 
 
+def _now():
+    return datetime.now(timezone.utc).isoformat(timespec="seconds")
+
+
+def stale(done, cases):
+    """Why a journal (``done``: its rows by case id) cannot be resumed into the board of ``cases``: it holds
+    another run of one of the board's cases (other FMUs, other metrics, other settings); None when it can."""
+    planned = {(c["controller"], c["scenario"], c["case"]): c for c in cases}
+    for row in done.values():
+        case = planned.get((row["controller"], row["scenario"], row["case"]))
+        if case is None or case["case_id"] == row["case_id"]:
+            continue
+        where = f"{row['controller']}, {row['scenario']}, {row['case']}"
+        if "fmus_sha256" not in row:
+            return f"it was written by an earlier version of the board, without provenance ({where})"
+        recorded = json.loads(row["fmus_sha256"])
+        now = json.loads(provenance(case)["fmus_sha256"])
+        changed = [f"{f}: sha256 {recorded.get(f, 'none')[:12]}..., now {now[f][:12]}..." for f in now
+                   if recorded.get(f) != now[f]]
+        if changed:
+            return f"it was made with other FMUs ({'; '.join(changed)}; in {where})"
+        if row.get("metrics_version") != case["metrics_version"]:
+            return (f"its figures were measured by another version of the metrics ({row.get('metrics_version')}; "
+                    f"crane_fmu/analysis/metrics.py is now {case['metrics_version']})")
+        return f"it holds another run of the same case ({where}: other parameters, connections, master or format)"
+    return None
+
+
+def _same_columns(rows):
+    """Parquet's column types come from the first rows: give every row every key (None where it has none)."""
+    keys = list(dict.fromkeys(k for r in rows for k in r if k != "signals"))
+    return [{k: r.get(k) for k in keys} for r in rows]
+
+
 def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=None, quick=False, progress=True,
-            animate=("S2",), only=False, log=print):
-    """Score the contenders; write scoreboard.md, scores.parquet, plots and animations to ``out_dir``.
+            animate=("S2",), only=False, log=print, scenarios=None, cases=None):
+    """Score the contenders; write scoreboard.md, scores.parquet, board.json, plots and animations to ``out_dir``.
 
     Parameters
     ----------
     chosen, only
         The controllers (see :func:`contenders`): by default every built-in one, and the user's FMUs beside them.
     quick : bool
-        A quick board (3 of the 27 plants of S3 and S9), written to ``out_dir/quick`` with its own journal, so
-        that it never replaces a full board and is never mistaken for one.
+        A quick board (:data:`~crane_fmu.analysis.scoreboard.QUICK_CASES` cases of the paired design), written to
+        ``out_dir/quick`` with its own journal, so that it never replaces a full board and is never mistaken for one.
     animate : iterable of str
         The scenarios (of :data:`ANIMATE`) whose nominal runs are animated; an animation is drawn again only when
         its run changed.
+    scenarios : iterable of str, optional
+        The scenarios to run (default: every one).
+    cases : int, optional
+        Cases of the paired design (default :data:`~crane_fmu.analysis.scoreboard.CASES`, quick
+        :data:`~crane_fmu.analysis.scoreboard.QUICK_CASES`).
 
     Returns
     -------
     list of dict
         The rows of the board: one per contender, scenario and case.
+
+    Raises
+    ------
+    ValueError
+        One line: a mistake in the arguments, or a controller that no chosen scenario applies to.
     """
     start = time.perf_counter()
     if sys._getframe(1).f_globals.get("__name__") == "__mp_main__":  # called by a script a worker imports
@@ -172,34 +260,133 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     if unknown:
         raise ValueError(f"animate {', '.join(unknown)}: no animation there; the animated scenarios are "
                          f"{', '.join(ANIMATE)}")
+    scenarios = list(SCENARIOS) if scenarios is None else list(dict.fromkeys(scenarios))
+    wrong = [s for s in scenarios if s not in SCENARIOS]
+    if wrong or not scenarios:
+        raise ValueError(f"--scenario {','.join(wrong)}: no such scenario; the scenarios are {', '.join(SCENARIOS)}")
+    cases = (scoreboard.QUICK_CASES if quick else scoreboard.CASES) if cases is None else cases
+    if isinstance(cases, bool) or not isinstance(cases, int) or cases < 1:
+        raise ValueError(f"--cases must be a whole number >= 1, got {cases!r}")
     out_dir = Path(out_dir) / "quick" if quick else Path(out_dir)
     chosen = contenders(chosen, fmu_dir, only)
-    cases, blobs, refused = plan(chosen, fmu_dir, quick=quick)
+    for contender in chosen:
+        reasons = {scoreboard.applicable(contender, sid) for sid in scenarios}
+        if None not in reasons:
+            runs = [s for s in SCENARIOS if not scoreboard.applicable(contender, s)]
+            raise ValueError(f"{contender.name}: no scenario of {', '.join(scenarios)} applies to it: "
+                             f"{reasons.pop()}; it can run {', '.join(runs)}")
+    planned, blobs, refused = plan(chosen, fmu_dir, scenarios, cases)
     out_dir.mkdir(parents=True, exist_ok=True)  # only now: a refused board leaves no folder behind
     done = read_journal(out_dir)
-    pending = [c for c in cases if c["case_id"] not in done]
-    failed_before = sum(done[c["case_id"]]["status"] != "ok" for c in cases if c["case_id"] in done)
-    bar = Progress(len(cases), len(cases) - len(pending), failed=failed_before) if progress else None
+    why = stale(done, planned)
+    if why:
+        kept = out_dir / f"{JOURNAL}.{_now().replace(':', '-')}.old"
+        (out_dir / JOURNAL).replace(kept)
+        log(f"{out_dir / JOURNAL} is not resumed: {why}; kept as {kept.name}, the board starts again")
+        done = {}
+    pending = [c for c in planned if c["case_id"] not in done]
+    failed_before = sum(done[c["case_id"]]["status"] != "ok" for c in planned if c["case_id"] in done)
+    bar = Progress(len(planned), len(planned) - len(pending), failed=failed_before) if progress else None
     ran = run_batch(run_score_case, pending, blobs, on="dask", workers=workers, scheduler=scheduler,
                     journal=out_dir / JOURNAL, progress=bar)
     done.update({r["case_id"]: r for r in ran})
-    rows = [done[c["case_id"]] for c in cases] + refused
+    rows = [done[c["case_id"]] for c in planned] + refused
     for row in rows:
-        row.update(quick=quick, **{f"scenario_{k}": v for k, v in scoreboard.scope(row["scenario"], quick).items()})
-    write_table([{k: v for k, v in r.items() if k != "signals"} for r in rows], out_dir / "scores.parquet")
+        row.update(quick=quick, **{f"scenario_{k}": v for k, v in scoreboard.scope(row["scenario"], cases).items()})
+    write_table(_same_columns(rows), out_dir / "scores.parquet")
+    manifest = {"contenders": [{"name": c.name, "source": c.source, "user": c.user} for c in chosen],
+                "scenarios": scenarios, "cases": cases, "quick": quick, "fmu_dir": str(Path(fmu_dir).resolve()),
+                "fmus": dict(sorted({f: d for c in planned for f, d in json.loads(provenance(c)["fmus_sha256"])
+                                     .items()}.items())),
+                "versions": versions(), "master": MASTER, "metrics_version": metrics.VERSION, "design_seed":
+                scoreboard.DESIGN_SEED, "date": _now()}
+    _write(out_dir / MANIFEST, json.dumps(manifest, indent=1))
     board = out_dir / "scoreboard.md"
-    from crane_fmu.analysis.floor import scenario_floors
-
-    board.with_name(".scoreboard.md.partial").write_text(scoreboard.render(rows, chosen, quick, scenario_floors()))
-    board.with_name(".scoreboard.md.partial").replace(board)
-    paths = score_plots.plot_all(rows, out_dir, {c.name for c in chosen if c.user})
+    stats = scoreboard.board_statistics(rows)
+    _write(board, scoreboard.render(rows, chosen, quick, cases, _provenance_lines(manifest), stats,
+                                    scenario_floors()))
+    paths = score_plots.plot_all(rows, out_dir, {c.name for c in chosen if c.user}, stats)
     drawn = 0
     for sid in animate:
         new = score_plots.animate_all(rows, sid, out_dir / "animations")
         paths += new
         drawn += len(new)
-    log(f"{len(cases)} cases: {len(ran)} run now, {len(cases) - len(pending)} already done, "
-        f"{sum(r['status'] != 'ok' for r in rows)} not ok, in {time.perf_counter() - start:.1f} s; "
-        f"wrote {board}{' (a QUICK board)' if quick else ''}, {out_dir / 'scores.parquet'}, "
-        f"{len(paths) - drawn} plots and {drawn} animations drawn now")
+    page = board_page.write_page(out_dir)
+    not_ok = sum(r["status"] not in ("ok", "n/a") for r in rows)
+    log(f"{len(planned)} cases: {len(ran)} run now, {len(planned) - len(pending)} already done, {not_ok} not ok, "
+        f"in {time.perf_counter() - start:.1f} s; wrote {board}{' (a QUICK board)' if quick else ''}, {page}, "
+        f"{out_dir / 'scores.parquet'}, {len(paths) - drawn} plots and {drawn} animations drawn now")
     return rows
+
+
+def _write(path, text):
+    """Write ``text`` under a temporary name, then rename: a reader never sees half a file."""
+    partial = path.with_name(f".{path.name}.partial")
+    partial.write_text(text)
+    partial.replace(path)
+
+
+def _provenance_lines(manifest):
+    return {"FMUs (sha256)": ", ".join(f"{f} {d}" for f, d in manifest["fmus"].items()),
+            "seeds": f"the paired design's {scoreboard.DESIGN_SEED}; each case's noise and wind seed in "
+                     "scores.parquet (`seeds`); S5's sensor seed 1, S8's 1",
+            "versions": ", ".join(f"{k} {v}" for k, v in manifest["versions"].items()),
+            "master": f"{manifest['master']}, communication step 1 ms (S6: 1, 10 and 50 ms)",
+            "metrics": manifest["metrics_version"], "date": manifest["date"],
+            "check": "`crane-fmu compare --check OUT` runs a sample of these cases again and compares every figure"}
+
+
+# Keys of a row that are not figures of the run: they may differ when the same case runs again.
+_NOT_FIGURES = ("duration_s", "date", "versions", "quick", "scenario_plants", "scenario_steps", "scenario_cases",
+                "signals")
+
+
+def check(out_dir, sample=5, workers=None, scheduler=None, log=print, seed=None):
+    """Run a random sample of a board's recorded cases again; return the differences from their recorded figures.
+
+    Parameters
+    ----------
+    out_dir : path
+        A board's folder (with board.json and scores.parquet; a quick board's is ``OUT/quick``).
+    sample : int
+        How many of its cases to run again.
+
+    Returns
+    -------
+    list of str
+        One line per case whose figures differ (empty: every figure was the same, bit for bit).
+
+    Raises
+    ------
+    ValueError
+        One line: no board in ``out_dir``, or FMUs that differ from the board's.
+    """
+    import pyarrow.parquet as pq
+
+    out_dir = Path(out_dir)
+    try:
+        manifest = json.loads((out_dir / MANIFEST).read_text())
+        recorded = {r["case_id"]: r for r in pq.read_table(out_dir / "scores.parquet").to_pylist() if r["case_id"]}
+    except (OSError, ValueError, KeyError) as exc:
+        raise ValueError(f"--check {out_dir}: no board there (board.json and scores.parquet of crane-fmu compare): "
+                         f"{exc}") from None
+    if isinstance(sample, bool) or not isinstance(sample, int) or sample < 1:
+        raise ValueError(f"--sample must be a whole number >= 1, got {sample!r}")
+    chosen = contenders([c["source"] for c in manifest["contenders"]], manifest["fmu_dir"], only=True)
+    planned, blobs, _ = plan(chosen, manifest["fmu_dir"], manifest["scenarios"], manifest["cases"])
+    why = stale(recorded, planned)
+    if why:
+        raise ValueError(f"--check {out_dir}: the board cannot be run again as it was: {why}")
+    known = [c for c in planned if c["case_id"] in recorded]
+    picked = [known[i] for i in sorted(np.random.default_rng(seed).choice(len(known), min(sample, len(known)),
+                                                                          replace=False))]
+    log(f"running {len(picked)} of the board's {len(known)} cases again: "
+        + "; ".join(f"{c['controller']} {c['scenario']} {c['case']}" for c in picked))
+    differences = []
+    for row in run_batch(run_score_case, picked, blobs, on="dask", workers=workers, scheduler=scheduler):
+        before = recorded[row["case_id"]]
+        changed = [f"{k}: {before.get(k)!r} recorded, {row.get(k)!r} now" for k in row
+                   if k not in _NOT_FIGURES and before.get(k) != row.get(k)]
+        if changed:
+            differences.append(f"{row['controller']}, {row['scenario']}, {row['case']}: " + "; ".join(changed))
+    return differences

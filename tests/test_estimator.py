@@ -9,9 +9,9 @@ from scipy.signal import cont2discrete
 
 from crane_fmu import systems
 from crane_fmu.analysis import metrics
-from crane_fmu.analysis.scoreboard import MISMATCH
+from crane_fmu.analysis.scoreboard import MISMATCH, residual_from
 from crane_fmu.cosim import ArrayRecorder, run
-from crane_fmu.model import disturbances, estimator, lqr, planner
+from crane_fmu.model import disturbances, estimator, lqr
 from crane_fmu.model.parameters import PlantParameters
 
 
@@ -117,9 +117,9 @@ def test_crane_sensor_noise_and_delay():
         component.check({"delay": -1.0})
 
 
-def _figures(columns, x_d, move_end=0.0):
+def _figures(columns, x_d, window=None):
     return metrics.move_metrics(columns["time"], columns["plant.x"], columns["plant.dx"], columns["plant.theta1"],
-                                columns["plant.theta2"], columns["controller.u"], x_d, move_end)
+                                columns["plant.theta2"], columns["controller.u"], x_d, window)
 
 
 def test_lqg_regulation_meets_the_issue_targets(fmu_dir):
@@ -134,24 +134,25 @@ def test_lqg_regulation_meets_the_issue_targets(fmu_dir):
 
 
 def test_lqg_transport_meets_the_issue_targets(fmu_dir):
-    """Issue 28: the 2 m move arrives (5 mm, 0.5 deg) by 4.0 s with at most 0.1 deg of residual swing."""
+    """Issue 28: the 2 m move arrives (5 mm, 0.5 deg) by 4.0 s with at most 0.1 deg of residual swing (from one
+    slow period after the planned move's end, as the scoreboard measures it)."""
     system = systems.get("lqg-transport")
     c = run(system, fmu_dir, recorder=ArrayRecorder()).columns()
-    end = planner.configure({**planner.COMPONENT.defaults(), **system.parameters["planner"]}).end
-    m = _figures(c, 2.0, end)
+    m = _figures(c, 2.0, residual_from(system.stop_time, system.parameters["planner"]))
     assert m["arrival_s"] is not None and m["arrival_s"] <= 4.0, m
     assert m["residual_deg"] <= 0.1, m
 
 
 def test_lqg_transport_on_the_mismatch_grid(fmu_dir):
-    """Issue 28: on the scoreboard's 27 plants (l1 +-10 %, l2 +-20 %, m2 +-50 %), unknown to estimator and
-    controller, the worst residual swing after arrival is at most 1 deg, and every plant arrives."""
+    """Issue 28: on the 27 plants of ``crane-fmu targets`` (l1 +-10 %, l2 +-20 %, m2 +-50 %), unknown to estimator and
+    controller, every plant arrives and the worst residual swing (measured as the scoreboard does, from one slow
+    period of the plant after the planned move's end) is within issue 28's 1 deg. The scoreboard's S9 asks more
+    (0.1 deg: the swing stopped), which this loop misses with light payloads; the board shows it."""
     system = systems.get("lqg-transport")
-    end = planner.configure({**planner.COMPONENT.defaults(), **system.parameters["planner"]}).end
     worst = 0.0
     for plant in MISMATCH:
         c = run(system.with_parameters({"plant": plant}), fmu_dir, recorder=ArrayRecorder()).columns()
-        m = _figures(c, 2.0, end)
+        m = _figures(c, 2.0, residual_from(system.stop_time, system.parameters["planner"], plant))
         assert m["arrival_s"] is not None, plant
         worst = max(worst, m["residual_deg"])
     assert worst <= 1.0

@@ -118,17 +118,21 @@ T11 = np.arange(11.0)
 
 
 def test_move_metrics_known_answers():
-    """Each figure read off the table above.
+    """Each figure read off the table above (the residual's window from t = 6.5 s: t = 7..10).
 
     - arrival: |x - 2| <= 5 mm from t = 7 on (t = 6 has 8 mm), both angles <= 0.5 deg from t = 6 on: 7 s;
-    - residual: the largest swing from t = 7 on is theta2's 0.3 deg;
+    - residual: the largest swing from t = 6.5 on is theta2's 0.3 deg (t = 7);
     - settling within 0.5 deg: theta1 from t = 4, theta2 (0.6 deg at t = 5) from t = 6: 6 s;
     - within 0.1 deg: theta1 from t = 7 (0.1 exactly on the band), theta2 (-0.12 at t = 8) from t = 9: 9 s;
     - within 1 cm: the 8 mm at t = 6 is inside, the 5 cm at t = 5 not: 6 s;
     - overshoot 0.1 m (t = 4), final error 1 mm, peak |u| 100 (the last sample counts here),
-      peak |v| 1.5, effort 1 + 4 + 9 + 0.25 = 14.25 m2/s3 (u held over each 1 s step; the last u is not).
+      peak |v| 1.5, effort 1 + 4 + 9 + 0.25 = 14.25 m2/s3 (u held over each 1 s step; the last u is not);
+    - the swing's peak is theta2's 4 deg (t = 1); theta1^2 + theta2^2 per sample [deg2]: 0, 25, 13, 5, 1.16,
+      0.45, 0.2425, 0.1, 0.0169, 0.0064, 0.0004, whose trapezoidal integral over the 1 s steps is their sum
+      less half the first and the last: 44.976 deg2 s; its mean over the 10 s, square-rooted: sqrt(4.4976) deg;
+    - the total variation of u: |2 - 1| + |-3 - 2| + |0.5 + 3| + |0 - 0.5| + |100 - 0| = 110 m/s2.
     """
-    m = metrics.move_metrics(T11, MOVE_X, MOVE_DX, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0)
+    m = metrics.move_metrics(T11, MOVE_X, MOVE_DX, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0, residual_from=6.5)
     assert m["arrival_s"] == 7.0
     assert m["residual_deg"] == pytest.approx(0.3, rel=1e-12)
     assert m["settling_0.5deg_s"] == 6.0, "theta2 is 0.6 deg at t = 5: both angles within 0.5 deg from 6 s"
@@ -138,38 +142,108 @@ def test_move_metrics_known_answers():
     assert m["final_error_m"] == pytest.approx(0.001, rel=1e-12)
     assert m["peak_abs_u"] == 100.0 and m["peak_abs_v"] == 1.5
     assert m["effort"] == 14.25
+    assert m["peak_swing_deg"] == pytest.approx(4.0, rel=1e-12)
+    assert m["ise_swing_deg2s"] == pytest.approx(44.976, rel=1e-12)
+    assert m["rms_swing_deg"] == pytest.approx(math.sqrt(4.4976), rel=1e-12)
+    assert m["u_total_variation"] == 110.0
+    assert m["bounds_held"] is None and m["bounds_broken"] is None  # no bounds given: none checked
 
 
-def test_move_metrics_residual_counts_from_the_end_of_the_planned_move():
-    """move_end = 8.5 s, after the arrival at 7 s: only t = 9, 10 count, theta2's 0.08 deg."""
-    m = metrics.move_metrics(T11, MOVE_X, MOVE_DX, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0, move_end=8.5)
-    assert m["arrival_s"] == 7.0 and m["residual_deg"] == pytest.approx(0.08, rel=1e-12)
+def test_the_residual_window_is_the_one_given():
+    """From t = 8.5 only t = 9, 10 count: theta2's 0.08 deg; from t = 4 on, theta2's 1 deg (t = 4); by default the
+    last quarter (t >= 7.5: t = 8, 9, 10): theta2's -0.12 deg; a window after the run's end: no figure."""
+    def residual(**window):
+        return metrics.move_metrics(T11, MOVE_X, MOVE_DX, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0,
+                                    **window)["residual_deg"]
+
+    assert residual(residual_from=8.5) == pytest.approx(0.08, rel=1e-12)
+    assert residual(residual_from=4.0) == pytest.approx(1.0, rel=1e-12)
+    assert residual() == pytest.approx(0.12, rel=1e-12)
+    assert residual(residual_from=10.5) is None
+
+
+def test_the_residual_is_not_bounded_by_the_arrival_band():
+    """The issue's case: a 2 m move whose planned end is 3.64 s (the scoreboard's ZV move), so that the window
+    opens one slow period (2.37 s) later, at 6.01 s. The swing is 5 deg during the move, 0.8 deg from 6 s to 7 s
+    and 0.45 deg from 7 s on; the trolley is at x_d from 5 s. The arrival (0.5 deg band) is 7 s, and the largest
+    swing from the arrival on is 0.45 deg: the old residual, which could never exceed the band. The residual is
+    the largest swing in the window: 0.8 deg, as measured; a wider arrival band changes the arrival, not it."""
+    from crane_fmu.analysis import scoreboard
+
+    t = np.round(np.arange(0, 10.001, 0.01), 10)
+    swing = np.where(t < 6.0, 5.0, np.where(t < 7.0, 0.8, 0.45))
+    theta1 = np.radians(swing)  # the swing's amplitude, sampled at its crests
+    x = np.minimum(t / 2.5, 1.0) * 2.0
+    window = scoreboard.residual_from(10.0, scoreboard.PLAN)
+    assert window == pytest.approx(3.6385 + 2.3682, abs=1e-3)
+    m = metrics.move_metrics(t, x, np.gradient(x, t), theta1, 0 * theta1, 0 * t, 2.0, window)
+    assert m["arrival_s"] == 7.0
+    assert math.degrees(np.abs(theta1[t >= m["arrival_s"]]).max()) == pytest.approx(0.45, rel=1e-12)  # the old
+    assert m["residual_deg"] == pytest.approx(0.8, rel=1e-12)
+    wide = metrics.move_metrics(t, x, np.gradient(x, t), theta1, 0 * theta1, 0 * t, 2.0, window,
+                                angle_band=math.radians(1.0))
+    assert wide["arrival_s"] == 6.0 and wide["residual_deg"] == m["residual_deg"]
 
 
 def test_move_metrics_of_the_mirrored_move():
     """The same move towards x_d = -2 m: the same figures; the overshoot is measured past -2 m, away from 0."""
-    m = metrics.move_metrics(T11, -MOVE_X, -MOVE_DX, -MOVE_THETA1, -MOVE_THETA2, -MOVE_U, -2.0)
+    m = metrics.move_metrics(T11, -MOVE_X, -MOVE_DX, -MOVE_THETA1, -MOVE_THETA2, -MOVE_U, -2.0, 6.5)
     assert (m["arrival_s"], m["settling_0.5deg_s"], m["settling_0.1deg_s"], m["position_1cm_s"]) == (7.0, 6.0, 9.0, 6.0)
     assert m["overshoot_m"] == pytest.approx(0.1, rel=1e-12)
+    assert (m["residual_deg"], m["peak_swing_deg"]) == pytest.approx((0.3, 4.0), rel=1e-12)
+    assert m["ise_swing_deg2s"] == pytest.approx(44.976, rel=1e-12) and m["u_total_variation"] == 110.0
 
 
 def test_move_metrics_of_a_move_that_never_arrives():
-    """The trolley stops 3 cm short (x = 1.97 from t = 5): no arrival, no 1 cm settling; the residual is then
-    taken at the last sample alone (0.02 deg, theta2's); the angles themselves settle as before."""
+    """The trolley stops 3 cm short (x = 1.97 from t = 5): no arrival, no 1 cm settling; the residual is the
+    same as when it arrives (it does not depend on the arrival); the angles settle as before."""
     x = np.minimum(MOVE_X, 1.97)
     x[5:] = 1.97
-    m = metrics.move_metrics(T11, x, MOVE_DX, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0)
+    m = metrics.move_metrics(T11, x, MOVE_DX, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0, 6.5)
     assert m["arrival_s"] is None and m["position_1cm_s"] is None
-    assert m["residual_deg"] == pytest.approx(0.02, rel=1e-12)
+    assert m["residual_deg"] == pytest.approx(0.3, rel=1e-12)
     assert m["overshoot_m"] == 0.0 and m["final_error_m"] == pytest.approx(0.03, rel=1e-12)
     assert (m["settling_0.5deg_s"], m["settling_0.1deg_s"]) == (6.0, 9.0)
+
+
+@pytest.mark.parametrize("bounds, broken", [
+    ({"u_max": 100.0, "v_max": 1.5, "x_min": 0.0, "x_max": 2.1}, ""),  # every extreme exactly on its bound
+    ({"u_max": 100.0 * (1 - 1e-6)}, "|u|"),  # 100 m/s2 at t = 10 (the last sample counts)
+    ({"v_max": 1.0}, "|v|"),  # -1.5 m/s at t = 3
+    ({"x_min": 0.5, "x_max": 2.05}, "x_min, x_max"),  # x = 0 at t = 0, 2.1 at t = 4
+    ({"u_max": 2.0, "v_max": 1.0, "x_min": -1.0, "x_max": 3.0}, "|u|, |v|"),  # the scoreboard's bounds
+    ({"u_max": math.inf, "x_min": -math.inf}, ""),  # no limit: nothing to break
+])
+def test_bounds_are_checked_at_every_sample(bounds, broken):
+    m = metrics.move_metrics(T11, MOVE_X, MOVE_DX, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0, 6.5, bounds=bounds)
+    assert (m["bounds_held"], m["bounds_broken"]) == (broken == "", broken)
+
+
+def test_a_bound_holds_to_its_rounding_and_a_non_finite_run_breaks_it():
+    """A drive at its speed limit reaches 1 m/s through floating-point arithmetic (within 1e-9 of it): held;
+    1 + 1e-6 m/s: broken; a run whose trolley speed became NaN breaks the speed bound."""
+    def broken(dx):
+        return metrics.move_metrics(T11, MOVE_X, dx, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0, 6.5,
+                                    bounds={"v_max": 1.0})["bounds_broken"]
+
+    at_limit = np.clip(MOVE_DX, -1.0, 1.0)
+    assert broken(at_limit) == "" and broken(at_limit * (1 + 1e-15)) == ""
+    assert broken(at_limit * (1 + 1e-6)) == "|v|"
+    assert broken(np.where(T11 == 5, np.nan, np.clip(MOVE_DX, -1, 1))) == "|v|"
+
+
+def test_the_metrics_version_is_the_hash_of_the_metric_module():
+    import hashlib
+    from pathlib import Path
+
+    assert metrics.VERSION == hashlib.sha256(Path(metrics.__file__).read_bytes()).hexdigest()[:16]
 
 
 def test_move_metrics_arrival_waits_for_the_angles():
     """Trolley within 5 mm from t = 7, but theta1 = 0.6 deg at t = 8 (out of the 0.5 deg arrival band): 9 s."""
     theta1 = MOVE_THETA1.copy()
     theta1[8] = math.radians(0.6)
-    m = metrics.move_metrics(T11, MOVE_X, MOVE_DX, theta1, MOVE_THETA2, MOVE_U, 2.0)
+    m = metrics.move_metrics(T11, MOVE_X, MOVE_DX, theta1, MOVE_THETA2, MOVE_U, 2.0, 6.5)
     assert m["arrival_s"] == 9.0 and m["settling_0.5deg_s"] == 9.0
 
 

@@ -374,7 +374,7 @@ def test_the_scoreboards_gust_and_sensor_cases_on_native_fmus_equal_the_python_f
                                                                                      scenario):
     """The EnergyController's S4 (a gust on the payload) and S5 (noisy, one step late) runs: all native vs Python."""
     contender = Contender("EnergyController", "EnergyController", ENERGY.names("input"), ENERGY.names("parameter"))
-    (_, system, step, stop_time, _), = systems_for(contender, scenario)
+    (_, system, step, stop_time, _, _), = systems_for(contender, scenario)
     assert (step, stop_time) == (system.step, system.stop_time)
     theirs = _runs_agree(system, native[version], _python_folder(fmu_dir, version))
     if scenario == "S4":

@@ -5,6 +5,7 @@ No FMU runs here: each rule is shown on rows written to isolate it (test_compare
 
 import itertools
 import math
+import re
 
 import numpy as np
 import pytest
@@ -67,9 +68,14 @@ def test_equal_figures_rank_by_the_swing_left():
     assert _ranked(rows) == ["Zzz", "Aaa", "Mmm"]
 
 
-def test_ties_are_broken_by_name():
-    rows = [_row(name, **FAST_BOTH) for name in ("Charlie", "alpha", "Bravo")]
-    assert _ranked(rows) == sorted(["Charlie", "alpha", "Bravo"])
+def test_equal_figures_tie_and_are_listed_by_name():
+    """Nothing tells them apart: one rank, each line says tie; the one after them has rank 4, not 2."""
+    rows = [_row(name, **FAST_BOTH) for name in ("Charlie", "alpha", "Bravo")] + [_row("Slow", arrival_s=3.9,
+                                                                                     residual_deg=0.05)]
+    lines = scoreboard.summarise(rows, "S2")
+    assert [(line["controller"], line["rank"], line["tie"]) for line in lines] == [
+        ("Bravo", 1, True), ("Charlie", 1, True), ("alpha", 1, True), ("Slow", 4, False)]
+    assert "1. `alpha`: 3.00 s, all targets met, tie" in scoreboard.render_summary(rows)
 
 
 def test_permuting_contenders_changes_nothing():
@@ -87,34 +93,50 @@ def test_permuting_contenders_changes_nothing():
     assert "`D` (yours)" in board and scoreboard.RULES in board
 
 
-def test_the_interface_is_checked_for_every_scenario_at_once():
+def test_the_interface_every_scenario_needs_is_checked_and_the_rest_is_not_applicable():
+    """The measured state in and u out: every scenario needs them (one line when missing). A target position
+    (x_d or the planner's inputs): only the transport scenarios, which are then not applicable."""
     with pytest.raises(ValueError) as caught:
-        scoreboard.check_interface("Mine", ["x", "dx", "theta1", "dtheta1", "theta2", "dtheta2"], ["u"], ["k"])
-    message = str(caught.value)
-    assert "\n" not in message
-    assert "Mine is not a crane controller: it misses a parameter x_d or the inputs x_ref, dx_ref, ddx_ref " \
-           "(S2, S3, S4, S5, S7, S8, S9)" in message
-    with pytest.raises(ValueError, match=r"it misses dtheta2, output u \(every scenario\); a parameter x_d"):
         scoreboard.check_interface("Half", ["x", "dx", "theta1", "dtheta1", "theta2"], [], [])
-    scoreboard.check_interface("Tracker", list(scoreboard.MEASURED) + ["x_ref", "dx_ref", "ddx_ref"], ["u"])
-    scoreboard.check_interface("Regulator", scoreboard.MEASURED, ["u"], ["x_d"])
+    assert "\n" not in str(caught.value)
+    assert str(caught.value).startswith("Half is not a crane controller: it misses dtheta2, output u (every scenario")
+    scoreboard.check_interface("Mine", scoreboard.MEASURED, ["u"], ["k"])  # regulation only: a crane controller
+    mine = Contender("Mine", "Mine", list(scoreboard.MEASURED), ["k"])
+    assert {sid: scoreboard.applicable(mine, sid) for sid in SCENARIOS} == {
+        sid: (None if sid in ("S1", "S6") else "n/a (needs x_d or x_ref)") for sid in SCENARIOS}
+    assert all(scoreboard.applicable(c, sid) is None for c in (TRACKER, REGULATOR) for sid in SCENARIOS)
+    with pytest.raises(ValueError, match=r"^Mine: S2 n/a \(needs x_d or x_ref\)$"):
+        scoreboard.systems_for(mine, "S2")
+
+
+def test_a_scenario_that_does_not_apply_is_shown_without_a_rank():
+    rows = [_row("A", "S2", **FAST_BOTH), _row("A", "S1", **{"settling_0.1deg_s": 3.0}),
+            {"controller": "Mine", "scenario": "S2", "case": "all", "status": "n/a",
+             "error": scoreboard.NOT_APPLICABLE},
+            _row("Mine", "S1", **{"settling_0.1deg_s": 3.5})]
+    assert _ranked(rows, "S2") == ["A"] and _ranked(rows, "S1") == ["A", "Mine"]
+    board = scoreboard.render(rows, [Contender("A", "A", [], []), Contender("Mine", "m.fmu", [], [], True)])
+    assert "| 1. `A`: 3.00 s, all targets met | `Mine` (yours): n/a (needs x_d or x_ref) |" in board
+    assert "- `Mine` (yours): n/a (needs x_d or x_ref)" in board
 
 
 def test_a_quick_board_says_so_in_its_title_and_every_scenario_line():
     rows = [_row("A", sid, **FAST_BOTH) for sid in SCENARIOS]
-    board = scoreboard.render(rows, [Contender("A", "A", [], [])], quick=True)
-    assert board.splitlines()[0] == "# Controller scoreboard (QUICK: a subset of the cases, not the full board)"
+    board = scoreboard.render(rows, [Contender("A", "A", [], [])], quick=True, cases=16)
+    assert board.splitlines()[0] == ("# Controller scoreboard (QUICK: fewer cases of the paired design, not the full "
+                                     "board)")
     scenario_lines = [line for line in board.splitlines() if line.startswith(("| S", "## S"))]
     assert len(scenario_lines) == 2 * len(SCENARIOS)
     assert all("(QUICK: " in line for line in scenario_lines)
-    assert "S3 (QUICK: 3 of 27 plants, 3 cases)" in board
-    assert "QUICK" not in scoreboard.render(rows, [Contender("A", "A", [], [])])
+    assert "S3 (QUICK: 16 cases)" in board and "S6 (QUICK: 3 cases)" in board
+    full = scoreboard.render(rows, [Contender("A", "A", [], [])])
+    assert "QUICK" not in full and "S3 (64 cases)" in full
 
 
-def test_quick_and_full_scopes():
-    assert scoreboard.scope("S3", quick=True) == {"plants": 3, "steps": 1, "cases": 3}
-    assert scoreboard.scope("S3") == {"plants": 27, "steps": 1, "cases": 27}
-    assert scoreboard.scope("S6", quick=True) == {"plants": 1, "steps": 3, "cases": 3}
+def test_scopes_of_the_paired_design():
+    assert scoreboard.scope("S3", 16) == {"plants": 16, "steps": 1, "cases": 16}
+    assert scoreboard.scope("S10") == {"plants": 64, "steps": 1, "cases": 64}
+    assert scoreboard.scope("S6", 16) == {"plants": 1, "steps": 3, "cases": 3}
 
 
 def test_every_target_carries_its_reason():
@@ -162,3 +184,144 @@ def test_animate_shows_progress_when_asked(tmp_path, capsys):
     assert capsys.readouterr().err.endswith("\rframe 11/11\n")
     animate(signals, tmp_path / "b.gif", fps=10)
     assert capsys.readouterr().err == ""
+
+
+# ---- the residual swing: a window the scenario fixes, and targets a swinging run cannot meet ---------------------
+
+TRACKER = Contender("Tracker", "Tracker", list(scoreboard.MEASURED) + ["x_ref", "dx_ref", "ddx_ref"], [])
+REGULATOR = Contender("Regulator", "Regulator", list(scoreboard.MEASURED), ["x_d", "l1"])
+
+
+def test_the_residual_window_is_fixed_by_the_scenario_not_the_controller():
+    """A move's window opens one slow period (of the plant as it ends the run) after the planned move's end,
+    whether the controller follows the planner or is given x_d alone; regulation's is the last quarter."""
+    from crane_fmu.model import planner
+
+    def windows(contender, sid):
+        return {r.label: r.residual_from for r in scoreboard.systems_for(contender, sid)}
+
+    for sid in SCENARIOS:
+        assert windows(TRACKER, sid) == windows(REGULATOR, sid), sid
+    zv_end = planner.configure({**planner.COMPONENT.defaults(), "x_d": 2.0, "shaper": "zv"}).end
+    zvd_end = planner.configure({**planner.COMPONENT.defaults(), "x_d": 2.0, "shaper": "zvd", "l1": 1.5}).end
+    slow = _periods(3.0, 7.0, 1.0, 0.5, 9.8)[0]
+    assert windows(TRACKER, "S2") == {"nominal": pytest.approx(zv_end + slow, rel=1e-12)}
+    assert windows(TRACKER, "S1") == {"nominal": 7.5} and set(windows(TRACKER, "S6").values()) == {7.5}
+    assert windows(TRACKER, "S7") == {"l1 2 m -> 1 m": pytest.approx(zvd_end + slow, rel=1e-12)}  # ends at l1 = 1 m
+    assert windows(TRACKER, "S8") == {"S1": 7.5, "S2": pytest.approx(zv_end + slow, rel=1e-12)}
+    runs = scoreboard.systems_for(TRACKER, "S10")
+    for run in runs:  # each case's window from the slow period of its own plant
+        p = run.system.parameters["plant"]
+        slow = _periods(p["m1"], p["m2"], p["l1"], p["l2"], 9.8)[0]
+        assert run.residual_from == pytest.approx(zv_end + slow, rel=1e-12)
+        assert run.residual_from < 10.0 - 2.0  # every window holds at least 2 s of the run
+
+
+def test_every_residual_target_asks_the_swing_stopped():
+    """A swing within 0.1 deg counts as stopped (metrics.SETTLED_BAND); no residual target allows more."""
+    from crane_fmu.analysis import metrics
+
+    assert scoreboard.STOPPED_DEG == pytest.approx(math.degrees(metrics.SETTLED_BAND), rel=1e-12)
+    limits = [t.limit for s in SCENARIOS.values() for t in s.targets if t.metric == "residual_deg"]
+    assert limits and max(limits) <= scoreboard.STOPPED_DEG
+
+
+def _made_up_rows(sid, amplitude_deg):
+    """Rows of hand-made runs of every case of a scenario: the trolley at x_d by 1 s, the swing 5 deg at the start,
+    decaying with a time constant of 0.3 s to a sustained oscillation of ``amplitude_deg`` at the slow mode's
+    frequency (0: to rest)."""
+    from crane_fmu.analysis import metrics
+
+    rows = []
+    for r in scoreboard.systems_for(TRACKER, sid):
+        dt = max(r.step, 0.01)  # the figures need no finer grid than 10 ms
+        t = np.round(np.arange(0.0, r.stop_time + dt / 2, dt), 9)
+        x = r.x_d * np.minimum(t, 1.0)
+        wave = np.cos(2 * np.pi * t / scoreboard.T_SLOW)
+        theta = np.radians((5.0 * np.exp(-t / 0.3) + amplitude_deg) * wave)
+        figures = metrics.move_metrics(t, x, np.gradient(x, t), theta, -theta, np.zeros_like(t), r.x_d,
+                                       r.residual_from)
+        rows.append({"controller": "Made-up", "scenario": sid, "case": r.label, "status": "ok", "error": None,
+                     **figures})
+    return rows
+
+
+@pytest.mark.parametrize("sid", SCENARIOS)
+def test_no_scenario_is_passed_by_a_run_that_never_stops_the_swing(sid):
+    """Runs that keep swinging by 0.11 deg (just above the stopped band) or 0.45 deg (inside the arrival band, the
+    swing the old residual hid) miss a target in every scenario; the same runs brought to rest meet them all, so
+    the targets can be met."""
+    for amplitude in (0.11, 0.45):
+        line, = scoreboard.summarise(_made_up_rows(sid, amplitude), sid)
+        assert not all(line["targets"]), (sid, amplitude, line)
+    line, = scoreboard.summarise(_made_up_rows(sid, 0.0), sid)
+    assert all(line["targets"]), (sid, line)
+
+
+# ---- the paired design and its ranking ----------------------------------------------------------------------------
+
+def test_the_paired_design_is_a_latin_hypercube_the_same_for_every_contender():
+    """16 cases: each factor's range cut in 16 equal strata holds one case in each; the same cases every time and
+    for every contender (the plant and the seed of each run), seeds whole numbers below 2^31."""
+    cases = scoreboard.design(16)
+    assert cases == scoreboard.design(16) and len({c["seed"] for c in cases}) == 16
+    for f in scoreboard.FACTORS:
+        strata = sorted(int((c[f.name] - f.low) / (f.high - f.low) * 16) for c in cases)
+        assert strata == list(range(16)), f.name
+    assert all(c["seed"] == int(c["seed"]) and 0 <= c["seed"] < 2 ** 31 for c in cases)
+
+    def runs(contender):
+        return [(r.label, r.system.parameters["plant"], r.system.parameters["wind"]["seed"])
+                for r in scoreboard.systems_for(contender, "S10", 16)]
+
+    assert runs(TRACKER) == runs(REGULATOR)
+    assert [r.system.parameters["sensor"]["seed"] for r in scoreboard.systems_for(TRACKER, "S9", 16)] == [
+        c["seed"] for c in cases]
+
+
+def _paired_rows(name, residuals, scenario="S3"):
+    return [_row(name, scenario, case=f"#{i:02d}", residual_deg=r, arrival_s=5.0) for i, r in enumerate(residuals)]
+
+
+BASE = [0.31, 0.12, 0.55, 0.27, 0.44, 0.18, 0.62, 0.35, 0.22, 0.49]  # made-up residuals of 10 cases [deg]
+
+
+def test_on_the_paired_design_a_rank_needs_a_significant_difference():
+    """Lower: lower than A in all 10 cases (Wilcoxon p = 2/1024): better. Mixed: 0.06 deg above and below A by
+    turns (p = 0.78 against A, 0.23 against Lower): it ties both. Nobody is better than Lower or Mixed, Lower is
+    better than A: ranks 1, 1 and 2, though Mixed and A tie."""
+    lower = [r - 0.05 - 0.001 * i for i, r in enumerate(BASE)]
+    mixed = [r + (0.06 if i % 2 else -0.06) for i, r in enumerate(BASE)]
+    rows = _paired_rows("A", BASE) + _paired_rows("Lower", lower) + _paired_rows("Mixed", mixed)
+    lines = {line["controller"]: line for line in scoreboard.summarise(rows, "S3")}
+    assert (lines["Lower"]["rank"], lines["Mixed"]["rank"], lines["A"]["rank"]) == (1, 1, 2)
+    assert lines["Lower"]["tie"] and lines["Mixed"]["tie"] and not lines["A"]["tie"]
+
+
+def test_on_the_paired_design_the_worst_case_does_not_decide():
+    """Spiky is lower than A in 9 of 10 cases and far higher in one (its worst case is worse than A's): the
+    rank sums W- = 45, W+ = 10 give p = 2 P(W+ <= 10) = 0.076, a tie, not a loss; ranking by the worst case
+    would have put it last."""
+    spiky = [r - 0.02 for r in BASE[:-1]] + [BASE[-1] + 1.0]
+    rows = _paired_rows("A", BASE) + _paired_rows("Spiky", spiky)
+    lines = scoreboard.summarise(rows, "S3")
+    assert [(line["controller"], line["rank"]) for line in lines] == [("A", 1), ("Spiky", 1)]
+    assert max(spiky) > max(BASE)
+
+
+def test_paired_statistics_are_on_the_board():
+    lower = [r - 0.05 - 0.001 * i for i, r in enumerate(BASE)]
+    rows = _paired_rows("A", BASE) + _paired_rows("Lower", lower)
+    board = scoreboard.render(rows, [Contender("A", "A", [], []), Contender("Lower", "Lower", [], [])], cases=10)
+    assert "| S3 (10 cases): " in board and "1. `Lower`: median 0.260 deg [" in board  # the 5th of 10 sorted
+    assert "| `Lower` | `A` | -0.055 deg [" in board and "| 0.00195 | `Lower` lower |" in board
+    assert re.search(r"\| residual \[deg\] \| 0\.260 \[[0-9.]+, [0-9.]+\]; 0\.498 \[", board)  # median; p90 (9th)
+
+
+def test_permuting_contenders_on_the_paired_design_changes_nothing():
+    lower = [r - 0.05 - 0.001 * i for i, r in enumerate(BASE)]
+    mixed = [r + (0.06 if i % 2 else -0.06) for i, r in enumerate(BASE)]
+    by = {"A": _paired_rows("A", BASE), "Lower": _paired_rows("Lower", lower), "Mixed": _paired_rows("Mixed", mixed)}
+    boards = {scoreboard.render([r for n in order for r in reversed(by[n])], [Contender(n, n, [], []) for n in order],
+                                cases=10) for order in itertools.permutations(by)}
+    assert len(boards) == 1

@@ -267,6 +267,23 @@ def test_ctrl_c_stops_a_sweep_with_one_line(fmu_dir, tmp_path):
     assert err == "crane-fmu: interrupted\n"  # (the dashboard on a free port: no "Port 8787 is in use" either)
 
 
+def test_rows_of_another_metric_module_are_measured_again(small_run, fmu_dir, tmp_path, monkeypatch):
+    """A journal made by another version of crane_fmu/analysis/metrics.py is not mixed into the results: every
+    case runs again, and each row names the version that measured it."""
+    import shutil
+
+    from crane_fmu.analysis import metrics
+
+    study, out, _ = small_run
+    shutil.copytree(out, tmp_path / "out")
+    assert {r["metrics_version"] for r in pq.read_table(out / "results.parquet").to_pylist()} == {metrics.VERSION}
+    monkeypatch.setattr(metrics, "VERSION", "another version")
+    summary = run_study(study, tmp_path / "out", fmu_dir, workers=2, progress=False)
+    assert (summary["skipped"], summary["ran"]) == (0, summary["cases"])
+    rows = pq.read_table(tmp_path / "out" / "results.parquet").to_pylist()
+    assert {r["metrics_version"] for r in rows} == {"another version"}
+
+
 def test_settling_band_is_chosen_by_the_study(small_run, fmu_dir, tmp_path):
     study = _study(tmp_path, SMALL.replace("step = 0.01", "step = 0.01\nsettling_band_deg = 20.0"))
     case = {"plant.theta1_0": 0.1, "controller.w_theta2": 0.0}

@@ -68,11 +68,14 @@ def test_the_check_reads_the_design_of_a_system_file(fmu_dir, user_fmus, tmp_pat
 
 
 def test_compare_refuses_what_simulate_refuses(fmu_dir, user_fmus, tmp_path, capsys):
-    for fmu, message in ((user_fmus["PdTypo"], "PdTypo is not a crane controller: it misses output u"),
-                         (user_fmus["PdRegulator"], "PdRegulator is not a crane controller: it misses a parameter "
-                                                    "x_d or the inputs x_ref, dx_ref, ddx_ref (S2")):
+    """A controller without u is refused; one that cannot be told a move is refused the moves (it is scored on the
+    scenarios that hold the crane where it is: test_compare.py), here every scenario asked for."""
+    for fmu, message, scenarios in (
+            (user_fmus["PdTypo"], "PdTypo is not a crane controller: it misses output u", "S1,S2"),
+            (user_fmus["PdRegulator"], "PdRegulator: no scenario of S2, S3 applies to it: n/a (needs x_d or x_ref); "
+                                       "it can run S1, S6", "S2,S3")):
         assert main(["compare", "--controller", str(fmu), "--only", "--quick", "--fmu-dir", str(fmu_dir),
-                     "--out", str(tmp_path / "board")]) == 2
+                     "--scenario", scenarios, "--out", str(tmp_path / "board")]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and message in err, err
     assert not (tmp_path / "board").exists()
@@ -104,9 +107,9 @@ def test_simulate_and_compare_give_a_controller_without_references_the_same_move
     assert "it is told the move's target, controller.x_d = 2 m (planner.x_d)" in err
     simulated = read_csv(tmp_path / "run.csv")
     contender, = contenders([str(mine)], fmu_dir, only=True)
-    (_, system, step, _, _), = scoreboard.systems_for(contender, "S2")
+    (_, system, step, *_), = scoreboard.systems_for(contender, "S2")
     assert system.parameters["controller"]["x_d"] == systems.get("transport").parameters["planner"]["x_d"]
-    scored = run(systems.at_step(system, fmu_dir, step), fmu_dir, recorder=ArrayRecorder(), stop_time=stop).columns()
+    scored = run(systems.prepare(system, step), fmu_dir, recorder=ArrayRecorder(), stop_time=stop).columns()
     assert simulated["plant.x"][-1] > 0.2  # moving towards 2 m (untold, it would stay at 0)
     np.testing.assert_array_equal(simulated["plant.x"], scored["plant.x"])
     np.testing.assert_array_equal(simulated["plant.theta1"], scored["plant.theta1"])

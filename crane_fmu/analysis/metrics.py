@@ -1,17 +1,26 @@
 """Metrics of recorded runs: peaks, frequencies, settling, classification.
 
 All functions take numpy arrays sampled on a uniform time grid, in SI units.
+
+:data:`VERSION` is a hash of this file: every result table and journal that holds
+figures made here records it, so that figures of another version of the metrics are
+computed again, never mixed with these.
 """
 
+import hashlib
 import math
+from pathlib import Path
 
 import numpy as np
+
+VERSION = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()[:16]
 
 CRANE_OUTPUTS = ("x", "theta1", "theta2")  # what the crane metrics need from some instance
 DIVERGED_ANGLE = math.pi / 2  # a swing beyond 90 degrees counts as divergence
 SETTLED_BAND = math.radians(0.1)  # a swing below 0.1 degree counts as settled
 CONVERGING = ("converges", "decaying")  # the outcomes of classify() that head for rest
 ARRIVAL_ANGLE = math.radians(0.5)  # an arrival leaves both angles within 0.5 degree
+BOUND_TOLERANCE = 1e-9  # relative: a drive at its speed limit reaches it through rounding
 
 
 def crane_signals(columns, extra=()):
@@ -169,32 +178,50 @@ def closed_loop_metrics(t, x, theta1, theta2, u, completed):
     }
 
 
-def move_metrics(t, x, dx, theta1, theta2, u, x_d, move_end=0.0, position_band=0.005,
-                 angle_band=ARRIVAL_ANGLE):
+def move_metrics(t, x, dx, theta1, theta2, u, x_d, residual_from=None, position_band=0.005,
+                 angle_band=ARRIVAL_ANGLE, bounds=None):
     """The figures of a move to (or regulation at) ``x_d``, angles in degrees.
+
+    Parameters
+    ----------
+    residual_from : float, optional
+        Start [s] of the window of the residual swing, which the task fixes (for a move: the planned
+        move's end plus one slow swing period); by default the last quarter of the run.
+    bounds : dict, optional
+        ``u_max`` [m/s2], ``v_max`` [m/s], ``x_min``, ``x_max`` [m] (any of them): the bounds checked at
+        every sample; a missing one is not checked.
 
     Returns
     -------
     dict
         ``arrival_s``: from when on the trolley stays within ``position_band`` of
         ``x_d`` and both angles within ``angle_band`` (None: never);
-        ``residual_deg``: the largest swing from ``max(arrival, move_end)`` on;
+        ``residual_deg``: the largest swing (either angle) from ``residual_from`` to the end, as
+        measured (None: the run ended before the window);
         ``settling_0.5deg_s``, ``settling_0.1deg_s``: the angles alone;
         ``position_1cm_s``: the trolley alone, within 1 cm; ``overshoot_m``: the
         farthest the trolley went past ``x_d`` (in the direction of the move);
         ``final_error_m``; ``peak_abs_u``, ``peak_abs_v``; ``effort``: the
         integral of u^2 with u held over each step [m2/s3]; ``end_swing_deg``: the
-        largest swing over the last quarter of the run (what is left of the swing).
+        largest swing over the last quarter of the run (what is left of the swing);
+        ``peak_swing_deg``: the largest swing of the run; ``ise_swing_deg2s``: the integral of
+        theta1^2 + theta2^2 (trapezoidal) [deg2 s]; ``rms_swing_deg``: its mean over the run, square-rooted;
+        ``u_total_variation``: the sum of |u_k - u_(k-1)| [m/s2] (how much the command chatters);
+        ``bounds_held``: every bound held at every sample (None: no bounds given); ``bounds_broken``:
+        the bounds that did not ("" when all held), each within :data:`BOUND_TOLERANCE` of its value.
     """
     arrival = settling_time(t, [x - x_d, theta1 / angle_band * position_band, theta2 / angle_band * position_band],
                             position_band)
-    since = max(arrival if arrival is not None else t[-1], move_end)
-    after = t >= since
+    if residual_from is None:
+        residual_from = t[0] + 0.75 * (t[-1] - t[0])
+    window = t >= residual_from
     last = t >= t[0] + 0.75 * (t[-1] - t[0])
     direction = 1.0 if x_d >= x[0] else -1.0
-    return {
+    ise = math.degrees(math.degrees(_trapezoid(np.square(theta1) + np.square(theta2), t)))
+    duration = float(t[-1] - t[0])
+    figures = {
         "arrival_s": arrival,
-        "residual_deg": math.degrees(max(peak_abs(theta1[after]), peak_abs(theta2[after]))) if after.any() else None,
+        "residual_deg": swing_deg(theta1[window], theta2[window]) if window.any() else None,
         "settling_0.5deg_s": settling_time(t, [theta1, theta2], math.radians(0.5)),
         "settling_0.1deg_s": settling_time(t, [theta1, theta2], math.radians(0.1)),
         "position_1cm_s": settling_time(t, [x - x_d], 0.01),
@@ -203,8 +230,44 @@ def move_metrics(t, x, dx, theta1, theta2, u, x_d, move_end=0.0, position_band=0
         "peak_abs_u": peak_abs(u),
         "peak_abs_v": peak_abs(dx),
         "effort": float(np.sum(np.square(u[:-1]) * np.diff(t))),
-        "end_swing_deg": math.degrees(max(peak_abs(theta1[last]), peak_abs(theta2[last]))),
+        "end_swing_deg": swing_deg(theta1[last], theta2[last]),
+        "peak_swing_deg": swing_deg(theta1, theta2),
+        "ise_swing_deg2s": _finite(ise),
+        "rms_swing_deg": _finite(math.sqrt(ise / duration)) if duration > 0 else None,
+        "u_total_variation": _finite(float(np.sum(np.abs(np.diff(u))))),
     }
+    figures.update(bounds_check(x, dx, u, bounds))
+    return figures
+
+
+def swing_deg(theta1, theta2):
+    """The largest swing of either angle [deg]."""
+    return math.degrees(max(peak_abs(theta1), peak_abs(theta2)))
+
+
+def bounds_check(x, dx, u, bounds):
+    """``{"bounds_held": bool, "bounds_broken": str}`` of the bounds given (see :func:`move_metrics`).
+
+    A bound holds when no sample passes it by more than :data:`BOUND_TOLERANCE` of its size; a
+    non-finite sample breaks every bound on it.
+    """
+    if not bounds:
+        return {"bounds_held": None, "bounds_broken": None}
+
+    def beyond(extreme, bound, sign):  # np.max/np.min give nan for a non-finite run: never within
+        return not sign * extreme <= sign * bound + BOUND_TOLERANCE * max(abs(bound), 1.0)
+
+    checks = {"|u|": ("u_max", lambda b: beyond(np.max(np.abs(u)), b, 1)),
+              "|v|": ("v_max", lambda b: beyond(np.max(np.abs(dx)), b, 1)),
+              "x_min": ("x_min", lambda b: beyond(np.min(x), b, -1)),
+              "x_max": ("x_max", lambda b: beyond(np.max(x), b, 1))}
+    broken = [name for name, (key, check) in checks.items()
+              if key in bounds and math.isfinite(bounds[key]) and check(bounds[key])]
+    return {"bounds_held": not broken, "bounds_broken": ", ".join(broken)}
+
+
+def _trapezoid(y, t):
+    return float(np.sum((y[1:] + y[:-1]) * np.diff(t)) / 2)
 
 
 def _finite(value):

@@ -12,8 +12,8 @@ import numpy as np
 
 from crane_fmu import components
 
-from .plots import pyplot, save
-from .scoreboard import SCENARIOS, summarise
+from .plots import pyplot
+from .scoreboard import PAIRED, SCENARIOS, board_statistics, not_applicable, summarise
 
 COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink", "tab:gray",
            "tab:olive", "tab:cyan")
@@ -29,100 +29,170 @@ def colour(name):
     return left[zlib.crc32(name.encode()) % len(left)]
 
 
+HATCHES = ("", "..", "oo", "++", "--", "||", "**", "OO", "\\\\", "xx")  # with the colour: never colour alone;
+NEVER = {"color": "white", "edgecolor": "0.3", "hatch": "///"}  # never or failed: white, hatched like no controller
+MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*", "<", ">")
+
+
+def style(name, names):
+    """``(colour, hatch, marker)`` of a controller: its colour (:func:`colour`) and, by its place among
+    ``names`` (sorted), a hatch and a marker, so that no two controllers differ by colour alone."""
+    i = sorted(names).index(name)
+    return colour(name), HATCHES[i % len(HATCHES)], MARKERS[i % len(MARKERS)]
+
+
 def _nominal(rows, scenario):
     return [r for r in rows if r["scenario"] == scenario and r.get("signals")]
 
 
+def _label(name, users):
+    return name + (" (yours)" if name in users else "")
+
+
 def plot_runs(rows, scenario, path, users=()):
-    """Trolley position, both angles and u against time, one line per controller, for a scenario's nominal case."""
-    runs = _nominal(rows, scenario)
+    """A scenario's nominal run of every controller, as a grid: a column per controller (by name, the same
+    place on every board), a row per signal (trolley x, both angles, demanded u) on shared axes; each
+    panel draws its controller on top, the others faint grey beneath, so no curve hides another."""
+    runs = sorted(_nominal(rows, scenario), key=lambda r: r["controller"])
     if not runs:
         return None
     plt = pyplot()
-    fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 9))
-    for r in sorted(runs, key=lambda r: r["controller"]):
-        s, c = r["signals"], colour(r["controller"])
-        label = r["controller"] + (" (yours)" if r["controller"] in users else "") + (
-            "" if r["status"] == "ok" else " (failed)")
-        axes[0].plot(s["time"], s["x"], color=c, lw=1.2, label=label)
-        axes[1].plot(s["time"], np.degrees(s["theta1"]), color=c, lw=1.2)
-        axes[2].plot(s["time"], np.degrees(s["theta2"]), color=c, lw=1.2)
-        axes[3].plot(s["time"], s["u"], color=c, lw=1.2)
-    for ax, label in zip(axes, ("trolley x [m]", "hook angle theta1 [deg]", "payload angle theta2 [deg]",
-                                "demanded u [m/s2]")):
-        ax.set_ylabel(label)
-        ax.grid(True, alpha=0.3)
-    finite = [v for r in runs for k in ("theta1", "theta2") for v in np.degrees(r["signals"][k])
-              if math.isfinite(v)]  # both angles share one scale
-    limit = min(max(abs(min(finite)), abs(max(finite)), 1.0) * 1.1, 90.0)
-    axes[1].set_ylim(-limit, limit)
-    axes[2].set_ylim(-limit, limit)
-    axes[3].set_ylim(-3, 3)  # the drive gives at most 2 m/s2; larger demands are clipped in the picture
-    axes[0].legend(fontsize=8, loc="best")
-    quick = " (QUICK board: a subset of the cases)" if any(r.get("quick") for r in rows) else ""
-    axes[0].set_title(f"{scenario}: {SCENARIOS[scenario].title}{quick}")
-    axes[-1].set_xlabel("time [s]")
-    return save(fig, path, dpi=100)
-
-
-def plot_summary(rows, path, users=()):
-    """Per scenario, each controller's ranking figure (worst case) as a bar, in rank order, with the target.
-
-    A controller that never reached the figure within the run, or failed, gets a hatched bar to the top of
-    the axis with the word on it: never the shortest bar. A figure far beyond the target (over four times
-    it) is drawn to the top of the axis with its value written on it.
-    """
-    from matplotlib.lines import Line2D  # optional: the plot extra
-    from matplotlib.patches import Patch
-
-
-    plt = pyplot()
-    scenarios = [s for s in SCENARIOS if summarise(rows, s)]
-    fig, axes = plt.subplots(1, len(scenarios), figsize=(2.3 * len(scenarios), 4.4), squeeze=False,
-                             layout="constrained")
-    for ax, sid in zip(axes[0], scenarios):
-        lines = summarise(rows, sid)
-        key = SCENARIOS[sid].rank_by
-        unit = "deg" if key.endswith("_deg") else "s"
-        limit = next((t.limit for t in SCENARIOS[sid].targets if t.metric == key), None)
-        finite = [line[key] for line in lines if line[key] is not None and not line["failed"]]
-        shown = [v for v in finite if limit is None or v <= 4 * limit]
-        top = 1.25 * max(shown + ([limit] if limit is not None else []) + [1e-3])
-        for i, line in enumerate(lines):
-            value, edge = None if line["failed"] else line[key], colour(line["controller"])
-            if value is None:
-                ax.bar(i, top, color="white", edgecolor=edge, hatch="///", lw=1.2)
-            ax.bar(i, min(value, top), color=edge) if value is not None else None
-            word = "failed" if line["failed"] else "never" if value is None else (
-                f"{value:.3g} {unit}" if value > top else None)
-            if word:
-                ax.text(i, top / 2, word, ha="center", va="center", rotation=90, fontsize=9,
-                        bbox={"facecolor": "white", "edgecolor": "none", "pad": 1})
-        if limit is not None:
-            ax.axhline(limit, color="k", ls="--", lw=0.9)
-        ax.set_ylim(0, top)
-        ax.set_xticks(range(len(lines)), [str(i + 1) for i in range(len(lines))], fontsize=8)
-        ax.set_xlabel("rank", fontsize=8)
-        target = "" if limit is None else f"\ntarget <= {limit:g} {unit}"
-        ax.set_title(f"{sid}: {key.removesuffix('_s').removesuffix('_deg')} [{unit}]{target}", fontsize=9)
-        ax.tick_params(axis="y", labelsize=8)
-    names = sorted({r["controller"] for r in rows})
-    handles = [Patch(color=colour(n), label=n + (" (yours)" if n in users else "")) for n in names]
-    handles += [Patch(facecolor="white", edgecolor="k", hatch="///", label="never within the run, or failed"),
-                Line2D([], [], color="k", ls="--", lw=0.9, label="target (value under each title)")]
-    fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 4), fontsize=8, frameon=False)
-    quick = any(r.get("quick") for r in rows)
-    fig.suptitle(("QUICK board (a subset of the cases): " if quick else "")
-                 + "each scenario's ranking figure, worst case, in rank order; lower is better", fontsize=10)
-    fig.savefig(path, dpi=100)  # laid out by the constrained layout
+    names = [r["controller"] for r in runs]
+    signals = (("x", "trolley x [m]", 1.0), ("theta1", "hook theta1 [deg]", 180 / math.pi),
+               ("theta2", "payload theta2 [deg]", 180 / math.pi), ("u", "demanded u [m/s2]", 1.0))
+    fig, axes = plt.subplots(len(signals), len(runs), sharex=True, sharey="row", squeeze=False,
+                             figsize=(2.6 * len(runs) + 1.2, 7.5), layout="constrained")
+    for j, r in enumerate(runs):
+        c, _, marker = style(r["controller"], names)
+        mine = r["controller"] in users
+        for i, (key, ylabel, scale) in enumerate(signals):
+            ax = axes[i][j]
+            for other in runs:
+                if other is not r:
+                    ax.plot(other["signals"]["time"], np.asarray(other["signals"][key]) * scale, color="0.8", lw=0.8)
+            t = np.asarray(r["signals"]["time"])
+            ax.plot(t, np.asarray(r["signals"][key]) * scale, color=c, lw=2.2 if mine else 1.4, marker=marker,
+                    markevery=max(1, len(t) // 8), ms=4)
+            ax.grid(True, alpha=0.3)
+            if j == 0:
+                ax.set_ylabel(ylabel, fontsize=8)
+            ax.tick_params(labelsize=7)
+        title = _label(r["controller"], users) + ("" if r["status"] == "ok" else " (failed)")
+        axes[0][j].set_title(title, fontsize=9, fontweight="bold" if mine else "normal", color=c)
+        axes[-1][j].set_xlabel("time [s]", fontsize=8)
+    finite = [v for r in runs for k in ("theta1", "theta2") for v in np.degrees(r["signals"][k]) if math.isfinite(v)]
+    limit = min(max(abs(min(finite)), abs(max(finite)), 1.0) * 1.1, 90.0)  # both angles share one scale
+    for row in (1, 2):
+        axes[row][0].set_ylim(-limit, limit)
+    axes[3][0].set_ylim(-3, 3)  # the drive gives at most 2 m/s2; larger demands are clipped in the picture
+    quick = " (QUICK board)" if any(r.get("quick") for r in rows) else ""
+    fig.suptitle(f"{scenario}: {SCENARIOS[scenario].title}{quick}", fontsize=10)
+    fig.savefig(path, dpi=100)
     plt.close(fig)
     return path
 
 
-def plot_all(rows, out_dir, users=()):
+def _ranking_figure(line, key, described=None):
+    """``(bar, low, high, p90)`` of a line's ranking figure (None where never), or None when it failed: the worst
+    case, or with the paired design's ``described`` figures the median, its interval and the 90th percentile."""
+    if line["failed"]:
+        return None
+    if described is None:
+        return (line[key], None, None, None)
+    d = described[key]
+    return tuple(v if math.isfinite(v) else None for v in (d.median, d.median_low, d.median_high, d.p90))
+
+
+def plot_summary(rows, path, users=(), stats=None):
+    """Per scenario a panel of each controller's ranking figure: a row per controller, by name, in the same place
+    in every panel (its rank written beside it), colour and hatch its own, yours in bold.
+
+    The bar is the worst case; on the paired design the median, with its 95 % interval as an error bar and the
+    90th percentile as a marker. *never* and *failed* are hatched bars to the edge with the word; a figure far
+    beyond the target (over four times it) runs to the edge with its value written on it.
+    """
+    from matplotlib.lines import Line2D  # optional: the plot extra
+    from matplotlib.patches import Patch
+
+    plt = pyplot()
+    stats = board_statistics(rows) if stats is None else stats
+    scenarios = [s for s in SCENARIOS if summarise(rows, s) or not_applicable(rows, s)]
+    names = sorted({r["controller"] for r in rows})
+    columns = min(4, len(scenarios))
+    grid = math.ceil(len(scenarios) / columns)
+    fig, axes = plt.subplots(grid, columns, figsize=(3.6 * columns, 0.45 * len(names) * grid + 1.6 * grid + 1.2),
+                             squeeze=False, layout="constrained")
+    for ax in axes.flat[len(scenarios):]:
+        ax.set_visible(False)
+    for ax, sid in zip(axes.flat, scenarios):
+        lines = {line["controller"]: line for line in summarise(rows, sid)}
+        key = SCENARIOS[sid].rank_by
+        unit = "deg" if key.endswith("_deg") else "s"
+        limit = next((t.limit for t in SCENARIOS[sid].targets if t.metric == key), None)
+        paired = sid in stats
+        figures = {n: _ranking_figure(line, key, stats[sid]["describe"][n] if paired else None)
+                   for n, line in lines.items()}
+        finite = [v for f in figures.values() if f for v in f if v is not None]
+        bars = [f[0] for f in figures.values() if f and f[0] is not None]
+        scale = max([limit or 0.0] + ([min(bars)] if bars else []))  # a far larger figure runs off the panel
+        top = 1.15 * max([v for v in finite if not scale or v <= 8 * scale] + [limit or 0.0, 1e-3])
+        for y, name in enumerate(names):
+            c, hatch, marker = style(name, names)
+            if name not in lines:
+                ax.text(0.02 * top, y, "n/a" if name in not_applicable(rows, sid) else "", va="center", fontsize=8,
+                        color="0.4")
+                continue
+            f = figures[name]
+            if f is None or f[0] is None:
+                ax.barh(y, top, lw=1.2, **NEVER)
+                ax.text(top / 2, y, "failed" if lines[name]["failed"] else "never", ha="center", va="center",
+                        fontsize=8, bbox={"facecolor": "white", "edgecolor": "none", "pad": 1})
+            else:
+                ax.barh(y, min(f[0], top), color=c, hatch=hatch, edgecolor="0.15", lw=2.0 if name in users else 0.5)
+                if f[0] > top:
+                    ax.text(top / 2, y, f"{f[0]:.3g} {unit}", ha="center", va="center", fontsize=8,
+                            bbox={"facecolor": "white", "edgecolor": "none", "pad": 1})
+                if f[1] is not None or f[2] is not None:
+                    low, high = f[1] if f[1] is not None else 0.0, min(f[2] if f[2] is not None else top, top)
+                    ax.errorbar(min(f[0], top), y, xerr=[[max(0.0, min(f[0], top) - low)], [max(0.0, high - min(
+                        f[0], top))]], fmt="none", ecolor="k", capsize=3, lw=1)
+                if f[3] is not None and f[3] <= top:
+                    ax.plot(f[3], y, marker=marker, color="k", ms=5, ls="none")
+            ax.text(1.0, y, f"  {lines[name]['rank']}{'=' if lines[name]['tie'] else ''}", va="center", fontsize=8,
+                    transform=ax.get_yaxis_transform(), clip_on=False)
+        if limit is not None:
+            ax.axvline(limit, color="k", ls="--", lw=0.9)
+        ax.set_xlim(0, top)
+        ax.set_ylim(len(names) - 0.5, -0.5)
+        ax.set_yticks(range(len(names)), [_label(n, users) for n in names], fontsize=8)
+        for tick, name in zip(ax.get_yticklabels(), names):
+            tick.set_fontweight("bold" if name in users else "normal")
+        what = "median, 95 % interval, p90" if paired else "worst case"
+        target = "" if limit is None else f"; target <= {limit:g}"
+        ax.set_title(f"{sid}: {key} [{unit}]\n{what}{target}", fontsize=8)
+        ax.tick_params(axis="x", labelsize=7)
+    handles = [Patch(facecolor=style(n, names)[0], hatch=style(n, names)[1], edgecolor="0.15",
+                     lw=2.0 if n in users else 0.5, label=_label(n, users)) for n in names]
+    handles += [Patch(facecolor=NEVER["color"], edgecolor=NEVER["edgecolor"], hatch=NEVER["hatch"],
+                      label="never within the run, or failed"),
+                Line2D([], [], color="k", ls="--", lw=0.9, label="target"),
+                Line2D([], [], color="k", marker="|", ls="none", label="95 % interval of the median (paired)"),
+                Line2D([], [], color="k", marker="o", ls="none", ms=4, label="90th percentile (paired; marker "
+                       "per controller)")]
+    fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 4), fontsize=8, frameon=False)
+    quick = any(r.get("quick") for r in rows)
+    fig.suptitle(("QUICK board: " if quick else "") + "each scenario's ranking figure; lower is better; the rank "
+                 "right of each bar (= a tie); " + ", ".join(s for s in PAIRED if s in scenarios) + " on the paired "
+                 "design", fontsize=10)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def plot_all(rows, out_dir, users=(), stats=None):
     """The S1, S2 and S7 runs and the summary, as PNGs in ``out_dir``; return their paths."""
     paths = [plot_runs(rows, s, Path(out_dir) / f"{s}.png", users) for s in ("S1", "S2", "S7")]
-    return [p for p in paths if p] + [plot_summary(rows, Path(out_dir) / "summary.png", users)]
+    return [p for p in paths if p] + [plot_summary(rows, Path(out_dir) / "summary.png", users, stats)]
 
 
 def animate(signals, path, title="", fps=15, progress=False):

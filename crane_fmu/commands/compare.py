@@ -12,6 +12,8 @@ EXAMPLES = (
     "  crane-fmu compare --controller build/mine/PdSway.fmu --out results/mine   # yours beside every built-in one\n"
     "  crane-fmu compare --controller build/mine/PdSway.fmu --controller LqrController --only --out results/two\n"
     "  crane-fmu compare --quick --animate none --out results/compare   # a first look: results/compare/quick\n"
+    "  crane-fmu compare --scenario S1,S6 --cases 32 --out results/some  # some scenarios, 32 paired cases\n"
+    "  crane-fmu compare --check results/compare                # run 5 recorded cases again: the same figures?\n"
     "  crane-fmu compare --out results/compare --scheduler tcp://scheduler-host:8786\n"
     "Re-running the same command resumes: finished cases are skipped."
 )
@@ -22,19 +24,36 @@ def arguments(p):
                    help="a built-in controller's name or a controller FMU (repeatable); every built-in one is "
                         "scored beside them unless --only")
     p.add_argument("--only", action="store_true", help="score only the --controller ones")
-    p.add_argument("--out", required=True, help="output folder: scoreboard.md, scores.parquet, plots, animations")
+    p.add_argument("--out", help="output folder: scoreboard.md, index.html, scores.parquet, plots, animations")
     dask_options(p)
     p.add_argument("--quick", action="store_true",
-                   help="3 of the 27 mismatch plants in S3 and S9; a board marked QUICK, written to OUT/quick")
+                   help="16 cases of the paired design (S3, S9, S10) instead of 64; a board marked QUICK, written to "
+                        "OUT/quick")
+    p.add_argument("--cases", type=int, metavar="N", help="cases of the paired design (default 64, --quick 16)")
+    p.add_argument("--scenario", metavar="S1,S6", help="the scenarios to run (default: every one)")
     p.add_argument("--animate", default="S2", metavar="none|all|S1|S2|S7",
                    help="whose nominal runs to animate (default S2); drawn again only when the run changed")
+    p.add_argument("--check", metavar="OUT", help="instead: run a random sample of the board in OUT again and "
+                                                  "compare every figure, bit for bit (exit 1 when one differs)")
+    p.add_argument("--sample", type=int, default=5, metavar="N", help="with --check: how many cases (default 5)")
 
 
 def run(args):
-    from crane_fmu.compare import ANIMATE, compare
+    from crane_fmu.compare import ANIMATE, check, compare
 
     check_workers(args)
     require_dask("compare")
+    if args.check:
+        try:
+            differences = check(args.check, args.sample, args.workers, args.scheduler)
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+        for line in differences:
+            print(f"differs: {line}")
+        print(f"{len(differences)} case(s) differ" if differences else "every figure the same, bit for bit")
+        return 1 if differences else 0
+    if not args.out:
+        raise UsageError("--out is required (or --check OUT)")
     choices = {"none": (), "all": ANIMATE, **{s: (s,) for s in ANIMATE}}
     if args.animate not in choices:
         raise UsageError(f"--animate {args.animate}: choose none, all, {', '.join(ANIMATE)} (the scenarios whose "
@@ -42,9 +61,11 @@ def run(args):
     if args.only and not args.controller:
         raise UsageError("--only scores only the --controller ones: give at least one --controller")
     writable_file(Path(args.out) / ("quick" if args.quick else "") / "scoreboard.md", "--out")
+    scenarios = [s.strip() for s in args.scenario.split(",")] if args.scenario else None
     try:
         compare(args.out, args.controller, args.fmu_dir, args.workers, args.scheduler, args.quick,
-                progress=not args.no_progress, animate=choices[args.animate], only=args.only)
+                progress=not args.no_progress, animate=choices[args.animate], only=args.only, scenarios=scenarios,
+                cases=args.cases)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     return 0

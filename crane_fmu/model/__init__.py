@@ -23,4 +23,5 @@ from . import (  # noqa: F401
     plant,
     plant_continuous,
     tables,
+    wind,
 )

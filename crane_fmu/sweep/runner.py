@@ -65,7 +65,7 @@ def case_parameters(case, base=None):
 
 def _invalid_row(case, settings, error, metric_names):
     return {"case_id": case_id(case, settings), **case, "status": "invalid", "error": error,
-            **dict.fromkeys(metric_names), "duration_s": 0.0}
+            "metrics_version": settings.get("metrics_version"), **dict.fromkeys(metric_names), "duration_s": 0.0}
 
 
 def run_case(case, system, settings, metric_names):
@@ -74,7 +74,8 @@ def run_case(case, system, settings, metric_names):
     Status is ``ok`` (ran to the stop time) or ``failed`` (an FMU stopped the
     run; the metrics cover the run up to there).
     """
-    row = {"case_id": case_id(case, settings), **case, "status": "ok", "error": None}
+    row = {"case_id": case_id(case, settings), **case, "status": "ok", "error": None,
+           "metrics_version": settings.get("metrics_version")}
     start = time.perf_counter()
     recorder = ArrayRecorder()
     try:
@@ -114,7 +115,7 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
         ``cases``, ``skipped`` (done before), ``ran``, ``not_ok`` and ``seconds``.
     """
     out_dir = Path(out_dir)
-    settings = study.settings()
+    settings = {**study.settings(), "metrics_version": metrics.VERSION}  # in every case's id: rows of other metrics rerun
     cases = study.cases()
     done = read_journal(out_dir)
     pending = [c for c in cases if case_id(c, settings) not in done]
