@@ -6,8 +6,8 @@ machine (FMI 2.0 section 4.2.4, FMI 3.0 section 4.2) to classify each call befor
 - valid: allowed in the state, with good values: OK;
 - wrong_state: not allowed in the state: error with a message, the state unchanged;
 - bad_value: allowed, with a value the FMU refuses (a non-finite input, a step that is not > 0 and
-  finite or needs more than 10^7 RK4 sub-steps, a NaN parameter at the end of initialisation,
-  garbage as a serialised state): error with a message;
+  finite or needs more than 10^7 RK4 sub-steps, a NaN parameter at the end of initialisation or when
+  a calculated variable is got before that, garbage as a serialised state): error with a message;
 - long_step: a step of 0.5 or 2 s (hundreds of sub-steps): OK;
 - diverging (the plant): u = 1e300 m/s2 over a 1 s step overflows the state: discard;
 - warning (the plant): the hoist at 100 m/s2 reaches a cable limit (0.8 or 1.2 m) within a 1 s step:
@@ -126,8 +126,9 @@ static void expect(int status, int expected, int cls, int mode) {
 }
 
 int main(int argc, char **argv) {
-    /* library token resources seed calls, then name=value: in=VR (inputs, repeated), out=VR (outputs,
-       repeated), get=VR (other reals to get, repeated), param=VR (refused NaN at the end of initialisation),
+    /* library token resources seed calls, then name=value: in=VR (inputs, repeated), out=VR (calculated
+       variables: outputs, Model Exchange states, derivatives and event indicators; repeated), get=VR (other
+       reals to get, repeated), param=VR (refused NaN at the end of initialisation),
        default=VALUE (its default), for the plant u=VR hoist=VR l1_now=VR l1_min=VR l1_max=VR, and calm=1 for a
        system whose inputs are disturbances of its plant (set only to values near zero) */
     so = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
@@ -223,8 +224,8 @@ int main(int argc, char **argv) {
             else expect(status, 0, VALID, m);
             break;
         }
-        case 5: case 6: { /* an output is computed from the parameters: with a NaN one set, before the
-                             initialisation ended, that fails */
+        case 5: case 6: { /* a calculated variable is computed from the parameters: with a NaN one set,
+                             before the initialisation ended, that fails */
             int k = next(n_out + n_get), output = k < n_out;
             status = GET(output ? out[k] : get[k - n_out], &x);
             if (!GETTABLE(m)) expect(status, 3, WRONG_STATE, m);
@@ -342,7 +343,10 @@ def test_random_calls_from_a_c_host_get_the_status_their_class_requires(drivers,
     md, library, token, resources = unpack_fmu(fmu, tmp_path)
     reals = {v.name: v for v in md.modelVariables if v.type in ("Real", "Float64")}
     args = [f"in={v.valueReference}" for v in reals.values() if v.causality == "input"]
-    args += [f"{'out' if v.causality == 'output' else 'get'}={v.valueReference}" for v in reals.values()]
+    # calculated (initial="calculated"): the outputs, and a Model Exchange FMU's states, derivatives and event
+    # indicators, which the FMU computes from the parameters as it does its outputs; the others are stored
+    calculated = [v.causality == "output" or v.initial == "calculated" for v in reals.values()]
+    args += [f"{'out' if c else 'get'}={v.valueReference}" for c, v in zip(calculated, reals.values())]
     param = reals["m1" if "m1" in reals else "x_d"]  # refused as NaN when initialisation ends
     args += [f"param={param.valueReference}", f"default={float(param.start)!r}"]
     plant = name == "CranePlant"
