@@ -2,13 +2,13 @@
 and for our native one-FMU (``build_scripts/one_fmu.py``) alike.
 
 The plant's outputs and the controller's ``u``; as parameters the crane model's ``m1``, ``m2``, ``l1``,
-``l2`` (each set on the plant, the controller and the planner that have it and agree on its value with
-the first of them: hoist-transport's planner, designed for l1 = 1.5 m, keeps its own l1, so that a host
-that sets every parameter to its start value gets the system's own run), ``x_d`` (to the planner if
-there is one, else to the controller) and the plant's ``theta1_0``, whose start values are the system's;
-as inputs the plant's inputs that nothing inside feeds (``F1``, ``F2``, ``hoist``). The plant, controller
-and planner are the first instances of those roles (their components' ``role``), never found by name. Its
-model structure (which own inputs each own output reads at once) follows the instances' along the connections.
+``l2`` (each set on the plant, the controller, the planner and the estimator that have it and agree on its
+value with the first of them: hoist-transport's planner, designed for l1 = 1.5 m, keeps its own l1, so that
+a host that sets every parameter to its start value gets the system's own run), ``x_d`` (to the planner if
+there is one, else to the controller) and the plant's ``theta1_0``, whose start values are the system's; as
+inputs the plant's inputs that nothing inside feeds (``F1``, ``F2``, ``hoist``). The plant, controller,
+planner and estimator are the first instances of those roles (their components' ``role``), never found by
+name. Its model structure (which own inputs each own output reads at once) follows the instances' along the connections.
 """
 
 from collections import namedtuple
@@ -16,7 +16,7 @@ from collections import namedtuple
 from crane_fmu import components
 
 SHARED = ("m1", "m2", "l1", "l2")
-MODELERS = ("plant", "controller", "planner")  # the roles that model the crane
+MODELERS = ("plant", "controller", "planner", "estimator")  # the roles that model the crane
 
 Exposed = namedtuple("Exposed", "name causality targets start")
 Exposed.__doc__ = """One variable of the packed FMU: ``targets`` is ``[(instance, variable)]``, the first of which
