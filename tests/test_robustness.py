@@ -260,9 +260,11 @@ FUZZ = textwrap.dedent("""
                 variable = op[1]
                 status = dll.fmi2GetReal(c, ref(variable), 1, real(0.0))
                 if self.refuse_unless(status, gettable):
-                    # a String is not a Real; an output is computed from the parameters: with a bad one set,
+                    # a String is not a Real; a calculated variable (an output, a Model Exchange FMU's states,
+                    # derivatives and event indicators) is computed from the parameters: with a bad one set,
                     # before the initialisation ended, that fails
-                    bad = variable.type != "Real" or (variable.causality == "output" and self.bad and m in (INI, ERR))
+                    calculated = variable.causality == "output" or variable.initial == "calculated"
+                    bad = variable.type != "Real" or (calculated and self.bad and m in (INI, ERR))
                     self.expect(status, 3 if bad else 0, "bad_value" if bad else "valid")
                     self.mode = ERR if bad else m
             elif kind == "do_step":

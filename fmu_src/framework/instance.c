@@ -244,7 +244,7 @@ int set_strings(Instance *c, const char *function, const unsigned vr[], size_t n
 
 int no_such_values(Instance *c, const char *function, int modes, size_t n) {
     if (!allowed(c, function, modes)) return MODEL_ERROR;
-    return n == 0 ? MODEL_OK : refuse(c, function, "this FMU has no variables of this type");
+    return n == 0 ? MODEL_OK : settle(c, refuse(c, function, "this FMU has no variables of this type"), 0);
 }
 
 int do_step(Instance *c, const char *function, double t, double h) {
