@@ -2,12 +2,15 @@
 
 ``open_native`` gives an instance of any FMU (native or Python, FMI 2.0 or 3.0) in initialisation mode;
 ``messages`` runs an FMI 2.0 instance call by call with a logger and returns its statuses and messages,
-so that a native FMU's refusals and errors can be compared with the Python FMU's.
+so that a native FMU's refusals and errors can be compared with the Python FMU's; ``native_folders``,
+``python_folder`` and ``compare_to_python`` hold a native component's outputs to its Python FMU's.
 """
 
 import ctypes
+import sys
 
 import fmpy
+import numpy as np
 import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
@@ -20,6 +23,9 @@ from fmpy.fmi2 import (
 )
 from fmpy.fmi3 import FMU3Slave
 from fmpy.logging import addLoggerProxy
+
+from crane_fmu.build_scripts.build_fmus import fmi3_dir
+from crane_fmu.build_scripts.native import native_dir
 
 _LIBC = ctypes.CDLL(None)
 _LIBC.calloc.restype, _LIBC.calloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t, ctypes.c_size_t]
@@ -130,3 +136,32 @@ def steps_after_restore(fmu, version, steps, k0, n):
     restored = fmu.deserializeFMUState(serialized) if version == 3 else fmu.deSerializeFMUstate(serialized)
     fmu.setFMUState(restored) if version == 3 else fmu.setFMUstate(restored)
     return first, again, steps(k0, n)
+
+
+def native_folders(fmu_dir, names):
+    """``{2: folder, 3: folder}`` of the native FMUs, checked to hold the C binaries of ``names`` (not the Python
+    FMUs copied beside them); skips where no C compiler built them."""
+    folders = {2: native_dir(fmu_dir, 2), 3: native_dir(fmu_dir, 3)}
+    if not (folders[2] / f"{names[0]}.fmu").exists():
+        pytest.skip("no C compiler: no native FMUs were built")
+    for name in names:
+        with open(folders[2] / f"{name}.fmu", "rb") as f:
+            assert f"binaries/linux64/{name}.so".encode() in f.read()
+    return folders
+
+
+def python_folder(fmu_dir, version):
+    """The Python FMUs of an FMI version."""
+    return fmu_dir if version == 2 else fmi3_dir(fmu_dir)
+
+
+def compare_to_python(ours, theirs):
+    """Worst relative deviation (scale at least 1) within 1e-12, returned; on Linux (glibc's libm in both models)
+    also bit equality, the signs of zeros too."""
+    ours, theirs = np.array(ours), np.array(theirs)
+    assert ours.shape == theirs.shape and np.all(np.isfinite(theirs))
+    worst = float(np.max(np.abs(ours - theirs) / np.maximum(np.abs(theirs), 1.0)))
+    assert worst <= 1e-12
+    if sys.platform.startswith("linux"):
+        assert np.array_equal(ours.view(np.int64), theirs.view(np.int64))
+    return worst

@@ -20,12 +20,12 @@ import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
-from native_fmus import close, compiler, messages, open_native, steps_after_restore
+from native_fmus import (close, compare_to_python, compiler, messages, native_folders, open_native, python_folder,
+                         steps_after_restore)
 
 from crane_fmu import components, systems
 from crane_fmu.analysis.scoreboard import Contender, systems_for
-from crane_fmu.build_scripts.build_fmus import fmi3_dir
-from crane_fmu.build_scripts.native import FOLDERS, HOST, native_dir, source_path, variables_header
+from crane_fmu.build_scripts.native import FOLDERS, HOST, source_path, variables_header
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cosim import System, run
 
@@ -40,28 +40,7 @@ CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # no venv, no pyenv: nothing of Python
 
 @pytest.fixture(scope="module")
 def native(fmu_dir):
-    folders = {2: native_dir(fmu_dir, 2), 3: native_dir(fmu_dir, 3)}
-    if not (folders[2] / "TrajectoryPlanner.fmu").exists():
-        pytest.skip("no C compiler: no native FMUs were built")
-    for name in NAMES:  # native FMUs, not the Python ones copied
-        with open(folders[2] / f"{name}.fmu", "rb") as f:
-            assert f"binaries/linux64/{name}.so".encode() in f.read()
-    return folders
-
-
-def _python_folder(fmu_dir, version):
-    return fmu_dir if version == 2 else fmi3_dir(fmu_dir)
-
-
-def _compare(ours, theirs):
-    """Worst relative deviation (scale at least 1); on Linux also bit equality."""
-    ours, theirs = np.array(ours), np.array(theirs)
-    assert ours.shape == theirs.shape and np.all(np.isfinite(theirs))
-    worst = float(np.max(np.abs(ours - theirs) / np.maximum(np.abs(theirs), 1.0)))
-    assert worst <= 1e-12
-    if LINUX:  # bit for bit, the signs of zeros too
-        assert np.array_equal(ours.view(np.int64), theirs.view(np.int64))
-    return worst
+    return native_folders(fmu_dir, NAMES)
 
 
 # ---- one source: the Python FMU's variables; strict C --------------------------------------------------------------
@@ -77,7 +56,7 @@ def _variables(path):
 def test_native_model_description_has_the_python_fmus_variables(fmu_dir, native, name, version):
     """Names, value references, causalities, start values, units, descriptions, outputs, default experiment."""
     ours, md = _variables(native[version] / f"{name}.fmu")
-    theirs, py_md = _variables(_python_folder(fmu_dir, version) / f"{name}.fmu")
+    theirs, py_md = _variables(python_folder(fmu_dir, version) / f"{name}.fmu")
     assert ours == theirs
     assert md.coSimulation.modelIdentifier == py_md.coSimulation.modelIdentifier == name
     assert (md.defaultExperiment.stopTime, md.defaultExperiment.stepSize) == \
@@ -139,7 +118,7 @@ def test_planner_outputs_equal_the_python_model_at_random_parameters_and_times(n
             theirs.append(PLANNER.output(config, (t + h,), ()))
             t += h
         close(fmu)
-    _compare(ours, theirs)
+    compare_to_python(ours, theirs)
     theirs = np.array(theirs)
     assert np.count_nonzero(theirs[:, 3]) > 1000 and np.count_nonzero(theirs[:, 2]) > 500  # moves and swing
 
@@ -194,7 +173,7 @@ def test_energy_output_equals_the_python_model_at_random_inputs_and_parameters(n
             if j == 0:
                 fmu.exitInitializationMode()
         close(fmu)
-    _compare(ours, theirs)
+    compare_to_python(ours, theirs)
     assert limited > 100  # the speed guard acts on many points
 
 
@@ -236,7 +215,7 @@ def test_disturbance_outputs_equal_the_python_model_over_random_steps(native, ve
             fmu.doStep(t, h)
             state, t = component.update(config, state, tuple(values[:len(inputs)]), t, h), t + h
         close(fmu)
-    _compare(ours, theirs)
+    compare_to_python(ours, theirs)
     assert np.count_nonzero(np.array(theirs)) > 1000
 
 
@@ -328,9 +307,9 @@ def _is_native(path):
         return any(n.startswith("sources/") and n.endswith("_variables.h") for n in z.namelist())
 
 
-def _runs_agree(system, native_folder, python_folder, exact=LINUX):
+def _runs_agree(system, native_folder, python_fmus, exact=LINUX):
     """Every recorded output of both runs within 1e-9 over the whole run (``exact``: equal); the recorded run."""
-    ours, theirs = run(system, native_folder).columns(), run(system, python_folder).columns()
+    ours, theirs = run(system, native_folder).columns(), run(system, python_fmus).columns()
     assert list(ours) == list(theirs)
     assert len(ours["time"]) == len(theirs["time"]) == round(system.stop_time / system.step) + 1
     worst = max(float(np.max(np.abs(ours[k] - theirs[k]))) for k in theirs)
@@ -343,7 +322,7 @@ def _runs_agree(system, native_folder, python_folder, exact=LINUX):
 @pytest.mark.parametrize("version", [2, 3])
 def test_the_energy_system_on_native_fmus_equals_the_python_fmus(fmu_dir, native, version):
     """20 s at 1 ms: the native plant and EnergyController against both Python FMUs."""
-    theirs = _runs_agree(systems.get("energy"), native[version], _python_folder(fmu_dir, version))
+    theirs = _runs_agree(systems.get("energy"), native[version], python_folder(fmu_dir, version))
     assert np.max(np.abs(theirs["controller.u"])) > 0.1  # the controller does act
 
 
@@ -353,7 +332,7 @@ def test_the_transport_systems_with_the_native_planner_equal_the_python_fmus(fmu
     """10 s of the ZV move, 12 s of the ZVD move with a second planner as the hoist, both at 1 ms and tracked by the
     LQR (Python or native, whichever build/native holds; bit for bit on Linux with the Python LQR)."""
     lqr_native = _is_native(native[version] / "LqrController.fmu")  # its design may differ in a last bit
-    theirs = _runs_agree(systems.get(system), native[version], _python_folder(fmu_dir, version),
+    theirs = _runs_agree(systems.get(system), native[version], python_folder(fmu_dir, version),
                          exact=LINUX and not lqr_native)
     assert abs(theirs["planner.x_ref"][-1] - 2.0) < 1e-12 and np.max(np.abs(theirs["planner.theta1_ref"])) > 1e-3
 
@@ -364,7 +343,7 @@ def test_the_planner_alone_over_its_run_equals_the_python_fmu(fmu_dir, native, v
     """A 3 m move back (x0 = 1, x_d = -2) from t0 = 0.25 s, 15 s at 1 ms, each shaper."""
     system = System(f"planner-{shaper}", {"planner": "TrajectoryPlanner"},
                     parameters={"planner": {"x0": 1.0, "x_d": -2.0, "t0": 0.25, "shaper": shaper}}, stop_time=15.0)
-    theirs = _runs_agree(system, native[version], _python_folder(fmu_dir, version))
+    theirs = _runs_agree(system, native[version], python_folder(fmu_dir, version))
     assert theirs["planner.x_ref"][-1] == -2.0 and np.min(theirs["planner.dx_ref"]) < -0.5
 
 
@@ -376,7 +355,7 @@ def test_the_scoreboards_gust_and_sensor_cases_on_native_fmus_equal_the_python_f
     contender = Contender("EnergyController", "EnergyController", ENERGY.names("input"), ENERGY.names("parameter"))
     (_, system, step, stop_time, _, _), = systems_for(contender, scenario)
     assert (step, stop_time) == (system.step, system.stop_time)
-    theirs = _runs_agree(system, native[version], _python_folder(fmu_dir, version))
+    theirs = _runs_agree(system, native[version], python_folder(fmu_dir, version))
     if scenario == "S4":
         assert np.max(theirs["gust.F2"]) == pytest.approx(10.0, rel=1e-5)
     else:

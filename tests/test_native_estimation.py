@@ -19,11 +19,11 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
-from native_fmus import close, compiler, messages, open_native, steps_after_restore
+from native_fmus import (close, compare_to_python, compiler, messages, native_folders, open_native, python_folder,
+                         steps_after_restore)
 
 from crane_fmu import components, systems
-from crane_fmu.build_scripts.build_fmus import fmi3_dir
-from crane_fmu.build_scripts.native import FOLDERS, native_dir, source_path, variables_header
+from crane_fmu.build_scripts.native import FOLDERS, source_path, variables_header
 from crane_fmu.build_scripts.one_fmu import one_fmu_name, plan
 from crane_fmu.cosim import run
 from crane_fmu.model import hard_hit
@@ -37,26 +37,7 @@ INF, NAN = float("inf"), float("nan")
 
 @pytest.fixture(scope="module")
 def native(fmu_dir):
-    folders = {2: native_dir(fmu_dir, 2), 3: native_dir(fmu_dir, 3)}
-    if not (folders[2] / "StateEstimator.fmu").exists():
-        pytest.skip("no C compiler: no native FMUs were built")
-    for name in NAMES:  # native FMUs, not the Python ones copied
-        with open(folders[2] / f"{name}.fmu", "rb") as f:
-            assert f"binaries/linux64/{name}.so".encode() in f.read()
-    return folders
-
-
-def _python_folder(fmu_dir, version):
-    return fmu_dir if version == 2 else fmi3_dir(fmu_dir)
-
-
-def _compare(ours, theirs):
-    """Worst relative deviation (scale at least 1) within 1e-12; on Linux also bit equality."""
-    ours, theirs = np.array(ours), np.array(theirs)
-    assert ours.shape == theirs.shape and np.all(np.isfinite(theirs))
-    assert float(np.max(np.abs(ours - theirs) / np.maximum(np.abs(theirs), 1.0))) <= 1e-12
-    if LINUX:  # bit for bit, the signs of zeros too
-        assert np.array_equal(ours.view(np.int64), theirs.view(np.int64))
+    return native_folders(fmu_dir, NAMES)
 
 
 # ---- one source: the Python FMU's variables; strict C --------------------------------------------------------------
@@ -69,7 +50,7 @@ def test_native_model_description_has_the_python_fmus_variables(fmu_dir, native,
         return [(v.name, v.valueReference, v.causality, v.variability, v.initial, v.start, v.unit, v.description)
                 for v in read_model_description(str(path)).modelVariables]
 
-    assert variables(native[version] / f"{name}.fmu") == variables(_python_folder(fmu_dir, version) / f"{name}.fmu")
+    assert variables(native[version] / f"{name}.fmu") == variables(python_folder(fmu_dir, version) / f"{name}.fmu")
     assert validate_fmu(str(native[version] / f"{name}.fmu")) == []
 
 
@@ -132,7 +113,7 @@ def test_outputs_equal_the_python_model_over_random_steps(native, version, compo
             fmu.doStep(t, h)
             state, t = component.update(config, state, tuple(values), t, h), t + h
         close(fmu)
-    _compare(ours, theirs)
+    compare_to_python(ours, theirs)
     assert np.count_nonzero(np.array(theirs)) > len(theirs) * len(outputs) / 2
 
 
@@ -167,7 +148,7 @@ def test_hard_hit_output_equals_the_python_model_at_random_inputs_and_parameters
             if j == 0:
                 fmu.exitInitializationMode()
         close(fmu)
-    _compare(ours, theirs)
+    compare_to_python(ours, theirs)
     weights = np.array(weights)
     assert min(np.count_nonzero(weights == 0), np.count_nonzero(weights == 1),
                np.count_nonzero((weights > 0) & (weights < 1))) > 20  # each design alone, and blended
@@ -246,7 +227,7 @@ def test_the_system_on_native_fmus_and_as_one_native_fmu_equals_the_python_fmus(
     """4 s at 1 ms through our master: the native component FMUs, and the one-FMU in fmpy, give the run on the Python
     FMUs (1e-9; bit for bit on Linux)."""
     system = _short(name)
-    theirs = run(system, _python_folder(fmu_dir, version)).columns()
+    theirs = run(system, python_folder(fmu_dir, version)).columns()
     ours = run(system, native[version]).columns()
     assert list(ours) == list(theirs) and len(theirs["time"]) == 4001
     worst = max(float(np.max(np.abs(ours[k] - theirs[k]))) for k in theirs)
