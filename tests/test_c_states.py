@@ -1,8 +1,8 @@
 """The FMI state machine of our C wrappers as a table, like Reference-FMUs' state masks.
 
-A C host (compiled per FMI version against the official headers) drives a fresh CranePlant instance (the
-Python FMU and the native one: both answer through the one C framework, fmu_src/framework)
-into each state, calls one exported function there with valid arguments, and reports the status.
+A C host (compiled per FMI version against the official headers) drives a fresh instance (the Python
+CranePlant, the native one and a native closed loop as one FMU: all answer through the one C framework,
+fmu_src/framework) into each state, calls one exported function there with valid arguments, and reports the status.
 It then checks that the instance is still usable: from the state the call should have left it in
 (the same state after a refusal) it runs the rest of a session, every call of which must give OK.
 
@@ -36,7 +36,8 @@ HOST = r"""
 #include <stdlib.h>
 #include <string.h>
 static void *so, *c;
-static unsigned vr_u, vr_x, vr_x_max;
+static unsigned vr_u, vr_x, vr_setup;
+static double setup_value, push;
 static double now;
 static int errors_logged;
 #define CALL(name, ...) ((name##TYPE *)dlsym(so, #name))(__VA_ARGS__)
@@ -90,17 +91,18 @@ typedef fmi3FMUState State;
 #define DESERIALIZE(in, n, s) CALL(fmi3DeserializeFMUState, c, (const fmi3Byte *)in, n, s)
 #endif
 
-/* Drive the fresh instance into `state`; 0 on success. The rail end x_max = 0.3 m makes a 2 s step at
-   u = 1 m/s2 a discarded step; a NaN input is refused with an error. */
+/* Drive the fresh instance into `state`; 0 on success. The setup value (the plant: a rail end x_max = 0.3 m)
+   and the input at `push` (the plant: u = 1 m/s2; a closed loop: a force of 1e300 N) make a 2 s step a
+   discarded step; a NaN input is refused with an error. */
 static int reach(int state) {
     now = 0.0;
-    if (SET_REAL(vr_x_max, 0.3)) return 1;
+    if (SET_REAL(vr_setup, setup_value)) return 1;
     if (state == INSTANTIATED) return 0;
     if (ENTER()) return 1;
     if (state == INITIALIZATION) return 0;
     if (EXIT()) return 1;
     if (state == STEP) return 0;
-    if (state == DISCARDED) return SET_REAL(vr_u, 1.0) || STEP_BY(2.0) != 2;
+    if (state == DISCARDED) return SET_REAL(vr_u, push) || STEP_BY(2.0) != 2;
     if (state == TERMINATED) return TERMINATE() != 0;
     return SET_REAL(vr_u, NAN) != 3;
 }
@@ -259,11 +261,12 @@ static int call(const char *f, int *next) {
 }
 
 int main(int argc, char **argv) {
-    /* library token resources vr_u vr_x vr_x_max; stdin: lines "function state next-state-if-ok" */
+    /* library token resources vr_u vr_x vr_setup setup_value push; stdin: lines "function state next-state-if-ok" */
     so = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
     if (!so) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 3; }
     const char *token = argv[2], *resources = argv[3];
-    vr_u = atoi(argv[4]), vr_x = atoi(argv[5]), vr_x_max = atoi(argv[6]);
+    vr_u = atoi(argv[4]), vr_x = atoi(argv[5]), vr_setup = atoi(argv[6]);
+    setup_value = atof(argv[7]), push = atof(argv[8]);
 #if FMI == 2
     if (strcmp(CALL(fmi2GetVersion), "2.0") || strcmp(CALL(fmi2GetTypesPlatform), "default")) return 7;
 #else
@@ -311,7 +314,8 @@ FMI2 = {
                                   "CancelStep", "GetStatus", "GetIntegerStatus", "GetStringStatus")},
 }
 # FMI 2.0 has one set of functions for both interfaces: an FMU that declares <ModelExchange> beside
-# <CoSimulation> exports the Model Exchange functions too (the native CranePlant). They are no part of the
+# <CoSimulation> exports the Model Exchange functions too (the native CranePlant), and so does a closed loop as
+# one FMU (its framework is the plant's). They are no part of the
 # co-simulation state machine (section 4.2.4 has no row for them; they belong to the Model Exchange one,
 # section 3.2.3, whose modes a co-simulation instance never enters), so a co-simulation instance refuses them
 # in every state. (FMI 3.0's table above lists its Model Exchange functions already, refused alike.)
@@ -352,10 +356,17 @@ def _exported(library, prefix):
     return {s.removeprefix(prefix) for s in symbols if s.startswith(prefix)}
 
 
-@pytest.mark.parametrize("kind", ["python", "native"])
+# every kind of FMU over the one C framework: the Python model, the native model (with Model Exchange beside
+# co-simulation), a closed loop as one FMU; each with (the input set, the knob set when instantiated and its value,
+# the input value that makes a 2 s step discarded)
+FMUS = {("python", "CranePlant"): ("u", "x_max", 0.3, 1.0), ("native", "CranePlant"): ("u", "x_max", 0.3, 1.0),
+        ("one-fmu", "CraneLqr"): ("F1", "x_d", 1.0, 1e300)}
+
+
+@pytest.mark.parametrize(("kind", "name"), FMUS)
 @pytest.mark.parametrize("version", [2, 3])
 def test_every_function_in_every_state_gets_the_status_of_the_standards_table(table_hosts, fmu_dir, version, kind,
-                                                                              tmp_path):
+                                                                              name, tmp_path):
     """Each (function, state) pair: OK where the table allows it, else fmi2Error/fmi3Error with a message;
     and the instance goes on: after OK from the state the call leads to, after a refusal from the same state.
 
@@ -364,20 +375,24 @@ def test_every_function_in_every_state_gets_the_status_of_the_standards_table(ta
     """
     prefix = f"fmi{version}"
     folder = (fmu_dir if version == 2 else fmi3_dir(fmu_dir)) if kind == "python" else native_dir(fmu_dir, version)
-    fmu = folder / "CranePlant.fmu"
-    if kind == "native" and not fmu.exists():
+    fmu = folder / f"{name}.fmu"
+    if kind != "python" and not fmu.exists():
         pytest.skip("no native FMUs were built (no C compiler)")
     md, library, token, resources = unpack_fmu(fmu, tmp_path)
-    table = FMI3 if version == 3 else FMI2 | FMI2_MODEL_EXCHANGE if md.modelExchange else FMI2
     # every function the FMU exports is in the table, except those called once per process or instance
     lifecycle = {"GetVersion", "GetTypesPlatform", "Instantiate", "InstantiateCoSimulation",
                  "InstantiateModelExchange", "InstantiateScheduledExecution", "FreeInstance"}
-    assert _exported(library, prefix) - lifecycle == set(table)
+    exported = _exported(library, prefix) - lifecycle
+    model_exchange = md.modelExchange or exported & set(FMI2_MODEL_EXCHANGE)
+    table = FMI3 if version == 3 else FMI2 | FMI2_MODEL_EXCHANGE if model_exchange else FMI2
+    assert exported == set(table)
     vr = {v.name: v.valueReference for v in md.modelVariables}
     cases = [(f, s) for f in table for s in range(6)]
     stdin = "".join(f"{f} {s} {table[f][1] if table[f][1] is not None else s}\n" for f, s in cases)
-    proc = subprocess.run([str(table_hosts[version]), library, token, resources, str(vr["u"]), str(vr["x"]),
-                           str(vr["x_max"])], input=stdin, capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    pushed, setup, setup_value, push = FMUS[kind, name]
+    proc = subprocess.run([str(table_hosts[version]), library, token, resources, str(vr[pushed]), str(vr["x"]),
+                           str(vr[setup]), repr(setup_value), repr(push)], input=stdin, capture_output=True, text=True,
+                          timeout=600, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     lines = proc.stdout.splitlines()
     assert len(lines) == len(cases), proc.stdout[-2000:]
