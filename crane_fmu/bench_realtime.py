@@ -34,14 +34,15 @@ STATE = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2")
 RT_PRIORITY = 10  # as in the docs' example of serve --rt-priority
 
 
-def run_realtime_bench(seconds=2.0, round_trips=500, out=print):
-    """Run the benchmark, print its figures and return them."""
+def run_realtime_bench(seconds=2.0, round_trips=500, out=print, fmu_dir=None):
+    """Run the benchmark, print its figures and return them; on the FMUs of ``fmu_dir``, or on ones it builds."""
     figures = {}
     with tempfile.TemporaryDirectory(prefix="crane_bench_realtime_") as tmp:
         tmp = Path(tmp)
-        built = tmp / "fmus"
         system = systems.get("lqr")
-        build_all(built, set(system.instances.values()), systems=(), fmi3=False, log=lambda _: None)
+        built = Path(fmu_dir) if fmu_dir else tmp / "fmus"
+        if not fmu_dir:
+            build_all(built, set(system.instances.values()), systems=(), fmi3=False, log=lambda _: None)
         out(f"1. the lqr system (plant and LQR FMUs, CSV of every step) paced for {seconds:g} s, no protocol:")
         for priority in (None, RT_PRIORITY):
             for period in (1e-3, 1e-2):
