@@ -18,7 +18,7 @@ The working set ``W`` of rows held at a bound gives the equality-constrained min
 the Cholesky factor of ``R_W H^-1 R_W'`` grows by one row when a row joins ``W``.
 
 Every sum runs left to right in explicit loops (never ``sum()``, whose float
-rounding changed in CPython 3.12), so the C port (``fmu_src/native/qp.c``) gives
+rounding changed in CPython 3.12), so the C port (``fmu_src/models/qp.c``) gives
 the same bits on the same platform.
 """
 
