@@ -50,9 +50,9 @@ FMI_DERIVATIVE_BENCH = SOURCES / "host" / "fmi_derivative_bench.c"  # the same t
 # every native FMU's: the framework's files and what the model files share; besides them each FMU compiles the
 # generated fmu_model.c, which names the model its framework runs
 COMMON = ("instance.c", "continuous.c", "py_repr.c", "component.c", "plant_equations.c", "portable_math.c", "linalg.c",
-          "lqr_design.c")
+          "lqr_design.c", "qp.c")
 HEADERS = ("model.h", "instance.h", "continuous.h", "py_repr.h", "component.h", "rules.h", "plant_equations.h",
-           "plant_math.h", "linalg.h", "lqr_design.h", "noise.h")
+           "plant_math.h", "linalg.h", "lqr_design.h", "noise.h", "qp.h")
 CONTINUOUS = (("plant_continuous.c",), ("plant_continuous.h",))  # what a component with Model Exchange adds
 FRAMEWORKS = {2: ("fmi2Functions.c", "fmi2_calls.h"), 3: ("fmi3Functions.c", "fmi3_calls.h")}
 PLATFORMS = {2: {"linux": "linux64", "windows": "win64"}, 3: {"linux": "x86_64-linux", "windows": "x86_64-windows"}}

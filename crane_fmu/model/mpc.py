@@ -50,6 +50,7 @@ from .tables import MEASURED_STATE, controller_model, input_, output, parameter,
 RHO = 1e6  # the plan's weight on missing the target state
 REACHED = 1e-3  # the plan reaches the target when every state is this close (m, m/s, rad, rad/s)
 LONGEST_PLAN = 6.0  # s: a move that needs longer is not planned (the tracking QP regulates alone)
+MAX_PLAN = 1200  # the most intervals a plan may have (LONGEST_PLAN of them at least): the interval's rule
 SCHEDULE_POINTS = 11
 REPLAN_GAP = 0.25  # s: the least time between two plans made because the state left the plan
 RETRY_GAP = 6.0  # s: ... after no move within LONGEST_PLAN was found (each attempt costs a bisection of QPs)
@@ -265,6 +266,9 @@ def configure(values):
     if steps > 200:
         raise ValueError(f"horizon must be at most 200 intervals, got {values['horizon']!r} s = {steps} intervals "
                          f"of {interval!r} s")
+    if int(LONGEST_PLAN / interval) > MAX_PLAN:
+        raise ValueError(f"interval must be at least {LONGEST_PLAN / MAX_PLAN!r} s (a plan of at most {MAX_PLAN} "
+                         f"intervals), got {interval!r} s")
     weights = [values[name] for name in WEIGHTS]
     low, high = values["l1_low"], values["l1_high"]
     if (low, high) == (0.0, 0.0):
@@ -578,4 +582,5 @@ COMPONENT = Component(
     "MpcController", "controller",
     "Constrained model-predictive control: the shortest move to x_d within the drive's limits, planned at the "
     "start, tracked by a QP every interval (our own active-set solver); output: trolley acceleration u",
-    VARIABLES, configure, _output, feedthrough=True, initial_state=initial_state, update=update, report=report)
+    VARIABLES, configure, _output, feedthrough=True, initial_state=initial_state, update=update, report=report,
+    native="mpc.c")
