@@ -169,8 +169,8 @@ REACHES = {
                   "F1": {"plant"}, "F2": {"plant"}, "hoist": {"plant"}},
     "hoist-transport": {"m1": TRIO, "m2": TRIO, "l1": PAIR, "l2": TRIO, "x_d": {"planner"}, "theta1_0": {"plant"},
                         "F1": {"plant"}, "F2": {"plant"}},
-    "hard-hit": {"m1": PAIR, "m2": PAIR, "l1": PAIR, "l2": PAIR, "x_d": {"controller"}, "theta1_0": {"plant"},
-                 "F1": {"plant"}, "F2": {"plant"}, "hoist": {"plant"}},
+    **{name: {"m1": PAIR, "m2": PAIR, "l1": PAIR, "l2": PAIR, "x_d": {"controller"}, "theta1_0": {"plant"},
+              "F1": {"plant"}, "F2": {"plant"}, "hoist": {"plant"}} for name in ("hard-hit", "mpc", "mpc-transport")},
     # the estimator models the crane too: a host's m1 reaches its Kalman filter's design as the controller's
     "lqg": {"m1": PAIR | {"estimator"}, "m2": PAIR | {"estimator"}, "l1": PAIR | {"estimator"},
             "l2": PAIR | {"estimator"}, "x_d": {"controller"}, "theta1_0": {"plant"}, "F1": {"plant"},
