@@ -1,0 +1,253 @@
+"""The native (C) MpcController and its QP solver against their specification.
+
+The Python models (crane_fmu/model/mpc.py and qp.py) are the specification: on Linux (glibc's libm in both, the
+same operations in the same order) the native numbers are the Python ones bit for bit. The FMUs are built by the
+session's ``fmu_dir`` fixture into ``build/native``; the solver alone is qp.c compiled here and called through
+ctypes. The systems ``mpc`` and ``mpc-transport`` as one native FMU each (``CraneMpc``, ``CraneMpcTransport``) are
+held to our master over the native component FMUs in test_one_fmu.py (fmpy, the C host without Python, the Windows
+DLLs under Wine); here the native component to the Python one through our master.
+"""
+
+import ctypes
+import math
+import subprocess
+import sys
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from fmpy import read_model_description
+from fmpy.validation import validate_fmu
+from native_fmus import (close, compare_to_python, compiler, messages, native_folders, open_native, python_folder,
+                         steps_after_restore)
+from test_mpc import _loop, _random_qp
+
+from crane_fmu import components, systems
+from crane_fmu.build_scripts.native import FOLDERS, source_path, variables_header
+from crane_fmu.cosim import run
+from crane_fmu.model import mpc, qp
+
+MPC = components.get("MpcController")
+LINUX = sys.platform.startswith("linux")  # glibc's libm in both models: the same bits
+INF, NAN = float("inf"), float("nan")
+MISMATCH = {"l1": 1.1, "l2": 0.4, "m2": 3.5}  # a plant the controller's model (l1 2 m, l2 0.5 m, m2 5 kg) is not
+
+
+@pytest.fixture(scope="module")
+def native(fmu_dir):
+    return native_folders(fmu_dir, ["MpcController"])
+
+
+# ---- one source: the Python FMU's variables; strict C --------------------------------------------------------------
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_native_model_description_has_the_python_fmus_variables(fmu_dir, native, version):
+    """Names, value references, causalities, start values, units, descriptions; fmpy's validation is clean."""
+    def variables(path):
+        return [(v.name, v.valueReference, v.causality, v.variability, v.initial, v.start, v.unit, v.description)
+                for v in read_model_description(str(path)).modelVariables]
+
+    path = native[version] / "MpcController.fmu"
+    assert variables(path) == variables(python_folder(fmu_dir, version) / "MpcController.fmu")
+    assert validate_fmu(str(path)) == []
+
+
+@pytest.mark.parametrize("own_math", [False, True], ids=["libm", "portable"])
+def test_the_model_files_compile_without_warnings_under_strict_flags(tmp_path, own_math):
+    """ISO C99, -Wall -Wextra -Werror (less unused parameters), with the C library's math and the portable one."""
+    flags = ["-c", "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Wno-unused-parameter", "-Werror"]
+    flags += ["-DCRANE_OWN_MATH"] if own_math else []
+    (tmp_path / "MpcController_variables.h").write_text(variables_header(MPC))
+    for name in ("mpc.c", "qp.c"):
+        subprocess.run([compiler(), *flags, f"-I{tmp_path}", *(f"-I{folder}" for folder in FOLDERS),
+                        str(source_path(name)), "-o", str(tmp_path / "m.o")], check=True)
+
+
+# ---- the solver: qp.c against qp.py --------------------------------------------------------------------------------
+
+class _Prepared(ctypes.Structure):
+    _fields_ = [("n", ctypes.c_int), ("m", ctypes.c_int), ("first", ctypes.POINTER(ctypes.c_int)),
+                ("length", ctypes.POINTER(ctypes.c_int)), ("offset", ctypes.POINTER(ctypes.c_int)),
+                ("values", ctypes.POINTER(ctypes.c_double)), ("hinv", ctypes.POINTER(ctypes.c_double)),
+                ("g", ctypes.POINTER(ctypes.c_double)), ("norms", ctypes.POINTER(ctypes.c_double)),
+                ("chain_end", ctypes.POINTER(ctypes.c_int))]
+
+
+class _Solution(ctypes.Structure):
+    _fields_ = [("x", ctypes.POINTER(ctypes.c_double)), ("active", ctypes.POINTER(ctypes.c_int)),
+                ("sides", ctypes.POINTER(ctypes.c_int)), ("n_active", ctypes.c_int), ("iterations", ctypes.c_int),
+                ("optimal", ctypes.c_int)]
+
+
+def _doubles(values):
+    return (ctypes.c_double * max(1, len(values)))(*values)
+
+
+def _ints(values):
+    return (ctypes.c_int * max(1, len(values)))(*values)
+
+
+@pytest.fixture(scope="module")
+def c_qp(tmp_path_factory):
+    """``solve(prepared, f, lower, upper, start, hint, cap)``: qp.c's prepare and solve of a qp.py problem, as
+    ``((hinv, g), qp.Solution)``."""
+    library = tmp_path_factory.mktemp("qp") / "qp.so"
+    subprocess.run([compiler(), "-shared", "-fPIC", "-O2", "-Wall", "-Werror", "-ffp-contract=off",
+                    str(source_path("qp.c")), "-o", str(library), "-lm"], check=True)
+    lib = ctypes.CDLL(str(library))
+
+    def solve(prepared, f, lower, upper, start, hint=(), cap=100):
+        n, m = prepared.n, len(prepared.rows)
+        values, offsets = [], []
+        for _, row in prepared.rows:
+            offsets.append(len(values))
+            values += row
+        keep = (_ints([first for first, _ in prepared.rows]), _ints([len(row) for _, row in prepared.rows]),
+                _ints(offsets), _doubles(values))
+        hinv, g = _doubles([0.0] * n * n), _doubles([0.0] * m * n)
+        p = _Prepared(n, m, *keep, hinv, g, _doubles([0.0] * m), _ints([0] * m))
+        assert lib.qp_prepare(ctypes.byref(p), _doubles([v for row in prepared.h for v in row]),
+                              _doubles([0.0] * 2 * n * n)) == 0
+        x, active, sides = _doubles([0.0] * n), _ints([0] * m), _ints([0] * m)
+        out = _Solution(x, active, sides, 0, 0, 0)
+        lib.qp_solve(ctypes.byref(p), _doubles(f), _doubles(lower), _doubles(upper), _doubles(start),
+                     _ints([row for row, _ in hint]), _ints([side for _, side in hint]), len(hint), cap,
+                     _doubles([0.0] * (3 * n + 7 * m + m * (m + 1) // 2)), _ints([0] * 3 * m), ctypes.byref(out))
+        rows = [list(hinv[i * n:(i + 1) * n]) for i in range(n)], [list(g[i * n:(i + 1) * n]) for i in range(m)]
+        solution = qp.Solution(list(x[:n]), list(zip(active[:out.n_active], sides[:out.n_active])), out.iterations,
+                               bool(out.optimal))
+        return rows, solution
+
+    return solve
+
+
+def _same(ours, theirs):
+    """qp.c's prepared matrices and solution are qp.py's: bit for bit on Linux, to 1e-12 (relative) elsewhere."""
+    (hinv, g), solution = ours
+    prepared, expected = theirs
+    assert (solution.active, solution.iterations, solution.optimal) == \
+        (expected.active, expected.iterations, expected.optimal)
+    compare_to_python([solution.x, *hinv, *g], [expected.x, *prepared.hinv, *prepared.g])
+
+
+def test_the_c_solver_gives_the_python_solvers_bits_on_random_convex_qps(c_qp):
+    """40 random strictly convex QPs (bounds, general rows, equalities), solved cold to optimality, cold to a cap
+    of 3 iterations, and warm from the optimum's active set moved to a nearby feasible point."""
+    rng = np.random.default_rng(36)
+    capped = warm = 0
+    for _ in range(40):
+        prepared, f, lower, upper, start = _random_qp(rng)
+        full = qp.solve(prepared, f, lower, upper, start)
+        _same(c_qp(prepared, f, lower, upper, start), (prepared, full))
+        early = qp.solve(prepared, f, lower, upper, start, max_iterations=3)
+        _same(c_qp(prepared, f, lower, upper, start, cap=3), (prepared, early))
+        capped += not early.optimal
+        hinted = qp.solve(prepared, f, lower, upper, full.x, full.active)
+        _same(c_qp(prepared, f, lower, upper, full.x, full.active), (prepared, hinted))
+        warm += hinted.iterations < full.iterations
+    assert capped >= 10 and warm >= 10  # the cap and the warm start are exercised
+
+
+def test_the_c_solver_gives_the_python_solvers_bits_on_the_cranes_qps(c_qp, monkeypatch):
+    """Every QP of the first 0.6 s of the 2 m move on a plant unknown to the model (the plan's bisections with
+    their resampled warm starts, the identified model's plan) and from a 40 deg swing (the limits bind: the
+    tracking QPs with their shifted warm starts)."""
+    recorded, solve = [], qp.solve
+
+    def recording(prepared, f, lower, upper, start, hint=(), max_iterations=100):
+        solution = solve(prepared, f, lower, upper, start, hint, max_iterations)
+        recorded.append(((prepared, f, lower, upper, start, list(hint), max_iterations), solution))
+        return solution
+
+    monkeypatch.setattr(qp, "solve", recording)
+    _loop({"theta1_0": 0.0, **MISMATCH}, {"x_d": 2.0}, 0.6)
+    _loop({"theta1_0": math.radians(40.0)}, {}, 0.6)
+    tracking = MPC.check({}).steps
+    hinted = [args[0].n == tracking for args, _ in recorded if args[5]]
+    assert True in hinted and False in hinted  # warm starts: a tracking QP's shifted one, a plan's resampled one
+    for args, solution in recorded:
+        _same(c_qp(*args), (args[0], solution))
+
+
+# ---- the controller through our master: Python FMUs against native ones -------------------------------------------
+
+RUNS = {  # system, plant parameters over the system's, stop time: the limits bind, the move, identification
+    "regulation": ("mpc", {}, 1.5),
+    "transport": ("mpc-transport", {}, 3.0),
+    "unknown plant": ("mpc-transport", MISMATCH, 1.0),
+}
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("case", RUNS)
+def test_the_native_mpc_equals_the_python_mpc_through_our_master(fmu_dir, native, case, version):
+    """Every column of the run within 1e-9 (bit for bit on Linux); the MPC acts at its limit."""
+    name, plant, stop_time = RUNS[case]
+    system = systems.get(name)
+    system = replace(system, parameters={**system.parameters, "plant": {**system.parameters["plant"], **plant}},
+                     stop_time=stop_time)
+    theirs = run(system, python_folder(fmu_dir, version)).columns()
+    ours = run(system, native[version]).columns()
+    assert list(ours) == list(theirs) and len(theirs["time"]) == round(stop_time / system.step) + 1
+    worst = max(float(np.max(np.abs(ours[k] - theirs[k]))) for k in theirs)
+    assert worst <= 1e-9
+    if LINUX:
+        assert worst == 0.0
+    assert np.max(np.abs(theirs["controller.u"])) > 1.9  # at the drive's limit
+
+
+def test_on_the_unknown_plant_the_mpc_identifies_it_and_plans_again():
+    """What the ``unknown plant`` run above covers: within its first second the model is identified (the lengths
+    within 1 %) and the move planned again from there."""
+    _, _, state = _loop({"theta1_0": 0.0, **MISMATCH}, {"x_d": 2.0}, 1.0, with_state=True)
+    assert state[mpc.HEADER.l1] == pytest.approx(MISMATCH["l1"], rel=0.01)
+    assert state[mpc.HEADER.l2] == pytest.approx(MISMATCH["l2"], rel=0.01)
+    assert 0 < state[mpc.HEADER.plan_start] < 20  # planned again at an interval of the first second
+
+
+# ---- messages, rules, FMU states -----------------------------------------------------------------------------------
+
+def test_at_its_cap_the_native_mpc_warns_once_as_the_python_fmu_does(fmu_dir, native):
+    """One QP iteration allowed, from a 40 deg swing: three solves, each stopped at the cap, one warning, the same
+    words; no step fails."""
+    steps = [(0.0, 1e-3, {"theta1": math.radians(40.0)})] + [(k * 1e-3, 1e-3) for k in range(1, 120)]
+    ours = messages(native[2] / "MpcController.fmu", {"max_iterations": 1.0}, steps, read_at_end=["iterations"])
+    theirs = messages(fmu_dir / "MpcController.fmu", {"max_iterations": 1.0}, steps, read_at_end=["iterations"])
+    assert ours == theirs
+    assert ours[0][-1] == "end" and len(ours[1]) == 1 and "iteration cap (1) at t = 0.0 s" in ours[1][0]
+
+
+REFUSED = [{"m2": -1.0}, {"q_theta1": NAN}, {"r": 0.0}, {"interval": INF}, {"horizon": -1.0}, {"replan_x": NAN},
+           {"margin": 1.0}, {"max_iterations": 2.5}, {"max_iterations": 0.0}, {"identify": INF}, {"x_d": NAN},
+           {"u_max": 0.0}, {"v_max": INF}, {"horizon": 20.0}, {"interval": 0.004}, {"l1_low": -1.0, "l1_high": 2.0},
+           {"l1_low": 1.0, "l1_high": 0.5}]
+
+
+@pytest.mark.parametrize("settings", REFUSED, ids=lambda c: ",".join(f"{k}={v!r}" for k, v in c.items()))
+def test_every_parameter_refusal_has_the_python_fmus_rule_and_message(fmu_dir, native, settings):
+    ours = messages(native[2] / "MpcController.fmu", settings)
+    theirs = messages(fmu_dir / "MpcController.fmu", settings)
+    assert ours == theirs
+    assert ours[0][-2] == "exit: 3" and ours[1][-1].startswith("fmi2ExitInitializationMode: ")
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_a_restored_fmu_state_repeats_the_steps_after_it(native, version):
+    """Saved mid-move (a plan and a last solution in the state), restored, restored from its serialised copy."""
+    fmu, vr, set_, get = open_native(native[version] / "MpcController.fmu", version, {"x_d": 1.0})
+    fmu.exitInitializationMode()
+    inputs, outputs = [vr[n] for n in MPC.names("input")], [vr[n] for n in MPC.names("output")]
+
+    def steps(k0, n):
+        rows = []
+        for k in range(k0, k0 + n):
+            set_(inputs, [0.3 * math.sin(k * 0.01 + i) for i in range(len(inputs) - 1)] + [0.0])
+            fmu.doStep(k * 1e-3, 1e-3)
+            rows.append(get(outputs))
+        return rows
+
+    steps(0, 120)
+    first, again, third = steps_after_restore(fmu, version, steps, 120, 160)
+    close(fmu)
+    assert first == again == third
+    assert len({r[0] for r in first}) >= 3  # u, held over 50 steps, is solved again three times
