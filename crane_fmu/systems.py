@@ -238,7 +238,8 @@ register(System("hard-hit", {"plant": "CranePlant", "controller": "HardHitContro
 register(System("mpc", {"plant": "CranePlant", "controller": "MpcController"},
                 parameters={"plant": {"u_max": 2.0, "v_max": 1.0}},
                 description="Section V regulation from theta1(0) = 10 deg by the constrained MPC: the shortest move "
-                            "to rest within |u| <= 2 m/s2, |v| <= 1 m/s, tracked by a QP every 50 ms", tags=("one-fmu",)))
+                            "to rest within |u| <= 2 m/s2, |v| <= 1 m/s, tracked by a QP every 50 ms",
+                tags=("one-fmu",)))
 register(System("mpc-transport", {"plant": "CranePlant", "controller": "MpcController"},
                 parameters={"plant": {"theta1_0": 0.0, "u_max": 2.0, "v_max": 1.0}, "controller": {"x_d": 2.0}},
                 stop_time=10.0,

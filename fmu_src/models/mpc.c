@@ -171,7 +171,8 @@ static ModelStatus configure(const double values[], const StringValue strings[],
     if (plant != MODEL_OK) return plant;
     for (int i = 0; i < N_STATE; i++) {
         double value = values[VR_q_x + i];
-        if (!(value >= 0 && value < INFINITY)) return rule(r, VARIABLE_TABLE[VR_q_x + i].name, ">= 0 and finite", value);
+        if (!(value >= 0 && value < INFINITY))
+            return rule(r, VARIABLE_TABLE[VR_q_x + i].name, ">= 0 and finite", value);
     }
     static const unsigned positive[] = {VR_r, VR_h, VR_interval, VR_horizon, VR_replan_x, VR_replan_angle};
     for (unsigned i = 0; i < 6; i++) {
@@ -180,7 +181,8 @@ static ModelStatus configure(const double values[], const StringValue strings[],
     }
     if (!(0 <= V(margin) && V(margin) < 1)) return rule(r, "margin", ">= 0 and < 1", V(margin));
     double cap = V(max_iterations);
-    if (cap >= 1 && isinf(cap)) return report(r, MODEL_ERROR, "OverflowError: cannot convert float infinity to integer");
+    if (cap >= 1 && isinf(cap)) /* int(cap) in Python */
+        return report(r, MODEL_ERROR, "OverflowError: cannot convert float infinity to integer");
     if (!(cap >= 1 && cap == trunc(cap))) return rule(r, "max_iterations", "a whole number >= 1", cap);
     if (!(0 <= V(identify) && V(identify) < INFINITY)) return rule(r, "identify", ">= 0 and finite", V(identify));
     if (!isfinite(V(x_d))) return rule(r, "x_d", "finite", V(x_d));

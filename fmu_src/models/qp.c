@@ -216,7 +216,8 @@ void qp_solve(const QpPrepared *p, const double *f, const double *lower, const d
         int drop = -1;
         for (int i = 0; i < w.size; i++) {
             double signed_ = lam[i] * w.sides[i];
-            if (signed_ < worst && lower[w.rows[i]] != upper[w.rows[i]]) worst = signed_, drop = i; /* equalities stay */
+            if (signed_ < worst && lower[w.rows[i]] != upper[w.rows[i]]) /* an equality stays */
+                worst = signed_, drop = i;
         }
         if (drop < 0) {
             out->iterations = iterations, out->optimal = 1;
