@@ -19,9 +19,12 @@ the script again (the ``spawn`` start method), as ``multiprocessing`` does.
 import hashlib
 import importlib.metadata
 import json
+import multiprocessing
+import os
 import platform
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -31,9 +34,9 @@ import scipy
 
 from crane_fmu import components, systems
 from crane_fmu.analysis import board_page, metrics, score_plots, scoreboard
-from crane_fmu.analysis.floor import scenario_floors
+from crane_fmu.analysis.floor import stored_scenario_floors
 from crane_fmu.analysis.scoreboard import SCENARIOS, Contender
-from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch
+from crane_fmu.batch import JOURNAL, Progress, ignore_interrupts, read_journal, run_batch
 from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
 from crane_fmu.cosim.system import read_fmu
 from crane_fmu.sweep.runner import local_fmus, write_table
@@ -108,7 +111,7 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), cases=scoreboard.CASES):
     A case's id covers the metric module's version (:data:`crane_fmu.analysis.metrics.VERSION`): rows a journal
     holds from another version are never mixed into the board.
     """
-    planned, blobs, refused, digests = [], {}, [], {}
+    planned, blobs, refused, digests, checked = [], {}, [], {}, {}
     for contender in chosen:
         for sid in scenarios:
             why = scoreboard.applicable(contender, sid)
@@ -138,12 +141,29 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), cases=scoreboard.CASES):
                         "keep_signals": sid in ANIMATE and len(runs) == 1}
                 case["case_id"] = hashlib.sha256(json.dumps(case, sort_keys=True).encode()).hexdigest()[:16]
                 try:
-                    systems.check_parameters(system)
+                    _check_parameters(system, checked)
                 except ValueError as exc:
                     refused.append({**_identity(case), "status": "invalid", "error": str(exc)})
                     continue
                 planned.append(case)
     return planned, blobs, refused
+
+
+def _check_parameters(system, checked):
+    """:func:`crane_fmu.systems.check_parameters`, each component's parameters checked once per board (``checked``:
+    the message of each (model identifier, parameters) seen, None when valid): a controller that designs itself
+    from its parameters (LQR, MPC, estimator) has the same ones in every case of a scenario."""
+    for name, identifier in systems.kinds(system).items():
+        values = system.parameters.get(name, {})
+        key = (identifier, json.dumps(values, sort_keys=True))
+        if key not in checked:
+            try:
+                components.check_parameters(identifier, values)
+                checked[key] = None
+            except ValueError as exc:
+                checked[key] = str(exc)
+        if checked[key] is not None:
+            raise ValueError(f"{name}: {checked[key]}")
 
 
 def provenance(case):
@@ -303,20 +323,32 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     _write(out_dir / MANIFEST, json.dumps(manifest, indent=1))
     board = out_dir / "scoreboard.md"
     stats = scoreboard.board_statistics(rows)
-    _write(board, scoreboard.render(rows, chosen, quick, cases, _provenance_lines(manifest), stats,
-                                    scenario_floors()))
-    paths = score_plots.plot_all(rows, out_dir, {c.name for c in chosen if c.user}, stats)
-    drawn = 0
-    for sid in animate:
-        new = score_plots.animate_all(rows, sid, out_dir / "animations")
-        paths += new
-        drawn += len(new)
+    with _drawing(workers) as pool:  # the pictures in two other processes while this one writes the board
+        plots = pool.submit(score_plots.plot_all, rows, out_dir, {c.name for c in chosen if c.user}, stats)
+        animations = pool.submit(_animate, rows, animate, out_dir / "animations")
+        _write(board, scoreboard.render(rows, chosen, quick, cases, _provenance_lines(manifest), stats,
+                                        stored_scenario_floors()))
+        new = animations.result()
+        paths, drawn = plots.result() + new, len(new)
     page = board_page.write_page(out_dir)
     not_ok = sum(r["status"] not in ("ok", "n/a") for r in rows)
     log(f"{len(planned)} cases: {len(ran)} run now, {len(planned) - len(pending)} already done, {not_ok} not ok, "
         f"in {time.perf_counter() - start:.1f} s; wrote {board}{' (a QUICK board)' if quick else ''}, {page}, "
         f"{out_dir / 'scores.parquet'}, {len(paths) - drawn} plots and {drawn} animations drawn now")
     return rows
+
+
+def _drawing(workers=None):
+    """A pool of (at most) two processes for the board's pictures, forked where the platform can (no start-up)."""
+    methods = multiprocessing.get_all_start_methods()
+    return ProcessPoolExecutor(max_workers=max(1, min(2, workers or os.cpu_count() or 1)),
+                               mp_context=multiprocessing.get_context("fork") if "fork" in methods else None,
+                               initializer=ignore_interrupts)
+
+
+def _animate(rows, scenarios, folder):
+    """The animations of ``scenarios``, one scenario after the other (their files share one ledger)."""
+    return [path for sid in scenarios for path in score_plots.animate_all(rows, sid, folder)]
 
 
 def _write(path, text):

@@ -1,4 +1,5 @@
-"""The native (C) TrajectoryPlanner, EnergyController, Gust and Sensor FMUs against their specification.
+"""The native (C) TrajectoryPlanner, EnergyController, Gust and Sensor FMUs against their specification (and every
+native component of HOST_CASES, the Wind too, in the C host on Linux and under Wine).
 
 Built by the session's ``fmu_dir`` fixture into ``build/native`` beside the Python FMUs. The Python
 models (crane_fmu/model/planner.py, energy.py, disturbances.py) are the specification: on Linux
@@ -369,6 +370,7 @@ HOST_CASES = {  # component: (parameters and inputs set by the host, steps of 1 
     "Gust": ({"F1_peak": 3.0, "start": 0.2, "duration": 0.3}, 1000),
     "EnergyController": ({"x": 0.3, "dx": -0.2, "theta1": 0.1, "dtheta1": 0.4, "theta2": -0.2, "dtheta2": 0.5}, 3),
     "Sensor": ({"x": 0.3, "theta2": -0.2, "sigma_dx": 0.0}, 1000),
+    "Wind": ({"dx": 0.3, "theta1": 0.1, "dtheta1": -0.4, "theta2": -0.2, "dtheta2": 0.5, "seed": 7.0}, 1000),
 }
 
 
@@ -397,7 +399,7 @@ def _host_arguments(path, settings, steps, h):
 
 @pytest.fixture(scope="module")
 def unpacked(native, tmp_path_factory):
-    """``{name: folder}`` of the four native FMI 2.0 FMUs, unzipped."""
+    """``{name: folder}`` of the native FMI 2.0 FMUs of HOST_CASES, unzipped."""
     folders = {}
     for name in HOST_CASES:
         folders[name] = tmp_path_factory.mktemp(name)
@@ -434,7 +436,7 @@ def test_the_c_host_without_python_gives_the_python_models_outputs(native, unpac
 
 @pytest.fixture(scope="module")
 def wine(unpacked, windows_host, wine_env, tmp_path_factory):
-    """``(wine command, folder with host.exe and the four DLLs, environment)``."""
+    """``(wine command, folder with host.exe and the DLLs of HOST_CASES, environment)``."""
     folder = tmp_path_factory.mktemp("windows")
     shutil.copy(windows_host, folder)
     for name, unzipped in unpacked.items():

@@ -140,9 +140,11 @@ def test_scopes_of_the_paired_design():
 
 
 def test_every_target_carries_its_reason():
+    """A reason a reader can check: what the requirement is, not where in the project's history it was set."""
     for s in SCENARIOS.values():
         for t in s.targets:
             assert len(t.source) > 20, (s.id, t)
+            assert not re.search(r"\bissue \d", t.text + t.source, re.IGNORECASE), (s.id, t)
 
 
 def _periods(m1, m2, l1, l2, g):
@@ -325,3 +327,25 @@ def test_permuting_contenders_on_the_paired_design_changes_nothing():
     boards = {scoreboard.render([r for n in order for r in reversed(by[n])], [Contender(n, n, [], []) for n in order],
                                 cases=10) for order in itertools.permutations(by)}
     assert len(boards) == 1
+
+
+def test_every_marker_and_error_bar_of_the_summary_is_inside_its_panel():
+    """S9: Spiky's median is near A's, its 90th percentile 100 times the target (two cases far off); A's and Spiky's
+    bars, intervals and percentiles (Spiky's at the panel's edge, with its value written) all lie within the axes."""
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    from crane_fmu.analysis.score_plots import summary_figure
+
+    spiky = BASE[:8] + [10.0, 12.0]
+    rows = _paired_rows("A", BASE, "S9") + _paired_rows("Spiky", spiky, "S9")
+    fig = summary_figure(rows)
+    (ax,) = [ax for ax in fig.axes if ax.get_visible() and ax.get_title().startswith("S9")]
+    low, high = ax.get_xlim()
+    xs = [x for line in ax.get_lines() if line.get_marker() not in (None, "None", "")
+          for x in line.get_xdata()]
+    xs += [x for c in ax.collections if isinstance(c, LineCollection) for segment in c.get_segments()
+           for x in segment[:, 0]]
+    plt.close(fig)
+    assert len(xs) >= 4 and all(low <= x <= high for x in xs)
+    assert high < 5.0 and any(t.get_text().startswith("p90 ") for t in ax.texts)  # the far one is written

@@ -14,8 +14,13 @@ the nonlinear plant the floor is a close estimate, not a proof.
 """
 
 import functools
+import hashlib
+import json
 import math
+import os
+import tempfile
 from collections import namedtuple
+from pathlib import Path
 
 import numpy as np
 import scipy.linalg
@@ -201,3 +206,28 @@ def scenario_floors():
     }
     return {sid: Floor(sid, crane_floor(u_max=DRIVE["u_max"], v_max=DRIVE["v_max"], **kwargs), task, grid, METHOD)
             for sid, (task, kwargs, grid) in tasks.items()}
+
+
+def code_key():
+    """A hash of what the floors are computed by: this package's sources and numpy's and scipy's versions."""
+    digest = hashlib.sha256(f"numpy {np.__version__} scipy {scipy.__version__}".encode())
+    package = Path(__file__).resolve().parents[1]
+    for path in sorted(package.rglob("*.py")):
+        digest.update(str(path.relative_to(package)).encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()[:20]
+
+
+def stored_scenario_floors(folder=None):
+    """:func:`scenario_floors`, kept on disk (``folder``, default the temporary folder's ``crane_fmu_floors``)
+    under :func:`code_key`: the linear programs run once per machine and version of the code, not on every board."""
+    path = Path(folder or Path(tempfile.gettempdir()) / "crane_fmu_floors") / f"{code_key()}.json"
+    try:
+        return {sid: Floor(*row) for sid, row in json.loads(path.read_text()).items()}
+    except (OSError, ValueError, TypeError):  # none yet, or torn: computed again
+        pass
+    floors = scenario_floors()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    partial = path.with_name(f".{path.name}.{os.getpid()}.partial")
+    partial.write_text(json.dumps({sid: list(floor) for sid, floor in floors.items()}))
+    os.replace(partial, path)
+    return floors

@@ -105,12 +105,21 @@ def _ranking_figure(line, key, described=None):
 
 def plot_summary(rows, path, users=(), stats=None):
     """Per scenario a panel of each controller's ranking figure: a row per controller, by name, in the same place
-    in every panel (its rank written beside it), colour and hatch its own, yours in bold.
+    in every panel (its rank written beside it), colour and hatch its own, yours in bold; saved to ``path``.
 
     The bar is the worst case; on the paired design the median, with its 95 % interval as an error bar and the
     90th percentile as a marker. *never* and *failed* are hatched bars to the edge with the word; a figure far
-    beyond the target (over four times it) runs to the edge with its value written on it.
+    beyond the target or the best bar (over eight times it) runs to the edge with its value written on it, a 90th percentile that
+    far as a marker at the edge pointing out, with its value.
     """
+    fig = summary_figure(rows, users, stats)
+    fig.savefig(path, dpi=100)
+    pyplot().close(fig)
+    return path
+
+
+def summary_figure(rows, users=(), stats=None):
+    """The figure of :func:`plot_summary`; every bar, error bar and marker within its panel's axes."""
     from matplotlib.lines import Line2D  # optional: the plot extra
     from matplotlib.patches import Patch
 
@@ -136,6 +145,7 @@ def plot_summary(rows, path, users=(), stats=None):
         bars = [f[0] for f in figures.values() if f and f[0] is not None]
         scale = max([limit or 0.0] + ([min(bars)] if bars else []))  # a far larger figure runs off the panel
         top = 1.15 * max([v for v in finite if not scale or v <= 8 * scale] + [limit or 0.0, 1e-3])
+        edge = top / 1.15 * 1.1  # where a figure beyond the panel is marked, inside it
         for y, name in enumerate(names):
             c, hatch, marker = style(name, names)
             if name not in lines:
@@ -149,8 +159,9 @@ def plot_summary(rows, path, users=(), stats=None):
                         fontsize=8, bbox={"facecolor": "white", "edgecolor": "none", "pad": 1})
             else:
                 ax.barh(y, min(f[0], top), color=c, hatch=hatch, edgecolor="0.15", lw=2.0 if name in users else 0.5)
-                if f[0] > top:
-                    ax.text(top / 2, y, f"{f[0]:.3g} {unit}", ha="center", va="center", fontsize=8,
+                if f[0] > top:  # its 90th percentile, as far, with it
+                    p90 = f", p90 {f[3]:.3g}" if f[3] is not None and f[3] > top else ""
+                    ax.text(top / 2, y, f"{f[0]:.3g} {unit}{p90}", ha="center", va="center", fontsize=8,
                             bbox={"facecolor": "white", "edgecolor": "none", "pad": 1})
                 if f[1] is not None or f[2] is not None:
                     low, high = f[1] if f[1] is not None else 0.0, min(f[2] if f[2] is not None else top, top)
@@ -158,6 +169,11 @@ def plot_summary(rows, path, users=(), stats=None):
                         f[0], top))]], fmt="none", ecolor="k", capsize=3, lw=1)
                 if f[3] is not None and f[3] <= top:
                     ax.plot(f[3], y, marker=marker, color="k", ms=5, ls="none")
+                elif f[3] is not None and f[0] <= top:  # far beyond: at the edge, pointing out, with its value
+                    ax.plot(edge, y, marker=">", color="k", ms=5, ls="none")
+                    ax.annotate(f"p90 {f[3]:.3g} {unit}", (edge, y), xytext=(-6, 0), textcoords="offset points",
+                                ha="right", va="center", fontsize=7,
+                                bbox={"facecolor": "white", "edgecolor": "none", "pad": 1})
             ax.text(1.0, y, f"  {lines[name]['rank']}{'=' if lines[name]['tie'] else ''}", va="center", fontsize=8,
                     transform=ax.get_yaxis_transform(), clip_on=False)
         if limit is not None:
@@ -184,9 +200,7 @@ def plot_summary(rows, path, users=(), stats=None):
     fig.suptitle(("QUICK board: " if quick else "") + "each scenario's ranking figure; lower is better; the rank "
                  "right of each bar (= a tie); " + ", ".join(s for s in PAIRED if s in scenarios) + " on the paired "
                  "design", fontsize=10)
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
+    return fig
 
 
 def plot_all(rows, out_dir, users=(), stats=None):

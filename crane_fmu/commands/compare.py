@@ -1,5 +1,6 @@
 """``crane-fmu compare``: score controller FMUs on the same scenarios (the scoreboard)."""
 
+import os
 from pathlib import Path
 
 from .common import UsageError, check_workers, dask_options, require_dask, writable_file
@@ -39,6 +40,10 @@ def arguments(p):
 
 
 def run(args):
+    # one BLAS thread per process: the board's matrices are 6 x 6 to 8 x 8, and its processes fill the cores
+    # (OpenBLAS's own threads, spinning beside them, doubled the time of the floors' matrix exponentials)
+    for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(name, "1")
     from crane_fmu.compare import ANIMATE, check, compare
 
     check_workers(args)

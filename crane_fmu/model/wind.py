@@ -111,4 +111,5 @@ COMPONENT = Component(
      output("F2", "N", "drag on the payload along x"),
      output("wind", "m/s", "wind speed along x: U_mean plus the turbulence")),
     _configure, _output, feedthrough=True, initial_state=_initial_state, update=_update,
-    depends_on={"F1": ("dx", "theta1", "dtheta1"), "F2": ("dx", "theta1", "dtheta1", "theta2", "dtheta2")})
+    depends_on={"F1": ("dx", "theta1", "dtheta1"), "F2": ("dx", "theta1", "dtheta1", "theta2", "dtheta2")},
+    native="wind.c")
