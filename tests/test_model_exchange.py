@@ -135,6 +135,64 @@ def test_omsimulator_integrates_the_fmi2_plant(fmu_dir, tmp_path):
         assert np.abs(theirs[angle][on_grid] - ours[angle]).max() < ANGLES
 
 
+def _documented_oms_script():
+    """The interoperability page's OMSimulator recipe: a Lua script (its command line sets no start value)."""
+    page = (Path(__file__).parent.parent / "docs" / "guide" / "interoperability.md").read_text()
+    return re.search(r"## Model Exchange.*?```lua\n(.*?)```", page, re.S).group(1)
+
+
+def _omsimulator_script(script, tmp_path):
+    """Run an OMSimulator Lua script in tmp_path (beside a link to the build's folder); its log."""
+    (tmp_path / "run.lua").write_text(script)
+    code, log = run_tool([tool(OMSIMULATOR), "run.lua"], tmp_path)
+    assert code == 0 and "0 errors" in log and "NumRhsEvals" in log, log[-2000:]  # CVODE: Model Exchange
+    return log
+
+
+def _fmi2_plant(fmu_dir, tmp_path):
+    path = native_dir(fmu_dir, 2) / "CranePlant.fmu"
+    if not path.exists():
+        pytest.skip("no native FMUs were built (no C compiler)")
+    (tmp_path / "build").symlink_to(fmu_dir.parent)
+    return path
+
+
+def test_the_documented_omsimulator_recipe_hoists_as_the_co_simulation(fmu_dir, tmp_path):
+    """The page's Lua script as written: OMSimulator's Model Exchange run of the hoisting case (FMI 2.0) is the
+    co-simulation's within 1e-6 rad, and the cable follows l1 = 1 + hoist t^2 / 2 (no limit is reached)."""
+    path = _fmi2_plant(fmu_dir, tmp_path)
+    script = _documented_oms_script()
+    assert 'oms_setTolerance("model.root", 1e-10)' in script and 'oms_setStopTime("model", 1.0)' in script
+    _omsimulator_script(script, tmp_path)
+    theirs = read_oms_mat(tmp_path / "hoist.mat", 1e-3)
+    start, stop = CASES["hoisting"]
+    ours = _co_simulation(path, start, stop, 0.05)
+    on_grid = theirs["k"] % 50 == 0
+    assert on_grid.sum() == len(ours["time"]) == 21
+    for angle in ("theta1", "theta2"):
+        assert np.abs(theirs[f"model.root.plant.{angle}"][on_grid] - ours[angle]).max() < ANGLES
+    t = theirs["k"] * 1e-3
+    assert np.abs(theirs["model.root.plant.l1_now"] - (1.0 + start["hoist"] * t ** 2 / 2)).max() < ANGLES
+
+
+def test_omsimulator_locates_the_rail_end(fmu_dir, tmp_path):
+    """The rail end's state event at t = 1 s, located by OMSimulator's CVODE within 1e-6 s (the FMU names the
+    time the host gave it); OMSimulator does not end the run there (it integrates on to its stop time)."""
+    _fmi2_plant(fmu_dir, tmp_path)
+    start, stop = RAIL
+    script = _documented_oms_script().replace('"hoist.mat"', '"rail.mat"')
+    script = re.sub(r'oms_setStopTime\("model", [^)]*\)', f'oms_setStopTime("model", {stop!r})', script)
+    settings = "".join(f'oms_setReal("model.root.plant.{k}", {v!r})\n' for k, v in start.items())
+    script = re.sub(r'(oms_setReal\([^\n]*\n)+', settings, script)
+    log = _omsimulator_script(script, tmp_path)
+    located = re.findall(r"reached the rail end x_max = 0.5 m \(x = (\S+) m\) at t = (\S+) s", log)
+    assert len(located) == 1, log[-2000:]
+    x, t = map(float, located[0])
+    assert abs(t - 1.0) < EVENT and abs(x - 0.5) < EVENT
+    theirs = read_oms_mat(tmp_path / "rail.mat", 1e-3)
+    assert theirs["model.root.plant.x"].max() > 0.5 + 0.1  # past the rail end: the request to end was not heeded
+
+
 def test_fmucheck_reports_nothing(fmu_dir, tmp_path):
     path = native_dir(fmu_dir, 2) / "CranePlant.fmu"
     if not path.exists():
