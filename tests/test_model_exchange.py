@@ -10,8 +10,10 @@ model's exact tangents (plant_continuous.jacobians) and central differences of t
 import ctypes
 import math
 import re
+import shutil
 import subprocess
 import sys
+import zipfile
 from pathlib import Path
 
 import fmpy
@@ -20,7 +22,8 @@ import pytest
 from fmpy.fmi2 import FMU2Model
 from fmpy.fmi3 import FMU3Model
 from fmpy.validation import validate_fmu
-from third_party_hosts import CLEAN_ENV, FMUCHECK, FMUSIM, OMSIMULATOR, read_oms_mat, run_tool, tool
+from test_native_hosts import host  # noqa: F401 (the fixture: fmu_src/host/host.c for Linux)
+from third_party_hosts import CLEAN_ENV, FMUCHECK, FMUSIM, OMSIMULATOR, SAME, read_oms_mat, run_tool, tool
 
 from crane_fmu.analysis.linearize import linearize
 from crane_fmu.build_scripts.folders import native_dir
@@ -201,6 +204,52 @@ def test_fmucheck_reports_nothing(fmu_dir, tmp_path):
     assert code == 0, log[-2000:]
     assert "Version returned from ME FMU" in log  # the Model Exchange interface was checked
     assert "0 warning(s) and error(s)" in log and "\t0 Warning(s)" in log and "\t0 Error(s)" in log, log[-2000:]
+
+
+# ---- the Windows DLL's Model Exchange interface, under Wine ----
+
+def _host_rows(command, *args, cwd=None, env=None):
+    done = subprocess.run([*map(str, command), *map(str, args)], capture_output=True, text=True, cwd=cwd, env=env,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return np.array([[float(v) for v in line.split(",")] for line in done.stdout.replace("\r", "").splitlines()])
+
+
+def test_the_windows_dll_integrated_under_wine_gives_the_linux_run(fmu_dir, host, windows_host, wine_env, tmp_path):
+    """host.c's ``me`` mode (FMI 2.0 Model Exchange, RK4 at 1 ms over the FMU's derivatives, an event at a step's
+    end where an indicator changes sign) on the Linux library and on the Windows DLL under Wine: the free swing,
+    the hoisting run and the run into the rail end agree to 1e-9 (the DLL computes with the same math source,
+    mingw's libm is not used). The Linux run is the co-simulation's RK4 at 1 ms to rounding (the same steps over
+    the same derivatives), and it ends at the step that reaches the rail end (x_max = 0.5 m at t = 1 s)."""
+    path = native_dir(fmu_dir, 2) / "CranePlant.fmu"
+    if not path.exists():
+        pytest.skip("no native FMUs were built (no C compiler)")
+    with zipfile.ZipFile(path) as z:
+        z.extractall(tmp_path)
+    dll = tmp_path / "binaries" / "win64" / "CranePlant.dll"
+    if not dll.exists():
+        pytest.skip("the FMU has no Windows binary (mingw-w64 missing at build time)")
+    shutil.copy(windows_host, tmp_path)
+    shutil.copy(dll, tmp_path)
+    md = fmpy.read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    sizes = [len(md.derivatives), md.numberOfEventIndicators]
+    observed = ["x", "theta1", "theta2"]
+    for case, (start, stop) in {**CASES, "rail end": RAIL}.items():
+        arguments = [round(stop / 1e-3), 1e-3, *sizes, *(f"{vr[k]}={v!r}" for k, v in start.items()),
+                     *(vr[k] for k in observed)]
+        linux = _host_rows([host, "me", tmp_path / "binaries" / "linux64" / "CranePlant.so", md.guid], *arguments,
+                           env=CLEAN_ENV)
+        windows = _host_rows(["wine", tmp_path / "host.exe", "me", dll.name, md.guid], *arguments, cwd=tmp_path,
+                             env=wine_env)
+        assert windows.shape == linux.shape and np.abs(windows - linux).max() <= SAME, case
+        if case == "rail end":
+            assert linux[-1, 0] == 1.0 and abs(linux[-1, 1] - 0.5) < EVENT
+            continue
+        ours = _co_simulation(path, start, stop, 1e-3)
+        assert len(linux) == len(ours["time"]) and np.array_equal(linux[:, 0], ours["time"])
+        for column, name in enumerate(observed, start=1):
+            assert np.abs(linux[:, column] - ours[name]).max() <= SAME, (case, name)
 
 
 # ---- directional derivatives ----

@@ -22,6 +22,11 @@
  *                                                       instantiationToken): Float64 (and String) parameters set,
  *                                                       Float64s read
  *                                                       (its value references: FMI 2.0's plus one in ours)
+ *   host me LIB GUID STEPS H NX NZ [VR=VALUE]... VR...   an FMI 2.0 Model Exchange FMU (NX continuous states, NZ
+ *                                                       event indicators) integrated here: the classic RK4 at H,
+ *                                                       an event where an indicator changes sign at a step's end
+ *                                                       (not located within the step); rows as `outputs`' until
+ *                                                       the FMU asks to terminate
  */
 #include <stdarg.h>
 #include <stdio.h>
@@ -54,6 +59,7 @@ typedef struct {
     fmi2DoStepTYPE *step;
     fmi2SetStringTYPE *set_string;
     const char *guid;
+    void *lib; /* the library, for the functions a mode needs beyond these */
 } Api;
 
 static int quiet;
@@ -93,7 +99,8 @@ static Api load(const char *library, const char *guid) {
                (fmi2SetRealTYPE *)SYMBOL(lib, "fmi2SetReal"),
                (fmi2DoStepTYPE *)SYMBOL(lib, "fmi2DoStep"),
                (fmi2SetStringTYPE *)SYMBOL(lib, "fmi2SetString"),
-               guid};
+               guid,
+               lib};
     if (!api.instantiate || !api.step) {
         fprintf(stderr, "missing FMI functions in %s\n", library);
         exit(3);
@@ -316,6 +323,103 @@ static int print_outputs3(const char *library, const char *token, int steps, dou
     return ok;
 }
 
+/* ---- FMI 2.0 Model Exchange: the `me` mode --------------------------------------------------------------------- */
+
+typedef struct {
+    fmi2SetTimeTYPE *set_time;
+    fmi2SetContinuousStatesTYPE *set_states;
+    fmi2GetContinuousStatesTYPE *get_states;
+    fmi2GetDerivativesTYPE *derivatives;
+    fmi2GetEventIndicatorsTYPE *indicators;
+    fmi2EnterEventModeTYPE *enter_event_mode;
+    fmi2NewDiscreteStatesTYPE *new_discrete_states;
+    fmi2EnterContinuousTimeModeTYPE *enter_continuous_time_mode;
+    fmi2CompletedIntegratorStepTYPE *completed_step;
+    size_t nx, nz;
+} MeApi;
+
+/* The derivatives dx at (t, x); 0 if the FMU refused. */
+static int slope(const MeApi *me, fmi2Component c, double t, const double x[], double dx[]) {
+    return me->set_time(c, t) <= fmi2Warning && me->set_states(c, x, me->nx) <= fmi2Warning &&
+           me->derivatives(c, dx, me->nx) <= fmi2Warning;
+}
+
+/* Event iteration until the FMU needs no more; then continuous-time mode, the states and indicators read again.
+   0 if the FMU refused; *terminate: the FMU asks to end the simulation. */
+static int event_iteration(const MeApi *me, fmi2Component c, double x[], double z[], int *terminate) {
+    fmi2EventInfo info = {.newDiscreteStatesNeeded = fmi2True};
+    while (info.newDiscreteStatesNeeded && !info.terminateSimulation)
+        if (me->new_discrete_states(c, &info) > fmi2Warning) return 0;
+    *terminate = info.terminateSimulation;
+    return *terminate || (me->enter_continuous_time_mode(c) <= fmi2Warning &&
+                          me->get_states(c, x, me->nx) <= fmi2Warning && me->indicators(c, z, me->nz) <= fmi2Warning);
+}
+
+enum { MAX_STATES = 64 };
+
+static int integrate(const Api *api, const MeApi *me, fmi2Component c, int steps, double h, size_t n_get,
+                     const fmi2ValueReference get_vr[]) {
+    double x[MAX_STATES], z[MAX_STATES], z_new[MAX_STATES], k[4][MAX_STATES], trial[MAX_STATES], y[MAX_VR];
+    size_t n = me->nx;
+    int terminate = 0;
+    if (!event_iteration(me, c, x, z, &terminate)) return 0;
+    for (int step = 0; step <= steps; step++) {
+        double t = step * h;
+        if (api->get(c, get_vr, n_get, y) > fmi2Warning) return 0;
+        printf("%.17g", t);
+        for (size_t i = 0; i < n_get; i++) printf(",%.17g", y[i]);
+        putchar('\n');
+        if (terminate || step == steps) break;
+        static const double at[4] = {0.0, 0.5, 0.5, 1.0};
+        for (int s = 0; s < 4; s++) {
+            for (size_t i = 0; i < n; i++) trial[i] = s ? x[i] + at[s] * h * k[s - 1][i] : x[i];
+            if (!slope(me, c, s == 3 ? (step + 1) * h : t + at[s] * h, trial, k[s])) return 0;
+        }
+        for (size_t i = 0; i < n; i++) x[i] += h / 6.0 * (k[0][i] + 2.0 * k[1][i] + 2.0 * k[2][i] + k[3][i]);
+        fmi2Boolean enter = fmi2False, end = fmi2False;
+        if (me->set_time(c, (step + 1) * h) > fmi2Warning || me->set_states(c, x, n) > fmi2Warning ||
+            me->completed_step(c, fmi2True, &enter, &end) > fmi2Warning || me->indicators(c, z_new, me->nz) > fmi2Warning)
+            return 0;
+        int crossed = enter;
+        for (size_t i = 0; i < me->nz; i++) crossed |= (z[i] > 0) != (z_new[i] > 0);
+        memcpy(z, z_new, me->nz * sizeof *z);
+        terminate = end;
+        if (crossed && !end &&
+            (me->enter_event_mode(c) > fmi2Warning || !event_iteration(me, c, x, z, &terminate)))
+            return 0;
+    }
+    return 1;
+}
+
+static int mode_me(const Api *api, const char *mode, int n, char **a) { /* STEPS H NX NZ [VR=VALUE]... VR... */
+    (void)mode;
+    if (n < 4) return 2;
+    void *lib = api->lib;
+    MeApi me = {(fmi2SetTimeTYPE *)SYMBOL(lib, "fmi2SetTime"),
+                (fmi2SetContinuousStatesTYPE *)SYMBOL(lib, "fmi2SetContinuousStates"),
+                (fmi2GetContinuousStatesTYPE *)SYMBOL(lib, "fmi2GetContinuousStates"),
+                (fmi2GetDerivativesTYPE *)SYMBOL(lib, "fmi2GetDerivatives"),
+                (fmi2GetEventIndicatorsTYPE *)SYMBOL(lib, "fmi2GetEventIndicators"),
+                (fmi2EnterEventModeTYPE *)SYMBOL(lib, "fmi2EnterEventMode"),
+                (fmi2NewDiscreteStatesTYPE *)SYMBOL(lib, "fmi2NewDiscreteStates"),
+                (fmi2EnterContinuousTimeModeTYPE *)SYMBOL(lib, "fmi2EnterContinuousTimeMode"),
+                (fmi2CompletedIntegratorStepTYPE *)SYMBOL(lib, "fmi2CompletedIntegratorStep"),
+                (size_t)atoi(a[2]), (size_t)atoi(a[3])};
+    if (!me.set_time || !me.completed_step || me.nx > MAX_STATES || me.nz > MAX_STATES) return 3;
+    fmi2ValueReference set_vr[MAX_VR], get_vr[MAX_VR];
+    double set_v[MAX_VR];
+    size_t n_set, n_get;
+    if (!parse_vrs(n - 4, a + 4, set_vr, set_v, &n_set, get_vr, &n_get)) return 2;
+    fmi2Component c = api->instantiate(instance_name, fmi2ModelExchange, api->guid, "", &callbacks, fmi2False,
+                                       fmi2False);
+    if (!c || api->setup(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) > fmi2Warning || api->enter(c) > fmi2Warning ||
+        (n_set && api->set(c, set_vr, n_set, set_v) > fmi2Warning) || api->exit_init(c) > fmi2Warning)
+        return 6;
+    int ok = integrate(api, &me, c, atoi(a[0]), atof(a[1]), n_get, get_vr);
+    api->free_instance(c);
+    return ok ? 0 : 6;
+}
+
 /* ---- the modes: each gets its arguments after LIB GUID and returns the exit status ---------------------------- */
 
 #define VR(text) ((fmi2ValueReference)atoi(text))
@@ -416,7 +520,7 @@ static const struct {
     const char *name;
     int (*run)(const Api *api, const char *mode, int n, char **args);
 } MODES[] = {{"outputs", mode_outputs}, {"pair", mode_pair}, {"pair-bench", mode_pair}, {"run", mode_run},
-             {"cycles", mode_cycles}, {"after-failure", mode_after_failure},
+             {"cycles", mode_cycles}, {"after-failure", mode_after_failure}, {"me", mode_me},
 #ifndef _WIN32
              {"threads", mode_threads}, {"maps", mode_maps},
 #endif
