@@ -6,7 +6,8 @@ derivatives that are none (``Continuous.variables``), then one event indicator v
 ``Continuous.indicators`` (FMI 3.0 names each event indicator by a variable). Both the C header
 (``<model>_variables.h``: which value references are the states, derivatives and indicators) and the
 modelDescription.xml (``<ModelExchange>``, the ``derivative`` attributes, ``Derivatives`` /
-``ContinuousStateDerivative``, ``EventIndicator``, the outputs' dependencies on the states) are made here.
+``ContinuousStateDerivative``, ``EventIndicator``, the outputs' dependencies on the states, the directional
+derivatives of both interfaces) are made here.
 
 The outputs' and derivatives' dependencies are the structural non-zeros of the component's exact
 Jacobians (``Continuous.derivatives_of`` and ``outputs_of`` along each unit seed) at random states and
@@ -139,6 +140,7 @@ def add_to_fmi2(xml_bytes, component, sources):
     for source in sources:
         ET.SubElement(files, "File", name=source)
     root.insert(list(root).index(cs), me)
+    cs.set("providesDirectionalDerivative", "true")  # at the communication points (continuous.c)
     _with_units(root, component, DISPLAY_UNITS)
     index = {name: vr + 1 for name, vr in vrs.items()}  # FMI 2.0 indices: 1-based positions (vr + 1 here)
     variables = root.find("ModelVariables")
@@ -186,6 +188,8 @@ def add_to_fmi3(xml_bytes, component):
                     canGetAndSetFMUState="true", canSerializeFMUState="true", providesDirectionalDerivatives="true",
                     providesAdjointDerivatives="true")
     root.insert(list(root).index(cs), me)
+    cs.set("providesDirectionalDerivatives", "true")  # at the communication points (continuous.c)
+    cs.set("providesAdjointDerivatives", "true")
     _with_units(root, component, DISPLAY_UNITS)
     variables = root.find("ModelVariables")
     for v in me_variables(component):

@@ -19,6 +19,12 @@ table of co-simulation; the masks of the Reference FMUs are the same) and FMI 3.
 - the functions the FMU does not provide (capability flags false, no event mode, no clocks, no types other
   than Float64, Int32, Int64, UInt64, Boolean, String), and those of Model Exchange on a co-simulation
   instance, answer fmi2Error (fmi3Error) with a message in every state.
+
+A second host drives the native plant as a Model Exchange instance through its modes (instantiated,
+initialization, event mode, continuous-time mode, terminated, error) against FMI 2.0's Model Exchange table
+(section 3.2.3) and FMI 3.0's common states (section 2.3). Where the two standards differ, each version
+follows its own: FMI 2.0 gives the derivatives from event mode on and the nominals also when instantiated,
+FMI 3.0 both from initialization mode on. Reference-FMUs' FMI 2.0 masks are the same as the FMI 2.0 table.
 """
 
 import subprocess
@@ -323,6 +329,11 @@ FMI2_MODEL_EXCHANGE = {f: (set(), None) for f in (
     "EnterEventMode", "NewDiscreteStates", "EnterContinuousTimeMode", "CompletedIntegratorStep", "SetTime",
     "SetContinuousStates", "GetDerivatives", "GetEventIndicators", "GetContinuousStates",
     "GetNominalsOfContinuousStates")}
+# The directional (FMI 3.0: and adjoint) derivatives of an FMU that provides them in co-simulation (FMI 2.0
+# providesDirectionalDerivative, FMI 3.0 providesDirectionalDerivatives and providesAdjointDerivatives on
+# <CoSimulation>): as the gets (FMI 2.0's table; FMI 3.0 section 2.3: Initialization Mode, Step Mode, Terminated).
+CO_SIMULATION_DERIVATIVES = {2: {"GetDirectionalDerivative": (GETS, None)},
+                             3: {"GetDirectionalDerivative": (GETS, None), "GetAdjointDerivative": (GETS, None)}}
 FMI3_TYPES = ("Float64", "Int32", "Int64", "UInt64", "Boolean", "String")
 FMI3 = {
     "SetDebugLogging": (EVERY, None), "EnterInitializationMode": ({INS}, INI), "ExitInitializationMode": ({INI}, STP),
@@ -385,6 +396,8 @@ def test_every_function_in_every_state_gets_the_status_of_the_standards_table(ta
     exported = _exported(library, prefix) - lifecycle
     model_exchange = md.modelExchange or exported & set(FMI2_MODEL_EXCHANGE)
     table = FMI3 if version == 3 else FMI2 | FMI2_MODEL_EXCHANGE if model_exchange else FMI2
+    if md.modelExchange:  # an FMU with Model Exchange (the native plant) gives its derivatives in co-simulation too
+        table = table | CO_SIMULATION_DERIVATIVES[version]
     assert exported == set(table)
     vr = {v.name: v.valueReference for v in md.modelVariables}
     cases = [(f, s) for f in table for s in range(6)]
@@ -406,4 +419,232 @@ def test_every_function_in_every_state_gets_the_status_of_the_standards_table(ta
             then = (f", then from {STATES[start]} {prefix}{REST[start][int(failed) - 1]} failed" if failed.isdigit()
                     and int(failed) > 0 else "")
             wrong.append(f"{prefix}{f} when {STATES[s]}: expected status {expected}, got {status}{then}")
+    assert not wrong, "\n".join(wrong)
+
+
+# ---- Model Exchange: an instance the host integrates ----------------------------------------------------------------
+
+ME_HOST = r"""
+#include <dlfcn.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+static void *so, *c;
+static unsigned vr_u, vr_x, vr_state, vr_derivative;
+static int errors_logged;
+enum { NX = 9, NZ = 8 };
+static const double STATES[NX] = {0.0, 0.0, 0.1, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0}; /* at rest, swung, l1 = 1 m */
+#define CALL(name, ...) ((name##TYPE *)dlsym(so, #name))(__VA_ARGS__)
+#define IS(name) (!strcmp(f, name))
+enum { INSTANTIATED, INITIALIZATION, EVENT, CONTINUOUS, TERMINATED, ERROR };
+#if FMI == 2
+#include "fmi2Functions.h"
+static void logger(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2String cat, fmi2String m, ...) {
+    if (s >= fmi2Error) errors_logged++;
+}
+static const fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+static fmi2EventInfo info;
+static fmi2Boolean flag;
+#define NEW() CALL(fmi2Instantiate, "table", fmi2ModelExchange, token, resources, &cb, fmi2False, fmi2False)
+#define FREE() CALL(fmi2FreeInstance, c)
+#define SET_REAL(vr, value) CALL(fmi2SetReal, c, &(unsigned){vr}, 1, &(double){value})
+#define GET_REAL(vr, out) CALL(fmi2GetReal, c, &(unsigned){vr}, 1, out)
+#define ENTER() (CALL(fmi2SetupExperiment, c, 0, 0.0, 0.0, 0, 0.0) || CALL(fmi2EnterInitializationMode, c))
+#define ENTER_ONLY() CALL(fmi2EnterInitializationMode, c)
+#define EXIT() CALL(fmi2ExitInitializationMode, c)
+#define UPDATE() CALL(fmi2NewDiscreteStates, c, &info)
+#define ENTER_CONTINUOUS() CALL(fmi2EnterContinuousTimeMode, c)
+#define ENTER_EVENT() CALL(fmi2EnterEventMode, c)
+#define STEP_DONE() CALL(fmi2CompletedIntegratorStep, c, fmi2True, &flag, &flag)
+#define SET_TIME(t) CALL(fmi2SetTime, c, t)
+#define SET_STATES(x) CALL(fmi2SetContinuousStates, c, x, NX)
+#define GET_STATES(x) CALL(fmi2GetContinuousStates, c, x, NX)
+#define DERIVATIVES(dx) CALL(fmi2GetDerivatives, c, dx, NX)
+#define INDICATORS(z) CALL(fmi2GetEventIndicators, c, z, NZ)
+#define NOMINALS(x) CALL(fmi2GetNominalsOfContinuousStates, c, x, NX)
+#define DIRECTIONAL(out) CALL(fmi2GetDirectionalDerivative, c, &vr_derivative, 1, &vr_state, 1, &(double){1.0}, out)
+#define TERMINATE() CALL(fmi2Terminate, c)
+#define RESET() CALL(fmi2Reset, c)
+#else
+#include "fmi3Functions.h"
+static void logger(fmi3InstanceEnvironment e, fmi3Status s, fmi3String cat, fmi3String m) {
+    if (s >= fmi3Error) errors_logged++;
+}
+static fmi3Boolean flag;
+static fmi3Float64 next_time;
+#define NEW() CALL(fmi3InstantiateModelExchange, "table", token, resources, fmi3False, fmi3False, NULL, logger)
+#define FREE() CALL(fmi3FreeInstance, c)
+#define SET_REAL(vr, value) CALL(fmi3SetFloat64, c, &(unsigned){vr}, 1, &(double){value}, 1)
+#define GET_REAL(vr, out) CALL(fmi3GetFloat64, c, &(unsigned){vr}, 1, out, 1)
+#define ENTER() CALL(fmi3EnterInitializationMode, c, fmi3False, 0.0, 0.0, fmi3False, 0.0)
+#define ENTER_ONLY() ENTER()
+#define EXIT() CALL(fmi3ExitInitializationMode, c)
+#define UPDATE() CALL(fmi3UpdateDiscreteStates, c, &flag, &flag, &flag, &flag, &flag, &next_time)
+#define ENTER_CONTINUOUS() CALL(fmi3EnterContinuousTimeMode, c)
+#define ENTER_EVENT() CALL(fmi3EnterEventMode, c)
+#define STEP_DONE() CALL(fmi3CompletedIntegratorStep, c, fmi3True, &flag, &flag)
+#define SET_TIME(t) CALL(fmi3SetTime, c, t)
+#define SET_STATES(x) CALL(fmi3SetContinuousStates, c, x, NX)
+#define GET_STATES(x) CALL(fmi3GetContinuousStates, c, x, NX)
+#define DERIVATIVES(dx) CALL(fmi3GetContinuousStateDerivatives, c, dx, NX)
+#define INDICATORS(z) CALL(fmi3GetEventIndicators, c, z, NZ)
+#define NOMINALS(x) CALL(fmi3GetNominalsOfContinuousStates, c, x, NX)
+#define DIRECTIONAL(out) \
+    CALL(fmi3GetDirectionalDerivative, c, &vr_derivative, 1, &vr_state, 1, &(double){1.0}, 1, out, 1)
+#define ADJOINT(out) CALL(fmi3GetAdjointDerivative, c, &vr_derivative, 1, &vr_state, 1, &(double){1.0}, 1, out, 1)
+#define TERMINATE() CALL(fmi3Terminate, c)
+#define RESET() CALL(fmi3Reset, c)
+#endif
+
+/* Drive the fresh instance into `state`; 0 on success. A NaN input is refused with an error. */
+static int reach(int state) {
+    if (state == INSTANTIATED) return 0;
+    if (ENTER()) return 1;
+    if (state == INITIALIZATION) return 0;
+    if (EXIT()) return 1;
+    if (state == EVENT) return 0;
+    if (state == CONTINUOUS) return UPDATE() || ENTER_CONTINUOUS();
+    if (state == TERMINATED) return TERMINATE() != 0;
+    return SET_REAL(vr_u, NAN) != 3;
+}
+
+/* The rest of a session from `state`, each call expected to give OK: 0, or the number of the call that did not. */
+static int go_on(int state) {
+    double x[NX], dx[NX], z[NZ];
+    int k = 1;
+    switch (state) {
+    case TERMINATED: if (GET_REAL(vr_x, x)) return k; k++; /* fall through: reset, then a whole session */
+    case ERROR: if (RESET()) return k; k++; /* fall through */
+    case INSTANTIATED: if (ENTER()) return k; k++; /* fall through */
+    case INITIALIZATION: if (EXIT()) return k; k++; /* fall through */
+    case EVENT: if (UPDATE()) return k; k++; if (ENTER_CONTINUOUS()) return k; k++; /* fall through */
+    case CONTINUOUS: if (SET_TIME(1e-3)) return k; k++; if (SET_STATES(STATES)) return k; k++;
+                     if (DERIVATIVES(dx)) return k; k++; if (INDICATORS(z)) return k; k++;
+                     if (STEP_DONE()) return k; k++; if (TERMINATE()) return k; k++;
+    }
+    return 0;
+}
+
+/* The function named f, in the current state, with valid arguments. */
+static int call(const char *f) {
+    double x[NX], z[NZ], d;
+    if (IS("GetReal")) return GET_REAL(vr_x, x);
+    if (IS("SetReal")) return SET_REAL(vr_u, 0.0);
+    if (IS("EnterInitializationMode")) return ENTER_ONLY();
+    if (IS("ExitInitializationMode")) return EXIT();
+    if (IS("Terminate")) return TERMINATE();
+    if (IS("Reset")) return RESET();
+    if (IS("EnterEventMode")) return ENTER_EVENT();
+    if (IS("NewDiscreteStates") || IS("UpdateDiscreteStates")) return UPDATE();
+    if (IS("EnterContinuousTimeMode")) return ENTER_CONTINUOUS();
+    if (IS("CompletedIntegratorStep")) return STEP_DONE();
+    if (IS("SetTime")) return SET_TIME(0.0);
+    if (IS("SetContinuousStates")) return SET_STATES(STATES);
+    if (IS("GetContinuousStates")) return GET_STATES(x);
+    if (IS("GetDerivatives") || IS("GetContinuousStateDerivatives")) return DERIVATIVES(x);
+    if (IS("GetEventIndicators")) return INDICATORS(z);
+    if (IS("GetNominalsOfContinuousStates")) return NOMINALS(x);
+    if (IS("GetDirectionalDerivative")) return DIRECTIONAL(&d);
+#if FMI == 3
+    if (IS("GetAdjointDerivative")) return ADJOINT(&d);
+#endif
+    return 200; /* no such function in this host */
+}
+
+int main(int argc, char **argv) {
+    /* library token resources vr_u vr_x vr_state vr_derivative; stdin: lines "function state next-state-if-ok" */
+    so = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+    if (!so) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 3; }
+    const char *token = argv[2], *resources = argv[3];
+    vr_u = atoi(argv[4]), vr_x = atoi(argv[5]), vr_state = atoi(argv[6]), vr_derivative = atoi(argv[7]);
+    char f[128];
+    int state, next;
+    while (scanf("%127s %d %d", f, &state, &next) == 3) {
+        c = NEW();
+        if (!c) { printf("%s %d instantiation-failed\n", f, state); continue; }
+        if (reach(state)) { printf("%s %d reach-failed\n", f, state); FREE(); continue; }
+        int before = errors_logged;
+        int status = call(f);
+        int silent = status >= 3 && errors_logged == before;
+        int failed_call = go_on(status == 0 ? next : state);
+        printf("%s %d status=%d%s continuation=%d\n", f, state, status, silent ? " silent" : "", failed_call);
+        FREE();
+    }
+    return 0;
+}
+"""
+
+ME_STATES = ("instantiated", "initialization", "event mode", "continuous-time mode", "terminated", "error")
+EVT, CTM = 2, 3  # event mode and continuous-time mode where the co-simulation table has its step states
+ME_EVERY = {INS, INI, EVT, CTM, TRM, ERR}
+ME_GETS = {INI, EVT, CTM, TRM, ERR}  # from initialization mode on, and in the error state for diagnosis
+ME_REST = {INS: ["EnterInitializationMode", "ExitInitializationMode", "NewDiscreteStates", "EnterContinuousTimeMode",
+                 "SetTime", "SetContinuousStates", "GetDerivatives", "GetEventIndicators", "CompletedIntegratorStep",
+                 "Terminate"]}
+ME_REST[INI], ME_REST[EVT], ME_REST[CTM] = ME_REST[INS][1:], ME_REST[INS][2:], ME_REST[INS][4:]
+ME_REST[ERR] = ["Reset"] + ME_REST[INS]
+ME_REST[TRM] = ["GetReal"] + ME_REST[ERR]
+# function: (the states it is allowed in, the state it leaves on OK when it changes the state). The FMI 2.0 table
+# of Model Exchange (section 3.2.3; Reference-FMUs' masks in fmi2Functions.c are the same): the derivatives from
+# event mode on, the nominals also when instantiated, neither in initialization mode; the states, event indicators
+# and directional derivatives from initialization mode on; every get also in the error state.
+FMI2_ME = {
+    "EnterInitializationMode": ({INS}, INI), "ExitInitializationMode": ({INI}, EVT), "Reset": (ME_EVERY, INS),
+    "Terminate": ({EVT, CTM}, TRM), "GetReal": (ME_GETS, None), "SetReal": ({INS, INI, EVT, CTM}, None),
+    "EnterEventMode": ({EVT, CTM}, EVT), "NewDiscreteStates": ({EVT}, None), "EnterContinuousTimeMode": ({EVT}, CTM),
+    "CompletedIntegratorStep": ({CTM}, None), "SetTime": ({EVT, CTM}, None), "SetContinuousStates": ({CTM}, None),
+    "GetContinuousStates": (ME_GETS, None), "GetEventIndicators": (ME_GETS, None),
+    "GetDerivatives": ({EVT, CTM, TRM, ERR}, None), "GetNominalsOfContinuousStates": ({INS, EVT, CTM, TRM, ERR}, None),
+    "GetDirectionalDerivative": (ME_GETS, None),
+}
+# FMI 3.0 section 2.3 (the common states): the states' derivatives, the states, the event indicators, their nominals
+# and the directional and adjoint derivatives in Initialization Mode, Event Mode, Continuous-Time Mode and in
+# Terminated, which an FMU enters after an error (so in our error state too); the nominals not when instantiated.
+# Event and continuous-time mode's own functions as in FMI 2.0.
+FMI3_ME = {
+    "EnterInitializationMode": ({INS}, INI), "ExitInitializationMode": ({INI}, EVT), "Reset": (ME_EVERY, INS),
+    "Terminate": ({EVT, CTM}, TRM), "GetReal": (ME_GETS, None), "UpdateDiscreteStates": ({EVT}, None),
+    "EnterContinuousTimeMode": ({EVT}, CTM), "CompletedIntegratorStep": ({CTM}, None),
+    "SetContinuousStates": ({CTM}, None),
+    **{f: (ME_GETS, None) for f in ("GetContinuousStates", "GetEventIndicators", "GetContinuousStateDerivatives",
+                                    "GetNominalsOfContinuousStates", "GetDirectionalDerivative",
+                                    "GetAdjointDerivative")},
+}
+
+
+@pytest.fixture(scope="module")
+def me_table_hosts(tmp_path_factory):
+    return compile_hosts(ME_HOST, tmp_path_factory.mktemp("me_states"))
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_a_model_exchange_instance_follows_the_standards_table(me_table_hosts, fmu_dir, version, tmp_path):
+    """The native CranePlant as a Model Exchange instance: each (function, state) pair gives OK where the table
+    allows it, else an error with a message, and the instance goes on from the state the call left it in."""
+    fmu = native_dir(fmu_dir, version) / "CranePlant.fmu"
+    if not fmu.exists():
+        pytest.skip("no native FMUs were built (no C compiler)")
+    md, library, token, resources = unpack_fmu(fmu, tmp_path)
+    table = FMI3_ME if version == 3 else FMI2_ME
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    derivative = md.derivatives[3].variable  # der(dtheta1), by theta1 (both FMI versions' value references)
+    cases = [(f, s) for f in table for s in range(6)]
+    stdin = "".join(f"{f} {s} {table[f][1] if table[f][1] is not None else s}\n" for f, s in cases)
+    proc = subprocess.run([str(me_table_hosts[version]), library, token, resources, str(vr["u"]), str(vr["x"]),
+                           str(vr["theta1"]), str(derivative.valueReference)], input=stdin, capture_output=True,
+                          text=True, timeout=600, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    lines = proc.stdout.splitlines()
+    assert len(lines) == len(cases), proc.stdout[-2000:]
+    prefix, wrong = f"fmi{version}", []
+    for (f, s), line in zip(cases, lines):
+        expected = 0 if s in table[f][0] else 3
+        if line != f"{f} {s} status={expected} continuation=0":
+            got = line.split(" ", 2)[2]
+            status, _, failed = got.rpartition(" continuation=")
+            start = s if status != "status=0" or table[f][1] is None else table[f][1]
+            then = (f", then from {ME_STATES[start]} {prefix}{ME_REST[start][int(failed) - 1]} failed"
+                    if failed.isdigit() and int(failed) > 0 else "")
+            wrong.append(f"{prefix}{f} when {ME_STATES[s]}: expected status {expected}, got {status}{then}")
     assert not wrong, "\n".join(wrong)

@@ -13,14 +13,15 @@ import re
 import shutil
 import subprocess
 import sys
+import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
 import fmpy
 import numpy as np
 import pytest
-from fmpy.fmi2 import FMU2Model
-from fmpy.fmi3 import FMU3Model
+from fmpy.fmi2 import FMU2Model, FMU2Slave
+from fmpy.fmi3 import FMU3Model, FMU3Slave
 from fmpy.validation import validate_fmu
 from test_native_hosts import host  # noqa: F401 (the fixture: fmu_src/host/host.c for Linux)
 from third_party_hosts import CLEAN_ENV, FMUCHECK, FMUSIM, OMSIMULATOR, SAME, read_oms_mat, run_tool, tool
@@ -262,7 +263,7 @@ PARAMETERS = {"c1": 0.05, "c2": 0.02, "tau": 0.0}
 class _Instance:
     """An instance of the plant in continuous-time mode at STATE and INPUTS (its mode free)."""
 
-    def __init__(self, path, parameters):
+    def __init__(self, path, parameters, state=STATE, inputs=INPUTS):
         md = fmpy.read_model_description(str(path))
         self.fmi3 = md.fmiVersion.startswith("3")
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
@@ -285,10 +286,10 @@ class _Instance:
         self.fmu.exitInitializationMode()
         (self.fmu.updateDiscreteStates if self.fmi3 else self.fmu.newDiscreteStates)()
         self.fmu.enterContinuousTimeMode()
-        set_(self.inputs, list(INPUTS))
+        set_(self.inputs, list(inputs))
         self.set_ = set_
-        self.x = (ctypes.c_double * len(STATE))(*STATE)
-        self.fmu.setContinuousStates(self.x, len(STATE))
+        self.x = (ctypes.c_double * len(state))(*state)
+        self.fmu.setContinuousStates(self.x, len(state))
 
     def derivatives_at(self, x, u):
         self.fmu.setContinuousStates((ctypes.c_double * len(x))(*x), len(x))
@@ -359,3 +360,91 @@ def test_the_documented_fmpy_recipe_stops_at_the_rail_end(fmu_dir, tmp_path):
     last = done.stdout.splitlines()[-1]  # after fmpy's log of the FMU's warning (the rail end)
     printed = re.fullmatch(r"stopped at the rail end x_max = 2 m at t = (\d+\.\d{6}) s", last)
     assert printed and abs(float(printed.group(1)) - math.sqrt(2 * 2.0 / 0.5)) < 1e-6, done.stdout
+
+
+# ---- directional derivatives in co-simulation ----
+
+CS_PARAMETERS = {"c1": 0.05, "c2": 0.02, "tau": 0.05}  # the drive's lag on: its state is one of the knowns
+
+
+def _stepped_co_simulation(path):
+    """A co-simulation instance of the plant 0.2 s into a run at INPUTS (pushed, hoisted, forced: all nine states
+    move), and its value references."""
+    md = fmpy.read_model_description(str(path))
+    fmi3 = md.fmiVersion.startswith("3")
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    kind = FMU3Slave if fmi3 else FMU2Slave
+    fmu = kind(guid=md.instantiationToken if fmi3 else md.guid, unzipDirectory=fmpy.extract(str(path)),
+               modelIdentifier=md.coSimulation.modelIdentifier, instanceName="cs")
+    fmu.instantiate()
+    set_ = fmu.setFloat64 if fmi3 else fmu.setReal
+    if fmi3:
+        fmu.enterInitializationMode(startTime=0.0)
+    else:
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+    set_([vr[k] for k in CS_PARAMETERS], list(CS_PARAMETERS.values()))
+    set_([vr[n] for n in me.INPUTS], list(INPUTS))
+    fmu.exitInitializationMode()
+    for k in range(200):
+        fmu.doStep(k * 1e-3, 1e-3)
+    return fmu, md, vr, set_, (fmu.getFloat64 if fmi3 else fmu.getReal)
+
+
+@pytest.fixture
+def co_simulation(plant_fmu):
+    made = _stepped_co_simulation(plant_fmu)
+    yield made
+    made[0].terminate()
+    made[0].freeInstance()
+
+
+def _co_simulation_element(path):
+    return ET.fromstring(zipfile.ZipFile(path).read("modelDescription.xml")).find("CoSimulation")
+
+
+def test_co_simulation_gives_the_directional_derivatives_at_its_communication_point(plant_fmu, co_simulation):
+    """FMI 2.0 section 2.1.9 (Step Mode), FMI 3.0 alike: the outputs and state derivatives by the states and inputs
+    at the communication point. They are the model's exact Jacobians there, except co-simulation's ddx (the
+    acceleration over the last step, a value it keeps: no input or state moves it); the input columns are the
+    central differences of what fmi2GetReal gives (the state derivatives by the inputs, the outputs none)."""
+    fmu, md, vr, set_, get = co_simulation
+    flag = "providesDirectionalDerivatives" if md.fmiVersion.startswith("3") else "providesDirectionalDerivative"
+    assert _co_simulation_element(plant_fmu).get(flag) == "true"
+    states = [d.variable.derivative.valueReference for d in md.derivatives]
+    inputs = [vr[n] for n in me.INPUTS]
+    unknowns = [d.variable.valueReference for d in md.derivatives] + [u.variable.valueReference for u in md.outputs]
+    jacobian = np.array([fmu.getDirectionalDerivative(unknowns, [k], [1.0]) for k in states + inputs]).T
+    state = get(states)
+    a, b, c, d = (np.array(m) for m in me.jacobians(plant.COMPONENT.check(CS_PARAMETERS), tuple(state), INPUTS,
+                                                      me.FREE))
+    want = np.block([[a, b], [c, d]])
+    kept = [i for i, unknown in enumerate(unknowns) if unknown == vr["ddx"]]
+    assert len(kept) == 2 and np.count_nonzero(want[kept]) > 0  # der(dx) and the output ddx: Model Exchange's move
+    want[kept] = 0.0
+    assert np.abs(jacobian - want).max() <= 1e-12 * max(1.0, np.abs(want).max())
+    h = 1e-6
+    for j, known in enumerate(inputs):
+        values = list(INPUTS)
+        values[j] = INPUTS[j] + h
+        set_(inputs, values)
+        plus = np.array(get(unknowns))
+        values[j] = INPUTS[j] - h
+        set_(inputs, values)
+        minus = np.array(get(unknowns))
+        set_(inputs, list(INPUTS))
+        assert np.abs(jacobian[:, len(states) + j] - (plus - minus) / (2 * h)).max() < 1e-6, me.INPUTS[j]
+    assert np.count_nonzero(jacobian[:, len(states):]) > 0
+
+
+@pytest.mark.parametrize("plant_fmu", [3], ids=["FMI 3.0"], indirect=True)
+def test_co_simulation_gives_the_adjoint_derivatives_too(plant_fmu, co_simulation):
+    fmu, md, vr, _, _ = co_simulation
+    element = _co_simulation_element(plant_fmu)
+    assert element.get("providesDirectionalDerivatives") == element.get("providesAdjointDerivatives") == "true"
+    knowns = [d.variable.derivative.valueReference for d in md.derivatives] + [vr[n] for n in me.INPUTS]
+    unknowns = [d.variable.valueReference for d in md.derivatives] + [u.variable.valueReference for u in md.outputs]
+    jacobian = np.array([fmu.getDirectionalDerivative(unknowns, [k], [1.0]) for k in knowns]).T
+    seed = [math.cos(i + 0.5) for i in range(len(unknowns))]
+    adjoint = np.array(fmu.getAdjointDerivative(unknowns, knowns, seed, len(knowns)))
+    assert np.abs(adjoint - jacobian.T @ seed).max() < 1e-12 * max(1.0, np.abs(adjoint).max())

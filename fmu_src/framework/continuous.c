@@ -87,8 +87,8 @@ int set_continuous_states(Instance *c, const char *function, const double x[], s
     return settled(c, c->type->continuous->set_states(c->type, c->model, x, &r));
 }
 
-int get_derivatives(Instance *c, const char *function, double dx[], size_t n) {
-    if (!array_checks(c, function, INITIALIZATION | AFTER_INITIALIZATION, dx, n, number_of_states(c)))
+int get_derivatives(Instance *c, const char *function, int modes, double dx[], size_t n) {
+    if (!array_checks(c, function, modes, dx, n, number_of_states(c)))
         return MODEL_ERROR;
     Reporter r = instance_reporter(c, function);
     return settled(c, c->type->continuous->derivatives(c->type, c->model, dx, &r));
@@ -101,15 +101,24 @@ int get_event_indicators(Instance *c, const char *function, double z[], size_t n
     return settled(c, c->type->continuous->indicators(c->type, c->model, z, &r));
 }
 
-int get_nominals(Instance *c, const char *function, double x[], size_t n) {
-    if (!array_checks(c, function, ANY_MODE, x, n, number_of_states(c))) return MODEL_ERROR;
+int get_nominals(Instance *c, const char *function, int modes, double x[], size_t n) {
+    if (!array_checks(c, function, modes, x, n, number_of_states(c))) return MODEL_ERROR;
     for (size_t i = 0; i < n; i++) x[i] = 1.0;
     return MODEL_OK;
 }
 
+/* The directional and adjoint derivatives, of a model with a ContinuousModel, in Model Exchange and in co-simulation:
+   from initialisation on, and in the error state for diagnosis (FMI 2.0's tables; FMI 3.0 section 2.3 lists them
+   in Initialization, Event, Continuous-Time and Step Mode and in Terminated, which an FMU enters after an error).
+   Co-simulation's are those of its outputs and state derivatives at the communication point by its states and
+   inputs (FMI 2.0 section 2.1.9, Step Mode: the ModelStructure's Outputs, and its Derivatives where it has them). */
+#define DERIVATIVE_MODES (INITIALIZATION | RUNNING | TERMINATED | FAILED)
+
 static int derivative_checks(Instance *c, const char *function, const unsigned unknowns[], size_t nu,
                              const unsigned knowns[], size_t nk, const double seed[], double sensitivity[]) {
-    if (!checked(c, function, INITIALIZATION | EVENT_MODE | CONTINUOUS_TIME | TERMINATED)) return 0;
+    if (!c) return 0;
+    if (!c->type->continuous) return refuse(c, function, "not supported by this FMU"), 0;
+    if (!allowed(c, function, DERIVATIVE_MODES)) return 0;
     if ((nu && (!unknowns || !sensitivity)) || (nk && (!knowns || !seed))) return refuse(c, function, "NULL array"), 0;
     return 1;
 }

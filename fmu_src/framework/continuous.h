@@ -22,14 +22,15 @@ int completed_integrator_step(Instance *c, const char *function, int *enter_even
 int update_discrete_states(Instance *c, const char *function, int *terminate, int *states_changed);
 int get_continuous_states(Instance *c, const char *function, double x[], size_t n);
 int set_continuous_states(Instance *c, const char *function, const double x[], size_t n);
-int get_derivatives(Instance *c, const char *function, double dx[], size_t n);
+/* The derivatives and the nominals in `modes` (FMI 2.0 and 3.0 differ: each version's file says). */
+int get_derivatives(Instance *c, const char *function, int modes, double dx[], size_t n);
 int get_event_indicators(Instance *c, const char *function, double z[], size_t n);
-int get_nominals(Instance *c, const char *function, double x[], size_t n);
+int get_nominals(Instance *c, const char *function, int modes, double x[], size_t n);
 /* The numbers of states and event indicators (0 for co-simulation). */
 size_t number_of_states(const Instance *c);
 size_t number_of_indicators(const Instance *c);
 /* sensitivity = J seed (directional) or J^T seed (adjoint), J = d unknowns / d knowns; value references as
-   get_reals'. */
+   get_reals'. Model Exchange and co-simulation instances alike. */
 int directional_derivative(Instance *c, const char *function, const unsigned unknowns[], size_t nu,
                            const unsigned knowns[], size_t nk, const double seed[], double sensitivity[]);
 int adjoint_derivative(Instance *c, const char *function, const unsigned unknowns[], size_t nu,

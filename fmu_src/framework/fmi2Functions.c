@@ -138,14 +138,17 @@ fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t n
 fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t n) {
     return get_continuous_states(c, "fmi2GetContinuousStates", x, n);
 }
+/* FMI 2.0's state table (section 3.2.3; Reference-FMUs' masks alike): the derivatives from event mode on, the
+   nominals also when instantiated, neither in initialization mode; both in the error state, for diagnosis. */
+#define ME_AFTER_INITIALIZATION (EVENT_MODE | CONTINUOUS_TIME | TERMINATED | FAILED)
 fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t n) {
-    return get_derivatives(c, "fmi2GetDerivatives", dx, n);
+    return get_derivatives(c, "fmi2GetDerivatives", ME_AFTER_INITIALIZATION, dx, n);
 }
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real z[], size_t n) {
     return get_event_indicators(c, "fmi2GetEventIndicators", z, n);
 }
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x[], size_t n) {
-    return get_nominals(c, "fmi2GetNominalsOfContinuousStates", x, n);
+    return get_nominals(c, "fmi2GetNominalsOfContinuousStates", INSTANTIATED | ME_AFTER_INITIALIZATION, x, n);
 }
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[], size_t nu,

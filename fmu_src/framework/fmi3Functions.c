@@ -250,14 +250,17 @@ fmi3Status fmi3SetContinuousStates(fmi3Instance c, const fmi3Float64 x[], size_t
 fmi3Status fmi3GetContinuousStates(fmi3Instance c, fmi3Float64 x[], size_t n) {
     return get_continuous_states(c, "fmi3GetContinuousStates", x, n);
 }
+/* FMI 3.0 section 2.3: the derivatives and the nominals from Initialization Mode on (Event, Continuous-Time Mode,
+   Terminated, which an FMU enters after an error), not when instantiated. */
+#define ME_FROM_INITIALIZATION (INITIALIZATION | EVENT_MODE | CONTINUOUS_TIME | TERMINATED | FAILED)
 fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance c, fmi3Float64 dx[], size_t n) {
-    return get_derivatives(c, "fmi3GetContinuousStateDerivatives", dx, n);
+    return get_derivatives(c, "fmi3GetContinuousStateDerivatives", ME_FROM_INITIALIZATION, dx, n);
 }
 fmi3Status fmi3GetEventIndicators(fmi3Instance c, fmi3Float64 z[], size_t n) {
     return get_event_indicators(c, "fmi3GetEventIndicators", z, n);
 }
 fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance c, fmi3Float64 x[], size_t n) {
-    return get_nominals(c, "fmi3GetNominalsOfContinuousStates", x, n);
+    return get_nominals(c, "fmi3GetNominalsOfContinuousStates", ME_FROM_INITIALIZATION, x, n);
 }
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance c, size_t *n) {
     if (!is_model_exchange(c, "fmi3GetNumberOfContinuousStates")) return fmi3Error;
@@ -276,7 +279,7 @@ fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance c, size_t *n) {
 static fmi3Status derivative(fmi3Instance c, const char *function, int adjoint, const fmi3ValueReference unknowns[],
                              size_t nu, const fmi3ValueReference knowns[], size_t nk, const fmi3Float64 seed[],
                              size_t ns, fmi3Float64 sensitivity[], size_t nsens) {
-    if (!is_model_exchange(c, function)) return fmi3Error;
+    if (!c) return fmi3Error;
     if (ns != (adjoint ? nu : nk) || nsens != (adjoint ? nk : nu))
         return refuse(c, function, "arrays are not supported (the seed and sensitivity lengths must match)");
     if ((nu && !unknowns) || (nk && !knowns)) return refuse(c, function, "NULL array");

@@ -84,7 +84,8 @@ static ModelStatus from_parameters(const Component *k, Block *b, const Reporter 
 static ModelStatus compute_outputs(const Component *k, Block *b, const Reporter *r) {
     if (from_parameters(k, b, r) != MODEL_OK) return MODEL_ERROR;
     if (b->model_exchange) {
-        k->continuous->outputs(b->values, config(k, b), state(k, b), NULL, NULL, &b->values[k->first_output], NULL);
+        k->continuous->outputs(b->values, config(k, b), state(k, b), 1, NULL, NULL, &b->values[k->first_output],
+                               NULL);
         return MODEL_OK;
     }
     return k->outputs(b->values, config(k, b), state(k, b), &b->values[k->first_output], r);
@@ -264,7 +265,9 @@ ModelStatus component_event_update(const ModelType *type, void *m, double time, 
 }
 
 /* d unknowns / d knowns along `seed`: the knowns are continuous states or inputs, the unknowns derivatives or
-   outputs; one forward-mode evaluation of the derivatives and the outputs. */
+   outputs; one forward-mode evaluation of the derivatives and the outputs. In co-simulation the same at the
+   communication point, the outputs being co-simulation's (an unknown that is an output and a derivative, such as
+   ddx, is the output: what fmi2GetReal gives there). */
 ModelStatus component_directional(const ModelType *type, void *m, const unsigned unknowns[], size_t nu,
                                   const unsigned knowns[], size_t nk, const double seed[], double sensitivity[],
                                   const Reporter *r) {
@@ -286,12 +289,12 @@ ModelStatus component_directional(const ModelType *type, void *m, const unsigned
     if (from_parameters(k, b, r) != MODEL_OK) return MODEL_ERROR;
     ModelStatus status = q->derivatives(b->values, config(k, b), state(k, b), ds, din, f, df, r);
     if (status != MODEL_OK) return status;
-    q->outputs(b->values, config(k, b), state(k, b), ds, din, out, dout);
+    q->outputs(b->values, config(k, b), state(k, b), b->model_exchange, ds, din, out, dout);
     for (size_t j = 0; j < nu; j++) {
         int i = position(q->derivative_vrs, q->n_states, unknowns[j]);
-        if (i >= 0) sensitivity[j] = df[i];
-        else if (unknowns[j] >= k->first_output && unknowns[j] < k->n_variables)
+        if (unknowns[j] >= k->first_output && unknowns[j] < k->n_variables)
             sensitivity[j] = dout[unknowns[j] - k->first_output];
+        else if (i >= 0) sensitivity[j] = df[i];
         else
             return report(r, MODEL_ERROR, "value reference %u is neither a derivative nor an output of %s",
                           unknowns[j], type->identifier);

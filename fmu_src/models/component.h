@@ -41,15 +41,17 @@ typedef char StringValue[STRING_SIZE];
 /* A component that a host can integrate (Model Exchange): its continuous state is part of its State, and its
    Model Exchange variables (states that are no output, derivatives, event indicators) follow the table, value
    references n_variables... (the generated STATE_VRS, DERIVATIVE_VRS and INDICATOR_VRS say which is which). The
-   inputs are the table's n_inputs rows from first_input; seeds are NULL where there is no direction. */
+   inputs are the table's n_inputs rows from first_input; seeds are NULL where there is no direction. The outputs
+   are Model Exchange's (model_exchange 1) or co-simulation's at a communication point (0: an output it keeps over
+   a step, such as the acceleration over the last step, is that stored value there, and constant). */
 typedef struct {
     unsigned n_states, n_indicators, n_locals, first_input, n_inputs;
     const unsigned *state_vrs, *derivative_vrs, *indicator_vrs;
     double *(*states)(void *state); /* where the continuous state lies in the State */
     ModelStatus (*derivatives)(const double values[], const void *config, const void *state, const double *ds,
                                const double *din, double f[], double *df, const Reporter *r);
-    void (*outputs)(const double values[], const void *config, const void *state, const double *ds,
-                    const double *din, double out[], double *dout);
+    void (*outputs)(const double values[], const void *config, const void *state, int model_exchange,
+                    const double *ds, const double *din, double out[], double *dout);
     void (*indicators)(const double values[], const void *config, const void *state, double z[]);
     ModelStatus (*event_update)(const double values[], const void *config, void *state, double time, int *terminate,
                                 const Reporter *r);
@@ -180,9 +182,9 @@ ModelStatus store_reals(const char *model, const VariableRow table[], unsigned n
                                     const double *din, double f[], double *df, const Reporter *r) {          \
         return derivatives(v, c, s, ds, din, f, df, r);                                                      \
     }                                                                                                        \
-    static void continuous_outputs_(const double v[], const void *c, const void *s, const double *ds,        \
-                                    const double *din, double out[], double *dout) {                         \
-        continuous_outputs(v, c, s, ds, din, out, dout);                                                     \
+    static void continuous_outputs_(const double v[], const void *c, const void *s, int me,                 \
+                                    const double *ds, const double *din, double out[], double *dout) {       \
+        continuous_outputs(v, c, s, me, ds, din, out, dout);                                                 \
     }                                                                                                        \
     static void indicators_(const double v[], const void *c, const void *s, double z[]) {                    \
         indicators(v, c, s, z);                                                                              \

@@ -179,9 +179,13 @@ static ModelStatus derivatives(const double values[], const Config *c, const Sta
     return MODEL_OK;
 }
 
-static void continuous_outputs(const double values[], const Config *c, const State *state, const double *ds,
-                               const double *din, double out[], double *dout) {
+static void continuous_outputs(const double values[], const Config *c, const State *state, int model_exchange,
+                               const double *ds, const double *din, double out[], double *dout) {
     plant_continuous_outputs(&c->continuous, state->s, &values[VR_u], state->mode, ds, din, out, dout);
+    if (!model_exchange) { /* co-simulation's ddx: the acceleration over the last step, kept (outputs() above) */
+        out[13] = state->s[ACCEL];
+        if (dout) dout[13] = 0.0;
+    }
 }
 
 static void indicators(const double values[], const Config *c, const State *state, double z[]) {
