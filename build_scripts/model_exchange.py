@@ -6,13 +6,16 @@ derivatives that are none (``Continuous.variables``), then one event indicator v
 ``Continuous.indicators`` (FMI 3.0 names each event indicator by a variable). Both the C header
 (``<model>_variables.h``: which value references are the states, derivatives and indicators) and the
 modelDescription.xml (``<ModelExchange>``, the ``derivative`` attributes, ``Derivatives`` /
-``ContinuousStateDerivative``, ``EventIndicator``, the outputs' dependencies on the states, the directional
-derivatives of both interfaces) are made here.
+``ContinuousStateDerivative``, ``EventIndicator``, the outputs' dependencies on the states and inputs, the
+directional derivatives of both interfaces) are made here.
 
 The outputs' and derivatives' dependencies are the structural non-zeros of the component's exact
 Jacobians (``Continuous.derivatives_of`` and ``outputs_of`` along each unit seed) at random states and
 inputs, for the default parameters and for every parameter moved off its default (so that a term a
-default switches off, such as the drive's lag ``tau = 0``, is still listed).
+default switches off, such as the drive's lag ``tau = 0``, is still listed). One ModelStructure serves both
+interfaces, so an output lists the union of its dependencies in each: co-simulation's table (an output it keeps
+over a step, such as ``ddx``, depends on no input there) and Model Exchange's (``ddx`` is the acceleration now,
+``u`` through the drive).
 """
 
 import math
@@ -79,11 +82,15 @@ def _generic_values(component):
     return moved
 
 
+ROUNDING = 1e-12  # an exact Jacobian entry this small (at states and inputs of order 1) is rounding, not a term
+
+
 def dependencies(component, points=3):
     """``({derivative: states and inputs}, {output: states and inputs})``: the structural non-zeros.
 
     The union over random states and inputs of the exact Jacobians' non-zero entries, for the default
-    parameters and the moved ones (:func:`_generic_values`), every limit free.
+    parameters and the moved ones (:func:`_generic_values`), every limit free. An entry within rounding of zero
+    (:data:`ROUNDING`) is zero: the tangent of a term that cancels (der(dtheta2) by dl1_now) leaves 1e-16.
     """
     q = component.continuous
     inputs = [v.name for v in component.variables if v.causality == "input"]
@@ -102,10 +109,10 @@ def dependencies(component, points=3):
                 _, d_derivatives = q.derivatives_of(config, tuple(state), tuple(u), q.free_mode, seed)
                 _, d_outputs = q.outputs_of(config, tuple(state), tuple(u), q.free_mode, seed)
                 for name, value in zip(q.derivatives, d_derivatives):
-                    if value != 0 and math.isfinite(value):
+                    if abs(value) > ROUNDING and math.isfinite(value):
                         found_d[name].add(known)
                 for name, value in zip(outputs, d_outputs):
-                    if value != 0 and math.isfinite(value):
+                    if abs(value) > ROUNDING and math.isfinite(value):
                         found_o[name].add(known)
     order = {name: i for i, name in enumerate(q.states + tuple(inputs))}
     return ({k: sorted(v, key=order.get) for k, v in found_d.items()},
@@ -157,8 +164,7 @@ def add_to_fmi2(xml_bytes, component, sources):
     for unknown in structure.find("Outputs"):
         name = scalars[int(unknown.get("index")) - 1].get("name")
         listed = unknown.get("dependencies", "").split()
-        unknown.attrib.update(_joined({int(i) for i in listed} | {index[s] for s in by_output[name]
-                                                                 if s in q.states}))
+        unknown.attrib.update(_joined({int(i) for i in listed} | {index[k] for k in by_output[name]}))
     derivatives = ET.Element("Derivatives")
     for name in q.derivatives:
         ET.SubElement(derivatives, "Unknown", index=str(index[name]),
@@ -209,7 +215,7 @@ def add_to_fmi3(xml_bytes, component):
     for unknown in outputs:
         name = names[int(unknown.get("valueReference"))]
         listed = unknown.get("dependencies", "").split()
-        unknown.attrib.update(_joined({int(i) for i in listed} | {vrs[s] for s in by_output[name] if s in q.states}))
+        unknown.attrib.update(_joined({int(i) for i in listed} | {vrs[k] for k in by_output[name]}))
     derivatives = [ET.Element("ContinuousStateDerivative", valueReference=str(vrs[name]),
                               **_joined(vrs[k] for k in by_derivative[name])) for name in q.derivatives]
     parameters = [vrs[v.name] for v in component.variables if v.causality == "parameter"]

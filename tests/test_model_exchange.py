@@ -28,6 +28,7 @@ from third_party_hosts import CLEAN_ENV, FMUCHECK, FMUSIM, OMSIMULATOR, SAME, re
 
 from crane_fmu.analysis.linearize import linearize
 from crane_fmu.build_scripts.folders import native_dir
+from crane_fmu.build_scripts.model_exchange import ROUNDING
 from crane_fmu.model import plant
 from crane_fmu.model import plant_continuous as me
 
@@ -448,3 +449,36 @@ def test_co_simulation_gives_the_adjoint_derivatives_too(plant_fmu, co_simulatio
     seed = [math.cos(i + 0.5) for i in range(len(unknowns))]
     adjoint = np.array(fmu.getAdjointDerivative(unknowns, knowns, seed, len(knowns)))
     assert np.abs(adjoint - jacobian.T @ seed).max() < 1e-12 * max(1.0, np.abs(adjoint).max())
+
+
+# ---- the ModelStructure against the directional derivatives ----
+
+OTHER_STATE = (-0.3, 0.5, -0.12, 0.7, 0.2, -0.25, 0.8, -0.2, 0.3)
+OTHER_INPUTS = (-0.3, 0.1, -0.2, 0.4)
+
+
+def test_the_model_structure_lists_exactly_the_dependencies_the_directional_derivatives_show(plant_fmu):
+    """Each derivative and each output depends (ModelStructure: Derivatives, Outputs) on exactly the states and
+    inputs whose column of the directional derivatives is not zero somewhere: at two generic states and inputs,
+    with the drive's lag off (ddx is u) and on (ddx is the drive's state); an entry within rounding of zero
+    (1e-12; a term that cancels leaves 1e-16) is zero. One ModelStructure serves co-simulation too, where ddx
+    depends on nothing (its own test above): a dependency listed beyond Model Exchange's would show here."""
+    md = fmpy.read_model_description(str(plant_fmu))
+    unknowns = list(md.derivatives) + list(md.outputs)
+    shown = [set() for _ in unknowns]
+    for parameters in (PARAMETERS, CS_PARAMETERS):
+        for state, inputs in ((STATE, INPUTS), (OTHER_STATE, OTHER_INPUTS)):
+            made = _Instance(plant_fmu, parameters, state, inputs)
+            try:
+                jacobian, knowns = made.jacobian(), made.states + made.inputs
+            finally:
+                made.fmu.terminate()
+                made.fmu.freeInstance()
+            for row, found in enumerate(shown):
+                found |= {knowns[k] for k in np.flatnonzero(np.abs(jacobian[row]) > ROUNDING)}
+    names = {v.valueReference: v.name for v in md.modelVariables}
+    for unknown, found in zip(unknowns, shown):
+        listed = {v.valueReference for v in unknown.dependencies}
+        assert listed == found, (unknown.variable.name, sorted(names[k] for k in listed ^ found))
+    ddx = next(u for u in md.outputs if u.variable.name == "ddx")
+    assert {v.name for v in ddx.dependencies} == {"u", "drive"}
