@@ -217,32 +217,39 @@ def _host_rows(command, *args, cwd=None, env=None):
     return np.array([[float(v) for v in line.split(",")] for line in done.stdout.replace("\r", "").splitlines()])
 
 
-def test_the_windows_dll_integrated_under_wine_gives_the_linux_run(fmu_dir, host, windows_host, wine_env, tmp_path):
-    """host.c's ``me`` mode (FMI 2.0 Model Exchange, RK4 at 1 ms over the FMU's derivatives, an event at a step's
-    end where an indicator changes sign) on the Linux library and on the Windows DLL under Wine: the free swing,
-    the hoisting run and the run into the rail end agree to 1e-9 (the DLL computes with the same math source,
+WINDOWS = {2: ("me", "linux64", "win64"), 3: ("me3", "x86_64-linux", "x86_64-windows")}  # host mode, binaries
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_the_windows_dll_integrated_under_wine_gives_the_linux_run(fmu_dir, host, windows_host, wine_env, tmp_path,
+                                                                   version):
+    """host.c's ``me`` mode (``me3`` for FMI 3.0: Model Exchange, RK4 at 1 ms over the FMU's derivatives, an event at
+    a step's end where an indicator changes sign) on the Linux library and on the Windows DLL under Wine: the free
+    swing, the hoisting run and the run into the rail end agree to 1e-9 (the DLL computes with the same math source,
     mingw's libm is not used). The Linux run is the co-simulation's RK4 at 1 ms to rounding (the same steps over
     the same derivatives), and it ends at the step that reaches the rail end (x_max = 0.5 m at t = 1 s)."""
-    path = native_dir(fmu_dir, 2) / "CranePlant.fmu"
+    path = native_dir(fmu_dir, version) / "CranePlant.fmu"
     if not path.exists():
         pytest.skip("no native FMUs were built (no C compiler)")
+    mode, linux_platform, windows_platform = WINDOWS[version]
     with zipfile.ZipFile(path) as z:
         z.extractall(tmp_path)
-    dll = tmp_path / "binaries" / "win64" / "CranePlant.dll"
+    dll = tmp_path / "binaries" / windows_platform / "CranePlant.dll"
     if not dll.exists():
         pytest.skip("the FMU has no Windows binary (mingw-w64 missing at build time)")
     shutil.copy(windows_host, tmp_path)
     shutil.copy(dll, tmp_path)
     md = fmpy.read_model_description(str(path))
+    token = md.instantiationToken if version == 3 else md.guid
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    sizes = [len(md.derivatives), md.numberOfEventIndicators]
+    indicators = len(md.eventIndicators) if version == 3 else md.numberOfEventIndicators
     observed = ["x", "theta1", "theta2"]
     for case, (start, stop) in {**CASES, "rail end": RAIL}.items():
-        arguments = [round(stop / 1e-3), 1e-3, *sizes, *(f"{vr[k]}={v!r}" for k, v in start.items()),
-                     *(vr[k] for k in observed)]
-        linux = _host_rows([host, "me", tmp_path / "binaries" / "linux64" / "CranePlant.so", md.guid], *arguments,
+        arguments = [round(stop / 1e-3), 1e-3, len(md.derivatives), indicators,
+                     *(f"{vr[k]}={v!r}" for k, v in start.items()), *(vr[k] for k in observed)]
+        linux = _host_rows([host, mode, tmp_path / "binaries" / linux_platform / "CranePlant.so", token], *arguments,
                            env=CLEAN_ENV)
-        windows = _host_rows(["wine", tmp_path / "host.exe", "me", dll.name, md.guid], *arguments, cwd=tmp_path,
+        windows = _host_rows(["wine", tmp_path / "host.exe", mode, dll.name, token], *arguments, cwd=tmp_path,
                              env=wine_env)
         assert windows.shape == linux.shape and np.abs(windows - linux).max() <= SAME, case
         if case == "rail end":

@@ -27,6 +27,7 @@
  *                                                       an event where an indicator changes sign at a step's end
  *                                                       (not located within the step); rows as `outputs`' until
  *                                                       the FMU asks to terminate
+ *   host me3 LIB TOKEN STEPS H NX NZ [VR=VALUE]... VR... the same for an FMI 3.0 Model Exchange FMU
  */
 #include <stdarg.h>
 #include <stdio.h>
@@ -323,49 +324,50 @@ static int print_outputs3(const char *library, const char *token, int steps, dou
     return ok;
 }
 
-/* ---- FMI 2.0 Model Exchange: the `me` mode --------------------------------------------------------------------- */
+/* ---- Model Exchange: the `me` and `me3` modes ------------------------------------------------------------------ */
 
+/* A Model Exchange instance of either FMI version as integrate() drives it (one per process): each call returns 1
+   on success (OK or warning). */
 typedef struct {
-    fmi2SetTimeTYPE *set_time;
-    fmi2SetContinuousStatesTYPE *set_states;
-    fmi2GetContinuousStatesTYPE *get_states;
-    fmi2GetDerivativesTYPE *derivatives;
-    fmi2GetEventIndicatorsTYPE *indicators;
-    fmi2EnterEventModeTYPE *enter_event_mode;
-    fmi2NewDiscreteStatesTYPE *new_discrete_states;
-    fmi2EnterContinuousTimeModeTYPE *enter_continuous_time_mode;
-    fmi2CompletedIntegratorStepTYPE *completed_step;
     size_t nx, nz;
-} MeApi;
+    int (*set_time)(double t);
+    int (*set_states)(const double x[]);
+    int (*get_states)(double x[]);
+    int (*derivatives)(double dx[]);
+    int (*indicators)(double z[]);
+    int (*enter_event_mode)(void);
+    int (*update)(int *again, int *terminate); /* one event update */
+    int (*enter_continuous)(void);
+    int (*completed)(int *event, int *terminate);
+    int (*get)(const unsigned vr[], size_t n, double v[]);
+} Me;
 
 /* The derivatives dx at (t, x); 0 if the FMU refused. */
-static int slope(const MeApi *me, fmi2Component c, double t, const double x[], double dx[]) {
-    return me->set_time(c, t) <= fmi2Warning && me->set_states(c, x, me->nx) <= fmi2Warning &&
-           me->derivatives(c, dx, me->nx) <= fmi2Warning;
+static int slope(const Me *me, double t, const double x[], double dx[]) {
+    return me->set_time(t) && me->set_states(x) && me->derivatives(dx);
 }
 
 /* Event iteration until the FMU needs no more; then continuous-time mode, the states and indicators read again.
    0 if the FMU refused; *terminate: the FMU asks to end the simulation. */
-static int event_iteration(const MeApi *me, fmi2Component c, double x[], double z[], int *terminate) {
-    fmi2EventInfo info = {.newDiscreteStatesNeeded = fmi2True};
-    while (info.newDiscreteStatesNeeded && !info.terminateSimulation)
-        if (me->new_discrete_states(c, &info) > fmi2Warning) return 0;
-    *terminate = info.terminateSimulation;
-    return *terminate || (me->enter_continuous_time_mode(c) <= fmi2Warning &&
-                          me->get_states(c, x, me->nx) <= fmi2Warning && me->indicators(c, z, me->nz) <= fmi2Warning);
+static int event_iteration(const Me *me, double x[], double z[], int *terminate) {
+    int again = 1;
+    *terminate = 0;
+    while (again && !*terminate)
+        if (!me->update(&again, terminate)) return 0;
+    return *terminate || (me->enter_continuous() && me->get_states(x) && me->indicators(z));
 }
 
 enum { MAX_STATES = 64 };
 
-static int integrate(const Api *api, const MeApi *me, fmi2Component c, int steps, double h, size_t n_get,
-                     const fmi2ValueReference get_vr[]) {
+/* From event mode after initialisation: rows "t,values of get_vr" at t = k h, the classic RK4 between them. */
+static int integrate(const Me *me, int steps, double h, size_t n_get, const unsigned get_vr[]) {
     double x[MAX_STATES], z[MAX_STATES], z_new[MAX_STATES], k[4][MAX_STATES], trial[MAX_STATES], y[MAX_VR];
     size_t n = me->nx;
     int terminate = 0;
-    if (!event_iteration(me, c, x, z, &terminate)) return 0;
+    if (!event_iteration(me, x, z, &terminate)) return 0;
     for (int step = 0; step <= steps; step++) {
         double t = step * h;
-        if (api->get(c, get_vr, n_get, y) > fmi2Warning) return 0;
+        if (!me->get(get_vr, n_get, y)) return 0;
         printf("%.17g", t);
         for (size_t i = 0; i < n_get; i++) printf(",%.17g", y[i]);
         putchar('\n');
@@ -373,50 +375,162 @@ static int integrate(const Api *api, const MeApi *me, fmi2Component c, int steps
         static const double at[4] = {0.0, 0.5, 0.5, 1.0};
         for (int s = 0; s < 4; s++) {
             for (size_t i = 0; i < n; i++) trial[i] = s ? x[i] + at[s] * h * k[s - 1][i] : x[i];
-            if (!slope(me, c, s == 3 ? (step + 1) * h : t + at[s] * h, trial, k[s])) return 0;
+            if (!slope(me, s == 3 ? (step + 1) * h : t + at[s] * h, trial, k[s])) return 0;
         }
         for (size_t i = 0; i < n; i++) x[i] += h / 6.0 * (k[0][i] + 2.0 * k[1][i] + 2.0 * k[2][i] + k[3][i]);
-        fmi2Boolean enter = fmi2False, end = fmi2False;
-        if (me->set_time(c, (step + 1) * h) > fmi2Warning || me->set_states(c, x, n) > fmi2Warning ||
-            me->completed_step(c, fmi2True, &enter, &end) > fmi2Warning || me->indicators(c, z_new, me->nz) > fmi2Warning)
+        int enter = 0;
+        if (!me->set_time((step + 1) * h) || !me->set_states(x) || !me->completed(&enter, &terminate) ||
+            !me->indicators(z_new))
             return 0;
         int crossed = enter;
         for (size_t i = 0; i < me->nz; i++) crossed |= (z[i] > 0) != (z_new[i] > 0);
         memcpy(z, z_new, me->nz * sizeof *z);
-        terminate = end;
-        if (crossed && !end &&
-            (me->enter_event_mode(c) > fmi2Warning || !event_iteration(me, c, x, z, &terminate)))
-            return 0;
+        if (crossed && !terminate && (!me->enter_event_mode() || !event_iteration(me, x, z, &terminate))) return 0;
     }
     return 1;
 }
+
+/* FMI 2.0: the library's functions and the one instance */
+static struct {
+    fmi2Component c;
+    size_t nx, nz;
+    fmi2SetTimeTYPE *set_time;
+    fmi2SetContinuousStatesTYPE *set_states;
+    fmi2GetContinuousStatesTYPE *get_states;
+    fmi2GetDerivativesTYPE *derivatives;
+    fmi2GetEventIndicatorsTYPE *indicators;
+    fmi2EnterEventModeTYPE *enter_event_mode;
+    fmi2NewDiscreteStatesTYPE *update;
+    fmi2EnterContinuousTimeModeTYPE *enter_continuous;
+    fmi2CompletedIntegratorStepTYPE *completed;
+    fmi2GetRealTYPE *get;
+} m2;
+static int set_time2(double t) { return m2.set_time(m2.c, t) <= fmi2Warning; }
+static int set_states2(const double x[]) { return m2.set_states(m2.c, x, m2.nx) <= fmi2Warning; }
+static int get_states2(double x[]) { return m2.get_states(m2.c, x, m2.nx) <= fmi2Warning; }
+static int derivatives2(double dx[]) { return m2.derivatives(m2.c, dx, m2.nx) <= fmi2Warning; }
+static int indicators2(double z[]) { return m2.indicators(m2.c, z, m2.nz) <= fmi2Warning; }
+static int enter_event_mode2(void) { return m2.enter_event_mode(m2.c) <= fmi2Warning; }
+static int update2(int *again, int *terminate) {
+    fmi2EventInfo info;
+    if (m2.update(m2.c, &info) > fmi2Warning) return 0;
+    *again = info.newDiscreteStatesNeeded, *terminate = info.terminateSimulation;
+    return 1;
+}
+static int enter_continuous2(void) { return m2.enter_continuous(m2.c) <= fmi2Warning; }
+static int completed2(int *event, int *terminate) {
+    fmi2Boolean e = fmi2False, t = fmi2False;
+    if (m2.completed(m2.c, fmi2True, &e, &t) > fmi2Warning) return 0;
+    *event = e, *terminate = t;
+    return 1;
+}
+static int get2(const unsigned vr[], size_t n, double v[]) { return m2.get(m2.c, vr, n, v) <= fmi2Warning; }
 
 static int mode_me(const Api *api, const char *mode, int n, char **a) { /* STEPS H NX NZ [VR=VALUE]... VR... */
     (void)mode;
     if (n < 4) return 2;
     void *lib = api->lib;
-    MeApi me = {(fmi2SetTimeTYPE *)SYMBOL(lib, "fmi2SetTime"),
-                (fmi2SetContinuousStatesTYPE *)SYMBOL(lib, "fmi2SetContinuousStates"),
-                (fmi2GetContinuousStatesTYPE *)SYMBOL(lib, "fmi2GetContinuousStates"),
-                (fmi2GetDerivativesTYPE *)SYMBOL(lib, "fmi2GetDerivatives"),
-                (fmi2GetEventIndicatorsTYPE *)SYMBOL(lib, "fmi2GetEventIndicators"),
-                (fmi2EnterEventModeTYPE *)SYMBOL(lib, "fmi2EnterEventMode"),
-                (fmi2NewDiscreteStatesTYPE *)SYMBOL(lib, "fmi2NewDiscreteStates"),
-                (fmi2EnterContinuousTimeModeTYPE *)SYMBOL(lib, "fmi2EnterContinuousTimeMode"),
-                (fmi2CompletedIntegratorStepTYPE *)SYMBOL(lib, "fmi2CompletedIntegratorStep"),
-                (size_t)atoi(a[2]), (size_t)atoi(a[3])};
-    if (!me.set_time || !me.completed_step || me.nx > MAX_STATES || me.nz > MAX_STATES) return 3;
+    m2.set_time = (fmi2SetTimeTYPE *)SYMBOL(lib, "fmi2SetTime");
+    m2.set_states = (fmi2SetContinuousStatesTYPE *)SYMBOL(lib, "fmi2SetContinuousStates");
+    m2.get_states = (fmi2GetContinuousStatesTYPE *)SYMBOL(lib, "fmi2GetContinuousStates");
+    m2.derivatives = (fmi2GetDerivativesTYPE *)SYMBOL(lib, "fmi2GetDerivatives");
+    m2.indicators = (fmi2GetEventIndicatorsTYPE *)SYMBOL(lib, "fmi2GetEventIndicators");
+    m2.enter_event_mode = (fmi2EnterEventModeTYPE *)SYMBOL(lib, "fmi2EnterEventMode");
+    m2.update = (fmi2NewDiscreteStatesTYPE *)SYMBOL(lib, "fmi2NewDiscreteStates");
+    m2.enter_continuous = (fmi2EnterContinuousTimeModeTYPE *)SYMBOL(lib, "fmi2EnterContinuousTimeMode");
+    m2.completed = (fmi2CompletedIntegratorStepTYPE *)SYMBOL(lib, "fmi2CompletedIntegratorStep");
+    m2.get = api->get;
+    m2.nx = (size_t)atoi(a[2]), m2.nz = (size_t)atoi(a[3]);
+    if (!m2.set_time || !m2.completed || m2.nx > MAX_STATES || m2.nz > MAX_STATES) return 3;
+    Me me = {m2.nx, m2.nz, set_time2, set_states2, get_states2, derivatives2, indicators2, enter_event_mode2,
+             update2, enter_continuous2, completed2, get2};
     fmi2ValueReference set_vr[MAX_VR], get_vr[MAX_VR];
     double set_v[MAX_VR];
     size_t n_set, n_get;
     if (!parse_vrs(n - 4, a + 4, set_vr, set_v, &n_set, get_vr, &n_get)) return 2;
-    fmi2Component c = api->instantiate(instance_name, fmi2ModelExchange, api->guid, "", &callbacks, fmi2False,
-                                       fmi2False);
-    if (!c || api->setup(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) > fmi2Warning || api->enter(c) > fmi2Warning ||
-        (n_set && api->set(c, set_vr, n_set, set_v) > fmi2Warning) || api->exit_init(c) > fmi2Warning)
+    m2.c = api->instantiate(instance_name, fmi2ModelExchange, api->guid, "", &callbacks, fmi2False, fmi2False);
+    if (!m2.c || api->setup(m2.c, fmi2False, 0.0, 0.0, fmi2False, 0.0) > fmi2Warning ||
+        api->enter(m2.c) > fmi2Warning || (n_set && api->set(m2.c, set_vr, n_set, set_v) > fmi2Warning) ||
+        api->exit_init(m2.c) > fmi2Warning)
         return 6;
-    int ok = integrate(api, &me, c, atoi(a[0]), atof(a[1]), n_get, get_vr);
-    api->free_instance(c);
+    int ok = integrate(&me, atoi(a[0]), atof(a[1]), n_get, get_vr);
+    api->free_instance(m2.c);
+    return ok ? 0 : 6;
+}
+
+/* FMI 3.0: the same */
+static struct {
+    fmi3Instance c;
+    size_t nx, nz;
+    fmi3SetTimeTYPE *set_time;
+    fmi3SetContinuousStatesTYPE *set_states;
+    fmi3GetContinuousStatesTYPE *get_states;
+    fmi3GetContinuousStateDerivativesTYPE *derivatives;
+    fmi3GetEventIndicatorsTYPE *indicators;
+    fmi3EnterEventModeTYPE *enter_event_mode;
+    fmi3UpdateDiscreteStatesTYPE *update;
+    fmi3EnterContinuousTimeModeTYPE *enter_continuous;
+    fmi3CompletedIntegratorStepTYPE *completed;
+    fmi3GetFloat64TYPE *get;
+} m3;
+static int set_time3(double t) { return m3.set_time(m3.c, t) <= fmi3Warning; }
+static int set_states3(const double x[]) { return m3.set_states(m3.c, x, m3.nx) <= fmi3Warning; }
+static int get_states3(double x[]) { return m3.get_states(m3.c, x, m3.nx) <= fmi3Warning; }
+static int derivatives3(double dx[]) { return m3.derivatives(m3.c, dx, m3.nx) <= fmi3Warning; }
+static int indicators3(double z[]) { return m3.indicators(m3.c, z, m3.nz) <= fmi3Warning; }
+static int enter_event_mode3(void) { return m3.enter_event_mode(m3.c) <= fmi3Warning; }
+static int update3(int *again, int *terminate) {
+    fmi3Boolean needed, end, nominals, values, defined;
+    fmi3Float64 next;
+    if (m3.update(m3.c, &needed, &end, &nominals, &values, &defined, &next) > fmi3Warning) return 0;
+    *again = needed, *terminate = end;
+    return 1;
+}
+static int enter_continuous3(void) { return m3.enter_continuous(m3.c) <= fmi3Warning; }
+static int completed3(int *event, int *terminate) {
+    fmi3Boolean e = fmi3False, t = fmi3False;
+    if (m3.completed(m3.c, fmi3True, &e, &t) > fmi3Warning) return 0;
+    *event = e, *terminate = t;
+    return 1;
+}
+static int get3(const unsigned vr[], size_t n, double v[]) { return m3.get(m3.c, vr, n, v, n) <= fmi3Warning; }
+
+/* me3 LIB TOKEN STEPS H NX NZ [VR=VALUE]... VR...: `me` for an FMI 3.0 FMU (its value references) */
+static int me3(const char *library, const char *token, int n, char **a) {
+    if (n < 4) return 2;
+    void *lib = open_library(library);
+    fmi3InstantiateModelExchangeTYPE *instantiate =
+        (fmi3InstantiateModelExchangeTYPE *)SYMBOL(lib, "fmi3InstantiateModelExchange");
+    fmi3FreeInstanceTYPE *free_instance = (fmi3FreeInstanceTYPE *)SYMBOL(lib, "fmi3FreeInstance");
+    fmi3EnterInitializationModeTYPE *enter =
+        (fmi3EnterInitializationModeTYPE *)SYMBOL(lib, "fmi3EnterInitializationMode");
+    fmi3ExitInitializationModeTYPE *exit_init =
+        (fmi3ExitInitializationModeTYPE *)SYMBOL(lib, "fmi3ExitInitializationMode");
+    fmi3SetFloat64TYPE *set = (fmi3SetFloat64TYPE *)SYMBOL(lib, "fmi3SetFloat64");
+    m3.set_time = (fmi3SetTimeTYPE *)SYMBOL(lib, "fmi3SetTime");
+    m3.set_states = (fmi3SetContinuousStatesTYPE *)SYMBOL(lib, "fmi3SetContinuousStates");
+    m3.get_states = (fmi3GetContinuousStatesTYPE *)SYMBOL(lib, "fmi3GetContinuousStates");
+    m3.derivatives = (fmi3GetContinuousStateDerivativesTYPE *)SYMBOL(lib, "fmi3GetContinuousStateDerivatives");
+    m3.indicators = (fmi3GetEventIndicatorsTYPE *)SYMBOL(lib, "fmi3GetEventIndicators");
+    m3.enter_event_mode = (fmi3EnterEventModeTYPE *)SYMBOL(lib, "fmi3EnterEventMode");
+    m3.update = (fmi3UpdateDiscreteStatesTYPE *)SYMBOL(lib, "fmi3UpdateDiscreteStates");
+    m3.enter_continuous = (fmi3EnterContinuousTimeModeTYPE *)SYMBOL(lib, "fmi3EnterContinuousTimeMode");
+    m3.completed = (fmi3CompletedIntegratorStepTYPE *)SYMBOL(lib, "fmi3CompletedIntegratorStep");
+    m3.get = (fmi3GetFloat64TYPE *)SYMBOL(lib, "fmi3GetFloat64");
+    m3.nx = (size_t)atoi(a[2]), m3.nz = (size_t)atoi(a[3]);
+    if (!instantiate || !set || !m3.set_time || !m3.completed || m3.nx > MAX_STATES || m3.nz > MAX_STATES) return 3;
+    Me me = {m3.nx, m3.nz, set_time3, set_states3, get_states3, derivatives3, indicators3, enter_event_mode3,
+             update3, enter_continuous3, completed3, get3};
+    fmi3ValueReference set_vr[MAX_VR], get_vr[MAX_VR];
+    double set_v[MAX_VR];
+    size_t n_set, n_get;
+    if (!parse_vrs(n - 4, a + 4, set_vr, set_v, &n_set, get_vr, &n_get)) return 2;
+    m3.c = instantiate(instance_name, token, "", fmi3False, fmi3False, NULL, logger3);
+    if (!m3.c || enter(m3.c, fmi3False, 0.0, 0.0, fmi3False, 0.0) > fmi3Warning ||
+        (n_set && set(m3.c, set_vr, n_set, set_v, n_set) > fmi3Warning) || exit_init(m3.c) > fmi3Warning)
+        return 6;
+    int ok = integrate(&me, atoi(a[0]), atof(a[1]), n_get, get_vr);
+    free_instance(m3.c);
     return ok ? 0 : 6;
 }
 
@@ -531,6 +645,7 @@ int main(int argc, char **argv) {
     const char *mode = argv[1];
     if (!strcmp(mode, "outputs3"))
         return argc >= 6 && print_outputs3(argv[2], argv[3], atoi(argv[4]), atof(argv[5]), argc - 6, argv + 6) ? 0 : 6;
+    if (!strcmp(mode, "me3")) return me3(argv[2], argv[3], argc - 4, argv + 4);
     for (size_t i = 0; i < sizeof MODES / sizeof *MODES; i++)
         if (!strcmp(mode, MODES[i].name)) {
             Api api = load(argv[2], argv[3]);
