@@ -12,10 +12,12 @@ directional derivatives of both interfaces) are made here.
 The outputs' and derivatives' dependencies are the structural non-zeros of the component's exact
 Jacobians (``Continuous.derivatives_of`` and ``outputs_of`` along each unit seed) at random states and
 inputs, for the default parameters and for every parameter moved off its default (so that a term a
-default switches off, such as the drive's lag ``tau = 0``, is still listed). One ModelStructure serves both
-interfaces, so an output lists the union of its dependencies in each: co-simulation's table (an output it keeps
-over a step, such as ``ddx``, depends on no input there) and Model Exchange's (``ddx`` is the acceleration now,
-``u`` through the drive).
+default switches off, such as the drive's lag ``tau = 0``, is still listed). An output lists the inputs of
+co-simulation's table and the states Model Exchange reads it by. One ModelStructure serves both interfaces, and
+one output reads an input in Model Exchange only: ``ddx`` (the acceleration now, ``u`` through the drive; in
+co-simulation the acceleration over the last step). Its Derivatives entry lists ``u``, its Outputs entry does not:
+listed there, ``u`` would make the plant a direct-feedthrough instance to masters that order instances by that
+(ours, the one-FMU build), and every closed loop through it an algebraic loop.
 """
 
 import math
@@ -164,7 +166,8 @@ def add_to_fmi2(xml_bytes, component, sources):
     for unknown in structure.find("Outputs"):
         name = scalars[int(unknown.get("index")) - 1].get("name")
         listed = unknown.get("dependencies", "").split()
-        unknown.attrib.update(_joined({int(i) for i in listed} | {index[k] for k in by_output[name]}))
+        unknown.attrib.update(_joined({int(i) for i in listed} | {index[s] for s in by_output[name]
+                                                                 if s in q.states}))
     derivatives = ET.Element("Derivatives")
     for name in q.derivatives:
         ET.SubElement(derivatives, "Unknown", index=str(index[name]),
@@ -215,7 +218,7 @@ def add_to_fmi3(xml_bytes, component):
     for unknown in outputs:
         name = names[int(unknown.get("valueReference"))]
         listed = unknown.get("dependencies", "").split()
-        unknown.attrib.update(_joined({int(i) for i in listed} | {vrs[k] for k in by_output[name]}))
+        unknown.attrib.update(_joined({int(i) for i in listed} | {vrs[s] for s in by_output[name] if s in q.states}))
     derivatives = [ET.Element("ContinuousStateDerivative", valueReference=str(vrs[name]),
                               **_joined(vrs[k] for k in by_derivative[name])) for name in q.derivatives]
     parameters = [vrs[v.name] for v in component.variables if v.causality == "parameter"]
