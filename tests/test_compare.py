@@ -47,20 +47,21 @@ def user_lqr(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def quick_board(template_fmu, fmu_dir, tmp_path_factory):
+def quick_board(template_fmu, fmu_dir, dask_scheduler, tmp_path_factory):
     """The template and the LQR alone (--only), quick, 3 paired cases: the board is in OUT/quick."""
     out = tmp_path_factory.mktemp("compare")
     log = []
-    rows = compare(out, [str(template_fmu), "LqrController"], fmu_dir, workers=2, quick=True, progress=False,
-                   animate=(), only=True, log=log.append, cases=QUICK_CASES)
+    rows = compare(out, [str(template_fmu), "LqrController"], fmu_dir, scheduler=dask_scheduler, quick=True,
+                   progress=False, animate=(), only=True, log=log.append, cases=QUICK_CASES)
     return out / "quick", rows, log
 
 
 @pytest.fixture(scope="module")
-def full_board(fmu_dir, tmp_path_factory):
+def full_board(fmu_dir, dask_scheduler, tmp_path_factory):
     """Every built-in controller on every scenario, FULL_CASES cases of the paired design."""
     out = tmp_path_factory.mktemp("full")
-    rows = compare(out, (), fmu_dir, workers=2, progress=False, animate=(), log=lambda _: None, cases=FULL_CASES)
+    rows = compare(out, (), fmu_dir, scheduler=dask_scheduler, progress=False, animate=(), log=lambda _: None,
+                   cases=FULL_CASES)
     return out, rows
 
 
@@ -90,11 +91,11 @@ def test_a_quick_board_cannot_be_mistaken_for_a_full_one(quick_board):
     assert not (out.parent / "scoreboard.md").exists()  # the quick board has a folder of its own
 
 
-def test_a_full_board_survives_a_quick_run_in_the_same_folder(full_board, fmu_dir):
+def test_a_full_board_survives_a_quick_run_in_the_same_folder(full_board, fmu_dir, dask_scheduler):
     out, rows = full_board
     before = {name: (out / name).read_bytes() for name in ("scoreboard.md", "scores.parquet", JOURNAL)}
-    compare(out, ["LqrController"], fmu_dir, workers=2, quick=True, only=True, progress=False, animate=(),
-            log=lambda _: None, scenarios=("S1",))
+    compare(out, ["LqrController"], fmu_dir, scheduler=dask_scheduler, quick=True, only=True, progress=False,
+            animate=(), log=lambda _: None, scenarios=("S1",))
     assert {name: (out / name).read_bytes() for name in before} == before
     assert (out / "quick" / "scoreboard.md").read_text().startswith("# Controller scoreboard (QUICK")
     table = pq.read_table(out / "scores.parquet").to_pylist()
@@ -149,18 +150,18 @@ def test_the_board_marks_your_controller(quick_board):
     assert "`MyController` (yours):" in board and "`LqrController` (yours)" not in board
 
 
-def test_animations_are_drawn_only_when_their_run_changed(quick_board, template_fmu, fmu_dir):
+def test_animations_are_drawn_only_when_their_run_changed(quick_board, template_fmu, fmu_dir, dask_scheduler):
     out, _, _ = quick_board
     chosen = [str(template_fmu), "LqrController"]
     logs = []
     for _ in range(2):
-        compare(out.parent, chosen, fmu_dir, workers=2, quick=True, only=True, progress=False, animate=("S2",),
-                log=logs.append, cases=QUICK_CASES)
+        compare(out.parent, chosen, fmu_dir, scheduler=dask_scheduler, quick=True, only=True, progress=False,
+                animate=("S2",), log=logs.append, cases=QUICK_CASES)
     assert logs[0].endswith("4 plots and 2 animations drawn now") and "38 already done" in logs[0]
     assert logs[1].endswith("4 plots and 0 animations drawn now")
     (out / "animations" / "S2_LqrController.gif").unlink()
-    compare(out.parent, chosen, fmu_dir, workers=2, quick=True, only=True, progress=False, animate=("S2",),
-            log=logs.append, cases=QUICK_CASES)
+    compare(out.parent, chosen, fmu_dir, scheduler=dask_scheduler, quick=True, only=True, progress=False,
+            animate=("S2",), log=logs.append, cases=QUICK_CASES)
     assert logs[2].endswith("4 plots and 1 animations drawn now")
     assert (out / "animations" / "S2_LqrController.gif").stat().st_size > 10_000
 
@@ -224,10 +225,10 @@ def test_every_row_records_the_metric_module_that_measured_it(quick_board, fmu_d
     assert ids.isdisjoint(c["case_id"] for c in harness.plan(chosen, fmu_dir, ("S1", "S2"))[0])
 
 
-def test_a_rerun_resumes(quick_board, template_fmu, fmu_dir):
+def test_a_rerun_resumes(quick_board, template_fmu, fmu_dir, dask_scheduler):
     out, rows, _ = quick_board
     log = []
-    again = compare(out.parent, [str(template_fmu), "LqrController"], fmu_dir, workers=2, quick=True,
+    again = compare(out.parent, [str(template_fmu), "LqrController"], fmu_dir, scheduler=dask_scheduler, quick=True,
                     progress=False, animate=(), only=True, log=log.append, cases=QUICK_CASES)
     assert log[-1].startswith("38 cases: 0 run now, 38 already done")
     assert [r["case_id"] for r in again] == [r["case_id"] for r in rows]
@@ -343,39 +344,6 @@ def test_only_fmus_that_run_python_here_are_called_holding_the_gil(template_fmu,
         stock.free()
 
 
-def _close(a, b):
-    """Equal to 1e-9 (relative above 1) in every number, NaN as NaN, recursively through lists and dicts."""
-    if isinstance(a, dict):
-        return a.keys() == b.keys() and all(_close(a[k], b[k]) for k in a)
-    if isinstance(a, list):
-        return len(a) == len(b) and all(_close(x, y) for x, y in zip(a, b))
-    if isinstance(a, float) and isinstance(b, float):
-        return a == b or (math.isnan(a) and math.isnan(b)) or abs(a - b) <= 1e-9 * max(1.0, abs(a))
-    return a == b
-
-
-def test_the_native_fmus_give_the_python_board(full_board, fmu_dir, tmp_path):
-    """Issue 27: ``compare --fmu-dir build/native`` (the components ported to C native, the others the Python FMUs
-    copied beside them) scores every controller as the Python FMUs do: every figure to 1e-9, the same statuses
-    and board. (Not the case identities, which hash the FMU files, nor run times, nor the failed runs' log text.)"""
-    from crane_fmu.build_scripts.native import native_dir
-
-    native = native_dir(fmu_dir)
-    if not (native / "LqrController.fmu").exists():
-        pytest.skip("no native FMUs were built (no C compiler)")
-    _, python_rows = full_board
-    rows = compare(tmp_path, (), native, workers=2, progress=False, animate=(), log=lambda _: None, cases=FULL_CASES)
-    key = lambda r: (r["scenario"], r["controller"], r["case"])  # noqa: E731
-    theirs = {key(r): r for r in python_rows}
-    assert sorted(map(key, rows)) == sorted(theirs)
-    for row in rows:
-        ours, other = ({k: v for k, v in r.items() if k not in ("case_id", "duration_s", "error", "fmus_sha256",
-                                                                  "date")}
-                       for r in (row, theirs[key(row)]))
-        assert _close(ours, other), key(row)
-    assert scoreboard.render_summary(rows) == scoreboard.render_summary(python_rows)
-
-
 # ---- any controller's interface, provenance, the journal, --check, the page ----------------------------------------
 
 @pytest.fixture(scope="module")
@@ -423,7 +391,7 @@ def test_every_row_records_its_provenance(quick_board, fmu_dir, template_fmu):
     assert "## Provenance" in board and f"LqrController.fmu {lqr}" in board and "- master: gauss-seidel" in board
 
 
-def test_a_journal_made_with_other_fmus_is_not_resumed(user_board, fmu_dir, user_lqr, tmp_path):
+def test_a_journal_made_with_other_fmus_is_not_resumed(user_board, fmu_dir, user_lqr, dask_scheduler, tmp_path):
     """A journal whose rows were made with another CranePlant.fmu (its sha256 in every row): the board starts
     again, says why, and keeps the old journal."""
     import json
@@ -439,8 +407,8 @@ def test_a_journal_made_with_other_fmus_is_not_resumed(user_board, fmu_dir, user
         row.update(fmus_sha256=json.dumps(shas), case_id="other" + row["case_id"][5:])
     journal.write_text("".join(json.dumps(r) + "\n" for r in rows))
     log = []
-    compare(folder, [str(user_lqr)], fmu_dir, workers=2, quick=True, only=True, progress=False, animate=(),
-            log=log.append)
+    compare(folder, [str(user_lqr)], fmu_dir, scheduler=dask_scheduler, quick=True, only=True, progress=False,
+            animate=(), log=log.append)
     assert re.fullmatch(r"\S+cases.jsonl is not resumed: it was made with other FMUs \(CranePlant.fmu: sha256 "
                         r"000000000000\.\.\., now [0-9a-f]{12}\.\.\.; in UserLqr, S\d, [^)]+\); kept as "
                         r"cases\.jsonl\.\S+\.old, the board starts again", log[0]), log[0]

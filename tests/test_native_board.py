@@ -1,0 +1,47 @@
+"""``crane-fmu compare --fmu-dir build/native`` scores every built-in controller as the Python FMUs do.
+
+A module of its own, beside test_compare.py: it needs the run's quick board of the built-in controllers (made once
+for every worker, conftest.py's ``builtin_quick_board``), not test_compare's full board, so the two boards run on
+two workers at once.
+"""
+
+import math
+
+import pytest
+
+from crane_fmu.analysis import scoreboard
+from crane_fmu.compare import compare
+
+
+def _close(a, b):
+    """Equal to 1e-9 (relative above 1) in every number, NaN as NaN, recursively through lists and dicts."""
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(_close(a[k], b[k]) for k in a)
+    if isinstance(a, list):
+        return len(a) == len(b) and all(_close(x, y) for x, y in zip(a, b))
+    if isinstance(a, float) and isinstance(b, float):
+        return a == b or (math.isnan(a) and math.isnan(b)) or abs(a - b) <= 1e-9 * max(1.0, abs(a))
+    return a == b
+
+
+def test_the_native_fmus_give_the_python_board(builtin_quick_board, native_dirs, dask_scheduler, tmp_path):
+    """The components ported to C native, the others the Python FMUs copied beside them: every controller on every
+    scenario (the quick board's cases, every scenario of the board) gives every figure to 1e-9, the same statuses
+    and the same board. (Not the case identities, which hash the FMU files, nor run times, nor the failed runs'
+    log text.)"""
+    native = native_dirs[2]
+    if not (native / "LqrController.fmu").exists():
+        pytest.skip("no native FMUs were built (no C compiler)")
+    _, python_rows = builtin_quick_board
+    rows = compare(tmp_path, (), native, scheduler=dask_scheduler, quick=True, progress=False, animate=(),
+                   log=lambda _: None)
+    key = lambda r: (r["scenario"], r["controller"], r["case"])  # noqa: E731
+    theirs = {key(r): r for r in python_rows}
+    assert sorted(map(key, rows)) == sorted(theirs)
+    assert {r["scenario"] for r in rows} == set(scoreboard.SCENARIOS)
+    for row in rows:
+        ours, other = ({k: v for k, v in r.items() if k not in ("case_id", "duration_s", "error", "fmus_sha256",
+                                                                  "date")}
+                       for r in (row, theirs[key(row)]))
+        assert _close(ours, other), key(row)
+    assert scoreboard.render_summary(rows) == scoreboard.render_summary(python_rows)
