@@ -34,6 +34,7 @@ FORMAT = 1  # the version of the keys: another one makes every output again
 PACKAGE = Path(crane_fmu.__file__).parent
 MODEL = PACKAGE / "model"
 COSIM = PACKAGE / "cosim"
+CLOSED_LOOP = PACKAGE / "closed_loop.py"  # the interface of a closed loop as one FMU (one-FMU and container)
 FMU_SRC = Path(crane_fmu.fmu_src.__file__).parent
 HERE = Path(__file__).parent
 
@@ -211,12 +212,15 @@ def native_key(component, fmi_version, tools, files):
 
 def one_fmu_key(system, kinds, fmi_version, tools, files):
     """A system as one native FMU: the system's data, its components' tables, the C sources it is compiled from
-    (``files``)."""
+    (``files``), the closed loop's interface."""
     build = [HERE / name for name in ("one_fmu.py", "native.py", "model_description.py", "wrapper.py")]
     return key("one-fmu", fmi_version, repr(system), [component_data(components.get(k)) for k in kinds], *files,
-               MODEL / "tables.py", *build, _compilers(tools), _version("fmpy"))
+               MODEL / "tables.py", CLOSED_LOOP, *build, _compilers(tools), _version("fmpy"))
 
 
 def system_file_key(kind, system, fmus, writer):
-    """A system file (SSP, OSP, container FMU): the system's data, the FMUs it names or packs, its writer."""
-    return key(kind, repr(system), *[Path(p) for p in fmus], COSIM, writer, _version("fmpy"), sys.version)
+    """A system file (SSP, OSP, container FMU): the system's data, the FMUs it names or packs, its writer (a
+    container's interface: the closed loop's)."""
+    interface = [CLOSED_LOOP] if kind == "container" else []
+    return key(kind, repr(system), *[Path(p) for p in fmus], COSIM, writer, *interface, _version("fmpy"),
+               sys.version)

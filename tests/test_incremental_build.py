@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pd_controller
 
+from crane_fmu import container, systems
 from crane_fmu.build_scripts import incremental
 from crane_fmu.cli import main
 
@@ -68,3 +69,19 @@ def test_the_record_keeps_an_output_only_for_the_same_key(tmp_path):
     with incremental.building(tmp_path, force=True) as record:
         record.make(target, "b", lambda: produce("5"))
     assert target.read_text() == "5" and record.made == [target] and record.kept == []
+
+
+def test_an_edit_of_the_closed_loops_interface_makes_the_one_fmus_and_containers_again(tmp_path, monkeypatch):
+    """closed_loop.py chooses what a one-FMU and a container expose: both keys read it."""
+    system = systems.get("lqr")
+    copy = tmp_path / "closed_loop.py"
+    copy.write_text(incremental.CLOSED_LOOP.read_text())
+    monkeypatch.setattr(incremental, "CLOSED_LOOP", copy)
+
+    def keys():
+        return (incremental.one_fmu_key(system, sorted(set(system.instances.values())), 2, {}, []),
+                incremental.system_file_key("container", system, [], Path(container.__file__)))
+
+    before = keys()
+    copy.write_text(copy.read_text() + "\n# edited\n")
+    assert all(a != b for a, b in zip(before, keys()))
