@@ -141,9 +141,8 @@ ModelStatus store_reals(const char *model, const VariableRow table[], unsigned n
                                          sizeof(Config), 0, configure_, NULL, outputs_, NULL, NULL};         \
     COMPONENT_MODEL_(COMPONENT_)
 
-/* The registration of a model file whose component has a state: Config, State, configure(), initial_state(),
-   outputs() and update(). */
-#define STATEFUL_COMPONENT                                                                                   \
+/* The functions of a component with a state, typed for the model file's Config and State. */
+#define STATEFUL_FUNCTIONS_                                                                                  \
     static ModelStatus configure_(const double v[], const StringValue s[], void *c, const Reporter *r) {      \
         return configure(v, s, c, r);                                                                        \
     }                                                                                                        \
@@ -155,7 +154,12 @@ ModelStatus store_reals(const char *model, const VariableRow table[], unsigned n
     static ModelStatus update_(const double v[], const void *c, void *s, double t, double h,                 \
                                const Reporter *r) {                                                          \
         return update(v, c, s, t, h, r);                                                                     \
-    }                                                                                                        \
+    }
+
+/* The registration of a model file whose component has a state: Config, State, configure(), initial_state(),
+   outputs() and update(). */
+#define STATEFUL_COMPONENT                                                                                   \
+    STATEFUL_FUNCTIONS_                                                                                      \
     static const Component COMPONENT_ = {VARIABLE_TABLE, N_VARIABLES, FIRST_OUTPUT, N_OUTPUTS, N_STRINGS,    \
                                          sizeof(Config), sizeof(State), configure_, initial_state_, outputs_, \
                                          update_, NULL};                                                     \
@@ -165,18 +169,7 @@ ModelStatus store_reals(const char *model, const VariableRow table[], unsigned n
    continuous_states(), derivatives(), continuous_outputs(), indicators() and event_update() (ContinuousComponent's
    functions, typed for the Config and State); the generated header's Model Exchange variables. */
 #define CONTINUOUS_COMPONENT                                                                                 \
-    static ModelStatus configure_(const double v[], const StringValue s[], void *c, const Reporter *r) {      \
-        return configure(v, s, c, r);                                                                        \
-    }                                                                                                        \
-    static void initial_state_(const double v[], const void *c, void *s) { initial_state(v, c, s); }         \
-    static ModelStatus outputs_(const double v[], const void *c, const void *s, double out[],                \
-                                const Reporter *r) {                                                         \
-        return outputs(v, c, s, out, r);                                                                     \
-    }                                                                                                        \
-    static ModelStatus update_(const double v[], const void *c, void *s, double t, double h,                 \
-                               const Reporter *r) {                                                          \
-        return update(v, c, s, t, h, r);                                                                     \
-    }                                                                                                        \
+    STATEFUL_FUNCTIONS_                                                                                      \
     static double *states_(void *s) { return continuous_states(s); }                                        \
     static ModelStatus derivatives_(const double v[], const void *c, const void *s, const double *ds,        \
                                     const double *din, double f[], double *df, const Reporter *r) {          \
