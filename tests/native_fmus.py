@@ -165,3 +165,28 @@ def compare_to_python(ours, theirs):
     if sys.platform.startswith("linux"):
         assert np.array_equal(ours.view(np.int64), theirs.view(np.int64))
     return worst
+
+
+def outputs_beside_python(path, version, component, parameter_sets, steps, random_inputs, rng, longest_step):
+    """``(ours, theirs)``: the outputs of the native FMU at ``path`` and of ``component``'s Python model, for each
+    of ``parameter_sets`` over ``steps`` steps, the same random inputs (``random_inputs(rng)``) and step lengths
+    (1 ms or up to ``longest_step``) given to both."""
+    inputs, outputs = component.names("input"), component.names("output")
+    ours, theirs = [], []
+    for parameters in parameter_sets:
+        fmu, vr, set_, get = open_native(path, version, parameters)
+        config = component.check(parameters)
+        state, t = component.initial_state(config), 0.0
+        for j in range(steps):
+            values = tuple(random_inputs(rng))
+            if inputs:
+                set_([vr[n] for n in inputs], values)
+            ours.append(get([vr[n] for n in outputs]))
+            theirs.append(component.output(config, state, values))
+            if j == 0:
+                fmu.exitInitializationMode()
+            h = rng.choice([1e-3, rng.uniform(1e-3, longest_step)])
+            fmu.doStep(t, h)
+            state, t = component.update(config, state, values, t, h), t + h
+        close(fmu)
+    return ours, theirs

@@ -21,8 +21,8 @@ import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
-from native_fmus import (close, compare_to_python, compiler, messages, native_folders, open_native, python_folder,
-                         steps_after_restore)
+from native_fmus import (close, compare_to_python, compiler, messages, native_folders, open_native,
+                         outputs_beside_python, python_folder, steps_after_restore)
 
 from crane_fmu import components, systems
 from crane_fmu.analysis.scoreboard import Contender, systems_for
@@ -197,25 +197,10 @@ def _sensor_parameters(rng, i):
 def test_disturbance_outputs_equal_the_python_model_over_random_steps(native, version, component, random_parameters):
     """30 parameter sets x 100 steps of random length (Gust: its pulse; Sensor: noise, seed, both delays)."""
     rng = random.Random(2029)
-    name, inputs, outputs = component.model_identifier, component.names("input"), component.names("output")
-    ours, theirs = [], []
-    for i in range(30):
-        parameters = random_parameters(rng, i)
-        fmu, vr, set_, get = open_native(native[version] / f"{name}.fmu", version, parameters)
-        config = component.check(parameters)
-        state, t = component.initial_state(config), 0.0
-        for j in range(100):
-            values = _random_state(rng)[:len(inputs)]
-            if inputs:
-                set_([vr[n] for n in inputs], values)
-            ours.append(get([vr[n] for n in outputs]))
-            theirs.append(component.output(config, state, tuple(values[:len(inputs)])))
-            if j == 0:
-                fmu.exitInitializationMode()
-            h = rng.choice([1e-3, rng.uniform(1e-3, 0.2)])
-            fmu.doStep(t, h)
-            state, t = component.update(config, state, tuple(values[:len(inputs)]), t, h), t + h
-        close(fmu)
+    n_inputs = len(component.names("input"))
+    ours, theirs = outputs_beside_python(native[version] / f"{component.model_identifier}.fmu", version, component,
+                                         (random_parameters(rng, i) for i in range(30)), 100,
+                                         lambda rng: _random_state(rng)[:n_inputs], rng, 0.2)
     compare_to_python(ours, theirs)
     assert np.count_nonzero(np.array(theirs)) > 1000
 

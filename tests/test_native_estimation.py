@@ -19,8 +19,8 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
-from native_fmus import (close, compare_to_python, compiler, messages, native_folders, open_native, python_folder,
-                         steps_after_restore)
+from native_fmus import (close, compare_to_python, compiler, messages, native_folders, open_native,
+                         outputs_beside_python, python_folder, steps_after_restore)
 
 from crane_fmu import components, systems
 from crane_fmu.build_scripts.native import FOLDERS, source_path, variables_header
@@ -95,24 +95,10 @@ def _random_inputs(rng, n):
 def test_outputs_equal_the_python_model_over_random_steps(native, version, component, random_parameters):
     """12 parameter sets (delays 0 to 7 steps, a camera or none) x 60 steps of random length and inputs."""
     rng = random.Random(2036)
-    name, inputs, outputs = component.model_identifier, component.names("input"), component.names("output")
-    ours, theirs = [], []
-    for i in range(12):
-        parameters = random_parameters(rng, i)
-        fmu, vr, set_, get = open_native(native[version] / f"{name}.fmu", version, parameters)
-        config = component.check(parameters)
-        state, t = component.initial_state(config), 0.0
-        for j in range(60):
-            values = _random_inputs(rng, len(inputs))
-            set_([vr[n] for n in inputs], values)
-            ours.append(get([vr[n] for n in outputs]))
-            theirs.append(component.output(config, state, tuple(values)))
-            if j == 0:
-                fmu.exitInitializationMode()
-            h = rng.choice([1e-3, rng.uniform(1e-3, 0.2)])
-            fmu.doStep(t, h)
-            state, t = component.update(config, state, tuple(values), t, h), t + h
-        close(fmu)
+    n_inputs, outputs = len(component.names("input")), component.names("output")
+    ours, theirs = outputs_beside_python(native[version] / f"{component.model_identifier}.fmu", version, component,
+                                         (random_parameters(rng, i) for i in range(12)), 60,
+                                         lambda rng: _random_inputs(rng, n_inputs), rng, 0.2)
     compare_to_python(ours, theirs)
     assert np.count_nonzero(np.array(theirs)) > len(theirs) * len(outputs) / 2
 

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
-from native_fmus import (close, compare_to_python, compiler, messages, native_folders, open_native, python_folder,
-                         steps_after_restore)
+from native_fmus import (close, compare_to_python, compiler, messages, native_folders, open_native,
+                         outputs_beside_python, python_folder, steps_after_restore)
 
 from crane_fmu import components
 from crane_fmu.analysis.scoreboard import Contender, systems_for
@@ -65,24 +65,10 @@ def test_outputs_equal_the_python_model_over_random_steps(native, version):
     """8 parameter sets (no turbulence too, a wind against the move, the extreme seeds) x 50 steps of random length
     and inputs: the drag, the wind and the noise sequence of the seed are the Python model's."""
     rng = random.Random(2038)
-    inputs, outputs = WIND.names("input"), WIND.names("output")
-    ours, theirs = [], []
-    for i in range(8):
-        parameters = _parameters(rng, i)
-        fmu, vr, set_, get = open_native(native[version] / "Wind.fmu", version, parameters)
-        config = WIND.check(parameters)
-        state, t = WIND.initial_state(config), 0.0
-        for j in range(50):
-            values = [rng.uniform(-2, 2) for _ in inputs]
-            set_([vr[n] for n in inputs], values)
-            ours.append(get([vr[n] for n in outputs]))
-            theirs.append(WIND.output(config, state, tuple(values)))
-            if j == 0:
-                fmu.exitInitializationMode()
-            h = rng.choice([1e-3, rng.uniform(1e-3, 0.5)])
-            fmu.doStep(t, h)
-            state, t = WIND.update(config, state, tuple(values), t, h), t + h
-        close(fmu)
+    n_inputs = len(WIND.names("input"))
+    ours, theirs = outputs_beside_python(native[version] / "Wind.fmu", version, WIND,
+                                         (_parameters(rng, i) for i in range(8)), 50,
+                                         lambda rng: [rng.uniform(-2, 2) for _ in range(n_inputs)], rng, 0.5)
     compare_to_python(ours, theirs)
     speeds = np.array(theirs)[:, 2].reshape(8, 50)
     assert sum(len(set(row)) > 40 for row in speeds) >= 4  # turbulent sets: the wind moves at every step
