@@ -34,11 +34,11 @@ from pathlib import Path
 
 import crane_fmu.fmu_src.python
 import crane_fmu.model
-from crane_fmu import DEFAULT_FMU_DIR, components, container
+from crane_fmu import DEFAULT_FMU_DIR, components
 from crane_fmu import systems as registry  # build_all's argument `systems` is names
 from crane_fmu.build_scripts import incremental
 from crane_fmu.build_scripts.folders import container_name, containers_dir, fmi3_dir, systems_dir
-from crane_fmu.build_scripts.incremental import python_fmu_key, system_file_key
+from crane_fmu.build_scripts.incremental import container_key, python_fmu_key, system_file_key
 from crane_fmu.build_scripts.model_description import postprocess, postprocess3
 from crane_fmu.build_scripts.native import build_native
 from crane_fmu.build_scripts.one_fmu import build_one_fmus
@@ -317,7 +317,6 @@ def _build_all(record, out_dir, kinds, systems, fmi3, containers, native, log, f
     for name in containers if containers is not None else [n for n in registry.tagged("container") if n in names]:
         system = registry.get(name)
         target = containers_dir(out_dir) / f"{container_name(name)}.fmu"
-        paths.append(record.make(target, system_file_key("container", system, system.fmus(out_dir).values(),
-                                                         Path(container.__file__)),
+        paths.append(record.make(target, container_key(system, system.fmus(out_dir).values()),
                                  lambda system=system, target=target: build_container(system, out_dir, target)))
     return paths

@@ -218,9 +218,12 @@ def one_fmu_key(system, kinds, fmi_version, tools, files):
                MODEL / "tables.py", CLOSED_LOOP, *build, _compilers(tools), _version("fmpy"))
 
 
-def system_file_key(kind, system, fmus, writer):
-    """A system file (SSP, OSP, container FMU): the system's data, the FMUs it names or packs, its writer (a
-    container's interface: the closed loop's)."""
-    interface = [CLOSED_LOOP] if kind == "container" else []
-    return key(kind, repr(system), *[Path(p) for p in fmus], COSIM, writer, *interface, _version("fmpy"),
-               sys.version)
+def system_file_key(kind, system, fmus, *writers):
+    """A system file (SSP, OSP, container FMU): the system's data, the FMUs it names or packs, the modules that
+    write it."""
+    return key(kind, repr(system), *[Path(p) for p in fmus], COSIM, *writers, _version("fmpy"), sys.version)
+
+
+def container_key(system, fmus):
+    """A container FMU: a system file written by container.py with the closed loop's interface."""
+    return system_file_key("container", system, fmus, PACKAGE / "container.py", CLOSED_LOOP)
