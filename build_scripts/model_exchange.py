@@ -135,6 +135,15 @@ def _joined(references):
             **({"dependenciesKind": " ".join(["dependent"] * len(references))} if references else {})}
 
 
+def _more_initial_unknowns(component, ids, listed):
+    """The continuous states and derivatives not ``listed`` among the initial unknowns yet, as ``(id,
+    dependencies)`` (``ids``: name -> index or value reference): each depends on every parameter and input."""
+    q = component.continuous
+    sources = [ids[v.name] for v in component.variables if v.causality in ("parameter", "input")]
+    new = dict.fromkeys(ids[name] for name in q.states + q.derivatives if ids[name] not in listed)
+    return [(i, _joined(sources)) for i in new]
+
+
 def add_to_fmi2(xml_bytes, component, sources):
     """modelDescription.xml (FMI 2.0) with Model Exchange beside its co-simulation."""
     q, vrs = component.continuous, value_references(component)
@@ -174,13 +183,9 @@ def add_to_fmi2(xml_bytes, component, sources):
                       **_joined(index[k] for k in by_derivative[name]))
     structure.insert(1, derivatives)
     initial = structure.find("InitialUnknowns")
-    parameters = [index[v.name] for v in component.variables if v.causality == "parameter"]
-    inputs = [index[v.name] for v in component.variables if v.causality == "input"]
     listed = {int(u.get("index")) for u in initial}
-    for name in q.states + q.derivatives:
-        if index[name] not in listed:
-            listed.add(index[name])
-            ET.SubElement(initial, "Unknown", index=str(index[name]), **_joined(parameters + inputs))
+    for i, depends in _more_initial_unknowns(component, index, listed):
+        ET.SubElement(initial, "Unknown", index=str(i), **depends)
     initial[:] = sorted(initial, key=lambda u: int(u.get("index")))
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
@@ -221,13 +226,9 @@ def add_to_fmi3(xml_bytes, component):
         unknown.attrib.update(_joined({int(i) for i in listed} | {vrs[s] for s in by_output[name] if s in q.states}))
     derivatives = [ET.Element("ContinuousStateDerivative", valueReference=str(vrs[name]),
                               **_joined(vrs[k] for k in by_derivative[name])) for name in q.derivatives]
-    parameters = [vrs[v.name] for v in component.variables if v.causality == "parameter"]
-    inputs = [vrs[v.name] for v in component.variables if v.causality == "input"]
     listed = {int(u.get("valueReference")) for u in initial}
-    for name in q.states + q.derivatives:
-        if vrs[name] not in listed:
-            listed.add(vrs[name])
-            initial.append(ET.Element("InitialUnknown", valueReference=str(vrs[name]), **_joined(parameters + inputs)))
+    initial += [ET.Element("InitialUnknown", valueReference=str(vr), **depends)
+                for vr, depends in _more_initial_unknowns(component, vrs, listed)]
     initial.sort(key=lambda u: int(u.get("valueReference")))
     indicators = [ET.Element("EventIndicator", valueReference=str(vrs[indicator_name(w)])) for w in q.indicators]
     structure[:] = outputs + derivatives + initial + indicators

@@ -125,20 +125,17 @@ def law(p, k):
 # --- the BacksteppingController component -------------------------------------------
 
 _K = ControllerGains()  # defaults live in the dataclass
+_COORDINATES = (("x", "trolley position", "trolley", "m"), ("theta1", "hook angle", "hook", "rad"),
+                ("theta2", "payload angle", "payload", "rad"))  # name, its error, its row, unit
 
 VARIABLES = controller_model() + (
-    parameter("K1_x", _K.K1_x, "1/s", "K1 gain on trolley position error, eq (18)"),
-    parameter("K1_theta1", _K.K1_theta1, "1/s", "K1 gain on hook angle error, eq (18)"),
-    parameter("K1_theta2", _K.K1_theta2, "1/s", "K1 gain on payload angle error, eq (18)"),
-    parameter("K2_x", _K.K2_x, "1/s", "K2 gain on trolley delta2, eq (19)"),
-    parameter("K2_theta1", _K.K2_theta1, "1/s", "K2 gain on hook delta2, eq (19)"),
-    parameter("K2_theta2", _K.K2_theta2, "1/s", "K2 gain on payload delta2, eq (19)"),
-    parameter("x_d", _K.x_d, "m", "target trolley position"),
-    parameter("theta1_d", _K.theta1_d, "rad", "target hook angle"),
-    parameter("theta2_d", _K.theta2_d, "rad", "target payload angle"),
-    parameter("w_x", _K.w_x, "1", "least-squares weight of the trolley row of eq (20)"),
-    parameter("w_theta1", _K.w_theta1, "1", "least-squares weight of the hook row of eq (20)"),
-    parameter("w_theta2", _K.w_theta2, "1", "least-squares weight of the payload row of eq (20)"),
+    *(parameter(f"K1_{q}", getattr(_K, f"K1_{q}"), "1/s", f"K1 gain on {error} error, eq (18)")
+      for q, error, _, _ in _COORDINATES),
+    *(parameter(f"K2_{q}", getattr(_K, f"K2_{q}"), "1/s", f"K2 gain on {part} delta2, eq (19)")
+      for q, _, part, _ in _COORDINATES),
+    *(parameter(f"{q}_d", getattr(_K, f"{q}_d"), unit, f"target {error}") for q, error, _, unit in _COORDINATES),
+    *(parameter(f"w_{q}", getattr(_K, f"w_{q}"), "1", f"least-squares weight of the {part} row of eq (20)")
+      for q, _, part, _ in _COORDINATES),
     parameter("b3_form", _K.b3_form, None,
               "b3 of eq (14): 'derived' (corrected sign) or 'printed' (as in the paper)", "String"),
     *limits.parameters(u_max=limits.NO_LIMIT, v_max=limits.NO_LIMIT),  # the paper's law has none

@@ -42,7 +42,7 @@ from . import linalg
 from .component import Component
 from .lqr import continuous_model
 from .parameters import plant_parameters, positive
-from .tables import STATE, input_, output, parameter, positions
+from .tables import STATE, controller_model, input_, output, parameter, positions
 
 NOISES = ("sigma_x", "sigma_theta", "sigma_u", "sigma_swing")
 
@@ -135,12 +135,7 @@ def update(c, state, inputs, time, step):
     return (1.0, s, applied[1:], estimate)
 
 
-VARIABLES = tuple(v._replace(description="estimator's model: " + v.description) for v in (
-    parameter("m1", 3.0, "kg", "hook mass"),
-    parameter("m2", 7.0, "kg", "payload mass"),
-    parameter("l1", 1.0, "m", "cable length trolley to hook"),
-    parameter("l2", 0.5, "m", "cable length hook to payload"),
-    parameter("g", 9.8, "m/s2", "gravitational acceleration"))) + (
+VARIABLES = controller_model("estimator") + (
     parameter("h", 1e-3, "s", "communication step the discrete filter is for"),
     parameter("sigma_x", 1e-3, "m", "trolley position sensor noise (standard deviation)"),
     parameter("sigma_theta", math.radians(0.1), "rad", "swing angle sensor noise (standard deviation)"),

@@ -27,9 +27,9 @@ from collections import namedtuple
 
 from . import limits, linalg
 from .component import Component
-from .lqr import DEFAULT_WEIGHTS, REFERENCE, WEIGHTS, design
+from .lqr import DEFAULT_WEIGHTS, REFERENCE_INPUTS, WEIGHTS, design
 from .parameters import finite, plant_parameters, positive
-from .tables import MEASURED_STATE, controller_model, input_, output, parameter, positions
+from .tables import MEASURED_STATE, controller_model, output, parameter, positions
 
 Config = namedtuple("Config", "near far e_near e_far mu m2 l1 l2 g x_d u_max v_max h")
 
@@ -106,10 +106,7 @@ VARIABLES = controller_model() + tuple(
     parameter("h", 1e-3, "s", "communication step the discrete designs are for"),
     parameter("x_d", 0.0, "m", "target trolley position (added to x_ref)"),
     *limits.parameters(),
-) + MEASURED_STATE + tuple(
-    input_(name, unit, f"reference {name[:-4]}") for name, unit in zip(
-        REFERENCE, ("m", "m/s", "rad", "rad/s", "rad", "rad/s"))) + (
-    input_("ddx_ref", "m/s2", "reference trolley acceleration (feedforward)"),
+) + MEASURED_STATE + REFERENCE_INPUTS + (
     output("u", "m/s2", "demanded trolley acceleration, ddx_ref - K(w) (s - s_ref), limited"),
 )
 IN = positions(VARIABLES, "input")

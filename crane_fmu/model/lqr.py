@@ -124,6 +124,11 @@ def report(config):
 
 
 DEFAULT_WEIGHTS = dict(zip(WEIGHTS, (50.0, 0.0, 400.0, 10.0, 50.0, 5.0)))
+# the planner's references, tracked by this controller and the HardHitController
+REFERENCE_INPUTS = tuple(input_(name, unit, f"reference {text}") for name, unit, text in zip(
+    REFERENCE, ("m", "m/s", "rad", "rad/s", "rad", "rad/s"),
+    ("trolley position (plus x_d)", "trolley velocity", "hook swing angle", "hook swing rate", "payload swing angle",
+     "payload swing rate"))) + (input_("ddx_ref", "m/s2", "reference trolley acceleration (feedforward)"),)
 
 VARIABLES = controller_model() + tuple(
     parameter(name, value, "1", f"LQR state weight on {name[2:]} (Q diagonal, SI units)")
@@ -134,12 +139,7 @@ VARIABLES = controller_model() + tuple(
     parameter("l1_low", 0.0, "m", "gain schedule: shortest main cable designed for; 0 with l1_high = 0: none"),
     parameter("l1_high", 0.0, "m", "gain schedule: longest main cable designed for"),
     *limits.parameters(),
-) + MEASURED_STATE + tuple(
-    input_(name, unit, f"reference {text}") for name, unit, text in zip(
-        REFERENCE, ("m", "m/s", "rad", "rad/s", "rad", "rad/s"),
-        ("trolley position (plus x_d)", "trolley velocity", "hook swing angle", "hook swing rate",
-         "payload swing angle", "payload swing rate"))) + (
-    input_("ddx_ref", "m/s2", "reference trolley acceleration (feedforward)"),
+) + MEASURED_STATE + REFERENCE_INPUTS + (
     input_("l1_now", "m", "measured main cable length, for the gain schedule; 0: not measured"),
     output("u", "m/s2", "demanded trolley acceleration, ddx_ref - K (s - s_ref), limited"),
 )

@@ -102,9 +102,9 @@ _STATE_ROWS = (
 MEASURED_STATE = tuple(input_(name, unit, "measured " + text) for name, (unit, text) in zip(STATE, _STATE_ROWS))
 
 
-def controller_model():
-    """The :data:`PLANT_MODEL` rows as a controller's model of the plant."""
-    return tuple(v._replace(description="controller's model: " + v.description) for v in PLANT_MODEL)
+def controller_model(whose="controller"):
+    """The :data:`PLANT_MODEL` rows as a controller's (or ``whose``) model of the plant."""
+    return tuple(v._replace(description=f"{whose}'s model: " + v.description) for v in PLANT_MODEL)
 
 
 def variable_table(component, markdown=False):
