@@ -249,8 +249,15 @@ def _table(header, rows):
 
 def render(s):
     """The Markdown text of REPORT.md from the metrics summary."""
+    sections = (_introduction, _claims, _figure7, _figure8, _free_swing,
+                _region_of_attraction, _communication_step, _linear_analysis, _errata_section)
+    return "\n".join(line for section in sections for line in section(s)) + "\n"
+
+
+def _introduction(s):
+    """REPORT.md's lines on the title, the settings and how outcomes are judged."""
     p, k = s["settings"]["plant"], s["settings"]["gains"]
-    out = [
+    return [
         "# Reproduction report: double-pendulum crane and backstepping anti-swing control",
         "",
         "Every number below comes from co-simulating `CranePlant.fmu` (and `BacksteppingController.fmu`) "
@@ -272,12 +279,24 @@ def render(s):
         "of the run is below 0.1 deg (it has a settling time); *decaying* if it is not, but below 0.9 times "
         "that of the third quarter; otherwise *sustained oscillation*.",
         "",
+    ]
+
+
+def _claims(s):
+    """REPORT.md's lines on the paper's claims and their verdicts."""
+    return [
         "## Claims",
         "",
         _table(["#", "claim (quoted)", "where", "measured", "rule", "verdict"],
                [(i + 1, f"\"{c.quote}\"", c.where, c.measure(s), c.rule, f"**{c.verdict(s)}**")
                 for i, c in enumerate(CLAIMS)]),
         "",
+    ]
+
+
+def _figure7(s):
+    """REPORT.md's lines on Figure 7: the Section V closed loop."""
+    return [
         "## Figure 7: Section V closed loop",
         "",
         _table(["form", "outcome", "0.5 deg from", "0.1 deg from", "max theta1", "max theta2",
@@ -288,6 +307,12 @@ def render(s):
         f"{_f(s['fig7']['open loop']['max_theta1_deg'], 1)} deg, max theta2 "
         f"{_f(s['fig7']['open loop']['max_theta2_deg'], 1)} deg for the whole run.",
         "",
+    ]
+
+
+def _figure8(s):
+    """REPORT.md's lines on Figure 8: the main cable length."""
+    return [
         "## Figure 8: main cable length (l2 = 0.5 m; plant and controller model both use l1)",
         "",
         _table(["form", "l1", "outcome", "0.5 deg from", "0.1 deg from", "max theta1", "max theta2",
@@ -295,6 +320,12 @@ def render(s):
                [(form, f"{r['l1']:g} m", _outcome(r), *_loop_columns(r))
                 for form, runs in s["fig8"].items() for r in runs]),
         "",
+    ]
+
+
+def _free_swing(s):
+    """REPORT.md's lines on Figures 4 and 5: the free swing."""
+    return [
         "## Figures 4 and 5: free swing, measured against linear theory",
         "",
         _table(["case", "max theta1", "max theta2", "theta2 / theta1(0)", "frequencies in theta1",
@@ -307,6 +338,12 @@ def render(s):
         "equilibrium. The measured peaks sit slightly below the linear values, the softening expected "
         "of a pendulum at finite amplitude.",
         "",
+    ]
+
+
+def _region_of_attraction(s):
+    """REPORT.md's lines on the region of attraction."""
+    return [
         "## Region of attraction (initial theta1, everything else at rest)",
         "",
         _table(["form", "largest theta1(0) with every smaller angle converging", "converging angles", "outcomes"],
@@ -314,6 +351,12 @@ def render(s):
                  ", ".join(f"{a:g}" for a in r["converging_deg"]) or "none",
                  _outcome_counts(r["outcomes"])) for form, r in s["region_of_attraction"].items()]),
         "",
+    ]
+
+
+def _communication_step(s):
+    """REPORT.md's lines on the communication step."""
+    return [
         "## Communication step",
         "",
         "Deviation of the co-simulated closed loop (u held over each step) from the continuous-time "
@@ -331,6 +374,13 @@ def render(s):
                      f"; the continuous-time reference itself diverges at t = {st['reference_end_s']:.3f} s")
                   for form, st in s["communication_step"].items()),
         "",
+    ]
+
+
+def _linear_analysis(s):
+    """REPORT.md's lines on the linearised closed loop."""
+    k = s["settings"]["gains"]
+    return [
         "## Linear analysis of the closed loop",
         "",
         _table(["form", "closed-loop poles of the linearised loop [1/s]"],
@@ -345,11 +395,17 @@ def render(s):
         _table(["l1", "poles [1/s]"], [(key, ", ".join(_complex(z) for z in poles))
                                        for key, poles in s["linear"]["closed_loop_poles_by_l1"].items()]),
         "",
+    ]
+
+
+def _errata_section(s):
+    """REPORT.md's lines on the errata."""
+    p = s["settings"]["plant"]
+    return [
         "## Errata",
         "",
         _errata(s["errata"], p),
     ]
-    return "\n".join(out) + "\n"
 
 
 def _free_row(label, r):
