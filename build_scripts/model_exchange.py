@@ -13,11 +13,11 @@ The outputs' and derivatives' dependencies are the structural non-zeros of the c
 Jacobians (``Continuous.derivatives_of`` and ``outputs_of`` along each unit seed) at random states and
 inputs, for the default parameters and for every parameter moved off its default (so that a term a
 default switches off, such as the drive's lag ``tau = 0``, is still listed). An output lists the inputs of
-co-simulation's table and the states Model Exchange reads it by. One ModelStructure serves both interfaces, and
-one output reads an input in Model Exchange only: ``ddx`` (the acceleration now, ``u`` through the drive; in
-co-simulation the acceleration over the last step). Its Derivatives entry lists ``u``, its Outputs entry does not:
-listed there, ``u`` would make the plant a direct-feedthrough instance to masters that order instances by that
-(ours, the one-FMU build), and every closed loop through it an algebraic loop.
+co-simulation's table and the states and inputs Model Exchange reads it by. One ModelStructure serves both
+interfaces, so it lists their union: ``ddx`` reads ``u`` in Model Exchange only (the acceleration now, ``u``
+through the drive; in co-simulation the acceleration over the last step, which ``u`` does not move). No closed
+loop becomes algebraic by that: no built-in system feeds ``ddx`` back into ``u``, and masters that judge loops per
+variable (ours, ``crane_fmu.cosim.exchange``) see none.
 """
 
 import math
@@ -144,6 +144,17 @@ def _more_initial_unknowns(component, ids, listed):
     return [(i, _joined(sources)) for i in new]
 
 
+def _list_initial_inputs(initial, name_of, ids, component, by_output):
+    """An output reads in initialisation mode the inputs it reads after it: its initial unknown lists them too
+    (``name_of(unknown)``: the unknown's variable; ``ids``: name -> index or value reference)."""
+    inputs = {ids[v.name] for v in component.variables if v.causality == "input"}
+    for unknown in initial:
+        name = name_of(unknown)
+        if name in by_output:
+            listed = {int(i) for i in unknown.get("dependencies", "").split()}
+            unknown.attrib.update(_joined(listed | ({ids[k] for k in by_output[name]} & inputs)))
+
+
 def add_to_fmi2(xml_bytes, component, sources):
     """modelDescription.xml (FMI 2.0) with Model Exchange beside its co-simulation."""
     q, vrs = component.continuous, value_references(component)
@@ -175,14 +186,15 @@ def add_to_fmi2(xml_bytes, component, sources):
     for unknown in structure.find("Outputs"):
         name = scalars[int(unknown.get("index")) - 1].get("name")
         listed = unknown.get("dependencies", "").split()
-        unknown.attrib.update(_joined({int(i) for i in listed} | {index[s] for s in by_output[name]
-                                                                 if s in q.states}))
+        unknown.attrib.update(_joined({int(i) for i in listed} | {index[s] for s in by_output[name]}))
     derivatives = ET.Element("Derivatives")
     for name in q.derivatives:
         ET.SubElement(derivatives, "Unknown", index=str(index[name]),
                       **_joined(index[k] for k in by_derivative[name]))
     structure.insert(1, derivatives)
     initial = structure.find("InitialUnknowns")
+    _list_initial_inputs(initial, lambda u: scalars[int(u.get("index")) - 1].get("name"), index, component,
+                         by_output)
     listed = {int(u.get("index")) for u in initial}
     for i, depends in _more_initial_unknowns(component, index, listed):
         ET.SubElement(initial, "Unknown", index=str(i), **depends)
@@ -223,9 +235,10 @@ def add_to_fmi3(xml_bytes, component):
     for unknown in outputs:
         name = names[int(unknown.get("valueReference"))]
         listed = unknown.get("dependencies", "").split()
-        unknown.attrib.update(_joined({int(i) for i in listed} | {vrs[s] for s in by_output[name] if s in q.states}))
+        unknown.attrib.update(_joined({int(i) for i in listed} | {vrs[s] for s in by_output[name]}))
     derivatives = [ET.Element("ContinuousStateDerivative", valueReference=str(vrs[name]),
                               **_joined(vrs[k] for k in by_derivative[name])) for name in q.derivatives]
+    _list_initial_inputs(initial, lambda u: names[int(u.get("valueReference"))], vrs, component, by_output)
     listed = {int(u.get("valueReference")) for u in initial}
     initial += [ET.Element("InitialUnknown", valueReference=str(vr), **depends)
                 for vr, depends in _more_initial_unknowns(component, vrs, listed)]

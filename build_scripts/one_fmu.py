@@ -30,6 +30,7 @@ from crane_fmu import closed_loop, components
 from crane_fmu import systems as registry
 from crane_fmu.build_scripts import incremental, native
 from crane_fmu.cosim.connections import connect
+from crane_fmu.cosim.exchange import exchange_calls
 
 
 def one_fmu_name(system_name):
@@ -91,35 +92,15 @@ def plan(system):
     inputs = {name: [] for name in kinds}
     for c in connections:
         inputs[c.target].append((c.input, (c.source, c.output)))
-    feedthrough = {name: components.get(kind).feedthrough and bool(names[name]["input"])
-                   for name, kind in kinds.items()}
-    order = _dependency_order(kinds, connections, feedthrough)
-    exchange = []
-    for name in order:
-        exchange += [("write", name), ("read", name)] if feedthrough[name] else [("read", name)]
-    exchange += [("write", name) for name in order if not feedthrough[name]]
-    exchange = [(op, name) for op, name in exchange if op == "read" or inputs[name]]
+    calls = exchange_calls(list(kinds), {name: components.get(kind).dependencies() for name, kind in kinds.items()},
+                           connections)  # as our master's Wiring: per variable
+    exchange = [(op, name) for op, name in calls.exchange if op == "read" or inputs[name]]
     variables, links = _interface(system, kinds, tables, inputs)
     dependencies = closed_loop.system_dependencies(
         {name: components.get(kind).dependencies() for name, kind in kinds.items()}, connections,
         {v.name: links[v.name][0] for v in variables if v.causality == "output"},
         {v.name: links[v.name] for v in variables if v.causality == "input"})
-    return Plan(kinds, inputs, _values(system, tables), exchange, order, variables, links, dependencies)
-
-
-def _dependency_order(kinds, connections, feedthrough):
-    """As ``Wiring._dependency_order``: every feedthrough instance after its sources; ValueError around a loop."""
-    after = {name: {c.source for c in connections if c.target == name and c.source != name and feedthrough[name]}
-             for name in kinds}
-    order = []
-    while after:
-        ready = [n for n, deps in after.items() if not deps - set(order)]
-        if not ready:
-            raise ValueError("algebraic loop through direct-feedthrough instances: " + ", ".join(sorted(after)))
-        for n in ready:
-            order.append(n)
-            del after[n]
-    return order
+    return Plan(kinds, inputs, _values(system, tables), exchange, calls.order, variables, links, dependencies)
 
 
 def _values(system, tables):

@@ -15,13 +15,14 @@ import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (
+    FMU2Model,
     FMU2Slave,
     fmi2CallbackAllocateMemoryTYPE,
     fmi2CallbackFreeMemoryTYPE,
     fmi2CallbackFunctions,
     fmi2CallbackLoggerTYPE,
 )
-from fmpy.fmi3 import FMU3Slave
+from fmpy.fmi3 import FMU3Model, FMU3Slave
 from fmpy.logging import addLoggerProxy
 
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
@@ -32,23 +33,26 @@ _LIBC.calloc.restype, _LIBC.calloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t,
 _LIBC.free.argtypes = [ctypes.c_void_p]
 
 
-def open_native(path, version, parameters=None, instance_name="c"):
+def open_native(path, version, parameters=None, instance_name="c", model_exchange=False):
     """An instance in initialisation mode with ``parameters`` set: ``(fmu, vr, set, get)``.
 
-    The real parameters are set in one call, in their order, then each str one as a String.
+    The real parameters are set in one call, in their order, then each str one as a String. With
+    ``model_exchange`` an instance of the FMU's Model Exchange interface.
     """
     md = read_model_description(str(path))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    name, unzipped = md.coSimulation.modelIdentifier, fmpy.extract(str(path))
+    interface = md.modelExchange if model_exchange else md.coSimulation
+    name, unzipped = interface.modelIdentifier, fmpy.extract(str(path))
     if version == 2:
-        fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=name, instanceName=instance_name)
+        fmu = (FMU2Model if model_exchange else FMU2Slave)(guid=md.guid, unzipDirectory=unzipped,
+                                                          modelIdentifier=name, instanceName=instance_name)
         fmu.instantiate()
         fmu.setupExperiment(startTime=0.0)
         fmu.enterInitializationMode()
         set_, get = fmu.setReal, fmu.getReal
     else:
-        fmu = FMU3Slave(guid=md.instantiationToken, unzipDirectory=unzipped, modelIdentifier=name,
-                        instanceName=instance_name)
+        fmu = (FMU3Model if model_exchange else FMU3Slave)(guid=md.instantiationToken, unzipDirectory=unzipped,
+                                                          modelIdentifier=name, instanceName=instance_name)
         fmu.instantiate()
         fmu.enterInitializationMode(startTime=0.0)
         set_, get = fmu.setFloat64, fmu.getFloat64

@@ -601,11 +601,13 @@ FMI2_ME = {
 # FMI 3.0 section 2.3 (the common states): the states' derivatives, the states, the event indicators, their nominals
 # and the directional and adjoint derivatives in Initialization Mode, Event Mode, Continuous-Time Mode and in
 # Terminated, which an FMU enters after an error (so in our error state too); the nominals not when instantiated.
-# Event and continuous-time mode's own functions as in FMI 2.0.
+# Event and continuous-time mode's own functions as in FMI 2.0, but fmi3EnterEventMode: from Continuous-Time Mode only
+# (FMI 3.0's Event Mode section does not list it; Reference-FMUs' mask is Continuous-Time Mode and, with event mode
+# used, co-simulation's Step Mode).
 FMI3_ME = {
     "EnterInitializationMode": ({INS}, INI), "ExitInitializationMode": ({INI}, EVT), "Reset": (ME_EVERY, INS),
     "Terminate": ({EVT, CTM}, TRM), "GetReal": (ME_GETS, None), "UpdateDiscreteStates": ({EVT}, None),
-    "EnterContinuousTimeMode": ({EVT}, CTM), "CompletedIntegratorStep": ({CTM}, None),
+    "EnterEventMode": ({CTM}, EVT), "EnterContinuousTimeMode": ({EVT}, CTM), "CompletedIntegratorStep": ({CTM}, None),
     "SetContinuousStates": ({CTM}, None),
     **{f: (ME_GETS, None) for f in ("GetContinuousStates", "GetEventIndicators", "GetContinuousStateDerivatives",
                                     "GetNominalsOfContinuousStates", "GetDirectionalDerivative",

@@ -7,6 +7,7 @@ import pytest
 from crane_fmu.cosim import FmiError
 from crane_fmu.cosim.algorithms import ALGORITHMS, Algorithm, IterativeJacobi
 from crane_fmu.cosim.connections import Connection
+from crane_fmu.cosim.exchange import AlgebraicLoop, find_loop
 from crane_fmu.cosim.master import Master, communication_points
 from crane_fmu.cosim.recorder import ArrayRecorder
 
@@ -14,10 +15,16 @@ pytestmark = pytest.mark.quick  # no build: in the quick subset
 
 
 class FakeInstance:
-    """Python stand-in for an FMU instance: ``outputs(values)`` computes outputs from inputs and state."""
+    """Python stand-in for an FMU instance: ``outputs(values)`` computes outputs from inputs and state.
+
+    ``feedthrough``: every output reads every input at the same instant, or none does; or
+    ``{output: (input, ...)}``, what each output reads."""
 
     def __init__(self, name, inputs, outputs, feedthrough, step=None, compute=None):
-        self.name, self.inputs, self.outputs, self.feedthrough = name, inputs, outputs, feedthrough
+        self.name, self.inputs, self.outputs = name, inputs, outputs
+        self.dependencies = (feedthrough if isinstance(feedthrough, dict) else
+                             {o: tuple(inputs) if feedthrough else () for o in outputs})
+        self.feedthrough = any(self.dependencies.values())
         self.values = {n: 0.0 for n in inputs + outputs}
         self._step_function, self._compute = step, compute
         self.calls = []
@@ -129,6 +136,67 @@ def test_algebraic_loop_is_refused():
     conns = [Connection("a", "o", "b", "i"), Connection("b", "o", "a", "i")]
     with pytest.raises(ValueError, match="algebraic loop"):
         Master({"a": a, "b": b}, conns)
+
+
+def _partly_feedthrough(gain=2.0):
+    """A cart whose position ``y`` reads no input and whose acceleration ``a`` reads its force ``f`` at the same
+    instant (``y' = v, v' = f``), closed by ``f = -gain*y`` (feedthrough): per instance both are feedthrough and
+    wait for each other; per variable ``ctrl.f`` reads ``cart.y`` and nothing reads ``cart.a``: no loop."""
+    cart = FakeInstance("cart", ["f"], ["y", "a"], {"y": (), "a": ("f",)},
+                        step=lambda v, h: {"y": v["y"] + h * v["v"], "v": v["v"] + h * v["f"]},
+                        compute=lambda v: {"a": v["f"]})
+    cart.values.update(y=1.0, v=0.0)
+    ctrl = FakeInstance("ctrl", ["y"], ["f"], True, compute=lambda v: {"f": -gain * v["y"]})
+    return {"cart": cart, "ctrl": ctrl}, [Connection("cart", "y", "ctrl", "y"), Connection("ctrl", "f", "cart", "f")]
+
+
+def test_a_partly_feedthrough_instance_in_a_closed_loop_is_no_algebraic_loop():
+    """Judged per variable (ModelStructure's dependencies per output): the cart is read first for the controller,
+    and again once its force is set, so the acceleration observed is the force of the same instant."""
+    instances, conns = _partly_feedthrough()
+    wiring = Master(instances, conns).wiring
+    calls = [(instance.name, function) for _, function, instance in wiring.propagation()]
+    assert calls == [("cart", "get"), ("ctrl", "set"), ("ctrl", "get"), ("cart", "set"), ("cart", "get")]
+    rec = ArrayRecorder()
+    Master(instances, conns).run(0.0, 0.5, 0.1, [rec])
+    c = rec.columns()
+    assert list(c["cart.a"]) == list(c["ctrl.f"]) == [-2.0 * y for y in c["cart.y"]]
+    y, v = [1.0], 0.0
+    for _ in range(5):  # Gauss-Seidel: each step with the force of its start
+        y, v = y + [y[-1] + 0.1 * v], v + 0.1 * (-2.0 * y[-1])
+    assert list(c["cart.y"]) == pytest.approx(y, rel=1e-15)
+
+
+def test_a_loop_through_the_feedthrough_output_is_found_and_named_along_its_variables():
+    """The same cart with its acceleration fed back into the controller (a second input): now a chain of direct
+    feedthrough closes, cart.f -> cart.a -> ctrl.a -> ctrl.f -> cart.f, and Gauss-Seidel refuses it."""
+    instances, conns = _partly_feedthrough()
+    ctrl = FakeInstance("ctrl", ["y", "a"], ["f"], True, compute=lambda v: {"f": -2.0 * v["y"] - 0.1 * v["a"]})
+    instances["ctrl"] = ctrl
+    conns = conns + [Connection("cart", "a", "ctrl", "a")]
+    with pytest.raises(AlgebraicLoop, match=r"^algebraic loop through direct-feedthrough instances: cart, ctrl "
+                                            r"\((\S+ -> ){4}\S+\)$") as loop:
+        Master(instances, conns, "gauss-seidel")
+    cycle = loop.value.path
+    assert cycle[0] == cycle[-1] and sorted(cycle[:-1]) == ["cart.a", "cart.f", "ctrl.a", "ctrl.f"]
+    assert find_loop({"cart": instances["cart"].dependencies, "ctrl": ctrl.dependencies}, conns[:2]) is None
+    # iterative Jacobi settles it: f = -2 y - 0.1 f, so f = -2 y / 1.1
+    rec = ArrayRecorder()
+    Master(instances, conns, IterativeJacobi(tolerance=1e-15)).run(0.0, 0.1, 0.1, [rec])
+    assert rec.columns()["ctrl.f"][0] == pytest.approx(-2.0 / 1.1, rel=1e-12)
+
+
+def test_whole_instance_calls_that_cannot_order_a_loop_free_system_are_refused_in_one_line():
+    """Two channels of one instance (s.o1 reads s.i1, s.o2 reads s.i2) with a feedthrough instance between them:
+    no loop of variables, but setting s's inputs in one call would need a's output before s is read."""
+    s = FakeInstance("s", ["i1", "i2"], ["o1", "o2"], {"o1": ("i1",), "o2": ("i2",)})
+    a = FakeInstance("a", ["i"], ["o"], True)
+    src = FakeInstance("src", [], ["o"], False)
+    conns = [Connection("src", "o", "s", "i1"), Connection("s", "o1", "a", "i"), Connection("a", "o", "s", "i2")]
+    with pytest.raises(AlgebraicLoop, match=r"^algebraic loop through direct-feedthrough instances: a, s; no loop of "
+                                            r"variables, but an exchange of whole-instance calls"):
+        Master({"src": src, "s": s, "a": a}, conns, "gauss-seidel")
+    Master({"src": src, "s": s, "a": a}, conns, "jacobi", initial_exchange=False).run(0.0, 0.2, 0.1)  # as it is
 
 
 @pytest.mark.parametrize("conn, message", [

@@ -464,17 +464,13 @@ OTHER_STATE = (-0.3, 0.5, -0.12, 0.7, 0.2, -0.25, 0.8, -0.2, 0.3)
 OTHER_INPUTS = (-0.3, 0.1, -0.2, 0.4)
 
 
-# What the ModelStructure does not list: the output ddx reads u in Model Exchange only (the acceleration now; in
-# co-simulation the acceleration over the last step, its own test above). One ModelStructure serves both, and it
-# keeps co-simulation's there (build_scripts/model_exchange.py says why); its Derivatives entry lists u.
-UNLISTED = {("ddx", "u")}
-
-
 def test_the_model_structure_lists_exactly_the_dependencies_the_directional_derivatives_show(plant_fmu):
     """Each derivative and each output depends (ModelStructure: Derivatives, Outputs) on exactly the states and
-    inputs whose column of the directional derivatives is not zero somewhere, but for :data:`UNLISTED`: at two
-    generic states and inputs, with the drive's lag off (ddx is u) and on (ddx is the drive's state); an entry
-    within rounding of zero (1e-12; a term that cancels leaves 1e-16) is zero."""
+    inputs whose column of the directional derivatives is not zero somewhere: at two generic states and inputs,
+    with the drive's lag off (ddx is u) and on (ddx is the drive's state); an entry within rounding of zero
+    (1e-12; a term that cancels leaves 1e-16) is zero. The output ddx too, which reads u in Model Exchange only
+    (the acceleration now; in co-simulation the acceleration over the last step, its own test above): one
+    ModelStructure serves both interfaces, so it lists u."""
     md = fmpy.read_model_description(str(plant_fmu))
     unknowns = list(md.derivatives) + list(md.outputs)
     shown = [set() for _ in unknowns]
@@ -492,9 +488,6 @@ def test_the_model_structure_lists_exactly_the_dependencies_the_directional_deri
     for unknown, found in zip(unknowns, shown):
         listed = {names[v.valueReference] for v in unknown.dependencies}
         found = {names[k] for k in found}
-        if unknown in md.outputs:
-            found -= {k for o, k in UNLISTED if o == unknown.variable.name}
         assert listed == found, (unknown.variable.name, sorted(listed ^ found))
     ddx = md.outputs[[u.variable.name for u in md.outputs].index("ddx")]
-    assert {v.name for v in ddx.dependencies} == {"drive"}  # and u, as the directional derivatives show
-    assert "u" in {names[k] for k in shown[unknowns.index(ddx)]}
+    assert {v.name for v in ddx.dependencies} == {"drive", "u"}

@@ -7,6 +7,10 @@ algebraic loop, as OMSimulator showed with outputs that listed nothing, read as 
 initialisation (``InitialUnknowns``, ``InitialUnknown``) the same holds for the inputs, and every output also
 lists every parameter (until initialisation ends the outputs follow them). Every FMU kind we build: the
 pythonfmu FMUs, the native components, the one-FMU systems (FMI 2.0 and 3.0), and the container FMUs.
+
+An FMU with Model Exchange beside co-simulation has one ModelStructure for both: an input is listed exactly where
+it moves the output in one of them (the plant's ``ddx`` reads ``u`` in Model Exchange only), so there the inputs are
+perturbed in both, co-simulation's step mode and Model Exchange's continuous-time mode.
 """
 
 import random
@@ -70,6 +74,22 @@ def _moved(fmu, vr, set_, get, inputs, outputs):
     return moved
 
 
+def _moved_in_each_mode(path, version, md, inputs, outputs, model_exchange):
+    """``[{input: moved outputs} in initialisation mode, the same after it]``: co-simulation's step mode before any
+    step, or Model Exchange's continuous-time mode."""
+    fmu, vr, set_, get = open_native(path, version, ACTING.get(md.coSimulation.modelIdentifier),
+                                     model_exchange=model_exchange)
+    try:
+        found = [_moved(fmu, vr, set_, get, inputs, outputs)]
+        fmu.exitInitializationMode()
+        if model_exchange:
+            (fmu.updateDiscreteStates if version == 3 else fmu.newDiscreteStates)()
+            fmu.enterContinuousTimeMode()
+        return found + [_moved(fmu, vr, set_, get, inputs, outputs)]
+    finally:
+        fmu.freeInstance()
+
+
 @pytest.mark.parametrize("kind, version", [("python", 2), ("python", 3), ("native", 2), ("native", 3),
                                            ("one-fmu", 2), ("one-fmu", 3), ("container", 3)])
 def test_perturbing_an_input_moves_exactly_the_outputs_that_list_it(fmu_dir, kind, version):
@@ -78,24 +98,21 @@ def test_perturbing_an_input_moves_exactly_the_outputs_that_list_it(fmu_dir, kin
         inputs = [v.name for v in md.modelVariables if v.causality == "input"]
         outputs = [u.variable.name for u in md.outputs]
         parameters = {v.name for v in md.modelVariables if v.causality == "parameter"}
-        fmu, vr, set_, get = open_native(path, version, ACTING.get(md.coSimulation.modelIdentifier))
-        try:
-            for initial in (True, False):  # initialisation mode, then step mode before any step
-                if not initial:
-                    fmu.exitInitializationMode()
-                declared, listed_parameters = _declared(md, initial)
-                moved = _moved(fmu, vr, set_, get, inputs, outputs) if inputs else {}
-                stepwise = STEPWISE.get(md.coSimulation.modelIdentifier, set())
-                for name in inputs:
-                    listing = {o for o in outputs if name in declared[o]}
-                    assert moved[name] - stepwise == listing - stepwise, (path.name, initial, name)
-                    assert moved[name] <= listing, (path.name, initial, name)
-                if initial:
-                    assert all(listed == parameters for listed in listed_parameters.values()), path.name
-                else:
-                    assert not any(listed_parameters.values()), path.name
-        finally:
-            fmu.freeInstance()
+        stepwise = STEPWISE.get(md.coSimulation.modelIdentifier, set())
+        interfaces = (False, True) if md.modelExchange else (False,)
+        by_interface = [_moved_in_each_mode(path, version, md, inputs, outputs, me) for me in interfaces] if inputs \
+            else [[{}, {}]]
+        for initial in (True, False):  # initialisation mode, then step mode (continuous-time mode) after it
+            declared, listed_parameters = _declared(md, initial)
+            for name in inputs:
+                listing = {o for o in outputs if name in declared[o]}
+                moved = set().union(*(modes[not initial][name] for modes in by_interface))
+                assert moved - stepwise == listing - stepwise, (path.name, initial, name)
+                assert moved <= listing, (path.name, initial, name)
+            if initial:
+                assert all(listed == parameters for listed in listed_parameters.values()), path.name
+            else:
+                assert not any(listed_parameters.values()), path.name
 
 
 def test_a_feedthrough_component_declares_its_inputs_per_output():
@@ -105,3 +122,17 @@ def test_a_feedthrough_component_declares_its_inputs_per_output():
     assert components.get("CranePlant").dependencies()["x"] == ()
     assert components.get("BacksteppingController").dependencies()["u"] == components.get(
         "BacksteppingController").names("input")
+
+
+def test_the_model_exchange_plant_lists_what_its_acceleration_reads_and_co_simulation_does_not_move_it(fmu_dir):
+    """ddx is the acceleration now in Model Exchange (u through the drive), over the last step in co-simulation:
+    listed, u moves it in Model Exchange only, and the union rule above is what holds the listing."""
+    path = native_dir(fmu_dir, 2) / "CranePlant.fmu"
+    if not path.exists():
+        pytest.skip("no native FMUs were built (no C compiler)")
+    md = read_model_description(str(path))
+    inputs = [v.name for v in md.modelVariables if v.causality == "input"]
+    outputs = [u.variable.name for u in md.outputs]
+    assert "u" in _declared(md, False)[0]["ddx"]
+    co_simulation, model_exchange = (_moved_in_each_mode(path, 2, md, inputs, outputs, me)[1] for me in (False, True))
+    assert "ddx" in model_exchange["u"] and "ddx" not in co_simulation["u"]

@@ -52,8 +52,10 @@ class Instance:
         ``{name: fmpy ScalarVariable}``.
     inputs, outputs : list of str
         Names of the inputs and outputs, in modelDescription order.
+    dependencies : dict
+        ``{output: (input, ...)}``: the inputs each output reads at the same instant (ModelStructure).
     feedthrough : bool
-        Some output depends on an input of the same instant (ModelStructure).
+        Some output depends on an input of the same instant.
 
     Subclasses implement ``set``, ``get``, ``setup``, ``enter_initialization``,
     ``exit_initialization``, the saved-state calls, ``terminate``, and the hot
@@ -81,8 +83,11 @@ class Instance:
         self.inputs = [v.name for v in self.md.modelVariables if v.causality == "input"]
         # FMI: an output without a dependencies attribute may depend on every input (a listed continuous state of
         # an FMU with Model Exchange is no input)
-        self.feedthrough = bool(self.inputs) and any(
-            u.dependencies is None or any(v.causality == "input" for v in u.dependencies) for u in self.md.outputs)
+        self.dependencies = {name: () for name in self.outputs}
+        self.dependencies.update({u.variable.name: tuple(self.inputs) if u.dependencies is None else
+                                  tuple(v.name for v in u.dependencies if v.causality == "input")
+                                  for u in self.md.outputs})
+        self.feedthrough = any(self.dependencies.values())
 
     def _call(self, function, call, *args, **kwargs):
         """Run an fmpy call, turning its exceptions into FmiError (with the exception as cause)."""

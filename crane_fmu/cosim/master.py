@@ -17,6 +17,7 @@ import ctypes
 from . import algorithms
 from .compiled_loop import CompiledLoop
 from .connections import connect
+from .exchange import AlgebraicLoop, Calls, exchange_calls
 
 
 def communication_points(start_time, stop_time, step):
@@ -113,9 +114,12 @@ class Wiring:
             wiring[c.target].append((c.input, src, src.instance.outputs.index(c.output)))
         for name, links in wiring.items():
             self.ports[name].connect(links)
-        self._sources = {name: {c.source for c in connections if c.target == name and c.source != name
-                                and instances[name].feedthrough} for name in instances}
-        self.order = self._dependency_order() or list(self.ports.values())
+        try:
+            self._calls, self.loop = exchange_calls(list(instances), {name: inst.dependencies for name, inst in
+                                                                     instances.items()}, connections), None
+        except AlgebraicLoop as loop:  # Jacobi's exchanges step it as it is; Gauss-Seidel refuses it
+            self._calls, self.loop = Calls([], list(instances)), loop
+        self.order = [self.ports[name] for name in self._calls.order]
         self.reads = [p.read for p in self.order]
         self.writes = [p.write for p in self.order if p.write]
         self.steps = [p.step for p in self.order]
@@ -123,30 +127,15 @@ class Wiring:
         self._callers = {id(call): (instance, function) for call, function, instance in
                          self.reads + self.writes + self.steps}
 
-    def _dependency_order(self):
-        """Ports ordered so that every feedthrough instance follows its sources; None around an algebraic loop."""
-        after, order = dict(self._sources), []
-        while after:
-            ready = [n for n, deps in after.items() if not deps - set(order)]
-            if not ready:
-                self.loop = sorted(after)
-                return None
-            for n in ready:
-                order.append(n)
-                del after[n]
-        self.loop = None
-        return [self.ports[n] for n in order]
-
     def propagation(self):
-        """The calls that propagate values along the connections in dependency order: a feedthrough
-        instance gets its inputs before its outputs are read, the others once every output is known.
-        ValueError around an algebraic loop of direct-feedthrough instances."""
+        """The calls that propagate values along the connections in dependency order, judged per variable
+        (:func:`~crane_fmu.cosim.exchange.exchange_calls`): an output that reads an input of the same instant is
+        read after that input is set. :class:`~crane_fmu.cosim.exchange.AlgebraicLoop` (a ValueError) around an
+        algebraic loop of direct feedthrough."""
         if self.loop:
-            raise ValueError("algebraic loop through direct-feedthrough instances: " + ", ".join(self.loop))
-        calls = []
-        for p in self.order:
-            calls += [p.write, p.read] if p.instance.feedthrough else [p.read]
-        return [c for c in calls + [p.write for p in self.order if not p.instance.feedthrough] if c]
+            raise self.loop
+        calls = [getattr(self.ports[name], op) for op, name in self._calls.exchange]
+        return [c for c in calls if c]
 
     def fail(self, call, status, time):
         instance, function = self._callers[id(call)]

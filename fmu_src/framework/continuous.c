@@ -36,8 +36,8 @@ int set_time(Instance *c, const char *function, double time) {
     return MODEL_OK;
 }
 
-int enter_event_mode(Instance *c, const char *function) {
-    if (!checked(c, function, EVENT_MODE | CONTINUOUS_TIME)) return MODEL_ERROR;
+int enter_event_mode(Instance *c, const char *function, int modes) {
+    if (!checked(c, function, modes)) return MODEL_ERROR;
     c->mode = EVENT_MODE;
     return MODEL_OK;
 }

@@ -14,7 +14,9 @@
 /* Is `c` an instance the host integrates? If not, it logs why. */
 int is_model_exchange(Instance *c, const char *function);
 int set_time(Instance *c, const char *function, double time);
-int enter_event_mode(Instance *c, const char *function);
+/* Event mode from the `modes` the version allows: FMI 2.0 also from event mode, FMI 3.0 from continuous-time
+   mode only (its Event Mode section does not list fmi3EnterEventMode). */
+int enter_event_mode(Instance *c, const char *function, int modes);
 int enter_continuous_time_mode(Instance *c, const char *function);
 /* The model needs no event at an integrator step (its events are all state events). */
 int completed_integrator_step(Instance *c, const char *function, int *enter_event_mode, int *terminate);

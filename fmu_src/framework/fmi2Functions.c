@@ -106,7 +106,9 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean no_pr
 
 /* ---- Model Exchange (continuous.c) ---- */
 
-fmi2Status fmi2EnterEventMode(fmi2Component c) { return enter_event_mode(c, "fmi2EnterEventMode"); }
+fmi2Status fmi2EnterEventMode(fmi2Component c) {
+    return enter_event_mode(c, "fmi2EnterEventMode", EVENT_MODE | CONTINUOUS_TIME);
+}
 fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
     return enter_continuous_time_mode(c, "fmi2EnterContinuousTimeMode");
 }

@@ -216,7 +216,7 @@ fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 t, fmi3Float64 h, fmi3Boolean 
 
 /* ---- Model Exchange (continuous.c) ---- */
 
-fmi3Status fmi3EnterEventMode(fmi3Instance c) { return enter_event_mode(c, "fmi3EnterEventMode"); }
+fmi3Status fmi3EnterEventMode(fmi3Instance c) { return enter_event_mode(c, "fmi3EnterEventMode", CONTINUOUS_TIME); }
 fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance c) {
     return enter_continuous_time_mode(c, "fmi3EnterContinuousTimeMode");
 }
