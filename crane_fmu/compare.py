@@ -11,11 +11,13 @@ again, saying why. Every row records its provenance (:func:`provenance`), and
 ``OUT/board.json`` what the board was made of, so that :func:`check` can run a
 sample of its cases again and confirm their figures bit for bit.
 
-From a script, call :func:`compare` under ``if __name__ == "__main__":``: the
-local Dask cluster starts its workers as fresh Python processes, which import
-the script again (the ``spawn`` start method), as ``multiprocessing`` does.
+From a script, call :func:`compare` under ``if __name__ == "__main__":``: on
+Linux the local Dask cluster forks its workers from the calling process, but
+elsewhere it starts them as fresh Python processes, which import the script
+again (the ``spawn`` start method), as ``multiprocessing`` does.
 """
 
+import functools
 import hashlib
 import importlib.metadata
 import json
@@ -99,6 +101,11 @@ MANIFEST = "board.json"
 
 def versions():
     """The versions that make a figure: this project, Python, fmpy, numpy, scipy."""
+    return dict(_versions())
+
+
+@functools.cache
+def _versions():  # read once per process: importlib.metadata takes about 4 ms a case
     return {"crane-antisway-cosim": importlib.metadata.version("crane-antisway-cosim"),
             "python": platform.python_version(), "fmpy": fmpy.__version__, "numpy": np.__version__,
             "scipy": scipy.__version__}

@@ -221,7 +221,8 @@ def test_the_wrappers_cached_readers_and_writers_follow_reset_and_saved_states(c
 
 
 def test_an_unzipped_fmu_is_reused_once_freed_and_removed_at_exit(crane_fmus):
-    """Instances alive together each have their own folder; a freed one's folder serves the next instance."""
+    """Instances alive together each have their own folder; a freed one's folder, with its library still loaded,
+    serves the next instance, which runs from a fresh fmi2Instantiate (the same step gives the same figures)."""
     import subprocess
     import sys
 
@@ -230,11 +231,22 @@ import sys
 from crane_fmu.cosim import open_instance
 a, b = open_instance(sys.argv[1], "a"), open_instance(sys.argv[1], "b")
 assert a._unzip != b._unzip
-folders = {a._unzip, b._unzip}
+folders, libraries = {a._unzip, b._unzip}, {id(a._fmu), id(b._fmu)}
+
+def swing(inst):
+    inst.set("theta1_0", 0.2)
+    inst.setup(0.0)
+    inst.enter_initialization()
+    inst.exit_initialization()
+    inst.do_step(0.0, 0.01)
+    return inst.get("theta1")
+
+first = swing(a)
 a.free()
 b.free()
 c = open_instance(sys.argv[1], "c")
-assert c._unzip in folders, (c._unzip, folders)
+assert c._unzip in folders and id(c._fmu) in libraries, (c._unzip, folders)
+assert swing(c) == first and first != 0.2
 c.free()
 print(*folders)
 """

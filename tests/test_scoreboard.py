@@ -188,6 +188,28 @@ def test_animate_shows_progress_when_asked(tmp_path, capsys):
     assert capsys.readouterr().err == ""
 
 
+def test_an_animation_drawn_before_from_the_same_run_is_copied_and_another_run_is_drawn(tmp_path, monkeypatch):
+    """The picture store: the same case id gives the very file drawn before, without drawing; another case id draws
+    again."""
+    from crane_fmu.analysis import score_plots
+
+    t = np.linspace(0.0, 0.3, 31)
+    signals = {"time": t.tolist(), "x": t.tolist(), "x1": t.tolist(), "y1": [-1.0] * 31, "x2": t.tolist(),
+               "y2": [-1.5] * 31}
+    rows = [{"scenario": "S2", "controller": "A", "case_id": "run-a", "status": "ok", "signals": signals}]
+    drawn = []
+    animate = score_plots.animate
+    monkeypatch.setattr(score_plots, "animate", lambda *a, **k: drawn.append(a[1].name) or animate(*a, **k))
+    store = tmp_path / "store"
+    first = score_plots.animate_all(rows, "S2", tmp_path / "one", fps=10, store=store)
+    second = score_plots.animate_all(rows, "S2", tmp_path / "two", fps=10, store=store)
+    assert drawn == ["S2_A.gif"] and [p.name for p in second] == ["S2_A.gif"]
+    assert second[0].read_bytes() == first[0].read_bytes() and len(list(store.iterdir())) == 1
+    rows[0]["case_id"] = "run-b"  # another run: drawn again, even with the same signals
+    score_plots.animate_all(rows, "S2", tmp_path / "three", fps=10, store=store)
+    assert drawn == ["S2_A.gif"] * 2 and len(list(store.iterdir())) == 2
+
+
 # ---- the residual swing: a window the scenario fixes, and targets a swinging run cannot meet ---------------------
 
 TRACKER = Contender("Tracker", "Tracker", list(scoreboard.MEASURED) + ["x_ref", "dx_ref", "ddx_ref"], [])

@@ -1,10 +1,14 @@
 """The scoreboard's pictures: comparison plots and animations of the crane (matplotlib, Agg)."""
 
+import functools
+import hashlib
 import json
 import math
+import os
 import shutil
 import subprocess
 import sys
+import tempfile
 import zlib
 from pathlib import Path
 
@@ -203,10 +207,61 @@ def summary_figure(rows, users=(), stats=None):
     return fig
 
 
-def plot_all(rows, out_dir, users=(), stats=None):
-    """The S1, S2 and S7 runs and the summary, as PNGs in ``out_dir``; return their paths."""
-    paths = [plot_runs(rows, s, Path(out_dir) / f"{s}.png", users) for s in ("S1", "S2", "S7")]
-    return [p for p in paths if p] + [plot_summary(rows, Path(out_dir) / "summary.png", users, stats)]
+def plot_all(rows, out_dir, users=(), stats=None, store=None):
+    """The S1, S2 and S7 runs and the summary, as PNGs in ``out_dir``; return their paths.
+
+    A picture drawn before on this machine from the same cases is copied from ``store`` (see :func:`kept`): a case's
+    id is the hash of everything its run is made of, and the summary's statistics are a function of the rows.
+    """
+    quick, users = any(r.get("quick") for r in rows), sorted(users)
+    paths = []
+    for s in ("S1", "S2", "S7"):
+        runs = sorted(_nominal(rows, s), key=lambda r: r["controller"])
+        if runs:
+            made_of = [s, users, quick, [[r["case_id"], r["status"]] for r in runs]]
+            paths.append(kept(Path(out_dir) / f"{s}.png", made_of, lambda path, s=s: plot_runs(rows, s, path, users),
+                              store))
+    cases = sorted([str(r.get(k)) for k in ("case_id", "controller", "scenario", "case", "status", "error")]
+                   for r in rows)
+    return paths + [kept(Path(out_dir) / "summary.png", ["summary", users, quick, cases],
+                         lambda path: plot_summary(rows, path, users, stats), store)]
+
+
+STORE = "crane_fmu_pictures"  # in the temporary folder: pictures by what they were drawn from
+
+
+def kept(path, made_of, draw, store=None):
+    """``draw(path)``, or a copy of the file it wrote before on this machine from the same ``made_of``; return
+    ``path``.
+
+    ``made_of`` (JSON) names everything the picture is drawn from: case ids, each the hash of everything its run is
+    made of. With this package's sources and matplotlib's and Pillow's versions, it is the file's name in ``store``
+    (default: the temporary folder's ``crane_fmu_pictures``): an edit of the code draws every picture again.
+    """
+    name = hashlib.sha256(json.dumps([_drawn_by(), made_of]).encode())
+    stored = Path(store or Path(tempfile.gettempdir()) / STORE) / f"{name.hexdigest()[:32]}{path.suffix}"
+    partial = path.with_name(f".{path.stem}.partial{path.suffix}")
+    if stored.is_file():
+        shutil.copyfile(stored, partial)
+        partial.replace(path)
+        return path
+    draw(path)
+    stored.parent.mkdir(parents=True, exist_ok=True)
+    spare = stored.with_name(f".{stored.name}.{os.getpid()}.partial")
+    shutil.copyfile(path, spare)
+    os.replace(spare, stored)
+    return path
+
+
+@functools.cache
+def _drawn_by():
+    """What draws the pictures: this package's sources (read once per process), matplotlib's and Pillow's versions."""
+    import matplotlib
+    import PIL
+
+    from .floor import code_key
+
+    return code_key(), matplotlib.__version__, PIL.__version__
 
 
 def animate(signals, path, title="", fps=15, progress=False):
@@ -311,11 +366,12 @@ def _write_mp4(images, path, fps):
     subprocess.run(command, input=b"".join(a.tobytes() for a in images), check=True)
 
 
-def animate_all(rows, scenario, out_dir, fps=15):
+def animate_all(rows, scenario, out_dir, fps=15, store=None):
     """A GIF (and an MP4 where ffmpeg is available) of each controller's nominal run of a scenario.
 
     An animation is drawn again only when its run changed: ``.drawn.json`` in ``out_dir`` keeps the
-    case id each file was drawn from. Returns the paths drawn now.
+    case id each file was drawn from. One drawn before on this machine from the same run is copied from
+    ``store`` (see :func:`kept`). Returns the paths written now.
     """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -331,7 +387,8 @@ def animate_all(rows, scenario, out_dir, fps=15):
             path = out_dir / f"{scenario}_{r['controller']}{suffix}"
             if drawn.get(path.name) == key and path.exists():
                 continue
-            paths.append(animate(r["signals"], path, title, fps=fps))
+            paths.append(kept(path, [r["case_id"], fps, title],
+                              lambda path, r=r, title=title: animate(r["signals"], path, title, fps=fps), store))
             drawn[path.name] = key
             partial = ledger.with_suffix(".partial")
             partial.write_text(json.dumps(drawn, indent=1, sort_keys=True))

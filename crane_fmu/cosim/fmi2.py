@@ -48,8 +48,7 @@ class Fmi2Instance(Instance):
     def __init__(self, path, name):
         self._describe(path, name)
         try:
-            self._fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self._unzip,
-                                  modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+            self._fmu = self._library_of(FMU2Slave)
             key = next(_keys)
             _instances[key] = self
             self._callbacks = fmi2CallbackFunctions()

@@ -15,8 +15,7 @@ class Fmi3Instance(Instance):
         self._describe(path, name)
         self._start = self._stop = None
         try:
-            self._fmu = FMU3Slave(guid=self.md.guid, unzipDirectory=self._unzip,
-                                  modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+            self._fmu = self._library_of(FMU3Slave)
             self._call("fmi3InstantiateCoSimulation", self._fmu.instantiate, loggingOn=True,
                        logMessage=self._log)
         except BaseException:

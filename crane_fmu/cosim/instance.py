@@ -72,7 +72,7 @@ class Instance:
         self.messages = deque(maxlen=20)  # the FMU's latest log messages
         self.time = None
         self._instantiated = False
-        self._folder_key, self._unzip = _take_folder(path)
+        self._folder_key, self._unzip, self._spare = _take_folder(path)
 
     def _interface(self, path, name):
         """The name, model description, variables, inputs, outputs and feedthrough of the FMU at ``path``."""
@@ -151,40 +151,57 @@ class Instance:
         """A ctypes array of the value references of ``names`` (checked)."""
         return (ctypes.c_uint * len(names))(*(self._variable(n).valueReference for n in names))
 
+    def _library_of(self, kind):
+        """fmpy's ``kind`` (FMU2Slave, FMU3Slave) over this instance's folder: the spare one that came with the
+        folder, its library still loaded, else a new one (which loads it)."""
+        if self._spare is None:
+            return kind(guid=self.md.guid, unzipDirectory=self._unzip,
+                        modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=self.name)
+        fmu, self._spare = self._spare, None
+        fmu.instanceName = self.name
+        return fmu
+
     def free(self):
-        """Free the instance and unload the library; safe to call twice. The extracted folder is kept for the
-        next instance of this FMU file and removed when the process exits."""
+        """Free the instance (fmi2FreeInstance, fmi3FreeInstance); safe to call twice. The extracted folder and
+        its loaded library are kept for the next instance of this FMU file; the folder is removed when the
+        process exits."""
         if self._instantiated:
             self._instantiated = False
+            library = None
             try:
-                self._fmu.freeInstance()
+                getattr(self._fmu, f"fmi{self.md.fmiVersion[0]}FreeInstance")(self._fmu.component)
+                library = self._fmu
             finally:
-                _SPARE_FOLDERS.setdefault(self._folder_key, []).append(self._unzip)
+                _SPARE_FOLDERS.setdefault(self._folder_key, []).append((self._unzip, library))
 
 
-# Extracted FMUs no instance uses now, by FMU file version: the next instance of the same FMU takes
-# one instead of unzipping it again (a sweep's worker runs thousands of cases); removed at exit.
-# Instances alive at the same time each have their own folder, as if every one had unzipped it.
+# Extracted FMUs no instance uses now, by FMU file version, each with fmpy's object over its library, still
+# loaded: the next instance of the same FMU takes one instead of unzipping it again and loading its library
+# (fmpy binds each FMI function by inspecting its Python signature: about 8 ms an FMU, more than a whole case
+# of the scoreboard simulates). A new instance is made by fmi2Instantiate / fmi3InstantiateCoSimulation, as the
+# standard allows after the library's previous instance was freed. Folders are removed at exit. Instances alive
+# at the same time each have their own folder and library, as if every one had unzipped it.
 _SPARE_FOLDERS = {}
 
 
 def _take_folder(path):
-    """``(key, folder)``: a spare extracted folder of the FMU at ``path``, else a new one."""
+    """``(key, folder, fmu)``: a spare extracted folder of the FMU at ``path`` with fmpy's object over its loaded
+    library (None when not loaded), else a new folder and None."""
     key = _file_version(path)
     spare = _SPARE_FOLDERS.get(key)
     while spare:
-        folder = spare.pop()
+        folder, fmu = spare.pop()
         if os.path.isdir(folder):
-            return key, folder
+            return key, folder, fmu
     from fmpy import extract  # start-up: fmpy takes about 0.4 s to import
 
-    return key, extract(str(path))
+    return key, extract(str(path)), None
 
 
 @atexit.register
 def _remove_spare_folders():
     for folders in _SPARE_FOLDERS.values():
-        for folder in folders:
+        for folder, _ in folders:
             shutil.rmtree(folder, ignore_errors=True)
     _SPARE_FOLDERS.clear()
 
