@@ -456,6 +456,7 @@ def solve(config, state, measured, l1_now):
     replan = count == 0 or model is not None or (moved and at >= plan_after)
     large = deviation(d, measured, target)[1] > LARGEST_SWING  # too far from rest for the linear model's plan
     if replan and large:  # none made: the tracking QP takes the swing down alone, a plan is tried at the next interval
+        replan = bool(plan_u) or model is not None  # the last solve's warm start holds unless a plan or model changed
         plan_u, plan_s = (), ()
         plan_start, step, plan_after = at, 0, at
     elif replan:

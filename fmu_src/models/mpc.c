@@ -591,6 +591,7 @@ static const char *solve(Config *c, const double *state, const double measured[N
     deviation(d, measured, target, &to_trolley, &to_rest);
     int large = to_rest > LARGEST_SWING; /* too far from rest for the linear model's plan */
     if (replan && large) { /* none made: the tracking QP takes the swing down alone, a plan tried next interval */
+        replan = n_plan > 0 || found_model; /* the last solve's warm start holds unless a plan or model changed */
         n_plan = 0, n_states = 0, plan_u = plan_s = new_plan_u;
         plan_start = at, step = 0, plan_after = at;
     } else if (replan) {
