@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from crane_fmu import systems
-from crane_fmu.analysis import floor, metrics, scoreboard
+from crane_fmu.analysis import controller_targets, floor, metrics, scoreboard
 from crane_fmu.cosim import ArrayRecorder, run
 from crane_fmu.model import mpc, plant, qp
 from crane_fmu.model.component import Step
@@ -269,3 +269,17 @@ def test_the_mpc_meets_the_board_targets_through_the_fmus(fmu_dir, scenario, cas
     s = metrics.crane_signals(c, ("dx",))
     m = metrics.move_metrics(s["time"], s["x"], s["dx"], s["theta1"], s["theta2"], s["u"], x_d)
     assert m[metric] is not None and m[metric] <= bound
+
+
+def test_the_targets_measure_the_mpcs_residual_over_the_boards_window():
+    """``crane-fmu targets`` and the board give the same residual: every MPC run of the targets carries its board
+    case's window (a move's: the planned move's end plus a slow period, not the last quarter of the run)."""
+    contender = scoreboard.Contender("MpcController", "MpcController",
+                                     list(mpc.COMPONENT.names("input")), list(mpc.COMPONENT.names("parameter")))
+    runs = controller_targets.mpc_runs(quick=True)
+    assert {r.group for r in runs} == {"mpc_S1", "mpc_S2", "mpc_S3"}
+    for r in runs:
+        board = {case.label: case.residual_from for case in scoreboard.systems_for(contender, r.group[4:], 3)}
+        assert r.residual_from == board[r.label]
+        if r.group != "mpc_S1":  # a move: the window opens well before the run's last quarter
+            assert r.residual_from < 0.75 * r.stop_time
