@@ -283,3 +283,14 @@ def test_the_targets_measure_the_mpcs_residual_over_the_boards_window():
         assert r.residual_from == board[r.label]
         if r.group != "mpc_S1":  # a move: the window opens well before the run's last quarter
             assert r.residual_from < 0.75 * r.stop_time
+
+
+@pytest.mark.parametrize("degrees, planned", [(10.0, True), (60.0, False)])
+def test_no_move_is_planned_from_a_swing_beyond_the_linear_models_reach(degrees, planned):
+    """S1's 10 deg swing is planned at the first solve; from a hard hit's 60 deg (beyond LARGEST_SWING as a modal
+    amplitude) no plan is made and the tracking QP alone acts, at the drive's limit."""
+    result, _, state = _loop({"theta1_0": math.radians(degrees)}, {}, 0.1, with_state=True)
+    d = mpc.configure({**mpc.COMPONENT.defaults(), "h": 1e-3}).designs[0]
+    assert (mpc.deviation(d, result[0, :6], (0.0,) * 6)[1] <= mpc.LARGEST_SWING) == planned
+    assert (state[mpc.HEADER.plan_steps] > 0) == planned
+    assert np.max(np.abs(result[:, 6])) == pytest.approx(2.0)
