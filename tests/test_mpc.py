@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from crane_fmu import systems
-from crane_fmu.analysis import floor, metrics, scoreboard
+from crane_fmu.analysis import controller_targets, floor, metrics, scoreboard
 from crane_fmu.cosim import ArrayRecorder, run
 from crane_fmu.model import mpc, plant, qp
 from crane_fmu.model.component import Step
@@ -269,3 +269,28 @@ def test_the_mpc_meets_the_board_targets_through_the_fmus(fmu_dir, scenario, cas
     s = metrics.crane_signals(c, ("dx",))
     m = metrics.move_metrics(s["time"], s["x"], s["dx"], s["theta1"], s["theta2"], s["u"], x_d)
     assert m[metric] is not None and m[metric] <= bound
+
+
+def test_the_targets_measure_the_mpcs_residual_over_the_boards_window():
+    """``crane-fmu targets`` and the board give the same residual: every MPC run of the targets carries its board
+    case's window (a move's: the planned move's end plus a slow period, not the last quarter of the run)."""
+    contender = scoreboard.Contender("MpcController", "MpcController",
+                                     list(mpc.COMPONENT.names("input")), list(mpc.COMPONENT.names("parameter")))
+    runs = controller_targets.mpc_runs(quick=True)
+    assert {r.group for r in runs} == {"mpc_S1", "mpc_S2", "mpc_S3"}
+    for r in runs:
+        board = {case.label: case.residual_from for case in scoreboard.systems_for(contender, r.group[4:], 3)}
+        assert r.residual_from == board[r.label]
+        if r.group != "mpc_S1":  # a move: the window opens well before the run's last quarter
+            assert r.residual_from < 0.75 * r.stop_time
+
+
+@pytest.mark.parametrize("degrees, planned", [(10.0, True), (60.0, False)])
+def test_no_move_is_planned_from_a_swing_beyond_the_linear_models_reach(degrees, planned):
+    """S1's 10 deg swing is planned at the first solve; from a hard hit's 60 deg (beyond LARGEST_SWING as a modal
+    amplitude) no plan is made and the tracking QP alone acts, at the drive's limit."""
+    result, _, state = _loop({"theta1_0": math.radians(degrees)}, {}, 0.1, with_state=True)
+    d = mpc.configure({**mpc.COMPONENT.defaults(), "h": 1e-3}).designs[0]
+    assert (mpc.deviation(d, result[0, :6], (0.0,) * 6)[1] <= mpc.LARGEST_SWING) == planned
+    assert (state[mpc.HEADER.plan_steps] > 0) == planned
+    assert np.max(np.abs(result[:, 6])) == pytest.approx(2.0)

@@ -185,6 +185,7 @@ RUNS = {  # system, plant parameters over the system's, stop time: the limits bi
     "regulation": ("mpc", {}, 1.5),
     "transport": ("mpc-transport", {}, 3.0),
     "unknown plant": ("mpc-transport", MISMATCH, 1.0),
+    "hard hit": ("mpc", {"theta1_0": math.radians(60.0)}, 1.0),  # no plan from the large swing: the QP alone
 }
 
 

@@ -16,8 +16,9 @@ from crane_fmu.cosim import ArrayRecorder, FmiError, run
 
 from . import metrics, scoreboard
 
-Run = namedtuple("Run", "group label system parameters step stop_time")
-Run.__doc__ = "One co-simulation: its group and label, a system (a registered name or a System), its settings."
+Run = namedtuple("Run", "group label system parameters step stop_time residual_from", defaults=(None,))
+Run.__doc__ = ("One co-simulation: its group and label, a system (a registered name or a System), its settings, and the "
+               "start of its residual swing's window [s] (None: :func:`.scoreboard.residual_from` of the run's planner).")
 SHAPERS = ("zv", "zvd", "ei", "none")
 ROA_ANGLES = tuple(range(5, 65, 5))
 MISMATCH, DISTANCE = scoreboard.MISMATCH, scoreboard.DISTANCE  # a grid of plants unknown to the controller, S2's move
@@ -53,10 +54,10 @@ def mpc_runs(quick=False):
                                      list(mpc.names("parameter")))
     runs = []
     for sid in ("S1", "S2", "S3") if quick else ("S1", "S2", "S3", "S7", "S8"):
-        for label, system, step, stop_time, *_ in scoreboard.systems_for(contender, sid, 3 if quick else
-                                                                          scoreboard.CASES):
+        for label, system, step, stop_time, _, window in scoreboard.systems_for(contender, sid, 3 if quick else
+                                                                                 scoreboard.CASES):
             group = f"mpc_{sid}" + (f"_{label}" if sid == "S8" else "")
-            runs.append(Run(group, label, system, {}, step, stop_time))
+            runs.append(Run(group, label, system, {}, step, stop_time, window))  # the board's residual window
     if not quick:
         runs.append(Run("mpc_hard_hit", f"{HARD_HIT_DEG:g} deg", "mpc",
                         {"plant": {"theta1_0": math.radians(HARD_HIT_DEG)}}, 1e-3, 20.0))
@@ -96,8 +97,8 @@ def measure(r, fmu_dir):
         plant["l1"] = system.parameters["hoist"]["x_d"]  # the cable as the run ends
     plan = system.parameters.get("planner", {}) if "planner" in system.instances else None
     s = metrics.crane_signals(recorder.columns(), ("dx",))
-    result = metrics.move_metrics(s["time"], s["x"], s["dx"], s["theta1"], s["theta2"], s["u"], x_d,
-                                  scoreboard.residual_from(r.stop_time, plan, plant))
+    window = r.residual_from if r.residual_from is not None else scoreboard.residual_from(r.stop_time, plan, plant)
+    result = metrics.move_metrics(s["time"], s["x"], s["dx"], s["theta1"], s["theta2"], s["u"], x_d, window)
     result.update(outcome=metrics.classify(s["time"], s["theta1"], s["theta2"], error is None), error=error,
                   end_s=float(s["time"][-1]))
     return r, result

@@ -30,6 +30,9 @@ after ``identify`` seconds of data their least-squares solution (when well posed
 explaining the data) replaces the model, and the move is planned again with it (:func:`identify`).
 The move is planned again too when the measured state leaves the plan by ``replan_x`` (trolley) or
 ``replan_angle`` (swing, as a modal amplitude; :func:`deviation`), at most every :data:`REPLAN_GAP`.
+No move is planned from a swing larger than :data:`LARGEST_SWING` (a hard hit), where the linear model's plan
+would be far off: the tracking QP alone takes the swing down, its trolley error left out (the trolley free), and
+the move is planned once the swing is below it.
 
 What is claimed is measured, not proven: ``crane-fmu targets`` and the scoreboard
 give its figures; the plan is only as good as the linear model (a few tenths of a
@@ -54,6 +57,7 @@ MAX_PLAN = 1200  # the most intervals a plan may have (LONGEST_PLAN of them at l
 SCHEDULE_POINTS = 11
 REPLAN_GAP = 0.25  # s: the least time between two plans made because the state left the plan
 RETRY_GAP = 6.0  # s: ... after no move within LONGEST_PLAN was found (each attempt costs a bisection of QPs)
+LARGEST_SWING = math.radians(17.5)  # rad: no move is planned from a larger swing (as a modal amplitude, deviation)
 WELL_POSED = 1e-2  # ... and gives a model when no pivot of its normal equations falls below this share
 MISFIT = 1e-5  # ... that explains the data to this share of their squares (0.3 % RMS): clean measurements
 PLAUSIBLE = 2.0  # ... within this factor of the configured cable lengths
@@ -450,7 +454,12 @@ def solve(config, state, measured, l1_now):
     rescheduled = len(c.designs) > 1 and d.l1 != state[HEADER.plan_l1]  # the schedule's design changed
     moved = trolley > c.replan_x or swing > c.replan_angle or rescheduled
     replan = count == 0 or model is not None or (moved and at >= plan_after)
-    if replan:
+    large = deviation(d, measured, target)[1] > LARGEST_SWING  # too far from rest for the linear model's plan
+    if replan and large:  # none made: the tracking QP takes the swing down alone, a plan is tried at the next interval
+        replan = bool(plan_u) or model is not None  # the last solve's warm start holds unless a plan or model changed
+        plan_u, plan_s = (), ()
+        plan_start, step, plan_after = at, 0, at
+    elif replan:
         shrink = 1.0 - c.margin
         plan_u, plan_s = plan_move(d, measured, target, c.u_max * shrink, c.v_max * shrink, c.interval,
                                    int(LONGEST_PLAN / c.interval))
@@ -462,6 +471,8 @@ def solve(config, state, measured, l1_now):
     ref_u = [plan_u[step + k] if step + k < len(plan_u) else 0.0 for k in range(n)]
     ref_s = plan_s[step] if step < len(plan_s) else target
     e0 = [a - b for a, b in zip(measured, ref_s)]
+    if large and not plan_u:  # the trolley left free while the swing is taken down
+        e0[0] = 0.0
     f = [linalg.dot(row, e0) for row in d.gain]
     v0 = measured[1]
     lower = [-c.u_max - value for value in ref_u]

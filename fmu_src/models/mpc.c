@@ -27,6 +27,7 @@
 #define LONGEST_PLAN 6.0 /* mpc.LONGEST_PLAN */
 #define REPLAN_GAP 0.25  /* mpc.REPLAN_GAP */
 #define RETRY_GAP 6.0    /* mpc.RETRY_GAP */
+#define LARGEST_SWING (17.5 * (3.141592653589793 / 180.0)) /* mpc.LARGEST_SWING: math.radians(17.5) */
 #define WELL_POSED 1e-2  /* mpc.WELL_POSED */
 #define MISFIT 1e-5      /* mpc.MISFIT */
 #define PLAUSIBLE 2.0    /* mpc.PLAUSIBLE */
@@ -586,8 +587,14 @@ static const char *solve(Config *c, const double *state, const double measured[N
     int rescheduled = c->n_designs > 1 && d->l1 != state[H_PLAN_L1]; /* the schedule's design changed */
     int moved = trolley > c->replan_x || swing > c->replan_angle || rescheduled;
     int replan = count == 0 || found_model || (moved && at >= plan_after);
-    double *new_plan_u = next + plan_at;
-    if (replan) {
+    double *new_plan_u = next + plan_at, to_trolley, to_rest;
+    deviation(d, measured, target, &to_trolley, &to_rest);
+    int large = to_rest > LARGEST_SWING; /* too far from rest for the linear model's plan */
+    if (replan && large) { /* none made: the tracking QP takes the swing down alone, a plan tried next interval */
+        replan = n_plan > 0 || found_model; /* the last solve's warm start holds unless a plan or model changed */
+        n_plan = 0, n_states = 0, plan_u = plan_s = new_plan_u;
+        plan_start = at, step = 0, plan_after = at;
+    } else if (replan) {
         double shrink = 1.0 - c->margin, far = 0.0;
         error = plan_move(d, measured, target, c->u_max * shrink, c->v_max * shrink, c->interval,
                           (int)(LONGEST_PLAN / c->interval), new_plan_u, new_plan_u + MAX_PLAN, &n_plan);
@@ -606,6 +613,7 @@ static const char *solve(Config *c, const double *state, const double measured[N
     ref_s = step < n_states ? plan_s + step * N_STATE : target;
     double e0[N_STATE];
     for (int i = 0; i < N_STATE; i++) e0[i] = measured[i] - ref_s[i];
+    if (large && n_plan == 0) e0[0] = 0.0; /* the trolley left free while the swing is taken down */
     for (int k = 0; k < n; k++) f[k] = la_dot(d->gain[k], e0, N_STATE);
     double v0 = measured[1], planned = v0;
     for (int k = 0; k < n; k++) lower[k] = -c->u_max - ref_u[k], upper[k] = c->u_max - ref_u[k];
