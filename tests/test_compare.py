@@ -57,12 +57,14 @@ def quick_board(template_fmu, fmu_dir, dask_scheduler, tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def full_board(fmu_dir, dask_scheduler, tmp_path_factory):
-    """Every built-in controller on every scenario, FULL_CASES cases of the paired design."""
+def full_board(native_dirs, dask_scheduler, tmp_path_factory):
+    """Every built-in controller on every scenario, FULL_CASES cases of the paired design, on the native FMUs (which
+    give the Python FMUs' board to 1e-9 in every figure: test_native_board.py; the Python MPC alone would take most
+    of the run): ``(folder, rows, FMU folder)``."""
     out = tmp_path_factory.mktemp("full")
-    rows = compare(out, (), fmu_dir, scheduler=dask_scheduler, progress=False, animate=(), log=lambda _: None,
+    rows = compare(out, (), native_dirs[2], scheduler=dask_scheduler, progress=False, animate=(), log=lambda _: None,
                    cases=FULL_CASES)
-    return out, rows
+    return out, rows, native_dirs[2]
 
 
 def test_every_controller_scenario_and_case_is_a_row(quick_board):
@@ -91,10 +93,10 @@ def test_a_quick_board_cannot_be_mistaken_for_a_full_one(quick_board):
     assert not (out.parent / "scoreboard.md").exists()  # the quick board has a folder of its own
 
 
-def test_a_full_board_survives_a_quick_run_in_the_same_folder(full_board, fmu_dir, dask_scheduler):
-    out, rows = full_board
+def test_a_full_board_survives_a_quick_run_in_the_same_folder(full_board, dask_scheduler):
+    out, rows, fmus = full_board
     before = {name: (out / name).read_bytes() for name in ("scoreboard.md", "scores.parquet", JOURNAL)}
-    compare(out, ["LqrController"], fmu_dir, scheduler=dask_scheduler, quick=True, only=True, progress=False,
+    compare(out, ["LqrController"], fmus, scheduler=dask_scheduler, quick=True, only=True, progress=False,
             animate=(), log=lambda _: None, scenarios=("S1",))
     assert {name: (out / name).read_bytes() for name in before} == before
     assert (out / "quick" / "scoreboard.md").read_text().startswith("# Controller scoreboard (QUICK")
@@ -110,7 +112,7 @@ def test_a_full_board_survives_a_quick_run_in_the_same_folder(full_board, fmu_di
 def test_the_paper_law_ranks_below_the_converging_laws_in_every_scenario(full_board):
     """The paper's law limit-cycles or diverges; the energy law converges (slowly) and the LQR converges: the
     board says so in every scenario, not the alphabet (on the paired design by Wilcoxon's test over 6 cases)."""
-    _, rows = full_board
+    _, rows, _ = full_board
     for sid in scoreboard.SCENARIOS:
         rank = {line["controller"]: line["rank"] for line in scoreboard.summarise(rows, sid)}
         assert rank["BacksteppingController"] > max(rank["EnergyController"], rank["LqrController"]), sid
@@ -314,7 +316,7 @@ def test_readme_shows_the_current_scoreboard(full_board):
     behind them is held by requirement tests: the LQR's targets (test_controllers.py), the documented
     LQR design against scipy, the metrics' known answers (test_metrics.py) and the ranking rules
     (test_scoreboard.py, test_statistics.py)."""
-    _, rows = full_board
+    _, rows, _ = full_board
     generated = scoreboard.render_summary(rows, cases=FULL_CASES).splitlines()
     for page in (ROOT / "README.md", ROOT / "docs" / "guide" / "scoreboard.md"):  # the front door and the guide
         text = page.read_text()

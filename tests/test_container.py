@@ -51,6 +51,29 @@ def test_a_container_parameter_reaches_plant_and_controller(fmu_dir):
     assert np.array_equal(result["theta1"], ours["plant.theta1"])
 
 
+@pytest.mark.parametrize("x_d", [None, 1.2, -0.8])  # None: the container's own x_d (the system's 2 m)
+def test_the_transport_container_follows_the_move_planned_to_the_x_d_set_on_it(fmu_dir, x_d):
+    """x_d set on the transport container is the planner's: the trolley follows the reference that the planner's
+    model (crane_fmu.model.planner, called here, no FMU and no master) plans from 0 to that x_d, within 2 % of the
+    move all along (the LQR tracks it with the feedforward). An x_d that reached the controller instead leaves the
+    planner at its own start (no move planned) and makes the LQR jump to x_d: it ends there too, so the end cannot
+    tell (test_wiring.py's end-position test), the path can (12-24 % of the move off the plan)."""
+    from crane_fmu import components
+    from crane_fmu.model import planner
+
+    system = systems.get("transport")
+    target = system.parameters["planner"]["x_d"] if x_d is None else x_d
+    result = simulate_fmu(str(containers_dir(fmu_dir) / "CraneTransport.fmu"), stop_time=5.0, output_interval=0.01,
+                          start_values={} if x_d is None else {"x_d": x_d}, output=["x"])
+    model = components.get("TrajectoryPlanner")
+    values = {v.name: v.start for v in model.variables if v.causality == "parameter"}
+    plan = model.configure({**values, **system.parameters["planner"], "x_d": target})
+    assert plan.end < 4.0  # the move is over before the run ends
+    x_ref = np.array([planner.reference(plan, t)[0] for t in result["time"]])
+    assert x_ref[-1] == pytest.approx(target, abs=1e-12)
+    assert np.abs(result["x"] - x_ref).max() <= 0.02 * abs(target)
+
+
 def test_build_container_command(fmu_dir, tmp_path, capsys):
     out = tmp_path / "build" / "fmus"
     out.parent.mkdir()
