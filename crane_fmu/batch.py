@@ -131,9 +131,8 @@ def _on_dask(task, items, extra, workers, scheduler, kwargs):
         # process stops, closes the cluster and says so in one line, no traceback from every worker.
         handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
-            with _forked_workers():
-                cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                                       processes=True, dashboard_address=":0", silence_logs=50)  # a free port
+            cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
+                                   dashboard_address=":0", silence_logs=50)  # a free port: no warning
         finally:
             signal.signal(signal.SIGINT, handler)
         client = Client(cluster)
@@ -145,17 +144,6 @@ def _on_dask(task, items, extra, workers, scheduler, kwargs):
         client.close()
         if cluster is not None:
             cluster.close()
-
-
-def _forked_workers():
-    """Dask's setting under which a local cluster's workers are forked from this process where Linux allows it:
-    they start with every module this process imported (fmpy, numpy, ours), instead of importing them again as
-    fresh interpreters (about 3 s of CPU for two workers here, and as long again to stop them)."""
-    import dask
-
-    if sys.platform != "linux":
-        return nullcontext()
-    return dask.config.set({"distributed.worker.multiprocessing-method": "fork"})
 
 
 def ignore_interrupts():
