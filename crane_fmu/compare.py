@@ -11,10 +11,9 @@ again, saying why. Every row records its provenance (:func:`provenance`), and
 ``OUT/board.json`` what the board was made of, so that :func:`check` can run a
 sample of its cases again and confirm their figures bit for bit.
 
-From a script, call :func:`compare` under ``if __name__ == "__main__":``: on
-Linux the local Dask cluster forks its workers from the calling process, but
-elsewhere it starts them as fresh Python processes, which import the script
-again (the ``spawn`` start method), as ``multiprocessing`` does.
+From a script, call :func:`compare` under ``if __name__ == "__main__":``: the
+local Dask cluster starts its workers as fresh Python processes, which import
+the script again (the ``spawn`` start method), as ``multiprocessing`` does.
 """
 
 import functools

@@ -7,6 +7,8 @@ names it.
 """
 
 import math
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import pd_controller
@@ -18,6 +20,7 @@ from crane_fmu import components, systems
 from crane_fmu.build_scripts.build_fmus import build_all, systems_dir
 from crane_fmu.cli import main
 from crane_fmu.cosim import ArrayRecorder, System, read_csv, run
+from crane_fmu.cosim.instance import _SPARE_FOLDERS
 from crane_fmu.model import plant
 from crane_fmu.model.component import Component
 from crane_fmu.sweep import spec
@@ -81,10 +84,17 @@ def test_the_ssp_file_runs_in_libcosim_like_our_jacobi_master(pd_build):
     assert_libcosim_matches(theirs, ours)
 
 
-def test_swept_on_dask(pd_build, tmp_path):
+def test_swept_on_dask(pd_build, tmp_path, monkeypatch):
+    """A sweep on a local cluster of its own; its workers leave no extracted FMU behind when they stop."""
     study = spec.parse({"system": "pd", "stop_time": 2.0, "step": 0.01,
                         "parameters": {"controller.k_x": [2.0, 8.0], "controller.k_v": [3.0, -1.0]}})
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    monkeypatch.setenv("TMPDIR", str(temporary))  # the workers' temporary folder, started or forked
+    monkeypatch.setattr(tempfile, "tempdir", str(temporary))
     summary = run_study(study, tmp_path / "out", pd_build, workers=2, progress=False)
+    ours = {Path(folder) for folders in _SPARE_FOLDERS.values() for folder, _ in folders}  # removed at our exit
+    assert [p for p in temporary.glob("*/modelDescription.xml") if p.parent not in ours] == []
     rows = pq.read_table(tmp_path / "out" / "results.parquet").to_pylist()
     assert summary["cases"] == 4 and [r["status"] for r in rows] == ["ok", "invalid", "ok", "invalid"]
     expected = _python_loop(2.0, 0.01, k_x=2.0)
