@@ -93,10 +93,28 @@ class ExternalInstance(Instance):
         pass
 
     def reader(self, vrs, values):
-        return _copier([self._out_index[vr] for vr in vrs], self._out, values, self._lock, 1), "external get"
+        positions = [self._out_index[vr] for vr in vrs]
+        out, lock = self._out, self._lock
+
+        def read():
+            with lock:
+                for i, position in enumerate(positions):
+                    values[i] = out[position]
+            return 0
+
+        return read, "external get"
 
     def writer(self, vrs, values):
-        return _copier([self._in_index[vr] for vr in vrs], self._in, values, self._lock, 0), "external set"
+        positions = [self._in_index[vr] for vr in vrs]
+        inputs, lock = self._in, self._lock
+
+        def write():
+            with lock:
+                for i, position in enumerate(positions):
+                    inputs[position] = values[i]
+            return 0
+
+        return write, "external set"
 
     def stepper(self):
         return (lambda time, step: 0), "external step"
@@ -109,17 +127,3 @@ def _start(variable):
     except (TypeError, ValueError):
         return 0.0
     return value if math.isfinite(value) else 0.0
-
-
-def _copier(positions, stored, values, lock, to_values):
-    """The hot-path call that copies ``stored[positions]`` into ``values`` (``to_values``) or back."""
-    def copy():
-        with lock:
-            for i, position in enumerate(positions):
-                if to_values:
-                    values[i] = stored[position]
-                else:
-                    stored[position] = values[i]
-        return 0
-
-    return copy
