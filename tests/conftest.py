@@ -215,8 +215,8 @@ BOARD_CASES = 2  # of the paired design on builtin_quick_board: every scenario, 
 @pytest.fixture(scope="session")
 def builtin_quick_board(fmu_dir, dask_scheduler, tmp_path_factory):
     """``(folder, rows)``: ``crane-fmu compare --quick --cases 2`` (``BOARD_CASES``) of every built-in controller on
-    the Python FMUs, made once per run (the board, its scores and its journal ``cases.jsonl`` in ``folder``; ``rows`` as compare returned
-    them). A test that scores another controller beside them may start from a copy of that journal: compare
+    the Python FMUs, made once per run (the board, its scores and its journal ``cases.jsonl`` in ``folder``;
+    ``rows`` as compare returned them). A test that scores another controller beside them may start from a copy of that journal: compare
     then runs only the new controller's cases (the built-ins' are the very same runs)."""
     import pickle
 

@@ -27,8 +27,8 @@ def _close(a, b):
 
 def test_the_native_fmus_give_the_python_board(builtin_quick_board, native_dirs, dask_scheduler, tmp_path):
     """The components ported to C native, the others the Python FMUs copied beside them: every controller on every
-    scenario (the run's quick board of BOARD_CASES paired cases, every scenario of the board) gives every figure to 1e-9, the same statuses
-    and the same board. (Not the case identities, which hash the FMU files, nor run times, nor the failed runs'
+    scenario (the run's quick board of BOARD_CASES paired cases, every scenario of the board) gives every figure to
+    1e-9, the same statuses and the same board. (Not the case identities, which hash the FMU files, nor run times, nor the failed runs'
     log text.)"""
     native = native_dirs[2]
     if not (native / "LqrController.fmu").exists():

@@ -17,8 +17,9 @@ from crane_fmu.cosim import ArrayRecorder, FmiError, run
 from . import metrics, scoreboard
 
 Run = namedtuple("Run", "group label system parameters step stop_time residual_from", defaults=(None,))
-Run.__doc__ = ("One co-simulation: its group and label, a system (a registered name or a System), its settings, and the "
-               "start of its residual swing's window [s] (None: :func:`.scoreboard.residual_from` of the run's planner).")
+Run.__doc__ = ("One co-simulation: its group and label, a system (a registered name or a System), its settings, "
+               "and the start of its residual swing's window [s] (None: :func:`.scoreboard.residual_from` of the "
+               "run's planner).")
 SHAPERS = ("zv", "zvd", "ei", "none")
 ROA_ANGLES = tuple(range(5, 65, 5))
 MISMATCH, DISTANCE = scoreboard.MISMATCH, scoreboard.DISTANCE  # a grid of plants unknown to the controller, S2's move

@@ -113,8 +113,8 @@ def plot_summary(rows, path, users=(), stats=None):
 
     The bar is the worst case; on the paired design the median, with its 95 % interval as an error bar and the
     90th percentile as a marker. *never* and *failed* are hatched bars to the edge with the word; a figure far
-    beyond the target or the best bar (over eight times it) runs to the edge with its value written on it, a 90th percentile that
-    far as a marker at the edge pointing out, with its value.
+    beyond the target or the best bar (over eight times it) runs to the edge with its value written on it, a 90th
+    percentile that far as a marker at the edge pointing out, with its value.
     """
     fig = summary_figure(rows, users, stats)
     fig.savefig(path, dpi=100)
