@@ -48,8 +48,6 @@ MPC_TARGETS = (
 def mpc_runs(quick=False):
     """The constrained MPC on the scoreboard's own cases (S1, S2, S3, S7, S8) and from a hard hit (quick: S1, S2
     and 3 cases of S3's paired design)."""
-    from crane_fmu import components
-
     mpc = components.get("MpcController")
     contender = scoreboard.Contender("MpcController", "MpcController", list(mpc.names("input")),
                                      list(mpc.names("parameter")))
