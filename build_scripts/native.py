@@ -21,15 +21,18 @@ FMU's numbers; mingw-w64's libm differs, so the Windows binary (and a build from
 uses the portable sin, cos, exp, tanh and log of ``fmu_src/models/portable_math.c``.
 """
 
+import atexit
 import hashlib
 import os
+import re
 import shutil
 import subprocess
 import tempfile
+import threading
 import uuid
 import xml.etree.ElementTree as ET
 import zipfile
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from functools import partial
 from pathlib import Path
 
@@ -56,7 +59,7 @@ HEADERS = ("model.h", "instance.h", "continuous.h", "py_repr.h", "component.h", 
 CONTINUOUS = (("plant_continuous.c",), ("plant_continuous.h",))  # what a component with Model Exchange adds
 FRAMEWORKS = {2: ("fmi2Functions.c", "fmi2_calls.h"), 3: ("fmi3Functions.c", "fmi3_calls.h")}
 PLATFORMS = {2: {"linux": "linux64", "windows": "win64"}, 3: {"linux": "x86_64-linux", "windows": "x86_64-windows"}}
-FLAGS = ["-shared", "-O2", "-Wall", "-Werror", "-ffp-contract=off"]
+FLAGS = ["-O2", "-Wall", "-Werror", "-ffp-contract=off"]  # every C file's, for both platforms
 MINGW = "x86_64-w64-mingw32-gcc"
 
 
@@ -272,13 +275,74 @@ def build_description(component, sources=None):
 
 
 def _compile(compiler, sources, include, out, platform):
-    flags = [*FLAGS, "-fPIC", "-fvisibility=hidden"] if platform == "linux" else \
-        [*FLAGS, "-DCRANE_OWN_MATH", "-static-libgcc"]
-    libs = ["-lm"] if platform == "linux" else []
-    command = [compiler, *flags, *[f"-I{folder}" for folder in include], *map(str, sources), "-o", str(out), *libs]
+    objects = OBJECTS.made(compiler, platform, sources, include)
+    libs = ["-lm"] if platform == "linux" else ["-static-libgcc"]
+    _gcc([compiler, "-shared", *map(str, objects), "-o", str(out), *libs], out.name)
+
+
+def _gcc(command, what):
     done = subprocess.run(command, capture_output=True, text=True)
     if done.returncode != 0:  # a bug in our C, not a missing tool: stop the build
-        raise RuntimeError(f"compiling {out.name} failed: {done.stderr.strip()}")
+        raise RuntimeError(f"compiling {what} failed: {done.stderr.strip()}")
+
+
+class Objects:
+    """Object files compiled once per process and linked into every FMU that has the same C file.
+
+    An object is made from its C file, the headers it includes (followed in the include folders) and the
+    compiler's flags, and is named by a hash of them: most files (the framework, the shared model code, each
+    model file) are the same in many FMUs. Builds on several threads share it: a file one thread compiles,
+    the others wait for instead of compiling it again.
+    """
+
+    def __init__(self):
+        self._lock = threading.Lock()
+        self._made = {}  # hash -> Future of the object's path
+        self._folder = None
+
+    def made(self, compiler, platform, sources, include):
+        """The objects of ``sources`` for ``platform``, compiled here unless made before."""
+        flags = [*FLAGS, "-fPIC", "-fvisibility=hidden"] if platform == "linux" else [*FLAGS, "-DCRANE_OWN_MATH"]
+        mine, futures = [], []
+        with self._lock:
+            if self._folder is None:
+                self._folder = Path(tempfile.mkdtemp(prefix="crane_objects_"))
+                atexit.register(shutil.rmtree, self._folder, True)
+            for source in map(Path, sources):
+                key = _object_key([compiler, *flags], source, include)
+                if key not in self._made:
+                    self._made[key] = Future()
+                    mine.append((source, key))
+                futures.append(self._made[key])
+        for source, key in mine:  # those no other thread compiles: first, then wait for the others'
+            out = self._folder / f"{key}.o"
+            try:
+                _gcc([compiler, "-c", *flags, *[f"-I{folder}" for folder in include], str(source), "-o", str(out)],
+                     source.name)
+                self._made[key].set_result(out)
+            except Exception as exc:
+                self._made[key].set_exception(exc)
+        return [future.result() for future in futures]
+
+
+def _object_key(command, source, include):
+    """A hash of the compile ``command``, of ``source`` and of every header it includes with quotes."""
+    digest = hashlib.sha256(repr(command).encode())
+    seen, todo = set(), [source]
+    while todo:
+        path = todo.pop()
+        text = path.read_bytes()
+        digest.update(path.name.encode() + b"\0" + text)
+        for name in re.findall(rb'^\s*#\s*include\s+"([^"]+)"', text, re.MULTILINE):
+            header = next((Path(folder) / name.decode() for folder in [path.parent, *include]
+                           if (Path(folder) / name.decode()).exists()), None)
+            if header is not None and header not in seen:
+                seen.add(header)
+                todo.append(header)
+    return digest.hexdigest()[:24]
+
+
+OBJECTS = Objects()
 
 
 def build_native_fmu(component, out_dir, fmi_version=2, tools=None):
