@@ -39,8 +39,9 @@ def test_derivative_bench_prints_the_cost_of_the_native_derivatives():
 
 
 def test_realtime_bench_prints_the_loops_lateness_and_the_protocols_round_trips(fmu_dir):
-    """A short run on the run's FMUs: each pacing figure and each round trip measured; a lock-step cycle (read,
-    write and a step) takes longer than one write and read."""
+    """A short run on the run's FMUs: each pacing figure and each round trip measured, its p99 no less than its
+    median. Which round trip is the longer is the benchmark's figure, not asserted here: on a loaded machine the
+    ordering of two medians of 20 trips flips."""
     pytest.importorskip("asyncua", reason="the serve extra (asyncua)")
     from crane_fmu.bench_realtime import run_realtime_bench
 
@@ -48,6 +49,6 @@ def test_realtime_bench_prints_the_loops_lateness_and_the_protocols_round_trips(
     figures = run_realtime_bench(seconds=0.1, round_trips=20, out=lines.append, fmu_dir=fmu_dir)
     assert figures["loop_1ms"]["cycles"] == 100 and figures["loop_10ms"]["cycles"] == 10, figures
     for protocol in ("OPC UA", "Modbus TCP"):
-        (write_read, _), (cycle, _) = figures[f"{protocol}_write_read"], figures[f"{protocol}_cycle"]
-        assert 0 < write_read < cycle, (protocol, lines)
+        for median, p99 in (figures[f"{protocol}_write_read"], figures[f"{protocol}_cycle"]):
+            assert 0 < median <= p99, (protocol, lines)
     assert any("lateness p50" in line and "real-time factor" in line for line in lines), lines
