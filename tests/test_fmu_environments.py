@@ -136,20 +136,35 @@ static int abuse(void *so, const char *token, const char *resources) {
     return 0;
 }
 
-int main(int argc, char **argv) {
-    /* run library token resources steps h nin vr... nout vr... [vr=value ...]  |  abuse library token resources */
-    void *so = dlopen(argv[2], RTLD_NOW | RTLD_LOCAL);
+/* one run: argv = run library token resources steps h nin vr... nout vr... [vr=value ...] */
+static int run_command(int argc, char **argv) {
+    void *so = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
     if (!so) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 3; }
-    if (!strcmp(argv[1], "abuse")) return abuse(so, argv[3], argv[4]);
     unsigned in[64], out[64], par[64];
     double value[64];
-    int nin = atoi(argv[7]), nout = atoi(argv[8 + nin]), npar = argc - 9 - nin - nout;
-    for (int i = 0; i < nin; i++) in[i] = (unsigned)atoi(argv[8 + i]);
-    for (int i = 0; i < nout; i++) out[i] = (unsigned)atoi(argv[9 + nin + i]);
-    for (int i = 0; i < npar; i++) sscanf(argv[9 + nin + nout + i], "%u=%lf", &par[i], &value[i]);
-    return run(so, argv[3], argv[4], atoi(argv[5]), atof(argv[6]), nin, in, nout, out, npar, par, value);
+    int nin = atoi(argv[6]), nout = atoi(argv[7 + nin]), npar = argc - 8 - nin - nout;
+    for (int i = 0; i < nin; i++) in[i] = (unsigned)atoi(argv[7 + i]);
+    for (int i = 0; i < nout; i++) out[i] = (unsigned)atoi(argv[8 + nin + i]);
+    for (int i = 0; i < npar; i++) sscanf(argv[8 + nin + nout + i], "%u=%lf", &par[i], &value[i]);
+    return run(so, argv[2], argv[3], atoi(argv[4]), atof(argv[5]), nin, in, nout, out, npar, par, value);
 }
-"""
+int main(int argc, char **argv) {
+    /* run ... [-- run ...]: each FMU in turn in this one process, its rows then a line "end"
+       |  abuse library token resources */
+    if (!strcmp(argv[1], "abuse")) {
+        void *so = dlopen(argv[2], RTLD_NOW | RTLD_LOCAL);
+        if (!so) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 3; }
+        return abuse(so, argv[3], argv[4]);
+    }
+    for (int first = 1, last; first < argc; first = last + 1) {
+        for (last = first; last < argc && strcmp(argv[last], "--"); last++) {}
+        int status = run_command(last - first, argv + first);
+        if (status) return status;
+        printf("end\n");
+        fflush(stdout);
+    }
+    return 0;
+}"""
 
 STEPS, H = 300, 0.01
 CLEAN_PATH = "/usr/bin:/bin"  # no pyenv shims, no venv: what `env -i PATH=/usr/bin:/bin` leaves
@@ -171,21 +186,40 @@ def _unpacked(fmu, tmp_path):
     return unpack_fmu(fmu, tmp_path / f"{fmu.stem}-{fmu.parent.name}")
 
 
-def _run_alone(host, fmu, tmp_path, env):
-    """Every Real output of ``fmu`` run alone in the C host under exactly ``env``: ``(rows, log)``."""
+def _arguments(fmu, tmp_path):
+    """The host's ``run`` arguments for ``fmu``: every Real input and output; and the number of outputs."""
     md, library, token, resources = _unpacked(fmu, tmp_path)
     real = [v for v in md.modelVariables if v.type in ("Real", "Float64")]
     inputs = [str(v.valueReference) for v in real if v.causality == "input"]
     outputs = [str(v.valueReference) for v in real if v.causality == "output"]
     parameters = [f"{v.valueReference}={PARAMETERS[md.coSimulation.modelIdentifier][v.name]!r}" for v in real
                   if v.name in PARAMETERS.get(md.coSimulation.modelIdentifier, {})]
-    proc = subprocess.run([str(host), "run", library, token, resources, str(STEPS), str(H), str(len(inputs)),
-                           *inputs, str(len(outputs)), *outputs, *parameters], capture_output=True, text=True,
-                          timeout=300, env=env, cwd=tmp_path)
-    assert proc.returncode == 0, f"{fmu.name} exited {proc.returncode}: {proc.stdout[-500:]}{proc.stderr[-2000:]}"
-    rows = np.array([[float(x) for x in line.split(",")] for line in proc.stdout.splitlines()])
-    assert rows.shape == (STEPS + 1, len(outputs) + 1) and np.isfinite(rows).all(), fmu.name
-    return rows, proc.stderr
+    return ["run", library, token, resources, str(STEPS), str(H), str(len(inputs)), *inputs, str(len(outputs)),
+            *outputs, *parameters], len(outputs)
+
+
+def _run_each(host, fmus, tmp_path, env):
+    """Every Real output of each of ``fmus``, each run alone in turn in one C host process under exactly
+    ``env``: ``([rows of each], log)``."""
+    runs = [_arguments(fmu, tmp_path) for fmu in fmus]
+    command = [str(host), *[arg for i, (args, _) in enumerate(runs) for arg in (["--"] if i else []) + args]]
+    proc = subprocess.run(command, capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path)
+    names = ", ".join(fmu.name for fmu in fmus)
+    assert proc.returncode == 0, f"{names} exited {proc.returncode}: {proc.stdout[-500:]}{proc.stderr[-2000:]}"
+    blocks = proc.stdout.split("end\n")
+    assert len(blocks) == len(fmus) + 1 and not blocks[-1], names
+    results = []
+    for fmu, block, (_, n_outputs) in zip(fmus, blocks, runs):
+        rows = np.array([[float(x) for x in line.split(",")] for line in block.splitlines()])
+        assert rows.shape == (STEPS + 1, n_outputs + 1) and np.isfinite(rows).all(), fmu.name
+        results.append(rows)
+    return results, proc.stderr
+
+
+def _run_alone(host, fmu, tmp_path, env):
+    """Every Real output of ``fmu`` run alone in the C host under exactly ``env``: ``(rows, log)``."""
+    (rows,), log = _run_each(host, [fmu], tmp_path, env)
+    return rows, log
 
 
 @pytest.mark.parametrize("version", [2, 3])
@@ -200,20 +234,19 @@ def test_every_fmu_runs_in_a_clean_environment(hosts, fmu_dir, version, tmp_path
 @pytest.mark.parametrize("version", [2, 3])
 def test_one_build_gives_the_same_bits_with_every_cpython(hosts, fmu_dir, version, tmp_path):
     """Each component, built once, run with each of the five CPythons named by CRANE_FMU_PYTHON in a
-    clean environment: identical outputs, bit for bit (the build's own Python gives the reference)."""
-    pythons = {name: _python(name) for name in PYTHONS}
-    for name in COMPONENTS:
-        fmu = _fmu(fmu_dir, name, version)
-        results = {}
-        for python, executable in pythons.items():
-            rows, log = _run_alone(hosts[version], fmu, tmp_path, {"PATH": CLEAN_PATH,
-                                                                    "CRANE_FMU_PYTHON": executable})
-            assert f"using CPython {python.split('-')[-1]}." in log and ", its home /" in log, log
-            results[python] = rows
-        reference = results["3.11"]
+    clean environment (one host process per CPython runs every component in turn): identical outputs, bit for
+    bit (the build's own Python gives the reference)."""
+    fmus = [_fmu(fmu_dir, name, version) for name in COMPONENTS]
+    results = {}
+    for python in PYTHONS:
+        results[python], log = _run_each(hosts[version], fmus, tmp_path, {"PATH": CLEAN_PATH,
+                                                                         "CRANE_FMU_PYTHON": _python(python)})
+        assert f"using CPython {python.split('-')[-1]}." in log and ", its home /" in log, log
+    for i, name in enumerate(COMPONENTS):
+        reference = results["3.11"][i]
         assert np.abs(reference[:, 1:]).max() > 0, f"{name}: all outputs zero, nothing compared"
         for python, rows in results.items():
-            differ = np.argwhere(rows != reference)
+            differ = np.argwhere(rows[i] != reference)
             assert differ.size == 0, f"{name} under CPython {python}: first difference at row, column {differ[0]}"
 
 
