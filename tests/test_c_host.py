@@ -237,8 +237,10 @@ def test_fmpy_under_another_cpython_runs_the_fmus_built_here(crane_fmus, fmi3_fm
 
     executable = _python("3.12")
     venv = tmp_path / "venv312"
-    subprocess.run([executable, "-m", "venv", str(venv)], check=True)
-    pip = subprocess.run([str(venv / "bin" / "pip"), "install", "-q", f"fmpy=={fmpy.__version__}"],
+    subprocess.run([executable, "-m", "venv", "--without-pip", str(venv)], check=True)
+    # this pip installs into it: fmpy and what simulate_fmu imports (its other requirements serve other commands)
+    pip = subprocess.run([sys.executable, "-m", "pip", "--python", str(venv / "bin" / "python"), "install", "-q",
+                          "--no-deps", f"fmpy=={fmpy.__version__}", "numpy", "lxml", "attrs"],
                          capture_output=True, text=True, timeout=600)
     if pip.returncode != 0:
         pytest.skip(f"cannot install fmpy into a CPython 3.12 venv: {pip.stderr[-500:]}")
