@@ -5,10 +5,9 @@ difference between the two is what the crane's physics and law cost.
 """
 
 from .component import Component
-from .tables import MEASURED_STATE, STATE, input_, output
+from .tables import MEASURED_STATE, STATE, input_, output, state_variables
 
-PLANT_VARIABLES = (input_("u", "m/s2", "trolley acceleration"),) + tuple(
-    output(v.name, v.unit, v.description.removeprefix("measured ")) for v in MEASURED_STATE)
+PLANT_VARIABLES = (input_("u", "m/s2", "trolley acceleration"),) + state_variables(output)
 CONTROLLER_VARIABLES = MEASURED_STATE + (output("u", "m/s2", "demanded trolley acceleration"),)
 
 

@@ -4,7 +4,7 @@ import math
 from collections import namedtuple
 
 from .component import Component
-from .tables import MEASURED_STATE, STATE, input_, output, parameter
+from .tables import STATE, input_, output, parameter, state_variables
 
 # --- Gust: horizontal force pulses on hook and payload -------------------------------------
 
@@ -102,8 +102,7 @@ SENSOR = Component(
      parameter("sigma_dtheta", math.radians(0.2), "rad/s", "noise on both swing rates"),
      parameter("seed", 1.0, "1", "seed of the noise (a whole number): the same seed, the same noise"),
      parameter("delay", 1.0, "1", "1: the measurement reaches the output one communication step late; 0: at once"),
-     ) + tuple(input_(v.name, v.unit, v.description.replace("measured ", "true ")) for v in MEASURED_STATE)
-    + tuple(output(name + "_m", v.unit, v.description) for name, v in zip(STATE, MEASURED_STATE)),
+     ) + state_variables(input_, "true ") + state_variables(output, "measured ", suffix="_m"),
     _sensor_configure, _sensor_output, feedthrough=True,
     initial_state=lambda config: (0, None), update=_sensor_update, native="sensor.c",
     depends_on={name + "_m": (name,) for name in STATE})  # each channel its own (at once: delay 0, first sample)
@@ -159,9 +158,7 @@ CRANE_SENSOR = Component(
      parameter("sigma_theta2", math.radians(0.1), "rad", "noise on the payload angle (standard deviation)"),
      parameter("seed", 1.0, "1", "seed of the noise (a whole number): the same seed, the same noise"),
      parameter("delay", 1.0, "1", "whole communication steps by which the outputs are late; 0: at once"),
-     input_("x", "m", "true trolley position"),
-     input_("theta1", "rad", "true hook swing angle"),
-     input_("theta2", "rad", "true payload swing angle"),
+     *state_variables(input_, "true ", MEASURED),
      output("x_meas", "m", "measured trolley position"),
      output("theta1_meas", "rad", "measured hook swing angle"),
      output("theta2_meas", "rad", "measured payload swing angle (a camera)")),

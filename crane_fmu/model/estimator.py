@@ -42,7 +42,7 @@ from . import linalg
 from .component import Component
 from .lqr import continuous_model
 from .parameters import plant_parameters, positive
-from .tables import STATE, controller_model, input_, output, parameter, positions
+from .tables import STATE, controller_model, input_, output, parameter, positions, state_variables
 
 NOISES = ("sigma_x", "sigma_theta", "sigma_u", "sigma_swing")
 
@@ -148,9 +148,7 @@ VARIABLES = controller_model("estimator") + (
     input_("theta2_meas", "rad", "measured payload swing angle (used when camera = 1)"),
     input_("u", "m/s2", "trolley acceleration applied (the controller's output)"),
     input_("l1_now", "m", "measured main cable length (taken, not used: see the module's notes)"),
-) + tuple(output(name, unit, "estimated " + text) for name, (unit, text) in zip(STATE, (
-    ("m", "trolley position"), ("m/s", "trolley velocity"), ("rad", "hook swing angle"),
-    ("rad/s", "hook swing rate"), ("rad", "payload swing angle"), ("rad/s", "payload swing rate"))))
+) + state_variables(output, "estimated ")
 IN = positions(VARIABLES, "input")
 
 

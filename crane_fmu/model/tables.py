@@ -88,18 +88,28 @@ PLANT_MODEL = (
 )
 
 # The plant state in the order of crane_fmu.model.plant, with units and descriptions.
-STATE = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2")
-_STATE_ROWS = (
-    ("m", "trolley position"),
-    ("m/s", "trolley velocity"),
-    ("rad", "hook swing angle"),
-    ("rad/s", "hook swing rate"),
-    ("rad", "payload swing angle"),
-    ("rad/s", "payload swing rate"),
-)
+_STATE_ROWS = {
+    "x": ("m", "trolley position"),
+    "dx": ("m/s", "trolley velocity"),
+    "theta1": ("rad", "hook swing angle"),
+    "dtheta1": ("rad/s", "hook swing rate"),
+    "theta2": ("rad", "payload swing angle"),
+    "dtheta2": ("rad/s", "payload swing rate"),
+}
+STATE = tuple(_STATE_ROWS)
+
+
+def state_variables(make, prefix="", names=STATE, suffix=""):
+    """Rows for the plant state's ``names``, made by ``make`` (:func:`input_` or :func:`output`).
+
+    Each is named ``name + suffix`` and has the state's unit and ``prefix`` + its description:
+    ``state_variables(output, "estimated ")`` gives ``output("x", "m", "estimated trolley position")``, ...
+    """
+    return tuple(make(name + suffix, _STATE_ROWS[name][0], prefix + _STATE_ROWS[name][1]) for name in names)
+
 
 # What every controller takes: the measured plant state.
-MEASURED_STATE = tuple(input_(name, unit, "measured " + text) for name, (unit, text) in zip(STATE, _STATE_ROWS))
+MEASURED_STATE = state_variables(input_, "measured ")
 
 
 def controller_model(whose="controller"):

@@ -25,7 +25,7 @@ from collections import namedtuple
 
 from .component import Component
 from .disturbances import noise
-from .tables import input_, output, parameter
+from .tables import STATE, input_, output, parameter, state_variables
 
 CHANNEL = 16  # the noise channel of the wind, apart from the sensors' 0-5 and 8-10
 # MIL-F-8785C's low-altitude model at h = 10 m (32.8 ft) for a 10 m/s wind taken as its 20-ft wind W20:
@@ -102,11 +102,7 @@ COMPONENT = Component(
      parameter("l1", 1.0, "m", "main cable length, trolley to hook (for the hook's velocity)"),
      parameter("l2", 0.5, "m", "lower cable length, hook to payload (for the payload's velocity)"),
      parameter("seed", 1.0, "1", "seed of the turbulence (a whole number): the same seed, the same wind"),
-     input_("dx", "m/s", "trolley velocity"),
-     input_("theta1", "rad", "hook swing angle"),
-     input_("dtheta1", "rad/s", "hook swing rate"),
-     input_("theta2", "rad", "payload swing angle"),
-     input_("dtheta2", "rad/s", "payload swing rate"),
+     *state_variables(input_, names=STATE[1:]),  # dx .. dtheta2
      output("F1", "N", "drag on the hook along x"),
      output("F2", "N", "drag on the payload along x"),
      output("wind", "m/s", "wind speed along x: U_mean plus the turbulence")),
