@@ -17,12 +17,7 @@
 
 enum { MAX_DELAY = 100 }; /* the rule on delay */
 
-/* disturbances.CraneSensorConfig */
-typedef struct {
-    double sigmas[N_OUTPUTS];
-    uint64_t seed;
-    int delay;
-} Config;
+typedef SensorConfig Config; /* disturbances.CraneSensorConfig */
 
 typedef struct {
     uint64_t k;                               /* samples taken, */
@@ -49,10 +44,9 @@ static ModelStatus configure(const double values[], const StringValue strings[],
     return MODEL_OK;
 }
 
-/* disturbances.crane_measure(): (x, theta1, theta2) plus independent normal noise at sample k. */
-static void measure(const Config *c, uint64_t k, const double true_values[N_OUTPUTS], double out[N_OUTPUTS]) {
-    for (unsigned i = 0; i < N_OUTPUTS; i++)
-        out[i] = c->sigmas[i] != 0 ? true_values[i] + c->sigmas[i] * noise(c->seed, k, 8 + i) : true_values[i];
+/* disturbances.crane_measure(): (x, theta1, theta2) plus noise on channels 8-10 at sample k. */
+static void crane_measure(const Config *c, uint64_t k, const double true_values[N_OUTPUTS], double out[N_OUTPUTS]) {
+    measure(c, k, 8, N_OUTPUTS, true_values, out);
 }
 
 static void initial_state(const double values[], const Config *c, State *s) { s->k = 0, s->held = 0; } /* (0, []) */
@@ -60,7 +54,7 @@ static void initial_state(const double values[], const Config *c, State *s) { s-
 /* _crane_sensor_output(): the sample delay steps ago (the oldest kept until there is one that old); without a
    delay, and at first, a sample of the inputs now. */
 static ModelStatus outputs(const double values[], const Config *c, const State *s, double out[], const Reporter *r) {
-    if (c->delay == 0 || s->held == 0) measure(c, s->k, &values[VR_x], out);
+    if (c->delay == 0 || s->held == 0) crane_measure(c, s->k, &values[VR_x], out);
     else memcpy(out, s->history[0], sizeof s->history[0]);
     return MODEL_OK;
 }
@@ -70,7 +64,7 @@ static ModelStatus update(const double values[], const Config *c, State *s, doub
                           const Reporter *r) {
     if (c->delay > 0) {
         if (s->held == c->delay) memmove(s->history[0], s->history[1], (size_t)--s->held * sizeof s->history[0]);
-        measure(c, s->k, &values[VR_x], s->history[s->held++]);
+        crane_measure(c, s->k, &values[VR_x], s->history[s->held++]);
     }
     s->k++;
     return MODEL_OK;

@@ -29,4 +29,20 @@ static inline double noise(uint64_t seed, uint64_t k, uint64_t channel) {
     return sqrt(-2.0 * LOG(u1)) * COS(2.0 * NOISE_PI * u2);
 }
 
+/* disturbances.SensorConfig and CraneSensorConfig: the noise's standard deviation on each channel (one a measured
+   value, at most the plant state's six), its seed, and the delay in communication steps. */
+typedef struct {
+    double sigmas[6];
+    uint64_t seed;
+    int delay;
+} SensorConfig;
+
+/* disturbances.measure() and crane_measure(): n true values plus independent normal noise at sample k, on the
+   channels first, first + 1, ... (none where a sigma is 0). */
+static inline void measure(const SensorConfig *c, uint64_t k, unsigned first, unsigned n, const double true_values[],
+                           double out[]) {
+    for (unsigned i = 0; i < n; i++)
+        out[i] = c->sigmas[i] != 0 ? true_values[i] + c->sigmas[i] * noise(c->seed, k, first + i) : true_values[i];
+}
+
 #endif

@@ -42,8 +42,22 @@ static void paper_accelerations(double theta1, double dtheta1, double theta2, do
     dd[1] = (a * r2 - c * r1) / det;
 }
 
+/* The end of an RK4 step from the state s at its start (overwritten): the swing rates at the four stages (w1 and
+   w2: at the start, b, c, d) and the angular accelerations k1..k4. x'' = u is constant over the step, so RK4
+   integrates x exactly. */
+static void rk4_end(double s[N_SWING], double u, double dt, const double w1[4], const double w2[4],
+                    const double k1[2], const double k2[2], const double k3[2], const double k4[2]) {
+    double x = s[X], v = s[DX], a1 = s[THETA1], a2 = s[THETA2], h2 = 0.5 * dt, sixth = dt / 6.0;
+    s[X] = x + dt * v + h2 * dt * u;
+    s[DX] = v + dt * u;
+    s[THETA1] = a1 + sixth * (w1[0] + 2.0 * w1[1] + 2.0 * w1[2] + w1[3]);
+    s[DTHETA1] = w1[0] + sixth * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]);
+    s[THETA2] = a2 + sixth * (w2[0] + 2.0 * w2[1] + 2.0 * w2[2] + w2[3]);
+    s[DTHETA2] = w2[0] + sixth * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]);
+}
+
 void paper_step(double s[N_SWING], double u, double dt, const PlantParameters *p) {
-    double x = s[X], v = s[DX], a1 = s[THETA1], w1 = s[DTHETA1], a2 = s[THETA2], w2 = s[DTHETA2], big_l = s[L1];
+    double a1 = s[THETA1], w1 = s[DTHETA1], a2 = s[THETA2], w2 = s[DTHETA2], big_l = s[L1];
     double a = (p->m1 + p->m2) * big_l, al2 = a * p->l2, h2 = 0.5 * dt;
     double k1[2], k2[2], k3[2], k4[2];
     paper_accelerations(a1, w1, a2, w2, u, big_l, a, al2, p, k1);
@@ -53,19 +67,12 @@ void paper_step(double s[N_SWING], double u, double dt, const PlantParameters *p
     paper_accelerations(a1 + h2 * w1b, w1c, a2 + h2 * w2b, w2c, u, big_l, a, al2, p, k3);
     double w1d = w1 + dt * k3[0], w2d = w2 + dt * k3[1];
     paper_accelerations(a1 + dt * w1c, w1d, a2 + dt * w2c, w2d, u, big_l, a, al2, p, k4);
-    double sixth = dt / 6.0;
-    /* x'' = u is constant over the step, so RK4 integrates x exactly */
-    s[X] = x + dt * v + h2 * dt * u;
-    s[DX] = v + dt * u;
-    s[THETA1] = a1 + sixth * (w1 + 2.0 * w1b + 2.0 * w1c + w1d);
-    s[DTHETA1] = w1 + sixth * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]);
-    s[THETA2] = a2 + sixth * (w2 + 2.0 * w2b + 2.0 * w2c + w2d);
-    s[DTHETA2] = w2 + sixth * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]);
+    rk4_end(s, u, dt, (double[4]){w1, w1b, w1c, w1d}, (double[4]){w2, w2b, w2c, w2d}, k1, k2, k3, k4);
     s[DL1] = 0.0;
 }
 
 void rk4_step(double s[N_SWING], double u, double dt, const PlantParameters *p, const Load *load) {
-    double x = s[X], v = s[DX], a1 = s[THETA1], w1 = s[DTHETA1], a2 = s[THETA2], w2 = s[DTHETA2];
+    double a1 = s[THETA1], w1 = s[DTHETA1], a2 = s[THETA2], w2 = s[DTHETA2];
     double big_l = s[L1], dl = s[DL1], hoist = load->hoist, h2 = 0.5 * dt;
     /* l1'' = hoist is constant over the step: l1 and its rate are exact at every stage */
     double ls[3] = {big_l, big_l + h2 * dl + 0.5 * hoist * h2 * h2, big_l + dt * dl + 0.5 * hoist * dt * dt};
@@ -79,13 +86,7 @@ void rk4_step(double s[N_SWING], double u, double dt, const PlantParameters *p, 
     angular_accelerations(a1 + h2 * w1b, w1c, a2 + h2 * w2b, w2c, u, p, ls[1], dls[1], load, k3);
     double w1d = w1 + dt * k3[0], w2d = w2 + dt * k3[1];
     angular_accelerations(a1 + dt * w1c, w1d, a2 + dt * w2c, w2d, u, p, ls[2], dls[2], load, k4);
-    double sixth = dt / 6.0;
-    s[X] = x + dt * v + h2 * dt * u;
-    s[DX] = v + dt * u;
-    s[THETA1] = a1 + sixth * (w1 + 2.0 * w1b + 2.0 * w1c + w1d);
-    s[DTHETA1] = w1 + sixth * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]);
-    s[THETA2] = a2 + sixth * (w2 + 2.0 * w2b + 2.0 * w2c + w2d);
-    s[DTHETA2] = w2 + sixth * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]);
+    rk4_end(s, u, dt, (double[4]){w1, w1b, w1c, w1d}, (double[4]){w2, w2b, w2c, w2d}, k1, k2, k3, k4);
     s[L1] = ls[2];
     s[DL1] = dls[2];
 }

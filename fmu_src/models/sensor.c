@@ -1,6 +1,6 @@
 /*
  * The Sensor component in C: the native twin of Sensor in crane_fmu/model/disturbances.py (its
- * variables, _sensor_configure() rules and messages, measure() with noise.h's noise()
+ * variables, _sensor_configure() rules and messages, noise.h's measure()
  * and the one-step delay), registered as a component (component.h). Its variables come from
  * Sensor_variables.h, generated from disturbances.SENSOR. Its state is (k, held): the sample count and
  * the last sample, none at first.
@@ -16,12 +16,7 @@
 #include "py_repr.h"
 #include "rules.h"
 
-/* disturbances.SensorConfig */
-typedef struct {
-    double sigmas[N_OUTPUTS];
-    uint64_t seed;
-    int delay;
-} Config;
+typedef SensorConfig Config; /* disturbances.SensorConfig */
 
 typedef struct {
     uint64_t k;             /* samples taken, */
@@ -48,17 +43,11 @@ static ModelStatus configure(const double values[], const StringValue strings[],
     return MODEL_OK;
 }
 
-/* disturbances.measure(): the true state plus independent normal noise at sample k. */
-static void measure(const Config *c, uint64_t k, const double state[N_OUTPUTS], double out[N_OUTPUTS]) {
-    for (unsigned i = 0; i < N_OUTPUTS; i++)
-        out[i] = c->sigmas[i] != 0 ? state[i] + c->sigmas[i] * noise(c->seed, k, i) : state[i];
-}
-
 static void initial_state(const double values[], const Config *c, State *s) { s->k = 0, s->have_held = 0; } /* (0, None) */
 
 /* _sensor_output(): the held sample when delayed, else (and at first) a sample of the inputs now. */
 static ModelStatus outputs(const double values[], const Config *c, const State *s, double out[], const Reporter *r) {
-    if (!c->delay || !s->have_held) measure(c, s->k, &values[VR_x], out);
+    if (!c->delay || !s->have_held) measure(c, s->k, 0, N_OUTPUTS, &values[VR_x], out);
     else memcpy(out, s->held, sizeof s->held);
     return MODEL_OK;
 }
@@ -66,7 +55,7 @@ static ModelStatus outputs(const double values[], const Config *c, const State *
 /* _sensor_update(): (k + 1, measure(k)) */
 static ModelStatus update(const double values[], const Config *c, State *s, double time, double step,
                           const Reporter *r) {
-    measure(c, s->k, &values[VR_x], s->held);
+    measure(c, s->k, 0, N_OUTPUTS, &values[VR_x], s->held);
     s->k++, s->have_held = 1;
     return MODEL_OK;
 }
