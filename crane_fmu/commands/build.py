@@ -33,14 +33,16 @@ def arguments(p):
                         "changed: sources, tables, the build's tools)")
     p.add_argument("--native", action=argparse.BooleanOptionalAction, default=None,
                    help="also build the native (C) FMUs into build/native (default: when a C compiler is found)")
-    p.add_argument("--container", metavar="SYSTEM|FILE.ssp",
-                   help="instead: pack one system (a built-in one, or an SSP file) into one FMU in build/containers")
-    p.add_argument("--one-fmu", action="extend", nargs="+", metavar="SYSTEM|FILE.ssp",
-                   help="instead: write systems of native components (built-in names or SSP files) as one native "
-                        "FMU each, FMI 2.0 into build/native and 3.0 into build/native/fmi3 (repeatable)")
-    p.add_argument("--component", metavar="MODULE.py",
-                   help="instead: build the components (Component objects) defined in your Python module, "
-                        "FMI 2.0 into --out and FMI 3.0 into its fmi3 folder")
+    instead = p.add_mutually_exclusive_group()  # separate builds: argparse refuses two
+    instead.add_argument("--container", metavar="SYSTEM|FILE.ssp",
+                         help="instead: pack one system (a built-in one, or an SSP file) into one FMU in "
+                              "build/containers")
+    instead.add_argument("--one-fmu", action="extend", nargs="+", metavar="SYSTEM|FILE.ssp",
+                         help="instead: write systems of native components (built-in names or SSP files) as one native "
+                              "FMU each, FMI 2.0 into build/native and 3.0 into build/native/fmi3 (repeatable)")
+    instead.add_argument("--component", metavar="MODULE.py",
+                         help="instead: build the components (Component objects) defined in your Python module, "
+                              "FMI 2.0 into --out and FMI 3.0 into its fmi3 folder")
 
 
 def run(args):
@@ -48,8 +50,6 @@ def run(args):
     from crane_fmu.build_scripts.build_fmus import build_all, container_name, containers_dir
     from crane_fmu.container import build_container
 
-    if sum(map(bool, (args.container, args.component, args.one_fmu))) > 1:
-        raise UsageError("--container, --component and --one-fmu are separate builds: choose one")
     if args.one_fmu:
         for path in _build_one_fmus(args.one_fmu, args.out):
             print(path)
