@@ -290,6 +290,18 @@ def test_unknown_command_is_one_line(capsys):
     assert code == 2 and err.count("\n") == 1
 
 
+@pytest.mark.quick
+@pytest.mark.parametrize("argv, flags", [
+    (["bench", "--sweep", "--mpc"], ("--sweep", "--mpc")),
+    (["bench", "--native", "--derivatives"], ("--native", "--derivatives")),
+    (["build", "--container", "transport", "--one-fmu", "lqr"], ("--container", "--one-fmu")),
+])
+def test_two_exclusive_choices_are_one_line_naming_both(capsys, argv, flags):
+    """Separate benchmarks (builds) are refused together before anything runs: one line naming both flags."""
+    code, out, err = _run(capsys, *argv)
+    assert code == 2 and out == "" and err.count("\n") == 1 and all(flag in err for flag in flags), err
+
+
 def test_unreadable_fmu_is_one_line(tmp_path, fmu_dir, capsys):
     for name in ("CranePlant.fmu", "BacksteppingController.fmu"):
         (tmp_path / name).write_bytes(b"not a zip file")
