@@ -16,7 +16,7 @@ For test writers (keep new tests fast):
   the one-FMU systems are native FMUs) to the same rule (the FMI state table, the fuzzers); a new kind
   of FMU is one entry in ``fmu_kinds.FMU_KINDS``.
 - ``plant_dir``: the FMI 2.0 folder of each kind in turn (a test taking it runs once per kind).
-- ``wine_env``: the environment of the run's one Wine prefix (made once, deleted when the run ends);
+- ``wine_env``: the environment of the run's one Wine prefix and server (made once, deleted when the run ends);
   the test skips without Wine and mingw-w64 (and fails in CI, see required_checks.py). ``windows_host``:
   ``fmu_src/host/host.c`` compiled for Windows once per run (copy it beside the DLLs it loads).
 - ``dask_scheduler``: a local Dask cluster kept for the run; give it as ``scheduler=`` to compare, sweeps and
@@ -175,23 +175,26 @@ def plant_dir(request, fmu_kinds):
 
 
 def _make_wine_prefix(folder):
+    """The prefix, and its Wine server started for the whole run with the services every program uses: started by
+    a test's first program instead, they would hold its captured output open (the server 2 s after each program)."""
     env = {**CLEAN_ENV, "HOME": str(folder), "WINEPREFIX": str(folder), "WINEDEBUG": "-all"}
+    quiet = {"stdin": subprocess.DEVNULL, "stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}
     subprocess.run(["wineboot", "--init"], env=env, capture_output=True, timeout=300, check=True)
     subprocess.run(["wineserver", "-w"], env=env, timeout=300)
+    subprocess.run(["wineserver", "-p"], env=env, timeout=120, check=True, **quiet)  # persistent: stopped at the end
+    subprocess.run(["wine", "cmd", "/c", "exit"], env=env, timeout=300, check=True, **quiet)
 
 
 @pytest.fixture(scope="session")
 def wine_env(tmp_path_factory):
-    """The environment (``CLEAN_ENV``, ``WINEPREFIX``, ...) of the run's one Wine prefix, made once for all workers.
-
-    Deleted when the run ends (about 700 MB). Skips without mingw-w64 or Wine.
+    """The environment (``CLEAN_ENV``, ``WINEPREFIX``, ...) of the run's one Wine prefix, made once for all workers,
+    its server running. The run's end stops the server and deletes the prefix (about 700 MB). Skips without
+    mingw-w64 or Wine.
     """
     if shutil.which(MINGW) is None or shutil.which("wine") is None:
         pytest.skip("needs mingw-w64 (gcc-mingw-w64-x86-64) and Wine (wine64, wine): .ci/run installs them")
     prefix = made_once(tmp_path_factory, "wineprefix", _make_wine_prefix)
-    env = {**CLEAN_ENV, "HOME": str(prefix), "WINEPREFIX": str(prefix), "WINEDEBUG": "-all"}
-    yield env
-    subprocess.run(["wineserver", "-w"], env=env, timeout=120)
+    return {**CLEAN_ENV, "HOME": str(prefix), "WINEPREFIX": str(prefix), "WINEDEBUG": "-all"}
 
 
 @pytest.fixture(scope="session")
