@@ -33,11 +33,11 @@ For test writers (keep new tests fast):
   quick subset (``python -m pytest -m quick``) must stay under a minute and touch every package.
 """
 
-import contextlib
-import io
 import os
 import shutil
 import subprocess
+import sys
+import threading
 from pathlib import Path
 
 import pytest
@@ -67,21 +67,29 @@ BUILT = {"fmu_dir", "build_record", "crane_fmus", "connections", "native_dirs", 
 def pytest_collection_modifyitems(config, items):
     """The quick subset stays quick: a test marked quick that needs the build is a mistake, said at collection.
 
-    The modules that need no build run first (each module stays whole, in its order): while the first worker
-    to need the build makes it, the others have work that does not wait for it.
+    The order of the modules (each stays whole, in its order; pyproject.toml's ``--no-loadscope-reorder`` keeps
+    pytest-xdist to it, handing out one module at a time): those that need no build first, while the build is
+    made (:func:`pytest_collection_finish`); then the longest first (``LONGEST``), so that no worker is left
+    alone with a long one at the end.
     """
     for item in items:
         needs = BUILT & set(item.fixturenames)
         if item.get_closest_marker("quick") and needs:
             raise pytest.UsageError(f"{item.nodeid} is marked quick but needs the build ({', '.join(sorted(needs))})")
     waits = {item.module for item in items if BUILT & set(item.fixturenames)}
-    items.sort(key=lambda item: item.module in waits)  # stable: each module's tests keep their order
+    rank = {name: i for i, name in enumerate(LONGEST)}
+    items.sort(key=lambda item: (item.module in waits, rank.get(item.module.__name__, len(rank))))  # stable
+
+
+# the modules that take longest (seconds of a whole run on 2 cores: python -m pytest --durations=0, summed by module)
+LONGEST = ("test_compare", "test_docs", "test_native_components", "test_one_fmu", "test_native_board", "test_cli",
+           "test_third_party_hosts", "test_incremental_build", "test_c_host", "test_sweep", "test_model_structure",
+           "test_robustness", "test_native")
 
 
 def _build_inputs():
     """A hash of everything the build is made from: the project's sources, this Python, the build's tools."""
     import hashlib
-    import sys
     from importlib.metadata import version
 
     import crane_fmu
@@ -100,14 +108,12 @@ def _build_inputs():
 
 
 def _build(folder):
-    """``crane-fmu build --bench --out folder/fmus``, its printed lines kept in ``folder/build.out``."""
-    from crane_fmu.cli import main
-
-    printed = io.StringIO()
-    with contextlib.redirect_stdout(printed):
-        code = main(["build", "--bench", "--out", str(folder / "fmus")])
-    (folder / "build.out").write_text(f"{code}\n{printed.getvalue()}")
-    assert code == 0, printed.getvalue()[-3000:]
+    """``crane-fmu build --bench --out folder/fmus`` in a process of its own, its printed lines kept in
+    ``folder/build.out``."""
+    done = subprocess.run([sys.executable, "-m", "crane_fmu", "build", "--bench", "--out", str(folder / "fmus")],
+                          capture_output=True, text=True)
+    (folder / "build.out").write_text(f"{done.returncode}\n{done.stdout}")
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
     (folder / "build.manifest").write_text(_manifest(folder))
 
 
@@ -121,14 +127,28 @@ def _manifest(folder):
                    for p in sorted(folder.rglob("*")) if p.is_file() and p.name not in NOT_BUILT)
 
 
-@pytest.fixture(scope="session")
-def fmu_dir(tmp_path_factory):
-    """Folder holding the FMUs of every registered component (FMI 3.0 ones in ../fmi3), built once per run."""
+def _the_build(tmp_path_factory):
+    """The run's build folder, made by the first to ask (see ``fmu_dir``)."""
     cache = os.environ.get("CRANE_TEST_CACHE")
     if cache:
         Path(cache).mkdir(parents=True, exist_ok=True)
-        return made_in(Path(cache), f"build-{_build_inputs()}", _build) / "fmus"
-    return made_once(tmp_path_factory, "build", _build) / "fmus"
+        return made_in(Path(cache), f"build-{_build_inputs()}", _build)
+    return made_once(tmp_path_factory, "build", _build)
+
+
+def pytest_collection_finish(session):
+    """When some test of the run needs the build, the first worker starts it at once, beside its first tests: by
+    the time a test asks for it, it is made or being made (its lock makes every other asker wait)."""
+    if session.config.option.collectonly or os.environ.get("PYTEST_XDIST_WORKER", "gw0") != "gw0":
+        return
+    if any(BUILT & set(item.fixturenames) for item in session.items):
+        threading.Thread(target=_the_build, args=(session.config._tmp_path_factory,), daemon=True).start()
+
+
+@pytest.fixture(scope="session")
+def fmu_dir(tmp_path_factory):
+    """Folder holding the FMUs of every registered component (FMI 3.0 ones in ../fmi3), built once per run."""
+    return _the_build(tmp_path_factory) / "fmus"
 
 
 @pytest.fixture(scope="session")
