@@ -47,11 +47,19 @@ def user_lqr(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def quick_board(template_fmu, fmu_dir, dask_scheduler, tmp_path_factory):
+def board_dir(native_dirs):
+    """The built-in FMUs of the quick board's tests: the native ones (held to the Python FMUs' board to 1e-9 by
+    test_native_board.py), the Python FMUs of the kinds not ported beside them. The user's controller is a
+    Python FMU."""
+    return native_dirs[2]
+
+
+@pytest.fixture(scope="module")
+def quick_board(template_fmu, board_dir, dask_scheduler, tmp_path_factory):
     """The template and the LQR alone (--only), quick, 3 paired cases: the board is in OUT/quick."""
     out = tmp_path_factory.mktemp("compare")
     log = []
-    rows = compare(out, [str(template_fmu), "LqrController"], fmu_dir, scheduler=dask_scheduler, quick=True,
+    rows = compare(out, [str(template_fmu), "LqrController"], board_dir, scheduler=dask_scheduler, quick=True,
                    progress=False, animate=(), only=True, log=log.append, cases=QUICK_CASES)
     return out / "quick", rows, log
 
@@ -118,11 +126,11 @@ def test_the_paper_law_ranks_below_the_converging_laws_in_every_scenario(full_bo
         assert rank["BacksteppingController"] > max(rank["EnergyController"], rank["LqrController"]), sid
 
 
-def test_any_order_of_controllers_gives_the_same_board(quick_board, template_fmu, fmu_dir, tmp_path):
+def test_any_order_of_controllers_gives_the_same_board(quick_board, template_fmu, board_dir, tmp_path):
     """The quick board again, from the command line, with the controllers in the other order, in a new folder."""
     out, _, _ = quick_board
     assert main(["compare", "--controller", "LqrController", "--controller", str(template_fmu), "--only", "--quick",
-                 "--out", str(tmp_path), "--fmu-dir", str(fmu_dir), "--workers", "2", "--no-progress",
+                 "--out", str(tmp_path), "--fmu-dir", str(board_dir), "--workers", "2", "--no-progress",
                  "--animate", "none", "--cases", str(QUICK_CASES)]) == 0
 
     def board(folder):  # but the date of the board
@@ -152,17 +160,17 @@ def test_the_board_marks_your_controller(quick_board):
     assert "`MyController` (yours):" in board and "`LqrController` (yours)" not in board
 
 
-def test_animations_are_drawn_only_when_their_run_changed(quick_board, template_fmu, fmu_dir, dask_scheduler):
+def test_animations_are_drawn_only_when_their_run_changed(quick_board, template_fmu, board_dir, dask_scheduler):
     out, _, _ = quick_board
     chosen = [str(template_fmu), "LqrController"]
     logs = []
     for _ in range(2):
-        compare(out.parent, chosen, fmu_dir, scheduler=dask_scheduler, quick=True, only=True, progress=False,
+        compare(out.parent, chosen, board_dir, scheduler=dask_scheduler, quick=True, only=True, progress=False,
                 animate=("S2",), log=logs.append, cases=QUICK_CASES)
     assert logs[0].endswith("4 plots and 2 animations drawn now") and "38 already done" in logs[0]
     assert logs[1].endswith("4 plots and 0 animations drawn now")
     (out / "animations" / "S2_LqrController.gif").unlink()
-    compare(out.parent, chosen, fmu_dir, scheduler=dask_scheduler, quick=True, only=True, progress=False,
+    compare(out.parent, chosen, board_dir, scheduler=dask_scheduler, quick=True, only=True, progress=False,
             animate=("S2",), log=logs.append, cases=QUICK_CASES)
     assert logs[2].endswith("4 plots and 1 animations drawn now")
     assert (out / "animations" / "S2_LqrController.gif").stat().st_size > 10_000
@@ -182,7 +190,7 @@ def test_a_controller_that_fails_in_one_case_is_scored_failed_there_only(quick_b
     assert s6.index("`LqrController`") < s6.index("`MyController`")  # a failed case ranks last
 
 
-def test_the_harness_runs_the_same_system_as_simulate(quick_board, fmu_dir):
+def test_the_harness_runs_the_same_system_as_simulate(quick_board, board_dir):
     """S2 for the LQR is the built-in transport system on the drive-limited plant: the same figures.
 
     The expected figures are computed here from the recorded run, by their definitions, without
@@ -194,7 +202,7 @@ def test_the_harness_runs_the_same_system_as_simulate(quick_board, fmu_dir):
     _, rows, _ = quick_board
     row = next(r for r in rows if r["controller"] == "LqrController" and r["scenario"] == "S2")
     system = systems.get("transport").with_parameters({"plant": {"u_max": 2.0, "v_max": 1.0}})
-    c = run(system, fmu_dir, recorder=ArrayRecorder()).columns()
+    c = run(system, board_dir, recorder=ArrayRecorder()).columns()
     from crane_fmu.model import planner
 
     end = planner.configure({**planner.COMPONENT.defaults(), "x_d": 2.0}).end
@@ -211,7 +219,7 @@ def test_the_harness_runs_the_same_system_as_simulate(quick_board, fmu_dir):
     assert held and row["bounds_held"] is True and row["bounds_broken"] == ""
 
 
-def test_every_row_records_the_metric_module_that_measured_it(quick_board, fmu_dir, monkeypatch):
+def test_every_row_records_the_metric_module_that_measured_it(quick_board, board_dir, monkeypatch):
     """Each row and the board name the metrics' version; under another version every case has another id, so
     a journal's rows of the old one are never taken into the new board."""
     from crane_fmu import compare as harness
@@ -221,16 +229,16 @@ def test_every_row_records_the_metric_module_that_measured_it(quick_board, fmu_d
     table = pq.read_table(out / "scores.parquet").to_pylist()
     assert {r["metrics_version"] for r in table if r["case_id"] is not None} == {metrics.VERSION}
     assert f"version {metrics.VERSION}" in (out / "scoreboard.md").read_text()
-    chosen = contenders(["LqrController"], fmu_dir, only=True)
-    ids = {c["case_id"] for c in harness.plan(chosen, fmu_dir, ("S1", "S2"))[0]}
+    chosen = contenders(["LqrController"], board_dir, only=True)
+    ids = {c["case_id"] for c in harness.plan(chosen, board_dir, ("S1", "S2"))[0]}
     monkeypatch.setattr(metrics, "VERSION", "another version")
-    assert ids.isdisjoint(c["case_id"] for c in harness.plan(chosen, fmu_dir, ("S1", "S2"))[0])
+    assert ids.isdisjoint(c["case_id"] for c in harness.plan(chosen, board_dir, ("S1", "S2"))[0])
 
 
-def test_a_rerun_resumes(quick_board, template_fmu, fmu_dir, dask_scheduler):
+def test_a_rerun_resumes(quick_board, template_fmu, board_dir, dask_scheduler):
     out, rows, _ = quick_board
     log = []
-    again = compare(out.parent, [str(template_fmu), "LqrController"], fmu_dir, scheduler=dask_scheduler, quick=True,
+    again = compare(out.parent, [str(template_fmu), "LqrController"], board_dir, scheduler=dask_scheduler, quick=True,
                     progress=False, animate=(), only=True, log=log.append, cases=QUICK_CASES)
     assert log[-1].startswith("38 cases: 0 run now, 38 already done")
     assert [r["case_id"] for r in again] == [r["case_id"] for r in rows]
@@ -369,7 +377,7 @@ def test_a_regulation_only_controller_is_scored_where_its_interface_allows(user_
     assert "| `UserLqr` (yours): n/a (needs x_d or x_ref) |" in board
 
 
-def test_every_row_records_its_provenance(quick_board, fmu_dir, template_fmu):
+def test_every_row_records_its_provenance(quick_board, board_dir, template_fmu):
     """The sha256 of each FMU scored (the files' own), the seeds, the versions, the master, the step and the
     date, in every Parquet row and in the board."""
     import hashlib
@@ -377,7 +385,7 @@ def test_every_row_records_its_provenance(quick_board, fmu_dir, template_fmu):
 
     out, _, _ = quick_board
     table = [r for r in pq.read_table(out / "scores.parquet").to_pylist() if r["case_id"]]
-    files = {p.name: p for p in [*Path(fmu_dir).glob("*.fmu"), Path(template_fmu)]}
+    files = {p.name: p for p in [*Path(board_dir).glob("*.fmu"), Path(template_fmu)]}
     for row in table:
         for name, digest in json.loads(row["fmus_sha256"]).items():
             assert digest == hashlib.sha256(files[name].read_bytes()).hexdigest(), (row["case"], name)
@@ -389,7 +397,7 @@ def test_every_row_records_its_provenance(quick_board, fmu_dir, template_fmu):
     assert [json.loads(r["seeds"]) for r in s10] == [{"wind.seed": c["seed"]} for c in design]
     assert [(r["plant_l1"], r["plant_m1"]) for r in s10] == [(c["l1"], c["m1"]) for c in design]
     board = (out / "scoreboard.md").read_text()
-    lqr = hashlib.sha256((Path(fmu_dir) / "LqrController.fmu").read_bytes()).hexdigest()
+    lqr = hashlib.sha256((Path(board_dir) / "LqrController.fmu").read_bytes()).hexdigest()
     assert "## Provenance" in board and f"LqrController.fmu {lqr}" in board and "- master: gauss-seidel" in board
 
 
