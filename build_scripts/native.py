@@ -334,8 +334,8 @@ def _object_key(command, source, include):
         text = path.read_bytes()
         digest.update(path.name.encode() + b"\0" + text)
         for name in re.findall(rb'^\s*#\s*include\s+"([^"]+)"', text, re.MULTILINE):
-            header = next((Path(folder) / name.decode() for folder in [path.parent, *include]
-                           if (Path(folder) / name.decode()).exists()), None)
+            places = (Path(folder) / name.decode() for folder in [path.parent, *include])
+            header = next((place for place in places if place.exists()), None)
             if header is not None and header not in seen:
                 seen.add(header)
                 todo.append(header)
