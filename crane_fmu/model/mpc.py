@@ -121,17 +121,21 @@ def design(p, weights, r, interval, steps):
     for _ in range(steps):
         powers.append(power)
         power = linalg.matmul(ad, power)
-    weight = [terminal if k == steps - 1 else q for k in range(steps)]
+    columns = [linalg.transpose(power) for power in powers]
+    # Q b_d and b_d' Q b_e: the same numbers for every k but the last (weighted by P), so made once, not per (i, k)
+    qb = [[linalg.dot(w, bk) for w in q] for bk in b]
+    bqb = [[linalg.dot(wb, bk) for bk in b] for wb in qb]
     hessian = [[0.0] * steps for _ in range(steps)]
     gain = []
     for i in range(steps):
-        row_f = [0.0] * 6
+        row_f, row_h = [0.0] * 6, hessian[i]
         for k in range(i, steps):
-            wb = [linalg.dot(w, b[k - i]) for w in weight[k]]
+            last = k == steps - 1
+            wb = [linalg.dot(w, b[k - i]) for w in terminal] if last else qb[k - i]
             for c in range(6):
-                row_f[c] += linalg.dot(wb, [powers[k][a][c] for a in range(6)])
+                row_f[c] += linalg.dot(wb, columns[k][c])
             for j in range(i, k + 1):
-                hessian[i][j] += linalg.dot(wb, b[k - j])
+                row_h[j] += linalg.dot(wb, b[k - j]) if last else bqb[k - i][k - j]
         gain.append(row_f)
     for i in range(steps):
         hessian[i][i] += r
