@@ -88,9 +88,10 @@ def pytest_collection_modifyitems(config, items):
 
 
 # the modules that take longest (seconds of a whole run on 2 cores: python -m pytest --durations=0, summed by module)
-LONGEST = ("test_compare", "test_docs", "test_native_components", "test_one_fmu", "test_native_board", "test_cli",
-           "test_third_party_hosts", "test_incremental_build", "test_c_host", "test_sweep", "test_model_structure",
-           "test_robustness", "test_native")
+LONGEST = ("test_docs", "test_compare", "test_native_components", "test_one_fmu", "test_native_board",
+           "test_third_party_hosts", "test_mpc", "test_cli", "test_c_host", "test_robustness", "test_native",
+           "test_serve", "test_wiring", "test_sweep", "test_controllers", "test_fmu_environments",
+           "test_model_structure", "test_incremental_build", "test_native_lqr", "test_native_mpc")
 
 
 def _build_inputs():
@@ -245,8 +246,8 @@ BOARD_CASES = 2  # of the paired design on builtin_quick_board: every scenario, 
 def builtin_quick_board(fmu_dir, dask_scheduler, tmp_path_factory):
     """``(folder, rows)``: ``crane-fmu compare --quick --cases 2`` (``BOARD_CASES``) of every built-in controller on
     the Python FMUs, made once per run (the board, its scores and its journal ``cases.jsonl`` in ``folder``;
-    ``rows`` as compare returned them). A test that scores another controller beside them may start from a copy of that journal: compare
-    then runs only the new controller's cases (the built-ins' are the very same runs)."""
+    ``rows`` as compare returned them). A test that scores another controller beside them may start from a copy of
+    that journal: compare then runs only the new controller's cases (the built-ins' are the very same runs)."""
     import pickle
 
     from crane_fmu.compare import compare
