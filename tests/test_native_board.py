@@ -1,4 +1,4 @@
-"""``crane-fmu compare --fmu-dir build/native`` scores every built-in controller as the Python FMUs do.
+"""``crane-fmu compare --fmu-dir build/native`` scores the built-in controllers as the Python FMUs do.
 
 A module of its own, beside test_compare.py: it needs the run's quick board of the built-in controllers (made once
 for every worker, conftest.py's ``builtin_quick_board``), not test_compare's full board, so the two boards run on
@@ -8,7 +8,7 @@ two workers at once.
 import math
 
 import pytest
-from conftest import BOARD_CASES
+from conftest import BOARD_CASES, BOARD_CONTROLLERS
 
 from crane_fmu.analysis import scoreboard
 from crane_fmu.compare import compare
@@ -26,16 +26,17 @@ def _close(a, b):
 
 
 def test_the_native_fmus_give_the_python_board(builtin_quick_board, native_dirs, dask_scheduler, tmp_path):
-    """The components ported to C native, the others the Python FMUs copied beside them: every controller on every
-    scenario (the run's quick board of BOARD_CASES paired cases, every scenario of the board) gives every figure to
-    1e-9, the same statuses and the same board. (Not the case identities, which hash the FMU files, nor run times, nor the failed runs'
-    log text.)"""
+    """The components ported to C native, the others the Python FMUs copied beside them: every controller of the
+    run's quick board (BOARD_CONTROLLERS: every built-in one but the MPC, whose native runs test_native_mpc.py holds
+    to the Python ones bit for bit) on every scenario (BOARD_CASES paired cases) gives every figure to 1e-9, the
+    same statuses and the same board. (Not the case identities, which hash the FMU files, nor run times, nor the
+    failed runs' log text.)"""
     native = native_dirs[2]
     if not (native / "LqrController.fmu").exists():
         pytest.skip("no native FMUs were built (no C compiler)")
     _, python_rows = builtin_quick_board
-    rows = compare(tmp_path, (), native, scheduler=dask_scheduler, quick=True, progress=False, animate=(),
-                   log=lambda _: None, cases=BOARD_CASES)
+    rows = compare(tmp_path, BOARD_CONTROLLERS, native, scheduler=dask_scheduler, quick=True, progress=False,
+                   animate=(), log=lambda _: None, cases=BOARD_CASES, only=True)
     key = lambda r: (r["scenario"], r["controller"], r["case"])  # noqa: E731
     theirs = {key(r): r for r in python_rows}
     assert sorted(map(key, rows)) == sorted(theirs)
