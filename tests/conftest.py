@@ -240,9 +240,10 @@ def dask_scheduler():
 
 BOARD_CASES = 2  # of the paired design on builtin_quick_board: every scenario, the fewest cases (16 cases, as
 # `compare --quick` runs, cost 3.6 times as many runs)
-# ... and every built-in controller but the MPC, whose Python runs were half the board's time: test_native_mpc.py
-# holds the native MPC to the Python one bit for bit on the board's kinds of run (regulation, the move, a plant it
-# does not know, hoisting, the hard hit), and test_compare.py's full board runs it natively on every scenario
+# The controllers of builtin_quick_board: every built-in one but the MPC, whose Python runs were half the board's
+# time. test_native_mpc.py holds the native MPC to the Python one bit for bit on the board's kinds of run
+# (regulation, the move, a plant it does not know, hoisting, the hard hit); test_compare.py's full board runs it
+# natively on every scenario.
 BOARD_CONTROLLERS = tuple(c.model_identifier for c in components.registered("controller")
                           if c.model_identifier != "MpcController")
 

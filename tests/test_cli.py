@@ -333,7 +333,7 @@ def test_benchmarks_run_and_print_their_figures(capsys, argv, figures):
 
 def test_targets_measures_every_controller_against_its_targets(native_dirs, capsys):
     """A smoke test of the command: the targets themselves are guarded by test_controllers.py (on the Python FMUs;
-    here the native ones, which test_native_board.py holds to them)."""
+    here the native ones, which test_native_board.py and test_native_mpc.py hold to them)."""
     assert main(["targets", "--quick", "--fmu-dir", str(native_dirs[2]), "--workers", "2"]) == 0
     out = capsys.readouterr().out
     assert "Region of attraction, energy (30 s runs): converges or is decaying from every theta1(0)" in out
