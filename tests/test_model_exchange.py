@@ -221,7 +221,7 @@ WINDOWS = {2: ("me", "linux64", "win64"), 3: ("me3", "x86_64-linux", "x86_64-win
 
 
 @pytest.mark.parametrize("version", [2, 3])
-def test_the_windows_dll_integrated_under_wine_gives_the_linux_run(fmu_dir, host, windows_host, wine_env, tmp_path,
+def test_the_windows_dll_integrated_under_wine_gives_the_linux_run(fmu_dir, host, windows_host, wine_env, tmp_path,  # noqa: F811
                                                                    version):
     """host.c's ``me`` mode (``me3`` for FMI 3.0: Model Exchange, RK4 at 1 ms over the FMU's derivatives, an event at
     a step's end where an indicator changes sign) on the Linux library and on the Windows DLL under Wine: the free
@@ -432,7 +432,7 @@ def test_co_simulation_gives_the_directional_derivatives_at_its_communication_po
     want[kept] = 0.0
     assert np.abs(jacobian - want).max() <= 1e-12 * max(1.0, np.abs(want).max())
     h = 1e-6
-    for j, known in enumerate(inputs):
+    for j in range(len(inputs)):
         values = list(INPUTS)
         values[j] = INPUTS[j] + h
         set_(inputs, values)

@@ -21,8 +21,17 @@ import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
-from native_fmus import (close, compare_to_python, compiler, messages, native_folders, open_native,
-                         outputs_beside_python, python_folder, steps_after_restore)
+from native_fmus import (
+    close,
+    compare_to_python,
+    compiler,
+    messages,
+    native_folders,
+    open_native,
+    outputs_beside_python,
+    python_folder,
+    steps_after_restore,
+)
 
 from crane_fmu import components, systems
 from crane_fmu.analysis.scoreboard import Contender, systems_for

@@ -19,8 +19,17 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
-from native_fmus import (close, compare_to_python, compiler, messages, native_folders, open_native,
-                         outputs_beside_python, python_folder, steps_after_restore)
+from native_fmus import (
+    close,
+    compare_to_python,
+    compiler,
+    messages,
+    native_folders,
+    open_native,
+    outputs_beside_python,
+    python_folder,
+    steps_after_restore,
+)
 
 from crane_fmu import components, systems
 from crane_fmu.build_scripts.native import FOLDERS, source_path, variables_header

@@ -14,8 +14,17 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
-from native_fmus import (close, compare_to_python, compiler, messages, native_folders, open_native,
-                         outputs_beside_python, python_folder, steps_after_restore)
+from native_fmus import (
+    close,
+    compare_to_python,
+    compiler,
+    messages,
+    native_folders,
+    open_native,
+    outputs_beside_python,
+    python_folder,
+    steps_after_restore,
+)
 
 from crane_fmu import components
 from crane_fmu.analysis.scoreboard import Contender, systems_for

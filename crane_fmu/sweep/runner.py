@@ -115,7 +115,8 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
         ``cases``, ``skipped`` (done before), ``ran``, ``not_ok`` and ``seconds``.
     """
     out_dir = Path(out_dir)
-    settings = {**study.settings(), "metrics_version": metrics.VERSION}  # in every case's id: rows of other metrics rerun
+    # in every case's id: rows of another metrics version run again
+    settings = {**study.settings(), "metrics_version": metrics.VERSION}
     cases = study.cases()
     done = read_journal(out_dir)
     pending = [c for c in cases if case_id(c, settings) not in done]
