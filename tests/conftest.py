@@ -11,7 +11,9 @@ For test writers (keep new tests fast):
   once per run. Read it, never write into it: build what your test changes into ``tmp_path``, and never
   build every FMU inside a test. ``build_record`` is what that ``crane-fmu build`` printed.
 - ``crane_fmus`` / ``connections``: the ``paper`` system's FMUs and connections.
-- ``native_dirs``: ``{2: build/native, 3: build/native/fmi3}``.
+- ``native``: ``{2: build/native, 3: build/native/fmi3}``, every ported component's FMU checked to be native; the
+  test skips, naming the missing C compiler, where there are none (and fails in CI, see required_checks.py). Take
+  it, never ``native_dir(fmu_dir)`` and a skip of your own. ``host``: ``fmu_src/host/host.c`` for Linux.
 - ``fmu_kinds``: ``{kind: {FMI version: folder}}`` for tests that hold every kind of FMU (Python, native;
   the one-FMU systems are native FMUs) to the same rule (the FMI state table, the fuzzers); a new kind
   of FMU is one entry in ``fmu_kinds.FMU_KINDS``.
@@ -26,6 +28,9 @@ For test writers (keep new tests fast):
   controller on a board of that size without running the built-ins' cases again.
 - ``made_once(tmp_path_factory, name, make)`` (``from once import made_once``): your own thing made once per
   run for every worker.
+- A helper that more than one test module uses lives in ``helpers.py`` (or the support modules it lists), never in
+  a ``test_*.py``: no test module imports another, and no test module defines a fixture named ``native``
+  (test_suite_layout.py checks both).
 - ``CRANE_TEST_CACHE=<folder>`` (environment): the build is kept there under a hash of everything it is made
   from (the sources, the Python, pythonfmu, the C compilers) and reused by later runs while that is unchanged;
   for the edit-and-check loop only (CI and a fresh clone build afresh).
@@ -38,15 +43,17 @@ import shutil
 import subprocess
 import sys
 import threading
+import zipfile
 from pathlib import Path
 
 import pytest
 import pythonfmu  # noqa: F401 (see below)
 import pythonfmu3  # noqa: F401
 from fmu_kinds import FMU_KINDS
+from helpers import BOARD_CASES, BOARD_CONTROLLERS
 from once import made_in, made_once
 
-from crane_fmu import components, systems
+from crane_fmu import systems
 
 pytest_plugins = ["required_checks"]  # CI=true: a skipped test fails the run
 
@@ -66,7 +73,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 # the fixtures that need the run's build (or Wine): a quick test may use none of them
-BUILT = {"fmu_dir", "build_record", "crane_fmus", "connections", "native_dirs", "fmu_kinds", "plant_dir",
+BUILT = {"fmu_dir", "build_record", "crane_fmus", "connections", "native", "fmu_kinds", "plant_dir",
          "builtin_quick_board", "wine_env", "windows_host"}
 
 
@@ -178,13 +185,23 @@ def connections(fmu_dir):
 
 
 @pytest.fixture(scope="session")
-def native_dirs(fmu_dir):
-    """``{FMI version: folder}`` of the native FMUs (a C compiler is required: the test fails without one)."""
-    from crane_fmu.build_scripts.native import native_dir
+def native(fmu_dir):
+    """``{FMI version: folder}`` of the native FMUs (``build/native``, ``build/native/fmi3``): the C twin of every
+    ported component, each checked to hold its C binary (not the Python FMU copied beside it), with the Python FMUs
+    of the other components and the one-FMU systems. Skips, naming the missing C compiler, where the build could
+    make none (in CI that fails the run: required_checks.py)."""
+    from crane_fmu.build_scripts.native import PLATFORMS, NativeUnavailable, compilers, native_dir, ported
 
+    try:
+        compilers()
+    except NativeUnavailable as exc:
+        pytest.skip(f"{exc}: no native FMUs were built")
     folders = {version: native_dir(fmu_dir, version) for version in (2, 3)}
-    if not (folders[2] / "CranePlant.fmu").is_file():
-        pytest.fail("the build made no native FMUs (no C compiler?)")
+    for version, folder in folders.items():
+        for name in ported():
+            with zipfile.ZipFile(folder / f"{name}.fmu") as fmu:
+                binary = f"binaries/{PLATFORMS[version]['linux']}/{name}.so"
+                assert binary in fmu.namelist(), f"{folder / name}.fmu has no {binary}: not a native FMU"
     return folders
 
 
@@ -238,16 +255,6 @@ def dask_scheduler():
         yield cluster.scheduler_address
 
 
-BOARD_CASES = 2  # of the paired design on builtin_quick_board: every scenario, the fewest cases (16 cases, as
-# `compare --quick` runs, cost 3.6 times as many runs)
-# The controllers of builtin_quick_board: every built-in one but the MPC, whose Python runs were half the board's
-# time. test_native_mpc.py holds the native MPC to the Python one bit for bit on the board's kinds of run
-# (regulation, the move, a plant it does not know, hoisting, the hard hit); test_compare.py's full board runs it
-# natively on every scenario.
-BOARD_CONTROLLERS = tuple(c.model_identifier for c in components.registered("controller")
-                          if c.model_identifier != "MpcController")
-
-
 @pytest.fixture(scope="session")
 def builtin_quick_board(fmu_dir, dask_scheduler, tmp_path_factory):
     """``(folder, rows)``: ``crane-fmu compare --quick --cases 2 --only`` (``BOARD_CASES``) of ``BOARD_CONTROLLERS`` on
@@ -273,6 +280,25 @@ def _compile_windows_host(folder):
 
     subprocess.run([MINGW, "-O2", "-Wall", "-Werror", "-static-libgcc", f"-I{fmi_headers()}", str(HOST), "-o",
                     str(folder / "host.exe")], check=True)
+
+
+def _compile_linux_host(folder):
+    from native_fmus import compiler
+
+    from crane_fmu.build_scripts.native import HOST
+    from crane_fmu.build_scripts.wrapper import fmi_headers
+
+    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", str(HOST), "-o",
+                    str(folder / "host"), "-ldl", "-lpthread", "-lm"], check=True)
+
+
+@pytest.fixture(scope="session")
+def host(tmp_path_factory):
+    """``host``: ``fmu_src/host/host.c`` for Linux, made once per run; skips without a C compiler."""
+    from native_fmus import compiler
+
+    compiler()
+    return made_once(tmp_path_factory, "linux_host", _compile_linux_host) / "host"
 
 
 @pytest.fixture(scope="session")

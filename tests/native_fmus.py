@@ -2,8 +2,9 @@
 
 ``open_native`` gives an instance of any FMU (native or Python, FMI 2.0 or 3.0) in initialisation mode;
 ``messages`` runs an FMI 2.0 instance call by call with a logger and returns its statuses and messages,
-so that a native FMU's refusals and errors can be compared with the Python FMU's; ``native_folders``,
-``python_folder`` and ``compare_to_python`` hold a native component's outputs to its Python FMU's.
+so that a native FMU's refusals and errors can be compared with the Python FMU's; ``python_folder`` and
+``compare_to_python`` hold a native component's outputs to its Python FMU's (conftest.py's ``native`` fixture gives
+the native FMUs' folders).
 """
 
 import ctypes
@@ -26,7 +27,6 @@ from fmpy.fmi3 import FMU3Model, FMU3Slave
 from fmpy.logging import addLoggerProxy
 
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
-from crane_fmu.build_scripts.native import native_dir
 
 _LIBC = ctypes.CDLL(None)
 _LIBC.calloc.restype, _LIBC.calloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t, ctypes.c_size_t]
@@ -140,18 +140,6 @@ def steps_after_restore(fmu, version, steps, k0, n):
     restored = fmu.deserializeFMUState(serialized) if version == 3 else fmu.deSerializeFMUstate(serialized)
     fmu.setFMUState(restored) if version == 3 else fmu.setFMUstate(restored)
     return first, again, steps(k0, n)
-
-
-def native_folders(fmu_dir, names):
-    """``{2: folder, 3: folder}`` of the native FMUs, checked to hold the C binaries of ``names`` (not the Python
-    FMUs copied beside them); skips where no C compiler built them."""
-    folders = {2: native_dir(fmu_dir, 2), 3: native_dir(fmu_dir, 3)}
-    if not (folders[2] / f"{names[0]}.fmu").exists():
-        pytest.skip("no C compiler: no native FMUs were built")
-    for name in names:
-        with open(folders[2] / f"{name}.fmu", "rb") as f:
-            assert f"binaries/linux64/{name}.so".encode() in f.read()
-    return folders
 
 
 def python_folder(fmu_dir, version):

@@ -23,10 +23,7 @@ that warn), so they are required of the plant alone.
 import subprocess
 
 import pytest
-from test_c_host import compile_hosts, unpack_fmu
-
-from crane_fmu.build_scripts.build_fmus import fmi3_dir
-from crane_fmu.build_scripts.native import native_dir
+from helpers import compile_hosts, kind_folder, unpack_fmu
 
 DRIVER = r"""
 #include <dlfcn.h>
@@ -335,11 +332,8 @@ FMUS = [("python", name) for name in MODELS] + [("native", name) for name in MOD
 @pytest.mark.parametrize(("kind", "name"), FMUS)
 @pytest.mark.parametrize("version", [2, 3])
 def test_random_calls_from_a_c_host_get_the_status_their_class_requires(drivers, fmu_dir, kind, name, version,
-                                                                       tmp_path):
-    folder = (fmu_dir if version == 2 else fmi3_dir(fmu_dir)) if kind == "python" else native_dir(fmu_dir, version)
-    fmu = folder / f"{name}.fmu"
-    if kind != "python" and not fmu.exists():
-        pytest.skip("no native FMUs were built (no C compiler)")
+                                                                       tmp_path, request):
+    fmu = kind_folder(request, fmu_dir, kind, version) / f"{name}.fmu"
     md, library, token, resources = unpack_fmu(fmu, tmp_path)
     reals = {v.name: v for v in md.modelVariables if v.type in ("Real", "Float64")}
     args = [f"in={v.valueReference}" for v in reals.values() if v.causality == "input"]

@@ -5,20 +5,17 @@ the closed loop, or with ``probe`` only instantiates the plant. The FMUs find th
 themselves (``fmu_src/find_python.h``); these tests walk each place they look.
 """
 
-import glob
 import os
-import shutil
 import subprocess
 import sys
-import zipfile
 from pathlib import Path
 
 import numpy as np
 import pytest
-from fmpy import read_model_description
+from helpers import PYTHONS, compile_hosts, installed_python, unpack_fmu
 
 from crane_fmu.build_scripts.build_fmus import build_fmu, fmi3_dir
-from crane_fmu.build_scripts.wrapper import compile_binaries, fmi_headers
+from crane_fmu.build_scripts.wrapper import compile_binaries
 from crane_fmu.cosim import simulate
 from crane_fmu.model import plant
 from crane_fmu.model.tables import STATE
@@ -115,53 +112,12 @@ int main(int argc, char **argv) {
 }
 """
 
-# The five CPythons of this machine kind: pyenv's 3.10-3.13 and Debian's own 3.11 (libpython in /usr/lib).
-PYTHONS = {f"3.{minor}": f"{os.path.expanduser('~')}/.pyenv/versions/3.{minor}.*/bin/python3.{minor}"
-           for minor in (10, 11, 12, 13)}
-PYTHONS["debian-3.11"] = "/usr/bin/python3.11"
 CLEAN = ("LD_PRELOAD", "LD_LIBRARY_PATH", "PYTHONPATH", "PYTHONHOME", "CRANE_FMU_PYTHON")
-
-
-def _python(name):
-    found = sorted(glob.glob(PYTHONS[name]))
-    if not found:
-        pytest.skip(f"CPython {name} is not installed here ({PYTHONS[name]})")
-    return found[-1]
-
-
-def _compiler():
-    compiler = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
-    if compiler is None:
-        pytest.skip("no C compiler")
-    return compiler
-
-
-def compile_hosts(source, folder):
-    """``{2: program, 3: program}``: C ``source`` compiled for each FMI version against the official headers."""
-    (folder / "host.c").write_text(source)
-    built = {}
-    for version in (2, 3):
-        built[version] = folder / f"host{version}"
-        subprocess.run([_compiler(), f"-DFMI={version}", "-I", str(fmi_headers()), str(folder / "host.c"), "-o",
-                        str(built[version]), "-ldl", "-lm"], check=True)
-    return built
 
 
 @pytest.fixture(scope="module")
 def hosts(tmp_path_factory):
     return compile_hosts(HOST, tmp_path_factory.mktemp("hosts"))
-
-
-def unpack_fmu(fmu, folder):
-    """Extract an FMU: ``(model description, its Linux library, instantiation token, resource location)``."""
-    with zipfile.ZipFile(fmu) as z:
-        z.extractall(folder)
-    md = read_model_description(str(fmu))
-    token = md.guid if md.fmiVersion == "2.0" else md.instantiationToken
-    platform = "linux64" if md.fmiVersion == "2.0" else "x86_64-linux"
-    library = folder / "binaries" / platform / f"{md.coSimulation.modelIdentifier}.so"
-    resources = (folder / "resources").as_uri() if md.fmiVersion == "2.0" else str(folder / "resources") + "/"
-    return md, str(library), token, resources
 
 
 def _environment(**extra):
@@ -213,7 +169,7 @@ def test_c_host_runs_the_closed_loop_bit_for_bit_like_our_master(hosts, crane_fm
 def test_one_build_runs_with_every_cpython_from_3_10_to_3_13(hosts, crane_fmus, fmi3_fmus, reference, version,
                                                              python, tmp_path):
     """The FMUs built once (here, by 3.11) run with each CPython named by CRANE_FMU_PYTHON: same numbers."""
-    executable = _python(python)
+    executable = installed_python(python)
     rows, log = _closed_loop(hosts[version], crane_fmus if version == 2 else fmi3_fmus, tmp_path,
                              CRANE_FMU_PYTHON=executable)
     minor = python.split("-")[-1]
@@ -235,7 +191,7 @@ def test_fmpy_under_another_cpython_runs_the_fmus_built_here(crane_fmus, fmi3_fm
     """fmpy on CPython 3.12 (a fresh venv) loads the FMUs built by this Python: the host's Python is used."""
     import fmpy
 
-    executable = _python("3.12")
+    executable = installed_python("3.12")
     venv = tmp_path / "venv312"
     subprocess.run([executable, "-m", "venv", "--without-pip", str(venv)], check=True)
     # this pip installs into it: fmpy and what simulate_fmu imports (its other requirements serve other commands)
@@ -292,7 +248,7 @@ def test_each_place_of_the_search_finds_a_python(hosts, lost_fmus, tmp_path):
     proc = _probe(hosts[2], lost_fmus[2], tmp_path, CRANE_FMU_PYTHON=debian)
     assert proc.returncode == 0 and f"from {debian} (found by: CRANE_FMU_PYTHON={debian})" in proc.stderr, \
         proc.stderr
-    python312 = Path(_python("3.12"))
+    python312 = Path(installed_python("3.12"))
     (tmp_path / "bin").mkdir()
     (tmp_path / "bin" / "python3").symlink_to(python312)
     proc = _probe(hosts[3], lost_fmus[3], tmp_path, PATH=str(tmp_path / "bin"))

@@ -30,10 +30,7 @@ FMI 3.0 both from initialization mode on. Reference-FMUs' FMI 2.0 masks are the 
 import subprocess
 
 import pytest
-from test_c_host import compile_hosts, unpack_fmu
-
-from crane_fmu.build_scripts.build_fmus import fmi3_dir
-from crane_fmu.build_scripts.native import native_dir
+from helpers import compile_hosts, kind_folder, unpack_fmu
 
 HOST = r"""
 #include <dlfcn.h>
@@ -377,7 +374,7 @@ FMUS = {("python", "CranePlant"): ("u", "x_max", 0.3, 1.0), ("native", "CranePla
 @pytest.mark.parametrize(("kind", "name"), FMUS)
 @pytest.mark.parametrize("version", [2, 3])
 def test_every_function_in_every_state_gets_the_status_of_the_standards_table(table_hosts, fmu_dir, version, kind,
-                                                                              name, tmp_path):
+                                                                              name, tmp_path, request):
     """Each (function, state) pair: OK where the table allows it, else fmi2Error/fmi3Error with a message;
     and the instance goes on: after OK from the state the call leads to, after a refusal from the same state.
 
@@ -385,10 +382,7 @@ def test_every_function_in_every_state_gets_the_status_of_the_standards_table(ta
     the binary directly, with no Python master in between.
     """
     prefix = f"fmi{version}"
-    folder = (fmu_dir if version == 2 else fmi3_dir(fmu_dir)) if kind == "python" else native_dir(fmu_dir, version)
-    fmu = folder / f"{name}.fmu"
-    if kind != "python" and not fmu.exists():
-        pytest.skip("no native FMUs were built (no C compiler)")
+    fmu = kind_folder(request, fmu_dir, kind, version) / f"{name}.fmu"
     md, library, token, resources = unpack_fmu(fmu, tmp_path)
     # every function the FMU exports is in the table, except those called once per process or instance
     lifecycle = {"GetVersion", "GetTypesPlatform", "Instantiate", "InstantiateCoSimulation",
@@ -621,12 +615,10 @@ def me_table_hosts(tmp_path_factory):
 
 
 @pytest.mark.parametrize("version", [2, 3])
-def test_a_model_exchange_instance_follows_the_standards_table(me_table_hosts, fmu_dir, version, tmp_path):
+def test_a_model_exchange_instance_follows_the_standards_table(me_table_hosts, native, version, tmp_path):
     """The native CranePlant as a Model Exchange instance: each (function, state) pair gives OK where the table
     allows it, else an error with a message, and the instance goes on from the state the call left it in."""
-    fmu = native_dir(fmu_dir, version) / "CranePlant.fmu"
-    if not fmu.exists():
-        pytest.skip("no native FMUs were built (no C compiler)")
+    fmu = native[version] / "CranePlant.fmu"
     md, library, token, resources = unpack_fmu(fmu, tmp_path)
     table = FMI3_ME if version == 3 else FMI2_ME
     vr = {v.name: v.valueReference for v in md.modelVariables}

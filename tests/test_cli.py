@@ -331,10 +331,10 @@ def test_benchmarks_run_and_print_their_figures(capsys, argv, figures):
         assert found and float(found.group(1)) > 0, (figure, out)
 
 
-def test_targets_measures_every_controller_against_its_targets(native_dirs, capsys):
+def test_targets_measures_every_controller_against_its_targets(native, capsys):
     """A smoke test of the command: the targets themselves are guarded by test_controllers.py (on the Python FMUs;
     here the native ones, which test_native_board.py and test_native_mpc.py hold to them)."""
-    assert main(["targets", "--quick", "--fmu-dir", str(native_dirs[2]), "--workers", "2"]) == 0
+    assert main(["targets", "--quick", "--fmu-dir", str(native[2]), "--workers", "2"]) == 0
     out = capsys.readouterr().out
     assert "Region of attraction, energy (30 s runs): converges or is decaying from every theta1(0)" in out
     # the words agree (issue 29): the law whose region of attraction is every angle tried is not called a

@@ -47,11 +47,11 @@ def user_lqr(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def board_dir(native_dirs):
+def board_dir(native):
     """The built-in FMUs of the quick board's tests: the native ones (held to the Python FMUs' board to 1e-9 by
     test_native_board.py), the Python FMUs of the kinds not ported beside them. The user's controller is a
     Python FMU."""
-    return native_dirs[2]
+    return native[2]
 
 
 @pytest.fixture(scope="module")
@@ -65,14 +65,14 @@ def quick_board(template_fmu, board_dir, dask_scheduler, tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def full_board(native_dirs, dask_scheduler, tmp_path_factory):
+def full_board(native, dask_scheduler, tmp_path_factory):
     """Every built-in controller on every scenario, FULL_CASES cases of the paired design, on the native FMUs (which
     give the Python FMUs' board to 1e-9 in every figure: test_native_board.py; the Python MPC alone would take most
     of the run): ``(folder, rows, FMU folder)``."""
     out = tmp_path_factory.mktemp("full")
-    rows = compare(out, (), native_dirs[2], scheduler=dask_scheduler, progress=False, animate=(), log=lambda _: None,
+    rows = compare(out, (), native[2], scheduler=dask_scheduler, progress=False, animate=(), log=lambda _: None,
                    cases=FULL_CASES)
-    return out, rows, native_dirs[2]
+    return out, rows, native[2]
 
 
 def test_every_controller_scenario_and_case_is_a_row(quick_board):

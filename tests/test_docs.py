@@ -181,7 +181,7 @@ def test_every_marked_block_runs_as_written(fmu_dir, tmp_path):
             assert done.stdout.startswith("20000 samples, theta1 = ") and done.stdout.endswith(" rad at 20.0 s\n")
 
 
-def test_the_controller_example_is_built_simulated_and_scored(native_dirs, tmp_path, monkeypatch, capsys):
+def test_the_controller_example_is_built_simulated_and_scored(native, tmp_path, monkeypatch, capsys):
     """The controller example of the controller interface page (the README's task 3 and the tutorial's section 6
     name the same commands), as a user runs it in a clone: build, simulate, compare, and the Python script. The
     built-in FMUs in its build/fmus are the native ones (held to the Python FMUs' board to 1e-9 by
@@ -207,7 +207,7 @@ def test_the_controller_example_is_built_simulated_and_scored(native_dirs, tmp_p
     (tmp_path / "examples" / "my_controller").mkdir(parents=True)
     (tmp_path / "examples" / "my_controller" / "pd_sway.py").write_text(module)
     (tmp_path / "build").mkdir()
-    (tmp_path / "build" / "fmus").symlink_to(native_dirs[2])  # every built-in component, as a build leaves them
+    (tmp_path / "build" / "fmus").symlink_to(native[2])  # every built-in component, as a build leaves them
     for command in commands:
         assert main(shlex.split(command)[1:]) == 0, capsys.readouterr().err
     written = sorted(str(p.relative_to(tmp_path / "build")) for p in (tmp_path / "build").rglob("*.fmu")

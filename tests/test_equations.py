@@ -1,17 +1,37 @@
-"""The model's equations against a symbolic Lagrangian derivation of eqs (4)-(7).
-
-The derivations run on first use, not when the module is imported (every test process collects it): other
-test modules import ``ACCEL``, ``INPUT_GAIN`` and ``EXT_ACCEL`` from here.
-"""
+"""The model's equations against a symbolic Lagrangian derivation of eqs (4)-(7) (tests/derivation.py)."""
 
 import functools
 import math
 import random
-from types import SimpleNamespace
 
 import pytest
 
 sympy = pytest.importorskip("sympy")
+
+from derivation import (  # noqa: E402
+    F1,
+    F2,
+    a1,
+    a2,
+    c1,
+    c2,
+    dd1,
+    dd2,
+    ddL,
+    dL,
+    extended,
+    g,
+    l1,
+    l2,
+    m1,
+    m2,
+    paper,
+    plain,
+    solve_linear,
+    u,
+    w1,
+    w2,
+)
 
 from crane_fmu.model import backstepping as controller  # noqa: E402
 from crane_fmu.model import plant  # noqa: E402
@@ -19,51 +39,6 @@ from crane_fmu.model.parameters import PlantParameters  # noqa: E402
 
 pytestmark = pytest.mark.quick  # no build: in the quick subset
 
-t = sympy.symbols("t")
-m1, m2, l1, l2, g, u = sympy.symbols("m1 m2 l1 l2 g u", positive=True)
-xt = sympy.Function("x")(t)
-th1 = sympy.Function("theta1")(t)
-th2 = sympy.Function("theta2")(t)
-
-
-def _lagrange_equations():
-    """Euler-Lagrange equations for theta1, theta2 with the trolley motion x(t) prescribed."""
-    x1, y1 = xt + l1 * sympy.sin(th1), -l1 * sympy.cos(th1)  # eq (4)
-    x2, y2 = x1 + l2 * sympy.sin(th2), y1 - l2 * sympy.cos(th2)  # eq (5)
-    T = (m1 * (x1.diff(t) ** 2 + y1.diff(t) ** 2) + m2 * (x2.diff(t) ** 2 + y2.diff(t) ** 2)) / 2  # eq (6)
-    V = g * (m1 * y1 + m2 * y2)  # eq (7)
-    L = T - V
-    eqs = [sympy.simplify(L.diff(q.diff(t)).diff(t) - L.diff(q)) for q in (th1, th2)]
-    return [e.subs(xt.diff(t, 2), u) for e in eqs]
-
-
-a1, a2, w1, w2, dd1, dd2 = sympy.symbols("a1 a2 w1 w2 dd1 dd2")
-
-
-def _plain(expr):
-    """Replace theta(t) and its derivatives by plain symbols."""
-    return expr.subs({th1.diff(t, 2): dd1, th2.diff(t, 2): dd2}).subs(
-        {th1.diff(t): w1, th2.diff(t): w2}).subs({th1: a1, th2: a2})
-
-
-@functools.cache
-def _paper():
-    """``EQS``, ``SOLUTION``, ``ACCEL``, ``INPUT_GAIN``: eqs (8)-(9) derived, solved for the angular accelerations, and
-    the accelerations and their input gains (b2, b3 of eq (11)) as functions, from the derivation alone."""
-    eqs = _lagrange_equations()
-    solution = sympy.solve([_plain(e) for e in eqs], [dd1, dd2], dict=True)[0]
-    accel = sympy.lambdify((a1, w1, a2, w2, u, m1, m2, l1, l2, g), (solution[dd1], solution[dd2]))
-    gain = sympy.lambdify((a1, w1, a2, w2, m1, m2, l1, l2, g), [sympy.diff(solution[d], u) for d in (dd1, dd2)])
-    return SimpleNamespace(EQS=eqs, SOLUTION=solution, ACCEL=accel, INPUT_GAIN=gain)
-
-
-def __getattr__(name):
-    """``EQS``, ``SOLUTION``, ``ACCEL``, ``INPUT_GAIN``, ``EXT`` and ``EXT_ACCEL``, derived on first use."""
-    if name in ("EQS", "SOLUTION", "ACCEL", "INPUT_GAIN"):
-        return getattr(_paper(), name)
-    if name in ("EXT", "EXT_ACCEL"):
-        return getattr(_extended(), name)
-    raise AttributeError(name)
 
 
 def _random_cases(n=40, seed=1):
@@ -80,14 +55,14 @@ def test_paper_eqs_8_9_are_the_lagrange_equations():
            + l1 * l2 * m2 * dd2 * sympy.cos(a1 - a2) + l1 * l2 * m2 * w2 ** 2 * sympy.sin(a1 - a2))
     eq9 = (l2 * m2 * u * sympy.cos(a2) + l1 * l2 * m2 * dd1 * sympy.cos(a1 - a2) + l2 ** 2 * m2 * dd2
            - l1 * l2 * m2 * w1 ** 2 * sympy.sin(a1 - a2) + l2 * m2 * g * sympy.sin(a2))
-    assert sympy.simplify(eq8 - _plain(_paper().EQS[0])) == 0
-    assert sympy.simplify(eq9 - _plain(_paper().EQS[1])) == 0
+    assert sympy.simplify(eq8 - plain(paper().EQS[0])) == 0
+    assert sympy.simplify(eq9 - plain(paper().EQS[1])) == 0
 
 
 def test_code_accelerations_equal_symbolic_solution():
     # Both sides are double-precision evaluations of the same closed form: 1e-9 relative.
     for p, (q1, r1, q2, r2), acc in _random_cases():
-        expected = _paper().ACCEL(q1, r1, q2, r2, acc, p.m1, p.m2, p.l1, p.l2, p.g)
+        expected = paper().ACCEL(q1, r1, q2, r2, acc, p.m1, p.m2, p.l1, p.l2, p.g)
         got = plant.angular_accelerations(q1, r1, q2, r2, acc, p)
         assert got == pytest.approx(expected, rel=1e-9, abs=1e-9)
 
@@ -95,11 +70,11 @@ def test_code_accelerations_equal_symbolic_solution():
 @pytest.mark.parametrize("form", ["derived", "printed"])
 def test_f_and_b_of_eq_14_against_the_derivation(form):
     """f = accelerations at u = 0 and b = d(accel)/du; only the printed b3 disagrees (sign)."""
-    b_sym = [sympy.diff(_paper().SOLUTION[d], u) for d in (dd1, dd2)]
+    b_sym = [sympy.diff(paper().SOLUTION[d], u) for d in (dd1, dd2)]
     b_fn = sympy.lambdify((a1, w1, a2, w2, m1, m2, l1, l2, g), b_sym)
     for p, (q1, r1, q2, r2), _ in _random_cases():
         (f1, f2, f3), (b1, b2, b3) = controller.drift_and_input_gain(q1, r1, q2, r2, p, form)
-        f_expected = _paper().ACCEL(q1, r1, q2, r2, 0.0, p.m1, p.m2, p.l1, p.l2, p.g)
+        f_expected = paper().ACCEL(q1, r1, q2, r2, 0.0, p.m1, p.m2, p.l1, p.l2, p.g)
         b_expected = b_fn(q1, r1, q2, r2, p.m1, p.m2, p.l1, p.l2, p.g)
         assert (f1, b1) == (0.0, 1.0)
         assert (f2, f3) == pytest.approx(f_expected, rel=1e-9, abs=1e-9)
@@ -123,51 +98,12 @@ def test_energy_is_that_of_eqs_6_7():
 
 # --- the extended plant: hoisting l1(t), horizontal forces, joint damping --------------------
 
-F1, F2, c1, c2 = sympy.symbols("F1 F2 c1 c2", real=True)
-L = sympy.Function("L")(t)
-dL, ddL = sympy.symbols("dL ddL", real=True)
-
-
-def _extended_equations():
-    """Euler-Lagrange equations with l1 = L(t), the forces' virtual work and Rayleigh's dissipation function.
-
-    ``d/dt dT/dq' - dT/dq + dV/dq = Q_F - dD/dq'`` with ``Q_F = F1 dx1/dq + F2 dx2/dq`` and
-    ``D = (c1 theta1'^2 + c2 (theta2' - theta1')^2) / 2``.
-    """
-    x1, y1 = xt + L * sympy.sin(th1), -L * sympy.cos(th1)
-    x2, y2 = x1 + l2 * sympy.sin(th2), y1 - l2 * sympy.cos(th2)
-    T = (m1 * (x1.diff(t) ** 2 + y1.diff(t) ** 2) + m2 * (x2.diff(t) ** 2 + y2.diff(t) ** 2)) / 2
-    V = g * (m1 * y1 + m2 * y2)
-    D = (c1 * th1.diff(t) ** 2 + c2 * (th2.diff(t) - th1.diff(t)) ** 2) / 2
-    lagrangian = T - V
-    eqs = []
-    for q in (th1, th2):
-        forces = F1 * x1.diff(q) + F2 * x2.diff(q) - D.diff(q.diff(t))
-        eqs.append(lagrangian.diff(q.diff(t)).diff(t) - lagrangian.diff(q) - forces)
-    subs = {xt.diff(t, 2): u, L.diff(t, 2): ddL}
-    eqs = [_plain(e.subs(subs)).subs(L.diff(t), dL).subs(L, l1) for e in eqs]
-    return [sympy.expand(e) for e in eqs]  # the trolley's speed x'(t) cancels
-
-
-def _solve_linear(eqs):
-    """``(dd1, dd2)`` from the two equations, linear in them, by Cramer's rule."""
-    a, b = sympy.linear_eq_to_matrix(eqs, [dd1, dd2])
-    det = a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
-    return (b[0] * a[1, 1] - a[0, 1] * b[1]) / det, (a[0, 0] * b[1] - a[1, 0] * b[0]) / det
-
-
-@functools.cache
-def _extended():
-    """``EXT``, ``EXT_ACCEL``: the extended equations and their angular accelerations as a function."""
-    ext = _extended_equations()
-    return SimpleNamespace(EXT=ext, EXT_ACCEL=sympy.lambdify((a1, w1, a2, w2, u, m1, m2, l1, l2, g, dL, ddL, F1, F2,
-                                                              c1, c2), _solve_linear(ext)))
 
 
 def test_extended_equations_reduce_to_eqs_8_9_without_hoisting_forces_and_damping():
     at_rest = {dL: 0, ddL: 0, F1: 0, F2: 0, c1: 0, c2: 0}
-    for extended, paper in zip(_extended().EXT, (_plain(e) for e in _paper().EQS)):
-        assert sympy.trigsimp(sympy.expand(sympy.expand_trig(extended.subs(at_rest) - paper))) == 0
+    for ext, eq in zip(extended().EXT, (plain(e) for e in paper().EQS)):
+        assert sympy.trigsimp(sympy.expand(sympy.expand_trig(ext.subs(at_rest) - eq))) == 0
 
 
 def test_code_accelerations_equal_the_extended_derivation():
@@ -176,7 +112,7 @@ def test_code_accelerations_equal_the_extended_derivation():
         load = (rng.uniform(-1, 1), rng.uniform(-2, 2), rng.uniform(-50, 50), rng.uniform(-50, 50),
                 rng.uniform(0, 5), rng.uniform(0, 5))
         length = rng.uniform(0.3, 3)
-        expected = _extended().EXT_ACCEL(q1, r1, q2, r2, acc, p.m1, p.m2, length, p.l2, p.g, *load)
+        expected = extended().EXT_ACCEL(q1, r1, q2, r2, acc, p.m1, p.m2, length, p.l2, p.g, *load)
         got = plant.angular_accelerations(q1, r1, q2, r2, acc, p, length, load)
         assert got == pytest.approx(expected, rel=1e-9, abs=1e-9)
 
@@ -189,7 +125,7 @@ _SEEDED = (a1, w1, a2, w2, u, l1, dL, ddL, F1, F2)
 def _ext_jacobian():
     """The extended accelerations differentiated by the seeded variables (derived on first use)."""
     return sympy.lambdify((a1, w1, a2, w2, u, m1, m2, l1, l2, g, dL, ddL, F1, F2, c1, c2),
-                          [[sympy.diff(e, v) for v in _SEEDED] for e in _solve_linear(_extended().EXT)])
+                          [[sympy.diff(e, v) for v in _SEEDED] for e in solve_linear(extended().EXT)])
 
 
 def test_code_directional_derivatives_equal_the_derivation_differentiated():

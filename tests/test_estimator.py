@@ -143,7 +143,7 @@ def test_lqg_transport_meets_the_issue_targets(fmu_dir):
     assert m["residual_deg"] <= 0.1, m
 
 
-def test_lqg_transport_on_the_mismatch_grid(native_dirs):
+def test_lqg_transport_on_the_mismatch_grid(native):
     """On the 27 plants of ``crane-fmu targets`` (l1 +-10 %, l2 +-20 %, m2 +-50 %), unknown to estimator and
     controller, every plant arrives and the worst residual swing (measured as the scoreboard does, from one slow
     period of the plant after the planned move's end) is within 1 deg. The scoreboard's S9 asks more (0.1 deg: the
@@ -152,7 +152,7 @@ def test_lqg_transport_on_the_mismatch_grid(native_dirs):
     system = systems.get("lqg-transport")
     worst = 0.0
     for plant in MISMATCH:
-        c = run(system.with_parameters({"plant": plant}), native_dirs[2], recorder=ArrayRecorder()).columns()
+        c = run(system.with_parameters({"plant": plant}), native[2], recorder=ArrayRecorder()).columns()
         m = _figures(c, 2.0, residual_from(system.stop_time, system.parameters["planner"], plant))
         assert m["arrival_s"] is not None, plant
         worst = max(worst, m["residual_deg"])

@@ -64,18 +64,14 @@ def test_fmi3_state_round_trip(fmi3_fmus):
 
 
 @pytest.mark.parametrize("kind", ["python", "native", "one-fmu"])
-def test_time_is_read_with_any_other_variables_and_never_set(fmu_dir, kind):
+def test_time_is_read_with_any_other_variables_and_never_set(fmu_dir, kind, request):
     """FMI 3.0's independent variable in one fmi3GetFloat64 call with others, anywhere in it (as fmusim reads it
     with the outputs); setting it is refused with a message."""
     from fmpy.fmi1 import FMICallException
+    from helpers import kind_folder
     from native_fmus import open_native
 
-    from crane_fmu.build_scripts.native import native_dir
-
-    path = {"python": fmi3_dir(fmu_dir) / "CranePlant.fmu", "native": native_dir(fmu_dir, 3) / "CranePlant.fmu",
-            "one-fmu": native_dir(fmu_dir, 3) / "CraneLqr.fmu"}[kind]
-    if not path.exists():
-        pytest.skip("no native FMUs were built (no C compiler)")
+    path = kind_folder(request, fmu_dir, kind, 3) / ("CraneLqr.fmu" if kind == "one-fmu" else "CranePlant.fmu")
     fmu, vr, set_, get = open_native(path, 3)
     try:
         time, x, theta1 = 0, vr["x"], vr["theta1"]

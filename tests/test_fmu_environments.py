@@ -16,7 +16,7 @@ import subprocess
 
 import numpy as np
 import pytest
-from test_c_host import PYTHONS, _python, compile_hosts, unpack_fmu
+from helpers import PYTHONS, compile_hosts, installed_python, unpack_fmu
 
 from crane_fmu import components
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
@@ -240,7 +240,7 @@ def test_one_build_gives_the_same_bits_with_every_cpython(hosts, fmu_dir, versio
     results = {}
     for python in PYTHONS:
         results[python], log = _run_each(hosts[version], fmus, tmp_path, {"PATH": CLEAN_PATH,
-                                                                         "CRANE_FMU_PYTHON": _python(python)})
+                                                                         "CRANE_FMU_PYTHON": installed_python(python)})
         assert f"using CPython {python.split('-')[-1]}." in log and ", its home /" in log, log
     for i, name in enumerate(COMPONENTS):
         reference = results["3.11"][i]
@@ -254,7 +254,7 @@ def test_one_build_gives_the_same_bits_with_every_cpython(hosts, fmu_dir, versio
 def test_the_fmus_python_can_be_a_venv_or_the_builds_own_executable(hosts, fmu_dir, version, tmp_path):
     """CRANE_FMU_PYTHON naming a venv's python: its base installation's standard library is used."""
     venv = tmp_path / "venv"
-    subprocess.run([_python("3.12"), "-m", "venv", "--without-pip", str(venv)], check=True)
+    subprocess.run([installed_python("3.12"), "-m", "venv", "--without-pip", str(venv)], check=True)
     _, log = _run_alone(hosts[version], _fmu(fmu_dir, "CranePlant", version), tmp_path,
                         {"PATH": CLEAN_PATH, "CRANE_FMU_PYTHON": str(venv / "bin" / "python")})
     assert "using CPython 3.12." in log and ", its home /" in log, log

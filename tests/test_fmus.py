@@ -72,14 +72,14 @@ def test_every_fmus_default_experiment_runs_at_its_systems_step(fmu_dir):
 
 def test_free_swing_matches_dop853_on_the_symbolic_equations(plant_dir):
     """RK4 at 1 ms sub-steps (h = 10 ms) vs DOP853 at rtol = atol = 1e-12 over 20 s on the equations that
-    sympy derives from the Lagrangian (tests/test_equations.py): no code shared with the plant.
+    sympy derives from the Lagrangian (tests/derivation.py): no code shared with the plant.
 
     Measured: 1.5e-9 rad on the angles and 1.3e-8 rad/s on the rates; the
     bounds below leave a margin of about 7 and guard against any change in
     the equations or a lower-order integrator (Euler would be off by ~1e-2).
     """
+    from derivation import ACCEL
     from scipy.integrate import solve_ivp
-    from test_equations import ACCEL
 
     p = PlantParameters()
     result = simulate({"plant": plant_dir / "CranePlant.fmu"}, [], 20.0, 0.01).columns()

@@ -51,13 +51,13 @@ def test_every_system_and_the_plants_general_path_equal_their_results_before_the
 
 
 @pytest.mark.parametrize("case", ["section5_paper", "section5_free", *(f"golden_{case}" for case in GOLDEN)])
-def test_the_native_fmus_give_the_same_results(native_dirs, case):
+def test_the_native_fmus_give_the_same_results(native, case):
     """The native plant's ModelStructure lists that ddx reads u (in Model Exchange); judged per variable no closed
     loop through it is algebraic, our master reads the plant before setting u and again after, and every run
     is the one written before, bit for bit."""
     system, parameters = GOLDEN.get(case.removeprefix("golden_"), (case.removeprefix("section5_"), {}))
     reference = read_csv(DATA / f"{case}.csv")
-    result = run(systems.get(system).with_parameters(parameters), native_dirs[2]).columns()
+    result = run(systems.get(system).with_parameters(parameters), native[2]).columns()
     assert set(reference) <= set(result) and (case.startswith("section5") or list(result) == list(reference))
     for name, values in reference.items():
         assert np.array_equal(result[name][::100], values), name

@@ -23,11 +23,9 @@ import pytest
 from fmpy.fmi2 import FMU2Model, FMU2Slave
 from fmpy.fmi3 import FMU3Model, FMU3Slave
 from fmpy.validation import validate_fmu
-from test_native_hosts import host  # noqa: F401 (the fixture: fmu_src/host/host.c for Linux)
 from third_party_hosts import CLEAN_ENV, FMUCHECK, FMUSIM, OMSIMULATOR, SAME, read_oms_mat, run_tool, tool
 
 from crane_fmu.analysis.linearize import linearize
-from crane_fmu.build_scripts.folders import native_dir
 from crane_fmu.build_scripts.model_exchange import ROUNDING
 from crane_fmu.model import plant
 from crane_fmu.model import plant_continuous as me
@@ -43,11 +41,8 @@ RAIL = ({"u": 1.0, "x_max": 0.5}, 2.0)  # x = t^2 / 2 reaches x_max = 0.5 m at t
 
 
 @pytest.fixture(scope="module", params=[2, 3], ids=["FMI 2.0", "FMI 3.0"])
-def plant_fmu(request, fmu_dir):
-    path = native_dir(fmu_dir, request.param) / "CranePlant.fmu"
-    if not path.exists():
-        pytest.skip("no native FMUs were built (no C compiler)")
-    return path
+def plant_fmu(request, native):
+    return native[request.param] / "CranePlant.fmu"
 
 
 def _run(path, interface, start, stop, step=0.05):
@@ -124,11 +119,9 @@ def test_fmusim_stops_at_the_rail_end(plant_fmu, tmp_path):
     assert abs(theirs["time"][-1] - 1.0) < EVENT and abs(theirs["x"][-1] - 0.5) < EVENT
 
 
-def test_omsimulator_integrates_the_fmi2_plant(fmu_dir, tmp_path):
+def test_omsimulator_integrates_the_fmi2_plant(native, tmp_path):
     """OMSimulator takes a lone FMU as Model Exchange (CVODE); its FMI 3.0 import crashes (tools README)."""
-    path = native_dir(fmu_dir, 2) / "CranePlant.fmu"
-    if not path.exists():
-        pytest.skip("no native FMUs were built (no C compiler)")
+    path = native[2] / "CranePlant.fmu"
     code, log = run_tool([tool(OMSIMULATOR), "--stopTime=2", f"--tolerance={RTOL!r}", "--resultFile=out.mat",
                           f"--tempDir={tmp_path}", path], tmp_path)
     assert code == 0 and "0 errors" in log and "NumRhsEvals" in log, log[-2000:]  # CVODE: Model Exchange
@@ -154,18 +147,15 @@ def _omsimulator_script(script, tmp_path):
     return log
 
 
-def _fmi2_plant(fmu_dir, tmp_path):
-    path = native_dir(fmu_dir, 2) / "CranePlant.fmu"
-    if not path.exists():
-        pytest.skip("no native FMUs were built (no C compiler)")
-    (tmp_path / "build").symlink_to(fmu_dir.parent)
-    return path
+def _fmi2_plant(native, tmp_path):
+    (tmp_path / "build").symlink_to(native[2].parent)
+    return native[2] / "CranePlant.fmu"
 
 
-def test_the_documented_omsimulator_recipe_hoists_as_the_co_simulation(fmu_dir, tmp_path):
+def test_the_documented_omsimulator_recipe_hoists_as_the_co_simulation(native, tmp_path):
     """The page's Lua script as written: OMSimulator's Model Exchange run of the hoisting case (FMI 2.0) is the
     co-simulation's within 1e-6 rad, and the cable follows l1 = 1 + hoist t^2 / 2 (no limit is reached)."""
-    path = _fmi2_plant(fmu_dir, tmp_path)
+    path = _fmi2_plant(native, tmp_path)
     script = _documented_oms_script()
     assert 'oms_setTolerance("model.root", 1e-10)' in script and 'oms_setStopTime("model", 1.0)' in script
     _omsimulator_script(script, tmp_path)
@@ -180,10 +170,10 @@ def test_the_documented_omsimulator_recipe_hoists_as_the_co_simulation(fmu_dir, 
     assert np.abs(theirs["model.root.plant.l1_now"] - (1.0 + start["hoist"] * t ** 2 / 2)).max() < ANGLES
 
 
-def test_omsimulator_locates_the_rail_end(fmu_dir, tmp_path):
+def test_omsimulator_locates_the_rail_end(native, tmp_path):
     """The rail end's state event at t = 1 s, located by OMSimulator's CVODE within 1e-6 s (the FMU names the
     time the host gave it); OMSimulator does not end the run there (it integrates on to its stop time)."""
-    _fmi2_plant(fmu_dir, tmp_path)
+    _fmi2_plant(native, tmp_path)
     start, stop = RAIL
     script = _documented_oms_script().replace('"hoist.mat"', '"rail.mat"')
     script = re.sub(r'oms_setStopTime\("model", [^)]*\)', f'oms_setStopTime("model", {stop!r})', script)
@@ -198,10 +188,8 @@ def test_omsimulator_locates_the_rail_end(fmu_dir, tmp_path):
     assert theirs["model.root.plant.x"].max() > 0.5 + 0.1  # past the rail end: the request to end was not heeded
 
 
-def test_fmucheck_reports_nothing(fmu_dir, tmp_path):
-    path = native_dir(fmu_dir, 2) / "CranePlant.fmu"
-    if not path.exists():
-        pytest.skip("no native FMUs were built (no C compiler)")
+def test_fmucheck_reports_nothing(native, tmp_path):
+    path = native[2] / "CranePlant.fmu"
     code, log = run_tool([tool(FMUCHECK), "-h", "1e-3", "-s", "2", "-o", tmp_path / "out.csv", path], tmp_path)
     assert code == 0, log[-2000:]
     assert "Version returned from ME FMU" in log  # the Model Exchange interface was checked
@@ -221,16 +209,14 @@ WINDOWS = {2: ("me", "linux64", "win64"), 3: ("me3", "x86_64-linux", "x86_64-win
 
 
 @pytest.mark.parametrize("version", [2, 3])
-def test_the_windows_dll_integrated_under_wine_gives_the_linux_run(fmu_dir, host, windows_host, wine_env, tmp_path,  # noqa: F811
+def test_the_windows_dll_integrated_under_wine_gives_the_linux_run(native, host, windows_host, wine_env, tmp_path,
                                                                    version):
     """host.c's ``me`` mode (``me3`` for FMI 3.0: Model Exchange, RK4 at 1 ms over the FMU's derivatives, an event at
     a step's end where an indicator changes sign) on the Linux library and on the Windows DLL under Wine: the free
     swing, the hoisting run and the run into the rail end agree to 1e-9 (the DLL computes with the same math source,
     mingw's libm is not used). The Linux run is the co-simulation's RK4 at 1 ms to rounding (the same steps over
     the same derivatives), and it ends at the step that reaches the rail end (x_max = 0.5 m at t = 1 s)."""
-    path = native_dir(fmu_dir, version) / "CranePlant.fmu"
-    if not path.exists():
-        pytest.skip("no native FMUs were built (no C compiler)")
+    path = native[version] / "CranePlant.fmu"
     mode, linux_platform, windows_platform = WINDOWS[version]
     with zipfile.ZipFile(path) as z:
         z.extractall(tmp_path)
@@ -356,12 +342,12 @@ def test_linearize_uses_the_directional_derivatives_and_at_rest_is_the_linearisa
     assert np.abs(lin.B[[3, 5], 0] + np.array(small_w)).max() < 1e-9
 
 
-def test_the_documented_fmpy_recipe_stops_at_the_rail_end(fmu_dir, tmp_path):
+def test_the_documented_fmpy_recipe_stops_at_the_rail_end(native, tmp_path):
     """The interoperability page's fmpy recipe, run as written in a clone's layout: it stops where x = u t^2 / 2
     reaches x_max, at the time it prints."""
     page = (Path(__file__).parent.parent / "docs" / "guide" / "interoperability.md").read_text()
     block = re.search(r"## Model Exchange.*?```python\n(.*?)```", page, re.S).group(1)
-    (tmp_path / "build").symlink_to(fmu_dir.parent)
+    (tmp_path / "build").symlink_to(native[2].parent)
     (tmp_path / "recipe.py").write_text(block)
     done = subprocess.run([sys.executable, "recipe.py"], cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]

@@ -17,11 +17,12 @@ import random
 
 import pytest
 from fmpy import read_model_description
+from helpers import kind_folder
 from native_fmus import open_native
 
 from crane_fmu import components, systems
-from crane_fmu.build_scripts.build_fmus import container_name, containers_dir, fmi3_dir
-from crane_fmu.build_scripts.native import native_dir, ported
+from crane_fmu.build_scripts.build_fmus import container_name, containers_dir
+from crane_fmu.build_scripts.native import ported
 from crane_fmu.build_scripts.one_fmu import not_native, one_fmu_name
 
 # Parameters under which every declared dependency acts: the LQR and the MPC read l1_now only with a schedule
@@ -32,15 +33,12 @@ ACTING = {"LqrController": {"l1_low": 0.5, "l1_high": 2.0}, "MpcController": {"l
 STEPWISE = {"MpcController": {"iterations", "plan_end"}}
 
 
-def _paths(fmu_dir, kind, version):
-    if kind == "python":
-        folder = fmu_dir if version == 2 else fmi3_dir(fmu_dir)
-        return [folder / f"{c.model_identifier}.fmu" for c in components.registered() if c.role != "benchmark"]
+def _paths(request, fmu_dir, kind, version):
     if kind == "container":
         return [containers_dir(fmu_dir) / f"{container_name(name)}.fmu" for name in systems.tagged("container")]
-    folder = native_dir(fmu_dir, version)
-    if not (folder / "CranePlant.fmu").exists():
-        pytest.skip("no native FMUs were built (no C compiler)")
+    folder = kind_folder(request, fmu_dir, kind, version)
+    if kind == "python":
+        return [folder / f"{c.model_identifier}.fmu" for c in components.registered() if c.role != "benchmark"]
     if kind == "native":
         return [folder / f"{name}.fmu" for name in ported()]
     return [folder / f"{one_fmu_name(name)}.fmu" for name in systems.tagged("one-fmu")
@@ -92,8 +90,8 @@ def _moved_in_each_mode(path, version, md, inputs, outputs, model_exchange):
 
 @pytest.mark.parametrize("kind, version", [("python", 2), ("python", 3), ("native", 2), ("native", 3),
                                            ("one-fmu", 2), ("one-fmu", 3), ("container", 3)])
-def test_perturbing_an_input_moves_exactly_the_outputs_that_list_it(fmu_dir, kind, version):
-    for path in _paths(fmu_dir, kind, version):
+def test_perturbing_an_input_moves_exactly_the_outputs_that_list_it(fmu_dir, kind, version, request):
+    for path in _paths(request, fmu_dir, kind, version):
         md = read_model_description(str(path))
         inputs = [v.name for v in md.modelVariables if v.causality == "input"]
         outputs = [u.variable.name for u in md.outputs]
@@ -124,12 +122,10 @@ def test_a_feedthrough_component_declares_its_inputs_per_output():
         "BacksteppingController").names("input")
 
 
-def test_the_model_exchange_plant_lists_what_its_acceleration_reads_and_co_simulation_does_not_move_it(fmu_dir):
+def test_the_model_exchange_plant_lists_what_its_acceleration_reads_and_co_simulation_does_not_move_it(native):
     """ddx is the acceleration now in Model Exchange (u through the drive), over the last step in co-simulation:
     listed, u moves it in Model Exchange only, and the union rule above is what holds the listing."""
-    path = native_dir(fmu_dir, 2) / "CranePlant.fmu"
-    if not path.exists():
-        pytest.skip("no native FMUs were built (no C compiler)")
+    path = native[2] / "CranePlant.fmu"
     md = read_model_description(str(path))
     inputs = [v.name for v in md.modelVariables if v.causality == "input"]
     outputs = [u.variable.name for u in md.outputs]

@@ -5,12 +5,12 @@ import math
 import daqp
 import numpy as np
 import pytest
+from helpers import mpc_loop, random_qp
 
 from crane_fmu import systems
 from crane_fmu.analysis import controller_targets, floor, metrics, scoreboard
 from crane_fmu.cosim import ArrayRecorder, run
-from crane_fmu.model import mpc, plant, qp
-from crane_fmu.model.component import Step
+from crane_fmu.model import mpc, qp
 from crane_fmu.model.parameters import PlantParameters
 
 TEN_DEG = math.radians(10.0)
@@ -68,29 +68,11 @@ def _check_against_daqp(prepared, f, lower, upper, solution):
     assert np.all(products <= np.array(upper) + 1e-9) and np.all(products >= np.array(lower) - 1e-9)
 
 
-def _random_qp(rng):
-    """A random strictly convex QP with bounds, general rows and a few equalities, and a feasible point."""
-    n, m = int(rng.integers(1, 30)), int(rng.integers(0, 40))
-    a = rng.normal(size=(n, n))
-    h = a @ a.T + 0.1 * np.eye(n)
-    general = rng.normal(size=(m, n))
-    feasible = rng.normal(size=n)
-    at = np.concatenate([feasible, general @ feasible])
-    lower, upper = at - rng.uniform(0, 1, n + m), at + rng.uniform(0, 1, n + m)
-    lower[rng.random(n + m) < 0.2] = -np.inf
-    upper[rng.random(n + m) < 0.2] = np.inf
-    equal = np.r_[np.zeros(n, bool), rng.random(m) < 0.1]
-    lower[equal] = upper[equal] = at[equal]
-    rows = [(k, [1.0]) for k in range(n)] + [(0, list(row)) for row in general]
-    return qp.prepare(h.tolist(), rows), (rng.normal(size=n) * 3).tolist(), lower.tolist(), upper.tolist(), \
-        feasible.tolist()
-
-
 @pytest.mark.parametrize("seed", range(4))
 def test_the_solver_gives_daqps_answer_on_random_convex_qps(seed):
     rng = np.random.default_rng(seed)
     for _ in range(25):
-        prepared, f, lower, upper, start = _random_qp(rng)
+        prepared, f, lower, upper, start = random_qp(rng)
         _check_against_daqp(prepared, f, lower, upper, qp.solve(prepared, f, lower, upper, start, (), 1000))
 
 
@@ -107,8 +89,8 @@ def crane_qps():
 
     qp.solve = recording
     try:
-        _loop({"theta1_0": 0.0, "l1": 1.1, "l2": 0.6, "m2": 10.5}, {"x_d": 2.0}, 3.5)
-        _loop({"theta1_0": math.radians(40.0)}, {}, 2.0)
+        mpc_loop({"theta1_0": 0.0, "l1": 1.1, "l2": 0.6, "m2": 10.5}, {"x_d": 2.0}, 3.5)
+        mpc_loop({"theta1_0": math.radians(40.0)}, {}, 2.0)
     finally:
         qp.solve = solve
     return recorded
@@ -132,7 +114,7 @@ def test_at_its_cap_the_solver_gives_a_feasible_point_no_worse_than_its_start():
     rng = np.random.default_rng(7)
     capped = 0
     for _ in range(40):
-        prepared, f, lower, upper, start = _random_qp(rng)
+        prepared, f, lower, upper, start = random_qp(rng)
         solution = qp.solve(prepared, f, lower, upper, start, (), 2)
         rows = np.array([[0.0] * first + values + [0.0] * (prepared.n - first - len(values))
                          for first, values in prepared.rows])
@@ -144,26 +126,6 @@ def test_at_its_cap_the_solver_gives_a_feasible_point_no_worse_than_its_start():
 
 
 # --- the MpcController ---------------------------------------------------------------------------
-
-
-def _loop(plant_values, controller_values, stop_time, h=1e-3, with_state=False):
-    """The plant and the MpcController called directly, as the master calls the FMUs; the run's arrays, its
-    messages (and with ``with_state`` the controller's last state)."""
-    pc = plant.configure({**plant.COMPONENT.defaults(), "u_max": 2.0, "v_max": 1.0, **plant_values})
-    cc = mpc.configure({**mpc.COMPONENT.defaults(), "h": h, **controller_values})
-    ps, cs = pc.state0, mpc.initial_state(cc)
-    rows, messages = [], []
-    for k in range(round(stop_time / h) + 1):
-        out = plant.COMPONENT.output(pc, ps, (0.0,) * 4)
-        inputs = tuple(out[:6]) + (out[11],)
-        u = mpc.COMPONENT.output(cc, cs, inputs)[0]
-        rows.append(tuple(out[:6]) + (u, out[-1]))
-        ps = plant.update(pc, ps, (u, 0.0, 0.0, 0.0), k * h, h)
-        cs = mpc.update(cc, cs, inputs, k * h, h)
-        if isinstance(cs, Step):
-            messages += cs.messages
-            cs = cs.state
-    return (np.array(rows), messages, cs) if with_state else (np.array(rows), messages)
 
 
 def _move_metrics(result, x_d, h=1e-3):
@@ -185,7 +147,7 @@ def test_the_plan_is_as_short_as_the_floor_on_its_grid():
 def test_the_mpc_keeps_the_drive_within_its_limits_and_warns_once_at_its_cap():
     """From a 40 deg swing (the limits bind at once) with one QP iteration allowed: u is still within
     |u| <= 2 and keeps |v| <= 1 (the drive never has to limit it), and the host hears of the cap once."""
-    result, messages = _loop({"theta1_0": math.radians(40.0)}, {"max_iterations": 1.0}, 3.0)
+    result, messages = mpc_loop({"theta1_0": math.radians(40.0)}, {"max_iterations": 1.0}, 3.0)
     u, ddx = result[:, 6], result[:, 7]
     assert np.abs(u).max() <= 2.0 + 1e-12 and np.abs(result[:, 1]).max() <= 1.0 + 1e-12
     assert np.abs(ddx[1:] - u[:-1]).max() <= 1e-12  # what the drive did is what was demanded
@@ -209,13 +171,13 @@ def test_mpc_parameter_rules(values, message):
 def test_the_mpc_fmus_give_the_python_loop_bit_for_bit(fmu_dir):
     """The FMU (its output and its step share one solve) equals the model called directly; the move arrives."""
     result = run(systems.get("mpc-transport"), fmu_dir, recorder=ArrayRecorder(), stop_time=4.0).columns()
-    loop, _ = _loop({"theta1_0": 0.0}, {"x_d": 2.0}, 4.0)
+    loop, _ = mpc_loop({"theta1_0": 0.0}, {"x_d": 2.0}, 4.0)
     assert np.array_equal(result["plant.x"], loop[:, 0]) and np.array_equal(result["controller.u"], loop[:, 6])
     assert abs(result["plant.x"][-1] - 2.0) < 0.005
     assert result["controller.plan_end"][-1] == pytest.approx(2.75)  # 55 intervals of 50 ms
 
 
-def test_the_mpc_keeps_its_limits_in_every_board_scenario(native_dirs):
+def test_the_mpc_keeps_its_limits_in_every_board_scenario(native):
     """Every case of every scenario (3 of the paired design), the first 3 s (the move): |u| <= 2 m/s2 always, and
     where the controller sees the true state the drive never has to limit what it demands (so |v| <= 1 m/s by its
     own doing). On the native FMUs (held to the Python MPC bit for bit by test_native_mpc.py, and on the board by
@@ -225,7 +187,7 @@ def test_the_mpc_keeps_its_limits_in_every_board_scenario(native_dirs):
     for sid in scoreboard.SCENARIOS:
         for label, system, step, *_ in scoreboard.systems_for(contender, sid, 3):
             system = systems.prepare(system, step)
-            c = run(system, native_dirs[2], recorder=ArrayRecorder(), stop_time=3.0).columns()
+            c = run(system, native[2], recorder=ArrayRecorder(), stop_time=3.0).columns()
             assert np.abs(c["controller.u"]).max() <= 2.0 + 1e-9, (sid, label)
             if sid not in ("S5", "S8", "S9"):  # behind a sensor the MPC's speed is an estimate
                 assert np.abs(c["plant.ddx"][1:] - c["controller.u"][:-1]).max() <= 1e-9, (sid, label)
@@ -236,8 +198,8 @@ def test_the_mpc_keeps_its_limits_in_every_board_scenario(native_dirs):
 
 def test_the_mpc_meets_the_nominal_move_and_regulation_targets():
     """S2: the 2 m move arrives (5 mm, 0.5 deg) within 2.95 s; S1: from 10 deg both angles within 0.1 deg by 2.5 s."""
-    move, _ = _loop({"theta1_0": 0.0}, {"x_d": 2.0}, 4.0)
-    regulation, _ = _loop({}, {}, 4.0)
+    move, _ = mpc_loop({"theta1_0": 0.0}, {"x_d": 2.0}, 4.0)
+    regulation, _ = mpc_loop({}, {}, 4.0)
     assert _move_metrics(move, 2.0)["arrival_s"] <= 2.95
     assert _move_metrics(regulation, 0.0)["settling_0.1deg_s"] <= 2.5
 
@@ -247,7 +209,7 @@ def test_the_mpc_identifies_a_plant_it_does_not_know_and_arrives_within_5_s(true
     """S3's extreme plants (l1, l2, m2 unknown to the controller): the identified swing model is the true one
     (lengths and the payload's share m2 / (m1 + m2) within 1 %, eqs (8)-(9) hold exactly on the plant) and the
     2 m move arrives within 5.0 s (the target for every S3 plant)."""
-    result, _, state = _loop({"theta1_0": 0.0, **true}, {"x_d": 2.0}, 5.5, with_state=True)
+    result, _, state = mpc_loop({"theta1_0": 0.0, **true}, {"x_d": 2.0}, 5.5, with_state=True)
     configured = PlantParameters()
     found = state[mpc.HEADER.l1], state[mpc.HEADER.l2], state[mpc.HEADER.m2] / (configured.m1 + configured.m2)
     wanted = true["l1"], true["l2"], true["m2"] / (configured.m1 + true["m2"])
@@ -290,7 +252,7 @@ def test_the_targets_measure_the_mpcs_residual_over_the_boards_window():
 def test_no_move_is_planned_from_a_swing_beyond_the_linear_models_reach(degrees, planned):
     """S1's 10 deg swing is planned at the first solve; from a hard hit's 60 deg (beyond LARGEST_SWING as a modal
     amplitude) no plan is made and the tracking QP alone acts, at the drive's limit."""
-    result, _, state = _loop({"theta1_0": math.radians(degrees)}, {}, 0.1, with_state=True)
+    result, _, state = mpc_loop({"theta1_0": math.radians(degrees)}, {}, 0.1, with_state=True)
     d = mpc.configure({**mpc.COMPONENT.defaults(), "h": 1e-3}).designs[0]
     assert (mpc.deviation(d, result[0, :6], (0.0,) * 6)[1] <= mpc.LARGEST_SWING) == planned
     assert (state[mpc.HEADER.plan_steps] > 0) == planned

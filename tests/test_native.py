@@ -24,7 +24,7 @@ from native_fmus import close, compiler, messages, open_native, steps_after_rest
 from crane_fmu import components, systems
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
 from crane_fmu.build_scripts.model_exchange import me_variables
-from crane_fmu.build_scripts.native import FOLDERS, MODELS_DIR, native_dir, source_path
+from crane_fmu.build_scripts.native import FOLDERS, MODELS_DIR, source_path
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cosim import run
 from crane_fmu.model import plant
@@ -32,15 +32,6 @@ from crane_fmu.model.parameters import PlantParameters
 
 PLANT = components.get("CranePlant")
 FREE_SWING_MAX_THETA2_DEG = 15.5976  # the Python FMU's free swing from 10 deg, 20 s at 1 ms
-
-
-@pytest.fixture(scope="module")
-def native(fmu_dir):
-    """``{2: folder, 3: folder}`` of the native FMUs (with the Python FMUs of the other components)."""
-    folders = {2: native_dir(fmu_dir, 2), 3: native_dir(fmu_dir, 3)}
-    if not (folders[2] / "CranePlant.fmu").exists():
-        pytest.skip("no C compiler: no native FMUs were built")
-    return folders
 
 
 def _python_fmu(fmu_dir, version):

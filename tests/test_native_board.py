@@ -7,8 +7,7 @@ two workers at once.
 
 import math
 
-import pytest
-from conftest import BOARD_CASES, BOARD_CONTROLLERS
+from helpers import BOARD_CASES, BOARD_CONTROLLERS
 
 from crane_fmu.analysis import scoreboard
 from crane_fmu.compare import compare
@@ -25,17 +24,14 @@ def _close(a, b):
     return a == b
 
 
-def test_the_native_fmus_give_the_python_board(builtin_quick_board, native_dirs, dask_scheduler, tmp_path):
+def test_the_native_fmus_give_the_python_board(builtin_quick_board, native, dask_scheduler, tmp_path):
     """The components ported to C native, the others the Python FMUs copied beside them: every controller of the
     run's quick board (BOARD_CONTROLLERS: every built-in one but the MPC, whose native runs test_native_mpc.py holds
     to the Python ones bit for bit) on every scenario (BOARD_CASES paired cases) gives every figure to 1e-9, the
     same statuses and the same board. (Not the case identities, which hash the FMU files, nor run times, nor the
     failed runs' log text.)"""
-    native = native_dirs[2]
-    if not (native / "LqrController.fmu").exists():
-        pytest.skip("no native FMUs were built (no C compiler)")
     _, python_rows = builtin_quick_board
-    rows = compare(tmp_path, BOARD_CONTROLLERS, native, scheduler=dask_scheduler, quick=True, progress=False,
+    rows = compare(tmp_path, BOARD_CONTROLLERS, native[2], scheduler=dask_scheduler, quick=True, progress=False,
                    animate=(), log=lambda _: None, cases=BOARD_CASES, only=True)
     key = lambda r: (r["scenario"], r["controller"], r["case"])  # noqa: E731
     theirs = {key(r): r for r in python_rows}

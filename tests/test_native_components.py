@@ -26,7 +26,6 @@ from native_fmus import (
     compare_to_python,
     compiler,
     messages,
-    native_folders,
     open_native,
     outputs_beside_python,
     python_folder,
@@ -46,11 +45,6 @@ SHAPERS = ("zv", "zvd", "ei", "none")
 LINUX = sys.platform.startswith("linux")  # glibc's libm in both models: the same bits
 INF, NAN = float("inf"), float("nan")
 CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # no venv, no pyenv: nothing of Python
-
-
-@pytest.fixture(scope="module")
-def native(fmu_dir):
-    return native_folders(fmu_dir, NAMES)
 
 
 # ---- one source: the Python FMU's variables; strict C --------------------------------------------------------------

@@ -10,7 +10,7 @@ import subprocess
 import sys
 
 import pytest
-from test_plant_continuous import _cases  # the same random cases as the Python model's tests)
+from helpers import continuous_plant_cases  # the same random cases as the Python model's tests
 
 from crane_fmu.build_scripts.native import MODELS_DIR, NativeUnavailable, compilers
 from crane_fmu.model import plant
@@ -66,7 +66,7 @@ def _array(values, n=None):
 
 
 def test_derivatives_and_their_directional_derivatives_are_the_python_models(lib):
-    for config, state, inputs, mode in _cases():
+    for config, state, inputs, mode in continuous_plant_cases():
         c, s, i = _plant(config), _array(state), _array(inputs)
         m = _Mode(*mode)
         for k in range(N + M):

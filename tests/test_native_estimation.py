@@ -24,7 +24,6 @@ from native_fmus import (
     compare_to_python,
     compiler,
     messages,
-    native_folders,
     open_native,
     outputs_beside_python,
     python_folder,
@@ -42,11 +41,6 @@ NAMES = ("CraneSensor", "StateEstimator", "HardHitController")
 SYSTEMS = ("lqg", "lqg-transport", "hard-hit")
 LINUX = sys.platform.startswith("linux")  # glibc's libm in both models: the same bits
 INF, NAN = float("inf"), float("nan")
-
-
-@pytest.fixture(scope="module")
-def native(fmu_dir):
-    return native_folders(fmu_dir, NAMES)
 
 
 # ---- one source: the Python FMU's variables; strict C --------------------------------------------------------------

@@ -17,7 +17,6 @@ from native_fmus import close, messages, open_native
 
 from crane_fmu import components, systems
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
-from crane_fmu.build_scripts.native import native_dir
 from crane_fmu.cosim import run
 from crane_fmu.model import lqr
 from crane_fmu.model.tables import STATE
@@ -26,16 +25,6 @@ CONTROLLER = components.get("LqrController")
 NAME = "LqrController"
 INF, NAN = float("inf"), float("nan")
 LINUX = sys.platform.startswith("linux")  # glibc's libm in both, the same operations: the same bits
-
-
-@pytest.fixture(scope="module")
-def native(fmu_dir):
-    folders = {2: native_dir(fmu_dir, 2), 3: native_dir(fmu_dir, 3)}
-    if not (folders[2] / f"{NAME}.fmu").exists():
-        pytest.skip("no C compiler: no native FMUs were built")
-    with open(folders[2] / f"{NAME}.fmu", "rb") as f:  # a native FMU, not the Python one copied
-        assert b"binaries/linux64/LqrController.so" in f.read()
-    return folders
 
 
 # ---- random parameters and inputs -------------------------------------------------------------------------------

@@ -19,20 +19,29 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
+from helpers import (
+    BINARIES,
+    HOST_COMMAND,
+    host_rows,
+    master_run,
+    mpc_loop,
+    observed_columns,
+    one_fmu,
+    random_qp,
+    unpack_one_fmu,
+)
 from native_fmus import (
     close,
     compare_to_python,
     compiler,
     messages,
-    native_folders,
     open_native,
     python_folder,
     steps_after_restore,
 )
-from test_mpc import _loop, _random_qp
 
 from crane_fmu import components, systems
-from crane_fmu.build_scripts.native import FOLDERS, native_dir, source_path, variables_header
+from crane_fmu.build_scripts.native import FOLDERS, source_path, variables_header
 from crane_fmu.build_scripts.one_fmu import one_fmu_name
 from crane_fmu.cosim import run
 from crane_fmu.model import mpc, qp
@@ -41,11 +50,6 @@ MPC = components.get("MpcController")
 LINUX = sys.platform.startswith("linux")  # glibc's libm in both models: the same bits
 INF, NAN = float("inf"), float("nan")
 MISMATCH = {"l1": 1.1, "l2": 0.4, "m2": 3.5}  # a plant the controller's model (l1 2 m, l2 0.5 m, m2 5 kg) is not
-
-
-@pytest.fixture(scope="module")
-def native(fmu_dir):
-    return native_folders(fmu_dir, ["MpcController"])
 
 
 # ---- one source: the Python FMU's variables; strict C --------------------------------------------------------------
@@ -146,7 +150,7 @@ def test_the_c_solver_gives_the_python_solvers_bits_on_random_convex_qps(c_qp):
     rng = np.random.default_rng(36)
     capped = warm = 0
     for _ in range(40):
-        prepared, f, lower, upper, start = _random_qp(rng)
+        prepared, f, lower, upper, start = random_qp(rng)
         full = qp.solve(prepared, f, lower, upper, start)
         _same(c_qp(prepared, f, lower, upper, start), (prepared, full))
         early = qp.solve(prepared, f, lower, upper, start, max_iterations=3)
@@ -170,8 +174,8 @@ def test_the_c_solver_gives_the_python_solvers_bits_on_the_cranes_qps(c_qp, monk
         return solution
 
     monkeypatch.setattr(qp, "solve", recording)
-    _loop({"theta1_0": 0.0, **MISMATCH}, {"x_d": 2.0}, 0.6)
-    _loop({"theta1_0": math.radians(40.0)}, {}, 0.6)
+    mpc_loop({"theta1_0": 0.0, **MISMATCH}, {"x_d": 2.0}, 0.6)
+    mpc_loop({"theta1_0": math.radians(40.0)}, {}, 0.6)
     tracking = MPC.check({}).steps
     hinted = [args[0].n == tracking for args, _ in recorded if args[5]]
     assert True in hinted and False in hinted  # warm starts: a tracking QP's shifted one, a plan's resampled one
@@ -232,7 +236,7 @@ def test_while_hoisting_the_native_mpc_equals_the_python_mpc_through_our_master(
 def test_on_the_unknown_plant_the_mpc_identifies_it_and_plans_again():
     """What the ``unknown plant`` run above covers: within its first second the model is identified (the lengths
     within 1 %) and the move planned again from there."""
-    _, _, state = _loop({"theta1_0": 0.0, **MISMATCH}, {"x_d": 2.0}, 1.0, with_state=True)
+    _, _, state = mpc_loop({"theta1_0": 0.0, **MISMATCH}, {"x_d": 2.0}, 1.0, with_state=True)
     assert state[mpc.HEADER.l1] == pytest.approx(MISMATCH["l1"], rel=0.01)
     assert state[mpc.HEADER.l2] == pytest.approx(MISMATCH["l2"], rel=0.01)
     assert 0 < state[mpc.HEADER.plan_start] < 20  # planned again at an interval of the first second
@@ -290,15 +294,13 @@ def test_a_restored_fmu_state_repeats_the_steps_after_it(native, version):
 # ---- Windows: the DLL under Wine ------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("version", [2, 3])
-def test_under_wine_the_windows_dll_plans_again_as_the_linux_one(fmu_dir, windows_host, wine_env, tmp_path, version):
+def test_under_wine_the_windows_dll_plans_again_as_the_linux_one(native, windows_host, wine_env, tmp_path, version):
     """CraneMpcTransport pushed by a 2 N force on the hook that its model does not know: its plans made again and
     again (the deviation's rule), in the Windows DLL under Wine (portable sin and cos), give the Linux run of our
     master over the native FMUs: the states within 1e-9, u within 1e-9 relative."""
-    from test_one_fmu import BINARIES, HOST_COMMAND, _columns, _master, _run, _unpacked
-
-    native, name, stop_time = native_dir(fmu_dir), "mpc-transport", 4.0
-    guid, vrs = _unpacked(native, name, tmp_path, version)
-    fmu = (native if version == 2 else native / "fmi3") / f"{one_fmu_name(name)}.fmu"
+    name, stop_time = "mpc-transport", 4.0
+    guid, vrs = unpack_one_fmu(native, name, tmp_path, version)
+    fmu = one_fmu(native, name, version)
     dll = tmp_path / "binaries" / BINARIES[version][1] / f"{one_fmu_name(name)}.dll"
     if not dll.exists():
         pytest.skip("the one-FMU has no Windows binary (mingw-w64 missing at build time)")
@@ -306,10 +308,10 @@ def test_under_wine_the_windows_dll_plans_again_as_the_linux_one(fmu_dir, window
     shutil.copy(dll, tmp_path)
     force = next(v.valueReference for v in read_model_description(str(fmu)).modelVariables if v.name == "F1")
     step = systems.get(name).step
-    windows = _run(["wine", tmp_path / "host.exe", HOST_COMMAND[version]], dll.name, guid, round(stop_time / step),
+    windows = host_rows(["wine", tmp_path / "host.exe", HOST_COMMAND[version]], dll.name, guid, round(stop_time / step),
                    step, f"{force}=2.0", *vrs, env=wine_env, cwd=tmp_path)
-    linux = _master(native, name, ["plant.F1=2.0"], stop_time, tmp=tmp_path)
-    expected = _columns(linux, name)
+    linux = master_run(native, name, ["plant.F1=2.0"], stop_time, tmp=tmp_path)
+    expected = observed_columns(linux, name)
     assert windows.shape == expected.shape
     assert np.max(np.abs(windows[:, :4] - expected[:, :4])) <= 1e-9
     assert np.max(np.abs(windows[:, 4] - expected[:, 4]) / np.maximum(np.abs(expected[:, 4]), 1.0)) <= 1e-9

@@ -19,7 +19,6 @@ from native_fmus import (
     compare_to_python,
     compiler,
     messages,
-    native_folders,
     open_native,
     outputs_beside_python,
     python_folder,
@@ -34,11 +33,6 @@ from crane_fmu.cosim import run
 WIND = components.get("Wind")
 LINUX = sys.platform.startswith("linux")  # glibc's libm in both models: the same bits
 INF, NAN = float("inf"), float("nan")
-
-
-@pytest.fixture(scope="module")
-def native(fmu_dir):
-    return native_folders(fmu_dir, ("Wind",))
 
 
 @pytest.mark.parametrize("version", [2, 3])

@@ -10,20 +10,28 @@ another order of operations (in practice the bits are equal on Linux).
 """
 
 import shutil
-import subprocess
-import zipfile
 from pathlib import Path
 
 import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
+from helpers import (
+    BINARIES,
+    HOST_COMMAND,
+    OBSERVED,
+    host_rows,
+    libcosim_run,
+    master_run,
+    observed_columns,
+    one_fmu,
+    one_fmu_outputs,
+    unpack_one_fmu,
+)
 
 from crane_fmu import systems
-from crane_fmu.build_scripts.native import HOST, native_dir
 from crane_fmu.build_scripts.one_fmu import not_native, one_fmu_name, plan
-from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cli import main
-from crane_fmu.cosim import ArrayRecorder, FmiError, open_instance, read_result, simulate
+from crane_fmu.cosim import ArrayRecorder, FmiError, open_instance, simulate
 from crane_fmu.cosim.master import Master
 
 SYSTEMS = [name for name in systems.tagged("one-fmu") if not not_native(systems.get(name))]
@@ -31,42 +39,8 @@ CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # no venv, no pyenv: no Python to be foun
 SAME = 1e-9  # the same C models, the same calls: any difference is another order of operations
 
 
-@pytest.fixture(scope="module")
-def native(fmu_dir):
-    folder = native_dir(fmu_dir)
-    if not (folder / "CranePaper.fmu").exists():
-        pytest.skip("no native FMUs were built (no C compiler)")
-    return folder
-
-
-def _fmu(native, name, version=2):
-    return (native if version == 2 else native / "fmi3") / f"{one_fmu_name(name)}.fmu"
-
-
-_RUNS = {}
-
-
-def _master(native, name, settings=(), stop_time=None, tmp=None):
-    """``crane-fmu simulate --system NAME --fmu-dir build/native --set ...``: its columns (cached)."""
-    key = (name, tuple(settings), stop_time)
-    if key not in _RUNS:
-        out = tmp / f"{len(_RUNS)}.csv"
-        args = ["simulate", "--system", name, "--fmu-dir", str(native), "--out", str(out)]
-        args += [f"--set={item}" for item in settings] + (["--stop-time", str(stop_time)] if stop_time else [])
-        assert main(args) == 0
-        _RUNS[key] = read_result(out)
-    return _RUNS[key]
-
-
-def _outputs(name):
-    """``{one-FMU output: master column}``."""
-    links = plan(systems.get(name)).links
-    md_outputs = [v for v in plan(systems.get(name)).variables if v.causality == "output"]
-    return {v.name: "{}.{}".format(*links[v.name][0]) for v in md_outputs}
-
-
 def _deviation(result, columns, name, every=1):
-    return max(np.max(np.abs(result[own] - columns[column][::every])) for own, column in _outputs(name).items())
+    return max(np.max(np.abs(result[own] - columns[column][::every])) for own, column in one_fmu_outputs(name).items())
 
 
 @pytest.mark.parametrize("version", [2, 3])
@@ -74,10 +48,10 @@ def _deviation(result, columns, name, every=1):
 @pytest.mark.parametrize("every", [1, 2, 10])
 def test_the_one_fmu_in_fmpy_is_our_master_over_the_native_fmus(native, tmp_path_factory, name, version, every):
     system = systems.get(name)
-    columns = _master(native, name, tmp=tmp_path_factory.mktemp("runs"))
+    columns = master_run(native, name, tmp=tmp_path_factory.mktemp("runs"))
     h = system.step * every
-    result = simulate_fmu(str(_fmu(native, name, version)), stop_time=system.stop_time, step_size=h,
-                          output_interval=h, output=list(_outputs(name)))
+    result = simulate_fmu(str(one_fmu(native, name, version)), stop_time=system.stop_time, step_size=h,
+                          output_interval=h, output=list(one_fmu_outputs(name)))
     assert len(result) == len(columns["time"][::every])
     assert np.array_equal(result["time"], columns["time"][::every])
     assert _deviation(result, columns, name, every) <= SAME
@@ -89,7 +63,7 @@ def test_judged_per_variable_our_master_reads_the_plant_twice_and_runs_every_sys
     closed loop through u is algebraic. Our master reads the plant before setting u and again after it; the
     one-FMU's exchange, from the components' co-simulation tables (ddx reads no input), reads it once. Every
     built-in system closed through u gives the same numbers both ways, bit for bit (50 steps)."""
-    folder = native if version == 2 else native / "fmi3"
+    folder = native[version]
     for name in SYSTEMS:
         system = systems.get(name)
         stop = system.start_time + 50 * system.step
@@ -107,8 +81,8 @@ def test_judged_per_variable_our_master_reads_the_plant_twice_and_runs_every_sys
         assert [i for i, _ in reads].count("plant") == 2 and ("plant", "u") in {(c.target, c.input)
                                                                                 for c in connections}, name
         ours = recorder.columns()
-        one = simulate({"one": _fmu(native, name, version)}, [], stop, system.step).columns()
-        for own, column in _outputs(name).items():
+        one = simulate({"one": one_fmu(native, name, version)}, [], stop, system.step).columns()
+        for own, column in one_fmu_outputs(name).items():
             assert np.array_equal(one[f"one.{own}"], ours[column]), (name, own)
 
 
@@ -122,7 +96,7 @@ def _instance(path, name="one"):
 
 @pytest.mark.parametrize("version", [2, 3])
 def test_a_step_that_is_no_whole_multiple_of_the_system_step_is_refused(native, version):
-    inst = _instance(_fmu(native, "paper", version))
+    inst = _instance(one_fmu(native, "paper", version))
     try:
         with pytest.raises(FmiError, match=r"communication step 0\.0015 s must be a whole multiple of the system "
                                             r"step 0\.001 s"):
@@ -136,7 +110,7 @@ def test_a_host_that_adds_up_its_steps_runs_to_the_end_like_our_master(native, t
     """t += 0.001 ten thousand times leaves t = 10 - 1.03e-13 (OMSimulator's time, the issue's remainder step); the
     step to 10 s is then within rounding (1e-6 of a system step) of none and taken as none: the outputs at 10 s are
     our master's. A step 1e-5 system steps off a whole number of them is still refused."""
-    inst = _instance(_fmu(native, "lqr", version))
+    inst = _instance(one_fmu(native, "lqr", version))
     try:
         t = 0.0
         for _ in range(10_000):
@@ -144,8 +118,8 @@ def test_a_host_that_adds_up_its_steps_runs_to_the_end_like_our_master(native, t
             t += 0.001
         assert 0 < 10.0 - t < 2e-13
         inst.do_step(t, 10.0 - t)
-        columns = _master(native, "lqr", (), 10.0, tmp=tmp_path_factory.mktemp("runs"))
-        assert max(abs(inst.get(own) - columns[column][-1]) for own, column in _outputs("lqr").items()) <= SAME
+        columns = master_run(native, "lqr", (), 10.0, tmp=tmp_path_factory.mktemp("runs"))
+        assert max(abs(inst.get(own) - columns[column][-1]) for own, column in one_fmu_outputs("lqr").items()) <= SAME
         with pytest.raises(FmiError, match="must be a whole multiple of the system step 0.001 s"):
             inst.do_step(10.0, 0.001 + 1e-8)
     finally:
@@ -155,7 +129,7 @@ def test_a_host_that_adds_up_its_steps_runs_to_the_end_like_our_master(native, t
 @pytest.mark.parametrize("version", [2, 3])
 def test_a_step_of_more_than_ten_million_system_steps_is_refused_not_run(native, version):
     """As the plant refuses a step of more than 10^7 RK4 sub-steps: a host must never hang in doStep."""
-    inst = _instance(_fmu(native, "paper", version))
+    inst = _instance(one_fmu(native, "paper", version))
     try:
         inst.do_step(0.0, 1.0)  # 1000 system steps: taken
         with pytest.raises(FmiError, match=r"communication step 20000\.0 s needs more than 10000000 system steps "
@@ -166,7 +140,7 @@ def test_a_step_of_more_than_ten_million_system_steps_is_refused_not_run(native,
 
 
 def test_an_inner_models_message_names_its_instance(native):
-    inst = open_instance(_fmu(native, "paper"), "one")
+    inst = open_instance(one_fmu(native, "paper"), "one")
     inst.setup(0.0, 20.0)
     inst.set("l1", -1.0)
     inst.enter_initialization()
@@ -230,12 +204,12 @@ def test_values_set_on_the_one_fmu_reach_every_instance_that_has_them(native, tm
     """As our master with the same values set on each instance the rule names (REACHES); and they act."""
     settings = [f"{instance}.{own}={value!r}" for own, value in values.items() for instance in REACHES[name][own]]
     stop_time = 5.0
-    columns = _master(native, name, settings, stop_time, tmp=tmp_path_factory.mktemp("runs"))
-    plain = _master(native, name, (), stop_time, tmp=tmp_path_factory.mktemp("runs"))
+    columns = master_run(native, name, settings, stop_time, tmp=tmp_path_factory.mktemp("runs"))
+    plain = master_run(native, name, (), stop_time, tmp=tmp_path_factory.mktemp("runs"))
     for version in (2, 3):
         step = systems.get(name).step
-        result = simulate_fmu(str(_fmu(native, name, version)), stop_time=stop_time, step_size=step,
-                              output_interval=step, start_values=values, output=list(_outputs(name)))
+        result = simulate_fmu(str(one_fmu(native, name, version)), stop_time=stop_time, step_size=step,
+                              output_interval=step, start_values=values, output=list(one_fmu_outputs(name)))
         assert _deviation(result, columns, name) <= SAME
         assert _deviation(result, plain, name) > 1e-3  # they act
 
@@ -243,12 +217,12 @@ def test_values_set_on_the_one_fmu_reach_every_instance_that_has_them(native, tm
 @pytest.mark.parametrize("name", SYSTEMS)
 def test_setting_every_parameter_to_its_start_value_changes_nothing(native, tmp_path_factory, name):
     """What many tools do (Simulink sets every parameter): the run must be the system's own."""
-    md = read_model_description(str(_fmu(native, name)))
+    md = read_model_description(str(one_fmu(native, name)))
     starts = {v.name: float(v.start) for v in md.modelVariables if v.causality == "parameter"}
-    columns = _master(native, name, (), 5.0, tmp=tmp_path_factory.mktemp("runs"))
+    columns = master_run(native, name, (), 5.0, tmp=tmp_path_factory.mktemp("runs"))
     step = systems.get(name).step
-    result = simulate_fmu(str(_fmu(native, name)), stop_time=5.0, step_size=step, output_interval=step,
-                          start_values=starts, output=list(_outputs(name)))
+    result = simulate_fmu(str(one_fmu(native, name)), stop_time=5.0, step_size=step, output_interval=step,
+                          start_values=starts, output=list(one_fmu_outputs(name)))
     assert _deviation(result, columns, name) <= SAME
 
 
@@ -256,76 +230,33 @@ def test_setting_every_parameter_to_its_start_value_changes_nothing(native, tmp_
 def test_libcosim_runs_the_one_fmu_from_an_ssp_like_our_master(native, tmp_path, name):
     """The one-FMU as the only component of an SSP package (every parameter set to its start value, as our SSP
     writer does), in libcosim at the system's step."""
-    from test_system_files import libcosim_run
-
     from crane_fmu.cosim import System
     from crane_fmu.cosim.ssp import write_ssp
 
     system = systems.get(name)
-    ssp = write_ssp(System(name, {"crane": str(_fmu(native, name))}, stop_time=system.stop_time), native,
+    ssp = write_ssp(System(name, {"crane": str(one_fmu(native, name))}, stop_time=system.stop_time), native[2],
                     tmp_path / f"{name}.ssp")
     steps = round(system.stop_time / system.step)
     theirs = libcosim_run("ssp", ssp, steps=steps, instance="crane")
-    ours = _master(native, name, tmp=tmp_path)
+    ours = master_run(native, name, tmp=tmp_path)
     for signal in ("x", "theta1", "theta2"):
         times, values = np.array(theirs[signal][0]), np.array(theirs[signal][1])
         assert len(times) >= steps
         index = np.rint(times / system.step).astype(int)
-        assert np.max(np.abs(values - ours[_outputs(name)[signal]][index])) <= SAME, signal
+        assert np.max(np.abs(values - ours[one_fmu_outputs(name)[signal]][index])) <= SAME, signal
 
 
 # ---- the C host: no Python; Windows under Wine --------------------------------------------------------------------
-
-OBSERVED = ("x", "theta1", "theta2", "u")
-
-
-@pytest.fixture(scope="module")
-def host(tmp_path_factory):
-    compiler = shutil.which("cc") or shutil.which("gcc")
-    if compiler is None:
-        pytest.skip("no C compiler")
-    out = tmp_path_factory.mktemp("host") / "host"
-    subprocess.run([compiler, "-O2", "-Wall", "-Werror", "-ffp-contract=off", f"-I{fmi_headers()}", str(HOST), "-o",
-                    str(out), "-ldl", "-lpthread", "-lm"], check=True)
-    return out
-
-
-# the host's command and the binary folders (Linux, Windows) of each FMI version
-HOST_COMMAND = {2: "outputs", 3: "outputs3"}
-BINARIES = {2: ("linux64", "win64"), 3: ("x86_64-linux", "x86_64-windows")}
-
-
-def _unpacked(native, name, folder, version=2):
-    """The FMU unpacked into folder: its guid (FMI 3.0: instantiationToken) and the value references of OBSERVED
-    (FMI 3.0's are FMI 2.0's plus one: vr 0 is time)."""
-    fmu = _fmu(native, name, version)
-    with zipfile.ZipFile(fmu) as z:
-        z.extractall(folder)
-    md = read_model_description(str(fmu))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    return md.guid, [str(vr[v]) for v in OBSERVED]
-
-
-def _run(command, *args, **kwargs):
-    done = subprocess.run([*map(str, command), *map(str, args)], capture_output=True, text=True, timeout=300, **kwargs)
-    assert done.returncode == 0, done.stderr[-2000:]
-    return np.array([[float(x) for x in line.split(",")] for line in done.stdout.replace("\r", "").splitlines()])
-
-
-def _columns(columns, name):
-    outputs = _outputs(name)
-    return np.column_stack([columns["time"]] + [columns[outputs[v]] for v in OBSERVED])
-
 
 @pytest.mark.parametrize("version", [2, 3])
 @pytest.mark.parametrize("name", SYSTEMS)
 def test_the_c_host_runs_the_one_fmu_without_python(native, host, tmp_path, name, version):
     system = systems.get(name)
-    guid, vrs = _unpacked(native, name, tmp_path, version)
+    guid, vrs = unpack_one_fmu(native, name, tmp_path, version)
     steps = round((system.stop_time - system.start_time) / system.step)
     library = tmp_path / "binaries" / BINARIES[version][0] / f"{one_fmu_name(name)}.so"
-    rows = _run([host, HOST_COMMAND[version]], library, guid, steps, system.step, *vrs, env=CLEAN_ENV)
-    expected = _columns(_master(native, name, tmp=tmp_path), name)
+    rows = host_rows([host, HOST_COMMAND[version]], library, guid, steps, system.step, *vrs, env=CLEAN_ENV)
+    expected = observed_columns(master_run(native, name, tmp=tmp_path), name)
     assert rows.shape == expected.shape
     assert np.max(np.abs(rows - expected)) <= SAME
 
@@ -335,7 +266,7 @@ def test_the_c_host_runs_the_one_fmu_without_python(native, host, tmp_path, name
 def test_the_windows_dll_under_wine_gives_the_linux_run(native, windows_host, wine_env, tmp_path, name, version):
     """The DLL uses the portable sin, cos and exp, Linux glibc's: as for the plant alone (test_native_hosts), the
     states agree to 1e-9 and u to 1e-9 relative."""
-    guid, vrs = _unpacked(native, name, tmp_path, version)
+    guid, vrs = unpack_one_fmu(native, name, tmp_path, version)
     dll = tmp_path / "binaries" / BINARIES[version][1] / f"{one_fmu_name(name)}.dll"
     if not dll.exists():
         pytest.skip("the one-FMU has no Windows binary (mingw-w64 missing at build time)")
@@ -343,9 +274,9 @@ def test_the_windows_dll_under_wine_gives_the_linux_run(native, windows_host, wi
     shutil.copy(dll, tmp_path)
     system = systems.get(name)
     steps = round((system.stop_time - system.start_time) / system.step)
-    windows = _run(["wine", tmp_path / "host.exe", HOST_COMMAND[version]], dll.name, guid, steps, system.step,
+    windows = host_rows(["wine", tmp_path / "host.exe", HOST_COMMAND[version]], dll.name, guid, steps, system.step,
                    *vrs, env=wine_env, cwd=tmp_path)
-    expected = _columns(_master(native, name, tmp=tmp_path), name)
+    expected = observed_columns(master_run(native, name, tmp=tmp_path), name)
     assert windows.shape == expected.shape
     assert np.max(np.abs(windows[:, :4] - expected[:, :4])) <= SAME
     assert np.max(np.abs(windows[:, 4] - expected[:, 4]) / np.maximum(np.abs(expected[:, 4]), 1.0)) <= SAME
@@ -362,7 +293,7 @@ def test_build_one_fmu_from_an_ssp_file_gives_the_built_in_systems_run(fmu_dir, 
                        str(tmp_path / "native" / "fmi3" / "CranePaper.fmu")]
     for version in (2, 3):
         ours = simulate_fmu(written[version - 2], stop_time=2.0, output=list(OBSERVED))
-        built_in = simulate_fmu(str(_fmu(native, "paper", version)), stop_time=2.0, output=list(OBSERVED))
+        built_in = simulate_fmu(str(one_fmu(native, "paper", version)), stop_time=2.0, output=list(OBSERVED))
         assert all(np.array_equal(ours[v], built_in[v]) for v in OBSERVED)
 
 
@@ -392,11 +323,11 @@ def test_build_writes_the_built_in_one_fmus_whose_components_are_native_and_note
     code, printed = build_record
     tagged = systems.tagged("one-fmu")
     ones = {one_fmu_name(name) for name in tagged}
-    written = sorted(Path(line).relative_to(native.parent) for line in printed
-                     if Path(line).parent in (native, native / "fmi3") and Path(line).stem in ones)
+    written = sorted(Path(line).relative_to(native[2].parent) for line in printed
+                     if Path(line).parent in (native[2], native[3]) and Path(line).stem in ones)
     assert written == sorted(Path(folder) / f"{one_fmu_name(name)}.fmu" for name in SYSTEMS
                              for folder in ("native", "native/fmi3"))
-    assert all((native.parent / path).is_file() for path in written)
+    assert all((native[2].parent / path).is_file() for path in written)
     notes = [line for line in printed if line.startswith("note:")]
     others = [name for name in tagged if name not in SYSTEMS]
     assert [note.split()[1] for note in notes] == [one_fmu_name(name) for name in others]

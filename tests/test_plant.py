@@ -36,8 +36,8 @@ def test_static_deflection_under_constant_forces_with_damping(plant_dir):
 
 def test_hoisting_run_equals_scipy_on_the_symbolic_equations(plant_dir):
     """Lowering at 0.3 m/s2 while the trolley accelerates, forces and damping on: DOP853 on the
-    sympy-derived equations (tests/test_equations.py). RK4 at 1 ms: measured 3e-11 rad; bound 1e-8."""
-    from test_equations import EXT_ACCEL
+    sympy-derived equations (tests/derivation.py). RK4 at 1 ms: measured 3e-11 rad; bound 1e-8."""
+    from derivation import EXT_ACCEL
 
     values = {"theta1_0": 0.1, "theta2_0": -0.05, "u": 0.5, "hoist": 0.3, "F1": 1.0, "F2": -2.0, "c1": 0.5, "c2": 0.2}
     c = _run(plant_dir, values, 2.0)
@@ -60,7 +60,7 @@ def test_power_balance(plant_dir):
     The drives' powers are their generalised forces times their rates: ``H = m1 x1'' + m2 x2'' - F1 - F2``
     for the trolley and ``Q_L = (m1 a1 + m2 a2 + (m1 + m2) g ey) . (sin th1, -cos th1) - (F1 + F2) sin th1``
     for the hoist, with the loads' accelerations from the kinematics of eqs (4)-(5) and the angular
-    accelerations of the symbolic Lagrange derivation (tests/test_equations.py), not of the plant's code: the
+    accelerations of the symbolic Lagrange derivation (tests/derivation.py), not of the plant's code: the
     FMU's recorded state and energy are the only things taken from the code under test.
     """
     u, hoist, f1, f2, c1, c2 = 0.7, -0.2, 3.0, -5.0, 0.8, 0.3
@@ -70,7 +70,7 @@ def test_power_balance(plant_dir):
     t, m1, m2, l2, g = c["time"], P.m1, P.m2, P.l2, P.g
     q1, w1, q2, w2, length, dl, v = (c[n] for n in ("theta1", "dtheta1", "theta2", "dtheta2", "l1_now", "dl1_now",
                                                      "dx"))
-    from test_equations import EXT_ACCEL  # the sympy-derived accelerations, not the plant's own code
+    from derivation import EXT_ACCEL  # the sympy-derived accelerations, not the plant's own code
 
     dd = np.array([EXT_ACCEL(a, b, c_, d, u, m1, m2, e, l2, g, f, hoist, f1, f2, c1, c2)
                    for a, b, c_, d, e, f in zip(q1, w1, q2, w2, length, dl)])

@@ -6,10 +6,10 @@ host of our own (scipy's DOP853 with event location, :func:`crane_fmu.analysis.r
 """
 
 import math
-import random
 
 import numpy as np
 import pytest
+from helpers import continuous_plant_cases
 
 from crane_fmu.analysis.reference import model_exchange
 from crane_fmu.model import plant
@@ -18,21 +18,6 @@ from crane_fmu.model.plant_continuous import FREE, Mode
 
 COMPONENT = plant.COMPONENT
 N, M = len(me.STATES), len(me.INPUTS)
-
-
-def _cases(n=30, seed=3):
-    """Random parameters (damping, a drive lag, finite limits), states, inputs and modes."""
-    rng = random.Random(seed)
-    for k in range(n):
-        values = {"m1": rng.uniform(0.5, 10), "m2": rng.uniform(0.1, 10), "l1": rng.uniform(0.3, 3),
-                  "l2": rng.uniform(0.1, 2), "g": rng.uniform(1, 20), "c1": rng.uniform(0, 5), "c2": rng.uniform(0, 5),
-                  "tau": rng.choice((0.0, rng.uniform(0.05, 1))), "u_max": rng.choice((math.inf, 3.0))}
-        config = COMPONENT.check(values)
-        state = (rng.uniform(-2, 2), rng.uniform(-1, 1), *(rng.uniform(-1.5, 1.5) for _ in range(4)),
-                 rng.uniform(0.3, 3), rng.uniform(-1, 1), rng.uniform(-2, 2))
-        inputs = (rng.uniform(-5, 5), rng.uniform(-2, 2), rng.uniform(-50, 50), rng.uniform(-50, 50))
-        mode = FREE if k % 3 == 0 else Mode(rng.choice((-1, 0, 1)), rng.choice((-1, 0, 1)), rng.choice((-1, 0, 1)))
-        yield config, state, inputs, mode
 
 
 def _central(f, x, k, h):
@@ -49,7 +34,7 @@ def test_directional_derivatives_equal_central_differences():
     rounding eps |f| / h (about 1e-11): 1e-7 of the column's scale catches any wrong or missing term,
     which is of the order of the column itself.
     """
-    for case in _cases():
+    for case in continuous_plant_cases():
         _check_columns(*case, h=1e-5)
 
 
@@ -71,7 +56,7 @@ def _check_columns(config, state, inputs, mode, h):
 
 def test_derivatives_are_the_function_the_co_simulation_rk4_calls():
     """Free of limits, the derivatives are plant.derivative's (which RK4 calls), bit for bit."""
-    for config, state, inputs, _ in _cases():
+    for config, state, inputs, _ in continuous_plant_cases():
         if config.tau > 0 or config.u_max < math.inf:
             continue
         u, hoist, f1, f2 = inputs

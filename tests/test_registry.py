@@ -14,7 +14,7 @@ import numpy as np
 import pd_controller
 import pyarrow.parquet as pq
 import pytest
-from test_system_files import assert_libcosim_matches, libcosim_run
+from helpers import assert_libcosim_matches, libcosim_run
 
 from crane_fmu import components, systems
 from crane_fmu.build_scripts.build_fmus import build_all, systems_dir

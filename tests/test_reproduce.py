@@ -83,8 +83,8 @@ def test_figure4_metrics_recomputed_with_scipy(quick):
 
 def _independent_weighted_loop(stop, h=1e-3):
     """The law with weights (1, 1, 0) written from eqs (16)-(21) here, on the sympy-derived plant
-    (tests/test_equations.py), u held over each step and a classical RK4 step written here."""
-    from test_equations import ACCEL, INPUT_GAIN
+    (tests/derivation.py), u held over each step and a classical RK4 step written here."""
+    from derivation import ACCEL, INPUT_GAIN
 
     p, k = PlantParameters(), ControllerGains()
     args = (p.m1, p.m2, p.l1, p.l2, p.g)

@@ -5,10 +5,10 @@ import math
 import subprocess
 import sys
 import zipfile
-from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import assert_libcosim_matches, libcosim_run
 
 from crane_fmu import systems
 from crane_fmu.build_scripts.build_fmus import systems_dir
@@ -17,7 +17,6 @@ from crane_fmu.cosim import ArrayRecorder, Connection, System, connect, read_csv
 from crane_fmu.cosim.ssp import load_parameters, load_system, write_ssp, write_ssv
 from crane_fmu.model import backstepping, plant
 
-LIBCOSIM = Path(__file__).parent / "libcosim_run.py"
 CRANE = {"plant": (["u"], ["x", "dx", "theta1", "dtheta1", "theta2", "dtheta2", "x1"]),
          "controller": (["x", "dx", "theta1", "dtheta1", "theta2", "dtheta2"], ["u"])}
 
@@ -159,23 +158,6 @@ def test_a_system_of_other_fmus_plots_what_it_has(fmu_dir, tmp_path, capsys):
     assert list(read_csv(tmp_path / "f.csv")) == ["time", "a.x", "a.dx", "a.theta1", "a.dtheta1", "a.theta2",
                                                   "a.dtheta2", "b.u"]
     assert (tmp_path / "f.png").stat().st_size > 10_000
-
-
-def libcosim_run(kind, path, steps=1000, instance="plant"):
-    """libcosim's trajectories of x, theta1, theta2 for a system file, from a subprocess."""
-    pytest.importorskip("libcosimpy")
-    proc = subprocess.run([sys.executable, str(LIBCOSIM), kind, str(path), str(steps), instance],
-                          capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    return json.loads(proc.stdout.strip().splitlines()[-1])
-
-
-def assert_libcosim_matches(theirs, ours, instance="plant", bound=1e-12):
-    for name in ("x", "theta1", "theta2"):
-        times, values = np.array(theirs[name][0]), np.array(theirs[name][1])
-        assert len(times) > 900
-        index = np.rint(times / 1e-3).astype(int)
-        assert np.abs(values - ours[f"{instance}.{name}"][index]).max() < bound
 
 
 @pytest.mark.parametrize("kind", ["ssp", "osp"])

@@ -16,6 +16,7 @@ import re
 import numpy as np
 import pytest
 from fmpy import read_model_description
+from helpers import kind_folder
 from third_party_hosts import (
     FMUCHECK,
     OMSIMULATOR,
@@ -29,7 +30,7 @@ from third_party_hosts import (
 )
 
 from crane_fmu import components, systems
-from crane_fmu.build_scripts.build_fmus import fmi3_dir, systems_dir
+from crane_fmu.build_scripts.build_fmus import systems_dir
 from crane_fmu.build_scripts.native import native_dir, ported
 from crane_fmu.build_scripts.one_fmu import not_native, one_fmu_name, plan
 from crane_fmu.cosim import System, run
@@ -40,23 +41,15 @@ ONE_FMU_SYSTEMS = [name for name in systems.tagged("one-fmu") if not not_native(
 SHORT = 1.0  # s: the stop time where the run's length tests nothing (the step, the outputs, the log do)
 
 
-def _fmus(fmu_dir, kind, version):
+def _fmus(request, fmu_dir, kind, version):
     """``{name: path}`` of every FMU of one kind and FMI version that ``crane-fmu build`` writes."""
+    folder = kind_folder(request, fmu_dir, kind, version)
     if kind == "python":
-        folder = fmu_dir if version == 2 else fmi3_dir(fmu_dir)
         return {c.model_identifier: folder / f"{c.model_identifier}.fmu"
                 for c in components.registered() if c.role != "benchmark"}
-    folder = _native(fmu_dir, version)
     if kind == "native":
         return {name: folder / f"{name}.fmu" for name in ported()}
     return {name: folder / f"{one_fmu_name(name)}.fmu" for name in ONE_FMU_SYSTEMS}
-
-
-def _native(fmu_dir, version=2):
-    folder = native_dir(fmu_dir, version)
-    if not (folder / "CranePlant.fmu").exists():
-        pytest.skip("no native FMUs were built (no C compiler)")
-    return folder
 
 
 def _ours(fmu_dir, kind, name, path, stop_time):
@@ -78,10 +71,10 @@ def _ours(fmu_dir, kind, name, path, stop_time):
 
 @pytest.mark.parametrize("version", [3, 2])
 @pytest.mark.parametrize("kind", KINDS)
-def test_fmusim_runs_every_fmu_like_our_master(fmu_dir, tmp_path, kind, version):
+def test_fmusim_runs_every_fmu_like_our_master(fmu_dir, tmp_path, kind, version, request):
     """1 s at each FMU's own step, in a bare environment (``env -i PATH=/usr/bin:/bin``). fmusim reads ``time``
     together with the outputs in one fmi3GetFloat64 call, as FMI 3.0 allows."""
-    for name, path in _fmus(fmu_dir, kind, version).items():
+    for name, path in _fmus(request, fmu_dir, kind, version).items():
         step = float(read_model_description(str(path)).defaultExperiment.stepSize)
         theirs = fmusim(path, SHORT, step, tmp_path / f"{name}.csv")
         ours, pairs = _ours(fmu_dir, kind, name, path, SHORT)
@@ -140,9 +133,9 @@ def test_omsimulator_runs_every_built_in_ssp_file_like_our_master(fmu_dir, tmp_p
 
 
 @pytest.mark.parametrize("name", ["paper", "lqr"])
-def test_omsimulator_runs_an_ssp_file_of_native_fmus_like_our_master(fmu_dir, tmp_path, name):
+def test_omsimulator_runs_an_ssp_file_of_native_fmus_like_our_master(native, tmp_path, name):
     """The SSP writer's file of a system on the native component FMUs (FMI 2.0), 1 s."""
-    folder = _native(fmu_dir)
+    folder = native[2]
     ssp = write_ssp(systems.get(name), folder, tmp_path / f"{name}.ssp")
     out, log = _omsimulator(ssp, SHORT, tmp_path)
     assert omsimulator_log_problems(log) == [] and "Alg. loop" not in log
@@ -152,10 +145,10 @@ def test_omsimulator_runs_an_ssp_file_of_native_fmus_like_our_master(fmu_dir, tm
 
 
 @pytest.mark.parametrize("name", ONE_FMU_SYSTEMS)
-def test_omsimulator_runs_every_one_fmu_to_its_end_like_our_master(fmu_dir, tmp_path, name):
+def test_omsimulator_runs_every_one_fmu_to_its_end_like_our_master(fmu_dir, tmp_path, name, request):
     """``OMSimulator --mode=cs --stopTime=10 CraneX.fmu``: 1 ms steps at a summed time, then the remainder step of
     1.03e-13 s, which the one-FMU takes as no step at all (not an error); FMI 2.0."""
-    path = _fmus(fmu_dir, "one-fmu", 2)[name]
+    path = _fmus(request, fmu_dir, "one-fmu", 2)[name]
     out, log = _omsimulator(path, 10.0, tmp_path)
     assert omsimulator_log_problems(log) == []
     ours, pairs = _ours(fmu_dir, "one-fmu", name, path, 10.0)
@@ -167,12 +160,12 @@ def test_omsimulator_runs_every_one_fmu_to_its_end_like_our_master(fmu_dir, tmp_
 # ---- fmuCheck: every FMI 2.0 FMU, the FMU's own log included ----------------------------------------------------
 
 @pytest.mark.parametrize("kind", KINDS)
-def test_fmucheck_reports_no_warning_or_error_on_any_fmi2_fmu(fmu_dir, tmp_path, kind):
+def test_fmucheck_reports_no_warning_or_error_on_any_fmi2_fmu(fmu_dir, tmp_path, kind, request):
     """``fmuCheck.linux64 -l 4`` (info: the FMU's messages too) checks the XML and runs the FMU alone at its default
     experiment's step: the one-FMU systems and native components to its stop time (hoist-transport's planned end
     of the hoist, at 3 s, is information), the Python FMUs for 2 s (each starts an interpreter: the run's length
     tests nothing more)."""
-    for name, path in _fmus(fmu_dir, kind, 2).items():
+    for name, path in _fmus(request, fmu_dir, kind, 2).items():
         experiment = read_model_description(str(path)).defaultExperiment
         stop_time = 2.0 if kind == "python" else float(experiment.stopTime)
         code, log = run_tool([tool(FMUCHECK), "-l", "4", "-h", experiment.stepSize, "-s", repr(stop_time), "-n", "0",
