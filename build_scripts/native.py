@@ -50,13 +50,11 @@ MODELS_DIR = SOURCES / "models"
 HOST = SOURCES / "host" / "host.c"  # a C host for tests and benchmarks, in no FMU
 DERIVATIVE_BENCH = SOURCES / "host" / "derivative_bench.c"  # the Model Exchange derivatives' cost (bench)
 FMI_DERIVATIVE_BENCH = SOURCES / "host" / "fmi_derivative_bench.c"  # the same through the FMU's FMI 2.0 calls
-# every native FMU's: the framework's files and what the model files share; besides them each FMU compiles the
-# generated fmu_model.c, which names the model its framework runs
-COMMON = ("instance.c", "continuous.c", "py_repr.c", "component.c", "plant_equations.c", "portable_math.c", "linalg.c",
-          "lqr_design.c", "qp.c")
-HEADERS = ("model.h", "instance.h", "continuous.h", "py_repr.h", "component.h", "rules.h", "plant_equations.h",
-           "plant_math.h", "linalg.h", "lqr_design.h", "noise.h", "qp.h")
-CONTINUOUS = (("plant_continuous.c",), ("plant_continuous.h",))  # what a component with Model Exchange adds
+# every native FMU's: the framework's files, the component interface and the portable math; besides them each FMU
+# compiles its model files (:func:`model_sources`) and the generated fmu_model.c, which names the model its
+# framework runs
+COMMON = ("instance.c", "continuous.c", "py_repr.c", "component.c", "portable_math.c")
+HEADERS = ("model.h", "instance.h", "continuous.h", "py_repr.h", "component.h", "rules.h", "plant_math.h")
 FRAMEWORKS = {2: ("fmi2Functions.c", "fmi2_calls.h"), 3: ("fmi3Functions.c", "fmi3_calls.h")}
 PLATFORMS = {2: {"linux": "linux64", "windows": "win64"}, 3: {"linux": "x86_64-linux", "windows": "x86_64-windows"}}
 FLAGS = ["-O2", "-Wall", "-Werror", "-ffp-contract=off"]  # every C file's, for both platforms
@@ -80,11 +78,29 @@ def ported():
     return [c.model_identifier for c in components.registered() if c.native]
 
 
+def model_sources(model_files):
+    """``(c_files, headers)``: the model files and what they include of ``fmu_src/models``, transitively: a header
+    ``name.h`` there brings its ``name.c`` when there is one (a plant's equations, the LQR design, the QP solver),
+    so that an FMU compiles only the models it runs."""
+    c_files, headers, todo = list(model_files), [], list(model_files)
+    while todo:
+        for name in re.findall(r'^#include "([^"]+)"', source_path(todo.pop()).read_text(), re.MULTILINE):
+            if name in headers or name in HEADERS or not (MODELS_DIR / name).exists():
+                continue  # known, the framework's, or generated (a variables header)
+            headers.append(name)
+            todo.append(name)
+            c_file = name[:-2] + ".c"
+            if (MODELS_DIR / c_file).exists() and c_file not in c_files:
+                c_files.append(c_file)
+                todo.append(c_file)
+    return c_files, headers
+
+
 def _sources(component, fmi_version):
     """The C files of fmu_src the component's FMU is compiled from, and its headers (not the generated ones)."""
     framework, functions = FRAMEWORKS[fmi_version]
-    extra_c, extra_h = CONTINUOUS if component.continuous else ((), ())
-    return [component.native, *COMMON, *extra_c, framework], [*HEADERS, *extra_h, functions]
+    c_files, headers = model_sources([component.native])
+    return [*c_files, *COMMON, framework], [*HEADERS, *headers, functions]
 
 
 def compiled(component, fmi_version):
@@ -100,7 +116,7 @@ def source_path(name):
 def token(component):
     """The GUID / instantiation token: a hash of the variable table and of every C source."""
     digest = hashlib.sha256(repr(component.variables).encode())
-    for name in sorted({*_sources(component, 2)[0], *_sources(component, 3)[0], *HEADERS}):
+    for name in sorted({name for version in (2, 3) for group in _sources(component, version) for name in group}):
         digest.update(name.encode() + source_path(name).read_bytes())
     return "{" + str(uuid.UUID(digest.hexdigest()[:32])) + "}"
 

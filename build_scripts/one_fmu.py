@@ -221,17 +221,18 @@ static const Link LINKS[N_LINKS] = {{
 """
 
 
+def compiled_sources(kinds, fmi_version):
+    """The C files of fmu_src a one-FMU of components ``kinds`` compiles (besides the generated fmu_model.c)."""
+    c_files, _ = native.model_sources([components.get(k).native for k in kinds])
+    return [*c_files, *native.COMMON, "system.c", native.FRAMEWORKS[fmi_version][0]]
+
+
 def copied_sources(kinds, fmi_version):
     """The C files of fmu_src a one-FMU of components ``kinds`` is compiled from, and its headers (besides the
     generated ones)."""
-    c_files, h_files = _continuous(kinds)
-    return [*(components.get(k).native for k in kinds), *native.COMMON, *c_files, "system.c",
-            native.FRAMEWORKS[fmi_version][0], *native.HEADERS, *h_files, "system.h", native.FRAMEWORKS[fmi_version][1]]
-
-
-def _continuous(kinds):
-    """The C files and headers a component of ``kinds`` needs for its Model Exchange equations (none if none has)."""
-    return native.CONTINUOUS if any(components.get(k).continuous for k in kinds) else ((), ())
+    _, headers = native.model_sources([components.get(k).native for k in kinds])
+    return [*compiled_sources(kinds, fmi_version), *native.HEADERS, *headers, "system.h",
+            native.FRAMEWORKS[fmi_version][1]]
 
 
 def build_one_fmu(system, out_dir, fmi_version=2, name=None, tools=None):
@@ -240,9 +241,7 @@ def build_one_fmu(system, out_dir, fmi_version=2, name=None, tools=None):
     name = name or one_fmu_name(system.name)
     p = plan(system)
     kinds = list(dict.fromkeys(p.kinds.values()))
-    framework = native.FRAMEWORKS[fmi_version]
-    compiled = [*(components.get(k).native for k in kinds), *native.COMMON, *_continuous(kinds)[0], "system.c",
-                framework[0], "fmu_model.c"]
+    compiled = [*compiled_sources(kinds, fmi_version), "fmu_model.c"]
     with tempfile.TemporaryDirectory(prefix="crane_one_fmu_") as tmp:
         sources = Path(tmp) / "sources"
         native.copy_sources(copied_sources(kinds, fmi_version), sources)

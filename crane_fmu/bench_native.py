@@ -43,7 +43,9 @@ def _unpack(folder, native, name):
         z.extract(f"binaries/linux64/{name}.so", folder)
     md = read_model_description(str(native / f"{name}.fmu"))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    return [str(folder / "binaries" / "linux64" / f"{name}.so"), md.guid], [str(vr["x"]), str(vr["u"])]
+    axis = components.get("CranePlant").crane.axes[0]  # the benchmark's pair: the planar crane
+    return [str(folder / "binaries" / "linux64" / f"{name}.so"), md.guid], [str(vr[axis.position]),
+                                                                          str(vr[axis.demand])]
 
 
 def _c_host(folder, native):

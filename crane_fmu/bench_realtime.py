@@ -30,7 +30,7 @@ from crane_fmu.cosim.realtime import Runner
 from crane_fmu.model import lqr
 from crane_fmu.serve.modbus import FIRST_HOLDING, float32_words, words_float32
 
-STATE = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2")
+STATE = components.get("CranePlant").crane.state  # what the served plant gives an external controller
 RT_PRIORITY = 10  # as in the docs' example of serve --rt-priority
 
 

@@ -1,14 +1,16 @@
 """What a host sees of a closed loop packed as one FMU: chosen here for fmpy's container (``container.py``)
 and for our native one-FMU (``build_scripts/one_fmu.py``) alike.
 
-The plant's outputs and the controller's ``u``; as parameters the crane model's ``m1``, ``m2``, ``l1``,
+The plant's outputs and the controller's demands (``u``); as parameters the crane model's ``m1``, ``m2``, ``l1``,
 ``l2`` (each set on the plant, the controller, the planner and the estimator that have it and agree on its
 value with the first of them: hoist-transport's planner, designed for l1 = 1.5 m, keeps its own l1, so that
-a host that sets every parameter to its start value gets the system's own run), ``x_d`` (to the planner if
-there is one, else to the controller) and the plant's ``theta1_0``, whose start values are the system's; as
-inputs the plant's inputs that nothing inside feeds (``F1``, ``F2``, ``hoist``). The plant, controller,
-planner and estimator are the first instances of those roles (their components' ``role``), never found by
-name. Its model structure (which own inputs each own output reads at once) follows the instances' along the connections.
+a host that sets every parameter to its start value gets the system's own run), each axis's target ``x_d`` (to
+the planner if there is one, else to the controller) and the plant's start swing ``theta1_0``, whose start
+values are the system's; as inputs the plant's inputs that nothing inside feeds (``F1``, ``F2``, ``hoist``).
+The plant, controller, planner and estimator are the first instances of those roles (their components'
+``role``), never found by name, and what the plant's roles name (``Component.crane``: its axes, demands and
+start swing) is read from them. Its model structure (which own inputs each own output reads at once) follows
+the instances' along the connections.
 """
 
 from collections import namedtuple
@@ -46,6 +48,7 @@ def interface(system, kinds, variables, fed):
     if "plant" not in by_role:
         raise ValueError(f"system {system.name} has no instance whose component is a plant to expose")
     plant, exposed = by_role["plant"], []
+    crane = components.get(kinds[plant]).crane
 
     def start(instance, name):
         return system.parameters.get(instance, {}).get(name, variables[instance][name][1])
@@ -57,9 +60,12 @@ def interface(system, kinds, variables, fed):
             value = start(holders[0], name)
             exposed.append(Exposed(name, "parameter", [(i, name) for i in holders if start(i, name) == value], value))
     target = by_role.get("planner", by_role.get("controller"))
-    if target and "x_d" in variables[target]:
-        exposed.append(Exposed("x_d", "parameter", [(target, "x_d")], start(target, "x_d")))
-    exposed.append(Exposed("theta1_0", "parameter", [(plant, "theta1_0")], start(plant, "theta1_0")))
+    for axis in crane.axes:
+        if target and axis.target in variables[target]:
+            exposed.append(Exposed(axis.target, "parameter", [(target, axis.target)], start(target, axis.target)))
+    if crane.start_swing:
+        exposed.append(Exposed(crane.start_swing, "parameter", [(plant, crane.start_swing)],
+                               start(plant, crane.start_swing)))
     for name, (causality, _) in variables[plant].items():
         if causality == "input" and (plant, name) not in fed:
             exposed.append(Exposed(name, "input", [(plant, name)], start(plant, name)))
@@ -67,8 +73,9 @@ def interface(system, kinds, variables, fed):
         if causality == "output":
             exposed.append(Exposed(name, "output", [(plant, name)], None))
     controller = by_role.get("controller")
-    if controller and "u" in variables[controller]:
-        exposed.append(Exposed("u", "output", [(controller, "u")], None))
+    for demand in crane.demands:
+        if controller and demand in variables[controller]:
+            exposed.append(Exposed(demand, "output", [(controller, demand)], None))
     return exposed
 
 

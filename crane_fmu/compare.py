@@ -34,15 +34,15 @@ import numpy as np
 import scipy
 
 from crane_fmu import components, systems
-from crane_fmu.analysis import board_page, metrics, score_plots, scoreboard
+from crane_fmu.analysis import board_page, board_tables, metrics, ranking, score_plots
+from crane_fmu.analysis import scenarios as scenario_registry
 from crane_fmu.analysis.floor import stored_scenario_floors
-from crane_fmu.analysis.scoreboard import SCENARIOS, Contender
+from crane_fmu.analysis.scenarios import Contender
 from crane_fmu.batch import JOURNAL, Progress, ignore_interrupts, read_journal, run_batch
 from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
 from crane_fmu.cosim.system import read_fmu
 from crane_fmu.sweep.runner import local_fmus, write_table
 
-SIGNALS = ("time", "x", "theta1", "theta2", "u", "x1", "y1", "x2", "y2", "l1_now")  # crane_signals() names
 SIGNAL_EVERY = 0.02  # s: the signals kept for plots and animations
 ROW_FORMAT = 4  # the version of what a row holds: a journal of another format is not reused
 ANIMATE = ("S1", "S2", "S7")  # the scenarios whose nominal runs keep their signals
@@ -89,8 +89,9 @@ def contenders(chosen=(), fmu_dir="build/fmus", only=False):
                              "FMU file" + ("" if only else " or give --only"))
         inputs = [n for n, c in variables.items() if c == "input"]
         parameters = [n for n, c in variables.items() if c == "parameter"]
-        scoreboard.check_interface(name, inputs, [n for n, c in variables.items() if c == "output"], parameters)
-        result[name] = Contender(name, source, inputs, parameters, user)
+        outputs = [n for n, c in variables.items() if c == "output"]
+        scenario_registry.check_interface(name, inputs, outputs, parameters)
+        result[name] = Contender(name, source, inputs, parameters, user, outputs)
     return [result[name] for name in sorted(result)]
 
 
@@ -110,7 +111,7 @@ def _versions():  # read once per process: importlib.metadata takes about 4 ms a
             "scipy": scipy.__version__}
 
 
-def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), cases=scoreboard.CASES):
+def plan(chosen, fmu_dir, scenarios=None, cases=scenario_registry.CASES):
     """``(cases, blobs, refused)``: the cases to run, the FMU bytes by hash, and rows of cases that cannot run
     (not applicable to a contender: status ``n/a``; refused by a parameter rule: ``invalid``).
 
@@ -119,13 +120,13 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), cases=scoreboard.CASES):
     """
     planned, blobs, refused, digests, checked = [], {}, [], {}, {}
     for contender in chosen:
-        for sid in scenarios:
-            why = scoreboard.applicable(contender, sid)
+        for sid in scenario_registry.scenarios() if scenarios is None else scenarios:
+            why = scenario_registry.applicable(contender, sid)
             if why:
                 refused.append({"controller": contender.name, "scenario": sid, "case": "all", "status": "n/a",
                                 "error": why})
                 continue
-            runs = scoreboard.systems_for(contender, sid, cases)
+            runs = scenario_registry.systems_for(contender, sid, cases)
             for label, system, step, stop_time, x_d, residual_from in runs:
                 fmus, connections = systems.resolve(system, fmu_dir)
                 system = systems.prepare(system, step, stop_time, check=False)
@@ -142,7 +143,7 @@ def plan(chosen, fmu_dir, scenarios=tuple(SCENARIOS), cases=scoreboard.CASES):
                         "files": {name: Path(fmus[name]).name for name in sorted(fmus)},
                         "connections": [list(c) for c in connections], "parameters": system.parameters,
                         "step": step, "stop_time": stop_time, "master": MASTER, "x_d": x_d,
-                        "residual_from": residual_from, "bounds": {**scoreboard.DRIVE, **scoreboard.RAIL},
+                        "residual_from": residual_from, "bounds": scenario_registry.get(sid).bounds,
                         "format": ROW_FORMAT, "metrics_version": metrics.VERSION,
                         "keep_signals": sid in ANIMATE and len(runs) == 1}
                 case["case_id"] = hashlib.sha256(json.dumps(case, sort_keys=True).encode()).hexdigest()[:16]
@@ -203,15 +204,33 @@ def run_score_case(case, blobs):
         row.update(status="failed", error=str(exc))
     columns = recorder.columns() if recorder.names else None
     if columns and len(columns["time"]) > 1:
-        s = metrics.crane_signals(columns, ("dx",) + SIGNALS[5:])
-        row.update(metrics.move_metrics(s["time"], s["x"], s["dx"], s["theta1"], s["theta2"], s["u"], case["x_d"],
-                                        case["residual_from"], bounds=case["bounds"]))
-        row["outcome"] = metrics.classify(s["time"], s["theta1"], s["theta2"], row["status"] == "ok")
+        row.update(case_metrics(columns, case, row["status"] == "ok"))
         if case["keep_signals"]:
-            every = max(1, round(SIGNAL_EVERY / case["step"]))
-            row["signals"] = {k: s[k][::every].tolist() for k in SIGNALS if k in s}
+            row["signals"] = kept_signals(columns, max(1, round(SIGNAL_EVERY / case["step"])))
     row["duration_s"] = time.perf_counter() - start
     return row
+
+
+def case_metrics(columns, case, completed):
+    """The figures of a board's case from its recorded columns: :func:`~crane_fmu.analysis.metrics.move_metrics`
+    of the plant's signals (read by its roles) to the case's target, and the outcome."""
+    s = metrics.crane_signals(columns)
+    swing = list(s["swing"].values())
+    figures = metrics.move_metrics(s["time"], s["position"], s["velocity"], swing, s["demand"], case["x_d"],
+                                   case["residual_from"], bounds=case["bounds"])
+    figures["outcome"] = metrics.classify(s["time"], swing, completed)
+    return figures
+
+
+def kept_signals(columns, every):
+    """The signals a board keeps of a nominal run for its pictures and animations, every ``every``-th sample:
+    ``time``, the plant's axis positions, swing angles, hook, load and cable, and the demands, by name."""
+    s = metrics.crane_signals(columns)
+    crane = s["crane"]
+    names = (*(a.position for a in crane.axes), *crane.swing, *crane.hook, *crane.load, *filter(None, [crane.cable]))
+    kept = {"time": s["time"], **metrics.plant_outputs(columns, s["instance"], names),
+            **dict(zip(crane.demands, s["demand"]))}
+    return {k: v[::every].tolist() for k, v in kept.items()}
 
 
 def _now():
@@ -257,7 +276,7 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     chosen, only
         The controllers (see :func:`contenders`): by default every built-in one, and the user's FMUs beside them.
     quick : bool
-        A quick board (:data:`~crane_fmu.analysis.scoreboard.QUICK_CASES` cases of the paired design), written to
+        A quick board (:data:`~crane_fmu.analysis.scenarios.QUICK_CASES` cases of the paired design), written to
         ``out_dir/quick`` with its own journal, so that it never replaces a full board and is never mistaken for one.
     animate : iterable of str
         The scenarios (of :data:`ANIMATE`) whose nominal runs are animated; an animation is drawn again only when
@@ -265,8 +284,8 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     scenarios : iterable of str, optional
         The scenarios to run (default: every one).
     cases : int, optional
-        Cases of the paired design (default :data:`~crane_fmu.analysis.scoreboard.CASES`, quick
-        :data:`~crane_fmu.analysis.scoreboard.QUICK_CASES`).
+        Cases of the paired design (default :data:`~crane_fmu.analysis.scenarios.CASES`, quick
+        :data:`~crane_fmu.analysis.scenarios.QUICK_CASES`).
 
     Returns
     -------
@@ -286,19 +305,20 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     if unknown:
         raise ValueError(f"animate {', '.join(unknown)}: no animation there; the animated scenarios are "
                          f"{', '.join(ANIMATE)}")
-    scenarios = list(SCENARIOS) if scenarios is None else list(dict.fromkeys(scenarios))
-    wrong = [s for s in scenarios if s not in SCENARIOS]
+    known = scenario_registry.scenarios()
+    scenarios = list(known) if scenarios is None else list(dict.fromkeys(scenarios))
+    wrong = [s for s in scenarios if s not in known]
     if wrong or not scenarios:
-        raise ValueError(f"--scenario {','.join(wrong)}: no such scenario; the scenarios are {', '.join(SCENARIOS)}")
-    cases = (scoreboard.QUICK_CASES if quick else scoreboard.CASES) if cases is None else cases
+        raise ValueError(f"--scenario {','.join(wrong)}: no such scenario; the scenarios are {', '.join(known)}")
+    cases = (scenario_registry.QUICK_CASES if quick else scenario_registry.CASES) if cases is None else cases
     if isinstance(cases, bool) or not isinstance(cases, int) or cases < 1:
         raise ValueError(f"--cases must be a whole number >= 1, got {cases!r}")
     out_dir = Path(out_dir) / "quick" if quick else Path(out_dir)
     chosen = contenders(chosen, fmu_dir, only)
     for contender in chosen:
-        reasons = {scoreboard.applicable(contender, sid) for sid in scenarios}
+        reasons = {scenario_registry.applicable(contender, sid) for sid in scenarios}
         if None not in reasons:
-            runs = [s for s in SCENARIOS if not scoreboard.applicable(contender, s)]
+            runs = [s for s in known if not scenario_registry.applicable(contender, s)]
             raise ValueError(f"{contender.name}: no scenario of {', '.join(scenarios)} applies to it: "
                              f"{reasons.pop()}; it can run {', '.join(runs)}")
     planned, blobs, refused = plan(chosen, fmu_dir, scenarios, cases)
@@ -318,30 +338,38 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     done.update({r["case_id"]: r for r in ran})
     rows = [done[c["case_id"]] for c in planned] + refused
     for row in rows:
-        row.update(quick=quick, **{f"scenario_{k}": v for k, v in scoreboard.scope(row["scenario"], cases).items()})
+        scope = scenario_registry.get(row["scenario"]).scope(cases)
+        row.update(quick=quick, **{f"scenario_{k}": v for k, v in scope.items()})
     write_table(_same_columns(rows), out_dir / "scores.parquet")
     manifest = {"contenders": [{"name": c.name, "source": c.source, "user": c.user} for c in chosen],
                 "scenarios": scenarios, "cases": cases, "quick": quick, "fmu_dir": str(Path(fmu_dir).resolve()),
                 "fmus": dict(sorted({f: d for c in planned for f, d in json.loads(provenance(c)["fmus_sha256"])
                                      .items()}.items())),
                 "versions": versions(), "master": MASTER, "metrics_version": metrics.VERSION, "design_seed":
-                scoreboard.DESIGN_SEED, "date": _now()}
+                _design_seeds(planned), "date": _now()}
     _write(out_dir / MANIFEST, json.dumps(manifest, indent=1))
-    board = out_dir / "scoreboard.md"
-    stats = scoreboard.board_statistics(rows)
+    board_md = out_dir / "scoreboard.md"
+    stats = ranking.board_statistics(rows)
     with _drawing(workers) as pool:  # the pictures in two other processes while this one writes the board
         plots = pool.submit(score_plots.plot_all, rows, out_dir, {c.name for c in chosen if c.user}, stats)
         animations = pool.submit(_animate, rows, animate, out_dir / "animations")
-        _write(board, scoreboard.render(rows, chosen, quick, cases, _provenance_lines(manifest), stats,
+        _write(board_md, board_tables.render(rows, chosen, quick, cases, _provenance_lines(manifest), stats,
                                         stored_scenario_floors()))
         new = animations.result()
         paths, drawn = plots.result() + new, len(new)
     page = board_page.write_page(out_dir)
     not_ok = sum(r["status"] not in ("ok", "n/a") for r in rows)
     log(f"{len(planned)} cases: {len(ran)} run now, {len(planned) - len(pending)} already done, {not_ok} not ok, "
-        f"in {time.perf_counter() - start:.1f} s; wrote {board}{' (a QUICK board)' if quick else ''}, {page}, "
+        f"in {time.perf_counter() - start:.1f} s; wrote {board_md}{' (a QUICK board)' if quick else ''}, {page}, "
         f"{out_dir / 'scores.parquet'}, {len(paths) - drawn} plots and {drawn} animations drawn now")
     return rows
+
+
+def _design_seeds(planned):
+    """The seed of the paired design of each plant the board's scenarios run on (one: that seed)."""
+    plants = {scenario_registry.get(c["scenario"]).plant for c in planned}
+    seeds = {scenario_registry.notes(plant)["seed"] for plant in plants}
+    return seeds.pop() if len(seeds) == 1 else sorted(seeds)
 
 
 def _drawing(workers=None):
@@ -366,7 +394,7 @@ def _write(path, text):
 
 def _provenance_lines(manifest):
     return {"FMUs (sha256)": ", ".join(f"{f} {d}" for f, d in manifest["fmus"].items()),
-            "seeds": f"the paired design's {scoreboard.DESIGN_SEED}; each case's noise and wind seed in "
+            "seeds": f"the paired design's {manifest['design_seed']}; each case's noise and wind seed in "
                      "scores.parquet (`seeds`); S5's sensor seed 1, S8's 1",
             "versions": ", ".join(f"{k} {v}" for k, v in manifest["versions"].items()),
             "master": f"{manifest['master']}, communication step 1 ms (S6: 1, 10 and 50 ms)",

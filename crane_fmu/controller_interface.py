@@ -1,37 +1,52 @@
 """What every controller takes and gives, and what it is told: the one rule of simulate and compare.
 
-Every controller takes the measured crane state (:data:`MEASURED`) and gives the trolley
-acceleration ``u`` [m/s2]. In a system that moves the load, a controller is told the move:
+A controller is checked against the plant it is connected to, by the plant's roles
+(:class:`crane_fmu.model.component.Crane`): it takes the plant's measured state
+(``crane.state``) and gives every axis's demand (the planar crane: ``u`` [m/s2]). In a
+system that moves the load, a controller is told the move, axis by axis:
 
-- one with the planner's inputs ``x_ref``, ``dx_ref``, ``ddx_ref`` (and optionally the swing
-  references) gets the planner's references;
-- else one with a parameter ``x_d`` [m] gets the move's target there;
+- one with a planner's references (``x_ref``, ``dx_ref``, ``ddx_ref`` for the axis ``x``, and
+  optionally references of the other states, ``theta1_ref``, ...) gets the planner's references;
+- else one with the axis's target parameter (``x_d``) gets the move's target there;
 - one with neither cannot be told the move and is refused, with that reason.
 """
 
 import math
 from collections import namedtuple
 
-MEASURED = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2")
-REFERENCE = ("x_ref", "dx_ref", "ddx_ref", "theta1_ref", "dtheta1_ref", "theta2_ref", "dtheta2_ref")
-TRACKED = REFERENCE[:3]  # the references a controller needs to follow a planner's move
-
-Told = namedtuple("Told", "references x_d")
+Told = namedtuple("Told", "references targets")
 Told.__doc__ = ("What a controller is told: the planner's reference inputs it gets (a tuple, empty when none) and "
-                "the target position set as its parameter ``x_d`` [m] (None when not set).")
-
-MOVE_NEEDS = f"a parameter x_d or the inputs {', '.join(TRACKED)}"
+                "the target of each axis set as its parameter, ``{x_d: 2.0}`` (empty when none).")
 
 
-def misses(inputs, outputs, parameters):
-    """``(always, to_move)``: what the controller misses of what every system needs, and of what a move needs."""
-    always = [n for n in MEASURED if n not in inputs] + (["output u"] if "u" not in outputs else [])
-    to_move = [] if all(n in inputs for n in TRACKED) or "x_d" in parameters else [MOVE_NEEDS]
+def tracked(crane):
+    """The references a controller needs to follow a planner's move: each axis's position, velocity, acceleration."""
+    return tuple(name for axis in crane.axes for name in axis.references)
+
+
+def references(crane):
+    """Every reference a planner gives, in order: :func:`tracked`, then one per other state (``theta1_ref``, ...)."""
+    along = {name for axis in crane.axes for name in (axis.position, axis.velocity)}
+    return tracked(crane) + tuple(f"{name}_ref" for name in crane.state if name not in along)
+
+
+def move_needs(crane):
+    """What a controller needs to be told a move: ``a parameter x_d or the inputs x_ref, dx_ref, ddx_ref``."""
+    targets = ", ".join(axis.target for axis in crane.axes)
+    return f"a parameter{'s' if len(crane.axes) > 1 else ''} {targets} or the inputs {', '.join(tracked(crane))}"
+
+
+def misses(crane, inputs, outputs, parameters):
+    """``(always, to_move)``: what the controller misses of what every system of this plant needs, and of what a
+    move needs."""
+    always = [n for n in crane.state if n not in inputs] + [f"output {n}" for n in crane.demands if n not in outputs]
+    follows = all(n in inputs for n in tracked(crane))
+    to_move = [] if follows or all(a.target in parameters for a in crane.axes) else [move_needs(crane)]
     return always, to_move
 
 
-def told(name, inputs, outputs, parameters, target=None):
-    """What the controller ``name`` is told in a system; the one rule of simulate and compare.
+def told(name, inputs, outputs, parameters, plant, target=None):
+    """What the controller ``name`` is told in a system of ``plant``; the one rule of simulate and compare.
 
     Parameters
     ----------
@@ -39,32 +54,37 @@ def told(name, inputs, outputs, parameters, target=None):
         The controller, named in the message.
     inputs, outputs, parameters : iterable of str
         Its variables' names.
-    target : float, optional
-        Where the system moves the load [m] (infinite: somewhere a parameter cannot say); None in a system
-        that does not move it (regulation).
+    plant : Component
+        The plant it is connected to (its :attr:`~crane_fmu.model.component.Component.crane` roles).
+    target : dict, optional
+        Where the system moves the load, ``{axis position: value}`` [m] (infinite: somewhere a parameter cannot
+        say); None in a system that does not move it (regulation).
 
     Returns
     -------
     Told
-        The planner's references (when it has their inputs), else ``x_d = target`` (when it has the
-        parameter); nothing in regulation.
+        The planner's references (when it has their inputs), else each axis's target as its parameter
+        (when it has them); nothing in regulation.
 
     Raises
     ------
     ValueError
         One line: what the controller misses, and why it is needed.
     """
-    inputs, parameters = list(inputs), list(parameters)
-    always, to_move = misses(inputs, outputs, parameters)
+    crane, inputs, parameters = plant.crane, list(inputs), list(parameters)
+    always, to_move = misses(crane, inputs, outputs, parameters)
     if always:
-        raise ValueError(f"{name} is not a crane controller: it misses {', '.join(always)} (every controller takes "
-                         f"the measured state {', '.join(MEASURED)} and gives u)")
+        raise ValueError(f"{name} is not a controller of {plant.model_identifier}: it misses {', '.join(always)} "
+                         f"(every controller of it takes the measured state {', '.join(crane.state)} and gives "
+                         f"{', '.join(crane.demands)})")
     if target is None:
-        return Told((), None)
-    if all(n in inputs for n in TRACKED):
-        return Told(tuple(n for n in REFERENCE if n in inputs), None)
-    where = f" ({target:g} m)" if math.isfinite(target) else ""
-    if "x_d" in parameters and where:
-        return Told((), target)
-    raise ValueError(f"{name} cannot be told where the load goes{where}: it misses "
-                     + (to_move[0] if where else f"the inputs {', '.join(TRACKED)}"))
+        return Told((), {})
+    if all(n in inputs for n in tracked(crane)):
+        return Told(tuple(n for n in references(crane) if n in inputs), {})
+    values = {axis.target: target[axis.position] for axis in crane.axes}
+    where = ", ".join(f"{v:g} m" for v in values.values())
+    if all(map(math.isfinite, values.values())):
+        if not to_move:
+            return Told((), values)
+        raise ValueError(f"{name} cannot be told where the load goes ({where}): it misses {to_move[0]}")
+    raise ValueError(f"{name} cannot be told where the load goes: it misses the inputs {', '.join(tracked(crane))}")

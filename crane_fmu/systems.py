@@ -16,7 +16,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from crane_fmu import components
-from crane_fmu.controller_interface import MEASURED, TRACKED, told
+from crane_fmu.controller_interface import references, told, tracked
 from crane_fmu.cosim.connections import Connection
 from crane_fmu.cosim.ssp import load_system
 from crane_fmu.cosim.system import System, read_fmu
@@ -59,7 +59,7 @@ def resolve(system, fmu_dir):
     for path in system.fmus(fmu_dir).values():
         if not path.is_file():
             raise ValueError(f"{path} not found: build the FMUs first (crane-fmu build)")
-    fmus, optional = system.fmus(fmu_dir), {}
+    fmus, optional, plant = system.fmus(fmu_dir), {}, plant_of(system)
     for name, designed in system.replaced.items():
         place, used = _component(designed), _component(fmus[name])
         if place is None:
@@ -68,8 +68,30 @@ def resolve(system, fmu_dir):
             raise ValueError(f"{name}: {fmus[name]} is a {used.role} ({used.model_identifier}), where the system "
                              f"has a {place.role} ({place.model_identifier})")
         if place.role == "controller":
-            optional[name] = [n for n in place.names("input") if n not in MEASURED]
+            measured = plant.crane.state if plant is not None and plant.crane else ()
+            optional[name] = [n for n in place.names("input") if n not in measured]
     return system.resolve(fmu_dir, optional)
+
+
+def plant_of(system):
+    """The registered component of the system's first plant instance (its crane roles), or None."""
+    instance = components.by_role(kinds(system)).get("plant")
+    return None if instance is None else components.find(kinds(system)[instance])
+
+
+def move_target(system):
+    """``{axis position: target}`` of the system's move, by role: each axis's target parameter (``x_d``) of its
+    first planner, else of its first controller, else 0 (regulation at the origin)."""
+    by_role, crane = components.by_role(kinds(system)), plant_of(system).crane
+    given = [system.parameters.get(by_role[role], {}) for role in ("planner", "controller") if role in by_role]
+    return {a.position: next((g[a.target] for g in given if a.target in g), 0.0) for a in crane.axes}
+
+
+def cable_source(system):
+    """The instance whose ``ddx_ref`` drives the plant's hoist (a planner of the cable's length), or None."""
+    hoist = plant_of(system).crane.hoist
+    plant = components.by_role(kinds(system))["plant"]
+    return next((c.source for c in system.connections if c.target == plant and c.input == hoist), None)
 
 
 def _component(source):
@@ -82,18 +104,22 @@ def _component(source):
 def tell_controllers(system, fmu_dir):
     """``(system, notes)``: each controller told what :func:`crane_fmu.controller_interface.told` gives it.
 
-    A system moves the load when its design feeds a controller's ``x_ref`` (from a planner); the move's
-    target is that planner's ``x_d``. A controller with the planner's inputs gets them (as connected); one
-    with a parameter ``x_d`` instead gets the target there (a note says so); one with neither is refused.
-    A controller is an instance whose place (its component as designed) has the role ``controller``.
+    A system moves the load when its design feeds a controller's references of an axis (``x_ref``, from a
+    planner); the move's target is that planner's target parameter (``x_d``). A controller with the planner's
+    inputs gets them (as connected); one with the axes' target parameters instead gets the targets there (a note
+    says so); one with neither is refused. A controller is an instance whose place (its component as designed)
+    has the role ``controller``; what it is checked against is the system's plant (its crane roles).
 
     Raises
     ------
     ValueError
         One line naming the instance, the FMU and what it misses.
     """
-    fmus, notes = system.fmus(fmu_dir), []
-    moves = {c.target: c.source for c in system.designed(fmu_dir) if c.input == "x_ref"}
+    plant = plant_of(system)
+    if plant is None or plant.crane is None:
+        return system, []
+    fmus, notes, axes = system.fmus(fmu_dir), [], plant.crane.axes
+    moves = {c.target: c.source for c in system.designed(fmu_dir) if c.input == axes[0].references[0]}
     for name in system.instances:
         place = _component(system.replaced.get(name, system.instances[name]))
         if place is None or place.role != "controller":
@@ -102,18 +128,20 @@ def tell_controllers(system, fmu_dir):
         names = {causality: [v.name for v in variables if v.causality == causality]
                  for causality in ("input", "output", "parameter")}
         target = None
-        if name in moves:  # the planner's x_d (a planner without one: only its references can tell the move)
+        if name in moves:  # the planner's targets (a planner without them: only its references can tell the move)
             starts = {v.name: v.start for v in read_fmu(fmus[moves[name]]).modelVariables}
-            target = float(system.parameters.get(moves[name], {}).get("x_d", starts.get("x_d", math.inf)))
+            given = system.parameters.get(moves[name], {})
+            target = {a.position: float(given.get(a.target, starts.get(a.target, math.inf))) for a in axes}
         try:
-            move = told(f"{name} ({fmus[name]})", names["input"], names["output"], names["parameter"], target)
+            move = told(f"{name} ({fmus[name]})", names["input"], names["output"], names["parameter"], plant, target)
         except ValueError as exc:
-            where = f" (system {system.name} moves it to {moves[name]}.x_d)" if name in moves else ""
+            where = f" (system {system.name} moves it to {moves[name]}.{axes[0].target})" if name in moves else ""
             raise ValueError(f"{exc}{where}") from None
-        if move.x_d is not None:
-            system = system.with_parameters({name: {"x_d": move.x_d}})
-            notes.append(f"{name} ({Path(fmus[name]).name}) has no inputs {', '.join(TRACKED)}: it is told the "
-                         f"move's target, {name}.x_d = {move.x_d:g} m ({moves[name]}.x_d)")
+        if move.targets:
+            system = system.with_parameters({name: move.targets})
+            told_text = ", ".join(f"{name}.{k} = {v:g} m ({moves[name]}.{k})" for k, v in move.targets.items())
+            notes.append(f"{name} ({Path(fmus[name]).name}) has no inputs {', '.join(tracked(plant.crane))}: it is "
+                         f"told the move's target, {told_text}")
     return system, notes
 
 
@@ -184,6 +212,22 @@ def check_parameters(system):
 
 LOOP = ("container", "one-fmu")  # a closed loop packed as one FMU both ways
 
+
+def measuring(crane):
+    """What a crane measures, as connections: the plant's sensed outputs (``crane.sensed``) to the sensor (which
+    gives ``<name>_meas`` to the estimator by name), the estimator's state (``crane.state``) to the controller
+    (written out: the plant has outputs of those names too); the demands and the cable's length connect by name."""
+    return tuple(Connection("plant", name, "sensor", name) for name in crane.sensed) + tuple(
+        Connection("estimator", name, "controller", name) for name in crane.state)
+
+
+def _planar():
+    """The planar crane's roles, and its settings of the built-in systems: from rest, drive limits, a move."""
+    crane = components.get("CranePlant").crane
+    return crane, {crane.start_swing: 0.0}, {"u_max": 2.0, "v_max": 1.0}, {crane.axes[0].target: 2.0}
+
+
+CRANE, REST, DRIVE, MOVE = _planar()
 register(System("paper", {"plant": "CranePlant", "controller": "BacksteppingController"},
                 description="Section V: the plant and the paper's backstepping controller (eq 21, derived b3), "
                             "theta1(0) = 10 deg", tags=(*LOOP, "regulation")))
@@ -195,53 +239,44 @@ register(System("energy", {"plant": "CranePlant", "controller": "EnergyControlle
                 description="Section V regulation from theta1(0) = 10 deg by the energy-coupling law (proof in "
                             "crane_fmu/model/energy.py)", tags=(*LOOP, "regulation")))
 register(System("transport", {"plant": "CranePlant", "planner": "TrajectoryPlanner", "controller": "LqrController"},
-                parameters={"plant": {"theta1_0": 0.0}, "planner": {"x_d": 2.0}}, stop_time=10.0,
+                parameters={"plant": REST, "planner": MOVE}, stop_time=10.0,
                 description="a 2 m move from rest: ZV-shaped reference (planner.x_d) tracked by the LQR",
                 tags=LOOP))
 register(System("hoist-transport",
                 {"plant": "CranePlant", "planner": "TrajectoryPlanner", "hoist": "TrajectoryPlanner",
                  "controller": "LqrController"},
-                connections=tuple(Connection("planner", name, "controller", name) for name in (
-                    "x_ref", "dx_ref", "ddx_ref", "theta1_ref", "dtheta1_ref", "theta2_ref", "dtheta2_ref"))
-                + (Connection("hoist", "ddx_ref", "plant", "hoist"),),
-                parameters={"plant": {"theta1_0": 0.0, "l1": 2.0, "l1_min": 1.0, "l1_max": 2.0},
-                            "planner": {"x_d": 2.0, "l1": 1.5, "shaper": "zvd"},
+                connections=tuple(Connection("planner", name, "controller", name) for name in references(CRANE))
+                + (Connection("hoist", "ddx_ref", "plant", CRANE.hoist),),
+                parameters={"plant": {**REST, "l1": 2.0, "l1_min": 1.0, "l1_max": 2.0},
+                            "planner": {**MOVE, "l1": 1.5, "shaper": "zvd"},
                             "hoist": {"x0": 2.0, "x_d": 1.0, "shaper": "none", "u_max": 0.5, "v_max": 0.5},
                             "controller": {"l1": 2.0, "l1_low": 1.0, "l1_high": 2.0}},
                 stop_time=12.0,
                 description="a 2 m move while the hoist lifts the load from l1 = 2 m to 1 m; the LQR's gains "
                             "follow the measured cable length", tags=("one-fmu",)))
-
-# What a crane measures: the sensor sees the plant's true x, theta1, theta2 and outputs x_meas, theta1_meas,
-# theta2_meas (to the estimator by name); the estimator's x, ..., dtheta2 feed the controller (written out: the
-# plant has outputs of those names too); u and l1_now connect by name.
-MEASURING = tuple(Connection("plant", name, "sensor", name) for name in ("x", "theta1", "theta2")) + tuple(
-    Connection("estimator", name, "controller", name) for name in ("x", "dx", "theta1", "dtheta1", "theta2",
-                                                                   "dtheta2"))
 register(System("lqg", {"plant": "CranePlant", "controller": "LqrController", "sensor": "CraneSensor",
                         "estimator": "StateEstimator"},
-                connections=MEASURING, parameters={"plant": {"u_max": 2.0, "v_max": 1.0}},
+                connections=measuring(CRANE), parameters={"plant": DRIVE},
                 description="Section V regulation from theta1(0) = 10 deg with only x and theta1 measured (1 mm, "
                             "0.1 deg noise, one step late): a Kalman filter in front of the LQR, |u| <= 2 m/s2, "
                             "|v| <= 1 m/s", tags=("one-fmu",)))
 register(System("lqg-transport", {"plant": "CranePlant", "planner": "TrajectoryPlanner", "controller": "LqrController",
                                   "sensor": "CraneSensor", "estimator": "StateEstimator"},
-                connections=MEASURING,
-                parameters={"plant": {"theta1_0": 0.0, "u_max": 2.0, "v_max": 1.0}, "planner": {"x_d": 2.0}},
+                connections=measuring(CRANE), parameters={"plant": {**REST, **DRIVE}, "planner": MOVE},
                 stop_time=10.0,
                 description="the 2 m move of transport with only x and theta1 measured: a Kalman filter in front of "
                             "the LQR", tags=("one-fmu",)))
 register(System("hard-hit", {"plant": "CranePlant", "controller": "HardHitController"},
-                parameters={"plant": {"theta1_0": 1.0471975511965976, "u_max": 2.0, "v_max": 1.0}},
+                parameters={"plant": {CRANE.start_swing: 1.0471975511965976, **DRIVE}},
                 description="a hard hit: regulation from theta1(0) = 60 deg by LQR gains scheduled on the swing "
                             "energy, |u| <= 2 m/s2, |v| <= 1 m/s", tags=("one-fmu",)))
 register(System("mpc", {"plant": "CranePlant", "controller": "MpcController"},
-                parameters={"plant": {"u_max": 2.0, "v_max": 1.0}},
+                parameters={"plant": DRIVE},
                 description="Section V regulation from theta1(0) = 10 deg by the constrained MPC: the shortest move "
                             "to rest within |u| <= 2 m/s2, |v| <= 1 m/s, tracked by a QP every 50 ms",
                 tags=("one-fmu",)))
 register(System("mpc-transport", {"plant": "CranePlant", "controller": "MpcController"},
-                parameters={"plant": {"theta1_0": 0.0, "u_max": 2.0, "v_max": 1.0}, "controller": {"x_d": 2.0}},
+                parameters={"plant": {**REST, **DRIVE}, "controller": MOVE},
                 stop_time=10.0,
                 description="a 2 m move from rest by the constrained MPC: its own shortest move within the drive's "
                             "limits, tracked by a QP every 50 ms", tags=("one-fmu",)))

@@ -417,8 +417,9 @@ def test_plot_draws_only_what_the_results_hold(fmu_dir, tmp_path, monkeypatch, c
     free = read_csv(_simulated(fmu_dir, tmp_path, "free", "2"))
     write_csv(tmp_path / "fmpy.csv", {k.removeprefix("plant."): v for k, v in free.items()})  # fmpy's names
     assert main(["plot", str(tmp_path / "fmpy.csv"), "--out", str(tmp_path / "free.png")]) == 0
-    assert [label for label, _ in drawn[-1]["panels"]] == ["trolley x [m]", "hook angle theta1 [deg]",
-                                                          "payload angle theta2 [deg]"]
+    assert [label for label, _ in drawn[-1]["panels"]] == ["trolley position x [m]",
+                                                          "hook swing angle theta1 [deg]",
+                                                          "payload swing angle theta2 [deg]"]
     paper, lqr = _simulated(fmu_dir, tmp_path, "paper", "4"), _simulated(fmu_dir, tmp_path, "lqr", "4")
     assert main(["plot", str(paper), str(lqr), "--out", str(tmp_path / "s5.png")]) == 0
     panels, legend = drawn[-1]["panels"], drawn[-1]["legend"]

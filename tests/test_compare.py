@@ -10,7 +10,8 @@ import pytest
 from once import made_once
 
 from crane_fmu import components, systems
-from crane_fmu.analysis import scoreboard
+from crane_fmu.analysis import board_tables, ranking, scenarios
+from crane_fmu.analysis import planar_scenarios as planar
 from crane_fmu.cli import main
 from crane_fmu.compare import compare, contenders
 from crane_fmu.cosim import ArrayRecorder, read_csv, run
@@ -121,8 +122,8 @@ def test_the_paper_law_ranks_below_the_converging_laws_in_every_scenario(full_bo
     """The paper's law limit-cycles or diverges; the energy law converges (slowly) and the LQR converges: the
     board says so in every scenario, not the alphabet (on the paired design by Wilcoxon's test over 6 cases)."""
     _, rows, _ = full_board
-    for sid in scoreboard.SCENARIOS:
-        rank = {line["controller"]: line["rank"] for line in scoreboard.summarise(rows, sid)}
+    for sid in scenarios.scenarios():
+        rank = {line["controller"]: line["rank"] for line in ranking.summarise(rows, sid)}
         assert rank["BacksteppingController"] > max(rank["EnergyController"], rank["LqrController"]), sid
 
 
@@ -246,8 +247,8 @@ def test_a_rerun_resumes(quick_board, template_fmu, board_dir, dask_scheduler):
 
 @pytest.mark.parametrize("argv, message", [
     (["--controller", "Nothing"], "no controller 'Nothing'; controllers: BacksteppingController, LqrController"),
-    (["--controller", "{fmu_dir}/CranePlant.fmu"], "CranePlant is not a crane controller: it misses x, dx, theta1, "
-                                                  "dtheta1, theta2, dtheta2, output u (every scenario; "),
+    (["--controller", "{fmu_dir}/CranePlant.fmu"], "CranePlant is not a crane controller: of CranePlant, it misses x, "
+                                                  "dx, theta1, dtheta1, theta2, dtheta2, output u (the interface: "),
     (["--controller", "{user_lqr}", "--only", "--scenario", "S2,S3"],
      "UserLqr: no scenario of S2, S3 applies to it: n/a (needs x_d or x_ref); it can run S1, S6"),
     (["--scenario", "S1,S11"], "--scenario S11: no such scenario; the scenarios are S1, S2"),
@@ -291,7 +292,7 @@ def test_animate_a_simulate_result(fmu_dir, tmp_path, capsys):
 
     write_csv(tmp_path / "no_crane.csv", free)
     assert main(["animate", str(tmp_path / "no_crane.csv"), "--out", str(tmp_path / "x.gif")]) == 2
-    assert "has no crane to animate: it needs the plant outputs x, x1, y1, x2, y2" in capsys.readouterr().err
+    assert "has no crane to animate: it needs a plant's outputs" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("every", [32, 7, 250])
@@ -325,7 +326,7 @@ def test_readme_shows_the_current_scoreboard(full_board):
     LQR design against scipy, the metrics' known answers (test_metrics.py) and the ranking rules
     (test_scoreboard.py, test_statistics.py)."""
     _, rows, _ = full_board
-    generated = scoreboard.render_summary(rows, cases=FULL_CASES).splitlines()
+    generated = board_tables.render_summary(rows, cases=FULL_CASES).splitlines()
     for page in (ROOT / "README.md", ROOT / "docs" / "guide" / "scoreboard.md"):  # the front door and the guide
         text = page.read_text()
         shown = re.search(r"<!-- scoreboard:start -->\n(.*)\n<!-- scoreboard:end -->", text, re.S).group(1)
@@ -333,8 +334,8 @@ def test_readme_shows_the_current_scoreboard(full_board):
         assert len(shown) == len(generated) and shown[:2] == generated[:2], page
         for ours, theirs in zip(generated[2:], shown[2:]):
             sid = ours[2:].split(" ")[0].rstrip(":")
-            if sid in scoreboard.PAIRED:
-                assert theirs.startswith(f"| {sid} ({scoreboard.CASES} cases): "), (page, sid)
+            if sid in planar.PAIRED:
+                assert theirs.startswith(f"| {sid} ({scenarios.CASES} cases): "), (page, sid)
             else:
                 assert theirs == ours, (page, sid)
 
@@ -371,7 +372,7 @@ def test_a_regulation_only_controller_is_scored_where_its_interface_allows(user_
     ran = sorted((r["scenario"], r["case"]) for r in table if r["status"] != "n/a")
     assert ran == [("S1", "nominal"), ("S6", "h=10ms"), ("S6", "h=1ms"), ("S6", "h=50ms")]
     absent = {r["scenario"]: r["error"] for r in table if r["status"] == "n/a"}
-    assert absent == {sid: "n/a (needs x_d or x_ref)" for sid in scoreboard.SCENARIOS if sid not in ("S1", "S6")}
+    assert absent == {sid: "n/a (needs x_d or x_ref)" for sid in scenarios.scenarios() if sid not in ("S1", "S6")}
     board = (user_board / "scoreboard.md").read_text()
     assert "| 1. `UserLqr` (yours): 3.03 s (1.50x floor), all targets met |" in board  # S1: the LQR's figure
     assert "| `UserLqr` (yours): n/a (needs x_d or x_ref) |" in board
@@ -391,7 +392,7 @@ def test_every_row_records_its_provenance(quick_board, board_dir, template_fmu):
             assert digest == hashlib.sha256(files[name].read_bytes()).hexdigest(), (row["case"], name)
         assert set(json.loads(row["versions"])) == {"crane-antisway-cosim", "python", "fmpy", "numpy", "scipy"}
         assert row["master"] == "gauss-seidel" and row["step"] in (1e-3, 1e-2, 5e-2) and row["date"][:2] == "20"
-    design = scoreboard.design(QUICK_CASES)
+    design = planar.design(QUICK_CASES)
     s10 = sorted((r for r in table if r["scenario"] == "S10" and r["controller"] == "LqrController"),
                  key=lambda r: r["case"])
     assert [json.loads(r["seeds"]) for r in s10] == [{"wind.seed": c["seed"]} for c in design]

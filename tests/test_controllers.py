@@ -105,7 +105,7 @@ def test_lqr_regulation_meets_its_targets(fmu_dir):
 
     c = run(systems.get("lqr"), fmu_dir, recorder=ArrayRecorder()).columns()
     t, theta1, theta2 = c["time"], c["plant.theta1"], c["plant.theta2"]
-    m = metrics.move_metrics(t, c["plant.x"], c["plant.dx"], theta1, theta2, c["controller.u"], 0.0)
+    m = metrics.move_metrics(t, c["plant.x"], c["plant.dx"], (theta1, theta2), c["controller.u"], 0.0)
     for band, target in ((0.5, 3.0), (0.1, 4.0)):
         settled = m[f"settling_{band}deg_s"]
         assert settled is not None and settled <= target, (band, settled)

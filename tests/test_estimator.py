@@ -9,7 +9,7 @@ from scipy.signal import cont2discrete
 
 from crane_fmu import systems
 from crane_fmu.analysis import metrics
-from crane_fmu.analysis.scoreboard import MISMATCH, residual_from
+from crane_fmu.analysis.planar_scenarios import MISMATCH, residual_from
 from crane_fmu.cosim import ArrayRecorder, run
 from crane_fmu.model import disturbances, estimator, lqr
 from crane_fmu.model.parameters import PlantParameters
@@ -118,8 +118,9 @@ def test_crane_sensor_noise_and_delay():
 
 
 def _figures(columns, x_d, window=None):
-    return metrics.move_metrics(columns["time"], columns["plant.x"], columns["plant.dx"], columns["plant.theta1"],
-                                columns["plant.theta2"], columns["controller.u"], x_d, window)
+    swing = (columns["plant.theta1"], columns["plant.theta2"])
+    return metrics.move_metrics(columns["time"], columns["plant.x"], columns["plant.dx"], swing,
+                                columns["controller.u"], x_d, window)
 
 
 def test_lqg_regulation_meets_the_issue_targets(fmu_dir):

@@ -46,7 +46,7 @@ def test_no_hole_in_the_region_of_attraction(fmu_dir):
     for angle in ANGLES:
         c = run(system.with_parameters({"plant": {"theta1_0": math.radians(angle)}}), fmu_dir,
                 recorder=ArrayRecorder()).columns()
-        m = metrics.move_metrics(c["time"], c["plant.x"], c["plant.dx"], c["plant.theta1"], c["plant.theta2"],
+        m = metrics.move_metrics(c["time"], c["plant.x"], c["plant.dx"], (c["plant.theta1"], c["plant.theta2"]),
                                  c["controller.u"], 0.0)
         settled[angle] = (m["settling_0.5deg_s"], m["settling_0.1deg_s"])
         assert np.abs(c["controller.u"]).max() <= 2.0 and np.abs(c["plant.dx"]).max() <= 1.0 + 1e-9

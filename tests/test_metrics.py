@@ -47,7 +47,7 @@ def test_peak_and_rms():
     (np.full_like(T, 1e-4), True, "converges"),
 ])
 def test_classify(signal, completed, outcome):
-    assert metrics.classify(T, signal, 0.5 * signal, completed) == outcome
+    assert metrics.classify(T, (signal, 0.5 * signal), completed) == outcome
     # the words agree with the figures: "converges" exactly where the settling time to the band exists
     settles = metrics.settling_time(T, [signal, 0.5 * signal], metrics.SETTLED_BAND) is not None
     assert (outcome == "converges") == (settles and completed and outcome != "diverges")
@@ -132,7 +132,7 @@ def test_move_metrics_known_answers():
       less half the first and the last: 44.976 deg2 s; its mean over the 10 s, square-rooted: sqrt(4.4976) deg;
     - the total variation of u: |2 - 1| + |-3 - 2| + |0.5 + 3| + |0 - 0.5| + |100 - 0| = 110 m/s2.
     """
-    m = metrics.move_metrics(T11, MOVE_X, MOVE_DX, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0, residual_from=6.5)
+    m = metrics.move_metrics(T11, MOVE_X, MOVE_DX, (MOVE_THETA1, MOVE_THETA2), MOVE_U, 2.0, residual_from=6.5)
     assert m["arrival_s"] == 7.0
     assert m["residual_deg"] == pytest.approx(0.3, rel=1e-12)
     assert m["settling_0.5deg_s"] == 6.0, "theta2 is 0.6 deg at t = 5: both angles within 0.5 deg from 6 s"
@@ -153,7 +153,7 @@ def test_the_residual_window_is_the_one_given():
     """From t = 8.5 only t = 9, 10 count: theta2's 0.08 deg; from t = 4 on, theta2's 1 deg (t = 4); by default the
     last quarter (t >= 7.5: t = 8, 9, 10): theta2's -0.12 deg; a window after the run's end: no figure."""
     def residual(**window):
-        return metrics.move_metrics(T11, MOVE_X, MOVE_DX, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0,
+        return metrics.move_metrics(T11, MOVE_X, MOVE_DX, (MOVE_THETA1, MOVE_THETA2), MOVE_U, 2.0,
                                     **window)["residual_deg"]
 
     assert residual(residual_from=8.5) == pytest.approx(0.08, rel=1e-12)
@@ -168,26 +168,26 @@ def test_the_residual_is_not_bounded_by_the_arrival_band():
     and 0.45 deg from 7 s on; the trolley is at x_d from 5 s. The arrival (0.5 deg band) is 7 s, and the largest
     swing from the arrival on is 0.45 deg: the old residual, which could never exceed the band. The residual is
     the largest swing in the window: 0.8 deg, as measured; a wider arrival band changes the arrival, not it."""
-    from crane_fmu.analysis import scoreboard
+    from crane_fmu.analysis import planar_scenarios as planar
 
     t = np.round(np.arange(0, 10.001, 0.01), 10)
     swing = np.where(t < 6.0, 5.0, np.where(t < 7.0, 0.8, 0.45))
     theta1 = np.radians(swing)  # the swing's amplitude, sampled at its crests
     x = np.minimum(t / 2.5, 1.0) * 2.0
-    window = scoreboard.residual_from(10.0, scoreboard.PLAN)
+    window = planar.residual_from(10.0, planar.PLAN)
     assert window == pytest.approx(3.6385 + 2.3682, abs=1e-3)
-    m = metrics.move_metrics(t, x, np.gradient(x, t), theta1, 0 * theta1, 0 * t, 2.0, window)
+    m = metrics.move_metrics(t, x, np.gradient(x, t), (theta1, 0 * theta1), 0 * t, 2.0, window)
     assert m["arrival_s"] == 7.0
     assert math.degrees(np.abs(theta1[t >= m["arrival_s"]]).max()) == pytest.approx(0.45, rel=1e-12)  # the old
     assert m["residual_deg"] == pytest.approx(0.8, rel=1e-12)
-    wide = metrics.move_metrics(t, x, np.gradient(x, t), theta1, 0 * theta1, 0 * t, 2.0, window,
+    wide = metrics.move_metrics(t, x, np.gradient(x, t), (theta1, 0 * theta1), 0 * t, 2.0, window,
                                 angle_band=math.radians(1.0))
     assert wide["arrival_s"] == 6.0 and wide["residual_deg"] == m["residual_deg"]
 
 
 def test_move_metrics_of_the_mirrored_move():
     """The same move towards x_d = -2 m: the same figures; the overshoot is measured past -2 m, away from 0."""
-    m = metrics.move_metrics(T11, -MOVE_X, -MOVE_DX, -MOVE_THETA1, -MOVE_THETA2, -MOVE_U, -2.0, 6.5)
+    m = metrics.move_metrics(T11, -MOVE_X, -MOVE_DX, (-MOVE_THETA1, -MOVE_THETA2), -MOVE_U, -2.0, 6.5)
     assert (m["arrival_s"], m["settling_0.5deg_s"], m["settling_0.1deg_s"], m["position_1cm_s"]) == (7.0, 6.0, 9.0, 6.0)
     assert m["overshoot_m"] == pytest.approx(0.1, rel=1e-12)
     assert (m["residual_deg"], m["peak_swing_deg"]) == pytest.approx((0.3, 4.0), rel=1e-12)
@@ -199,7 +199,7 @@ def test_move_metrics_of_a_move_that_never_arrives():
     same as when it arrives (it does not depend on the arrival); the angles settle as before."""
     x = np.minimum(MOVE_X, 1.97)
     x[5:] = 1.97
-    m = metrics.move_metrics(T11, x, MOVE_DX, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0, 6.5)
+    m = metrics.move_metrics(T11, x, MOVE_DX, (MOVE_THETA1, MOVE_THETA2), MOVE_U, 2.0, 6.5)
     assert m["arrival_s"] is None and m["position_1cm_s"] is None
     assert m["residual_deg"] == pytest.approx(0.3, rel=1e-12)
     assert m["overshoot_m"] == 0.0 and m["final_error_m"] == pytest.approx(0.03, rel=1e-12)
@@ -215,7 +215,7 @@ def test_move_metrics_of_a_move_that_never_arrives():
     ({"u_max": math.inf, "x_min": -math.inf}, ""),  # no limit: nothing to break
 ])
 def test_bounds_are_checked_at_every_sample(bounds, broken):
-    m = metrics.move_metrics(T11, MOVE_X, MOVE_DX, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0, 6.5, bounds=bounds)
+    m = metrics.move_metrics(T11, MOVE_X, MOVE_DX, (MOVE_THETA1, MOVE_THETA2), MOVE_U, 2.0, 6.5, bounds=bounds)
     assert (m["bounds_held"], m["bounds_broken"]) == (broken == "", broken)
 
 
@@ -223,7 +223,7 @@ def test_a_bound_holds_to_its_rounding_and_a_non_finite_run_breaks_it():
     """A drive at its speed limit reaches 1 m/s through floating-point arithmetic (within 1e-9 of it): held;
     1 + 1e-6 m/s: broken; a run whose trolley speed became NaN breaks the speed bound."""
     def broken(dx):
-        return metrics.move_metrics(T11, MOVE_X, dx, MOVE_THETA1, MOVE_THETA2, MOVE_U, 2.0, 6.5,
+        return metrics.move_metrics(T11, MOVE_X, dx, (MOVE_THETA1, MOVE_THETA2), MOVE_U, 2.0, 6.5,
                                     bounds={"v_max": 1.0})["bounds_broken"]
 
     at_limit = np.clip(MOVE_DX, -1.0, 1.0)
@@ -243,7 +243,7 @@ def test_move_metrics_arrival_waits_for_the_angles():
     """Trolley within 5 mm from t = 7, but theta1 = 0.6 deg at t = 8 (out of the 0.5 deg arrival band): 9 s."""
     theta1 = MOVE_THETA1.copy()
     theta1[8] = math.radians(0.6)
-    m = metrics.move_metrics(T11, MOVE_X, MOVE_DX, theta1, MOVE_THETA2, MOVE_U, 2.0, 6.5)
+    m = metrics.move_metrics(T11, MOVE_X, MOVE_DX, (theta1, MOVE_THETA2), MOVE_U, 2.0, 6.5)
     assert m["arrival_s"] == 9.0 and m["settling_0.5deg_s"] == 9.0
 
 
@@ -264,7 +264,7 @@ def test_closed_loop_metrics_known_answers():
     theta2 = -theta1 / 2
     x = 1.0 + np.array([0, 0.1, 0.3, -0.5, 0.2] + [0.25] * 16)
     u = np.array([0, 4.0, -2.0] + [0.0] * 18)
-    m = metrics.closed_loop_metrics(t, x, theta1, theta2, u, True)
+    m = metrics.closed_loop_metrics(t, x, {"theta1": theta1, "theta2": theta2}, u, True)
     assert m["settling_0.5deg_s"] == 7.0 and m["settling_0.1deg_s"] == 17.0
     assert m["max_theta1_deg"] == pytest.approx(10.0, rel=1e-12)
     assert m["max_theta2_deg"] == pytest.approx(5.0, rel=1e-12)
@@ -284,10 +284,11 @@ def test_closed_loop_metrics_settling_needs_both_angles():
     theta1 = _rad(REG_THETA1_DEG)
     theta2 = -theta1 / 2
     theta2[18] = math.radians(0.3)
-    m = metrics.closed_loop_metrics(t, np.zeros(21), theta1, theta2, np.zeros(21), True)
+    m = metrics.closed_loop_metrics(t, np.zeros(21), {"theta1": theta1, "theta2": theta2}, np.zeros(21), True)
     assert (m["settling_0.5deg_s"], m["settling_0.1deg_s"]) == (7.0, 19.0), "theta2 = 0.3 deg at t = 18"
     theta2[20] = math.radians(0.2)
-    m = metrics.closed_loop_metrics(t, np.zeros(21), theta1, theta2, np.zeros(21), True)
+    m = metrics.closed_loop_metrics(t, np.zeros(21), {"theta1": theta1, "theta2": theta2}, np.zeros(21), True)
     assert m["settling_0.1deg_s"] is None and m["settling_0.5deg_s"] == 7.0
-    short = metrics.closed_loop_metrics(t[:15], np.zeros(15), theta1[:15], theta2[:15], np.zeros(15), True)
+    short = metrics.closed_loop_metrics(t[:15], np.zeros(15), {"theta1": theta1[:15], "theta2": theta2[:15]},
+                                          np.zeros(15), True)
     assert short["residual_after_15s_deg"] is None and short["corr_theta1_theta2"] == pytest.approx(-1.0, abs=1e-12)

@@ -8,7 +8,8 @@ import pytest
 from helpers import mpc_loop, random_qp
 
 from crane_fmu import systems
-from crane_fmu.analysis import controller_targets, floor, metrics, scoreboard
+from crane_fmu.analysis import controller_targets, floor, metrics, scenarios
+from crane_fmu.analysis import planar_scenarios as planar
 from crane_fmu.cosim import ArrayRecorder, run
 from crane_fmu.model import mpc, qp
 from crane_fmu.model.parameters import PlantParameters
@@ -130,7 +131,7 @@ def test_at_its_cap_the_solver_gives_a_feasible_point_no_worse_than_its_start():
 
 def _move_metrics(result, x_d, h=1e-3):
     t = np.arange(len(result)) * h
-    return metrics.move_metrics(t, result[:, 0], result[:, 1], result[:, 2], result[:, 4], result[:, 6], x_d)
+    return metrics.move_metrics(t, result[:, 0], result[:, 1], (result[:, 2], result[:, 4]), result[:, 6], x_d)
 
 
 def test_the_plan_is_as_short_as_the_floor_on_its_grid():
@@ -182,10 +183,10 @@ def test_the_mpc_keeps_its_limits_in_every_board_scenario(native):
     where the controller sees the true state the drive never has to limit what it demands (so |v| <= 1 m/s by its
     own doing). On the native FMUs (held to the Python MPC bit for bit by test_native_mpc.py, and on the board by
     test_native_board.py): 30 runs in a tenth of the time."""
-    contender = scoreboard.Contender("MpcController", "MpcController",
+    contender = scenarios.Contender("MpcController", "MpcController",
                                      list(mpc.COMPONENT.names("input")), list(mpc.COMPONENT.names("parameter")))
-    for sid in scoreboard.SCENARIOS:
-        for label, system, step, *_ in scoreboard.systems_for(contender, sid, 3):
+    for sid in scenarios.scenarios():
+        for label, system, step, *_ in scenarios.systems_for(contender, sid, 3):
             system = systems.prepare(system, step)
             c = run(system, native[2], recorder=ArrayRecorder(), stop_time=3.0).columns()
             assert np.abs(c["controller.u"]).max() <= 2.0 + 1e-9, (sid, label)
@@ -204,7 +205,7 @@ def test_the_mpc_meets_the_nominal_move_and_regulation_targets():
     assert _move_metrics(regulation, 0.0)["settling_0.1deg_s"] <= 2.5
 
 
-@pytest.mark.parametrize("true", [scoreboard.MISMATCH[0], scoreboard.MISMATCH[-1]], ids=str)
+@pytest.mark.parametrize("true", [planar.MISMATCH[0], planar.MISMATCH[-1]], ids=str)
 def test_the_mpc_identifies_a_plant_it_does_not_know_and_arrives_within_5_s(true):
     """S3's extreme plants (l1, l2, m2 unknown to the controller): the identified swing model is the true one
     (lengths and the payload's share m2 / (m1 + m2) within 1 %, eqs (8)-(9) hold exactly on the plant) and the
@@ -224,25 +225,25 @@ def test_the_mpc_identifies_a_plant_it_does_not_know_and_arrives_within_5_s(true
 def test_the_mpc_meets_the_board_targets_through_the_fmus(fmu_dir, scenario, case, metric, bound):
     """The board's own S7 and S8 systems through the FMUs: S7's arrival within 5.5 s, S8's regulation within
     0.1 deg by 3.0 s."""
-    contender = scoreboard.Contender("MpcController", "MpcController",
+    contender = scenarios.Contender("MpcController", "MpcController",
                                      list(mpc.COMPONENT.names("input")), list(mpc.COMPONENT.names("parameter")))
-    (system, step, x_d), = [(r.system, r.step, r.x_d) for r in scoreboard.systems_for(contender, scenario)
+    (system, step, x_d), = [(r.system, r.step, r.x_d) for r in scenarios.systems_for(contender, scenario)
                             if r.label == case]
     c = run(systems.prepare(system, step), fmu_dir, recorder=ArrayRecorder(), stop_time=7.0).columns()
-    s = metrics.crane_signals(c, ("dx",))
-    m = metrics.move_metrics(s["time"], s["x"], s["dx"], s["theta1"], s["theta2"], s["u"], x_d)
+    s = metrics.crane_signals(c)
+    m = metrics.move_metrics(s["time"], s["position"], s["velocity"], list(s["swing"].values()), s["demand"], x_d)
     assert m[metric] is not None and m[metric] <= bound
 
 
 def test_the_targets_measure_the_mpcs_residual_over_the_boards_window():
     """``crane-fmu targets`` and the board give the same residual: every MPC run of the targets carries its board
     case's window (a move's: the planned move's end plus a slow period, not the last quarter of the run)."""
-    contender = scoreboard.Contender("MpcController", "MpcController",
+    contender = scenarios.Contender("MpcController", "MpcController",
                                      list(mpc.COMPONENT.names("input")), list(mpc.COMPONENT.names("parameter")))
     runs = controller_targets.mpc_runs(quick=True)
     assert {r.group for r in runs} == {"mpc_S1", "mpc_S2", "mpc_S3"}
     for r in runs:
-        board = {case.label: case.residual_from for case in scoreboard.systems_for(contender, r.group[4:], 3)}
+        board = {case.label: case.residual_from for case in scenarios.systems_for(contender, r.group[4:], 3)}
         assert r.residual_from == board[r.label]
         if r.group != "mpc_S1":  # a move: the window opens well before the run's last quarter
             assert r.residual_from < 0.75 * r.stop_time

@@ -9,7 +9,7 @@ import math
 
 from helpers import BOARD_CASES, BOARD_CONTROLLERS
 
-from crane_fmu.analysis import scoreboard
+from crane_fmu.analysis import board_tables, scenarios
 from crane_fmu.compare import compare
 
 
@@ -36,10 +36,10 @@ def test_the_native_fmus_give_the_python_board(builtin_quick_board, native, dask
     key = lambda r: (r["scenario"], r["controller"], r["case"])  # noqa: E731
     theirs = {key(r): r for r in python_rows}
     assert sorted(map(key, rows)) == sorted(theirs)
-    assert {r["scenario"] for r in rows} == set(scoreboard.SCENARIOS)
+    assert {r["scenario"] for r in rows} == set(scenarios.scenarios())
     for row in rows:
         ours, other = ({k: v for k, v in r.items() if k not in ("case_id", "duration_s", "error", "fmus_sha256",
                                                                   "date")}
                        for r in (row, theirs[key(row)]))
         assert _close(ours, other), key(row)
-    assert scoreboard.render_summary(rows) == scoreboard.render_summary(python_rows)
+    assert board_tables.render_summary(rows) == board_tables.render_summary(python_rows)

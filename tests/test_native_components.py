@@ -33,7 +33,7 @@ from native_fmus import (
 )
 
 from crane_fmu import components, systems
-from crane_fmu.analysis.scoreboard import Contender, systems_for
+from crane_fmu.analysis.scenarios import Contender, systems_for
 from crane_fmu.build_scripts.native import FOLDERS, HOST, source_path, variables_header
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cosim import System, run

@@ -223,14 +223,15 @@ def test_while_hoisting_the_native_mpc_equals_the_python_mpc_through_our_master(
     """The board's S7 (the cable hoisted from 2 m to 1 m as the trolley moves, the MPC designing again for the
     cable's length it is told) over its first 4 s, in which the hoist ends: every column bit for bit on Linux. With
     the runs above, it stands for the MPC's rows of the board, which test_native_board.py runs without the MPC."""
-    from crane_fmu.analysis import scoreboard
+    from crane_fmu.analysis import planar_scenarios as planar
+    from crane_fmu.analysis import scenarios
     from crane_fmu.compare import contenders
 
-    system = replace(scoreboard.systems_for(contenders(["MpcController"], fmu_dir, only=True)[0], "S7")[0].system,
+    system = replace(scenarios.systems_for(contenders(["MpcController"], fmu_dir, only=True)[0], "S7")[0].system,
                      stop_time=4.0)
     assert system.instances["hoist"] == "TrajectoryPlanner"
     theirs = _python_run_equal_to_native(system, fmu_dir, native, version)
-    assert theirs["plant.l1_now"][-1] == pytest.approx(scoreboard.HOIST["to"], abs=1e-3)  # hoisted within the run
+    assert theirs["plant.l1_now"][-1] == pytest.approx(planar.HOIST["to"], abs=1e-3)  # hoisted within the run
 
 
 def test_on_the_unknown_plant_the_mpc_identifies_it_and_plans_again():

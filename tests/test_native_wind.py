@@ -26,7 +26,7 @@ from native_fmus import (
 )
 
 from crane_fmu import components
-from crane_fmu.analysis.scoreboard import Contender, systems_for
+from crane_fmu.analysis.scenarios import Contender, systems_for
 from crane_fmu.build_scripts.native import FOLDERS, source_path, variables_header
 from crane_fmu.cosim import run
 

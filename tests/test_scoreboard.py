@@ -11,8 +11,13 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from crane_fmu.analysis import scoreboard
-from crane_fmu.analysis.scoreboard import SCENARIOS, Contender
+from crane_fmu import components
+from crane_fmu.analysis import board_tables, ranking, scenarios
+from crane_fmu.analysis import planar_scenarios as planar
+from crane_fmu.analysis.scenarios import Contender
+
+SCENARIOS = scenarios.scenarios()
+CRANE = components.get("CranePlant").crane
 
 pytestmark = pytest.mark.quick  # no build: in the quick subset
 
@@ -27,7 +32,7 @@ def _row(controller, scenario="S2", case="nominal", status="ok", **metrics):
 
 
 def _ranked(rows, scenario="S2"):
-    return [line["controller"] for line in scoreboard.summarise(rows, scenario)]
+    return [line["controller"] for line in ranking.summarise(rows, scenario)]
 
 
 # S2: arrival <= 4.0 s and residual <= 0.1 deg; it ranks by arrival
@@ -72,10 +77,10 @@ def test_equal_figures_tie_and_are_listed_by_name():
     """Nothing tells them apart: one rank, each line says tie; the one after them has rank 4, not 2."""
     rows = [_row(name, **FAST_BOTH) for name in ("Charlie", "alpha", "Bravo")] + [_row("Slow", arrival_s=3.9,
                                                                                      residual_deg=0.05)]
-    lines = scoreboard.summarise(rows, "S2")
+    lines = ranking.summarise(rows, "S2")
     assert [(line["controller"], line["rank"], line["tie"]) for line in lines] == [
         ("Bravo", 1, True), ("Charlie", 1, True), ("alpha", 1, True), ("Slow", 4, False)]
-    assert "1. `alpha`: 3.00 s, all targets met, tie" in scoreboard.render_summary(rows)
+    assert "1. `alpha`: 3.00 s, all targets met, tie" in board_tables.render_summary(rows)
 
 
 def test_permuting_contenders_changes_nothing():
@@ -85,58 +90,59 @@ def test_permuting_contenders_changes_nothing():
             _row("E", status="failed", **FAST_BOTH), _row("A", "S1"), _row("B", "S1", status="failed"),
             _row("C", "S1", **{"settling_0.1deg_s": 3.0}), _row("D", "S1"), _row("E", "S1")]
     contenders = [Contender(n, n, [], [], n == "D") for n in "ABCDE"]
-    boards = {scoreboard.render(list(itertools.chain(*[[r for r in rows if r["controller"] == n] for n in order])),
+    boards = {board_tables.render(list(itertools.chain(*[[r for r in rows if r["controller"] == n] for n in order])),
                                 [contenders["ABCDE".index(n)] for n in order])
               for order in itertools.permutations("ABCDE")}
     assert len(boards) == 1
     board = boards.pop()
-    assert "`D` (yours)" in board and scoreboard.RULES in board
+    assert "`D` (yours)" in board and ranking.RULES in board
 
 
 def test_the_interface_every_scenario_needs_is_checked_and_the_rest_is_not_applicable():
     """The measured state in and u out: every scenario needs them (one line when missing). A target position
     (x_d or the planner's inputs): only the transport scenarios, which are then not applicable."""
     with pytest.raises(ValueError) as caught:
-        scoreboard.check_interface("Half", ["x", "dx", "theta1", "dtheta1", "theta2"], [], [])
+        scenarios.check_interface("Half", ["x", "dx", "theta1", "dtheta1", "theta2"], [], [])
     assert "\n" not in str(caught.value)
-    assert str(caught.value).startswith("Half is not a crane controller: it misses dtheta2, output u (every scenario")
-    scoreboard.check_interface("Mine", scoreboard.MEASURED, ["u"], ["k"])  # regulation only: a crane controller
-    mine = Contender("Mine", "Mine", list(scoreboard.MEASURED), ["k"])
-    assert {sid: scoreboard.applicable(mine, sid) for sid in SCENARIOS} == {
+    assert str(caught.value).startswith("Half is not a crane controller: of CranePlant, it misses dtheta2, output u "
+                                        "(the interface: inputs x, dx, theta1, dtheta1, theta2, dtheta2; outputs u;")
+    scenarios.check_interface("Mine", CRANE.state, ["u"], ["k"])  # regulation only: a crane controller
+    mine = Contender("Mine", "Mine", list(CRANE.state), ["k"])
+    assert {sid: scenarios.applicable(mine, sid) for sid in SCENARIOS} == {
         sid: (None if sid in ("S1", "S6") else "n/a (needs x_d or x_ref)") for sid in SCENARIOS}
-    assert all(scoreboard.applicable(c, sid) is None for c in (TRACKER, REGULATOR) for sid in SCENARIOS)
+    assert all(scenarios.applicable(c, sid) is None for c in (TRACKER, REGULATOR) for sid in SCENARIOS)
     with pytest.raises(ValueError, match=r"^Mine: S2 n/a \(needs x_d or x_ref\)$"):
-        scoreboard.systems_for(mine, "S2")
+        scenarios.systems_for(mine, "S2")
 
 
 def test_a_scenario_that_does_not_apply_is_shown_without_a_rank():
     rows = [_row("A", "S2", **FAST_BOTH), _row("A", "S1", **{"settling_0.1deg_s": 3.0}),
             {"controller": "Mine", "scenario": "S2", "case": "all", "status": "n/a",
-             "error": scoreboard.NOT_APPLICABLE},
+             "error": "n/a (needs x_d or x_ref)"},
             _row("Mine", "S1", **{"settling_0.1deg_s": 3.5})]
     assert _ranked(rows, "S2") == ["A"] and _ranked(rows, "S1") == ["A", "Mine"]
-    board = scoreboard.render(rows, [Contender("A", "A", [], []), Contender("Mine", "m.fmu", [], [], True)])
+    board = board_tables.render(rows, [Contender("A", "A", [], []), Contender("Mine", "m.fmu", [], [], True)])
     assert "| 1. `A`: 3.00 s, all targets met | `Mine` (yours): n/a (needs x_d or x_ref) |" in board
     assert "- `Mine` (yours): n/a (needs x_d or x_ref)" in board
 
 
 def test_a_quick_board_says_so_in_its_title_and_every_scenario_line():
     rows = [_row("A", sid, **FAST_BOTH) for sid in SCENARIOS]
-    board = scoreboard.render(rows, [Contender("A", "A", [], [])], quick=True, cases=16)
+    board = board_tables.render(rows, [Contender("A", "A", [], [])], quick=True, cases=16)
     assert board.splitlines()[0] == ("# Controller scoreboard (QUICK: fewer cases of the paired design, not the full "
                                      "board)")
     scenario_lines = [line for line in board.splitlines() if line.startswith(("| S", "## S"))]
     assert len(scenario_lines) == 2 * len(SCENARIOS)
     assert all("(QUICK: " in line for line in scenario_lines)
     assert "S3 (QUICK: 16 cases)" in board and "S6 (QUICK: 3 cases)" in board
-    full = scoreboard.render(rows, [Contender("A", "A", [], [])])
+    full = board_tables.render(rows, [Contender("A", "A", [], [])])
     assert "QUICK" not in full and "S3 (64 cases)" in full
 
 
 def test_scopes_of_the_paired_design():
-    assert scoreboard.scope("S3", 16) == {"plants": 16, "steps": 1, "cases": 16}
-    assert scoreboard.scope("S10") == {"plants": 64, "steps": 1, "cases": 64}
-    assert scoreboard.scope("S6", 16) == {"plants": 1, "steps": 3, "cases": 3}
+    assert scenarios.get("S3").scope(16) == {"plants": 16, "steps": 1, "cases": 16}
+    assert scenarios.get("S10").scope() == {"plants": 64, "steps": 1, "cases": 64}
+    assert scenarios.get("S6").scope(16) == {"plants": 1, "steps": 3, "cases": 3}
 
 
 def test_every_target_carries_its_reason():
@@ -156,12 +162,12 @@ def _periods(m1, m2, l1, l2, g):
 @pytest.mark.parametrize("l1, l2, m2", [(1.0, 0.5, 7.0), (2.0, 0.5, 7.0), (1.1, 0.6, 3.5)])
 def test_the_targets_physics_the_mode_periods_agree_with_scipy(l1, l2, m2):
     """The periods the transport targets are derived from: the closed form against a generalised eigenproblem."""
-    assert scoreboard.mode_periods(3.0, m2, l1, l2, 9.8) == pytest.approx(_periods(3.0, m2, l1, l2, 9.8), rel=1e-12)
+    assert planar.mode_periods(3.0, m2, l1, l2, 9.8) == pytest.approx(_periods(3.0, m2, l1, l2, 9.8), rel=1e-12)
 
 
 def test_the_time_optimal_move():
-    assert scoreboard.move_time(2.0, 2.0, 1.0) == pytest.approx(2.5)  # 0.5 s up, 1.5 s coasting, 0.5 s down
-    assert scoreboard.move_time(0.5, 2.0, 1.0) == pytest.approx(1.0)  # triangular: the speed limit is never reached
+    assert planar.move_time(2.0, 2.0, 1.0) == pytest.approx(2.5)  # 0.5 s up, 1.5 s coasting, 0.5 s down
+    assert planar.move_time(0.5, 2.0, 1.0) == pytest.approx(1.0)  # triangular: the speed limit is never reached
 
 
 def test_a_controllers_colour_is_its_own_on_every_board():
@@ -212,8 +218,8 @@ def test_an_animation_drawn_before_from_the_same_run_is_copied_and_another_run_i
 
 # ---- the residual swing: a window the scenario fixes, and targets a swinging run cannot meet ---------------------
 
-TRACKER = Contender("Tracker", "Tracker", list(scoreboard.MEASURED) + ["x_ref", "dx_ref", "ddx_ref"], [])
-REGULATOR = Contender("Regulator", "Regulator", list(scoreboard.MEASURED), ["x_d", "l1"])
+TRACKER = Contender("Tracker", "Tracker", list(CRANE.state) + ["x_ref", "dx_ref", "ddx_ref"], [])
+REGULATOR = Contender("Regulator", "Regulator", list(CRANE.state), ["x_d", "l1"])
 
 
 def test_the_residual_window_is_fixed_by_the_scenario_not_the_controller():
@@ -222,7 +228,7 @@ def test_the_residual_window_is_fixed_by_the_scenario_not_the_controller():
     from crane_fmu.model import planner
 
     def windows(contender, sid):
-        return {r.label: r.residual_from for r in scoreboard.systems_for(contender, sid)}
+        return {r.label: r.residual_from for r in scenarios.systems_for(contender, sid)}
 
     for sid in SCENARIOS:
         assert windows(TRACKER, sid) == windows(REGULATOR, sid), sid
@@ -233,7 +239,7 @@ def test_the_residual_window_is_fixed_by_the_scenario_not_the_controller():
     assert windows(TRACKER, "S1") == {"nominal": 7.5} and set(windows(TRACKER, "S6").values()) == {7.5}
     assert windows(TRACKER, "S7") == {"l1 2 m -> 1 m": pytest.approx(zvd_end + slow, rel=1e-12)}  # ends at l1 = 1 m
     assert windows(TRACKER, "S8") == {"S1": 7.5, "S2": pytest.approx(zv_end + slow, rel=1e-12)}
-    runs = scoreboard.systems_for(TRACKER, "S10")
+    runs = scenarios.systems_for(TRACKER, "S10")
     for run in runs:  # each case's window from the slow period of its own plant
         p = run.system.parameters["plant"]
         slow = _periods(p["m1"], p["m2"], p["l1"], p["l2"], 9.8)[0]
@@ -245,9 +251,9 @@ def test_every_residual_target_asks_the_swing_stopped():
     """A swing within 0.1 deg counts as stopped (metrics.SETTLED_BAND); no residual target allows more."""
     from crane_fmu.analysis import metrics
 
-    assert scoreboard.STOPPED_DEG == pytest.approx(math.degrees(metrics.SETTLED_BAND), rel=1e-12)
+    assert scenarios.STOPPED_DEG == pytest.approx(math.degrees(metrics.SETTLED_BAND), rel=1e-12)
     limits = [t.limit for s in SCENARIOS.values() for t in s.targets if t.metric == "residual_deg"]
-    assert limits and max(limits) <= scoreboard.STOPPED_DEG
+    assert limits and max(limits) <= scenarios.STOPPED_DEG
 
 
 def _made_up_rows(sid, amplitude_deg):
@@ -257,13 +263,13 @@ def _made_up_rows(sid, amplitude_deg):
     from crane_fmu.analysis import metrics
 
     rows = []
-    for r in scoreboard.systems_for(TRACKER, sid):
+    for r in scenarios.systems_for(TRACKER, sid):
         dt = max(r.step, 0.01)  # the figures need no finer grid than 10 ms
         t = np.round(np.arange(0.0, r.stop_time + dt / 2, dt), 9)
         x = r.x_d * np.minimum(t, 1.0)
-        wave = np.cos(2 * np.pi * t / scoreboard.T_SLOW)
+        wave = np.cos(2 * np.pi * t / planar.T_SLOW)
         theta = np.radians((5.0 * np.exp(-t / 0.3) + amplitude_deg) * wave)
-        figures = metrics.move_metrics(t, x, np.gradient(x, t), theta, -theta, np.zeros_like(t), r.x_d,
+        figures = metrics.move_metrics(t, x, np.gradient(x, t), (theta, -theta), np.zeros_like(t), r.x_d,
                                        r.residual_from)
         rows.append({"controller": "Made-up", "scenario": sid, "case": r.label, "status": "ok", "error": None,
                      **figures})
@@ -276,9 +282,9 @@ def test_no_scenario_is_passed_by_a_run_that_never_stops_the_swing(sid):
     swing the old residual hid) miss a target in every scenario; the same runs brought to rest meet them all, so
     the targets can be met."""
     for amplitude in (0.11, 0.45):
-        line, = scoreboard.summarise(_made_up_rows(sid, amplitude), sid)
+        line, = ranking.summarise(_made_up_rows(sid, amplitude), sid)
         assert not all(line["targets"]), (sid, amplitude, line)
-    line, = scoreboard.summarise(_made_up_rows(sid, 0.0), sid)
+    line, = ranking.summarise(_made_up_rows(sid, 0.0), sid)
     assert all(line["targets"]), (sid, line)
 
 
@@ -287,19 +293,19 @@ def test_no_scenario_is_passed_by_a_run_that_never_stops_the_swing(sid):
 def test_the_paired_design_is_a_latin_hypercube_the_same_for_every_contender():
     """16 cases: each factor's range cut in 16 equal strata holds one case in each; the same cases every time and
     for every contender (the plant and the seed of each run), seeds whole numbers below 2^31."""
-    cases = scoreboard.design(16)
-    assert cases == scoreboard.design(16) and len({c["seed"] for c in cases}) == 16
-    for f in scoreboard.FACTORS:
+    cases = planar.design(16)
+    assert cases == planar.design(16) and len({c["seed"] for c in cases}) == 16
+    for f in planar.FACTORS:
         strata = sorted(int((c[f.name] - f.low) / (f.high - f.low) * 16) for c in cases)
         assert strata == list(range(16)), f.name
     assert all(c["seed"] == int(c["seed"]) and 0 <= c["seed"] < 2 ** 31 for c in cases)
 
     def runs(contender):
         return [(r.label, r.system.parameters["plant"], r.system.parameters["wind"]["seed"])
-                for r in scoreboard.systems_for(contender, "S10", 16)]
+                for r in scenarios.systems_for(contender, "S10", 16)]
 
     assert runs(TRACKER) == runs(REGULATOR)
-    assert [r.system.parameters["sensor"]["seed"] for r in scoreboard.systems_for(TRACKER, "S9", 16)] == [
+    assert [r.system.parameters["sensor"]["seed"] for r in scenarios.systems_for(TRACKER, "S9", 16)] == [
         c["seed"] for c in cases]
 
 
@@ -317,7 +323,7 @@ def test_on_the_paired_design_a_rank_needs_a_significant_difference():
     lower = [r - 0.05 - 0.001 * i for i, r in enumerate(BASE)]
     mixed = [r + (0.06 if i % 2 else -0.06) for i, r in enumerate(BASE)]
     rows = _paired_rows("A", BASE) + _paired_rows("Lower", lower) + _paired_rows("Mixed", mixed)
-    lines = {line["controller"]: line for line in scoreboard.summarise(rows, "S3")}
+    lines = {line["controller"]: line for line in ranking.summarise(rows, "S3")}
     assert (lines["Lower"]["rank"], lines["Mixed"]["rank"], lines["A"]["rank"]) == (1, 1, 2)
     assert lines["Lower"]["tie"] and lines["Mixed"]["tie"] and not lines["A"]["tie"]
 
@@ -328,7 +334,7 @@ def test_on_the_paired_design_the_worst_case_does_not_decide():
     would have put it last."""
     spiky = [r - 0.02 for r in BASE[:-1]] + [BASE[-1] + 1.0]
     rows = _paired_rows("A", BASE) + _paired_rows("Spiky", spiky)
-    lines = scoreboard.summarise(rows, "S3")
+    lines = ranking.summarise(rows, "S3")
     assert [(line["controller"], line["rank"]) for line in lines] == [("A", 1), ("Spiky", 1)]
     assert max(spiky) > max(BASE)
 
@@ -336,7 +342,7 @@ def test_on_the_paired_design_the_worst_case_does_not_decide():
 def test_paired_statistics_are_on_the_board():
     lower = [r - 0.05 - 0.001 * i for i, r in enumerate(BASE)]
     rows = _paired_rows("A", BASE) + _paired_rows("Lower", lower)
-    board = scoreboard.render(rows, [Contender("A", "A", [], []), Contender("Lower", "Lower", [], [])], cases=10)
+    board = board_tables.render(rows, [Contender("A", "A", [], []), Contender("Lower", "Lower", [], [])], cases=10)
     assert "| S3 (10 cases): " in board and "1. `Lower`: median 0.260 deg [" in board  # the 5th of 10 sorted
     assert "| `Lower` | `A` | -0.055 deg [" in board and "| 0.00195 | `Lower` lower |" in board
     assert re.search(r"\| residual \[deg\] \| 0\.260 \[[0-9.]+, [0-9.]+\]; 0\.498 \[", board)  # median; p90 (9th)
@@ -346,7 +352,7 @@ def test_permuting_contenders_on_the_paired_design_changes_nothing():
     lower = [r - 0.05 - 0.001 * i for i, r in enumerate(BASE)]
     mixed = [r + (0.06 if i % 2 else -0.06) for i, r in enumerate(BASE)]
     by = {"A": _paired_rows("A", BASE), "Lower": _paired_rows("Lower", lower), "Mixed": _paired_rows("Mixed", mixed)}
-    boards = {scoreboard.render([r for n in order for r in reversed(by[n])], [Contender(n, n, [], []) for n in order],
+    boards = {board_tables.render([r for n in order for r in reversed(by[n])], [Contender(n, n, [], []) for n in order],
                                 cases=10) for order in itertools.permutations(by)}
     assert len(boards) == 1
 

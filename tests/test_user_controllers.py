@@ -14,13 +14,16 @@ import numpy as np
 import pytest
 import user_controllers
 
-from crane_fmu import systems
-from crane_fmu.analysis import scoreboard
+from crane_fmu import components, systems
+from crane_fmu.analysis import planar_scenarios as planar
+from crane_fmu.analysis import scenarios
 from crane_fmu.build_scripts.build_fmus import build_fmu
 from crane_fmu.cli import main
 from crane_fmu.compare import contenders
 from crane_fmu.controller_interface import told
 from crane_fmu.cosim import ArrayRecorder, read_csv, run
+
+CRANE = components.get("CranePlant").crane
 
 
 @pytest.fixture(scope="module")
@@ -70,28 +73,28 @@ def test_the_check_reads_the_design_of_a_system_file(fmu_dir, user_fmus, tmp_pat
 def test_compare_refuses_what_simulate_refuses(fmu_dir, user_fmus, tmp_path, capsys):
     """A controller without u is refused; one that cannot be told a move is refused the moves (it is scored on the
     scenarios that hold the crane where it is: test_compare.py), here every scenario asked for."""
-    for fmu, message, scenarios in (
-            (user_fmus["PdTypo"], "PdTypo is not a crane controller: it misses output u", "S1,S2"),
+    for fmu, message, chosen in (
+            (user_fmus["PdTypo"], "PdTypo is not a crane controller: of CranePlant, it misses output u", "S1,S2"),
             (user_fmus["PdRegulator"], "PdRegulator: no scenario of S2, S3 applies to it: n/a (needs x_d or x_ref); "
                                        "it can run S1, S6", "S2,S3")):
         assert main(["compare", "--controller", str(fmu), "--only", "--quick", "--fmu-dir", str(fmu_dir),
-                     "--scenario", scenarios, "--out", str(tmp_path / "board")]) == 2
+                     "--scenario", chosen, "--out", str(tmp_path / "board")]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and message in err, err
     assert not (tmp_path / "board").exists()
 
 
 def test_one_rule_for_what_a_controller_is_told():
-    measured = list(scoreboard.MEASURED)
-    tracker = told("T", measured + ["x_ref", "dx_ref", "ddx_ref", "theta1_ref"], ["u"], ["x_d"], 2.0)
-    assert tracker.references == ("x_ref", "dx_ref", "ddx_ref", "theta1_ref") and tracker.x_d is None
-    assert told("R", measured, ["u"], ["x_d"], 2.0) == ((), 2.0)  # no references: the target as x_d
-    assert told("R", measured, ["u"], ["x_d"]) == ((), None)  # regulation: nothing but the state
-    assert told("N", measured, ["u"], []) == ((), None)  # regulation needs no target
+    measured, plant, move = list(CRANE.state), components.get("CranePlant"), {"x": 2.0}
+    tracker = told("T", measured + ["x_ref", "dx_ref", "ddx_ref", "theta1_ref"], ["u"], ["x_d"], plant, move)
+    assert tracker.references == ("x_ref", "dx_ref", "ddx_ref", "theta1_ref") and tracker.targets == {}
+    assert told("R", measured, ["u"], ["x_d"], plant, move) == ((), {"x_d": 2.0})  # no references: x_d
+    assert told("R", measured, ["u"], ["x_d"], plant) == ((), {})  # regulation: nothing but the state
+    assert told("N", measured, ["u"], [], plant) == ((), {})  # regulation needs no target
     with pytest.raises(ValueError, match=r"^N cannot be told where the load goes \(2 m\): it misses a parameter x_d"):
-        told("N", measured, ["u"], [], 2.0)
-    with pytest.raises(ValueError, match=r"^H is not a crane controller: it misses dtheta2, output u "):
-        told("H", measured[:5], ["acc"], ["x_d"])
+        told("N", measured, ["u"], [], plant, move)
+    with pytest.raises(ValueError, match=r"^H is not a controller of CranePlant: it misses dtheta2, output u "):
+        told("H", measured[:5], ["acc"], ["x_d"], plant)
 
 
 def test_simulate_and_compare_give_a_controller_without_references_the_same_move(fmu_dir, tmp_path, capsys):
@@ -102,12 +105,12 @@ def test_simulate_and_compare_give_a_controller_without_references_the_same_move
     mine.write_bytes((fmu_dir / "EnergyController.fmu").read_bytes())  # a user's file, not the built-in name
     stop = 3.0
     code, err = _simulate(capsys, fmu_dir, tmp_path, "transport", f"controller={mine}", "--stop-time", str(stop),
-                          *[f"--set=plant.{k}={v}" for k, v in scoreboard.DRIVE.items()])
+                          *[f"--set=plant.{k}={v}" for k, v in planar.DRIVE.items()])
     assert code == 0, err
     assert "it is told the move's target, controller.x_d = 2 m (planner.x_d)" in err
     simulated = read_csv(tmp_path / "run.csv")
     contender, = contenders([str(mine)], fmu_dir, only=True)
-    (_, system, step, *_), = scoreboard.systems_for(contender, "S2")
+    (_, system, step, *_), = scenarios.systems_for(contender, "S2")
     assert system.parameters["controller"]["x_d"] == systems.get("transport").parameters["planner"]["x_d"]
     scored = run(systems.prepare(system, step), fmu_dir, recorder=ArrayRecorder(), stop_time=stop).columns()
     assert simulated["plant.x"][-1] > 0.2  # moving towards 2 m (untold, it would stay at 0)

@@ -14,15 +14,17 @@ from crane_fmu import components, systems
 from crane_fmu.batch import run_batch
 from crane_fmu.cosim import ArrayRecorder, FmiError, run
 
-from . import metrics, scoreboard
+from . import metrics, scenarios
+from . import planar_scenarios as planar
+from .board_tables import floor_ratio
 
 Run = namedtuple("Run", "group label system parameters step stop_time residual_from", defaults=(None,))
 Run.__doc__ = ("One co-simulation: its group and label, a system (a registered name or a System), its settings, "
-               "and the start of its residual swing's window [s] (None: :func:`.scoreboard.residual_from` of the "
+               "and the start of its residual swing's window [s] (None: :func:`.planar_scenarios.residual_from` of the "
                "run's planner).")
 SHAPERS = ("zv", "zvd", "ei", "none")
 ROA_ANGLES = tuple(range(5, 65, 5))
-MISMATCH, DISTANCE = scoreboard.MISMATCH, scoreboard.DISTANCE  # a grid of plants unknown to the controller, S2's move
+MISMATCH, DISTANCE = planar.MISMATCH, planar.DISTANCE  # a grid of plants unknown to the controller, S2's move
 HARD_HIT_DEG = 60.0
 
 MpcTarget = namedtuple("MpcTarget", "group metric worst target ambition text")
@@ -49,17 +51,17 @@ def mpc_runs(quick=False):
     """The constrained MPC on the scoreboard's own cases (S1, S2, S3, S7, S8) and from a hard hit (quick: S1, S2
     and 3 cases of S3's paired design)."""
     mpc = components.get("MpcController")
-    contender = scoreboard.Contender("MpcController", "MpcController", list(mpc.names("input")),
+    contender = scenarios.Contender("MpcController", "MpcController", list(mpc.names("input")),
                                      list(mpc.names("parameter")))
     runs = []
     for sid in ("S1", "S2", "S3") if quick else ("S1", "S2", "S3", "S7", "S8"):
-        for label, system, step, stop_time, _, window in scoreboard.systems_for(contender, sid, 3 if quick else
-                                                                                 scoreboard.CASES):
+        for label, system, step, stop_time, _, window in scenarios.systems_for(contender, sid, 3 if quick else
+                                                                                 scenarios.CASES):
             group = f"mpc_{sid}" + (f"_{label}" if sid == "S8" else "")
             runs.append(Run(group, label, system, {}, step, stop_time, window))  # the board's residual window
     if not quick:
         runs.append(Run("mpc_hard_hit", f"{HARD_HIT_DEG:g} deg", "mpc",
-                        {"plant": {"theta1_0": math.radians(HARD_HIT_DEG)}}, 1e-3, 20.0))
+                        {"plant": {planar.CRANE.start_swing: math.radians(HARD_HIT_DEG)}}, 1e-3, 20.0))
     return runs
 
 
@@ -73,7 +75,8 @@ def plan(quick=False):
         runs += [Run(f"robust_{shaper}", str(plant), "transport", {"plant": plant, "planner": {"shaper": shaper}},
                      1e-3, 10.0) for plant in (MISMATCH[::13] if quick else MISMATCH)]
     for name in ("lqr", "energy"):
-        runs += [Run(f"roa_{name}", str(angle), name, {"plant": {"theta1_0": math.radians(angle)}}, 1e-3, 30.0)
+        runs += [Run(f"roa_{name}", str(angle), name, {"plant": {planar.CRANE.start_swing: math.radians(angle)}},
+                     1e-3, 30.0)
                  for angle in (ROA_ANGLES[::4] if quick else ROA_ANGLES)]
     for h in (1e-2, 5e-2):
         runs += [Run(f"step_{h:g}", name, name, {}, h, 40.0) for name in systems.tagged("regulation")]
@@ -90,16 +93,18 @@ def measure(r, fmu_dir):
         run(system, fmu_dir, recorder=recorder)
     except FmiError as exc:
         error = str(exc)
-    x_d = system.parameters.get("planner", {}).get("x_d", system.parameters.get("controller", {}).get("x_d", 0.0))
-    plant = dict(system.parameters.get("plant", {}))
-    if "hoist" in system.parameters:
-        plant["l1"] = system.parameters["hoist"]["x_d"]  # the cable as the run ends
-    plan = system.parameters.get("planner", {}) if "planner" in system.instances else None
-    s = metrics.crane_signals(recorder.columns(), ("dx",))
-    window = r.residual_from if r.residual_from is not None else scoreboard.residual_from(r.stop_time, plan, plant)
-    result = metrics.move_metrics(s["time"], s["x"], s["dx"], s["theta1"], s["theta2"], s["u"], x_d, window)
-    result.update(outcome=metrics.classify(s["time"], s["theta1"], s["theta2"], error is None), error=error,
-                  end_s=float(s["time"][-1]))
+    x_d = list(systems.move_target(system).values())
+    roles = components.by_role(systems.kinds(system))
+    plant = dict(system.parameters.get(roles["plant"], {}))
+    hoist = systems.cable_source(system)
+    if hoist is not None:
+        plant["l1"] = system.parameters[hoist]["x_d"]  # the cable as the run ends
+    plan = system.parameters.get(roles["planner"], {}) if "planner" in roles else None
+    s = metrics.crane_signals(recorder.columns())
+    swing = list(s["swing"].values())
+    window = r.residual_from if r.residual_from is not None else planar.residual_from(r.stop_time, plan, plant)
+    result = metrics.move_metrics(s["time"], s["position"], s["velocity"], swing, s["demand"], x_d, window)
+    result.update(outcome=metrics.classify(s["time"], swing, error is None), error=error, end_s=float(s["time"][-1]))
     return r, result
 
 
@@ -125,7 +130,7 @@ def report(results, out=print):
             f"trolley within 1 cm from {_fmt(m['position_1cm_s'])}, peak |u| {m['peak_abs_u']:.2f} m/s2, "
             f"peak |v| {m['peak_abs_v']:.2f} m/s, {m['outcome']}")
     out(f"Transport of {DISTANCE:g} m from rest, |v| <= 1 m/s (targets: within 5 mm and 0.5 deg from <= "
-        f"{scoreboard.ZV_MOVE_S:.1f} s (the ZV-shaped time-optimal move, scoreboard S2), "
+        f"{planar.ZV_MOVE_S:.1f} s (the ZV-shaped time-optimal move, scoreboard S2), "
         "residual swing (from one slow period after the planned move) <= 0.1 deg)")
     for shaper, m in by["transport"].items():
         out(f"  {shaper:<8} arrival {_fmt(m['arrival_s'])}, residual {_fmt(m['residual_deg'], 3, ' deg')}, "
@@ -141,7 +146,7 @@ def report(results, out=print):
                     else math.inf)
         slowest = max(cases.items(), key=lambda kv: kv[1]["arrival_s"] if kv[1]["arrival_s"] is not None else math.inf)
         out(f"Robustness, {group[7:]} shaper: {len(cases)} plants with l1 +-10 %, l2 +-20 %, m2 +-50 % unknown to "
-            f"planner and controller (target: residual <= {scoreboard.STOPPED_DEG:g} deg, scoreboard S3)")
+            f"planner and controller (target: residual <= {scenarios.STOPPED_DEG:g} deg, scoreboard S3)")
         out(f"  worst residual {_fmt(worst[1]['residual_deg'], 3, ' deg')} at {worst[0]}; "
             f"latest arrival {_fmt(slowest[1]['arrival_s'])} at {slowest[0]}")
     for group in [g for g in by if g.startswith("roa_")]:
@@ -171,9 +176,9 @@ def report_floors(floors, out=print):
         out(f"  {sid}: {f.seconds:.2f} s  {f.task}")
     from .floor import crane_floor
 
-    free = crane_floor(start=(0.0, 0.0, math.radians(10.0), 0.0, 0.0, 0.0), free=(0,), **scoreboard.DRIVE)
+    free = crane_floor(start=(0.0, 0.0, math.radians(10.0), 0.0, 0.0, 0.0), free=(0,), **planar.DRIVE)
     out(f"  (S1 with the trolley free to stop anywhere: {free:.2f} s; a rigid load's {DISTANCE:g} m move: "
-        f"{scoreboard.MOVE_S:.2f} s)")
+        f"{planar.MOVE_S:.2f} s)")
 
 
 def report_mpc(results, floors, out=print):
@@ -192,7 +197,7 @@ def report_mpc(results, floors, out=print):
         worst = None if any(v is None for v in values) else max(values)
         unit = " deg" if t.metric.endswith("deg") else " s"
         sid = t.group.split("_")[1]
-        ratio = scoreboard.floor_ratio(worst, floors.get(sid)) if unit == " s" and sid in floors else ""
+        ratio = floor_ratio(worst, floors.get(sid)) if unit == " s" and sid in floors else ""
         verdict = "failed: " + ", ".join(failed) if failed else (
             "met" if worst is not None and worst <= t.target else "MISSED")
         if verdict == "met" and t.ambition is not None and worst <= t.ambition:

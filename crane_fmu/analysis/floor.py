@@ -189,7 +189,7 @@ def scenario_floors():
     longest step, 50 ms); S2, S4 and S7 end at rest at the target, S4 with the gust and
     S7 with the hoist's motion known in advance.
     """
-    from .scoreboard import DISTANCE, DRIVE, GUST, HOIST, STEPS
+    from .planar_scenarios import DISTANCE, DRIVE, GUST, HOIST, STEPS
 
     swing = (0.0, 0.0, math.radians(10.0), 0.0, 0.0, 0.0)
     moved = (DISTANCE, 0.0, 0.0, 0.0, 0.0, 0.0)

@@ -15,7 +15,6 @@ import numpy as np
 
 VERSION = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()[:16]
 
-CRANE_OUTPUTS = ("x", "theta1", "theta2")  # what the crane metrics need from some instance
 DIVERGED_ANGLE = math.pi / 2  # a swing beyond 90 degrees counts as divergence
 SETTLED_BAND = math.radians(0.1)  # a swing below 0.1 degree counts as settled
 CONVERGING = ("converges", "decaying")  # the outcomes of classify() that head for rest
@@ -23,41 +22,87 @@ ARRIVAL_ANGLE = math.radians(0.5)  # an arrival leaves both angles within 0.5 de
 BOUND_TOLERANCE = 1e-9  # relative: a drive at its speed limit reaches it through rounding
 
 
-def crane_signals(columns, extra=()):
-    """``time``, ``x``, ``theta1``, ``theta2`` and ``u`` of a recorded run of any system (and of ``extra``).
+def needs(crane):
+    """The outputs the crane metrics need of the plant: each axis's position and the swing angles."""
+    return tuple(a.position for a in crane.axes) + tuple(crane.swing)
 
-    The crane signals are the outputs ``x``, ``theta1``, ``theta2`` of the first
-    instance that has all three, and ``u`` of the first other instance that
-    outputs ``u`` (zero when none does). ``extra`` names more outputs of that first
-    instance (``dx``, ``x1``, ...), kept where it has them.
+
+def _key(instance, name):  # columns without an instance prefix (one FMU, e.g. a container) have instance ""
+    return f"{instance}.{name}" if instance else name
+
+
+def find_crane(columns, wanted=needs):
+    """``(instance, plant)``: the first instance of a recorded run that has a registered plant's outputs
+    (``wanted(crane)``, none: not this plant; by default :func:`needs` of its crane roles), and that plant's
+    component; ``(None, None)`` when there is none."""
+    from crane_fmu import components
+
+    instances = list(dict.fromkeys(name.rpartition(".")[0] for name in columns))
+    for plant in components.registered("plant"):
+        if plant.crane is not None:
+            names = wanted(plant.crane)
+            for instance in instances:
+                if names and all(_key(instance, n) in columns for n in names):
+                    return instance, plant
+    return None, None
+
+
+def crane_signals(columns, extra=()):
+    """A recorded run's crane signals, by the plant's roles (:class:`~crane_fmu.model.component.Crane`).
+
+    The plant is the first instance that has a registered plant's axis positions and swing angles
+    (:func:`find_crane`); its demands are the outputs of that name of the first other instance (zero when
+    none gives them).
+
+    Returns
+    -------
+    dict
+        ``time``; ``crane`` (the plant's roles), ``plant`` (its component) and ``instance``; ``position``,
+        ``velocity`` and ``demand``: a list of arrays, one per axis (a velocity the run did not record is None);
+        ``swing``: ``{name: array}`` of the swing angles;
+        and the plant's outputs named in ``extra`` (``x1``, ``l1_now``, ...) where it has them.
 
     Raises
     ------
     ValueError
-        When no instance outputs ``x``, ``theta1`` and ``theta2``.
+        When no instance has a registered plant's outputs.
     """
-    def key(instance, name):  # columns without an instance prefix (one FMU, e.g. a container) have instance ""
-        return f"{instance}.{name}" if instance else name
-
-    instances = list(dict.fromkeys(name.rpartition(".")[0] for name in columns))
-    plant = next((i for i in instances if all(key(i, n) in columns for n in CRANE_OUTPUTS)), None)
+    plant, component = find_crane(columns)
     if plant is None:
-        raise ValueError(f"these results have no instance with outputs {', '.join(CRANE_OUTPUTS)}; columns: "
+        from crane_fmu import components
+
+        wanted = "; ".join(", ".join(needs(c.crane)) for c in components.registered("plant") if c.crane)
+        raise ValueError(f"these results have no instance with a crane's outputs ({wanted}); columns: "
                          + ", ".join(columns))
-    signals = {"time": columns["time"], **{n: columns[key(plant, n)] for n in CRANE_OUTPUTS + tuple(extra)
-                                           if key(plant, n) in columns}}
-    source = u_column(columns)
-    signals["u"] = columns[source] if source else np.zeros_like(columns["time"])
-    return signals
+    crane = component.crane
+    demands = demand_columns(columns, plant, crane)
+    return {"time": columns["time"], "crane": crane, "instance": plant, "plant": component,
+            "position": [columns[_key(plant, a.position)] for a in crane.axes],
+            "velocity": [columns.get(_key(plant, a.velocity)) for a in crane.axes],
+            "swing": {n: columns[_key(plant, n)] for n in crane.swing},
+            "demand": [columns[k] if k else np.zeros_like(columns["time"]) for k in demands],
+            **plant_outputs(columns, plant, extra)}
 
 
-def u_column(columns):
-    """The column of the demanded ``u`` that :func:`crane_signals` takes, or None when no column gives it
-    (a plant alone: its ``u`` is then zero, and a plot must not show a demand that was never made)."""
+def plant_outputs(columns, instance, names):
+    """``{name: column}`` of the outputs ``names`` of ``instance`` that the run recorded."""
+    return {n: columns[_key(instance, n)] for n in names if _key(instance, n) in columns}
+
+
+def demand_columns(columns, plant=None, crane=None):
+    """The columns of each axis's demand that :func:`crane_signals` takes (None for an axis no column gives:
+    a plant alone, whose demand is then zero, and a plot must not show a demand that was never made)."""
+    if crane is None:
+        plant, component = find_crane(columns)
+        if plant is None:
+            return []
+        crane = component.crane
     instances = list(dict.fromkeys(name.rpartition(".")[0] for name in columns))
-    plant = next((i for i in instances if all((f"{i}.{n}" if i else n) in columns for n in CRANE_OUTPUTS)), None)
-    sources = [f"{i}.u" if i else "u" for i in instances if i != plant] + (["u"] if plant == "" else [])
-    return next((k for k in sources if k in columns), None)
+    found = []
+    for demand in crane.demands:
+        sources = [_key(i, demand) for i in instances if i != plant] + ([demand] if plant == "" else [])
+        found.append(next((k for k in sources if k in columns), None))
+    return found
 
 
 def peak_abs(values):
@@ -110,11 +155,13 @@ def settling_time(t, signals, band):
     return float(t[0]) if len(outside) == 0 else float(t[outside[-1] + 1])
 
 
-def classify(t, theta1, theta2, completed, band=SETTLED_BAND):
+def classify(t, swing, completed, band=SETTLED_BAND):
     """``"converges"``, ``"decaying"``, ``"sustained oscillation"`` or ``"diverges"``.
 
     Parameters
     ----------
+    swing : sequence of arrays
+        The swing angles [rad] (the planar crane: theta1 and theta2).
     completed : bool
         False when the run stopped early (an FMU refused a non-finite state).
     band : float
@@ -122,7 +169,7 @@ def classify(t, theta1, theta2, completed, band=SETTLED_BAND):
 
     Notes
     -----
-    With ``A3`` and ``A4`` the largest swing (either angle) over the third
+    With ``A3`` and ``A4`` the largest swing (any angle) over the third
     and the last quarter of the run:
 
     - diverges: the run stopped early, a swing angle passed 90 degrees, or
@@ -134,13 +181,13 @@ def classify(t, theta1, theta2, completed, band=SETTLED_BAND):
 
     :data:`CONVERGING` holds the first two.
     """
-    if not completed or peak_abs(theta1) > DIVERGED_ANGLE or peak_abs(theta2) > DIVERGED_ANGLE:
+    if not completed or any(peak_abs(angle) > DIVERGED_ANGLE for angle in swing):
         return "diverges"
     span = t[-1] - t[0]
     third = (t >= t[0] + 0.5 * span) & (t < t[0] + 0.75 * span)
     last = t >= t[0] + 0.75 * span
-    a3 = max(peak_abs(theta1[third]), peak_abs(theta2[third]))
-    a4 = max(peak_abs(theta1[last]), peak_abs(theta2[last]))
+    a3 = max(peak_abs(angle[third]) for angle in swing)
+    a4 = max(peak_abs(angle[last]) for angle in swing)
     if a4 > 1.2 * a3:
         return "diverges"
     if a4 < band:
@@ -150,117 +197,161 @@ def classify(t, theta1, theta2, completed, band=SETTLED_BAND):
     return "sustained oscillation"
 
 
-def closed_loop_metrics(t, x, theta1, theta2, u, completed):
-    """The metrics the report gives for every closed-loop run (angles in degrees)."""
+def closed_loop_metrics(t, x, swing, u, completed):
+    """The metrics the report gives for every closed-loop run (angles in degrees).
+
+    ``x`` and ``u``: the trolley's position and the demand along one axis (the sum of the others' is not
+    taken); ``swing``: ``{name: angle}``, each angle's figures named after it (``max_theta1_deg``).
+    """
     def deg(value):
         return math.degrees(value) if math.isfinite(value) else None
 
-    settle_05 = settling_time(t, [theta1, theta2], math.radians(0.5))
-    settle_01 = settling_time(t, [theta1, theta2], math.radians(0.1))
-    finite = np.isfinite(theta1) & np.isfinite(theta2)
-    corr = (float(np.corrcoef(theta1, theta2)[0, 1])
-            if completed and finite.all() and np.std(theta1) > 0 and np.std(theta2) > 0 else None)
-    return {
-        "outcome": classify(t, theta1, theta2, completed),
+    angles = list(swing.values())
+    first, second = (list(swing) + [None])[:2]
+    settle_05 = settling_time(t, angles, math.radians(0.5))
+    settle_01 = settling_time(t, angles, math.radians(0.1))
+    figures = {
+        "outcome": classify(t, angles, completed),
         "completed": completed,
         "end_time_s": float(t[-1]),
         "settling_0.5deg_s": settle_05,
         "settling_0.1deg_s": settle_01,
-        "max_theta1_deg": deg(peak_abs(theta1)),
-        "max_theta2_deg": deg(peak_abs(theta2)),
-        "rms_theta1_deg": deg(rms(theta1)),
-        "corr_theta1_theta2": corr,
-        "residual_after_15s_deg": (deg(max(peak_abs(theta1[t >= 15]), peak_abs(theta2[t >= 15])))
-                                   if t[-1] >= 15 else None),
+        **{f"max_{name}_deg": deg(peak_abs(angle)) for name, angle in swing.items()},
+        f"rms_{first}_deg": deg(rms(swing[first])),
+    }
+    if second is not None:
+        a, b = swing[first], swing[second]
+        finite = np.isfinite(a) & np.isfinite(b)
+        varies = completed and finite.all() and np.std(a) > 0 and np.std(b) > 0
+        figures[f"corr_{first}_{second}"] = float(np.corrcoef(a, b)[0, 1]) if varies else None
+    figures.update({
+        "residual_after_15s_deg": (deg(max(peak_abs(angle[t >= 15]) for angle in angles)) if t[-1] >= 15 else None),
         "trolley_excursion_m": _finite(peak_abs(x - x[0])),
         "trolley_final_m": _finite(float(x[-1])),
         "peak_abs_u": _finite(peak_abs(u)),
-    }
+    })
+    return figures
 
 
-def move_metrics(t, x, dx, theta1, theta2, u, x_d, residual_from=None, position_band=0.005,
+def move_metrics(t, x, dx, swing, u, x_d, residual_from=None, position_band=0.005,
                  angle_band=ARRIVAL_ANGLE, bounds=None):
     """The figures of a move to (or regulation at) ``x_d``, angles in degrees.
 
     Parameters
     ----------
+    x, dx, u : array or sequence of arrays
+        The trolley's position and velocity and the demand, one array per axis (one array: one axis).
+    swing : sequence of arrays
+        The swing angles [rad] (the planar crane: theta1 and theta2).
+    x_d : float or sequence of float
+        The target, one per axis; on two axes the position error is the distance in the plane.
     residual_from : float, optional
         Start [s] of the window of the residual swing, which the task fixes (for a move: the planned
         move's end plus one slow swing period); by default the last quarter of the run.
     bounds : dict, optional
         ``u_max`` [m/s2], ``v_max`` [m/s], ``x_min``, ``x_max`` [m] (any of them): the bounds checked at
-        every sample; a missing one is not checked.
+        every sample, on every axis; a missing one is not checked.
 
     Returns
     -------
     dict
         ``arrival_s``: from when on the trolley stays within ``position_band`` of
-        ``x_d`` and both angles within ``angle_band`` (None: never);
-        ``residual_deg``: the largest swing (either angle) from ``residual_from`` to the end, as
+        ``x_d`` and every angle within ``angle_band`` (None: never);
+        ``residual_deg``: the largest swing (any angle) from ``residual_from`` to the end, as
         measured (None: the run ended before the window);
         ``settling_0.5deg_s``, ``settling_0.1deg_s``: the angles alone;
         ``position_1cm_s``: the trolley alone, within 1 cm; ``overshoot_m``: the
         farthest the trolley went past ``x_d`` (in the direction of the move);
-        ``final_error_m``; ``peak_abs_u``, ``peak_abs_v``; ``effort``: the
-        integral of u^2 with u held over each step [m2/s3]; ``end_swing_deg``: the
+        ``final_error_m``; ``peak_abs_u``, ``peak_abs_v`` (of any axis); ``effort``: the
+        integral of u^2 (summed over the axes) with u held over each step [m2/s3]; ``end_swing_deg``: the
         largest swing over the last quarter of the run (what is left of the swing);
-        ``peak_swing_deg``: the largest swing of the run; ``ise_swing_deg2s``: the integral of
-        theta1^2 + theta2^2 (trapezoidal) [deg2 s]; ``rms_swing_deg``: its mean over the run, square-rooted;
-        ``u_total_variation``: the sum of |u_k - u_(k-1)| [m/s2] (how much the command chatters);
-        ``bounds_held``: every bound held at every sample (None: no bounds given); ``bounds_broken``:
-        the bounds that did not ("" when all held), each within :data:`BOUND_TOLERANCE` of its value.
+        ``peak_swing_deg``: the largest swing of the run; ``ise_swing_deg2s``: the integral of the
+        angles' squares summed (theta1^2 + theta2^2, trapezoidal) [deg2 s]; ``rms_swing_deg``: its mean over
+        the run, square-rooted; ``u_total_variation``: the sum of |u_k - u_(k-1)| [m/s2] (how much the
+        command chatters, summed over the axes); ``bounds_held``: every bound held at every sample (None: no
+        bounds given); ``bounds_broken``: the bounds that did not ("" when all held), each within
+        :data:`BOUND_TOLERANCE` of its value.
     """
-    arrival = settling_time(t, [x - x_d, theta1 / angle_band * position_band, theta2 / angle_band * position_band],
-                            position_band)
+    xs, dxs, us, targets = _axes(x), _axes(dx), _axes(u), list(np.atleast_1d(x_d).astype(float))
+    swing = list(swing)
+    error = _distance([p - d for p, d in zip(xs, targets)])
+    arrival = settling_time(t, [error] + [angle / angle_band * position_band for angle in swing], position_band)
     if residual_from is None:
         residual_from = t[0] + 0.75 * (t[-1] - t[0])
     window = t >= residual_from
     last = t >= t[0] + 0.75 * (t[-1] - t[0])
-    direction = 1.0 if x_d >= x[0] else -1.0
-    ise = math.degrees(math.degrees(_trapezoid(np.square(theta1) + np.square(theta2), t)))
+    squares = np.square(swing[0])
+    for angle in swing[1:]:
+        squares = squares + np.square(angle)
+    ise = math.degrees(math.degrees(_trapezoid(squares, t)))
     duration = float(t[-1] - t[0])
     figures = {
         "arrival_s": arrival,
-        "residual_deg": swing_deg(theta1[window], theta2[window]) if window.any() else None,
-        "settling_0.5deg_s": settling_time(t, [theta1, theta2], math.radians(0.5)),
-        "settling_0.1deg_s": settling_time(t, [theta1, theta2], math.radians(0.1)),
-        "position_1cm_s": settling_time(t, [x - x_d], 0.01),
-        "overshoot_m": max(0.0, float(np.max(direction * (x - x_d)))),
-        "final_error_m": abs(float(x[-1]) - x_d),
-        "peak_abs_u": peak_abs(u),
-        "peak_abs_v": peak_abs(dx),
-        "effort": float(np.sum(np.square(u[:-1]) * np.diff(t))),
-        "end_swing_deg": swing_deg(theta1[last], theta2[last]),
-        "peak_swing_deg": swing_deg(theta1, theta2),
+        "residual_deg": swing_deg(angle[window] for angle in swing) if window.any() else None,
+        "settling_0.5deg_s": settling_time(t, swing, math.radians(0.5)),
+        "settling_0.1deg_s": settling_time(t, swing, math.radians(0.1)),
+        "position_1cm_s": settling_time(t, [error], 0.01),
+        "overshoot_m": max(0.0, float(np.max(_along_move(xs, targets)))),
+        "final_error_m": abs(float(_distance([p[-1:] - d for p, d in zip(xs, targets)])[0])),
+        "peak_abs_u": max(peak_abs(v) for v in us),
+        "peak_abs_v": max(peak_abs(v) for v in dxs),
+        "effort": sum(float(np.sum(np.square(v[:-1]) * np.diff(t))) for v in us),
+        "end_swing_deg": swing_deg(angle[last] for angle in swing),
+        "peak_swing_deg": swing_deg(swing),
         "ise_swing_deg2s": _finite(ise),
         "rms_swing_deg": _finite(math.sqrt(ise / duration)) if duration > 0 else None,
-        "u_total_variation": _finite(float(np.sum(np.abs(np.diff(u))))),
+        "u_total_variation": _finite(sum(float(np.sum(np.abs(np.diff(v)))) for v in us)),
     }
-    figures.update(bounds_check(x, dx, u, bounds))
+    figures.update(bounds_check(xs, dxs, us, bounds))
     return figures
 
 
-def swing_deg(theta1, theta2):
-    """The largest swing of either angle [deg]."""
-    return math.degrees(max(peak_abs(theta1), peak_abs(theta2)))
+def _axes(values):
+    """One array per axis: a single array is one axis."""
+    return [np.asarray(values)] if np.ndim(values) == 1 else [np.asarray(v) for v in values]
+
+
+def _distance(errors):
+    """The position error: on one axis the signed error itself (its size is what the bands take), on more the
+    distance in the plane."""
+    return errors[0] if len(errors) == 1 else np.sqrt(sum(np.square(e) for e in errors))
+
+
+def _along_move(xs, targets):
+    """How far past the target the trolley is, along the direction of the move (negative: short of it)."""
+    if len(xs) == 1:
+        direction = 1.0 if targets[0] >= xs[0][0] else -1.0
+        return direction * (xs[0] - targets[0])
+    start = [p[0] for p in xs]
+    length = math.hypot(*(d - s for d, s in zip(targets, start)))
+    if length == 0:
+        return _distance([p - d for p, d in zip(xs, targets)])
+    return sum((p - d) * ((d - s) / length) for p, d, s in zip(xs, targets, start))
+
+
+def swing_deg(swing):
+    """The largest swing of any angle [deg]."""
+    return math.degrees(max(peak_abs(angle) for angle in swing))
 
 
 def bounds_check(x, dx, u, bounds):
-    """``{"bounds_held": bool, "bounds_broken": str}`` of the bounds given (see :func:`move_metrics`).
+    """``{"bounds_held": bool, "bounds_broken": str}`` of the bounds given (see :func:`move_metrics`), on every
+    axis (``x``, ``dx``, ``u``: an array, or one per axis).
 
     A bound holds when no sample passes it by more than :data:`BOUND_TOLERANCE` of its size; a
     non-finite sample breaks every bound on it.
     """
     if not bounds:
         return {"bounds_held": None, "bounds_broken": None}
+    xs, dxs, us = _axes(x), _axes(dx), _axes(u)
 
     def beyond(extreme, bound, sign):  # np.max/np.min give nan for a non-finite run: never within
         return not sign * extreme <= sign * bound + BOUND_TOLERANCE * max(abs(bound), 1.0)
 
-    checks = {"|u|": ("u_max", lambda b: beyond(np.max(np.abs(u)), b, 1)),
-              "|v|": ("v_max", lambda b: beyond(np.max(np.abs(dx)), b, 1)),
-              "x_min": ("x_min", lambda b: beyond(np.min(x), b, -1)),
-              "x_max": ("x_max", lambda b: beyond(np.max(x), b, 1))}
+    checks = {"|u|": ("u_max", lambda b: any(beyond(np.max(np.abs(v)), b, 1) for v in us)),
+              "|v|": ("v_max", lambda b: any(beyond(np.max(np.abs(v)), b, 1) for v in dxs)),
+              "x_min": ("x_min", lambda b: any(beyond(np.min(v), b, -1) for v in xs)),
+              "x_max": ("x_max", lambda b: any(beyond(np.max(v), b, 1) for v in xs))}
     broken = [name for name, (key, check) in checks.items()
               if key in bounds and math.isfinite(bounds[key]) and check(bounds[key])]
     return {"bounds_held": not broken, "bounds_broken": ", ".join(broken)}

@@ -2,7 +2,7 @@
 
 import math
 
-from .metrics import crane_signals, u_column
+from .metrics import crane_signals, demand_columns
 
 MAX_PANELS = 8
 
@@ -25,11 +25,26 @@ def save(fig, path, dpi=110):
     return path
 
 
-def plot_overlay(runs, path, title=""):
-    """Trolley position, both swing angles and u of several crane runs on shared axes, to a PNG.
+def panels_of(s):
+    """``[(label, values)]`` of a crane's signals (:func:`~.metrics.crane_signals`): each axis's position [m], then
+    each swing angle [deg], labelled from the plant's variable descriptions (``hook swing angle theta1 [deg]``)."""
+    described = {v.name: v.description for v in s["plant"].variables}
 
-    ``runs`` is ``{label: columns}``; each run needs an instance with outputs ``x``, ``theta1``, ``theta2``.
-    The ``u`` panel shows the runs that record a demanded ``u`` (none: no panel), each labelled with its
+    def words(name):  # the description up to its qualifiers: "hook swing angle from vertical" -> "hook swing angle"
+        return described[name].split(" from ")[0].split(",")[0]
+
+    crane = s["crane"]
+    positions = [(f"{words(a.position)} {a.position} [m]", values) for a, values in zip(crane.axes, s["position"])]
+    return positions + [(f"{words(name)} {name} [deg]", [math.degrees(v) for v in values])
+                        for name, values in s["swing"].items()]
+
+
+def plot_overlay(runs, path, title=""):
+    """Trolley position, the swing angles and u of several runs of one crane on shared axes, to a PNG.
+
+    ``runs`` is ``{label: columns}``; each run needs a plant's outputs (:func:`~.metrics.crane_signals`), and
+    the panels are the first run's (:func:`panels_of`). The ``u`` panel shows the runs that record a demanded
+    ``u`` (none: no panel), each labelled with its
     peak ``|u|``; where one run's peak is over 20 times another's, its axis is symmetric-logarithmic
     (linear within the smallest peak), so that every run's ``u`` stays readable. Without ``title`` the
     runs' labels are the title.
@@ -42,29 +57,32 @@ def plot_overlay(runs, path, title=""):
     plt = pyplot()
 
 
-    demanded = {label: u_column(columns) for label, columns in runs.items()}
-    panels = 4 if any(demanded.values()) else 3
-    fig, axes = plt.subplots(panels, 1, sharex=True, figsize=(9, 2.2 * panels))
+    demanded = {label: any(demand_columns(columns)) for label, columns in runs.items()}
+    signals = {label: crane_signals(columns) for label, columns in runs.items()}
+    first = next(iter(signals.values()))
+    rows = panels_of(first)
+    demand = len(rows) if any(demanded.values()) else None
+    fig, axes = plt.subplots(len(rows) + (demand is not None), 1, sharex=True,
+                             figsize=(9, 2.2 * (len(rows) + (demand is not None))))
     peaks = {}
-    for label, columns in runs.items():
-        s = crane_signals(columns)
+    for label, s in signals.items():
         if demanded[label]:
-            peaks[label] = float(abs(s["u"]).max())
+            peaks[label] = max(float(abs(u).max()) for u in s["demand"])
             label_u = f"{label} (peak |u| {peaks[label]:.3g} m/s2)"
         else:
-            label_u = f"{label} (no u recorded)" if panels == 4 else label
-        axes[0].plot(s["time"], s["x"], lw=1.3, label=label_u)
-        axes[1].plot(s["time"], [math.degrees(v) for v in s["theta1"]], lw=1.3)
-        axes[2].plot(s["time"], [math.degrees(v) for v in s["theta2"]], lw=1.3)
+            label_u = f"{label} (no u recorded)" if demand is not None else label
+        for i, (_, values) in enumerate(panels_of(s)):
+            axes[i].plot(s["time"], values, lw=1.3, label=label_u if i == 0 else None)
         if demanded[label]:
-            axes[3].plot(s["time"], s["u"], lw=1.3)
-        elif panels == 4:
-            axes[3].plot([], [])  # keep each run's colour in every panel
-    labels = ["trolley x [m]", "hook angle theta1 [deg]", "payload angle theta2 [deg]", "demanded u [m/s2]"]
+            for u in s["demand"]:
+                axes[demand].plot(s["time"], u, lw=1.3)
+        elif demand is not None:
+            axes[demand].plot([], [])  # keep each run's colour in every panel
+    labels = [label for label, _ in rows] + ["demanded " + ", ".join(first["crane"].demands) + " [m/s2]"]
     nonzero = [p for p in peaks.values() if p > 0]
     if len(nonzero) > 1 and max(nonzero) > 20 * min(nonzero):
-        axes[3].set_yscale("symlog", linthresh=min(nonzero))
-        labels[3] = f"demanded u [m/s2]\n(symlog, linear within +-{min(nonzero):.3g})"
+        axes[demand].set_yscale("symlog", linthresh=min(nonzero))
+        labels[demand] += f"\n(symlog, linear within +-{min(nonzero):.3g})"
     for ax, label in zip(axes, labels):
         ax.set_ylabel(label)
         ax.grid(True, alpha=0.3)
@@ -81,10 +99,10 @@ def plot_overlay(runs, path, title=""):
 def plot_run(columns, path, title=""):
     """Plot a run of any system to a PNG.
 
-    A run with a crane (some instance outputs ``x``, ``theta1``, ``theta2``)
-    shows trolley position, both swing angles and ``u`` if some other instance
-    gives it; any other run shows its outputs, one panel each (the first
-    :data:`MAX_PANELS`).
+    A run with a crane (some instance has a registered plant's outputs) shows
+    the trolley's position, the swing angles (:func:`panels_of`) and the demands
+    if some other instance gives them; any other run shows its outputs, one
+    panel each (the first :data:`MAX_PANELS`).
 
     Parameters
     ----------
@@ -97,11 +115,11 @@ def plot_run(columns, path, title=""):
     t = columns["time"]
     try:
         s = crane_signals(columns)
-        panels = [("trolley x [m]", s["x"], None), ("theta1 [deg]", [math.degrees(v) for v in s["theta1"]], None),
-                  ("theta2 [deg]", [math.degrees(v) for v in s["theta2"]], "tab:orange")]
+        panels = [(label, values, color) for (label, values), color in
+                  zip(panels_of(s), [None] * len(s["position"]) + ["tab:blue", "tab:orange"] * len(s["swing"]))]
         drive = [values for name, values in columns.items() if name.endswith(".ddx")]
-        if any(name == "u" or name.endswith(".u") for name in columns):
-            panels.append(("u [m/s2]", s["u"], "tab:red"))
+        if any(demand_columns(columns)):
+            panels += [(f"{name} [m/s2]", u, "tab:red") for name, u in zip(s["crane"].demands, s["demand"])]
         elif drive and drive[0].any():  # no controller: the plant's own record of its acceleration
             panels.append(("trolley acceleration [m/s2]", drive[0], "tab:red"))
         hoisted = [values for name, values in columns.items()

@@ -35,15 +35,16 @@ def run_case(case, fmu_dir, csv_dir):
     every = max(1, round(case.output_interval / case.step))
     write_csv(Path(csv_dir) / f"{case.name}.csv", columns, every)
     s = metrics.crane_signals(columns)
+    signals = {"time": s["time"], "x": s["position"][0], **s["swing"], "u": s["demand"][0]}
     result = {"case": case, "error": error, "completed": error is None}
     if case.form is None:
-        result["metrics"] = free_swing_metrics(s["time"], s["theta1"], s["theta2"],
+        result["metrics"] = free_swing_metrics(s["time"], signals["theta1"], signals["theta2"],
                                                case.plant.get("theta1_0", math.pi / 18))
     else:
-        result["metrics"] = metrics.closed_loop_metrics(s["time"], s["x"], s["theta1"], s["theta2"], s["u"],
+        result["metrics"] = metrics.closed_loop_metrics(s["time"], signals["x"], s["swing"], signals["u"],
                                                         error is None)
     keep = ["time", "x", "theta1", "theta2"] + (["u"] if case.form else [])
-    result["signals"] = {k: s[k][::every].tolist() for k in keep}
+    result["signals"] = {k: signals[k][::every].tolist() for k in keep}
     return result
 
 

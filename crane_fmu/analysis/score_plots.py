@@ -16,8 +16,10 @@ import numpy as np
 
 from crane_fmu import components
 
+from .metrics import find_crane
 from .plots import pyplot
-from .scoreboard import PAIRED, SCENARIOS, board_statistics, not_applicable, summarise
+from .ranking import board_statistics, not_applicable, summarise
+from .scenarios import paired, scenarios
 
 COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink", "tab:gray",
            "tab:olive", "tab:cyan")
@@ -62,8 +64,11 @@ def plot_runs(rows, scenario, path, users=()):
         return None
     plt = pyplot()
     names = [r["controller"] for r in runs]
-    signals = (("x", "trolley x [m]", 1.0), ("theta1", "hook theta1 [deg]", 180 / math.pi),
-               ("theta2", "payload theta2 [deg]", 180 / math.pi), ("u", "demanded u [m/s2]", 1.0))
+    crane = find_crane(runs[0]["signals"])[1].crane
+    swing = list(crane.swing)
+    signals = tuple((a.position, f"trolley {a.position} [m]", 1.0) for a in crane.axes) + tuple(
+        (name, f"{name} [deg]", 180 / math.pi) for name in swing) + tuple(
+        (name, f"demanded {name} [m/s2]", 1.0) for name in crane.demands)
     fig, axes = plt.subplots(len(signals), len(runs), sharex=True, sharey="row", squeeze=False,
                              figsize=(2.6 * len(runs) + 1.2, 7.5), layout="constrained")
     for j, r in enumerate(runs):
@@ -84,13 +89,15 @@ def plot_runs(rows, scenario, path, users=()):
         title = _label(r["controller"], users) + ("" if r["status"] == "ok" else " (failed)")
         axes[0][j].set_title(title, fontsize=9, fontweight="bold" if mine else "normal", color=c)
         axes[-1][j].set_xlabel("time [s]", fontsize=8)
-    finite = [v for r in runs for k in ("theta1", "theta2") for v in np.degrees(r["signals"][k]) if math.isfinite(v)]
-    limit = min(max(abs(min(finite)), abs(max(finite)), 1.0) * 1.1, 90.0)  # both angles share one scale
-    for row in (1, 2):
+    finite = [v for r in runs for k in swing for v in np.degrees(r["signals"][k]) if math.isfinite(v)]
+    limit = min(max(abs(min(finite)), abs(max(finite)), 1.0) * 1.1, 90.0)  # the angles share one scale
+    first = len(crane.axes)
+    for row in range(first, first + len(swing)):
         axes[row][0].set_ylim(-limit, limit)
-    axes[3][0].set_ylim(-3, 3)  # the drive gives at most 2 m/s2; larger demands are clipped in the picture
+    for row in range(first + len(swing), len(signals)):
+        axes[row][0].set_ylim(-3, 3)  # the drive gives at most 2 m/s2; larger demands are clipped in the picture
     quick = " (QUICK board)" if any(r.get("quick") for r in rows) else ""
-    fig.suptitle(f"{scenario}: {SCENARIOS[scenario].title}{quick}", fontsize=10)
+    fig.suptitle(f"{scenario}: {scenarios()[scenario].title}{quick}", fontsize=10)
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return path
@@ -129,21 +136,21 @@ def summary_figure(rows, users=(), stats=None):
 
     plt = pyplot()
     stats = board_statistics(rows) if stats is None else stats
-    scenarios = [s for s in SCENARIOS if summarise(rows, s) or not_applicable(rows, s)]
+    shown = [s for s in scenarios() if summarise(rows, s) or not_applicable(rows, s)]
     names = sorted({r["controller"] for r in rows})
-    columns = min(4, len(scenarios))
-    grid = math.ceil(len(scenarios) / columns)
+    columns = min(4, len(shown))
+    grid = math.ceil(len(shown) / columns)
     fig, axes = plt.subplots(grid, columns, figsize=(3.6 * columns, 0.45 * len(names) * grid + 1.6 * grid + 1.2),
                              squeeze=False, layout="constrained")
-    for ax in axes.flat[len(scenarios):]:
+    for ax in axes.flat[len(shown):]:
         ax.set_visible(False)
-    for ax, sid in zip(axes.flat, scenarios):
+    for ax, sid in zip(axes.flat, shown):
         lines = {line["controller"]: line for line in summarise(rows, sid)}
-        key = SCENARIOS[sid].rank_by
+        key = scenarios()[sid].rank_by
         unit = "deg" if key.endswith("_deg") else "s"
-        limit = next((t.limit for t in SCENARIOS[sid].targets if t.metric == key), None)
-        paired = sid in stats
-        figures = {n: _ranking_figure(line, key, stats[sid]["describe"][n] if paired else None)
+        limit = next((t.limit for t in scenarios()[sid].targets if t.metric == key), None)
+        on_design = sid in stats
+        figures = {n: _ranking_figure(line, key, stats[sid]["describe"][n] if on_design else None)
                    for n, line in lines.items()}
         finite = [v for f in figures.values() if f for v in f if v is not None]
         bars = [f[0] for f in figures.values() if f and f[0] is not None]
@@ -187,7 +194,7 @@ def summary_figure(rows, users=(), stats=None):
         ax.set_yticks(range(len(names)), [_label(n, users) for n in names], fontsize=8)
         for tick, name in zip(ax.get_yticklabels(), names):
             tick.set_fontweight("bold" if name in users else "normal")
-        what = "median, 95 % interval, p90" if paired else "worst case"
+        what = "median, 95 % interval, p90" if on_design else "worst case"
         target = "" if limit is None else f"; target <= {limit:g}"
         ax.set_title(f"{sid}: {key} [{unit}]\n{what}{target}", fontsize=8)
         ax.tick_params(axis="x", labelsize=7)
@@ -202,7 +209,7 @@ def summary_figure(rows, users=(), stats=None):
     fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 4), fontsize=8, frameon=False)
     quick = any(r.get("quick") for r in rows)
     fig.suptitle(("QUICK board: " if quick else "") + "each scenario's ranking figure; lower is better; the rank "
-                 "right of each bar (= a tie); " + ", ".join(s for s in PAIRED if s in scenarios) + " on the paired "
+                 "right of each bar (= a tie); " + ", ".join(s for s in paired() if s in shown) + " on the paired "
                  "design", fontsize=10)
     return fig
 
@@ -264,11 +271,24 @@ def _drawn_by():
     return code_key(), matplotlib.__version__, PIL.__version__
 
 
+def _animated(crane):
+    """What an animation draws of a crane: the first axis's position, the hook's and the load's positions (none:
+    a crane without them is not animated)."""
+    return (crane.axes[0].position, *crane.hook, *crane.load) if crane.hook and crane.load else ()
+
+
+def animation_needs(columns):
+    """What a recorded run misses to be animated (empty: nothing): a registered plant's outputs that
+    :func:`_animated` names, of one instance."""
+    return [] if find_crane(columns, _animated)[1] is not None else ["a plant's outputs"]
+
+
 def animate(signals, path, title="", fps=15, progress=False):
     """An animation of the crane: rail, trolley, both cables, hook and payload, with the time.
 
-    ``signals`` holds ``time`` and the plant's ``x``, ``x1``, ``y1``, ``x2``, ``y2`` (any
-    instance prefix). Written as GIF (pillow), or MP4 when the path ends in .mp4 (needs ffmpeg).
+    ``signals`` holds ``time`` and the plant's outputs (any instance prefix) that its roles name: the first axis's
+    position, the hook's and the load's positions (a side view: their first and last coordinates). Written as
+    GIF (pillow), or MP4 when the path ends in .mp4 (needs ffmpeg).
 
     Parameters
     ----------
@@ -292,7 +312,9 @@ def animate(signals, path, title="", fps=15, progress=False):
     def column(name):
         return np.asarray(next(v for k, v in signals.items() if k == name or k.endswith("." + name)))
 
-    t, x, x1, y1, x2, y2 = (column(n) for n in ("time", "x", "x1", "y1", "x2", "y2"))
+    crane = find_crane(signals, _animated)[1].crane
+    names = ("time", crane.axes[0].position, crane.hook[0], crane.hook[-1], crane.load[0], crane.load[-1])
+    t, x, x1, y1, x2, y2 = (column(n) for n in names)
     delay = frame_delay(fps)
     count = int(math.floor((t[-1] - t[0]) / delay + 1e-9)) + 1
     frames = np.searchsorted(t, t[0] + delay * np.arange(count) + 1e-9, side="right") - 1
@@ -379,7 +401,7 @@ def animate_all(rows, scenario, out_dir, fps=15, store=None):
     drawn = json.loads(ledger.read_text()) if ledger.exists() else {}
     paths = []
     for r in sorted(_nominal(rows, scenario), key=lambda r: r["controller"]):
-        if "x2" not in r["signals"]:
+        if animation_needs(r["signals"]):
             continue
         title = f"{scenario}, {r['controller']}" + ("" if r["status"] == "ok" else " (failed)")
         key = f"{r['case_id']} {fps} fps"

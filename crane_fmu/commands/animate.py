@@ -24,7 +24,7 @@ def arguments(p):
 
 
 def run(args):
-    from crane_fmu.analysis.score_plots import animate
+    from crane_fmu.analysis.score_plots import animate, animation_needs
     from crane_fmu.cosim import read_result
 
     if Path(args.out).suffix not in (".gif", ".mp4"):
@@ -37,7 +37,7 @@ def run(args):
         columns = read_result(args.result)
     except (OSError, ValueError) as exc:
         raise UsageError(f"cannot read {args.result}: {exc}") from None
-    needed = [n for n in ("x", "x1", "y1", "x2", "y2") if not any(k == n or k.endswith("." + n) for k in columns)]
+    needed = animation_needs(columns)
     if needed:
         raise UsageError(f"{args.result} has no crane to animate: it needs the plant outputs "
                          f"{', '.join(needed)}")

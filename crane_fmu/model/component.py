@@ -71,6 +71,99 @@ class Continuous:
 
 
 @dataclass(frozen=True)
+class Axis:
+    """One driven horizontal axis of a crane: the trolley's position and velocity along it, and its demand.
+
+    A controller is told a move along the axis by a parameter ``<position>_d`` (:attr:`target`) or by a
+    planner's references ``<position>_ref``, ``d<position>_ref``, ``dd<position>_ref`` (:attr:`references`).
+    """
+
+    position: str
+    velocity: str
+    demand: str
+
+    @property
+    def target(self):
+        """The parameter that tells a controller where the load goes along this axis: ``x_d``."""
+        return self.position + "_d"
+
+    @property
+    def references(self):
+        """A planner's position, velocity and acceleration along the axis: ``x_ref``, ``dx_ref``, ``ddx_ref``."""
+        return (f"{self.position}_ref", f"d{self.position}_ref", f"dd{self.position}_ref")
+
+
+@dataclass(frozen=True)
+class Crane:
+    """What a plant is, by role: everything above the model reads these instead of the plant's names.
+
+    Attributes
+    ----------
+    state : tuple of str
+        The outputs that are the state every controller of this plant measures, in order.
+    starts : tuple of str
+        The parameters that give each state's start value, in the same order.
+    axes : tuple of Axis
+        One per driven horizontal axis.
+    swing : tuple of str
+        Outputs: angles from the vertical whose magnitude is the swing the metrics take.
+    sensed : tuple of str
+        Outputs: what a crane measures of itself (a sensor's inputs).
+    model : tuple of str
+        The parameters that define the dynamics (masses, lengths, g): the crane's own, set once for every
+        instance that models the crane (``crane.l2``).
+    hook, load : tuple of str
+        Outputs: the hook's and the load's position (horizontal coordinates, then the vertical, up positive);
+        empty for a plant that has none.
+    hoist : str, optional
+        Input: the hoist's acceleration (a plant that hoists).
+    cable : str, optional
+        Output: the main cable's length now.
+    forces : tuple of str
+        Inputs: horizontal forces on the hook and the load (wind, a push).
+    start_swing : str, optional
+        The parameter of the hook cable's start angle (a swing to regulate from; 0: from rest).
+    linearised : callable, optional
+        ``linearised({parameter: value}) -> (A, B)``: the state's ``x' = A x + B u`` at rest, ``u`` the axes'
+        demands in order (lists of rows).
+    """
+
+    state: tuple
+    starts: tuple
+    axes: tuple
+    swing: tuple
+    sensed: tuple
+    model: tuple
+    hook: tuple = ()
+    load: tuple = ()
+    hoist: str | None = None
+    cable: str | None = None
+    forces: tuple = ()
+    start_swing: str | None = None
+    linearised: Callable | None = None
+
+    @property
+    def demands(self):
+        """The inputs a controller drives, one per axis: ``("u",)``."""
+        return tuple(a.demand for a in self.axes)
+
+    def check(self, component):
+        """Raise ValueError naming a role whose variable the plant ``component`` does not have as it says."""
+        wanted = [("output", n) for n in (*self.state, *self.swing, *self.sensed, *self.hook, *self.load)]
+        wanted += [("parameter", n) for n in (*self.starts, *self.model, *filter(None, [self.start_swing]))]
+        wanted += [("input", n) for n in (*self.demands, *self.forces)] + [("output", a.position) for a in self.axes]
+        wanted += [("output", a.velocity) for a in self.axes] + ([("input", self.hoist)] if self.hoist else [])
+        wanted += [("output", self.cable)] if self.cable else []
+        for causality, name in wanted:
+            if name not in component.names(causality):
+                raise ValueError(f"{component.model_identifier}: its crane roles name {name!r}, which is no "
+                                 f"{causality} of it")
+        if len(self.starts) != len(self.state):
+            raise ValueError(f"{component.model_identifier}: a start parameter per state, got {len(self.starts)} for "
+                             f"{len(self.state)}")
+
+
+@dataclass(frozen=True)
 class Component:
     """One FMU kind.
 
@@ -117,6 +210,8 @@ class Component:
     native : str, optional
         The file of the component's C twin in ``fmu_src/models`` (``crane_plant.c``): ``crane-fmu
         build`` then builds its native FMU too, and systems of such components as one native FMU.
+    crane : Crane, optional
+        A plant's roles (:class:`Crane`): what the application layer reads of it.
     """
 
     model_identifier: str
@@ -133,6 +228,7 @@ class Component:
     depends_on: dict | None = None
     continuous: Continuous | None = None
     native: str | None = None
+    crane: Crane | None = None
 
     def __post_init__(self):
         if not self.model_identifier.isidentifier():
@@ -149,6 +245,10 @@ class Component:
             if v.type == "Real" and v.unit not in BASE_UNITS:
                 raise ValueError(f"{self.model_identifier}.{v.name}: unit must be one of tables.BASE_UNITS "
                                  f"({', '.join(BASE_UNITS)}), got {v.unit!r}")
+        if self.crane is not None:
+            if self.role != "plant":
+                raise ValueError(f"{self.model_identifier}: only a plant has crane roles, this is a {self.role}")
+            self.crane.check(self)
         if (self.initial_state is None) != (self.update is None):
             raise ValueError(f"{self.model_identifier}: a state needs both initial_state and update")
         if self.depends_on is not None:

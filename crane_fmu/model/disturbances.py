@@ -36,7 +36,7 @@ GUST = Component(
      parameter("duration", 0.5, "s", "how long it lasts"),
      output("F1", "N", "horizontal force on the hook"),
      output("F2", "N", "horizontal force on the payload")),
-    _gust_configure, lambda config, state, inputs: gust(config, state[0]),
+    _gust_configure, lambda config, state, inputs: gust(config, *state),
     initial_state=lambda config: (0.0,), update=lambda config, state, inputs, time, step: (time + step,),
     native="gust.c")
 

@@ -112,6 +112,9 @@ def _predict(c, s, u):
     return [linalg.dot(row, s) + b * u for row, b in zip(c.ad, c.bd)]
 
 
+ESTIMATE = 3  # the state's last entry: the estimate the outputs show
+
+
 def initial_state(config):
     """``(started, filtered-time prediction, the last delay inputs u, the output estimate)``."""
     zero = [0.0] * 6
@@ -162,5 +165,5 @@ COMPONENT = Component(
     "StateEstimator", "estimator",
     "Discrete Kalman filter of the crane linearised about rest, designed from its parameters at initialisation: "
     "the controllers' inputs x, dx, theta1, dtheta1, theta2, dtheta2 from x_meas, theta1_meas (theta2_meas) and u",
-    VARIABLES, configure, lambda config, state, inputs: tuple(state[3]),
+    VARIABLES, configure, lambda config, state, inputs: tuple(state[ESTIMATE]),
     initial_state=initial_state, update=update, report=report, native="estimator.c")

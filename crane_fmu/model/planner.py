@@ -190,6 +190,6 @@ COMPONENT = Component(
     "TrajectoryPlanner", "planner",
     "Input-shaped rest-to-rest trolley moves (ZV, ZVD, EI on both swing modes) within u_max and v_max; "
     "outputs: the reference x_ref, dx_ref, ddx_ref and the swing it induces",
-    VARIABLES, configure, lambda config, state, inputs: reference(config, state[0]),
+    VARIABLES, configure, lambda config, state, inputs: reference(config, *state),
     initial_state=lambda config: (0.0,), update=lambda config, state, inputs, time, step: (time + step,),
     report=report, default_experiment=(0.0, 10.0, 1e-3), native="planner.c")  # the transport system's move

@@ -11,7 +11,7 @@ import math
 from collections import namedtuple
 
 from . import plant_continuous
-from .component import Component, Continuous, Discard, Step
+from .component import Axis, Component, Continuous, Crane, Discard, Step
 from .limits import NO_LIMIT, unlimited
 from .linalg import total
 from .parameters import finite, plant_parameters, positive
@@ -247,10 +247,31 @@ CONTINUOUS = Continuous(
     free_mode=plant_continuous.FREE,
 )
 
+def linearised(values):
+    """The state ``(x, dx, theta1, dtheta1, theta2, dtheta2)`` at rest linearised: ``(A, B)``, input ``u``.
+
+    Notes
+    -----
+    The swing rows are :func:`.plant_equations.linearisation`'s ``q'' = -W q - w u``; the trolley's ``x'' = u``.
+    """
+    big_w, small_w = linearisation(plant_parameters(values))
+    a = [[0.0] * 6 for _ in range(6)]
+    a[0][1] = a[2][3] = a[4][5] = 1.0
+    for row, i in ((3, 0), (5, 1)):
+        a[row][2], a[row][4] = -big_w[i][0], -big_w[i][1]
+    return a, [[0.0], [1.0], [0.0], [-small_w[0]], [0.0], [-small_w[1]]]
+
+
+CRANE = Crane(
+    state=("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2"), starts=INITIAL_STATE, axes=(Axis("x", "dx", "u"),),
+    swing=("theta1", "theta2"), sensed=("x", "theta1", "theta2"), model=tuple(v.name for v in PLANT_MODEL),
+    hook=("x1", "y1"), load=("x2", "y2"), hoist="hoist", cable="l1_now", forces=("F1", "F2"),
+    start_swing="theta1_0", linearised=linearised)
+
 COMPONENT = Component(
     "CranePlant", "plant",
     "Overhead crane with a double-pendulum payload (hook m1 on cable l1, payload m2 on cable l2); "
     "inputs: trolley and hoist accelerations, horizontal forces; fixed-step RK4 inside doStep",
     VARIABLES, configure, _outputs,
     initial_state=lambda config: config.state0, update=update, continuous=CONTINUOUS,
-    native="crane_plant.c")
+    native="crane_plant.c", crane=CRANE)

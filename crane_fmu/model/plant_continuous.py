@@ -25,6 +25,7 @@ from .plant_limits import reached_limit
 DRIVE = DL1 + 1  # after the swing and hoist state: the drive's acceleration (moves only with a lag tau > 0)
 STATES = ("x", "dx", "theta1", "dtheta1", "theta2", "dtheta2", "l1_now", "dl1_now", "drive")
 INPUTS = ("u", "hoist", "F1", "F2")
+IN = namedtuple("Inputs", INPUTS)(*range(len(INPUTS)))  # their positions: inputs[IN.hoist]
 INDICATORS = ("x_min", "x_max", "-v_max", "v_max", "l1_min", "l1_max", "-dl1_max", "dl1_max")
 
 Mode = namedtuple("Mode", "speed cable hoist")
@@ -55,8 +56,8 @@ def _demand(config, u):
 
 def _trolley(config, state, inputs, seed):
     """The drive's output (the trolley's acceleration before the speed limit), its rate, and their derivatives."""
-    demand, gain = _demand(config, inputs[0])
-    t_demand = gain * seed[1][0]
+    demand, gain = _demand(config, inputs[IN.u])
+    t_demand = gain * seed[1][IN.u]
     if config.tau > 0:  # first-order lag: drive' = (demand - drive) / tau
         drive, t_drive = state[DRIVE], seed[0][DRIVE]
         return drive, t_drive, (demand - drive) / config.tau, (t_demand - t_drive) / config.tau
@@ -159,7 +160,7 @@ def event_indicators(config, state, inputs, mode):
     c = config
     x, dx, l1, dl1 = state[X], state[DX], state[L1], state[DL1]
     push = _trolley(c, state, inputs, _NO_SEED)[0]
-    lift = inputs[1]
+    lift = inputs[IN.hoist]
 
     def pair(value, low, high, held, pressing):
         return (-pressing if held < 0 else _room(-value, -low)), (pressing if held > 0 else _room(value, high))
@@ -208,7 +209,7 @@ def event_update(config, state, inputs, mode, time):
     c = config
     state = list(state)
     push = _trolley(c, state, inputs, _NO_SEED)[0]
-    lift = inputs[1]
+    lift = inputs[IN.hoist]
     end = _rail_end(c, state[X], state[DX], 0.0 if mode.speed else push)
     if end is not None:
         return Event(tuple(state), mode, [], f"the trolley reached the rail end {end[0]} = {end[1]!r} m "

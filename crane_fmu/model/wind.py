@@ -72,10 +72,13 @@ def drag(half_rho_cd_area, wind, velocity):
 
 def _output(c, state, inputs):
     dx, theta1, dtheta1, theta2, dtheta2 = inputs
-    speed = c.mean + state[1]
+    speed = c.mean + state[TURBULENCE]
     v1 = dx + c.l1 * math.cos(theta1) * dtheta1  # the hook's horizontal velocity, d/dt of eq (4)
     v2 = v1 + c.l2 * math.cos(theta2) * dtheta2  # the payload's, d/dt of eq (5)
     return drag(c.drag1, speed, v1), drag(c.drag2, speed, v2), speed
+
+
+TURBULENCE = 1  # the state is (the sample number, the turbulence [m/s] there)
 
 
 def _initial_state(c):

@@ -17,7 +17,6 @@ from pathlib import Path
 
 from crane_fmu import DEFAULT_FMU_DIR, systems
 from crane_fmu.analysis import metrics
-from crane_fmu.analysis.metrics import CRANE_OUTPUTS
 from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch
 from crane_fmu.cosim import ArrayRecorder, FmiError, simulate
 from crane_fmu.cosim.system import read_fmu, settable, split_name
@@ -87,13 +86,13 @@ def run_case(case, system, settings, metric_names):
     columns = recorder.columns() if recorder.names else None
     if columns and len(columns["time"]):  # else: failed before the first communication point
         s = metrics.crane_signals(columns)
-        values = metrics.closed_loop_metrics(s["time"], s["x"], s["theta1"], s["theta2"], s["u"],
+        swing = list(s["swing"].values())
+        values = metrics.closed_loop_metrics(s["time"], s["position"][0], s["swing"], s["demand"][0],
                                              row["status"] == "ok")
         band = math.radians(settings["settling_band_deg"])
-        values["settling_band_s"] = metrics.settling_time(s["time"], [s["theta1"], s["theta2"]], band)
+        values["settling_band_s"] = metrics.settling_time(s["time"], swing, band)
         # "converges" only where the study's settling time exists too (a narrower band than 0.1 deg)
-        values["outcome"] = metrics.classify(s["time"], s["theta1"], s["theta2"], row["status"] == "ok",
-                                             min(band, metrics.SETTLED_BAND))
+        values["outcome"] = metrics.classify(s["time"], swing, row["status"] == "ok", min(band, metrics.SETTLED_BAND))
     row.update({name: values.get(name) for name in metric_names})
     row["duration_s"] = time.perf_counter() - start
     return row
@@ -163,10 +162,10 @@ def _check_names(study, system, fmu_dir):
             split_name(name, known)
         except ValueError as exc:
             raise ValueError(f"parameter {name!r}: system {system.name}: {exc}") from None
-    outputs = {name: {v.name for v in read_fmu(path).modelVariables if v.causality == "output"}
-               for name, path in fmus.items()}
-    if not any(set(CRANE_OUTPUTS) <= names for names in outputs.values()):
-        raise ValueError(f"the sweep's metrics need an instance with outputs {', '.join(CRANE_OUTPUTS)}; system "
+    outputs = {f"{name}.{v.name}": None for name, path in fmus.items() for v in read_fmu(path).modelVariables
+               if v.causality == "output"}
+    if metrics.find_crane(outputs)[0] is None:
+        raise ValueError(f"the sweep's metrics need a crane: an instance with a registered plant's outputs; system "
                          f"{system.name} has none")
     return {name: known[name.partition(".")[0]][name.partition(".")[2]][1] for name in names}
 

@@ -1,6 +1,6 @@
 """A controller FMU of your own, scored by crane-fmu compare: a template to copy.
 
-It has the controller interface (crane_fmu/analysis/scoreboard.py): the measured
+It has the planar crane's controller interface (crane_fmu/controller_interface.py): the measured
 state in, the trolley acceleration u out, the target position x_d as a parameter.
 The law is a plain state feedback, u = -k . (x - x_d, dx, theta1, dtheta1, theta2, dtheta2),
 limited to |u| <= u_max. Replace it with yours.

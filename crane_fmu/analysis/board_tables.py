@@ -1,0 +1,180 @@
+"""The board as Markdown: the summary table, a table per scenario with its targets, the paired statistics."""
+
+import math
+
+from .ranking import FIGURES, FORMAT, RULES, board_statistics, not_applicable, summarise
+from .scenarios import CASES, notes, scenarios
+from .scenarios import plants as scenario_plants
+
+
+def _cell(value, digits=2, unit=""):
+    if value is None or value == math.inf:
+        return "never" if unit == " s" else "-"  # a time not reached; a figure of a run that ended early
+    return f"{value:.{digits}f}{unit}"
+
+
+def _interval(low, high, digits):
+    return f"[{_cell(low, digits)}, {_cell(high, digits)}]".replace("-, ", "never, ").replace(", -]", ", never]")
+
+
+def _bounds(line):
+    if line["bounds_held"] is None:
+        return "-"
+    return "held" if line["bounds_held"] else f"**broken**: {line['bounds_broken']}"
+
+
+def _name(name, users):
+    return f"`{name}`" + (" (yours)" if name in users else "")
+
+
+def _scenario_label(sid, cases=CASES, quick=False):
+    """``S3 (64 cases): S2 on plants ...``; on a quick board every scenario says so: ``S1 (QUICK: 1 case): ...``."""
+    s = scenarios()[sid]
+    n = s.scope(cases)["cases"]
+    if not s.paired and not quick:
+        return f"{sid}: {s.title}"
+    return f"{sid} ({'QUICK: ' if quick else ''}{n} case{'s' if n > 1 else ''}): {s.title}"
+
+
+def _ranked_by(sid):
+    s = scenarios()[sid]
+    return f"{s.rank_by}, median, paired Wilcoxon" if s.paired else s.rank_by
+
+
+def floor_ratio(value, floor):
+    """`` (1.32x floor)``: a time as a multiple of the scenario's floor (:mod:`.floor`), or nothing."""
+    return "" if floor is None or value is None else f" ({value / floor.seconds:.2f}x floor)"
+
+
+def render_summary(rows, users=(), quick=False, cases=CASES, stats=None, floors=None):
+    """One table: per scenario the controllers by rank, with their ranking figure (the worst case, and its ratio to
+    the scenario's floor where ``floors`` gives one; on the paired design the median with its 95 % interval), the
+    targets they met and ties; then those it does not apply to."""
+    stats = board_statistics(rows) if stats is None else stats
+    floors = floors or {}
+    lines = []
+    for sid, s in scenarios().items():
+        ranked, absent = summarise(rows, sid), not_applicable(rows, sid)
+        if not ranked and not absent:
+            continue
+        digits, unit = FORMAT.get(s.rank_by, (2, " s"))
+        digits = max(digits, 3) if unit == " deg" else digits
+        cells = []
+        for line in ranked:
+            if line["failed"]:
+                figure = "failed"
+            elif sid in stats:
+                d = stats[sid]["describe"][line["controller"]][s.rank_by]
+                figure = f"median {_cell(d.median, digits, unit)} {_interval(d.median_low, d.median_high, digits)}"
+            else:
+                figure = _cell(line[s.rank_by], digits, unit) + floor_ratio(line[s.rank_by], floors.get(sid))
+            verdict = "all targets met" if all(line["targets"]) and not line["failed"] else (
+                f"{sum(line['targets'])} of {len(line['targets'])} targets met")
+            cells.append(f"{line['rank']}. {_name(line['controller'], users)}: {figure}, {verdict}"
+                         + (", tie" if line["tie"] else ""))
+        cells += [f"{_name(name, users)}: {why}" for name, why in sorted(absent.items())]
+        lines.append((sid, cells))
+    width = max(len(cells) for _, cells in lines)
+    out = ["| scenario | ranked by | " + " | ".join(["controllers by rank"] + [""] * (width - 1)) + " |",
+           "|---|---|" + "---|" * width]
+    for sid, cells in lines:
+        out.append(f"| {_scenario_label(sid, cases, quick)} | {_ranked_by(sid)} | "
+                   + " | ".join(cells + [""] * (width - len(cells))) + " |")
+    return "\n".join(out)
+
+
+def _statistics_section(sid, stats, users):
+    """Markdown of a paired scenario's statistics: each figure's median and 90th percentile per contender with
+    their intervals, and each pair's paired difference of the ranking figure with the test."""
+    describe, pairs = stats["describe"], stats["pairs"]
+    names = list(describe)
+    out = ["Over the cases: median [95 % interval]; 90th percentile [95 % interval] (bootstrap):", "",
+           "| figure | " + " | ".join(_name(n, users) for n in names) + " |", "|---|" + "---|" * len(names)]
+    for header, metric, digits, unit in FIGURES:
+        cells = []
+        for n in names:
+            d = describe[n][metric]
+            cells.append(f"{_cell(d.median, digits)} {_interval(d.median_low, d.median_high, digits)}; "
+                         f"{_cell(d.p90, digits)} {_interval(d.p90_low, d.p90_high, digits)}")
+        out.append(f"| {header} [{unit.strip()}] | " + " | ".join(cells) + " |")
+    metric = scenarios()[sid].rank_by
+    digits, unit = FORMAT[metric]
+    digits = max(digits, 3)
+    out += ["", f"Pairs, on {metric} case by case (A - B):", "",
+            "| A | B | median difference [95 % interval] | Wilcoxon p | verdict |", "|---|---|---|---|---|"]
+    for a, b, paired in pairs:
+        verdict = "tie" if paired.better == 0 else f"{_name(a if paired.better < 0 else b, users)} lower"
+        out.append(f"| {_name(a, users)} | {_name(b, users)} | {_cell(paired.difference, digits, unit)} "
+                   f"{_interval(paired.low, paired.high, digits)} | {paired.p:.3g} | {verdict} |")
+    return out + [""]
+
+
+def render(rows, contenders, quick=False, cases=CASES, provenance=None, stats=None, floors=None):
+    """scoreboard.md: per scenario a table ranked by :data:`RULES`, with each target met or missed and its source;
+    on the paired design the statistics (``stats``: :func:`board_statistics`, computed when not given); the
+    provenance of the figures.
+
+    ``floors``: ``{scenario: floor.Floor}``, the least time the crane needs there, shown with its method and as
+    each ranking figure's ratio to it.
+    """
+    from crane_fmu.analysis import metrics, statistics
+
+    users = {c.name for c in contenders if c.user}
+    stats = board_statistics(rows) if stats is None else stats
+    floors = floors or {}
+    title = "# Controller scoreboard" + (" (QUICK: fewer cases of the paired design, not the full board)"
+                                         if quick else "")
+    plants = {scenarios()[r["scenario"]].plant for r in rows}
+    about = [notes(plant, cases) for plant in scenario_plants() if plant in plants]
+    out = [title, "",
+           "Every controller on the same crane (" + "; ".join(n["crane"] for n in about) + "), through the same "
+           "master, on the same scenarios (`crane_fmu/analysis/*scenarios.py` define them and their targets). Times "
+           "are from the start of the run; *never* means not within the run. A row's figure is the worst over the "
+           "scenario's cases.", ""]
+    for n in about:
+        out += n["design"]
+    out += [f"Ranking: {RULES}.", "",
+            f"Statistics: medians and 90th percentiles are figures some case had (the smallest with at least half, "
+            f"nine tenths, of the cases at or below it); their 95 % intervals are percentile bootstraps "
+            f"(scipy.stats.bootstrap, {statistics.RESAMPLES} resamples, seed {statistics.SEED}); {statistics.RULE} "
+            "(scipy.stats.wilcoxon; each pair on its own, at 5 %).", "",
+           "Controllers: " + ", ".join(_name(c.name, users) for c in sorted(contenders, key=lambda c: c.name)), "",
+           render_summary(rows, users, quick, cases, stats, floors), ""]
+    if floors:
+        method = next(iter(floors.values())).method
+        out += [f"The floor of a scenario is the least time the crane needs for its task: {method}.", ""]
+    for sid, s in scenarios().items():
+        lines, absent = summarise(rows, sid), not_applicable(rows, sid)
+        if not lines and not absent:
+            continue
+        out += [f"## {_scenario_label(sid, cases, quick)}", "", "Targets:", ""]
+        out += [f"- {t.text} ({t.source})" for t in s.targets] + [""]
+        if sid in floors:
+            out += [f"Floor: {floors[sid].seconds:.2f} s ({floors[sid].task})", ""]
+        if lines:
+            out.append("| rank | controller | " + " | ".join(header for header, _, _, _ in FIGURES)
+                       + " | bounds | targets |")
+            out.append("|---|---|" + "---|" * (len(FIGURES) + 2))
+        for line in lines:
+            verdict = ", ".join(("met" if ok else "**missed**") for ok in line["targets"])
+            if line["failed"]:
+                verdict = f"**failed** in {line['failed']} of {line['cases']}: {line['error']}"[:300]
+            out.append(f"| {line['rank']}{' (tie)' if line['tie'] else ''} | {_name(line['controller'], users)} | "
+                       + " | ".join(_cell(line[metric], digits, unit) for _, metric, digits, unit in FIGURES)
+                       + f" | {_bounds(line)} | {verdict.replace('|', '/')} |")
+        out.append("")
+        out += [f"- {_name(name, users)}: {why}" for name, why in sorted(absent.items())] + ([""] if absent else [])
+        if sid in stats:
+            out += _statistics_section(sid, stats[sid], users)
+    out += [f"Metrics (`crane_fmu/analysis/metrics.py`, version {metrics.VERSION}): settling times are from when both "
+            "angles stay within the band; arrival is from when the trolley also stays within 5 mm of the target; the "
+            "residual swing is the largest angle (either) in a window the scenario fixes, as measured: for a move "
+            "from the planned move's end plus one period of the plant's slow swing mode, for regulation the last "
+            "quarter of the run; peak, RMS and ISE of the swing are over the whole run (RMS and ISE of theta1 and "
+            "theta2 together); overshoot is how far the trolley went past the target; effort is the integral of "
+            "u^2; peak |u| is what the controller demanded (the drive gives at most 2 m/s2); the total variation "
+            "of u is the sum of |u_k - u_(k-1)| over the communication steps (how much the command chatters); "
+            "bounds: " + "; ".join(n["bounds"] for n in about) + ", at every step (checked, not enforced).", ""]
+    if provenance:
+        out += ["## Provenance", ""] + [f"- {key}: {value}" for key, value in provenance.items()] + [""]
+    return "\n".join(out)
