@@ -128,7 +128,7 @@ def render(rows, contenders, quick=False, cases=CASES, provenance=None, stats=No
     about = [notes(plant, cases) for plant in scenario_plants() if plant in plants]
     out = [title, "",
            "Every controller on the same crane (" + "; ".join(n["crane"] for n in about) + "), through the same "
-           "master, on the same scenarios (`crane_fmu/analysis/*scenarios.py` define them and their targets). Times "
+           "master, on the same scenarios (registered with their targets: `crane_fmu/analysis/scenarios.py`). Times "
            "are from the start of the run; *never* means not within the run. A row's figure is the worst over the "
            "scenario's cases.", ""]
     for n in about:

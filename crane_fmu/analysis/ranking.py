@@ -11,8 +11,8 @@ from .scenarios import met, paired, scenarios
 
 RULES = ("a controller's rank is 1 + the number of controllers better than it in the scenario. A is better than B when "
          "B failed in a case and A did not; else when A meets more targets (in every case); else, on the paired design "
-         "(the scenarios with a plant unknown to the controller), when the two-sided Wilcoxon signed-rank test of "
-         "their paired ranking figures gives p < 0.05 with A's figures lower (cases with equal figures left out); "
+         "(" + ", ".join(paired()) + "), when the two-sided Wilcoxon signed-rank test of their paired ranking figures "
+         "gives p < 0.05 with A's figures lower (cases with equal figures left out); "
          "elsewhere when A's ranking figure (its worst case) is lower, *never* after every finite value, or, equal, "
          "when A leaves less swing over the last quarter of the run (a law that keeps swinging below one that "
          "converges slowly). Controllers of one rank tie and the board says so; they are listed by name")
