@@ -1,11 +1,11 @@
 /*
- * The StateEstimator component in C: the native twin of crane_fmu/model/estimator.py (its variables, configure()
- * rules and messages in their order, noise_model() and design(): the steady Kalman filter of the crane linearised
- * about rest, and update(): correct, then predict over the delay), registered as a component (component.h). Its
- * variables come from StateEstimator_variables.h, generated from estimator.VARIABLES. The filter is designed
- * when initialisation ends (lqr_design.c's continuous model, linalg.c's ZOH and Riccati doubling, in
- * estimator.py's order of operations). Its state is (started, s, the last delay inputs u, the estimate); the
- * outputs are the estimate, zero until the first step (no direct feedthrough).
+ * The StateEstimator component in C: the native twin of crane_fmu/model/estimator.py (its variables, configure(),
+ * noise_model() and design(): the steady Kalman filter of the crane linearised about rest, and update(): correct,
+ * then predict over the delay), registered as a component (component.h). Its variables and parameter rules come
+ * from StateEstimator_variables.h, generated from estimator.VARIABLES. The filter is designed when initialisation
+ * ends (lqr_design.c's continuous model, linalg.c's ZOH and Riccati doubling, in estimator.py's order of
+ * operations). Its state is (started, s, the last delay inputs u, the estimate); the outputs are the estimate,
+ * zero until the first step (no direct feedthrough).
  */
 #include <math.h>
 #include <stdio.h>
@@ -76,21 +76,9 @@ static const char *design(const Matrix *ad, const Matrix *qd, const double sigma
     return NULL;
 }
 
-/* estimator.configure(): the rules of the crane model, h, the noises, camera and delay, in that order and in their
-   words; then the filter. */
+/* estimator.configure(), after its RULES (the generated parameter_rules()): the filter. */
 static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
-    ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
-    if (plant != MODEL_OK) return plant;
-    static const unsigned positive[] = {VR_h, VR_sigma_x, VR_sigma_theta, VR_sigma_u, VR_sigma_swing};
-    for (unsigned i = 0; i < 5; i++) {
-        double value = values[positive[i]];
-        if (!(isfinite(value) && value > 0)) return rule(r, VARIABLE_TABLE[positive[i]].name, "> 0 and finite", value);
-    }
-    if (!(V(camera) == 0.0 || V(camera) == 1.0))
-        return rule(r, "camera", "0 (x and theta1 measured) or 1 (theta2 too)", V(camera));
     double delay = V(delay);
-    if (!(isfinite(delay) && delay == trunc(delay) && 0 <= delay && delay <= MAX_DELAY))
-        return rule(r, "delay", "a whole number of steps in [0, 100]", delay);
     PlantParameters p = {V(m1), V(m2), V(l1), V(l2), V(g)};
     Matrix ad, bd, qd;
     c->n_rows = V(camera) == 1.0 ? 3 : 2, c->rows[0] = 0, c->rows[1] = 2, c->rows[2] = 4; /* measured_rows() */
