@@ -48,6 +48,7 @@ static const char *noise_model(const PlantParameters *p, double h, double sigma_
     *bd = la_zeros(N_STATE, 1);
     for (int i = 0; i < N_STATE; i++) bd->v[i][0] = gd.v[i][0];
     double variances[3] = {square(sigma_u), square(sigma_swing), square(sigma_swing)};
+    if (isinf(variances[0]) || isinf(variances[1])) return SQUARE_OVERFLOW; /* the sigmas are finite */
     *qd = la_zeros(N_STATE, N_STATE);
     for (int i = 0; i < N_STATE; i++) {
         double weighted[3];
@@ -62,7 +63,10 @@ static const char *noise_model(const PlantParameters *p, double h, double sigma_
 static const char *design(const Matrix *ad, const Matrix *qd, const double sigmas[MAX_MEASURED], Config *c) {
     int n = c->n_rows;
     Matrix cc = la_zeros(n, N_STATE), r = la_zeros(n, n), big_p, gain_t;
-    for (int i = 0; i < n; i++) cc.v[i][c->rows[i]] = 1.0, r.v[i][i] = square(sigmas[i]);
+    for (int i = 0; i < n; i++) {
+        cc.v[i][c->rows[i]] = 1.0, r.v[i][i] = square(sigmas[i]);
+        if (isinf(r.v[i][i])) return SQUARE_OVERFLOW; /* the sigmas are finite */
+    }
     const char *error = la_dare(la_transpose(*ad), la_transpose(cc), *qd, r, &big_p);
     if (error) return error;
     Matrix pct = la_zeros(N_STATE, n), innovation = la_zeros(n, n); /* P C', C P C' + R */
