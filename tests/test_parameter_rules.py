@@ -12,7 +12,10 @@ import ast
 import ctypes
 import itertools
 import math
+import random
 import re
+import struct
+import subprocess
 
 import fmpy
 import pytest
@@ -28,9 +31,10 @@ from fmpy.fmi2 import (
 from fmpy.logging import addLoggerProxy
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from native_fmus import compiler
 
 from crane_fmu import components
-from crane_fmu.build_scripts.native import native_dir
+from crane_fmu.build_scripts.native import FOLDERS, native_dir
 from crane_fmu.model import rules
 from crane_fmu.model.component import Component
 from crane_fmu.model.tables import parameter
@@ -275,3 +279,44 @@ def test_every_rule_of_every_component_is_written_in_c_with_its_message():
                    if "MODEL_ERROR" in line]
         for rule, written in zip(component.rules, formats):
             assert written == re.sub(r"\{[^{}]*\}", "%s", rule.message.replace("%", "%%")).replace('"', '\\"')
+
+
+PRINT_REPRS = r"""
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "py_repr.h"
+
+int main(void) { /* each line of stdin a double's bits in hex: its py_repr() */
+    char line[64], out[REPR_SIZE];
+    while (fgets(line, sizeof line, stdin)) {
+        uint64_t bits = strtoull(line, NULL, 16);
+        double value;
+        memcpy(&value, &bits, sizeof value);
+        puts(py_repr(value, out));
+    }
+    return 0;
+}
+"""
+
+
+def test_the_c_messages_show_a_double_as_pythons_repr_does(tmp_path):
+    """py_repr (fmu_src/framework) against repr() at every power of two and its neighbours (where the decimal
+    rounded from a double may not read back, but its neighbour does) and at random bit patterns."""
+    (tmp_path / "main.c").write_text(PRINT_REPRS)
+    framework = FOLDERS[0]
+    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", f"-I{framework}", str(tmp_path / "main.c"),
+                    str(framework / "py_repr.c"), "-o", str(tmp_path / "reprs"), "-lm"], check=True)
+    rng = random.Random(48)
+    values = [0.0, -0.0, 5e-324, 1.7976931348623157e308, 1e16, 1e-5, 1e23, 0.1, 2.0 ** -24]
+    for e in range(-1074, 1024):
+        values += [2.0 ** e, math.nextafter(2.0 ** e, INF), math.nextafter(2.0 ** e, 0.0)]
+    values += [struct.unpack("<d", rng.getrandbits(64).to_bytes(8, "little"))[0] for _ in range(20000)]
+    values = [v for value in values if not math.isnan(value) for v in (value, -value)]
+    bits = "".join(f"{struct.unpack('<Q', struct.pack('<d', v))[0]:x}\n" for v in values)
+    shown = subprocess.run([str(tmp_path / "reprs")], input=bits, capture_output=True, text=True,
+                           check=True).stdout.splitlines()
+    assert [(repr(v), s) for v, s in zip(values, shown) if repr(v) != s] == []
+    assert len(shown) == len(values)
