@@ -12,6 +12,7 @@ import ast
 import ctypes
 import itertools
 import math
+import pickle
 import random
 import re
 import struct
@@ -248,6 +249,14 @@ def test_the_first_rule_that_fails_is_reported_and_a_value_of_the_wrong_type_is_
         rules.check(both, {"a": True, "b": 0.0})
     with pytest.raises(ValueError, match=r"^s must be a string, got 1.0$"):
         rules.check([rules.one_of("s", ("a",))], {"s": 1.0})
+
+
+@pytest.mark.quick
+def test_a_rule_is_its_data_compared_and_pickled_by_it():
+    rule = rules.rule("b > 0", "b must be > 0, got {b}", when="a != 0")
+    again = pickle.loads(pickle.dumps(rule))
+    assert again == rule and repr(again) == repr(rule) and again.names == ("b", "a")
+    assert not again.holds({"a": 1.0, "b": -1.0}) and again.holds({"a": 0.0, "b": -1.0})
 
 
 @pytest.mark.quick

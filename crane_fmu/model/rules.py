@@ -81,6 +81,9 @@ class Rule:
         object.__setattr__(self, "_condition", compile(condition, "<rule>", "eval"))
         object.__setattr__(self, "_fields", tuple(compile(tree, "<rule>", "eval") for tree in fields))
 
+    def __reduce__(self):  # pickled as its data (its compiled code is made again)
+        return Rule, (self.test, self.message, self.when)
+
     @property
     def names(self):
         """The parameters the rule reads, in order."""
