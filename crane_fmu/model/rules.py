@@ -4,8 +4,8 @@ A :class:`Rule` is a condition on a component's parameter values and the message
 fails, one line naming the field, the rule and the value: ``l1 must be > 0 and finite, got -1.0``. From
 the same declaration come the Python check (:func:`check`, which every component's ``configure`` calls
 first, in the order of its ``RULES``) and the C check of its native twin (:func:`c_function`, which
-``crane-fmu build`` generates into ``<model>_variables.h`` and ``component.c`` runs before the model
-file's ``configure()``). The first rule that fails is the one reported, in Python and in C alike.
+``crane-fmu build`` generates into ``<model>_variables.h`` and the registration of ``component.h`` runs
+before the model file's ``configure()``). The first rule that fails is the one reported, in Python and in C alike.
 
 A condition is a Python expression over the component's parameter names, in a small language that means
 the same in Python and in C (IEEE doubles in both, no exceptions):
