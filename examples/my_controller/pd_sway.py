@@ -4,7 +4,7 @@ from crane_fmu.model.component import Component
 from crane_fmu.model.rules import check, positive
 from crane_fmu.model.tables import MEASURED_STATE, output, parameter
 
-RULES = positive("k_x", "k_v", "u_max")  # each > 0 and finite: one line per rule (crane_fmu/model/rules.py)
+RULES = positive("k_x", "k_v", "u_max")  # each > 0 and finite: one line per rule, each with its message
 
 
 def configure(values):
