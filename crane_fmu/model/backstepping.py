@@ -4,7 +4,8 @@ import math
 
 from . import limits
 from .component import Component
-from .parameters import PLANT_FIELDS, ControllerGains, plant_parameters, positive
+from .parameters import GAIN_RULES, PLANT_FIELDS, PLANT_RULES, ControllerGains, plant_parameters
+from .rules import check, positive
 from .tables import MEASURED_STATE, controller_model, output, parameter, positions
 
 
@@ -144,12 +145,13 @@ VARIABLES = controller_model() + (
     output("u", "m/s2", "demanded trolley acceleration, eq (21)"),
 )
 IN = positions(VARIABLES, "input")
+RULES = (*positive("h"), *limits.RULES, *PLANT_RULES, *GAIN_RULES)  # checked in this order (rules.py)
 
 
 def configure(values):
     """Validated ``(PlantParameters, ControllerGains, (u_max, v_max, h), law)`` from the parameter values."""
-    positive("h", values["h"])
-    bounds = (*limits.check(values), values["h"])
+    check(RULES, values)
+    bounds = (*limits.of(values), values["h"])
     gains = {name: value for name, value in values.items() if name not in PLANT_FIELDS + ("u_max", "v_max", "h")}
     p, k = plant_parameters(values), ControllerGains(**gains)
     return p, k, bounds, law(p, k)
@@ -166,4 +168,4 @@ COMPONENT = Component(
     "BacksteppingController", "controller",
     "Backstepping anti-swing controller for a double-pendulum crane payload "
     "(least-squares eq 21); output: trolley acceleration u, direct feedthrough",
-    VARIABLES, configure, _output, feedthrough=True, native="backstepping.c")
+    VARIABLES, configure, _output, feedthrough=True, native="backstepping.c", rules=RULES)

@@ -11,6 +11,7 @@ from collections import namedtuple
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from .rules import RESERVED
 from .tables import BASE_UNITS
 
 ROLES = ("plant", "controller", "planner", "disturbance", "sensor", "estimator", "benchmark")
@@ -212,6 +213,9 @@ class Component:
         build`` then builds its native FMU too, and systems of such components as one native FMU.
     crane : Crane, optional
         A plant's roles (:class:`Crane`): what the application layer reads of it.
+    rules : tuple of rules.Rule, optional
+        The parameter rules, in the order they are checked: ``configure`` checks them first
+        (:func:`.rules.check`), and the native twin's generated header holds them in C.
     """
 
     model_identifier: str
@@ -229,6 +233,7 @@ class Component:
     continuous: Continuous | None = None
     native: str | None = None
     crane: Crane | None = None
+    rules: tuple = ()
 
     def __post_init__(self):
         if not self.model_identifier.isidentifier():
@@ -249,6 +254,7 @@ class Component:
             if self.role != "plant":
                 raise ValueError(f"{self.model_identifier}: only a plant has crane roles, this is a {self.role}")
             self.crane.check(self)
+        self._check_rules()
         if (self.initial_state is None) != (self.update is None):
             raise ValueError(f"{self.model_identifier}: a state needs both initial_state and update")
         if self.depends_on is not None:
@@ -260,6 +266,17 @@ class Component:
             if any(self.depends_on.values()) != self.feedthrough:
                 raise ValueError(f"{self.model_identifier}: depends_on must name an input exactly when feedthrough "
                                  "is True")
+
+    def _check_rules(self):
+        """Every rule reads parameters of the table, a String one only as a string."""
+        kinds = {v.name: v.type for v in self.variables if v.causality == "parameter"}
+        for name in set(kinds) & RESERVED:
+            raise ValueError(f"{self.model_identifier}: parameter {name!r} has a name the rules reserve")
+        for rule in self.rules:
+            for name in rule.names:
+                if name not in kinds or (kinds[name] == "String") != (name in rule.strings):
+                    raise ValueError(f"{self.model_identifier}: rule {rule.test!r} reads {name!r}, which is no "
+                                     f"{'String' if name in rule.strings else 'Real'} parameter")
 
     @property
     def stateful(self):

@@ -4,19 +4,21 @@ import math
 from collections import namedtuple
 
 from .component import Component
+from .rules import check, finite, non_negative, one_of, positive, whole
 from .tables import STATE, input_, output, parameter, state_variables
+
+# The rules of a seed of the noise (noise()), and of a delay in whole communication steps.
+SEED = whole("seed", "0 <= seed < 4294967296", "a whole number in [0, 2^32)")
+DELAY_STEPS = whole("delay", "0 <= delay <= 100", "a whole number of steps in [0, 100]")
 
 # --- Gust: horizontal force pulses on hook and payload -------------------------------------
 
 GustConfig = namedtuple("GustConfig", "F1 F2 start duration")
+GUST_RULES = (*finite("F1_peak", "F2_peak", "start"), *positive("duration"))
 
 
 def _gust_configure(values):
-    for name in ("F1_peak", "F2_peak", "start"):
-        if not math.isfinite(values[name]):
-            raise ValueError(f"{name} must be finite, got {values[name]!r}")
-    if not (values["duration"] > 0 and math.isfinite(values["duration"])):
-        raise ValueError(f"duration must be > 0 and finite, got {values['duration']!r}")
+    check(GUST_RULES, values)
     return GustConfig(values["F1_peak"], values["F2_peak"], values["start"], values["duration"])
 
 
@@ -38,26 +40,20 @@ GUST = Component(
      output("F2", "N", "horizontal force on the payload")),
     _gust_configure, lambda config, state, inputs: gust(config, *state),
     initial_state=lambda config: (0.0,), update=lambda config, state, inputs, time, step: (time + step,),
-    native="gust.c")
+    native="gust.c", rules=GUST_RULES)
 
 
 # --- Sensor: noise and a one-step delay on the measured state ------------------------------
 
 SIGMAS = ("sigma_x", "sigma_dx", "sigma_theta", "sigma_dtheta")
 SensorConfig = namedtuple("SensorConfig", "sigmas seed delay")
+SENSOR_RULES = (*non_negative(*SIGMAS), SEED, one_of("delay", (0.0, 1.0), "0 or 1 (communication steps)"))
 
 
 def _sensor_configure(values):
-    for name in SIGMAS:
-        if not (values[name] >= 0 and math.isfinite(values[name])):
-            raise ValueError(f"{name} must be >= 0 and finite, got {values[name]!r}")
-    seed = values["seed"]
-    if not (math.isfinite(seed) and seed == int(seed) and 0 <= seed < 2 ** 32):
-        raise ValueError(f"seed must be a whole number in [0, 2^32), got {seed!r}")
-    if values["delay"] not in (0.0, 1.0):
-        raise ValueError(f"delay must be 0 or 1 (communication steps), got {values['delay']!r}")
+    check(SENSOR_RULES, values)
     s = [values[n] for n in SIGMAS]
-    return SensorConfig((s[0], s[1], s[2], s[3], s[2], s[3]), int(seed), values["delay"] == 1.0)
+    return SensorConfig((s[0], s[1], s[2], s[3], s[2], s[3]), int(values["seed"]), values["delay"] == 1.0)
 
 
 def _mix(z):
@@ -104,7 +100,7 @@ SENSOR = Component(
      parameter("delay", 1.0, "1", "1: the measurement reaches the output one communication step late; 0: at once"),
      ) + state_variables(input_, "true ") + state_variables(output, "measured ", suffix="_m"),
     _sensor_configure, _sensor_output, feedthrough=True,
-    initial_state=lambda config: (0, None), update=_sensor_update, native="sensor.c",
+    initial_state=lambda config: (0, None), update=_sensor_update, native="sensor.c", rules=SENSOR_RULES,
     depends_on={name + "_m": (name,) for name in STATE})  # each channel its own (at once: delay 0, first sample)
 
 
@@ -112,19 +108,13 @@ SENSOR = Component(
 
 MEASURED = ("x", "theta1", "theta2")  # encoder, rope angle at the trolley, a camera on the payload
 CraneSensorConfig = namedtuple("CraneSensorConfig", "sigmas seed delay")
+CRANE_SENSOR_RULES = (*non_negative("sigma_x", "sigma_theta1", "sigma_theta2"), SEED, DELAY_STEPS)
 
 
 def _crane_sensor_configure(values):
-    for name in ("sigma_x", "sigma_theta1", "sigma_theta2"):
-        if not (values[name] >= 0 and math.isfinite(values[name])):
-            raise ValueError(f"{name} must be >= 0 and finite, got {values[name]!r}")
-    seed, delay = values["seed"], values["delay"]
-    if not (math.isfinite(seed) and seed == int(seed) and 0 <= seed < 2 ** 32):
-        raise ValueError(f"seed must be a whole number in [0, 2^32), got {seed!r}")
-    if not (math.isfinite(delay) and delay == int(delay) and 0 <= delay <= 100):
-        raise ValueError(f"delay must be a whole number of steps in [0, 100], got {delay!r}")
-    return CraneSensorConfig((values["sigma_x"], values["sigma_theta1"], values["sigma_theta2"]), int(seed),
-                             int(delay))
+    check(CRANE_SENSOR_RULES, values)
+    return CraneSensorConfig((values["sigma_x"], values["sigma_theta1"], values["sigma_theta2"]), int(values["seed"]),
+                             int(values["delay"]))
 
 
 def crane_measure(c, k, true_values):
@@ -164,4 +154,5 @@ CRANE_SENSOR = Component(
      output("theta2_meas", "rad", "measured payload swing angle (a camera)")),
     _crane_sensor_configure, _crane_sensor_output, feedthrough=True,
     initial_state=lambda config: (0, []), update=_crane_sensor_update, native="crane_sensor.c",
+    rules=CRANE_SENSOR_RULES,
     depends_on={name + "_meas": (name,) for name in MEASURED})  # each channel its own (at once: delay 0, first sample)

@@ -57,20 +57,17 @@ from collections import namedtuple
 
 from . import limits
 from .component import Component
-from .parameters import finite, plant_parameters, positive
+from .parameters import PLANT_RULES, plant_parameters
+from .rules import check, finite, positive, rule
 from .tables import MEASURED_STATE, controller_model, output, parameter
 
 Config = namedtuple("Config", "mu m2 l1 l2 k_c k_p k_d x_d u_max v_max h")
 
 
 def configure(values):
+    check(RULES, values)
     p = plant_parameters(values)
-    for name in ("k_c", "k_p", "k_d", "h"):
-        positive(name, values[name])
-    finite("x_d", values["x_d"])
-    u_max, v_max = limits.check(values)
-    if not math.isfinite(u_max):
-        raise ValueError(f"u_max must be finite for the saturated law (E4), got {u_max!r}")
+    u_max, v_max = limits.of(values)
     return Config(mu=p.m1 + p.m2, m2=p.m2, l1=p.l1, l2=p.l2, k_c=values["k_c"], k_p=values["k_p"], k_d=values["k_d"],
                   x_d=values["x_d"], u_max=u_max, v_max=v_max, h=values["h"])
 
@@ -96,10 +93,12 @@ VARIABLES = controller_model() + (
 ) + MEASURED_STATE + (
     output("u", "m/s2", "demanded trolley acceleration, eq (E4), limited"),
 )
+RULES = (*PLANT_RULES, *positive("k_c", "k_p", "k_d", "h"), *finite("x_d"), *limits.RULES,
+         rule("finite(unlimited(u_max))", "u_max must be finite for the saturated law (E4), got {unlimited(u_max)}"))
 
 COMPONENT = Component(
     "EnergyController", "controller",
     "Energy-coupling anti-swing law with a Lyapunov/LaSalle proof (saturated, |u| <= u_max); "
     "output: trolley acceleration u, direct feedthrough",
     VARIABLES, configure, lambda config, state, inputs: (control(config, inputs),), feedthrough=True,
-    native="energy.c")
+    native="energy.c", rules=RULES)

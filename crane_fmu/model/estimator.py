@@ -40,8 +40,10 @@ from collections import namedtuple
 
 from . import linalg
 from .component import Component
+from .disturbances import DELAY_STEPS
 from .lqr import continuous_model
-from .parameters import plant_parameters, positive
+from .parameters import PLANT_RULES, plant_parameters
+from .rules import check, one_of, positive
 from .tables import STATE, controller_model, input_, output, parameter, positions, state_variables
 
 NOISES = ("sigma_x", "sigma_theta", "sigma_u", "sigma_swing")
@@ -91,17 +93,15 @@ def design(p, h, sigma_x, sigma_theta, sigma_u, sigma_swing, camera=False):
     return big_p, gain
 
 
+RULES = (*PLANT_RULES, *positive("h", *NOISES), one_of("camera", (0.0, 1.0), "0 (x and theta1 measured) or 1 "
+                                                                              "(theta2 too)"), DELAY_STEPS)
+
+
 def configure(values):
     """Validated parameters and the filter designed from them."""
+    check(RULES, values)
     p = plant_parameters(values)
-    positive("h", values["h"])
-    for name in NOISES:
-        positive(name, values[name])
-    if values["camera"] not in (0.0, 1.0):
-        raise ValueError(f"camera must be 0 (x and theta1 measured) or 1 (theta2 too), got {values['camera']!r}")
     delay = values["delay"]
-    if not (math.isfinite(delay) and delay == int(delay) and 0 <= delay <= 100):
-        raise ValueError(f"delay must be a whole number of steps in [0, 100], got {delay!r}")
     camera = values["camera"] == 1.0
     ad, bd, _ = noise_model(p, values["h"], values["sigma_u"], values["sigma_swing"])
     _, gain = design(p, values["h"], *(values[n] for n in NOISES), camera)
@@ -166,4 +166,4 @@ COMPONENT = Component(
     "Discrete Kalman filter of the crane linearised about rest, designed from its parameters at initialisation: "
     "the controllers' inputs x, dx, theta1, dtheta1, theta2, dtheta2 from x_meas, theta1_meas (theta2_meas) and u",
     VARIABLES, configure, lambda config, state, inputs: tuple(state[ESTIMATE]),
-    initial_state=initial_state, update=update, report=report, native="estimator.c")
+    initial_state=initial_state, update=update, report=report, native="estimator.c", rules=RULES)

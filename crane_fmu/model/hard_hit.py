@@ -28,7 +28,8 @@ from collections import namedtuple
 from . import limits, linalg
 from .component import Component
 from .lqr import DEFAULT_WEIGHTS, REFERENCE_INPUTS, WEIGHTS, design
-from .parameters import finite, plant_parameters, positive
+from .parameters import PLANT_RULES, plant_parameters
+from .rules import check, finite, non_negative, positive, rule
 from .tables import MEASURED_STATE, controller_model, output, parameter, positions
 
 Config = namedtuple("Config", "near far e_near e_far mu m2 l1 l2 g x_d u_max v_max h")
@@ -44,18 +45,10 @@ def swing_energy(c, s):
 
 def configure(values):
     """Validated parameters and the two designs."""
+    check(RULES, values)
     p = plant_parameters(values)
-    for name in WEIGHTS + ("q_x_far",):
-        value = values[name]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < math.inf:
-            raise ValueError(f"{name} must be >= 0 and finite, got {value!r}")
-    for name in ("r", "r_far", "h", "theta_near"):
-        positive(name, values[name])
     near, far = values["theta_near"], values["theta_far"]
-    if not (math.isfinite(far) and near < far < math.pi / 2):
-        raise ValueError(f"theta_far must be > theta_near = {near!r} and < pi/2, got {far!r}")
-    finite("x_d", values["x_d"])
-    u_max, v_max = limits.check(values)
+    u_max, v_max = limits.of(values)
     weights = [values[name] for name in WEIGHTS]
     mu = p.m1 + p.m2
 
@@ -110,9 +103,13 @@ VARIABLES = controller_model() + tuple(
     output("u", "m/s2", "demanded trolley acceleration, ddx_ref - K(w) (s - s_ref), limited"),
 )
 IN = positions(VARIABLES, "input")
+RULES = (*PLANT_RULES, *non_negative(*WEIGHTS, "q_x_far"), *positive("r", "r_far", "h", "theta_near"),
+         rule("finite(theta_far) and theta_near < theta_far < pi / 2",
+              "theta_far must be > theta_near = {theta_near} and < pi/2, got {theta_far}"),
+         *finite("x_d"), *limits.RULES)  # checked in this order (rules.py)
 
 COMPONENT = Component(
     "HardHitController", "controller",
     "Two discrete LQR designs blended by the swing energy (gentle far out, the LQR near rest), for large swings; "
     "tracks x_ref, dx_ref, ddx_ref; output: trolley acceleration u, direct feedthrough",
-    VARIABLES, configure, _output, feedthrough=True, report=report, native="hard_hit.c")
+    VARIABLES, configure, _output, feedthrough=True, report=report, native="hard_hit.c", rules=RULES)

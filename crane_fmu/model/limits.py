@@ -9,14 +9,10 @@ INF give the same run, bit for bit.
 
 import math
 
+from .rules import NO_LIMIT, limit, unlimited  # noqa: F401 (NO_LIMIT and unlimited() are the limits' own)
 from .tables import parameter
 
-NO_LIMIT = 1e60
-
-
-def unlimited(value):
-    """``value``, or +-inf where it lies at or beyond +-:data:`NO_LIMIT` (no limit)."""
-    return math.copysign(math.inf, value) if abs(value) >= NO_LIMIT else value
+RULES = limit("u_max", "v_max")  # each > 0; 1e60 or more (INF too) is no limit
 
 
 def parameters(u_max=2.0, v_max=1.0, what="u"):
@@ -25,12 +21,8 @@ def parameters(u_max=2.0, v_max=1.0, what="u"):
             parameter("v_max", v_max, "m/s", "largest trolley speed it commands; 1e60 or INF: no limit"))
 
 
-def check(values):
-    """Validated ``(u_max, v_max)``: each > 0; 1e60 or more is no limit (``inf``)."""
-    for name in ("u_max", "v_max"):
-        value = values[name]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
-            raise ValueError(f"{name} must be > 0 (inf: no limit), got {value!r}")
+def of(values):
+    """``(u_max, v_max)`` of values that meet :data:`RULES`, 1e60 or more as ``inf`` (no limit)."""
     return unlimited(values["u_max"]), unlimited(values["v_max"])
 
 

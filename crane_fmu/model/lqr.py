@@ -8,13 +8,13 @@ so they always follow what the user set. The same law tracks a reference
 """
 
 import dataclasses
-import math
 from collections import namedtuple
 
 from . import limits, linalg
 from .component import Component
-from .parameters import finite, plant_parameters, positive
+from .parameters import PLANT_RULES, plant_parameters
 from .plant import linearisation
+from .rules import check, finite, non_negative, positive, rule
 from .tables import MEASURED_STATE, STATE, controller_model, input_, output, parameter, positions
 
 WEIGHTS = tuple("q_" + name for name in STATE)
@@ -61,24 +61,22 @@ Config.__doc__ = ("The gains for l1, the limits, and the gain schedule: ``(l1 va
                   "[l1_low, l1_high], or None.")
 
 
+# A gain schedule over [l1_low, l1_high], or none (both 0): the LQR's and the MPC's.
+SCHEDULED = "l1_low != 0 or l1_high != 0"
+SCHEDULE_RULES = (*positive("l1_low", when=SCHEDULED),
+                  rule("l1_high > l1_low and finite(l1_high)", "l1_high must be finite and > l1_low = {l1_low}, got "
+                       "{l1_high}", when=SCHEDULED))
+
+
 def configure(values):
     """Validated parameters and the gains designed from them (and the schedule over the cable length)."""
+    check(RULES, values)
     p = plant_parameters(values)
-    for name in WEIGHTS:
-        value = values[name]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < float("inf"):
-            raise ValueError(f"{name} must be >= 0 and finite, got {value!r}")
-    positive("r", values["r"])
-    positive("h", values["h"])
-    finite("x_d", values["x_d"])
-    u_max, v_max = limits.check(values)
+    u_max, v_max = limits.of(values)
     weights = [values[name] for name in WEIGHTS]
     schedule = None
     low, high = values["l1_low"], values["l1_high"]
     if (low, high) != (0.0, 0.0):
-        positive("l1_low", low)
-        if not high > low or not math.isfinite(high):
-            raise ValueError(f"l1_high must be finite and > l1_low = {low!r}, got {high!r}")
         lengths = [low + (high - low) * i / (SCHEDULE_POINTS - 1) for i in range(SCHEDULE_POINTS)]
         schedule = (lengths, [design(dataclasses.replace(p, l1=length), weights, values["r"], values["h"])
                               for length in lengths])
@@ -144,10 +142,12 @@ VARIABLES = controller_model() + tuple(
     output("u", "m/s2", "demanded trolley acceleration, ddx_ref - K (s - s_ref), limited"),
 )
 IN = positions(VARIABLES, "input")
+RULES = (*PLANT_RULES, *non_negative(*WEIGHTS), *positive("r", "h"), *finite("x_d"), *limits.RULES,
+         *SCHEDULE_RULES)  # checked in this order (rules.py)
 
 
 COMPONENT = Component(
     "LqrController", "controller",
     "Discrete-time LQR of the double-pendulum crane about the hanging equilibrium, designed from its parameters "
     "at initialisation; tracks x_ref, dx_ref, ddx_ref; output: trolley acceleration u, direct feedthrough",
-    VARIABLES, configure, _output, feedthrough=True, report=report, native="lqr.c")
+    VARIABLES, configure, _output, feedthrough=True, report=report, native="lqr.c", rules=RULES)

@@ -46,8 +46,9 @@ from collections import namedtuple
 
 from . import limits, linalg, planner, qp
 from .component import Component, Step
-from .lqr import DEFAULT_WEIGHTS, WEIGHTS, continuous_model
-from .parameters import finite, plant_parameters, positive
+from .lqr import DEFAULT_WEIGHTS, SCHEDULE_RULES, WEIGHTS, continuous_model
+from .parameters import PLANT_RULES, plant_parameters
+from .rules import check, finite, in_range, non_negative, positive, rule, whole
 from .tables import MEASURED_STATE, controller_model, input_, output, parameter, positions
 
 RHO = 1e6  # the plan's weight on missing the target state
@@ -246,27 +247,14 @@ def plan_move(d, s0, target, u_max, v_max, interval, max_intervals):
 
 
 def configure(values):
-    """Validated parameters and the tracking designs (one, or one per scheduled cable length)."""
+    """Validated parameters and the tracking designs (one, or one per scheduled cable length).
+
+    After :data:`RULES`, the rules that need the interval and the horizon counted in steps (code).
+    """
+    check(RULES, values)
     p = plant_parameters(values)
-    for name in WEIGHTS:
-        value = values[name]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < math.inf:
-            raise ValueError(f"{name} must be >= 0 and finite, got {value!r}")
-    for name in ("r", "h", "interval", "horizon", "replan_x", "replan_angle"):
-        positive(name, values[name])
-    margin = values["margin"]
-    if not 0 <= margin < 1:
-        raise ValueError(f"margin must be >= 0 and < 1, got {margin!r}")
-    cap = values["max_iterations"]
-    if not (cap >= 1 and cap == int(cap)):
-        raise ValueError(f"max_iterations must be a whole number >= 1, got {cap!r}")
-    identify = values["identify"]
-    if not 0 <= identify < math.inf:
-        raise ValueError(f"identify must be >= 0 and finite, got {identify!r}")
-    finite("x_d", values["x_d"])
-    u_max, v_max = limits.check(values)
-    if not (math.isfinite(u_max) and math.isfinite(v_max)):
-        raise ValueError(f"u_max and v_max must be finite (the MPC's constraints), got {u_max!r}, {v_max!r}")
+    margin, cap, identify = values["margin"], values["max_iterations"], values["identify"]
+    u_max, v_max = limits.of(values)
     h = values["h"]
     every = max(1, round(values["interval"] / h))
     interval = every * h
@@ -282,9 +270,6 @@ def configure(values):
     if (low, high) == (0.0, 0.0):
         lengths = [p.l1]
     else:
-        positive("l1_low", low)
-        if not high > low or not math.isfinite(high):
-            raise ValueError(f"l1_high must be finite and > l1_low = {low!r}, got {high!r}")
         lengths = [low + (high - low) * i / (SCHEDULE_POINTS - 1) for i in range(SCHEDULE_POINTS)]
     designs = tuple(design(dataclasses.replace(p, l1=length), weights, values["r"], interval, steps)
                     for length in lengths)
@@ -592,10 +577,17 @@ VARIABLES = controller_model() + tuple(
     output("plan_end", "s", "when the planned move ends (0: no move planned)"),
 )
 IN = positions(VARIABLES, "input")
+RULES = (*PLANT_RULES, *non_negative(*WEIGHTS), *positive("r", "h", "interval", "horizon", "replan_x", "replan_angle"),
+         in_range("margin", 0, 1, high_open=True),
+         whole("max_iterations", "max_iterations >= 1", "a whole number >= 1"),
+         *non_negative("identify"), *finite("x_d"), *limits.RULES,
+         rule("finite(unlimited(u_max)) and finite(unlimited(v_max))",
+              "u_max and v_max must be finite (the MPC's constraints), got {unlimited(u_max)}, {unlimited(v_max)}"),
+         *SCHEDULE_RULES)  # checked in this order (rules.py), then configure()'s own
 
 COMPONENT = Component(
     "MpcController", "controller",
     "Constrained model-predictive control: the shortest move to x_d within the drive's limits, planned at the "
     "start, tracked by a QP every interval (our own active-set solver); output: trolley acceleration u",
     VARIABLES, configure, _output, feedthrough=True, initial_state=initial_state, update=update, report=report,
-    native="mpc.c")
+    native="mpc.c", rules=RULES)

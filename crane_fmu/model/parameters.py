@@ -1,30 +1,40 @@
-"""Parameters of the crane plant and of the backstepping controller.
+"""Parameters of the crane plant and of the backstepping controller, and their rules.
 
 Defaults are the paper's Section V values. Every class validates itself on
-construction and raises ``ValueError`` naming the field, the rule and the value.
+construction by its rules (:mod:`.rules`) and raises ``ValueError`` naming the
+field, the rule and the value; the components that take these parameters list
+the same rules among theirs.
 """
 
-import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
+
+from . import rules
+from .rules import non_negative
 
 B3_FORMS = ("derived", "printed")
 
+# The rules of the crane model's parameters (eqs (4)-(9)), in their order: every component that models the crane.
+PLANT_RULES = (*rules.positive("m1"), *non_negative("m2"), *rules.positive("l1", "l2", "g"))
 
-def _check(name, value, rule, ok):
-    if not isinstance(value, (int, float)) or isinstance(value, bool):
-        raise ValueError(f"{name} must be a number, got {value!r}")
-    if not math.isfinite(value) or not ok(value):
-        raise ValueError(f"{name} must be {rule}, got {value!r}")
+# The rules of the backstepping law's gains, targets and options (ControllerGains).
+GAIN_RULES = (
+    *rules.finite("K1_x", "K1_theta1", "K1_theta2", "K2_x", "K2_theta1", "K2_theta2", "x_d", "theta1_d", "theta2_d"),
+    *non_negative("w_x", "w_theta1", "w_theta2"),
+    # b1 = 1 always, so b'Wb > 0 exactly when w_x > 0 or a swing row is weighted where its b entry is non-zero;
+    # w_x = 0 can be singular.
+    rules.in_range("w_x", 0, low_open=True, finite=False, note="b'Wb must not vanish"),
+    rules.one_of("b3_form", B3_FORMS),
+)
 
 
 def positive(name, value):
-    """Raise ValueError naming ``name`` unless ``value`` is a finite number > 0."""
-    _check(name, value, "> 0 and finite", lambda v: v > 0)
+    """Raise ValueError naming ``name`` unless ``value`` is a finite number > 0 (:func:`.rules.positive`)."""
+    rules.check(rules.positive(name), {name: value})
 
 
 def finite(name, value):
-    """Raise ValueError naming ``name`` unless ``value`` is a finite number."""
-    _check(name, value, "finite", lambda v: True)
+    """Raise ValueError naming ``name`` unless ``value`` is a finite number (:func:`.rules.finite`)."""
+    rules.check(rules.finite(name), {name: value})
 
 
 @dataclass(frozen=True)
@@ -52,11 +62,7 @@ class PlantParameters:
     g: float = 9.8
 
     def __post_init__(self):
-        positive("m1", self.m1)
-        _check("m2", self.m2, ">= 0 and finite", lambda v: v >= 0)
-        positive("l1", self.l1)
-        positive("l2", self.l2)
-        positive("g", self.g)
+        rules.check(PLANT_RULES, {f.name: getattr(self, f.name) for f in fields(self)})
 
 
 @dataclass(frozen=True)
@@ -96,17 +102,7 @@ class ControllerGains:
     b3_form: str = "derived"
 
     def __post_init__(self):
-        for name in ("K1_x", "K1_theta1", "K1_theta2", "K2_x", "K2_theta1",
-                     "K2_theta2", "x_d", "theta1_d", "theta2_d"):
-            finite(name, getattr(self, name))
-        for name in ("w_x", "w_theta1", "w_theta2"):
-            _check(name, getattr(self, name), ">= 0 and finite", lambda v: v >= 0)
-        if self.w_x == 0:
-            # b1 = 1 always, so b'Wb > 0 exactly when w_x > 0 or a swing row is
-            # weighted where its b entry is non-zero; w_x = 0 can be singular.
-            raise ValueError(f"w_x must be > 0 (b'Wb must not vanish), got {self.w_x!r}")
-        if self.b3_form not in B3_FORMS:
-            raise ValueError(f"b3_form must be one of {', '.join(B3_FORMS)}, got {self.b3_form!r}")
+        rules.check(GAIN_RULES, {f.name: getattr(self, f.name) for f in fields(self)})
 
 
 PLANT_FIELDS = ("m1", "m2", "l1", "l2", "g")

@@ -26,8 +26,9 @@ from collections import namedtuple
 
 from . import limits
 from .component import Component
-from .parameters import plant_parameters
+from .parameters import PLANT_RULES, plant_parameters
 from .plant import linearisation
+from .rules import check, finite, one_of, rule
 from .tables import PLANT_MODEL, output, parameter
 
 EI_TOLERANCE = 0.05
@@ -100,15 +101,9 @@ Config = namedtuple("Config", "x0 distance t0 steps end omegas shapes gains u_ma
 
 
 def configure(values):
+    check(RULES, values)
     p = plant_parameters(values)
-    u_max, v_max = limits.check(values)
-    if values["shaper"] not in SHAPERS:
-        raise ValueError(f"shaper must be one of {', '.join(SHAPERS)}, got {values['shaper']!r}")
-    for name in ("x0", "x_d", "t0"):
-        if not math.isfinite(values[name]):
-            raise ValueError(f"{name} must be finite, got {values[name]!r}")
-    if not (math.isfinite(u_max) and math.isfinite(v_max)):
-        raise ValueError(f"u_max and v_max must be finite for a planned move, got {u_max!r}, {v_max!r}")
+    u_max, v_max = limits.of(values)
     omegas, shapes, gains = modes(p)
     impulses = convolve(shaper(values["shaper"], 2 * math.pi / omegas[0]),
                         shaper(values["shaper"], 2 * math.pi / omegas[1]))
@@ -185,6 +180,9 @@ VARIABLES = tuple(v._replace(description="planner's model: " + v.description) fo
     output("theta2_ref", "rad", "payload swing the reference induces in the linear model, during the move"),
     output("dtheta2_ref", "rad/s", "payload swing rate the reference induces, during the move"),
 )
+RULES = (*PLANT_RULES, *limits.RULES, one_of("shaper", SHAPERS), *finite("x0", "x_d", "t0"),
+         rule("finite(unlimited(u_max)) and finite(unlimited(v_max))",
+              "u_max and v_max must be finite for a planned move, got {unlimited(u_max)}, {unlimited(v_max)}"))
 
 COMPONENT = Component(
     "TrajectoryPlanner", "planner",
@@ -192,4 +190,4 @@ COMPONENT = Component(
     "outputs: the reference x_ref, dx_ref, ddx_ref and the swing it induces",
     VARIABLES, configure, lambda config, state, inputs: reference(config, *state),
     initial_state=lambda config: (0.0,), update=lambda config, state, inputs, time, step: (time + step,),
-    report=report, default_experiment=(0.0, 10.0, 1e-3), native="planner.c")  # the transport system's move
+    report=report, default_experiment=(0.0, 10.0, 1e-3), native="planner.c", rules=RULES)  # the transport system's move

@@ -14,7 +14,7 @@ from . import plant_continuous
 from .component import Axis, Component, Continuous, Crane, Discard, Step
 from .limits import NO_LIMIT, unlimited
 from .linalg import total
-from .parameters import finite, plant_parameters, positive
+from .parameters import PLANT_RULES, plant_parameters
 from .plant_equations import (  # noqa: F401 (the plant's equations, importable from here)
     DL1,
     DX,
@@ -35,6 +35,7 @@ from .plant_equations import (  # noqa: F401 (the plant's equations, importable 
     substeps,
 )
 from .plant_limits import clamp, drive_factors, held_cable, past_rail_end, reached_limit, within_speed
+from .rules import check, finite, limit, non_negative, positive, rule
 from .tables import PLANT_MODEL, input_, local, output, parameter
 
 DRIVE, ACCEL = plant_continuous.DRIVE, plant_continuous.DRIVE + 1  # the drive's and the trolley's mean acceleration
@@ -81,6 +82,19 @@ VARIABLES = PLANT_MODEL + (
     output("ddx", "m/s2", "trolley acceleration over the last step, after the drive's limits and lag"),
 )
 
+# The parameter rules, in the order they are checked (rules.py).
+RULES = (
+    *positive("max_substep"),
+    *PLANT_RULES,
+    *non_negative("c1", "c2", "tau", "l1_min"),
+    *limit("u_max", "v_max", "dl1_max", note="INF: no limit"),
+    rule("m2 != 0 or c2 == 0", "c2 must be 0 when m2 = 0 (the hook joint then moves no mass), got {c2}"),
+    rule("x_min < x_max", "x_min must be < x_max, got {x_min} and {x_max}"),
+    *finite(*INITIAL_STATE),
+    rule("x_min <= x0 <= x_max", "x0 must lie on the rail [{x_min}, {x_max}], got {x0}"),
+    rule("l1_min <= l1 <= l1_max", "l1 must lie within [l1_min, l1_max] = [{l1_min}, {l1_max}], got {l1}"),
+)
+
 U = 0  # the trolley acceleration among the inputs; the others (hoist, F1, F2) act when non-zero
 
 # The parameters that the fast path (the paper's RK4 step with the demand limited to u_max and the
@@ -95,35 +109,11 @@ Config.__doc__ = ("The plant's validated parameters; ``paper_step`` is :func:`.p
                   "for them, ``fast`` that every parameter outside :data:`FAST_PATH_PARAMETERS` is neutral.")
 
 
-def _at_least(name, value, low, rule):
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value >= low or value != value:
-        raise ValueError(f"{name} must be {rule}, got {value!r}")
-
-
 def configure(values):
     """Validated :class:`Config` from the CranePlant parameter values; the state starts at rest in the drive."""
-    positive("max_substep", values["max_substep"])
+    check(RULES, values)
     p = plant_parameters(values)
-    for name in ("c1", "c2", "tau", "l1_min"):
-        _at_least(name, values[name], 0.0, ">= 0 and finite")
-        if not math.isfinite(values[name]):
-            raise ValueError(f"{name} must be >= 0 and finite, got {values[name]!r}")
-    for name in ("u_max", "v_max", "dl1_max"):
-        _at_least(name, values[name], 0.0, "> 0 (INF: no limit)")
-        if values[name] == 0:
-            raise ValueError(f"{name} must be > 0 (INF: no limit), got {values[name]!r}")
-    if p.m2 == 0 and values["c2"] != 0:
-        raise ValueError(f"c2 must be 0 when m2 = 0 (the hook joint then moves no mass), got {values['c2']!r}")
-    if not values["x_min"] < values["x_max"]:
-        raise ValueError(f"x_min must be < x_max, got {values['x_min']!r} and {values['x_max']!r}")
     state0 = tuple(values[name] for name in INITIAL_STATE)
-    for name, value in zip(INITIAL_STATE, state0):
-        finite(name, value)
-    if not values["x_min"] <= values["x0"] <= values["x_max"]:
-        raise ValueError(f"x0 must lie on the rail [{values['x_min']!r}, {values['x_max']!r}], got {values['x0']!r}")
-    if not values["l1_min"] <= p.l1 <= values["l1_max"]:
-        raise ValueError(f"l1 must lie within [l1_min, l1_max] = [{values['l1_min']!r}, {values['l1_max']!r}], "
-                         f"got {p.l1!r}")
     values = {**values, **{name: unlimited(values[name]) for name in UNLIMITED}}  # validated: numbers
     fast = all(values[v.name] == (unlimited(v.start) if v.name in UNLIMITED else v.start) for v in VARIABLES
                if v.causality == "parameter" and v.name not in FAST_PATH_PARAMETERS)
@@ -274,4 +264,4 @@ COMPONENT = Component(
     "inputs: trolley and hoist accelerations, horizontal forces; fixed-step RK4 inside doStep",
     VARIABLES, configure, _outputs,
     initial_state=lambda config: config.state0, update=update, continuous=CONTINUOUS,
-    native="crane_plant.c", crane=CRANE)
+    native="crane_plant.c", crane=CRANE, rules=RULES)

@@ -24,7 +24,8 @@ import math
 from collections import namedtuple
 
 from .component import Component
-from .disturbances import noise
+from .disturbances import SEED, noise
+from .rules import check, finite, non_negative, positive, rule
 from .tables import STATE, input_, output, parameter, state_variables
 
 CHANNEL = 16  # the noise channel of the wind, apart from the sensors' 0-5 and 8-10
@@ -37,21 +38,15 @@ LENGTH_SCALE = _H_FT / (0.177 + 0.000823 * _H_FT) ** 1.2 * 0.3048  # 67.3 m
 WindConfig = namedtuple("WindConfig", "mean sigma time_constant drag1 drag2 l1 l2 seed")
 
 
+RULES = (*finite("U_mean", "l1", "l2"), *non_negative("sigma", "rho", "Cd", "A1", "A2"), *positive("L"),
+         rule("U_mean != 0", "U_mean must not be 0 while sigma > 0: Dryden turbulence is carried by a mean wind (its "
+              "time constant is L / |U_mean|)", when="sigma > 0"),
+         SEED)  # checked in this order (rules.py)
+
+
 def _configure(values):
-    for name in ("U_mean", "l1", "l2"):
-        if not math.isfinite(values[name]):
-            raise ValueError(f"{name} must be finite, got {values[name]!r}")
-    for name in ("sigma", "rho", "Cd", "A1", "A2"):
-        if not (values[name] >= 0 and math.isfinite(values[name])):
-            raise ValueError(f"{name} must be >= 0 and finite, got {values[name]!r}")
-    if not (values["L"] > 0 and math.isfinite(values["L"])):
-        raise ValueError(f"L must be > 0 and finite, got {values['L']!r}")
-    if values["sigma"] > 0 and values["U_mean"] == 0:
-        raise ValueError("U_mean must not be 0 while sigma > 0: Dryden turbulence is carried by a mean wind "
-                         "(its time constant is L / |U_mean|)")
+    check(RULES, values)
     seed = values["seed"]
-    if not (math.isfinite(seed) and seed == int(seed) and 0 <= seed < 2 ** 32):
-        raise ValueError(f"seed must be a whole number in [0, 2^32), got {seed!r}")
     half = 0.5 * values["rho"] * values["Cd"]
     time_constant = values["L"] / abs(values["U_mean"]) if values["U_mean"] else math.inf
     return WindConfig(values["U_mean"], values["sigma"], time_constant, half * values["A1"], half * values["A2"],
@@ -111,4 +106,4 @@ COMPONENT = Component(
      output("wind", "m/s", "wind speed along x: U_mean plus the turbulence")),
     _configure, _output, feedthrough=True, initial_state=_initial_state, update=_update,
     depends_on={"F1": ("dx", "theta1", "dtheta1"), "F2": ("dx", "theta1", "dtheta1", "theta2", "dtheta2")},
-    native="wind.c")
+    native="wind.c", rules=RULES)

@@ -1,15 +1,16 @@
 # pd_sway.py: a controller of your own, one module (standard library and crane_fmu.model only: both are
 # bundled into the FMU). Build it with: crane-fmu build --component pd_sway.py --out build/mine
 from crane_fmu.model.component import Component
-from crane_fmu.model.parameters import positive
+from crane_fmu.model.rules import check, positive
 from crane_fmu.model.tables import MEASURED_STATE, output, parameter
+
+RULES = positive("k_x", "k_v", "u_max")  # each > 0 and finite: one line per rule, each with its message
 
 
 def configure(values):
-    """The parameter values (defaults, then the system's and --set's) -> what `law` needs; a ValueError
-    names the parameter, the rule and the value."""
-    for name in ("k_x", "k_v", "u_max"):
-        positive(name, values[name])
+    """The parameter values (defaults, then the system's and --set's) -> what `law` needs; a value that
+    breaks a rule is refused with a ValueError naming the parameter, the rule and the value."""
+    check(RULES, values)
     return values["k_x"], values["k_v"], values["k_s"], values["x_d"], values["u_max"]
 
 
@@ -33,4 +34,4 @@ COMPONENT = Component(
      parameter("u_max", 2.0, "m/s2", "largest |u|"))
     + MEASURED_STATE  # the inputs: x, dx, theta1, dtheta1, theta2, dtheta2
     + (output("u", "m/s2", "demanded trolley acceleration"),),
-    configure, law, feedthrough=True)  # feedthrough: u depends on the inputs of the same instant
+    configure, law, feedthrough=True, rules=RULES)  # feedthrough: u depends on the inputs of the same instant

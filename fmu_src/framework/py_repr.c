@@ -5,18 +5,41 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The decimal of as many digits as sci (d.ddde[+-]x, no sign) one unit of its last digit above it (up) or below. */
+static void next_decimal(const char *sci, int up, char out[REPR_SIZE]) {
+    unsigned long long m = 0, limit = 1; /* the digits as a whole number, and 10^digits */
+    const char *p = sci;
+    for (; *p && *p != 'e'; p++)
+        if (*p != '.') m = m * 10 + (unsigned)(*p - '0'), limit *= 10;
+    int exponent = atoi(p + 1);
+    m = up ? m + 1 : m - 1;
+    if (m == limit) m /= 10, exponent++;                   /* 9.99 -> 10.0: 1.00, one more in the exponent */
+    else if (m < limit / 10) m = limit - 1, exponent--;   /* 1.00 -> 0.999: 9.99, one less */
+    char digits[24];
+    snprintf(digits, sizeof digits, "%llu", m);
+    snprintf(out, REPR_SIZE, "%c%s%se%d", digits[0], digits[1] ? "." : "", digits + 1, exponent);
+}
+
 char *py_repr(double value, char out[REPR_SIZE]) {
     if (isnan(value)) return strcpy(out, "nan");
     if (isinf(value)) return strcpy(out, value > 0 ? "inf" : "-inf");
-    /* the shortest mantissa that reads back exactly, as d.ddde[+-]x */
-    char sci[REPR_SIZE];
+    /* the shortest mantissa that reads back exactly, as d.ddde[+-]x: the digits rounded from the value, or
+       where they miss it (beside a power of two, where the doubles' spacing halves) the next decimal of as many
+       digits on the value's side, as Python's shortest repr finds it */
+    char sci[REPR_SIZE], next[REPR_SIZE];
+    double magnitude = fabs(value);
     for (int digits = 1; digits <= 17; digits++) {
-        snprintf(sci, sizeof sci, "%.*e", digits - 1, value);
-        if (strtod(sci, NULL) == value) break;
+        snprintf(sci, sizeof sci, "%.*e", digits - 1, magnitude);
+        double back = strtod(sci, NULL);
+        if (back == magnitude) break;
+        next_decimal(sci, back < magnitude, next);
+        if (strtod(next, NULL) == magnitude) {
+            strcpy(sci, next);
+            break;
+        }
     }
     const char *p = sci;
-    int negative = *p == '-';
-    if (negative) p++;
+    int negative = signbit(value) != 0;
     char mantissa[20];
     size_t n = 0;
     for (; *p && *p != 'e'; p++)

@@ -1,9 +1,8 @@
 /*
- * The BacksteppingController component in C: the native twin of crane_fmu/model/backstepping.py (its
- * configure() rules and messages, law() and the output limiting of limits.limited()), registered as a
- * component (component.h). Its variables, value references and start values come from
- * BacksteppingController_variables.h, generated from backstepping.VARIABLES. No state: the output u
- * follows the inputs of the same instant (direct feedthrough).
+ * The BacksteppingController component in C: the native twin of crane_fmu/model/backstepping.py (its configure(),
+ * law() and the output limiting of limits.limited()), registered as a component (component.h). Its variables,
+ * value references, start values and parameter rules come from BacksteppingController_variables.h, generated from
+ * backstepping.VARIABLES. No state: the output u follows the inputs of the same instant (direct feedthrough).
  */
 #include <math.h>
 #include <stdio.h>
@@ -23,30 +22,10 @@ typedef struct {
 } Config;
 
 #define V(name) (values[VR_##name])
-#define R(value) py_repr(value, (char[REPR_SIZE]){0})
 
-/* The rules of backstepping.configure() in its order and words: h, the limits, the plant model, the gains. */
+/* backstepping.configure(), after its RULES (the generated parameter_rules()): law()'s constants. */
 static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
-    const char *b3_form = strings[STRING_b3_form];
-    if (!(isfinite(V(h)) && V(h) > 0)) return rule(r, "h", "> 0 and finite", V(h));
-    if (!(V(u_max) > 0)) return rule(r, "u_max", "> 0 (inf: no limit)", V(u_max));
-    if (!(V(v_max) > 0)) return rule(r, "v_max", "> 0 (inf: no limit)", V(v_max));
-    ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
-    if (plant != MODEL_OK) return plant;
-    static const unsigned finite[] = {VR_K1_x, VR_K1_theta1, VR_K1_theta2, VR_K2_x, VR_K2_theta1, VR_K2_theta2,
-                                      VR_x_d, VR_theta1_d, VR_theta2_d};
-    for (unsigned i = 0; i < 9; i++)
-        if (!isfinite(values[finite[i]])) return rule(r, VARIABLE_TABLE[finite[i]].name, "finite", values[finite[i]]);
-    static const unsigned weights[] = {VR_w_x, VR_w_theta1, VR_w_theta2};
-    for (unsigned i = 0; i < 3; i++) {
-        double value = values[weights[i]];
-        if (!(isfinite(value) && value >= 0)) return rule(r, VARIABLE_TABLE[weights[i]].name, ">= 0 and finite", value);
-    }
-    if (V(w_x) == 0) return report(r, MODEL_ERROR, "w_x must be > 0 (b'Wb must not vanish), got %s", R(V(w_x)));
-    int derived = strcmp(b3_form, "derived") == 0;
-    if (!derived && strcmp(b3_form, "printed") != 0)
-        return report(r, MODEL_ERROR, "b3_form must be one of derived, printed, got %s",
-                      str_repr(b3_form, (char[STR_REPR_SIZE]){0}));
+    int derived = strcmp(strings[STRING_b3_form], "derived") == 0;
     double m1 = V(m1), m2 = V(m2), l2 = V(l2), g = V(g);
     c->a = 2.0 * m1 + m2;
     c->m2 = m2, c->l1 = V(l1), c->l2 = l2;

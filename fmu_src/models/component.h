@@ -1,7 +1,7 @@
 /*
  * A native component: the C twin of crane_fmu/model/component.py's Component. A model file holds only the
- * component's equations and rules, as plain functions of the values by value reference, its configuration and
- * its state:
+ * component's equations and the rules that need a computation, as plain functions of the values by value
+ * reference, its configuration and its state:
  *
  *   typedef struct { ... } Config;                 what configure() makes of the parameters
  *   typedef struct { ... } State;                  a component with a state only
@@ -16,6 +16,8 @@
  * <ModelIdentifier>_MODEL. Everything else a model does (start values, gets and sets with their checks and
  * messages, outputs before initialisation following the parameters, FMU states) is component.c's, from the
  * variable table that `crane-fmu build` generates into <ModelIdentifier>_variables.h from the component's table.
+ * That header also holds parameter_rules(), the component's declared parameter rules (its RULES), which the
+ * registration runs before configure(): configure() sees only values that meet them.
  */
 #ifndef COMPONENT_H
 #define COMPONENT_H
@@ -130,7 +132,8 @@ ModelStatus store_reals(const char *model, const VariableRow table[], unsigned n
 /* The registration of a model file whose component has no state: Config, configure() and outputs(). */
 #define STATELESS_COMPONENT                                                                                  \
     static ModelStatus configure_(const double v[], const StringValue s[], void *c, const Reporter *r) {      \
-        return configure(v, s, c, r);                                                                        \
+        ModelStatus status = parameter_rules(v, s, r); /* the generated header's: the declared rules first */ \
+        return status != MODEL_OK ? status : configure(v, s, c, r);                                          \
     }                                                                                                        \
     static ModelStatus outputs_(const double v[], const void *c, const void *s, double out[],                \
                                 const Reporter *r) {                                                         \
@@ -144,7 +147,8 @@ ModelStatus store_reals(const char *model, const VariableRow table[], unsigned n
 /* The functions of a component with a state, typed for the model file's Config and State. */
 #define STATEFUL_FUNCTIONS_                                                                                  \
     static ModelStatus configure_(const double v[], const StringValue s[], void *c, const Reporter *r) {      \
-        return configure(v, s, c, r);                                                                        \
+        ModelStatus status = parameter_rules(v, s, r); /* the generated header's: the declared rules first */ \
+        return status != MODEL_OK ? status : configure(v, s, c, r);                                          \
     }                                                                                                        \
     static void initial_state_(const double v[], const void *c, void *s) { initial_state(v, c, s); }         \
     static ModelStatus outputs_(const double v[], const void *c, const void *s, double out[],                \

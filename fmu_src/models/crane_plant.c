@@ -1,9 +1,9 @@
 /*
- * The CranePlant component in C: the native twin of crane_fmu/model/plant.py (its configure() rules and
- * messages, initial_state(), output() and update()), registered as a component (component.h) that a host can
- * also integrate (Model Exchange: plant_continuous.c's derivatives, event indicators and event updates). Its variables,
- * value references and start values come from CranePlant_variables.h, which `crane-fmu build` generates from
- * the same table (plant.VARIABLES) as the Python FMU's modelDescription.xml.
+ * The CranePlant component in C: the native twin of crane_fmu/model/plant.py (its configure(), initial_state(),
+ * output() and update()), registered as a component (component.h) that a host can also integrate (Model
+ * Exchange: plant_continuous.c's derivatives, event indicators and event updates). Its variables, value
+ * references, start values and parameter rules come from CranePlant_variables.h, which `crane-fmu build`
+ * generates from the same table and rules (plant.VARIABLES, plant.RULES) as the Python FMU is built from.
  */
 #include <math.h>
 #include <stdio.h>
@@ -36,34 +36,8 @@ typedef struct {
 #define V(name) (values[VR_##name])
 #define R(value) py_repr(value, (char[REPR_SIZE]){0})
 
-/* The rules of plant.configure() and parameters.py, in their order and words. */
+/* plant.configure(), after its RULES (the generated parameter_rules()). */
 static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
-    if (!(isfinite(V(max_substep)) && V(max_substep) > 0)) return rule(r, "max_substep", "> 0 and finite", V(max_substep));
-    ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
-    if (plant != MODEL_OK) return plant;
-    static const unsigned at_least_zero[] = {VR_c1, VR_c2, VR_tau, VR_l1_min};
-    for (unsigned i = 0; i < 4; i++) {
-        double value = values[at_least_zero[i]];
-        if (!(value >= 0.0 && isfinite(value)))
-            return rule(r, VARIABLE_TABLE[at_least_zero[i]].name, ">= 0 and finite", value);
-    }
-    static const unsigned limits[] = {VR_u_max, VR_v_max, VR_dl1_max};
-    for (unsigned i = 0; i < 3; i++) {
-        double value = values[limits[i]];
-        if (!(value > 0.0)) return rule(r, VARIABLE_TABLE[limits[i]].name, "> 0 (INF: no limit)", value);
-    }
-    if (V(m2) == 0 && V(c2) != 0)
-        return report(r, MODEL_ERROR, "c2 must be 0 when m2 = 0 (the hook joint then moves no mass), got %s", R(V(c2)));
-    if (!(V(x_min) < V(x_max)))
-        return report(r, MODEL_ERROR, "x_min must be < x_max, got %s and %s", R(V(x_min)), R(V(x_max)));
-    static const unsigned initial[] = {VR_x0, VR_dx0, VR_theta1_0, VR_dtheta1_0, VR_theta2_0, VR_dtheta2_0};
-    for (unsigned i = 0; i < 6; i++)
-        if (!isfinite(values[initial[i]])) return rule(r, VARIABLE_TABLE[initial[i]].name, "finite", values[initial[i]]);
-    if (!(V(x_min) <= V(x0) && V(x0) <= V(x_max)))
-        return report(r, MODEL_ERROR, "x0 must lie on the rail [%s, %s], got %s", R(V(x_min)), R(V(x_max)), R(V(x0)));
-    if (!(V(l1_min) <= V(l1) && V(l1) <= V(l1_max)))
-        return report(r, MODEL_ERROR, "l1 must lie within [l1_min, l1_max] = [%s, %s], got %s", R(V(l1_min)),
-                      R(V(l1_max)), R(V(l1)));
     *c = (Config){{V(m1), V(m2), V(l1), V(l2), V(g)}, {0.0, 0.0, 0.0, V(c1), V(c2)}, V(max_substep),
                   unlimited(V(u_max)), unlimited(V(v_max)), V(tau), unlimited(V(x_min)), unlimited(V(x_max)),
                   V(l1_min), unlimited(V(l1_max)), unlimited(V(dl1_max)), /* 1e60 and beyond: no limit */

@@ -1,9 +1,9 @@
 /*
  * The CraneSensor component in C: the native twin of CraneSensor in crane_fmu/model/disturbances.py (its
- * variables, _crane_sensor_configure() rules and messages, crane_measure() with noise.h's noise() on channels
- * 8-10, and the delay of whole steps), registered as a component (component.h). Its variables come from
- * CraneSensor_variables.h, generated from disturbances.CRANE_SENSOR. Its state is (k, history): the sample
- * count and the last `delay` samples, oldest first, none at first.
+ * variables, _crane_sensor_configure(), crane_measure() with noise.h's noise() on channels 8-10, and the delay of
+ * whole steps), registered as a component (component.h). Its variables and parameter rules come from
+ * CraneSensor_variables.h, generated from disturbances.CRANE_SENSOR. Its state is (k, history): the sample count
+ * and the last `delay` samples, oldest first, none at first.
  */
 #include <math.h>
 #include <stdint.h>
@@ -27,20 +27,10 @@ typedef struct {
 
 #define V(name) (values[VR_##name])
 
-/* The rules of _crane_sensor_configure() in its order and words. */
+/* _crane_sensor_configure(), after its rules (the generated parameter_rules()). */
 static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
-    static const unsigned sigmas[] = {VR_sigma_x, VR_sigma_theta1, VR_sigma_theta2};
-    for (unsigned i = 0; i < N_OUTPUTS; i++) {
-        double value = values[sigmas[i]];
-        if (!(value >= 0 && isfinite(value))) return rule(r, VARIABLE_TABLE[sigmas[i]].name, ">= 0 and finite", value);
-        c->sigmas[i] = value;
-    }
-    double seed = V(seed), delay = V(delay);
-    if (!(isfinite(seed) && seed == trunc(seed) && 0 <= seed && seed < 4294967296.0))
-        return rule(r, "seed", "a whole number in [0, 2^32)", seed);
-    if (!(isfinite(delay) && delay == trunc(delay) && 0 <= delay && delay <= MAX_DELAY))
-        return rule(r, "delay", "a whole number of steps in [0, 100]", delay);
-    c->seed = (uint64_t)seed, c->delay = (int)delay;
+    c->sigmas[0] = V(sigma_x), c->sigmas[1] = V(sigma_theta1), c->sigmas[2] = V(sigma_theta2);
+    c->seed = (uint64_t)V(seed), c->delay = (int)V(delay);
     return MODEL_OK;
 }
 

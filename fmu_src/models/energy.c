@@ -1,8 +1,8 @@
 /*
- * The EnergyController component in C: the native twin of crane_fmu/model/energy.py (its variables,
- * configure() rules and messages, control(): eqs (E2)-(E4) with limits.limited()), registered as a component
- * (component.h). Its variables come from EnergyController_variables.h, generated from
- * energy.VARIABLES. No state: the output u follows the inputs of the same instant (direct feedthrough).
+ * The EnergyController component in C: the native twin of crane_fmu/model/energy.py (its variables, configure(),
+ * control(): eqs (E2)-(E4) with limits.limited()), registered as a component (component.h). Its variables and
+ * parameter rules come from EnergyController_variables.h, generated from energy.VARIABLES. No state: the output u
+ * follows the inputs of the same instant (direct feedthrough).
  */
 #include <math.h>
 #include <stdio.h>
@@ -20,20 +20,9 @@ typedef struct {
 
 #define V(name) (values[VR_##name])
 
-/* The rules of energy.configure() in its order and words: the plant model, the gains and h, x_d, the limits. */
+/* energy.configure(), after its RULES (the generated parameter_rules()). */
 static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
-    ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
-    if (plant != MODEL_OK) return plant;
-    static const unsigned positive[] = {VR_k_c, VR_k_p, VR_k_d, VR_h};
-    for (unsigned i = 0; i < 4; i++) {
-        double value = values[positive[i]];
-        if (!(isfinite(value) && value > 0)) return rule(r, VARIABLE_TABLE[positive[i]].name, "> 0 and finite", value);
-    }
-    if (!isfinite(V(x_d))) return rule(r, "x_d", "finite", V(x_d));
-    if (!(V(u_max) > 0)) return rule(r, "u_max", "> 0 (inf: no limit)", V(u_max));
-    if (!(V(v_max) > 0)) return rule(r, "v_max", "> 0 (inf: no limit)", V(v_max));
     double u_max = unlimited(V(u_max)), v_max = unlimited(V(v_max));
-    if (!isfinite(u_max)) return rule(r, "u_max", "finite for the saturated law (E4)", u_max);
     *c = (Config){V(m1) + V(m2), V(m2), V(l1), V(l2), V(k_c), V(k_p), V(k_d), V(x_d), u_max, v_max, V(h)};
     return MODEL_OK;
 }

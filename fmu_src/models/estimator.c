@@ -1,11 +1,11 @@
 /*
- * The StateEstimator component in C: the native twin of crane_fmu/model/estimator.py (its variables, configure()
- * rules and messages in their order, noise_model() and design(): the steady Kalman filter of the crane linearised
- * about rest, and update(): correct, then predict over the delay), registered as a component (component.h). Its
- * variables come from StateEstimator_variables.h, generated from estimator.VARIABLES. The filter is designed
- * when initialisation ends (lqr_design.c's continuous model, linalg.c's ZOH and Riccati doubling, in
- * estimator.py's order of operations). Its state is (started, s, the last delay inputs u, the estimate); the
- * outputs are the estimate, zero until the first step (no direct feedthrough).
+ * The StateEstimator component in C: the native twin of crane_fmu/model/estimator.py (its variables, configure(),
+ * noise_model() and design(): the steady Kalman filter of the crane linearised about rest, and update(): correct,
+ * then predict over the delay), registered as a component (component.h). Its variables and parameter rules come
+ * from StateEstimator_variables.h, generated from estimator.VARIABLES. The filter is designed when initialisation
+ * ends (lqr_design.c's continuous model, linalg.c's ZOH and Riccati doubling, in estimator.py's order of
+ * operations). Its state is (started, s, the last delay inputs u, the estimate); the outputs are the estimate,
+ * zero until the first step (no direct feedthrough).
  */
 #include <math.h>
 #include <stdio.h>
@@ -48,6 +48,7 @@ static const char *noise_model(const PlantParameters *p, double h, double sigma_
     *bd = la_zeros(N_STATE, 1);
     for (int i = 0; i < N_STATE; i++) bd->v[i][0] = gd.v[i][0];
     double variances[3] = {square(sigma_u), square(sigma_swing), square(sigma_swing)};
+    if (isinf(variances[0]) || isinf(variances[1])) return SQUARE_OVERFLOW; /* the sigmas are finite */
     *qd = la_zeros(N_STATE, N_STATE);
     for (int i = 0; i < N_STATE; i++) {
         double weighted[3];
@@ -62,7 +63,10 @@ static const char *noise_model(const PlantParameters *p, double h, double sigma_
 static const char *design(const Matrix *ad, const Matrix *qd, const double sigmas[MAX_MEASURED], Config *c) {
     int n = c->n_rows;
     Matrix cc = la_zeros(n, N_STATE), r = la_zeros(n, n), big_p, gain_t;
-    for (int i = 0; i < n; i++) cc.v[i][c->rows[i]] = 1.0, r.v[i][i] = square(sigmas[i]);
+    for (int i = 0; i < n; i++) {
+        cc.v[i][c->rows[i]] = 1.0, r.v[i][i] = square(sigmas[i]);
+        if (isinf(r.v[i][i])) return SQUARE_OVERFLOW; /* the sigmas are finite */
+    }
     const char *error = la_dare(la_transpose(*ad), la_transpose(cc), *qd, r, &big_p);
     if (error) return error;
     Matrix pct = la_zeros(N_STATE, n), innovation = la_zeros(n, n); /* P C', C P C' + R */
@@ -76,21 +80,9 @@ static const char *design(const Matrix *ad, const Matrix *qd, const double sigma
     return NULL;
 }
 
-/* estimator.configure(): the rules of the crane model, h, the noises, camera and delay, in that order and in their
-   words; then the filter. */
+/* estimator.configure(), after its RULES (the generated parameter_rules()): the filter. */
 static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
-    ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
-    if (plant != MODEL_OK) return plant;
-    static const unsigned positive[] = {VR_h, VR_sigma_x, VR_sigma_theta, VR_sigma_u, VR_sigma_swing};
-    for (unsigned i = 0; i < 5; i++) {
-        double value = values[positive[i]];
-        if (!(isfinite(value) && value > 0)) return rule(r, VARIABLE_TABLE[positive[i]].name, "> 0 and finite", value);
-    }
-    if (!(V(camera) == 0.0 || V(camera) == 1.0))
-        return rule(r, "camera", "0 (x and theta1 measured) or 1 (theta2 too)", V(camera));
     double delay = V(delay);
-    if (!(isfinite(delay) && delay == trunc(delay) && 0 <= delay && delay <= MAX_DELAY))
-        return rule(r, "delay", "a whole number of steps in [0, 100]", delay);
     PlantParameters p = {V(m1), V(m2), V(l1), V(l2), V(g)};
     Matrix ad, bd, qd;
     c->n_rows = V(camera) == 1.0 ? 3 : 2, c->rows[0] = 0, c->rows[1] = 2, c->rows[2] = 4; /* measured_rows() */

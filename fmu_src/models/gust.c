@@ -1,8 +1,8 @@
 /*
  * The Gust component in C: the native twin of Gust in crane_fmu/model/disturbances.py (its variables,
- * _gust_configure() rules and messages, gust()), registered as a component (component.h). Its variables
- * come from Gust_variables.h, generated from disturbances.GUST. Its state is the time of its outputs:
- * 0 at first, then the end of the last step (time + step, the component's update()).
+ * _gust_configure(), gust()), registered as a component (component.h). Its variables and parameter rules come from
+ * Gust_variables.h, generated from disturbances.GUST. Its state is the time of its outputs: 0 at first, then the
+ * end of the last step (time + step, the component's update()).
  */
 #include <math.h>
 #include <stdio.h>
@@ -24,12 +24,8 @@ STATE_IS_TIME
 
 #define V(name) (values[VR_##name])
 
-/* The rules of _gust_configure() in its order and words. */
+/* _gust_configure(), after its rules (the generated parameter_rules()). */
 static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
-    static const unsigned finite[] = {VR_F1_peak, VR_F2_peak, VR_start};
-    for (unsigned i = 0; i < 3; i++)
-        if (!isfinite(values[finite[i]])) return rule(r, VARIABLE_TABLE[finite[i]].name, "finite", values[finite[i]]);
-    if (!(V(duration) > 0 && isfinite(V(duration)))) return rule(r, "duration", "> 0 and finite", V(duration));
     *c = (Config){V(F1_peak), V(F2_peak), V(start), V(duration)};
     return MODEL_OK;
 }

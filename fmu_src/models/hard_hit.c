@@ -1,10 +1,10 @@
 /*
  * The HardHitController component in C: the native twin of crane_fmu/model/hard_hit.py (its variables,
- * configure() rules and messages in their order, the two LQR designs of lqr_design.c, the swing energy of
- * eq (E1), the blend and control() with limits.limited()), registered as a component (component.h). Its
- * variables come from HardHitController_variables.h, generated from hard_hit.VARIABLES. The designs are done when
- * initialisation ends; before that the output follows the parameters. No state: u follows the inputs of the same
- * instant (direct feedthrough).
+ * configure(), the two LQR designs of lqr_design.c, the swing energy of eq (E1), the blend and control() with
+ * limits.limited()), registered as a component (component.h). Its variables and parameter rules come from
+ * HardHitController_variables.h, generated from hard_hit.VARIABLES. The designs are done when initialisation ends;
+ * before that the output follows the parameters. No state: u follows the inputs of the same instant (direct
+ * feedthrough).
  */
 #include <math.h>
 #include <stdio.h>
@@ -16,38 +16,16 @@
 #include "py_repr.h"
 #include "rules.h"
 
-#define HALF_PI 1.5707963267948966 /* math.pi / 2 */
-
 /* hard_hit.Config */
 typedef struct {
     double near[N_STATE], far[N_STATE], e_near, e_far, mu, m2, l1, l2, g, x_d, u_max, v_max, h;
 } Config;
 
 #define V(name) (values[VR_##name])
-#define R(value) py_repr(value, (char[REPR_SIZE]){0})
 
-/* hard_hit.configure(): the rules of the crane model, the weights (q_x_far too), r, r_far, h, theta_near,
-   theta_far, x_d and the limits, in that order and in their words; then the near and the far design. */
+/* hard_hit.configure(), after its RULES (the generated parameter_rules()): the near and the far design. */
 static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
-    ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
-    if (plant != MODEL_OK) return plant;
-    static const unsigned weights[] = {VR_q_x, VR_q_dx, VR_q_theta1, VR_q_dtheta1, VR_q_theta2, VR_q_dtheta2,
-                                       VR_q_x_far};
-    for (unsigned i = 0; i < 7; i++) {
-        double value = values[weights[i]];
-        if (!(value >= 0 && value < INFINITY)) return rule(r, VARIABLE_TABLE[weights[i]].name, ">= 0 and finite", value);
-    }
-    static const unsigned positive[] = {VR_r, VR_r_far, VR_h, VR_theta_near};
-    for (unsigned i = 0; i < 4; i++) {
-        double value = values[positive[i]];
-        if (!(isfinite(value) && value > 0)) return rule(r, VARIABLE_TABLE[positive[i]].name, "> 0 and finite", value);
-    }
     double near = V(theta_near), far = V(theta_far);
-    if (!(isfinite(far) && near < far && far < HALF_PI))
-        return report(r, MODEL_ERROR, "theta_far must be > theta_near = %s and < pi/2, got %s", R(near), R(far));
-    if (!isfinite(V(x_d))) return rule(r, "x_d", "finite", V(x_d));
-    if (!(V(u_max) > 0)) return rule(r, "u_max", "> 0 (inf: no limit)", V(u_max));
-    if (!(V(v_max) > 0)) return rule(r, "v_max", "> 0 (inf: no limit)", V(v_max));
     PlantParameters p = {V(m1), V(m2), V(l1), V(l2), V(g)};
     double far_weights[N_STATE];
     memcpy(far_weights, &values[VR_q_x], sizeof far_weights);

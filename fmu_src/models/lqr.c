@@ -1,10 +1,10 @@
 /*
- * The LqrController component in C: the native twin of crane_fmu/model/lqr.py (its variables, configure()
- * rules and messages in their order, the gain schedule, control() with limits.limited()), registered as a
- * component (component.h). Its variables, value references and start values come from
- * LqrController_variables.h, generated from lqr.VARIABLES. The designs (ZOH discretisation, Riccati doubling,
- * gains: lqr_design.c over linalg.c) are done when initialisation ends; before that the output follows the
- * parameters. No state: u follows the inputs of the same instant (direct feedthrough).
+ * The LqrController component in C: the native twin of crane_fmu/model/lqr.py (its variables, configure(), the
+ * gain schedule, control() with limits.limited()), registered as a component (component.h). Its variables, value
+ * references, start values and parameter rules come from LqrController_variables.h, generated from lqr.VARIABLES.
+ * The designs (ZOH discretisation, Riccati doubling, gains: lqr_design.c over linalg.c) are done when
+ * initialisation ends; before that the output follows the parameters. No state: u follows the inputs of the same
+ * instant (direct feedthrough).
  */
 #include <math.h>
 #include <stdio.h>
@@ -26,7 +26,6 @@ typedef struct {
 } Config;
 
 #define V(name) (values[VR_##name])
-#define R(value) py_repr(value, (char[REPR_SIZE]){0})
 
 /* lqr.design() for the controller's crane model with the cable length l1 (lqr_design.c). */
 static const char *design(const double values[], double l1, double gains[N_STATE]) {
@@ -34,27 +33,13 @@ static const char *design(const double values[], double l1, double gains[N_STATE
     return lqr_design(&p, &values[VR_q_x], V(r), V(h), gains);
 }
 
-/* lqr.configure(): the rules of parameters.plant_parameters, the weights, r, h, x_d, limits.check and the
-   schedule, in that order and in their words; then the schedule's designs and the design for l1. */
+/* lqr.configure(), after its RULES (the generated parameter_rules()): the schedule's designs and the design for
+   l1. */
 static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
-    ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
-    if (plant != MODEL_OK) return plant;
-    for (int i = 0; i < N_STATE; i++) {
-        double value = values[VR_q_x + i];
-        if (!(value >= 0 && value < INFINITY)) return rule(r, VARIABLE_TABLE[VR_q_x + i].name, ">= 0 and finite", value);
-    }
-    if (!(isfinite(V(r)) && V(r) > 0)) return rule(r, "r", "> 0 and finite", V(r));
-    if (!(isfinite(V(h)) && V(h) > 0)) return rule(r, "h", "> 0 and finite", V(h));
-    if (!isfinite(V(x_d))) return rule(r, "x_d", "finite", V(x_d));
-    if (!(V(u_max) > 0)) return rule(r, "u_max", "> 0 (inf: no limit)", V(u_max));
-    if (!(V(v_max) > 0)) return rule(r, "v_max", "> 0 (inf: no limit)", V(v_max));
     double low = V(l1_low), high = V(l1_high);
     const char *error;
     c->scheduled = !(low == 0.0 && high == 0.0);
     if (c->scheduled) {
-        if (!(isfinite(low) && low > 0)) return rule(r, "l1_low", "> 0 and finite", low);
-        if (!(high > low) || !isfinite(high))
-            return report(r, MODEL_ERROR, "l1_high must be finite and > l1_low = %s, got %s", R(low), R(high));
         for (int i = 0; i < SCHEDULE_POINTS; i++) {
             c->lengths[i] = low + (high - low) * i / (SCHEDULE_POINTS - 1);
             if ((error = design(values, c->lengths[i], c->table[i]))) return report(r, MODEL_ERROR, "%s", error);

@@ -1,9 +1,9 @@
 /*
- * The MpcController component in C: the native twin of crane_fmu/model/mpc.py (its variables, configure() rules
- * and messages in their order, the tracking designs, the plan by bisection, the tracking QP with its warm start and
- * its iteration cap, the identification and the plans made again), registered as a component (component.h). Its
- * variables come from MpcController_variables.h, generated from mpc.VARIABLES. The QPs are solved by qp.c, the
- * C of qp.py; the designs are made by lqr_design.c and linalg.c in mpc.py's order of operations.
+ * The MpcController component in C: the native twin of crane_fmu/model/mpc.py (its variables, configure(), the
+ * tracking designs, the plan by bisection, the tracking QP with its warm start and its iteration cap, the
+ * identification and the plans made again), registered as a component (component.h). Its variables and parameter
+ * rules come from MpcController_variables.h, generated from mpc.VARIABLES. The QPs are solved by qp.c, the C of
+ * qp.py; the designs are made by lqr_design.c and linalg.c in mpc.py's order of operations.
  *
  * The state is mpc.py's tuple as a flat array in its layout (the header, the last solution, its active rows, the
  * plan's inputs and states). The Config holds the designs (fixed-size, so that an FMU state is a plain copy of the
@@ -166,33 +166,10 @@ static const char *design(Config *c, const PlantParameters *p, Design *d) {
     return modes(p, d);
 }
 
-/* mpc.configure(): the rules in their order and words, then the designs (one, or one per scheduled length). */
+/* mpc.configure(), after its RULES (the generated parameter_rules()): the rules that need the interval and the
+   horizon counted in steps, then the designs (one, or one per scheduled length). */
 static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
-    ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
-    if (plant != MODEL_OK) return plant;
-    for (int i = 0; i < N_STATE; i++) {
-        double value = values[VR_q_x + i];
-        if (!(value >= 0 && value < INFINITY))
-            return rule(r, VARIABLE_TABLE[VR_q_x + i].name, ">= 0 and finite", value);
-    }
-    static const unsigned positive[] = {VR_r, VR_h, VR_interval, VR_horizon, VR_replan_x, VR_replan_angle};
-    for (unsigned i = 0; i < 6; i++) {
-        double value = values[positive[i]];
-        if (!(isfinite(value) && value > 0)) return rule(r, VARIABLE_TABLE[positive[i]].name, "> 0 and finite", value);
-    }
-    if (!(0 <= V(margin) && V(margin) < 1)) return rule(r, "margin", ">= 0 and < 1", V(margin));
-    double cap = V(max_iterations);
-    if (cap >= 1 && isinf(cap)) /* int(cap) in Python */
-        return report(r, MODEL_ERROR, "OverflowError: cannot convert float infinity to integer");
-    if (!(cap >= 1 && cap == trunc(cap))) return rule(r, "max_iterations", "a whole number >= 1", cap);
-    if (!(0 <= V(identify) && V(identify) < INFINITY)) return rule(r, "identify", ">= 0 and finite", V(identify));
-    if (!isfinite(V(x_d))) return rule(r, "x_d", "finite", V(x_d));
-    if (!(V(u_max) > 0)) return rule(r, "u_max", "> 0 (inf: no limit)", V(u_max));
-    if (!(V(v_max) > 0)) return rule(r, "v_max", "> 0 (inf: no limit)", V(v_max));
-    double u_max = unlimited(V(u_max)), v_max = unlimited(V(v_max));
-    if (!(isfinite(u_max) && isfinite(v_max)))
-        return report(r, MODEL_ERROR, "u_max and v_max must be finite (the MPC's constraints), got %s, %s", R(u_max),
-                      R(v_max));
+    double u_max = unlimited(V(u_max)), v_max = unlimited(V(v_max)), cap = V(max_iterations);
     double h = V(h), every = py_max(1.0, rint(V(interval) / h)), interval = every * h;
     double steps = py_max(1.0, rint(V(horizon) / interval));
     if (steps > MAX_STEPS)
@@ -208,12 +185,7 @@ static ModelStatus configure(const double values[], const StringValue strings[],
     c->replan_x = V(replan_x), c->replan_angle = V(replan_angle);
     double low = V(l1_low), high = V(l1_high);
     c->n_designs = 1;
-    if (!(low == 0.0 && high == 0.0)) {
-        if (!(isfinite(low) && low > 0)) return rule(r, "l1_low", "> 0 and finite", low);
-        if (!(high > low) || !isfinite(high))
-            return report(r, MODEL_ERROR, "l1_high must be finite and > l1_low = %s, got %s", R(low), R(high));
-        c->n_designs = SCHEDULE_POINTS;
-    }
+    if (!(low == 0.0 && high == 0.0)) c->n_designs = SCHEDULE_POINTS;
     constraint_rows(c->steps, interval, c->first, c->length, c->offset, c->values);
     for (int i = 0; i < c->n_designs; i++) {
         PlantParameters p = c->plant;

@@ -1,9 +1,9 @@
 /*
- * The TrajectoryPlanner component in C: the native twin of crane_fmu/model/planner.py (its variables,
- * configure() rules and messages, the shapers, modes() on plant_equations.linearisation(), the
- * bang-coast-bang base and reference()), registered as a component (component.h). Its variables come
- * from TrajectoryPlanner_variables.h, generated from planner.VARIABLES. Its state is the time of its
- * outputs: 0 at first, then the end of the last step (time + step, the component's update()).
+ * The TrajectoryPlanner component in C: the native twin of crane_fmu/model/planner.py (its variables, configure(),
+ * the shapers, modes() on plant_equations.linearisation(), the bang-coast-bang base and reference()), registered
+ * as a component (component.h). Its variables and parameter rules come from TrajectoryPlanner_variables.h,
+ * generated from planner.VARIABLES. Its state is the time of its outputs: 0 at first, then the end of the last
+ * step (time + step, the component's update()).
  */
 #include <math.h>
 #include <stdio.h>
@@ -33,7 +33,6 @@ typedef struct {
 STATE_IS_TIME
 
 #define V(name) (values[VR_##name])
-#define R(value) py_repr(value, (char[REPR_SIZE]){0})
 
 /* Python's sorted() of (time, value) tuples: by time, then value (insertion sort: at most 36 pairs). */
 static void sort_pairs(Pair p[], int n) {
@@ -122,24 +121,10 @@ static double peak(const Pair steps[], int n) {
     return top;
 }
 
-/* The rules of planner.configure() in its order and words, then its plan. */
+/* planner.configure(), after its RULES (the generated parameter_rules()): its plan. */
 static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
     const char *kind = strings[STRING_shaper];
-    ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
-    if (plant != MODEL_OK) return plant;
-    double u_max = V(u_max), v_max = V(v_max);
-    if (!(u_max > 0)) return rule(r, "u_max", "> 0 (inf: no limit)", u_max);
-    if (!(v_max > 0)) return rule(r, "v_max", "> 0 (inf: no limit)", v_max);
-    u_max = unlimited(u_max), v_max = unlimited(v_max);
-    if (strcmp(kind, "zv") && strcmp(kind, "zvd") && strcmp(kind, "ei") && strcmp(kind, "none"))
-        return report(r, MODEL_ERROR, "shaper must be one of zv, zvd, ei, none, got %s",
-                      str_repr(kind, (char[STR_REPR_SIZE]){0}));
-    static const unsigned finite[] = {VR_x0, VR_x_d, VR_t0};
-    for (unsigned i = 0; i < 3; i++)
-        if (!isfinite(values[finite[i]])) return rule(r, VARIABLE_TABLE[finite[i]].name, "finite", values[finite[i]]);
-    if (!(isfinite(u_max) && isfinite(v_max)))
-        return report(r, MODEL_ERROR, "u_max and v_max must be finite for a planned move, got %s, %s", R(u_max),
-                      R(v_max));
+    double u_max = unlimited(V(u_max)), v_max = unlimited(V(v_max));
     memset(c, 0, sizeof *c);
     ModelStatus status = modes(V(m1), V(m2), V(l1), V(l2), V(g), c, r);
     if (status != MODEL_OK) return status;

@@ -38,4 +38,7 @@ static inline double square(double x) {
 }
 #endif
 
+/* What Python raises where x ** 2 of a finite x overflows (square() then gives inf). */
+#define SQUARE_OVERFLOW "OverflowError: (34, 'Numerical result out of range')"
+
 #endif

@@ -1,26 +1,26 @@
 /*
- * What the model files share of the Python models (included after their generated variable header, with math.h,
- * stdio.h, string.h and py_repr.h): the rule messages of parameters.py and the configure()s, the crane model's
- * rules, the Python FMU's messages where its model divides by zero or takes the root of a negative number,
- * Python's repr() of a str, max() and min(); limits.unlimited() and limits.limited().
+ * What the model files share of the Python models: the language of the parameter rules (crane_fmu/model/rules.py)
+ * that the generated variable headers check, the Python FMU's messages where its model divides by zero or takes
+ * the root of a negative number, Python's repr() of a float and a str, max() and min(); limits.unlimited() and
+ * limits.limited().
  */
 #ifndef RULES_H
 #define RULES_H
 
-/* "name must be text, got repr(value)": the rule messages of parameters.py and the configure()s. */
-static inline ModelStatus rule(const Reporter *r, const char *name, const char *text, double value) {
-    return report(r, MODEL_ERROR, "%s must be %s, got %s", name, text, py_repr(value, (char[REPR_SIZE]){0}));
-}
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
 
-/* parameters.plant_parameters(): the rules of a component's crane model, in their order and words. */
-static inline ModelStatus plant_rules(double m1, double m2, double l1, double l2, double g, const Reporter *r) {
-    if (!(isfinite(m1) && m1 > 0)) return rule(r, "m1", "> 0 and finite", m1);
-    if (!(isfinite(m2) && m2 >= 0)) return rule(r, "m2", ">= 0 and finite", m2);
-    if (!(isfinite(l1) && l1 > 0)) return rule(r, "l1", "> 0 and finite", l1);
-    if (!(isfinite(l2) && l2 > 0)) return rule(r, "l2", "> 0 and finite", l2);
-    if (!(isfinite(g) && g > 0)) return rule(r, "g", "> 0 and finite", g);
-    return MODEL_OK;
-}
+#include "component.h"
+#include "py_repr.h"
+
+/* Python's repr() of a double (py_repr.h) and of a str (str_repr below), in a buffer that lives as long as the
+   statement: the values a rule's message shows. */
+#define REPR(value) py_repr(value, (char[REPR_SIZE]){0})
+#define STR_REPR(text) str_repr(text, (char[STR_REPR_SIZE]){0})
+
+/* rules.whole(): finite, with no fraction. */
+static inline int is_whole(double value) { return isfinite(value) && value == trunc(value); }
 
 /* The Python FMU's messages where its model divides by zero or takes the square root of a negative number. */
 #define ZERO_DIVISION(r) report(r, MODEL_ERROR, "ZeroDivisionError: float division by zero")

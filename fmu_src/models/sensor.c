@@ -1,9 +1,8 @@
 /*
- * The Sensor component in C: the native twin of Sensor in crane_fmu/model/disturbances.py (its
- * variables, _sensor_configure() rules and messages, noise.h's measure()
- * and the one-step delay), registered as a component (component.h). Its variables come from
- * Sensor_variables.h, generated from disturbances.SENSOR. Its state is (k, held): the sample count and
- * the last sample, none at first.
+ * The Sensor component in C: the native twin of Sensor in crane_fmu/model/disturbances.py (its variables,
+ * _sensor_configure(), noise.h's measure() and the one-step delay), registered as a component (component.h). Its
+ * variables and parameter rules come from Sensor_variables.h, generated from disturbances.SENSOR. Its state is (k,
+ * held): the sample count and the last sample, none at first.
  */
 #include <math.h>
 #include <stdint.h>
@@ -26,20 +25,11 @@ typedef struct {
 
 #define V(name) (values[VR_##name])
 
-/* The rules of _sensor_configure() in its order and words. */
+/* _sensor_configure(), after its rules (the generated parameter_rules()). */
 static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
-    static const unsigned sigmas[] = {VR_sigma_x, VR_sigma_dx, VR_sigma_theta, VR_sigma_dtheta};
-    for (unsigned i = 0; i < 4; i++) {
-        double value = values[sigmas[i]];
-        if (!(value >= 0 && isfinite(value))) return rule(r, VARIABLE_TABLE[sigmas[i]].name, ">= 0 and finite", value);
-    }
-    double seed = V(seed);
-    if (!(isfinite(seed) && seed == trunc(seed) && 0 <= seed && seed < 4294967296.0))
-        return rule(r, "seed", "a whole number in [0, 2^32)", seed);
-    if (!(V(delay) == 0.0 || V(delay) == 1.0)) return rule(r, "delay", "0 or 1 (communication steps)", V(delay));
     double s[6] = {V(sigma_x), V(sigma_dx), V(sigma_theta), V(sigma_dtheta), V(sigma_theta), V(sigma_dtheta)};
     memcpy(c->sigmas, s, sizeof s);
-    c->seed = (uint64_t)seed, c->delay = V(delay) == 1.0;
+    c->seed = (uint64_t)V(seed), c->delay = V(delay) == 1.0;
     return MODEL_OK;
 }
 

@@ -1,9 +1,9 @@
 /*
- * The Wind component in C: the native twin of crane_fmu/model/wind.py (its variables, _configure() rules and
- * messages in their order, turbulence_step(), drag() and _output()), registered as a component (component.h). Its
- * variables come from Wind_variables.h, generated from wind.COMPONENT. Its state is (k, w): the sample count and
- * the Dryden turbulence at sample k, drawn at first from the stationary distribution; the noise is noise.h's,
- * the Python wind's sequence for the same seed.
+ * The Wind component in C: the native twin of crane_fmu/model/wind.py (its variables, _configure(),
+ * turbulence_step(), drag() and _output()), registered as a component (component.h). Its variables and parameter
+ * rules come from Wind_variables.h, generated from wind.COMPONENT. Its state is (k, w): the sample count and the
+ * Dryden turbulence at sample k, drawn at first from the stationary distribution; the noise is noise.h's, the
+ * Python wind's sequence for the same seed.
  */
 #include <math.h>
 #include <stdint.h>
@@ -31,27 +31,11 @@ typedef struct {
 
 #define V(name) (values[VR_##name])
 
-/* The rules of wind._configure() in its order and words. */
+/* wind._configure(), after its RULES (the generated parameter_rules()). */
 static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
-    static const unsigned finite[] = {VR_U_mean, VR_l1, VR_l2};
-    for (unsigned i = 0; i < 3; i++)
-        if (!isfinite(values[finite[i]])) return rule(r, VARIABLE_TABLE[finite[i]].name, "finite", values[finite[i]]);
-    static const unsigned not_negative[] = {VR_sigma, VR_rho, VR_Cd, VR_A1, VR_A2};
-    for (unsigned i = 0; i < 5; i++) {
-        double value = values[not_negative[i]];
-        if (!(value >= 0 && isfinite(value)))
-            return rule(r, VARIABLE_TABLE[not_negative[i]].name, ">= 0 and finite", value);
-    }
-    if (!(V(L) > 0 && isfinite(V(L)))) return rule(r, "L", "> 0 and finite", V(L));
-    if (V(sigma) > 0 && V(U_mean) == 0)
-        return report(r, MODEL_ERROR, "U_mean must not be 0 while sigma > 0: Dryden turbulence is carried by a mean "
-                                      "wind (its time constant is L / |U_mean|)");
-    double seed = V(seed);
-    if (!(isfinite(seed) && seed == trunc(seed) && 0 <= seed && seed < 4294967296.0))
-        return rule(r, "seed", "a whole number in [0, 2^32)", seed);
     double half = 0.5 * V(rho) * V(Cd);
     *c = (Config){V(U_mean), V(sigma), V(U_mean) != 0 ? V(L) / fabs(V(U_mean)) : INFINITY, half * V(A1),
-                  half * V(A2), V(l1), V(l2), (uint64_t)seed};
+                  half * V(A2), V(l1), V(l2), (uint64_t)V(seed)};
     return MODEL_OK;
 }
 
