@@ -5,7 +5,7 @@ import math
 from . import limits
 from .component import Component
 from .parameters import PLANT_FIELDS, ControllerGains, plant_parameters, positive
-from .tables import MEASURED_STATE, controller_model, output, parameter, positions
+from .tables import CRANE_MODEL, MEASURED_STATE, controller_model, output, parameter, positions
 
 
 def drift_and_input_gain(theta1, dtheta1, theta2, dtheta2, p, b3_form="derived"):
@@ -166,4 +166,4 @@ COMPONENT = Component(
     "BacksteppingController", "controller",
     "Backstepping anti-swing controller for a double-pendulum crane payload "
     "(least-squares eq 21); output: trolley acceleration u, direct feedthrough",
-    VARIABLES, configure, _output, feedthrough=True, native="backstepping.c")
+    VARIABLES, configure, _output, feedthrough=True, crane_model=CRANE_MODEL, native="backstepping.c")

@@ -117,6 +117,9 @@ class Component:
     native : str, optional
         The file of the component's C twin in ``fmu_src/models`` (``crane_plant.c``): ``crane-fmu
         build`` then builds its native FMU too, and systems of such components as one native FMU.
+    crane_model : tuple of str
+        The parameters that are its model of the crane (the plant's own, a model-based controller's, planner's,
+        estimator's, the wind's): a system's ``crane.<name>`` sets them (the application's crane_parameters.py).
     """
 
     model_identifier: str
@@ -133,6 +136,7 @@ class Component:
     depends_on: dict | None = None
     continuous: Continuous | None = None
     native: str | None = None
+    crane_model: tuple = ()
 
     def __post_init__(self):
         if not self.model_identifier.isidentifier():
@@ -149,6 +153,9 @@ class Component:
             if v.type == "Real" and v.unit not in BASE_UNITS:
                 raise ValueError(f"{self.model_identifier}.{v.name}: unit must be one of tables.BASE_UNITS "
                                  f"({', '.join(BASE_UNITS)}), got {v.unit!r}")
+        for name in self.crane_model:
+            if name not in self.names("parameter"):
+                raise ValueError(f"{self.model_identifier}: crane_model names {name!r}, which is no parameter of it")
         if (self.initial_state is None) != (self.update is None):
             raise ValueError(f"{self.model_identifier}: a state needs both initial_state and update")
         if self.depends_on is not None:

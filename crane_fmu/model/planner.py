@@ -28,7 +28,7 @@ from . import limits
 from .component import Component
 from .parameters import plant_parameters
 from .plant import linearisation
-from .tables import PLANT_MODEL, output, parameter
+from .tables import CRANE_MODEL, PLANT_MODEL, output, parameter
 
 EI_TOLERANCE = 0.05
 # A time at most this much (relative, of at least 1 s) past a step of the plan counts as at it, before it: the
@@ -192,4 +192,5 @@ COMPONENT = Component(
     "outputs: the reference x_ref, dx_ref, ddx_ref and the swing it induces",
     VARIABLES, configure, lambda config, state, inputs: reference(config, state[0]),
     initial_state=lambda config: (0.0,), update=lambda config, state, inputs, time, step: (time + step,),
-    report=report, default_experiment=(0.0, 10.0, 1e-3), native="planner.c")  # the transport system's move
+    report=report, default_experiment=(0.0, 10.0, 1e-3),  # the transport system's move
+    crane_model=CRANE_MODEL, native="planner.c")
