@@ -1,14 +1,15 @@
-"""What a host sees of a closed loop packed as one FMU: chosen here for fmpy's container (``container.py``)
-and for our native one-FMU (``build_scripts/one_fmu.py``) alike.
+"""What a host sees of a closed loop packed as one FMU: chosen here for fmpy's container (``container.py``) and for
+our native one-FMU (``build_scripts/one_fmu.py``) alike.
 
-The plant's outputs and the controller's ``u``; as parameters the crane's ``m1``, ``m2``, ``l1``, ``l2``,
-``g`` (each set on the instances the system's ``crane.l2`` binds, ``crane_parameters.py``: those that model the
-crane and have no value of their own; hoist-transport's planner, designed for l1 = 1.5 m, keeps its own l1, so
-that a host that sets every parameter to its start value gets the system's own run), ``x_d`` (to the planner if
-there is one, else to the controller) and the plant's ``theta1_0``, whose start values are the system's; as
-inputs the plant's inputs that nothing inside feeds (``F1``, ``F2``, ``hoist``). The plant, controller,
-planner and estimator are the first instances of those roles (their components' ``role``), never found by
-name. Its model structure (which own inputs each own output reads at once) follows the instances' along the connections.
+The plant's outputs and the controller's ``u``; as parameters the crane's ``m1``, ``m2``, ``l1``, ``l2``, ``g``
+(``crane_parameters.packed``: each set on the instances that model the crane, by the rule of ``crane.l2``, and
+agree on its value with the system's crane value or the first of them: hoist-transport's planner, designed for l1 =
+1.5 m, keeps its own l1, so that a host that sets every parameter to its start value gets the system's own run),
+``x_d`` (to the planner if there is one, else to the controller) and the plant's ``theta1_0``, whose start values
+are the system's; as inputs the plant's inputs that nothing inside feeds (``F1``, ``F2``, ``hoist``). The plant,
+controller, planner and estimator are the first instances of those roles (their components' ``role``), never found
+by name. Its model structure (which own inputs each own output reads at once) follows the instances' along the
+connections.
 """
 
 from collections import namedtuple
@@ -48,7 +49,7 @@ def interface(system, kinds, variables, fed):
         return system.parameters.get(instance, {}).get(name, variables[instance][name][1])
 
     models = crane_parameters.modelled(kinds, lambda i: [n for n, (c, _) in variables[i].items() if c == "parameter"])
-    for name, (value, holders) in crane_parameters.shared(system, models, start).items():
+    for name, (value, holders) in crane_parameters.packed(system, models, start).items():
         exposed.append(Exposed(name, "parameter", [(i, name) for i in holders], value))
     target = by_role.get("planner", by_role.get("controller"))
     if target and "x_d" in variables[target]:

@@ -108,15 +108,34 @@ def bind(system, models):
 
 
 def shared(system, models, start):
-    """``{name: (value, [instance, ...])}``: each crane parameter as one system parameter (an SSP file's, a
-    closed loop packed as one FMU): the system's value, or where it sets none the start value of the first
-    instance it binds, and the bound instances that have that value (a host that sets it to its start value
-    then changes nothing). ``start(instance, name)`` is an instance's start value."""
+    """``{name: (value, [instance, ...])}``: each crane parameter as a value of the system's own (an SSP file's,
+    ``crane-fmu info``'s) and exactly the instances it binds: the system's value, or where it sets none the start
+    value of the first instance it binds, and the bound instances that have that value (reading the file back
+    binds the same). ``start(instance, name)`` is an instance's start value."""
     crane, result = values(system), {}
     for name, instances in bound(system, models).items():
         if instances:
             value = crane.get(name, start(instances[0], name))
             result[name] = (value, [i for i in instances if name in crane or start(i, name) == value])
+    return result
+
+
+def packed(system, models, start):
+    """``{name: (value, [instance, ...])}``: each crane parameter as one parameter of a closed loop packed as one
+    FMU (the one-FMU, the container): the system's value, or where it sets none the value of the first instance
+    that models it, set on every instance that models it and has that value now (the crane's it is bound to, its
+    own, or its start value: ``start(instance, name)`` gives the last two), so that a host that sets every
+    parameter to its start value changes nothing."""
+    crane, binding, result = values(system), bound(system, models), {}
+
+    def now(instance, name):
+        return crane[name] if name in crane and instance in binding[name] else start(instance, name)
+
+    for name in names():
+        holders = [i for i, modelled_ in models.items() if name in modelled_]
+        if holders:
+            value = crane.get(name, now(holders[0], name))
+            result[name] = (value, [i for i in holders if now(i, name) == value])
     return result
 
 

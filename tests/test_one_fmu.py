@@ -99,7 +99,7 @@ def test_judged_per_variable_our_master_reads_the_plant_twice_and_runs_every_sys
             master = Master(instances, connections)
             reads = [(i.name, f) for _, f, i in master.wiring.propagation() if f.endswith(("GetReal", "GetFloat64"))]
             recorder = ArrayRecorder()
-            master.run(system.start_time, stop, system.step, [recorder], system.parameters)
+            master.run(system.start_time, stop, system.step, [recorder], systems.bind(system).parameters)
             master.terminate()
         finally:
             for instance in instances.values():
