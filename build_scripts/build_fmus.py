@@ -38,7 +38,7 @@ from crane_fmu import DEFAULT_FMU_DIR, components
 from crane_fmu import systems as registry  # build_all's argument `systems` is names
 from crane_fmu.build_scripts import incremental
 from crane_fmu.build_scripts.folders import container_name, containers_dir, fmi3_dir, systems_dir
-from crane_fmu.build_scripts.incremental import container_key, python_fmu_key, system_file_key
+from crane_fmu.build_scripts.incremental import CRANE, container_key, python_fmu_key, system_file_key
 from crane_fmu.build_scripts.model_description import postprocess, postprocess3
 from crane_fmu.build_scripts.native import build_native
 from crane_fmu.build_scripts.one_fmu import build_one_fmus
@@ -46,7 +46,6 @@ from crane_fmu.build_scripts.wrapper import WrapperUnavailable, compile_binaries
 from crane_fmu.container import build_container
 from crane_fmu.cosim import osp, ssp
 from crane_fmu.cosim.osp import write_osp
-from crane_fmu.cosim.ssp import write_ssp
 from crane_fmu.model.tables import DISPLAY_UNITS
 
 __all__ = ["build_all", "build_fmu", "core_name", "fmi3_dir", "systems_dir", "containers_dir", "container_name"]
@@ -309,11 +308,12 @@ def _build_all(record, out_dir, kinds, systems, fmi3, containers, native, log, f
         system = registry.get(name)
         fmus = system.fmus(out_dir).values()
         target = systems_dir(out_dir) / f"{name}.ssp"
-        paths.append(record.make(target, system_file_key("ssp", system, fmus, Path(ssp.__file__)),
-                                 lambda system=system, target=target: write_ssp(system, out_dir, target)))
+        paths.append(record.make(target, system_file_key("ssp", system, fmus, Path(ssp.__file__), CRANE),
+                                 lambda system=system, target=target: registry.write_ssp(system, out_dir, target)))
         target = Path(out_dir) / f"{name}.OspSystemStructure.xml"
-        paths.append(record.make(target, system_file_key("osp", system, fmus, Path(osp.__file__)),
-                                 lambda system=system, target=target: write_osp(system, out_dir, target)))
+        paths.append(record.make(target, system_file_key("osp", system, fmus, Path(osp.__file__), CRANE),
+                                 lambda system=system, target=target: write_osp(registry.bind(system), out_dir,
+                                                                               target)))
     for name in containers if containers is not None else [n for n in registry.tagged("container") if n in names]:
         system = registry.get(name)
         target = containers_dir(out_dir) / f"{container_name(name)}.fmu"

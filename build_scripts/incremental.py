@@ -35,6 +35,7 @@ PACKAGE = Path(crane_fmu.__file__).parent
 MODEL = PACKAGE / "model"
 COSIM = PACKAGE / "cosim"
 CLOSED_LOOP = PACKAGE / "closed_loop.py"  # the interface of a closed loop as one FMU (one-FMU and container)
+CRANE = PACKAGE / "crane_parameters.py"  # which instances the crane's parameters bind (the files, the loops' interface)
 FMU_SRC = Path(crane_fmu.fmu_src.__file__).parent
 HERE = Path(__file__).parent
 
@@ -215,7 +216,7 @@ def one_fmu_key(system, kinds, fmi_version, tools, files):
     (``files``), the closed loop's interface."""
     build = [HERE / name for name in ("one_fmu.py", "native.py", "model_description.py", "wrapper.py")]
     return key("one-fmu", fmi_version, repr(system), [component_data(components.get(k)) for k in kinds], *files,
-               MODEL / "tables.py", CLOSED_LOOP, *build, _compilers(tools), _version("fmpy"))
+               MODEL / "tables.py", CLOSED_LOOP, CRANE, *build, _compilers(tools), _version("fmpy"))
 
 
 def system_file_key(kind, system, fmus, *writers):
@@ -226,4 +227,4 @@ def system_file_key(kind, system, fmus, *writers):
 
 def container_key(system, fmus):
     """A container FMU: a system file written by container.py with the closed loop's interface."""
-    return system_file_key("container", system, fmus, PACKAGE / "container.py", CLOSED_LOOP)
+    return system_file_key("container", system, fmus, PACKAGE / "container.py", CLOSED_LOOP, CRANE)

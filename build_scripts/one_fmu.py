@@ -11,7 +11,7 @@ Each component's model file is compiled once, as in its own FMU: it registers ``
 the system reaches through the model interface.
 
 The FMU's interface is the closed loop's, chosen once for it and fmpy's container (``crane_fmu/closed_loop.py``):
-the plant's outputs and the controller's ``u``; the masses and lengths, ``x_d`` and ``theta1_0`` as
+the plant's outputs and the controller's ``u``; the crane's masses, lengths and g, ``x_d`` and ``theta1_0`` as
 parameters, whose start values are the system's; the plant's inputs that nothing inside feeds as inputs.
 A parameter reaches the instances only when a host sets it.
 """

@@ -1,24 +1,21 @@
-"""What a host sees of a closed loop packed as one FMU: chosen here for fmpy's container (``container.py``)
-and for our native one-FMU (``build_scripts/one_fmu.py``) alike.
+"""What a host sees of a closed loop packed as one FMU: chosen here for fmpy's container (``container.py``) and for
+our native one-FMU (``build_scripts/one_fmu.py``) alike.
 
-The plant's outputs and the controller's demands (``u``); as parameters the crane model's ``m1``, ``m2``, ``l1``,
-``l2`` (each set on the plant, the controller, the planner and the estimator that have it and agree on its
-value with the first of them: hoist-transport's planner, designed for l1 = 1.5 m, keeps its own l1, so that
-a host that sets every parameter to its start value gets the system's own run), each axis's target ``x_d`` (to
-the planner if there is one, else to the controller) and the plant's start swing ``theta1_0``, whose start
-values are the system's; as inputs the plant's inputs that nothing inside feeds (``F1``, ``F2``, ``hoist``).
-The plant, controller, planner and estimator are the first instances of those roles (their components'
-``role``), never found by name, and what the plant's roles name (``Component.crane``: its axes, demands and
-start swing) is read from them. Its model structure (which own inputs each own output reads at once) follows
-the instances' along the connections.
+The plant's outputs and the controller's demands (``u``); as parameters the crane's ``m1``, ``m2``, ``l1``, ``l2``,
+``g`` (``crane_parameters.packed``: each set on the instances that model the crane, by the rule of ``crane.l2``,
+and agree on its value with the system's crane value or the first of them: hoist-transport's planner, designed for
+l1 = 1.5 m, keeps its own l1, so that a host that sets every parameter to its start value gets the system's own run),
+each axis's target ``x_d`` (to the planner if there is one, else to the controller) and the plant's start swing
+``theta1_0``, whose start values are the system's; as inputs the plant's inputs that nothing inside feeds (``F1``,
+``F2``, ``hoist``). The plant, controller, planner and estimator are the first instances of those roles (their
+components' ``role``), never found by name, and what the plant's roles name (``Component.crane``: its axes,
+demands and start swing) is read from them. Its model structure (which own inputs each own output reads at once)
+follows the instances' along the connections.
 """
 
 from collections import namedtuple
 
-from crane_fmu import components
-
-SHARED = ("m1", "m2", "l1", "l2")
-MODELERS = ("plant", "controller", "planner", "estimator")  # the roles that model the crane
+from crane_fmu import components, crane_parameters
 
 Exposed = namedtuple("Exposed", "name causality targets start")
 Exposed.__doc__ = """One variable of the packed FMU: ``targets`` is ``[(instance, variable)]``, the first of which
@@ -53,12 +50,9 @@ def interface(system, kinds, variables, fed):
     def start(instance, name):
         return system.parameters.get(instance, {}).get(name, variables[instance][name][1])
 
-    for name in SHARED:
-        holders = [by_role[role] for role in MODELERS
-                   if role in by_role and variables[by_role[role]].get(name, ("",))[0] == "parameter"]
-        if holders:  # those that agree with the first: a host setting the start value then changes nothing
-            value = start(holders[0], name)
-            exposed.append(Exposed(name, "parameter", [(i, name) for i in holders if start(i, name) == value], value))
+    models = crane_parameters.modelled(kinds, lambda i: [n for n, (c, _) in variables[i].items() if c == "parameter"])
+    for name, (value, holders) in crane_parameters.packed(system, models, start).items():
+        exposed.append(Exposed(name, "parameter", [(i, name) for i in holders], value))
     target = by_role.get("planner", by_role.get("controller"))
     for axis in crane.axes:
         if target and axis.target in variables[target]:

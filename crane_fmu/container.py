@@ -28,7 +28,7 @@ from fmpy.container_fmu.cli import create_container_fmu
 from fmpy.container_fmu.config import Component, Connection
 from fmpy.model_description import CoSimulation, DefaultExperiment, ModelDescription, ModelVariable, Unknown
 
-from crane_fmu import closed_loop
+from crane_fmu import closed_loop, crane_parameters
 
 
 def build_container(system, fmu_dir, path):
@@ -42,7 +42,8 @@ def build_container(system, fmu_dir, path):
                                                     for name, table in variables.items()},
                                     {(c.target, c.input) for c in connections})
     carried = {target for e in exposed if e.causality != "output" for target in e.targets}
-    lost = [f"{i}.{n}" for i, values in system.parameters.items() for n in values if (i, n) not in carried]
+    lost = [f"{i}.{n}" for i, values in system.parameters.items() if i != crane_parameters.CRANE for n in values
+            if (i, n) not in carried]  # the crane's values: its exposed parameters' start values
     if lost:
         raise ValueError(f"system {system.name}: fmpy's container sets only the variables it exposes, not "
                          f"{', '.join(lost)}; build it as one native FMU instead (crane-fmu build --one-fmu)")

@@ -15,8 +15,9 @@ import math
 from dataclasses import replace
 from pathlib import Path
 
-from crane_fmu import components
+from crane_fmu import components, crane_parameters
 from crane_fmu.controller_interface import references, told, tracked
+from crane_fmu.cosim import ssp
 from crane_fmu.cosim.connections import Connection
 from crane_fmu.cosim.ssp import load_system
 from crane_fmu.cosim.system import System, read_fmu
@@ -56,6 +57,7 @@ def resolve(system, fmu_dir):
         One line naming the instance, the variable and the FMU:
         ``"controller: mine/PdTypo.fmu has no output u, which the system connects to plant.u"``.
     """
+    crane_parameters.check_reserved(system)
     for path in system.fmus(fmu_dir).values():
         if not path.is_file():
             raise ValueError(f"{path} not found: build the FMUs first (crane-fmu build)")
@@ -162,7 +164,7 @@ def prepare(system, step=None, stop_time=None, values=(), check=True):
         The communication step and stop time [s] (default: the system's).
     values : sequence of dict
         ``{instance: {variable: value}}`` set over the system's values, in order (a parameter file's,
-        then ``--set``'s).
+        then ``--set``'s); the crane's values under ``crane`` (:mod:`crane_fmu.crane_parameters`).
     check : bool
         Check the values by the components' rules (:func:`check_parameters`); a command that reports a
         refused case as a row of its table checks later.
@@ -170,7 +172,8 @@ def prepare(system, step=None, stop_time=None, values=(), check=True):
     Returns
     -------
     System
-        With that step and stop time, those values, and ``h`` set to the step on every instance whose
+        With that step and stop time, those values, the crane's set on the instances they bind (:func:`bind`),
+        and ``h`` set to the step on every instance whose
         component has that parameter (the communication step it is designed for: the LQR's discrete
         design, the speed guards) where nothing set it; every value checked by its component's rules.
 
@@ -183,7 +186,8 @@ def prepare(system, step=None, stop_time=None, values=(), check=True):
     step = system.step if step is None else step
     system = replace(system, step=step, stop_time=system.stop_time if stop_time is None else stop_time)
     for overrides in values:
-        system = system.with_parameters(overrides)
+        system = crane_parameters.with_values(system, overrides)
+    system = bind(system)
     designed = {}
     for name, kind in kinds(system).items():
         component = components.find(kind)
@@ -193,6 +197,43 @@ def prepare(system, step=None, stop_time=None, values=(), check=True):
     if check:
         check_parameters(system)
     return system
+
+
+def modelled(system):
+    """``{instance: crane parameters it models}`` (:func:`crane_fmu.crane_parameters.modelled`): a registered
+    component's as it declares, an FMU file of another's by its parameters of those names."""
+    def parameters(name):
+        source = system.instances[name]
+        return [v.name for v in read_fmu(source).modelVariables if v.causality == "parameter"] \
+            if str(source).endswith(".fmu") else ()
+    return crane_parameters.modelled(kinds(system), parameters)
+
+
+def bind(system):
+    """The system with the crane's values (``crane.l2``) set on every instance that models the crane and has
+    no value of its own (:func:`crane_fmu.crane_parameters.bind`): as the master runs it."""
+    return crane_parameters.bind(system, modelled(system))
+
+
+def settable(system, fmus):
+    """:func:`crane_fmu.cosim.system.settable` of ``fmus`` and the crane's parameters (``crane.l2``): what
+    ``--set``, a parameter file and a study may name."""
+    from crane_fmu.cosim.system import settable as instances
+
+    return {**instances(fmus), **crane_parameters.settable(modelled(system))}
+
+
+def write_ssp(system, fmu_dir, path):
+    """Write the system as an SSP package (:func:`crane_fmu.cosim.ssp.write_ssp`): the crane's parameters once, as
+    values of the system's own (``crane.l2``) mapped to the instances each binds, which carry it too."""
+    fmus = system.fmus(fmu_dir)
+
+    def start(instance, name):
+        return next(float(v.start) for v in read_fmu(fmus[instance]).modelVariables if v.name == name)
+
+    shared = crane_parameters.shared(system, modelled(system), start)
+    return ssp.write_ssp(bind(system), fmu_dir, path, {f"{crane_parameters.CRANE}.{name}": (value, [
+        (instance, name) for instance in instances]) for name, (value, instances) in shared.items()})
 
 
 def check_parameters(system):
@@ -247,10 +288,13 @@ register(System("hoist-transport",
                  "controller": "LqrController"},
                 connections=tuple(Connection("planner", name, "controller", name) for name in references(CRANE))
                 + (Connection("hoist", "ddx_ref", "plant", CRANE.hoist),),
-                parameters={"plant": {**REST, "l1": 2.0, "l1_min": 1.0, "l1_max": 2.0},
+                # the crane's l1 is 2 m; the planner shapes the move for l1 = 1.5 m (its own, on purpose: half way
+                # while the hoist lifts); the hoist's planner plans the cable, not a swing: its swing references,
+                # which nothing reads, keep its own model's l1 = 1 m
+                parameters={"crane": {"l1": 2.0}, "plant": {**REST, "l1_min": 1.0, "l1_max": 2.0},
                             "planner": {**MOVE, "l1": 1.5, "shaper": "zvd"},
-                            "hoist": {"x0": 2.0, "x_d": 1.0, "shaper": "none", "u_max": 0.5, "v_max": 0.5},
-                            "controller": {"l1": 2.0, "l1_low": 1.0, "l1_high": 2.0}},
+                            "hoist": {"x0": 2.0, "x_d": 1.0, "shaper": "none", "u_max": 0.5, "v_max": 0.5, "l1": 1.0},
+                            "controller": {"l1_low": 1.0, "l1_high": 2.0}},
                 stop_time=12.0,
                 description="a 2 m move while the hoist lifts the load from l1 = 2 m to 1 m; the LQR's gains "
                             "follow the measured cable length", tags=("one-fmu",)))

@@ -86,7 +86,8 @@ def test_simulate_free_swing_and_settings(fmu_dir, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["--set", "crane.l1=1"], "unknown instance 'crane'; instances: plant, controller"),
+    (["--set", "crane.x0=1"], "crane has no parameter or input 'x0'; valid: m1, m2, l1, l2, g"),
+    (["--set", "plnat.l1=1"], "unknown instance 'plnat'; instances: plant, controller, crane"),
     (["--system", "nowhere"], "no system 'nowhere'; systems: paper, free, lqr, energy, transport, hoist-transport, "
                               "lqg, lqg-transport, hard-hit"),
     (["--system", "free", "--set", "controller.l1=1"], "unknown instance 'controller'; instances: plant"),

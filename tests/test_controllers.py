@@ -274,7 +274,7 @@ def test_lqr_gains_follow_the_measured_cable_length():
 
 def test_hoist_transport_through_the_fmus(fmu_dir):
     """The 2 m move while lifting from 2 m to 1 m: the trolley and the hoist arrive and the swing dies out."""
-    result = run(systems.get("hoist-transport"), fmu_dir, recorder=ArrayRecorder()).columns()
+    result = run(systems.bind(systems.get("hoist-transport")), fmu_dir, recorder=ArrayRecorder()).columns()
     assert result["plant.x"][-1] == pytest.approx(2.0, abs=1e-3)
     assert result["plant.l1_now"][0] == 2.0 and result["plant.l1_now"][-1] == pytest.approx(1.0, abs=1e-9)
     assert max(abs(result["plant.theta1"][-1]), abs(result["plant.theta2"][-1])) < math.radians(0.1)

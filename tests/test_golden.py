@@ -20,7 +20,7 @@ DATA = Path(__file__).parent / "data"
 def test_section5_runs_equal_the_reference_results(fmu_dir, case, system, parameters, tmp_path):
     """Same equations, same integrator, same exchange order: bit for bit, in memory and through the CSV."""
     reference = read_csv(DATA / f"section5_{case}.csv")
-    chosen = systems.get(system).with_parameters(parameters)
+    chosen = systems.prepare(systems.get(system), values=[parameters])
     in_memory = run(chosen, fmu_dir, recorder=ArrayRecorder()).columns()
     run(chosen, fmu_dir, recorder=CsvRecorder(tmp_path / "run.csv"))
     for result in (in_memory, read_csv(tmp_path / "run.csv")):
@@ -44,7 +44,7 @@ def test_every_system_and_the_plants_general_path_equal_their_results_before_the
     """tests/data/golden_*.csv, written before issue 25's refactoring: every output, bit for bit."""
     system, parameters = GOLDEN[case]
     reference = read_csv(DATA / f"golden_{case}.csv")
-    result = run(systems.get(system).with_parameters(parameters), fmu_dir).columns()
+    result = run(systems.prepare(systems.get(system), values=[parameters]), fmu_dir).columns()
     assert list(result) == list(reference)
     for name, values in reference.items():
         assert np.array_equal(result[name][::100], values), name
@@ -57,7 +57,7 @@ def test_the_native_fmus_give_the_same_results(native, case):
     is the one written before, bit for bit."""
     system, parameters = GOLDEN.get(case.removeprefix("golden_"), (case.removeprefix("section5_"), {}))
     reference = read_csv(DATA / f"{case}.csv")
-    result = run(systems.get(system).with_parameters(parameters), native[2]).columns()
+    result = run(systems.prepare(systems.get(system), values=[parameters]), native[2]).columns()
     assert set(reference) <= set(result) and (case.startswith("section5") or list(result) == list(reference))
     for name, values in reference.items():
         assert np.array_equal(result[name][::100], values), name

@@ -164,7 +164,7 @@ RUNS = {  # name: (built-in system, plant parameters beyond the system's)
 
 def _run(name, folder):
     system_name, extra = RUNS[name]
-    return run(systems.get(system_name).with_parameters({"plant": extra}), folder).columns()
+    return run(systems.bind(systems.get(system_name).with_parameters({"plant": extra})), folder).columns()
 
 
 @pytest.mark.parametrize("name", list(RUNS))

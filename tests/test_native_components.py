@@ -321,7 +321,7 @@ def test_the_transport_systems_with_the_native_planner_equal_the_python_fmus(fmu
     """10 s of the ZV move, 12 s of the ZVD move with a second planner as the hoist, both at 1 ms and tracked by the
     LQR (Python or native, whichever build/native holds; bit for bit on Linux with the Python LQR)."""
     lqr_native = _is_native(native[version] / "LqrController.fmu")  # its design may differ in a last bit
-    theirs = _runs_agree(systems.get(system), native[version], python_folder(fmu_dir, version),
+    theirs = _runs_agree(systems.bind(systems.get(system)), native[version], python_folder(fmu_dir, version),
                          exact=LINUX and not lqr_native)
     assert abs(theirs["planner.x_ref"][-1] - 2.0) < 1e-12 and np.max(np.abs(theirs["planner.theta1_ref"])) > 1e-3
 

@@ -99,7 +99,7 @@ def test_the_default_design_is_the_python_fmus_report(native):
     report = lqr.report(CONTROLLER.check({}))
     assert _native_gains(set_, get, vr) == [report["K_" + s] for s in STATE]
     close(fmu)
-    parameters = systems.get("hoist-transport").parameters["controller"]
+    parameters = systems.bind(systems.get("hoist-transport")).parameters["controller"]
     config = CONTROLLER.check(parameters)
     fmu, vr, set_, get = open_native(native[3] / f"{NAME}.fmu", 3, {**parameters, "u_max": INF, "v_max": INF})
     fmu.exitInitializationMode()
@@ -247,7 +247,7 @@ def test_closed_loops_with_the_native_lqr_equal_the_python_fmus_runs(fmu_dir, na
     ``lqr``: native plant and LQR; ``transport``: the same with the Python TrajectoryPlanner;
     ``hoist-transport``: the gains scheduled on the measured cable length as it goes from 2 m to 1 m.
     """
-    system = systems.get(name)
+    system = systems.bind(systems.get(name))
     ours, theirs = run(system, native[version]).columns(), run(system, _python_dir(fmu_dir, version)).columns()
     assert list(ours) == list(theirs)
     assert len(ours["time"]) == len(theirs["time"]) == round(system.stop_time / system.step) + 1

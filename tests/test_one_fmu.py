@@ -73,7 +73,7 @@ def test_judged_per_variable_our_master_reads_the_plant_twice_and_runs_every_sys
             master = Master(instances, connections)
             reads = [(i.name, f) for _, f, i in master.wiring.propagation() if f.endswith(("GetReal", "GetFloat64"))]
             recorder = ArrayRecorder()
-            master.run(system.start_time, stop, system.step, [recorder], system.parameters)
+            master.run(system.start_time, stop, system.step, [recorder], systems.bind(system).parameters)
             master.terminate()
         finally:
             for instance in instances.values():
@@ -161,27 +161,25 @@ def test_paper_interface_is_the_containers():
 
 
 # The instances each parameter of the one-FMU sets, written out here from the rule (the module docstring of
-# build_scripts/one_fmu.py, as the container's): m1, m2, l1, l2 to the plant, controller and planner that
-# have them and agree on the value (hoist-transport's planner keeps its l1 of 1.5 m, its hoist planner
-# is none of the three); x_d to the planner if there is one, else to the controller; theta1_0 to the plant.
-# Not from plan(), the code under test.
+# build_scripts/one_fmu.py, as the container's): m1, m2, l1, l2, g, the crane's, to every instance whose component
+# models the crane (plant, controller, planner, estimator) and that has no value of its own (hoist-transport's
+# planner keeps its l1 of 1.5 m, its hoist planner its l1 of 1 m); x_d to the planner if there is one, else to the
+# controller; theta1_0 to the plant. Not from plan(), the code under test.
 PAIR, TRIO = {"plant", "controller"}, {"plant", "controller", "planner"}
+CRANE = ("m1", "m2", "l1", "l2", "g")
 REACHES = {
-    **{name: {"m1": PAIR, "m2": PAIR, "l1": PAIR, "l2": PAIR, "x_d": {"controller"}, "theta1_0": {"plant"},
-              "F1": {"plant"}, "F2": {"plant"}, "hoist": {"plant"}} for name in ("paper", "lqr", "energy")},
-    "transport": {"m1": TRIO, "m2": TRIO, "l1": TRIO, "l2": TRIO, "x_d": {"planner"}, "theta1_0": {"plant"},
-                  "F1": {"plant"}, "F2": {"plant"}, "hoist": {"plant"}},
-    "hoist-transport": {"m1": TRIO, "m2": TRIO, "l1": PAIR, "l2": TRIO, "x_d": {"planner"}, "theta1_0": {"plant"},
-                        "F1": {"plant"}, "F2": {"plant"}},
-    **{name: {"m1": PAIR, "m2": PAIR, "l1": PAIR, "l2": PAIR, "x_d": {"controller"}, "theta1_0": {"plant"},
-              "F1": {"plant"}, "F2": {"plant"}, "hoist": {"plant"}} for name in ("hard-hit", "mpc", "mpc-transport")},
+    **{name: {**dict.fromkeys(CRANE, PAIR), "x_d": {"controller"}, "theta1_0": {"plant"}, "F1": {"plant"},
+              "F2": {"plant"}, "hoist": {"plant"}} for name in ("paper", "lqr", "energy", "hard-hit", "mpc",
+                                                                 "mpc-transport")},
+    "transport": {**dict.fromkeys(CRANE, TRIO), "x_d": {"planner"}, "theta1_0": {"plant"}, "F1": {"plant"},
+                  "F2": {"plant"}, "hoist": {"plant"}},
+    "hoist-transport": {**dict.fromkeys(CRANE, TRIO | {"hoist"}), "l1": PAIR, "x_d": {"planner"},
+                        "theta1_0": {"plant"}, "F1": {"plant"}, "F2": {"plant"}},
     # the estimator models the crane too: a host's m1 reaches its Kalman filter's design as the controller's
-    "lqg": {"m1": PAIR | {"estimator"}, "m2": PAIR | {"estimator"}, "l1": PAIR | {"estimator"},
-            "l2": PAIR | {"estimator"}, "x_d": {"controller"}, "theta1_0": {"plant"}, "F1": {"plant"},
-            "F2": {"plant"}, "hoist": {"plant"}},
-    "lqg-transport": {"m1": TRIO | {"estimator"}, "m2": TRIO | {"estimator"}, "l1": TRIO | {"estimator"},
-                      "l2": TRIO | {"estimator"}, "x_d": {"planner"}, "theta1_0": {"plant"}, "F1": {"plant"},
-                      "F2": {"plant"}, "hoist": {"plant"}},
+    "lqg": {**dict.fromkeys(CRANE, PAIR | {"estimator"}), "x_d": {"controller"}, "theta1_0": {"plant"},
+            "F1": {"plant"}, "F2": {"plant"}, "hoist": {"plant"}},
+    "lqg-transport": {**dict.fromkeys(CRANE, TRIO | {"estimator"}), "x_d": {"planner"}, "theta1_0": {"plant"},
+                      "F1": {"plant"}, "F2": {"plant"}, "hoist": {"plant"}},
 }
 
 

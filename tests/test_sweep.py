@@ -194,8 +194,8 @@ def test_cli_runs_the_minimal_study(fmu_dir, tmp_path, capsys):
 
 @pytest.mark.parametrize("study, message", [
     ('system = "nowhere"', "no system 'nowhere'; systems: paper, free"),
-    ('[parameters]\n"crane.l1" = [1.0]',
-     "parameter 'crane.l1': system paper: unknown instance 'crane'; instances: plant, controller"),
+    ('[parameters]\n"crane.x0" = [1.0]',
+     "parameter 'crane.x0': system paper: crane has no parameter or input 'x0'; valid: m1, m2, l1, l2, g"),
     ('system = "free"\n[parameters]\n"controller.l1" = [1.0]',
      "system free: unknown instance 'controller'; instances: plant"),
 ])

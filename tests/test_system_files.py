@@ -66,10 +66,14 @@ def test_ssp_describes_the_paper_system(system_files, fmu_dir):
         assert sorted(system.instances) == sorted(fmus)
         assert sorted(system.connections) == sorted(connections) and len(connections) == 7
         # every value (no limit is 1e60: libcosim refuses INF in system files, OMSimulator logs an error for
-        # it), but a String at the FMU's own start value (OMSimulator applies no String, and logs an error)
+        # it), but a String at the FMU's own start value (OMSimulator applies no String, and logs an error); the
+        # crane's parameters once, the system's, which the instances' are mapped to (test_crane_parameters.py)
+        crane = {"m1": 3.0, "m2": 7.0, "l1": 1.0, "l2": 0.5, "g": 9.8}
+        assert system.parameters["crane"] == crane
         for instance, component in (("plant", plant.COMPONENT), ("controller", backstepping.COMPONENT)):
             defaults = component.defaults()
-            assert system.parameters[instance] == {k: v for k, v in defaults.items() if not isinstance(v, str)}
+            assert system.parameters[instance] == {k: v for k, v in defaults.items()
+                                                   if not isinstance(v, str) and k not in crane}
             assert defaults["u_max"] == defaults["v_max"] == 1e60 and all(map(math.isfinite, system.parameters[
                 instance].values()))
         assert (system.start_time, system.stop_time, system.step) == (0.0, 20.0, 1e-3)  # the step: OMSimulator's
@@ -135,7 +139,8 @@ def test_ssd_with_parameters_in_ssv_files_bound_to_components_and_system(system_
     write_ssv({"plant": {"l2": 0.25}}, tmp_path / "system.ssv")
     with load_system(tmp_path / "SystemStructure.ssd") as system:
         assert system.parameters["controller"] == {"w_theta2": 0.0}
-        assert system.parameters["plant"]["l2"] == 0.25 and system.parameters["plant"]["l1"] == 1.0
+        assert system.parameters["plant"]["l2"] == 0.25 and system.parameters["plant"]["x0"] == 0.0
+        assert system.parameters["crane"]["l2"] == 0.5  # the crane's: the plant's own value overrides it
 
 
 @pytest.mark.quick
@@ -226,7 +231,12 @@ def test_every_component_has_one_parameter_set_of_the_one_name_every_engine_read
         assert len(bindings) == 1 and bindings[0].get("prefix") is None and bindings[0].get("source") is None
         sets = bindings[0].findall(f"{SSD}ParameterValues/{SSV}ParameterSet")
         assert [s.get("name") for s in sets] == ["initialValues"]
-    assert root.find(f"{SSD}System/{SSD}ParameterBindings") is None
+    # the system's one binding: the crane's parameters, each mapped to the instances it sets (test_crane_parameters)
+    bindings = root.findall(f"{SSD}System/{SSD}ParameterBindings/{SSD}ParameterBinding")
+    assert len(bindings) == 1 and bindings[0].get("prefix") is None and bindings[0].get("source") is None
+    assert [s.get("name") for s in bindings[0].findall(f"{SSD}ParameterValues/{SSV}ParameterSet")] == ["initialValues"]
+    assert [p.get("name") for p in bindings[0].iter(f"{SSV}Parameter")] == [f"crane.{n}" for n in ("m1", "m2", "l1",
+                                                                                                     "l2", "g")]
 
 
 @pytest.mark.parametrize("engine", ["ours", "libcosim", "ecos"])

@@ -56,7 +56,7 @@ def _ours(fmu_dir, kind, name, path, stop_time):
     """Our master's run (Gauss-Seidel) of what the FMU is: the component alone, or the one-FMU's system over
     the native components; ``(columns, [(FMU output, our column)])``."""
     if kind == "one-fmu":
-        system = systems.get(name)
+        system = systems.bind(systems.get(name))
         links = plan(system).links
         columns = run(system, native_dir(fmu_dir), stop_time=stop_time).columns()
         outputs = [v.name for v in plan(system).variables if v.causality == "output"]
@@ -117,7 +117,7 @@ def test_omsimulator_runs_every_built_in_ssp_file_like_our_master(fmu_dir, tmp_p
     strings = _strings(systems.get(name))
     assert omsimulator_log_problems(log) == [f"error:   {STRING_ERROR}"] * sum(map(len, strings.values()))
     assert "Alg. loop" not in log
-    system = systems.get(name)
+    system = systems.bind(systems.get(name))
     applied = dataclasses.replace(system, parameters={
         instance: {k: v for k, v in values.items() if not isinstance(v, str)}
         for instance, values in system.parameters.items()})

@@ -41,7 +41,7 @@ def test_a_built_in_move_ends_at_x_d(fmu_dir, name, x_d):
     target = _target(name, x_d)
     if x_d is not None:
         system = system.with_parameters({HOLDER[name]: {"x_d": x_d}})
-    c = run(system, fmu_dir, recorder=ArrayRecorder()).columns()
+    c = run(systems.bind(system), fmu_dir, recorder=ArrayRecorder()).columns()
     _check_end(c["plant.x"], c["plant.dx"], target)
     if name == "hoist-transport":  # the hoist's planner drives the cable from 2 m to its x_d = 1 m
         hoist = system.parameters["hoist"]["x_d"]

@@ -13,20 +13,22 @@ EXAMPLES = (
     "  crane-fmu info\n"
     "  crane-fmu info --markdown\n"
     "  crane-fmu info --system lqr\n"
-    "  crane-fmu info --system lqr --set controller.l1=1.5 --set controller.h=0.01  # the LQR's gains"
+    "  crane-fmu info --system lqr --set controller.l1=1.5 --set controller.h=0.01  # the LQR's gains\n"
+    "  crane-fmu info --system hoist-transport --set crane.l2=0.6   # the crane's parameters and what they bind"
 )
 
 
 def arguments(p):
     p.add_argument("--markdown", action="store_true", help="print the variable tables as Markdown")
-    p.add_argument("--system", help="instead: a built-in system's instances and what their components derive from "
-                                    "the parameters (gains, shaper impulses)")
+    p.add_argument("--system", help="instead: a built-in system's crane parameters (crane.l2: which instances they "
+                                    "set), its instances and what their components derive from the parameters "
+                                    "(gains, shaper impulses)")
     p.add_argument("--set", action="append", default=[], metavar="INSTANCE.VARIABLE=VALUE",
                    help="with --system: parameter values to derive from (repeatable)")
 
 
 def run(args):
-    from crane_fmu import components, systems
+    from crane_fmu import components, crane_parameters, systems
 
     if args.system:
         try:
@@ -39,6 +41,11 @@ def run(args):
     if args.markdown:
         print("\n".join(variable_table(c, True) for c in chosen), end="")
         return 0
+    print("crane parameters (--set crane.NAME=VALUE sets every instance that models the crane, unless it has its own "
+          "value; crane-fmu info --system NAME lists them):")
+    for v in crane_parameters.model():
+        print(f"  crane.{v.name:<3} [{v.unit}] {v.description}")
+    print()
     print("systems (crane-fmu simulate --system NAME):")
     for system in systems.registered():
         instances = ", ".join(f"{name} = {kind}" for name, kind in system.instances.items())
@@ -50,25 +57,49 @@ def run(args):
 
 
 def _derived(system, sets):
-    """Lines describing each instance of a built-in system and what its component derives from the parameters."""
-    from crane_fmu import components
+    """Lines describing a built-in system's crane parameters, each instance and what its component derives from
+    the parameters."""
+    from crane_fmu import components, crane_parameters, systems
 
     variables = {}
     for instance, kind in system.instances.items():
         component = components.find(kind)
         variables[instance] = {v.name: (v.type, v.unit) for v in (component.variables if component else ())
                                if v.causality != "output"}
-    parameters = parse_sets(sets, variables)
-    system = system.with_parameters(parameters)
-    lines = [f"{system.name}: {system.description}"]
+    models = systems.modelled(system)
+    variables.update(crane_parameters.settable(models))
+    system = crane_parameters.with_values(system, parse_sets(sets, variables))
+    lines = [f"{system.name}: {system.description}", *_crane(system, models)]
+    bound = systems.bind(system)
     for name, kind in system.instances.items():
         component = components.find(kind)
         lines.append(f"  {name} = {kind}" + ("" if component else " (not a registered component)"))
         if component and component.report:
             try:
-                derived = component.report(component.check(system.parameters.get(name, {})))
+                derived = component.report(component.check(bound.parameters.get(name, {})))
             except (ValueError, ArithmeticError) as exc:
                 raise UsageError(f"{name}: {exc}") from None
             lines += [f"    {key} = {value:.6g}" if isinstance(value, float) else f"    {key} = {value}"
                       for key, value in derived.items()]
+    return lines
+
+
+def _crane(system, models):
+    """The crane's parameters: each one's value and unit, the instances it sets and those with a value of their own."""
+    from crane_fmu import components, crane_parameters
+
+    def start(instance, name):
+        return components.get(system.instances[instance]).defaults()[name]
+
+    shared, values = crane_parameters.shared(system, models, start), crane_parameters.values(system)
+    lines = ["  crane parameters (crane.NAME=VALUE sets each on the instances listed; a value of an instance's own "
+             "overrides it):"]
+    for v in crane_parameters.model():
+        value, instances = shared.get(v.name, (None, []))
+        own = [f"{i} = {system.parameters[i][v.name]:g}" for i, names in models.items()
+               if v.name in names and v.name in system.parameters.get(i, {})]
+        where = ", ".join(instances) or "no instance"
+        lines.append(f"    crane.{v.name} = " + (f"{value:g} {v.unit}" if value is not None else "(none)")
+                     + (" (set)" if v.name in values else "") + f": {where}"
+                     + (f"; own values: {', '.join(own)}" if own else ""))
     return lines

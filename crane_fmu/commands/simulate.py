@@ -21,7 +21,8 @@ EXAMPLES = (
     "  crane-fmu simulate --system free --stop-time 10 --out free.csv\n"
     "  crane-fmu simulate --system build/systems/paper.ssp --parameters my.ssv\n"
     "  crane-fmu simulate --algorithm jacobi --step 0.01 --set controller.w_theta2=0\n"
-    "  crane-fmu simulate --set plant.l1=1.5 --set controller.l1=1.5 --set plant.theta1_0=0.2\n"
+    "  crane-fmu simulate --set crane.l1=1.5 --set plant.theta1_0=0.2   # the crane's l1: plant and controller\n"
+    "  crane-fmu simulate --system lqr --set crane.l2=0.6 --set controller.l2=0.5   # a controller told another\n"
     "  crane-fmu simulate --system transport --use controller=build/mine/PdSway.fmu --out mine.csv\n"
     "  crane-fmu simulate --system transport --out move.mat          # for MATLAB: columns and data\n"
     "On a terminal a long run shows its progress on stderr; Ctrl-C stops it and keeps the rows so far."
@@ -54,7 +55,8 @@ def run_options(p, stop_time_help):
                    help="SSP parameter set with names INSTANCE.VARIABLE, applied before --set")
     p.add_argument("--set", action="append", default=[], metavar="INSTANCE.VARIABLE=VALUE",
                    help="set any parameter or input before initialisation (repeatable); angles in rad, or with a deg "
-                        "suffix: plant.theta1_0=10deg")
+                        "suffix: plant.theta1_0=10deg; crane.l2=0.6 sets the crane's l2 on every instance that "
+                        "models it (crane-fmu info --system NAME lists them) and has no value of its own")
     p.add_argument("--use", action="append", default=[], metavar="INSTANCE=FILE.fmu",
                    help="run this FMU as the instance instead of the system's (repeatable), e.g. "
                         "controller=mine.fmu; the system's values for the instance are kept where the FMU has them")
@@ -116,14 +118,13 @@ def prepare(args, system, step):
     (``systems.prepare``: ``--parameters`` then ``--set`` applied, the step's designs, every instance's
     parameters checked). A mistake raises UsageError or ValueError (one line)."""
     from crane_fmu import systems
-    from crane_fmu.cosim.system import settable
 
     fmus, connections = systems.resolve(system, args.fmu_dir)
     system = _keep_known(system, fmus, list(system.replaced))
     system, notes = systems.tell_controllers(system, args.fmu_dir)
     for note in notes:
         print(f"crane-fmu: note: {note}", file=sys.stderr)
-    variables = settable(fmus)
+    variables = systems.settable(system, fmus)
     values = [_parameter_file(args.parameters, variables)] if args.parameters else []
     system = systems.prepare(system, step, values=values + [parse_sets(args.set, variables)])
     return system, fmus, connections

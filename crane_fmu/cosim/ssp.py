@@ -2,9 +2,19 @@
 
 Written packages hold SystemStructure.ssd (components with their connectors and
 units, every connection written out, every parameter value, the step in
-OMSimulator's annotation) and the FMUs under ``resources/``. Read are packages
-and ``.ssd`` files with parameter values inline or in ``.ssv`` files, bound to a
-component (names ``variable``) or to the system (names ``instance.variable``).
+OMSimulator's annotation, the system's own values with the parameters each sets)
+and the FMUs under ``resources/``. Read are packages and ``.ssd`` files with
+parameter values inline or in ``.ssv`` files, bound to a component (names
+``variable``) or to the system (names ``instance.variable``), and parameter
+mappings (``.ssm``) of the system's values.
+
+The system's own values (one value an application sets on several components'
+parameters) are a system-level ParameterBinding named ``group.variable`` whose
+ParameterMapping maps it to each component parameter it sets; each component's own
+set carries the same value. Measured: OMSimulator 3.0 applies the system-level
+value to the mapped parameters over the components' own; libcosim (libcosimpy 0.0.6)
+reads only the components' sets (and refuses a file with a connection from the
+system's own connectors, so none is written).
 """
 
 import contextlib
@@ -26,7 +36,8 @@ SSV_NS = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
 # OMSimulator (2.x, 3.0) takes a system's master and step only from its own annotation on the root system, and
 # without one refuses the file; every other engine ignores it. It matches the prefixes `oms:`, `ssc:`, `ssd:`.
 OMS_NS = "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
-SSD, SSC, SSV, OMS = (f"{{{ns}}}" for ns in (SSD_NS, SSC_NS, SSV_NS, OMS_NS))
+SSM_NS = "http://ssp-standard.org/SSP1/SystemStructureParameterMapping"
+SSD, SSC, SSV, OMS, SSM = (f"{{{ns}}}" for ns in (SSD_NS, SSC_NS, SSV_NS, OMS_NS, SSM_NS))
 # The name of every component's one inline parameter set in the SSDs written here. One name for
 # all: Ecos applies the sets of the one name given to it (`ecos simulate --parameterSet
 # initialValues`), and none without it; libcosim takes each component's first set, OMSimulator
@@ -97,8 +108,9 @@ def _parameter_set(node, origin):
 
 
 def _bindings(element, base, origin):
-    """``{name: value}`` of every ParameterBinding of ``element`` (inline or from an .ssv file)."""
-    values = {}
+    """``({name: value}, {source: [target, ...]})`` of every ParameterBinding of ``element`` (inline or from .ssv
+    and .ssm files): the values and where the parameter mapping sends them."""
+    values, mapping = {}, {}
     for binding in element.findall(f"{SSD}ParameterBindings/{SSD}ParameterBinding"):
         prefix = binding.get("prefix", "")
         if binding.get("source"):
@@ -106,7 +118,12 @@ def _bindings(element, base, origin):
         else:
             found = _parameter_set(binding, origin)
         values.update({name.removeprefix(prefix): value for name, value in found.items()})
-    return values
+        node = binding.find(f"{SSD}ParameterMapping")
+        if node is not None:
+            entries = _xml(base / node.get("source"), origin) if node.get("source") else node
+            for entry in entries.iter(f"{SSM}MappingEntry"):
+                mapping.setdefault(entry.get("source"), []).append(entry.get("target"))
+    return values, mapping
 
 
 def _parse(ssd, origin):
@@ -122,13 +139,8 @@ def _parse(ssd, origin):
             raise ValueError(f"{origin}: component {name!r} has no FMU at {source!r}")
         read_fmu(fmu)
         instances[name] = str(fmu)
-        parameters[name] = _bindings(component, ssd.parent, origin)
-    for key, value in _bindings(system, ssd.parent, origin).items():
-        instance, _, variable = key.partition(".")
-        if instance not in instances or not variable:
-            raise ValueError(f"{origin}: system parameter {key!r} must be INSTANCE.VARIABLE with an instance of "
-                             f"{', '.join(instances)}")
-        parameters[instance][variable] = value
+        parameters[name] = _bindings(component, ssd.parent, origin)[0]
+    _system_values(*_bindings(system, ssd.parent, origin), instances, parameters, origin)
     connections = tuple(Connection(c.get("startElement"), c.get("startConnector"), c.get("endElement"),
                                    c.get("endConnector")) for c in system.iter(f"{SSD}Connection"))
     for c in connections:
@@ -147,6 +159,33 @@ def _parse(ssd, origin):
                 times[key] = float(experiment.get(attr))
     return System(system.get("name") or Path(origin).stem, instances, connections, match_names=False,
                   parameters=parameters, **times)
+
+
+def _system_values(values, mapping, instances, parameters, origin):
+    """Put the system-level values into ``parameters``: ``instance.variable`` on the instance; mapped, on each
+    target; a system's own (``group.variable``, the group no instance) under ``parameters[group]``,
+    and the parameters its mapping names keep no value of their own (the system's sets them)."""
+    def split(key):
+        instance, _, variable = key.partition(".")
+        if not instance or not variable:
+            raise ValueError(f"{origin}: system parameter {key!r} must be INSTANCE.VARIABLE (or GROUP.VARIABLE, a "
+                             f"value of the system's own)")
+        return instance, variable
+
+    for key, value in values.items():
+        group, variable = split(key)
+        own = group not in instances
+        if own:
+            parameters.setdefault(group, {})[variable] = value
+        for target in mapping.get(key, [] if own else [key]):
+            instance, variable = split(target)
+            if instance not in instances:
+                raise ValueError(f"{origin}: system parameter {key!r} is mapped to {target!r}, which names no "
+                                 f"component of {', '.join(instances)}")
+            if own:
+                parameters[instance].pop(variable, None)
+            else:
+                parameters[instance][variable] = value
 
 
 def load_parameters(path):
@@ -207,13 +246,16 @@ def parameter_values(md, overrides):
     return values
 
 
-def system_structure(system, fmus, connections, sources):
-    """The SystemStructure.ssd element of a resolved system; ``sources`` maps instances to package paths."""
-    for prefix, ns in (("ssd", SSD_NS), ("ssc", SSC_NS), ("ssv", SSV_NS), ("oms", OMS_NS)):
+def system_structure(system, fmus, connections, sources, shared=None):
+    """The SystemStructure.ssd element of a resolved system; ``sources`` maps instances to package paths;
+    ``shared`` as :func:`write_ssp` takes it."""
+    for prefix, ns in (("ssd", SSD_NS), ("ssc", SSC_NS), ("ssv", SSV_NS), ("oms", OMS_NS), ("ssm", SSM_NS)):
         ET.register_namespace(prefix, ns)
     name = re.sub(r"\W", "_", system.name)  # OMSimulator refuses names that are not identifiers (hoist-transport)
     root = ET.Element(f"{SSD}SystemStructureDescription", version="1.0", name=name)
     node = ET.SubElement(root, f"{SSD}System", name=name)
+    if shared:
+        _shared_values(node, shared, fmus)
     elements = ET.SubElement(node, f"{SSD}Elements")
     units = {}
     for name, path in fmus.items():
@@ -253,20 +295,44 @@ def system_structure(system, fmus, connections, sources):
     return root
 
 
+def _shared_values(node, shared, fmus):
+    """The system's own values as a system-level ParameterBinding whose ParameterMapping sends each to the
+    component parameters it sets (typed and in the unit of the first of them)."""
+    binding = ET.SubElement(ET.SubElement(node, f"{SSD}ParameterBindings"), f"{SSD}ParameterBinding")
+    parameter_set = ET.SubElement(ET.SubElement(binding, f"{SSD}ParameterValues"), f"{SSV}ParameterSet",
+                                  version="1.0", name=PARAMETER_SET)
+    parameters = ET.SubElement(parameter_set, f"{SSV}Parameters")
+    mapping = ET.SubElement(ET.SubElement(binding, f"{SSD}ParameterMapping"), f"{SSM}ParameterMapping",
+                            version="1.0")
+    for name, (value, targets) in shared.items():
+        instance, variable = targets[0]
+        v = next(v for v in read_fmu(fmus[instance]).modelVariables if v.name == variable)
+        _typed(ET.SubElement(parameters, f"{SSV}Parameter", name=name), SSV, v.type, value=value_text(value),
+               unit=v.unit if v.type in ("Real", "Float64") else None)
+        for instance, variable in targets:
+            ET.SubElement(mapping, f"{SSM}MappingEntry", source=name, target=f"{instance}.{variable}")
+
+
 def _oms_annotation(parent):
     """An ``ssd:Annotations`` of type org.openmodelica under ``parent``; its ``oms:Annotations`` element."""
     annotation = ET.SubElement(ET.SubElement(parent, f"{SSD}Annotations"), f"{SSC}Annotation", type="org.openmodelica")
     return ET.SubElement(annotation, f"{OMS}Annotations")
 
 
-def write_ssp(system, fmu_dir, path):
-    """Write ``system`` (FMUs in ``fmu_dir`` or named by path) as an SSP package at ``path``; return it."""
+def write_ssp(system, fmu_dir, path, shared=None):
+    """Write ``system`` (FMUs in ``fmu_dir`` or named by path) as an SSP package at ``path``; return it.
+
+    ``shared`` is ``{"group.variable": (value, [(instance, variable), ...])}``: values of the system's own, each
+    written once at the system's level with the component parameters it sets (which ``system`` gives the same
+    value: the hosts that read only the components' sets apply it too).
+    """
     fmus, connections = system.resolve(fmu_dir)
     sources = {name: f"resources/{Path(p).name}" for name, p in fmus.items()}
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="cosim_ssp_") as staging:
-        ssd = _write_xml(system_structure(system, fmus, connections, sources), Path(staging) / "SystemStructure.ssd")
+        ssd = _write_xml(system_structure(system, fmus, connections, sources, shared),
+                         Path(staging) / "SystemStructure.ssd")
         partial = path.with_name(f".{path.name}.partial")
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as ssp:
             ssp.write(ssd, "SystemStructure.ssd")

@@ -6,7 +6,7 @@ from . import limits
 from .component import Component
 from .parameters import GAIN_RULES, PLANT_FIELDS, PLANT_RULES, ControllerGains, plant_parameters
 from .rules import check, positive
-from .tables import MEASURED_STATE, controller_model, output, parameter, positions
+from .tables import CRANE_MODEL, MEASURED_STATE, controller_model, output, parameter, positions
 
 
 def drift_and_input_gain(theta1, dtheta1, theta2, dtheta2, p, b3_form="derived"):
@@ -168,4 +168,4 @@ COMPONENT = Component(
     "BacksteppingController", "controller",
     "Backstepping anti-swing controller for a double-pendulum crane payload "
     "(least-squares eq 21); output: trolley acceleration u, direct feedthrough",
-    VARIABLES, configure, _output, feedthrough=True, native="backstepping.c", rules=RULES)
+    VARIABLES, configure, _output, feedthrough=True, crane_model=CRANE_MODEL, native="backstepping.c", rules=RULES)

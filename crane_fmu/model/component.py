@@ -216,6 +216,9 @@ class Component:
     rules : tuple of rules.Rule, optional
         The parameter rules, in the order they are checked: ``configure`` checks them first
         (:func:`.rules.check`), and the native twin's generated header holds them in C.
+    crane_model : tuple of str
+        The parameters that are its model of the crane (the plant's own, a model-based controller's, planner's,
+        estimator's, the wind's): a system's ``crane.<name>`` sets them (the application's crane_parameters.py).
     """
 
     model_identifier: str
@@ -234,6 +237,7 @@ class Component:
     native: str | None = None
     crane: Crane | None = None
     rules: tuple = ()
+    crane_model: tuple = ()
 
     def __post_init__(self):
         if not self.model_identifier.isidentifier():
@@ -254,7 +258,13 @@ class Component:
             if self.role != "plant":
                 raise ValueError(f"{self.model_identifier}: only a plant has crane roles, this is a {self.role}")
             self.crane.check(self)
+            if tuple(self.crane_model) != tuple(self.crane.model):
+                raise ValueError(f"{self.model_identifier}: a plant's crane_model is its crane roles' model, "
+                                 f"{self.crane.model!r}, got {self.crane_model!r}")
         self._check_rules()
+        for name in self.crane_model:
+            if name not in self.names("parameter"):
+                raise ValueError(f"{self.model_identifier}: crane_model names {name!r}, which is no parameter of it")
         if (self.initial_state is None) != (self.update is None):
             raise ValueError(f"{self.model_identifier}: a state needs both initial_state and update")
         if self.depends_on is not None:

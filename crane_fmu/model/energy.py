@@ -59,7 +59,7 @@ from . import limits
 from .component import Component
 from .parameters import PLANT_RULES, plant_parameters
 from .rules import check, finite, positive, rule
-from .tables import MEASURED_STATE, controller_model, output, parameter
+from .tables import CRANE_MODEL, MEASURED_STATE, controller_model, output, parameter
 
 Config = namedtuple("Config", "mu m2 l1 l2 k_c k_p k_d x_d u_max v_max h")
 
@@ -101,4 +101,4 @@ COMPONENT = Component(
     "Energy-coupling anti-swing law with a Lyapunov/LaSalle proof (saturated, |u| <= u_max); "
     "output: trolley acceleration u, direct feedthrough",
     VARIABLES, configure, lambda config, state, inputs: (control(config, inputs),), feedthrough=True,
-    native="energy.c", rules=RULES)
+    crane_model=CRANE_MODEL, native="energy.c", rules=RULES)

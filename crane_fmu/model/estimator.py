@@ -44,7 +44,7 @@ from .disturbances import DELAY_STEPS
 from .lqr import continuous_model
 from .parameters import PLANT_RULES, plant_parameters
 from .rules import check, one_of, positive
-from .tables import STATE, controller_model, input_, output, parameter, positions, state_variables
+from .tables import CRANE_MODEL, STATE, controller_model, input_, output, parameter, positions, state_variables
 
 NOISES = ("sigma_x", "sigma_theta", "sigma_u", "sigma_swing")
 
@@ -166,4 +166,5 @@ COMPONENT = Component(
     "Discrete Kalman filter of the crane linearised about rest, designed from its parameters at initialisation: "
     "the controllers' inputs x, dx, theta1, dtheta1, theta2, dtheta2 from x_meas, theta1_meas (theta2_meas) and u",
     VARIABLES, configure, lambda config, state, inputs: tuple(state[ESTIMATE]),
-    initial_state=initial_state, update=update, report=report, native="estimator.c", rules=RULES)
+    initial_state=initial_state, update=update, report=report,
+    crane_model=CRANE_MODEL, native="estimator.c", rules=RULES)

@@ -30,7 +30,7 @@ from .component import Component
 from .lqr import DEFAULT_WEIGHTS, REFERENCE_INPUTS, WEIGHTS, design
 from .parameters import PLANT_RULES, plant_parameters
 from .rules import check, finite, non_negative, positive, rule
-from .tables import MEASURED_STATE, controller_model, output, parameter, positions
+from .tables import CRANE_MODEL, MEASURED_STATE, controller_model, output, parameter, positions
 
 Config = namedtuple("Config", "near far e_near e_far mu m2 l1 l2 g x_d u_max v_max h")
 
@@ -112,4 +112,5 @@ COMPONENT = Component(
     "HardHitController", "controller",
     "Two discrete LQR designs blended by the swing energy (gentle far out, the LQR near rest), for large swings; "
     "tracks x_ref, dx_ref, ddx_ref; output: trolley acceleration u, direct feedthrough",
-    VARIABLES, configure, _output, feedthrough=True, report=report, native="hard_hit.c", rules=RULES)
+    VARIABLES, configure, _output, feedthrough=True, report=report,
+    crane_model=CRANE_MODEL, native="hard_hit.c", rules=RULES)

@@ -15,7 +15,7 @@ from .component import Component
 from .parameters import PLANT_RULES, plant_parameters
 from .plant import linearisation
 from .rules import check, finite, non_negative, positive, rule
-from .tables import MEASURED_STATE, STATE, controller_model, input_, output, parameter, positions
+from .tables import CRANE_MODEL, MEASURED_STATE, STATE, controller_model, input_, output, parameter, positions
 
 WEIGHTS = tuple("q_" + name for name in STATE)
 REFERENCE = ("x_ref", "dx_ref", "theta1_ref", "dtheta1_ref", "theta2_ref", "dtheta2_ref")
@@ -150,4 +150,5 @@ COMPONENT = Component(
     "LqrController", "controller",
     "Discrete-time LQR of the double-pendulum crane about the hanging equilibrium, designed from its parameters "
     "at initialisation; tracks x_ref, dx_ref, ddx_ref; output: trolley acceleration u, direct feedthrough",
-    VARIABLES, configure, _output, feedthrough=True, report=report, native="lqr.c", rules=RULES)
+    VARIABLES, configure, _output, feedthrough=True, report=report,
+    crane_model=CRANE_MODEL, native="lqr.c", rules=RULES)

@@ -49,7 +49,7 @@ from .component import Component, Step
 from .lqr import DEFAULT_WEIGHTS, SCHEDULE_RULES, WEIGHTS, continuous_model
 from .parameters import PLANT_RULES, plant_parameters
 from .rules import check, finite, in_range, non_negative, positive, rule, whole
-from .tables import MEASURED_STATE, controller_model, input_, output, parameter, positions
+from .tables import CRANE_MODEL, MEASURED_STATE, controller_model, input_, output, parameter, positions
 
 RHO = 1e6  # the plan's weight on missing the target state
 REACHED = 1e-3  # the plan reaches the target when every state is this close (m, m/s, rad, rad/s)
@@ -590,4 +590,4 @@ COMPONENT = Component(
     "Constrained model-predictive control: the shortest move to x_d within the drive's limits, planned at the "
     "start, tracked by a QP every interval (our own active-set solver); output: trolley acceleration u",
     VARIABLES, configure, _output, feedthrough=True, initial_state=initial_state, update=update, report=report,
-    native="mpc.c", rules=RULES)
+    crane_model=CRANE_MODEL, native="mpc.c", rules=RULES)

@@ -29,7 +29,7 @@ from .component import Component
 from .parameters import PLANT_RULES, plant_parameters
 from .plant import linearisation
 from .rules import check, finite, one_of, rule
-from .tables import PLANT_MODEL, output, parameter
+from .tables import CRANE_MODEL, PLANT_MODEL, output, parameter
 
 EI_TOLERANCE = 0.05
 # A time at most this much (relative, of at least 1 s) past a step of the plan counts as at it, before it: the
@@ -190,4 +190,5 @@ COMPONENT = Component(
     "outputs: the reference x_ref, dx_ref, ddx_ref and the swing it induces",
     VARIABLES, configure, lambda config, state, inputs: reference(config, *state),
     initial_state=lambda config: (0.0,), update=lambda config, state, inputs, time, step: (time + step,),
-    report=report, default_experiment=(0.0, 10.0, 1e-3), native="planner.c", rules=RULES)  # the transport system's move
+    report=report, default_experiment=(0.0, 10.0, 1e-3),
+    crane_model=CRANE_MODEL, native="planner.c", rules=RULES)  # the transport system's move

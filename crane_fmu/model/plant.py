@@ -36,7 +36,7 @@ from .plant_equations import (  # noqa: F401 (the plant's equations, importable 
 )
 from .plant_limits import clamp, drive_factors, held_cable, past_rail_end, reached_limit, within_speed
 from .rules import check, finite, limit, non_negative, positive, rule
-from .tables import PLANT_MODEL, input_, local, output, parameter
+from .tables import CRANE_MODEL, PLANT_MODEL, input_, local, output, parameter
 
 DRIVE, ACCEL = plant_continuous.DRIVE, plant_continuous.DRIVE + 1  # the drive's and the trolley's mean acceleration
 INITIAL_STATE = ("x0", "dx0", "theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0")
@@ -264,4 +264,4 @@ COMPONENT = Component(
     "inputs: trolley and hoist accelerations, horizontal forces; fixed-step RK4 inside doStep",
     VARIABLES, configure, _outputs,
     initial_state=lambda config: config.state0, update=update, continuous=CONTINUOUS,
-    native="crane_plant.c", crane=CRANE, rules=RULES)
+    crane_model=CRANE_MODEL, native="crane_plant.c", crane=CRANE, rules=RULES)

@@ -86,6 +86,8 @@ PLANT_MODEL = (
     parameter("l2", _PP.l2, "m", "cable length hook to payload"),
     parameter("g", _PP.g, "m/s2", "gravitational acceleration"),
 )
+# What a component that models the whole crane declares as its model of it (Component.crane_model).
+CRANE_MODEL = tuple(v.name for v in PLANT_MODEL)
 
 # The plant state in the order of crane_fmu.model.plant, with units and descriptions.
 _STATE_ROWS = {

@@ -106,4 +106,4 @@ COMPONENT = Component(
      output("wind", "m/s", "wind speed along x: U_mean plus the turbulence")),
     _configure, _output, feedthrough=True, initial_state=_initial_state, update=_update,
     depends_on={"F1": ("dx", "theta1", "dtheta1"), "F2": ("dx", "theta1", "dtheta1", "theta2", "dtheta2")},
-    native="wind.c", rules=RULES)
+    crane_model=("l1", "l2"), native="wind.c", rules=RULES)

@@ -13,20 +13,22 @@ import math
 import os
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
-from crane_fmu import DEFAULT_FMU_DIR, systems
+from crane_fmu import DEFAULT_FMU_DIR, crane_parameters, systems
 from crane_fmu.analysis import metrics
 from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch
 from crane_fmu.cosim import ArrayRecorder, FmiError, simulate
-from crane_fmu.cosim.system import read_fmu, settable, split_name
+from crane_fmu.cosim.system import read_fmu, split_name
 
 from .plots import plot_study
 from .spec import case_id
 
 
-def shippable(system, fmu_dir):
-    """What a worker needs to run cases of ``system``: FMU bytes by instance, connections, parameter values.
+def shippable(system, fmu_dir, binding=None):
+    """What a worker needs to run cases of a prepared ``system``: FMU bytes by instance, connections, parameter
+    values, and ``binding``, the instances each crane parameter binds (:func:`case_parameters`).
 
     ``blobs`` is ``{instance: (sha256, bytes)}``; workers cache each FMU once by its hash.
     """
@@ -35,7 +37,7 @@ def shippable(system, fmu_dir):
     for name, path in fmus.items():
         data = Path(path).read_bytes()
         blobs[name] = (hashlib.sha256(data).hexdigest()[:20], data)
-    return {"blobs": blobs, "connections": connections, "parameters": system.parameters}
+    return {"blobs": blobs, "connections": connections, "parameters": system.parameters, "binding": binding or {}}
 
 
 def local_fmus(blobs):
@@ -53,12 +55,18 @@ def local_fmus(blobs):
     return paths
 
 
-def case_parameters(case, base=None):
-    """``{"plant.l1": 1.5}`` -> ``{"plant": {"l1": 1.5}}``, over the system's own values ``base``."""
-    parameters = {name: dict(values) for name, values in (base or {}).items()}
+def case_parameters(case, base=None, binding=None):
+    """``{"plant.l1": 1.5}`` -> ``{"plant": {"l1": 1.5}}``, over the system's own values ``base``; a crane value
+    (``"crane.l2"``) set on the instances ``binding`` names for it (:func:`shippable`) that the case gives no
+    value of their own."""
+    values = {}
     for key, value in case.items():
         instance, _, variable = key.partition(".")
-        parameters.setdefault(instance, {})[variable] = value
+        values.setdefault(instance, {})[variable] = value
+    crane = values.pop(crane_parameters.CRANE, {})
+    parameters = {name: dict(v) for name, v in (base or {}).items()}
+    for instance, own in crane_parameters.bind_values(values, crane, binding or {}).items():
+        parameters.setdefault(instance, {}).update(own)
     return parameters
 
 
@@ -79,7 +87,7 @@ def run_case(case, system, settings, metric_names):
     recorder = ArrayRecorder()
     try:
         simulate(local_fmus(system["blobs"]), system["connections"], settings["stop_time"], settings["step"],
-                 settings["algorithm"], case_parameters(case, system["parameters"]), recorder)
+                 settings["algorithm"], case_parameters(case, system["parameters"], system["binding"]), recorder)
     except FmiError as exc:
         row.update(status="failed", error=str(exc))
     values = dict.fromkeys(metric_names)
@@ -128,11 +136,13 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
         out_dir.mkdir(parents=True, exist_ok=True)  # only now: a refused study leaves no folder behind
         bar = Progress(len(cases), len(cases) - len(pending), failed=failed_before) if progress else None
         if pending:
-            shipped = shippable(systems.prepare(system, study.step, study.stop_time, check=False), fmu_dir)
+            binding = crane_parameters.bound(system, systems.modelled(system))  # before prepare binds the crane's
+            shipped = shippable(systems.prepare(system, study.step, study.stop_time, check=False), fmu_dir, binding)
             to_run, invalid = [], []
             for case in pending:  # the model's parameter rules, before anything is shipped
                 try:
-                    systems.check_parameters(system.with_parameters(case_parameters(case)))
+                    systems.check_parameters(replace(system, parameters=case_parameters(
+                        case, shipped["parameters"], shipped["binding"])))
                     to_run.append(case)
                 except ValueError as exc:
                     invalid.append(_invalid_row(case, settings, str(exc), study.metrics))
@@ -154,7 +164,7 @@ def _check_names(study, system, fmu_dir):
     """Check that every varied or fixed variable is a parameter or input of its instance, and that the
     system has a crane; return ``{"instance.variable": unit}`` of the varied and fixed variables."""
     fmus = system.fmus(fmu_dir)
-    known = settable(fmus)
+    known = systems.settable(system, fmus)
     names = list(study.fixed) + [n for names, *_ in list(study.grid.values()) + list(study.sampled.values())
                                  for n in names]
     for name in names:

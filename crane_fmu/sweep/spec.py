@@ -27,7 +27,8 @@ A study is a TOML (or, with PyYAML installed, YAML) file::
     x = "plant.theta1_0"
     y = "plant.l1"
 
-Parameter names are ``INSTANCE.VARIABLE`` with an instance of the system.
+Parameter names are ``INSTANCE.VARIABLE`` with an instance of the system, or ``crane.l1`` (the crane's own,
+set on every instance that models it and that the case gives no value of its own: crane_fmu/crane_parameters.py).
 Every mistake raises ``ValueError`` with one line naming the key and the rule.
 """
 
