@@ -278,9 +278,13 @@ def _animated(crane):
 
 
 def animation_needs(columns):
-    """What a recorded run misses to be animated (empty: nothing): a registered plant's outputs that
-    :func:`_animated` names, of one instance."""
-    return [] if find_crane(columns, _animated)[1] is not None else ["a plant's outputs"]
+    """What a recorded run misses to be animated, one line (empty: nothing): one instance with what
+    :func:`_animated` names of a registered plant."""
+    if find_crane(columns, _animated)[1] is not None:
+        return ""
+    wanted = "; ".join(f"{c.model_identifier}: {', '.join(_animated(c.crane))}" for c in components.registered("plant")
+                       if c.crane is not None and _animated(c.crane))
+    return f"a plant's outputs ({wanted})"
 
 
 def animate(signals, path, title="", fps=15, progress=False):

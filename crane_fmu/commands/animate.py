@@ -39,8 +39,7 @@ def run(args):
         raise UsageError(f"cannot read {args.result}: {exc}") from None
     needed = animation_needs(columns)
     if needed:
-        raise UsageError(f"{args.result} has no crane to animate: it needs the plant outputs "
-                         f"{', '.join(needed)}")
+        raise UsageError(f"{args.result} has no crane to animate: it needs {needed}")
     writable_file(args.out, "--out")
     start = time.perf_counter()
     path = animate(columns, args.out, Path(args.result).stem, args.fps, progress=sys.stderr.isatty())
