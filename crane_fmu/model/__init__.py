@@ -22,6 +22,7 @@ from . import (  # noqa: F401
     planner,
     plant,
     plant_continuous,
+    plant3d,
     rules,
     tables,
     wind,

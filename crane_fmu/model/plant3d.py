@@ -1,0 +1,237 @@
+"""The CranePlant3D FMU kind: the overhead crane in three dimensions, its variables, rules and communication step.
+
+The equations of motion are in :mod:`.plant3d_equations` (the spatial double pendulum under a trolley that
+moves in x and y, with the hoist), the plant as a host integrates it in :mod:`.plant3d_continuous`. Each
+horizontal axis has the planar plant's drive (:mod:`.plant_limits`): the demand limited to its ``u_max``, a
+first-order lag ``tau``, a speed limit ``v_max`` and rail ends; the hoist is the planar plant's. The state is
+the swing-and-hoist state of :mod:`.plant3d_equations` followed by the two drives' accelerations and the
+trolley's mean accelerations over the last sub-step (:data:`DRIVE_X`, ..., :data:`ACCEL_Y`).
+
+Angles: ``theta1x`` and ``theta1y`` are the main cable's ``a`` and ``b`` of (S1), ``theta2x`` and ``theta2y`` the
+lower cable's: ``theta.x`` is the angle of the cable's projection onto the x-z plane from the downward vertical
+(the planar plant's ``theta``), ``theta.y`` the cable's angle out of that plane, towards +y. Linearised at rest
+they are the swing angles of two planar cranes, one per axis.
+"""
+
+import math
+from collections import namedtuple
+
+from . import plant3d_continuous as continuous
+from .component import Component, Continuous, Discard, Step
+from .limits import NO_LIMIT, unlimited
+from .parameters import finite, plant_parameters, positive
+from .plant3d_equations import DL1, DX, DY, L1, X, Y, outputs, rk4_step, substeps
+from .plant_limits import clamp, drive_factors, held_cable, past_rail_end, reached_limit, within_speed
+from .tables import PLANT_MODEL, input_, local, output, parameter, positions
+
+DRIVE_X, DRIVE_Y = continuous.DRIVE_X, continuous.DRIVE_Y  # the drives' accelerations (after the lag)
+ACCEL_X, ACCEL_Y = DRIVE_Y + 1, DRIVE_Y + 2  # the trolley's mean accelerations over the last sub-step
+SWING_STATE = ("x", "dx", "y", "dy", "theta1x", "dtheta1x", "theta1y", "dtheta1y", "theta2x", "dtheta2x", "theta2y",
+               "dtheta2y")
+INITIAL_STATE = ("x0", "dx0", "y0", "dy0", "theta1x_0", "dtheta1x_0", "theta1y_0", "dtheta1y_0", "theta2x_0",
+                 "dtheta2x_0", "theta2y_0", "dtheta2y_0")
+
+INF = NO_LIMIT  # no limit, as a finite start value (limits.py says why); configure() makes it inf
+UNLIMITED = ("ux_max", "vx_max", "x_min", "x_max", "uy_max", "vy_max", "y_min", "y_max", "l1_max", "dl1_max")
+
+_SWING_ROWS = {
+    "x": ("m", "trolley position along x (the bridge's rails' direction is y)"),
+    "dx": ("m/s", "trolley velocity along x"),
+    "y": ("m", "trolley position along y"),
+    "dy": ("m/s", "trolley velocity along y"),
+    "theta1x": ("rad", "hook cable's angle in the x-z plane from the vertical (its projection's; the planar theta1)"),
+    "dtheta1x": ("rad/s", "rate of theta1x"),
+    "theta1y": ("rad", "hook cable's angle out of the x-z plane, towards +y"),
+    "dtheta1y": ("rad/s", "rate of theta1y"),
+    "theta2x": ("rad", "load cable's angle in the x-z plane from the vertical (its projection's; the planar theta2)"),
+    "dtheta2x": ("rad/s", "rate of theta2x"),
+    "theta2y": ("rad", "load cable's angle out of the x-z plane, towards +y"),
+    "dtheta2y": ("rad/s", "rate of theta2y"),
+}
+
+
+def _axis_parameters(name, what):
+    return (
+        parameter(f"u{name}_max", INF, "m/s2", f"{what}: largest |acceleration|; 1e60 or INF: no limit"),
+        parameter(f"v{name}_max", INF, "m/s", f"{what}: largest speed; 1e60 or INF: no limit"),
+        parameter(f"tau_{name}", 0.0, "s", f"{what}: first-order lag of the acceleration; 0: none"),
+        parameter(f"{name}_min", -INF, "m", f"rail end: the trolley cannot pass below this {name}; -1e60 or -INF: none"),
+        parameter(f"{name}_max", INF, "m", f"rail end: the trolley cannot pass above this {name}; 1e60 or INF: none"),
+    )
+
+
+VARIABLES = PLANT_MODEL + tuple(
+    parameter(start, math.pi / 18 if start == "theta1x_0" else 0.0, _SWING_ROWS[name][0],
+              "initial " + _SWING_ROWS[name][1])
+    for start, name in zip(INITIAL_STATE, SWING_STATE)) + (
+    parameter("max_substep", 1e-3, "s", "longest RK4 sub-step inside doStep"),
+    parameter("c1", 0.0, "N.m.s/rad", "viscous damping of the hook cable's swing (at the trolley)"),
+    parameter("c2", 0.0, "N.m.s/rad", "viscous damping of the load cable's swing relative to the hook cable's"),
+    *_axis_parameters("x", "drive along x"),
+    *_axis_parameters("y", "drive along y"),
+    parameter("l1_min", 0.0, "m", "hoist: shortest main cable; 0: no limit"),
+    parameter("l1_max", INF, "m", "hoist: longest main cable; 1e60 or INF: no limit"),
+    parameter("dl1_max", INF, "m/s", "hoist: largest |cable speed|; 1e60 or INF: no limit"),
+    input_("ux", "m/s2", "trolley acceleration along x demanded (held over each step)"),
+    input_("uy", "m/s2", "trolley acceleration along y demanded (held over each step)"),
+    input_("hoist", "m/s2", "hoist acceleration l1'' (held over each step), positive lowers the hook"),
+    input_("F1x", "N", "horizontal force on the hook along x (wind, a push)"),
+    input_("F1y", "N", "horizontal force on the hook along y"),
+    input_("F2x", "N", "horizontal force on the load along x"),
+    input_("F2y", "N", "horizontal force on the load along y"),
+    *(output(name, unit, text) for name, (unit, text) in _SWING_ROWS.items()),
+    output("x1", "m", "hook position along x"),
+    output("y1", "m", "hook position along y"),
+    output("z1", "m", "hook height (up positive; the trolley at 0)"),
+    output("x2", "m", "load position along x"),
+    output("y2", "m", "load position along y"),
+    output("z2", "m", "load height (up positive; the trolley at 0)"),
+    output("swing1", "rad", "hook cable's angle from the vertical (in space)"),
+    output("swing2", "rad", "load cable's angle from the vertical (in space)"),
+    output("energy", "J", "kinetic + potential energy of hook and load"),
+    output("l1_now", "m", "main cable length trolley to hook now (starts at l1)"),
+    output("dl1_now", "m/s", "main cable length rate, positive lowering"),
+    output("ddx", "m/s2", "trolley acceleration along x over the last step, after the drive's limits and lag"),
+    output("ddy", "m/s2", "trolley acceleration along y over the last step, after the drive's limits and lag"),
+)
+
+IN = positions(VARIABLES, "input")  # inputs[IN.hoist]: the inputs by name (continuous.INPUTS, the same order)
+
+Axis = namedtuple("Axis", "u_max v_max tau low high")
+Axis.__doc__ = "One horizontal axis' drive and rail: ``|u| <= u_max``, lag ``tau``, ``|v| <= v_max``, ``low <= x <= high``."
+
+Config = namedtuple("Config", "params max_substep state0 damping x_axis y_axis l1_min l1_max dl1_max")
+Config.__doc__ = "The plant's validated parameters (each axis an :class:`Axis`; limits that are off are inf)."
+
+
+def _at_least_zero(name, value):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (value >= 0 and math.isfinite(value)):
+        raise ValueError(f"{name} must be >= 0 and finite, got {value!r}")
+
+
+def _limit(name, value):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
+        raise ValueError(f"{name} must be > 0 (INF: no limit), got {value!r}")
+
+
+def configure(values):
+    """Validated :class:`Config` from the CranePlant3D parameter values; the state starts at rest in the drives."""
+    positive("max_substep", values["max_substep"])
+    p = plant_parameters(values)
+    for name in ("c1", "c2", "tau_x", "tau_y", "l1_min"):
+        _at_least_zero(name, values[name])
+    for name in ("ux_max", "vx_max", "uy_max", "vy_max", "dl1_max"):
+        _limit(name, values[name])
+    if p.m2 == 0 and values["c2"] != 0:
+        raise ValueError(f"c2 must be 0 when m2 = 0 (the hook joint then moves no mass), got {values['c2']!r}")
+    for axis in ("x", "y"):
+        if not values[f"{axis}_min"] < values[f"{axis}_max"]:
+            raise ValueError(f"{axis}_min must be < {axis}_max, got {values[axis + '_min']!r} and "
+                             f"{values[axis + '_max']!r}")
+    state0 = tuple(values[name] for name in INITIAL_STATE)
+    for name, value in zip(INITIAL_STATE, state0):
+        finite(name, value)
+    for axis in ("x", "y"):
+        low, high, start = values[f"{axis}_min"], values[f"{axis}_max"], values[f"{axis}0"]
+        if not low <= start <= high:
+            raise ValueError(f"{axis}0 must lie on the rail [{low!r}, {high!r}], got {start!r}")
+    if not values["l1_min"] <= p.l1 <= values["l1_max"]:
+        raise ValueError(f"l1 must lie within [l1_min, l1_max] = [{values['l1_min']!r}, {values['l1_max']!r}], "
+                         f"got {p.l1!r}")
+    v = {**values, **{name: unlimited(values[name]) for name in UNLIMITED}}  # validated: numbers
+    axes = [Axis(v[f"u{a}_max"], v[f"v{a}_max"], v[f"tau_{a}"], v[f"{a}_min"], v[f"{a}_max"]) for a in "xy"]
+    return Config(params=p, max_substep=v["max_substep"], state0=state0 + (p.l1, 0.0, 0.0, 0.0, 0.0, 0.0),
+                  damping=(v["c1"], v["c2"]), x_axis=axes[0], y_axis=axes[1], l1_min=v["l1_min"], l1_max=v["l1_max"],
+                  dl1_max=v["dl1_max"])
+
+
+def _not_finite(time, inputs):
+    return Discard(f"plant state became non-finite in the step from t={time!r} s (ux={inputs[IN.ux]!r}, "
+                   f"uy={inputs[IN.uy]!r} m/s2); the step is discarded")
+
+
+def update(config, state, inputs, time, step):
+    """The state after one communication step with the inputs held.
+
+    Per RK4 sub-step ``dt`` and per axis, as the planar plant's :func:`.plant.general_update`: the demand is
+    limited to ``u_max``, the drive follows it with the lag ``tau`` (exactly, the trolley taking its mean over
+    the sub-step), and the acceleration is limited so that the speed ends within ``v_max``; the hoist
+    acceleration is limited by ``dl1_max``, and a cable reaching ``l1_min`` or ``l1_max`` is held there at rest.
+    A trolley that would pass a rail end, or a state that becomes non-finite, discards the step.
+    """
+    hoist, f1x, f1y, f2x, f2y = (inputs[i] for i in (IN.hoist, IN.F1x, IN.F1y, IN.F2x, IN.F2y))
+    c, p = config, config.params
+    if p.m2 == 0 and (f2x != 0 or f2y != 0):
+        raise Discard(f"F2 = ({f2x!r}, {f2y!r}) N acts on a load of mass m2 = 0: the step is discarded")
+    n = substeps(step, c.max_substep)  # ValueError for an unusable step
+    dt = step / n
+    forces = (f1x, f1y, f2x, f2y, *c.damping)
+    axes = ((c.x_axis, clamp(inputs[IN.ux], -c.x_axis.u_max, c.x_axis.u_max), *drive_factors(c.x_axis.tau, dt), DX, X, "x"),
+            (c.y_axis, clamp(inputs[IN.uy], -c.y_axis.u_max, c.y_axis.u_max), *drive_factors(c.y_axis.tau, dt), DY, Y, "y"))
+    messages, notes = [], []
+    swing, drives, accels = state[:DRIVE_X], [state[DRIVE_X], state[DRIVE_Y]], [0.0, 0.0]
+    try:
+        for k in range(n):
+            for i, (axis, demand, lag, mean, speed, _, _) in enumerate(axes):
+                accel = demand + (drives[i] - demand) * mean if axis.tau > 0 else demand
+                drives[i] = demand + (drives[i] - demand) * lag
+                accels[i] = within_speed(accel, swing[speed], axis.v_max, dt)
+            cable_rate = swing[DL1]
+            hoist_now = within_speed(hoist, cable_rate, c.dl1_max, dt)
+            swing = rk4_step(swing, accels[0], accels[1], dt, p, hoist_now, forces)
+            t = time + (k + 1) * dt
+            for axis, _, _, _, _, at, name in axes:
+                if not axis.low <= swing[at] <= axis.high:
+                    raise past_rail_end(axis.low, axis.high, swing[at], t, time, name)
+            held = held_cable(swing[L1], c.l1_min, c.l1_max)
+            if held is not None:
+                if cable_rate != 0.0:  # reached the limit in this sub-step (not already held there)
+                    warning, text = reached_limit(held, t, swing[DL1])
+                    (messages if warning else notes).append(text)
+                swing = swing[:L1] + (held, 0.0)
+        finite_state = all(map(math.isfinite, swing))
+    except (ArithmeticError, ValueError):  # overflow, or sin/cos of inf
+        finite_state = False
+    if not finite_state:
+        raise _not_finite(time, inputs)
+    state = swing + (drives[0], drives[1], accels[0], accels[1])
+    return Step(state, messages, notes) if messages or notes else state
+
+
+def _outputs(config, state, inputs):
+    return state[:L1] + outputs(state, config.params) + (state[L1], state[DL1], state[ACCEL_X], state[ACCEL_Y])
+
+
+CONTINUOUS = Continuous(
+    states=continuous.STATES,
+    derivatives=("dx", "ddx", "dy", "ddy", "dtheta1x", "der(dtheta1x)", "dtheta1y", "der(dtheta1y)", "dtheta2x",
+                 "der(dtheta2x)", "dtheta2y", "der(dtheta2y)", "dl1_now", "der(dl1_now)", "der(drive_x)",
+                 "der(drive_y)"),
+    variables=(
+        local("drive_x", "m/s2", "drive's acceleration along x, after its lag tau_x, before the speed limit"),
+        local("drive_y", "m/s2", "drive's acceleration along y, after its lag tau_y, before the speed limit"),
+        local("der(dtheta1x)", "rad/s2", "acceleration of theta1x"),
+        local("der(dtheta1y)", "rad/s2", "acceleration of theta1y"),
+        local("der(dtheta2x)", "rad/s2", "acceleration of theta2x"),
+        local("der(dtheta2y)", "rad/s2", "acceleration of theta2y"),
+        local("der(dl1_now)", "m/s2", "hoist acceleration applied (0 while the cable or its speed is held)"),
+        local("der(drive_x)", "m/s3", "rate of the drive's acceleration along x, (demand - drive) / tau_x"),
+        local("der(drive_y)", "m/s3", "rate of the drive's acceleration along y, (demand - drive) / tau_y"),
+    ),
+    indicators=continuous.INDICATORS,
+    initial=continuous.initial,
+    derivatives_of=continuous.derivatives,
+    outputs_of=continuous.output_values,
+    indicators_of=continuous.event_indicators,
+    event_update=continuous.event_update,
+    free_mode=continuous.FREE,
+)
+
+COMPONENT = Component(
+    "CranePlant3D", "plant",
+    "Overhead crane in three dimensions: a trolley moving in x and y (a drive per axis), the hook (m1 on cable l1) "
+    "and the load (m2 on cable l2) as a spatial double pendulum, the hoist; inputs: trolley and hoist "
+    "accelerations, horizontal forces; fixed-step RK4 inside doStep",
+    VARIABLES, configure, _outputs,
+    initial_state=lambda config: config.state0, update=update, continuous=CONTINUOUS,
+    native="crane_plant3d.c")
