@@ -7,6 +7,7 @@ import random
 
 import numpy as np
 import pytest
+from plant3d_cases import cases
 
 from crane_fmu.model import plant, plant3d
 from crane_fmu.model import plant3d_continuous as me3
@@ -262,23 +263,6 @@ def test_rail_ends_speed_limits_and_refusals():
 
 # --- Model Exchange --------------------------------------------------------------------------------------------------
 
-def _cases(n=20, seed=3):
-    """Random parameters (damping, drive lags, finite limits), states, inputs and modes of the ME plant."""
-    rng = random.Random(seed)
-    for k in range(n):
-        values = {"m1": rng.uniform(0.5, 10), "m2": rng.uniform(0.1, 10), "l1": rng.uniform(0.3, 3),
-                  "l2": rng.uniform(0.1, 2), "g": rng.uniform(1, 20), "c1": rng.uniform(0, 5), "c2": rng.uniform(0, 5),
-                  "tau_x": rng.choice((0.0, rng.uniform(0.05, 1))), "tau_y": rng.choice((0.0, rng.uniform(0.05, 1))),
-                  "ux_max": rng.choice((math.inf, 3.0)), "uy_max": rng.choice((math.inf, 3.0))}
-        config = COMPONENT.check(values)
-        state = tuple(rng.uniform(-1.2, 1.2) for _ in range(12)) + (rng.uniform(0.3, 3), rng.uniform(-1, 1),
-                                                                   rng.uniform(-2, 2), rng.uniform(-2, 2))
-        inputs = (rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-2, 2),
-                  *(rng.uniform(-50, 50) for _ in range(4)))
-        mode = me3.FREE if k % 3 == 0 else me3.Mode(*(rng.choice((-1, 0, 1)) for _ in range(4)))
-        yield config, state, inputs, mode
-
-
 def _central(f, x, k, h):
     up, down = list(x), list(x)
     up[k] += h
@@ -290,7 +274,7 @@ def _central(f, x, k, h):
 def test_directional_derivatives_equal_central_differences():
     """Every column of the four Jacobians against central differences (h = 1e-5: exact to about 1e-10 relative;
     1e-7 of the column's scale catches any wrong or missing term)."""
-    for config, state, inputs, mode in _cases(8):
+    for config, state, inputs, mode in cases(8):
         a, b, c, d = (np.array(m) for m in me3.jacobians(config, state, inputs, mode))
 
         def close(got, fd):
@@ -309,7 +293,7 @@ def test_directional_derivatives_equal_central_differences():
 @quick
 def test_derivatives_are_the_function_the_co_simulation_rk4_calls():
     """Free of limits and lags, the derivatives are plant3d_equations.derivative's (which RK4 calls), bit for bit."""
-    for config, state, inputs, _ in _cases():
+    for config, state, inputs, _ in cases():
         if config.x_axis.tau > 0 or config.y_axis.tau > 0 or config.x_axis.u_max < math.inf \
                 or config.y_axis.u_max < math.inf:
             continue

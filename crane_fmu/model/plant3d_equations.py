@@ -93,7 +93,8 @@ def _solve(mu, m2, big_l, l2, c, r1, r2):
 
 
 def _system(angles, ux, uy, p, big_l, dl1, load):
-    """The cables' kinematics and the terms of (S4)-(S6): ``(one, two, c, r1, r2)``."""
+    """The cables' kinematics and the terms of (S4)-(S6): ``(one, two, c, r1, r2)`` and, for the tangent, ``G1``,
+    ``G2`` (the vectors projected in R1 and R2) and ``d = w2 - w1``."""
     a1, da1, b1, db1, a2, da2, b2, db2 = angles
     ddl1, f1x, f1y, f2x, f2y, c1, c2 = load
     mu, m2, l2, g = p.m1 + p.m2, p.m2, p.l2, p.g
@@ -115,7 +116,7 @@ def _system(angles, ux, uy, p, big_l, dl1, load):
         r2[0] += (u2[0] * f2x + c2 * _dot(d, v2) / l2) / m2
         r2[1] += (v2[0] * f2x + v2[1] * f2y - c2 * _dot(d, u2) / l2) / m2
     c = ((_dot(u1, u2), _dot(u1, v2)), (_dot(v1, u2), _dot(v1, v2)))
-    return one, two, c, r1, r2
+    return one, two, c, r1, r2, g1, g2, d
 
 
 def angular_accelerations(angles, ux, uy, p, big_l, dl1=0.0, load=NO_LOAD):
@@ -140,7 +141,7 @@ def angular_accelerations(angles, ux, uy, p, big_l, dl1=0.0, load=NO_LOAD):
     tuple
         ``(dda1, ddb1, dda2, ddb2)`` [rad/s2].
     """
-    one, two, c, r1, r2 = _system(angles, ux, uy, p, big_l, dl1, load)
+    one, two, c, r1, r2, _, _, _ = _system(angles, ux, uy, p, big_l, dl1, load)
     q1, q2 = _solve(p.m1 + p.m2, p.m2, big_l, p.l2, c, r1, r2)
     return q1[0] / one[1], q1[1], q2[0] / two[1], q2[1]
 
@@ -192,31 +193,24 @@ def accelerations_tangent(angles, ux, uy, p, big_l, dl1, load, seed):
     """
     a1, da1, b1, db1, a2, da2, b2, db2 = angles
     ddl1, f1x, f1y, f2x, f2y, c1, c2 = load
-    mu, m2, l2, g = p.m1 + p.m2, p.m2, p.l2, p.g
+    mu, m2, l2 = p.m1 + p.m2, p.m2, p.l2
     t_angles, (tux, tuy, tl, tdl, tddl, tf1x, tf1y, tf2x, tf2y) = seed[:8], seed[8:]
-    one, two, c, r1, r2 = _system(angles, ux, uy, p, big_l, dl1, load)
+    one, two, c, r1, r2, g1, g2, d = _system(angles, ux, uy, p, big_l, dl1, load)
     q1, q2 = _solve(mu, m2, big_l, l2, c, r1, r2)
     dd = (q1[0] / one[1], q1[1], q2[0] / two[1], q2[1])
-    _, _, e1, u1, v1, s1, de1, k1, w1 = one
-    sb2, cb2, _, u2, v2, _, _, k2, w2 = two
+    _, _, e1, u1, v1, s1, de1, k1, _ = one
+    sb2, cb2, _, u2, v2, _, _, _, _ = two
     t1 = _cable_tangent(one, a1, da1, b1, db1, *t_angles[:4])
     t2 = _cable_tangent(two, a2, da2, b2, db2, *t_angles[4:])
     _, _, te1, tu1, tv1, ts1, tde1, tk1, tw1 = t1
     _, _, _, tu2, tv2, _, _, tk2, tw2 = t2
-    acc = (ux + ddl1 * e1[0] + 2.0 * dl1 * de1[0] + big_l * k1[0],
-           uy + ddl1 * e1[1] + 2.0 * dl1 * de1[1] + big_l * k1[1],
-           ddl1 * e1[2] + 2.0 * dl1 * de1[2] + big_l * k1[2])
     t_trolley = (tux, tuy, 0.0)
     tacc = tuple(t_trolley[i] + tddl * e1[i] + ddl1 * te1[i] + 2.0 * (tdl * de1[i] + dl1 * tde1[i])
                  + tl * k1[i] + big_l * tk1[i] for i in range(3))
     m2l2 = m2 * l2
-    g1 = (f1x + f2x - mu * acc[0] - m2l2 * k2[0], f1y + f2y - mu * acc[1] - m2l2 * k2[1],
-          -mu * g - mu * acc[2] - m2l2 * k2[2])
     tg1 = (tf1x + tf2x - mu * tacc[0] - m2l2 * tk2[0], tf1y + tf2y - mu * tacc[1] - m2l2 * tk2[1],
            -mu * tacc[2] - m2l2 * tk2[2])
-    g2 = (-acc[0] - l2 * k2[0], -acc[1] - l2 * k2[1], -g - acc[2] - l2 * k2[2])
     tg2 = tuple(-tacc[i] - l2 * tk2[i] for i in range(3))
-    d = tuple(w2[i] - w1[i] for i in range(3))
     td = tuple(tw2[i] - tw1[i] for i in range(3))
     q_u1, q_v1 = -c1 * s1 - c2 * _dot(d, v1), -c1 * db1 + c2 * _dot(d, u1)
     tq_u1 = -c1 * ts1 - c2 * (_dot(td, v1) + _dot(d, tv1))
