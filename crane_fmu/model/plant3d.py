@@ -19,8 +19,9 @@ from collections import namedtuple
 from . import plant3d_continuous as continuous
 from .component import Component, Continuous, Discard, Step
 from .limits import NO_LIMIT, unlimited
+from .linalg import total
 from .parameters import finite, plant_parameters, positive
-from .plant3d_equations import DL1, DX, DY, L1, X, Y, outputs, rk4_step, substeps
+from .plant3d_equations import DL1, DX, DY, L1, X, Y, outputs, rk4_step, substeps, swing_stepper
 from .plant_limits import clamp, drive_factors, held_cable, past_rail_end, reached_limit, within_speed
 from .tables import PLANT_MODEL, input_, local, output, parameter, positions
 
@@ -100,8 +101,16 @@ IN = positions(VARIABLES, "input")  # inputs[IN.hoist]: the inputs by name (cont
 Axis = namedtuple("Axis", "u_max v_max tau low high")
 Axis.__doc__ = "One horizontal axis' drive and rail: ``|u| <= u_max``, lag ``tau``, ``|v| <= v_max``, ``low <= x <= high``."
 
-Config = namedtuple("Config", "params max_substep state0 damping x_axis y_axis l1_min l1_max dl1_max")
-Config.__doc__ = "The plant's validated parameters (each axis an :class:`Axis`; limits that are off are inf)."
+# The parameters that the fast path (the swing stepper with the demands limited to their u_max and the rail and
+# cable limits checked) takes into account; any other parameter away from its neutral default sends every step to
+# the general path, so that no effect can be skipped.
+FAST_PATH_PARAMETERS = {"m1", "m2", "l1", "l2", "g", *INITIAL_STATE, "max_substep", "ux_max", "uy_max", "x_min",
+                        "x_max", "y_min", "y_max", "l1_min", "l1_max", "dl1_max"}  # dl1_max: no hoisting on it
+
+Config = namedtuple("Config", "params max_substep state0 damping x_axis y_axis l1_min l1_max dl1_max swing_step fast")
+Config.__doc__ = ("The plant's validated parameters (each axis an :class:`Axis`; limits that are off are inf); "
+                  "``swing_step`` is :func:`.plant3d_equations.swing_stepper` for them, ``fast`` that every "
+                  "parameter outside :data:`FAST_PATH_PARAMETERS` is neutral.")
 
 
 def _at_least_zero(name, value):
@@ -140,24 +149,66 @@ def configure(values):
                          f"got {p.l1!r}")
     v = {**values, **{name: unlimited(values[name]) for name in UNLIMITED}}  # validated: numbers
     axes = [Axis(v[f"u{a}_max"], v[f"v{a}_max"], v[f"tau_{a}"], v[f"{a}_min"], v[f"{a}_max"]) for a in "xy"]
+    fast = all(v[row.name] == (unlimited(row.start) if row.name in UNLIMITED else row.start) for row in VARIABLES
+               if row.causality == "parameter" and row.name not in FAST_PATH_PARAMETERS)
     return Config(params=p, max_substep=v["max_substep"], state0=state0 + (p.l1, 0.0, 0.0, 0.0, 0.0, 0.0),
                   damping=(v["c1"], v["c2"]), x_axis=axes[0], y_axis=axes[1], l1_min=v["l1_min"], l1_max=v["l1_max"],
-                  dl1_max=v["dl1_max"])
+                  dl1_max=v["dl1_max"], swing_step=swing_stepper(p), fast=fast)
 
 
 def _not_finite(time, inputs):
     return Discard(f"plant state became non-finite in the step from t={time!r} s (ux={inputs[IN.ux]!r}, "
-                   f"uy={inputs[IN.uy]!r} m/s2); the step is discarded")
+                   f"uy={inputs[IN.uy]!r} m/s2); the step is discarded")  # IN.ux, IN.uy: 0, 1
 
 
 def update(config, state, inputs, time, step):
     """The state after one communication step with the inputs held.
 
+    Steps where nothing but the trolley's accelerations act, with the cable at rest within its limits and every
+    other effect at its neutral parameter value, take :func:`fast_update`; the others :func:`general_update`.
+    Both give the same numbers where both apply.
+    """
+    if config.fast and not any(inputs[IN.hoist:]) and state[DL1] == 0.0 \
+            and config.l1_min <= state[L1] <= config.l1_max:
+        return fast_update(config, state, inputs[IN.ux], inputs[IN.uy], time, step)
+    return general_update(config, state, inputs, time, step)
+
+
+def fast_update(c, state, ux, uy, time, step):
+    """:func:`general_update` with nothing but the trolley acting: no hoisting, forces, damping, lags or speed
+    limits."""
+    n = 1 if 0.0 < step <= c.max_substep else substeps(step, c.max_substep)  # ValueError for an unusable step
+    dt = step / n
+    xa, ya = c.x_axis, c.y_axis
+    ax = xa.u_max if ux > xa.u_max else -xa.u_max if ux < -xa.u_max else ux  # clamp(), without its calls
+    ay = ya.u_max if uy > ya.u_max else -ya.u_max if uy < -ya.u_max else uy
+    swing = state[:DRIVE_X]
+    try:
+        for k in range(n):
+            swing = c.swing_step(swing, ax, ay, dt)
+            if not xa.low <= swing[X] <= xa.high:
+                raise past_rail_end(xa.low, xa.high, swing[X], time + (k + 1) * dt, time, "x")
+            if not ya.low <= swing[Y] <= ya.high:
+                raise past_rail_end(ya.low, ya.high, swing[Y], time + (k + 1) * dt, time, "y")
+        # a finite sum has finite terms (inf and nan propagate); only an overflowing sum needs a closer look
+        finite_state = math.isfinite(total(swing)) or all(map(math.isfinite, swing))
+    except (ArithmeticError, ValueError):  # overflow, or sin/cos of inf
+        finite_state = False
+    if not finite_state:
+        raise _not_finite(time, (ux, uy))
+    return swing + (ax, ay, ax, ay)
+
+
+def general_update(config, state, inputs, time, step):
+    """The state after one communication step with the inputs held, every effect included.
+
     Per RK4 sub-step ``dt`` and per axis, as the planar plant's :func:`.plant.general_update`: the demand is
     limited to ``u_max``, the drive follows it with the lag ``tau`` (exactly, the trolley taking its mean over
     the sub-step), and the acceleration is limited so that the speed ends within ``v_max``; the hoist
     acceleration is limited by ``dl1_max``, and a cable reaching ``l1_min`` or ``l1_max`` is held there at rest.
-    A trolley that would pass a rail end, or a state that becomes non-finite, discards the step.
+    A trolley that would pass a rail end, or a state that becomes non-finite, discards the step. With the cable
+    at rest and nothing but the trolley acting, a sub-step is :func:`.plant3d_equations.swing_stepper`'s (the same
+    numbers as :func:`.plant3d_equations.rk4_step`'s, faster).
     """
     hoist, f1x, f1y, f2x, f2y = (inputs[i] for i in (IN.hoist, IN.F1x, IN.F1y, IN.F2x, IN.F2y))
     c, p = config, config.params
@@ -178,7 +229,10 @@ def update(config, state, inputs, time, step):
                 accels[i] = within_speed(accel, swing[speed], axis.v_max, dt)
             cable_rate = swing[DL1]
             hoist_now = within_speed(hoist, cable_rate, c.dl1_max, dt)
-            swing = rk4_step(swing, accels[0], accels[1], dt, p, hoist_now, forces)
+            if hoist_now == 0.0 and cable_rate == 0.0 and not any(forces):
+                swing = c.swing_step(swing, accels[0], accels[1], dt)
+            else:
+                swing = rk4_step(swing, accels[0], accels[1], dt, p, hoist_now, forces)
             t = time + (k + 1) * dt
             for axis, _, _, _, _, at, name in axes:
                 if not axis.low <= swing[at] <= axis.high:

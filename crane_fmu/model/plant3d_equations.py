@@ -335,3 +335,68 @@ def outputs_tangent(state, p, seed):
     tv2 = tuple(tv1[i] + l2 * tde2[i] for i in range(3))
     tkinetic = m1 * _dot(v1, tv1) + m2 * _dot(v2, tv2)
     return tr1 + tr2 + (_swing_tangent(e1, te1), _swing_tangent(e2, te2), tkinetic + p.g * (m1 * tr1[2] + m2 * tr2[2]))
+
+
+def swing_stepper(p):
+    """:func:`rk4_step` when the cable is at rest and nothing but the trolley acts: the same numbers, faster.
+
+    Returns ``step(state, ux, uy, dt)`` with the constants of ``p`` bound once. The accelerations are those of
+    :func:`angular_accelerations` less its terms that vanish here (hoisting, forces, damping) and its products with
+    the frames' zero components, written out on scalars.
+    """
+    mu, m2, l2, g = p.m1 + p.m2, p.m2, p.l2, p.g
+    m2l2, mug = m2 * l2, -mu * g
+    sin, cos = math.sin, math.cos
+
+    def accelerations(a1, da1, b1, db1, a2, da2, b2, db2, ux, uy, big_l):
+        sa1, ca1, sb1, cb1 = sin(a1), cos(a1), sin(b1), cos(b1)
+        sa2, ca2, sb2, cb2 = sin(a2), cos(a2), sin(b2), cos(b2)
+        e10, e12 = sa1 * cb1, -ca1 * cb1
+        v10, v12 = -sa1 * sb1, ca1 * sb1
+        e20, e22 = sa2 * cb2, -ca2 * cb2
+        v20, v22 = -sa2 * sb2, ca2 * sb2
+        aa, ab, bb = da1 * da1 * cb1, 2.0 * da1 * db1 * sb1, db1 * db1
+        k10, k11, k12 = -aa * sa1 - ab * ca1 - bb * e10, -bb * sb1, aa * ca1 - ab * sa1 - bb * e12
+        aa, ab, bb = da2 * da2 * cb2, 2.0 * da2 * db2 * sb2, db2 * db2
+        k20, k21, k22 = -aa * sa2 - ab * ca2 - bb * e20, -bb * sb2, aa * ca2 - ab * sa2 - bb * e22
+        acc0, acc1, acc2 = ux + big_l * k10, uy + big_l * k11, big_l * k12
+        g10, g11, g12 = -mu * acc0 - m2l2 * k20, -mu * acc1 - m2l2 * k21, mug - mu * acc2 - m2l2 * k22
+        g20, g21, g22 = -acc0 - l2 * k20, -acc1 - l2 * k21, -g - acc2 - l2 * k22
+        r10 = ca1 * g10 + sa1 * g12
+        r11 = v10 * g10 + cb1 * g11 + v12 * g12
+        r20 = ca2 * g20 + sa2 * g22
+        r21 = v20 * g20 + cb2 * g21 + v22 * g22
+        c11, c12 = ca1 * ca2 + sa1 * sa2, ca1 * v20 + sa1 * v22
+        c21, c22 = v10 * ca2 + v12 * sa2, v10 * v20 + cb1 * cb2 + v12 * v22
+        s11 = mu - m2 * (c11 * c11 + c12 * c12)  # _solve, written out
+        s12 = -m2 * (c11 * c21 + c12 * c22)
+        s22 = mu - m2 * (c21 * c21 + c22 * c22)
+        h1 = r10 - m2 * (c11 * r20 + c12 * r21)
+        h2 = r11 - m2 * (c21 * r20 + c22 * r21)
+        det = (s11 * s22 - s12 * s12) * big_l
+        p1 = (s22 * h1 - s12 * h2) / det
+        p2 = (s11 * h2 - s12 * h1) / det
+        return (p1 / cb1, p2, (r20 - big_l * (c11 * p1 + c21 * p2)) / l2 / cb2,
+                (r21 - big_l * (c12 * p1 + c22 * p2)) / l2)
+
+    def step(state, ux, uy, dt):
+        x, vx, y, vy, a1, w1, b1, z1, a2, w2, b2, z2, big_l, _ = state
+        h2 = 0.5 * dt
+        k1 = accelerations(a1, w1, b1, z1, a2, w2, b2, z2, ux, uy, big_l)
+        w1b, z1b, w2b, z2b = w1 + h2 * k1[0], z1 + h2 * k1[1], w2 + h2 * k1[2], z2 + h2 * k1[3]
+        k2 = accelerations(a1 + h2 * w1, w1b, b1 + h2 * z1, z1b, a2 + h2 * w2, w2b, b2 + h2 * z2, z2b, ux, uy, big_l)
+        w1c, z1c, w2c, z2c = w1 + h2 * k2[0], z1 + h2 * k2[1], w2 + h2 * k2[2], z2 + h2 * k2[3]
+        k3 = accelerations(a1 + h2 * w1b, w1c, b1 + h2 * z1b, z1c, a2 + h2 * w2b, w2c, b2 + h2 * z2b, z2c, ux, uy,
+                           big_l)
+        w1d, z1d, w2d, z2d = w1 + dt * k3[0], z1 + dt * k3[1], w2 + dt * k3[2], z2 + dt * k3[3]
+        k4 = accelerations(a1 + dt * w1c, w1d, b1 + dt * z1c, z1d, a2 + dt * w2c, w2d, b2 + dt * z2c, z2d, ux, uy,
+                           big_l)
+        s = dt / 6.0
+        return (x + dt * vx + h2 * dt * ux, vx + dt * ux, y + dt * vy + h2 * dt * uy, vy + dt * uy,
+                a1 + s * (w1 + 2.0 * w1b + 2.0 * w1c + w1d), w1 + s * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]),
+                b1 + s * (z1 + 2.0 * z1b + 2.0 * z1c + z1d), z1 + s * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]),
+                a2 + s * (w2 + 2.0 * w2b + 2.0 * w2c + w2d), w2 + s * (k1[2] + 2.0 * k2[2] + 2.0 * k3[2] + k4[2]),
+                b2 + s * (z2 + 2.0 * z2b + 2.0 * z2c + z2d), z2 + s * (k1[3] + 2.0 * k2[3] + 2.0 * k3[3] + k4[3]),
+                big_l, 0.0)
+
+    return step
