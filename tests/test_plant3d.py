@@ -274,20 +274,24 @@ def _central(f, x, k, h):
 def test_directional_derivatives_equal_central_differences():
     """Every column of the four Jacobians against central differences (h = 1e-5: exact to about 1e-10 relative;
     1e-7 of the column's scale catches any wrong or missing term)."""
-    for config, state, inputs, mode in cases(8):
-        a, b, c, d = (np.array(m) for m in me3.jacobians(config, state, inputs, mode))
+    for case in cases(8):
+        _check_columns(*case, h=1e-5)
 
-        def close(got, fd):
-            assert got == pytest.approx(fd, rel=1e-7, abs=1e-7 * (1 + np.abs(fd).max())), mode
 
-        for k in range(len(me3.STATES)):
-            close(a[:, k], _central(lambda s: me3.derivatives(config, s, inputs, mode), state, k, 1e-5))
-            close(c[:, k], _central(lambda s: me3.output_values(config, s, inputs, mode), state, k, 1e-5))
-        for k in range(len(me3.INPUTS)):
-            if k < 2 and abs(abs(inputs[k]) - (config.x_axis, config.y_axis)[k].u_max) < 2e-5:
-                continue  # the drive's limit is a kink
-            close(b[:, k], _central(lambda i: me3.derivatives(config, state, i, mode), inputs, k, 1e-5))
-            close(d[:, k], _central(lambda i: me3.output_values(config, state, i, mode), inputs, k, 1e-5))
+def _check_columns(config, state, inputs, mode, h):
+    a, b, c, d = (np.array(m) for m in me3.jacobians(config, state, inputs, mode))
+
+    def close(got, fd):
+        assert got == pytest.approx(fd, rel=1e-7, abs=1e-7 * (1 + np.abs(fd).max())), mode
+
+    for k in range(len(me3.STATES)):
+        close(a[:, k], _central(lambda s: me3.derivatives(config, s, inputs, mode), state, k, h))
+        close(c[:, k], _central(lambda s: me3.output_values(config, s, inputs, mode), state, k, h))
+    for k in range(len(me3.INPUTS)):
+        if k < 2 and abs(abs(inputs[k]) - (config.x_axis, config.y_axis)[k].u_max) < 2 * h:
+            continue  # the drive's limit is a kink
+        close(b[:, k], _central(lambda i: me3.derivatives(config, state, i, mode), inputs, k, h))
+        close(d[:, k], _central(lambda i: me3.output_values(config, state, i, mode), inputs, k, h))
 
 
 @quick

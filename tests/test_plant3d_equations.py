@@ -149,6 +149,17 @@ def test_code_directional_derivatives_equal_the_derivation_differentiated():
             assert got == pytest.approx(tuple(expected), rel=1e-9, abs=1e-9), name
 
 
+def _positions(state, p, s):
+    """Hook and load positions (S1) after a time ``s`` of the state's rates held."""
+    x, dx, y, dy, a1, da1, b1, db1, a2, da2, b2, db2, length, rate = state
+    f1 = np.array([math.sin(a1 + s * da1) * math.cos(b1 + s * db1), math.sin(b1 + s * db1),
+                   -math.cos(a1 + s * da1) * math.cos(b1 + s * db1)])
+    f2 = np.array([math.sin(a2 + s * da2) * math.cos(b2 + s * db2), math.sin(b2 + s * db2),
+                   -math.cos(a2 + s * da2) * math.cos(b2 + s * db2)])
+    q1 = np.array([x + s * dx, y + s * dy, 0.0]) + (length + s * rate) * f1
+    return q1, q1 + p.l2 * f2
+
+
 def test_outputs_are_the_positions_swing_angles_and_energy_of_the_derivation():
     rng = random.Random(4)
     p = PlantParameters()
@@ -160,18 +171,8 @@ def test_outputs_are_the_positions_swing_angles_and_energy_of_the_derivation():
         r1 = np.array([x, y, 0.0]) + length * e1
         r2 = r1 + p.l2 * e2
         # velocities by differentiating the positions numerically along the motion (central, h = 1e-6)
-        h = 1e-6
-
-        def position(s):
-            f1 = np.array([math.sin(a1 + s * da1) * math.cos(b1 + s * db1), math.sin(b1 + s * db1),
-                           -math.cos(a1 + s * da1) * math.cos(b1 + s * db1)])
-            f2 = np.array([math.sin(a2 + s * da2) * math.cos(b2 + s * db2), math.sin(b2 + s * db2),
-                           -math.cos(a2 + s * da2) * math.cos(b2 + s * db2)])
-            q1 = np.array([x + s * dx, y + s * dy, 0.0]) + (length + s * rate) * f1
-            return q1, q1 + p.l2 * f2
-
-        (p1, p2), (n1, n2) = position(h), position(-h)
-        v1, v2 = (p1 - n1) / (2 * h), (p2 - n2) / (2 * h)
+        (p1, p2), (n1, n2) = _positions(state, p, 1e-6), _positions(state, p, -1e-6)
+        v1, v2 = (p1 - n1) / 2e-6, (p2 - n2) / 2e-6
         energy = 0.5 * (p.m1 * v1 @ v1 + p.m2 * v2 @ v2) + p.g * (p.m1 * r1[2] + p.m2 * r2[2])
         swing = [math.acos(-e[2]) for e in (e1, e2)]
         got = eq3.outputs(state, p)

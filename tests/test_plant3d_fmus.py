@@ -15,7 +15,7 @@ from fmpy.validation import validate_fmu
 from native_fmus import close, messages, native_folders, open_native, python_folder
 from third_party_hosts import CLEAN_ENV, FMUSIM, run_tool, tool
 
-from crane_fmu import components, compare, systems
+from crane_fmu import compare, components, systems
 from crane_fmu.analysis import scoreboard
 from crane_fmu.cli import main
 from crane_fmu.cosim import Connection, run

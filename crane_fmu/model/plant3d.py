@@ -56,7 +56,8 @@ def _axis_parameters(name, what):
         parameter(f"u{name}_max", INF, "m/s2", f"{what}: largest |acceleration|; 1e60 or INF: no limit"),
         parameter(f"v{name}_max", INF, "m/s", f"{what}: largest speed; 1e60 or INF: no limit"),
         parameter(f"tau_{name}", 0.0, "s", f"{what}: first-order lag of the acceleration; 0: none"),
-        parameter(f"{name}_min", -INF, "m", f"rail end: the trolley cannot pass below this {name}; -1e60 or -INF: none"),
+        parameter(f"{name}_min", -INF, "m", f"rail end: the trolley cannot pass below this {name}; -1e60 or -INF: "
+                                            "none"),
         parameter(f"{name}_max", INF, "m", f"rail end: the trolley cannot pass above this {name}; 1e60 or INF: none"),
     )
 
@@ -99,7 +100,8 @@ VARIABLES = PLANT_MODEL + tuple(
 IN = positions(VARIABLES, "input")  # inputs[IN.hoist]: the inputs by name (continuous.INPUTS, the same order)
 
 Axis = namedtuple("Axis", "u_max v_max tau low high")
-Axis.__doc__ = "One horizontal axis' drive and rail: ``|u| <= u_max``, lag ``tau``, ``|v| <= v_max``, ``low <= x <= high``."
+Axis.__doc__ = ("One horizontal axis' drive and rail: ``|u| <= u_max``, lag ``tau``, ``|v| <= v_max``, "
+                "``low <= x <= high``.")
 
 # The parameters that the fast path (the swing stepper with the demands limited to their u_max and the rail and
 # cable limits checked) takes into account; any other parameter away from its neutral default sends every step to
@@ -217,8 +219,8 @@ def general_update(config, state, inputs, time, step):
     n = substeps(step, c.max_substep)  # ValueError for an unusable step
     dt = step / n
     forces = (f1x, f1y, f2x, f2y, *c.damping)
-    axes = ((c.x_axis, clamp(inputs[IN.ux], -c.x_axis.u_max, c.x_axis.u_max), *drive_factors(c.x_axis.tau, dt), DX, X, "x"),
-            (c.y_axis, clamp(inputs[IN.uy], -c.y_axis.u_max, c.y_axis.u_max), *drive_factors(c.y_axis.tau, dt), DY, Y, "y"))
+    axes = tuple((axis, clamp(inputs[i], -axis.u_max, axis.u_max), *drive_factors(axis.tau, dt), speed, at, name)
+                 for axis, i, speed, at, name in ((c.x_axis, IN.ux, DX, X, "x"), (c.y_axis, IN.uy, DY, Y, "y")))
     messages, notes = [], []
     swing, drives, accels = state[:DRIVE_X], [state[DRIVE_X], state[DRIVE_Y]], [0.0, 0.0]
     try:
