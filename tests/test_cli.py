@@ -321,7 +321,10 @@ NUMBER = r"(\d+(?:\.\d+)?)"
     (["bench", "--endurance", "--stop-time", "0.5"], [rf"resident memory: {NUMBER} MB at t = 0"]),
     (["bench", "--sweep", "--cases", "2", "--stop-time", "0.2", "--repeat", "1"],
      [rf"1 worker: +{NUMBER} cases/s", rf"2 workers: {NUMBER} cases/s", rf"efficiency on 2 workers: {NUMBER} %"]),
-], ids=["pair", "endurance", "sweep"])
+    (["bench", "--spatial", "--stop-time", "0.2", "--repeat", "1"],
+     [rf"Python FMUs: +{NUMBER} us/step, ratio {NUMBER}", rf"native FMUs: +{NUMBER} us/step, ratio {NUMBER}",
+      rf"ratio {NUMBER}$"]),
+], ids=["pair", "endurance", "sweep", "spatial"])
 def test_benchmarks_run_and_print_their_figures(capsys, argv, figures):
     """Each benchmark at a few hundred steps prints each of its figures, and each is a positive number. The figures
     themselves are measured with crane-fmu bench at full length, not asserted here."""
