@@ -10,6 +10,7 @@
 
 #include "CranePlant3D_variables.h"
 #include "plant3d_continuous.h"
+#include "plant_limits.h"
 #include "plant_math.h"
 #include "py_repr.h"
 #include "rules.h"
@@ -94,18 +95,6 @@ static ModelStatus outputs(const double values[], const Config *c, const State *
     spatial_outputs(state->s, &c->c.p, out + L13);
     out[21] = state->s[L13], out[22] = state->s[DL13], out[23] = state->s[ACCEL_X], out[24] = state->s[ACCEL_Y];
     return MODEL_OK;
-}
-
-/* Python's min(max(value, low), high). */
-static double clamp(double value, double low, double high) {
-    double v = low > value ? low : value;
-    return high < v ? high : v;
-}
-
-/* `accel` limited so that `speed` ends the sub-step dt within +-speed_max (plant_limits.within_speed). */
-static double within_speed(double accel, double speed, double speed_max, double dt) {
-    if (speed_max == INFINITY) return accel;
-    return clamp(accel, (-speed_max - speed) / dt, (speed_max - speed) / dt);
 }
 
 static ModelStatus update(const double values[], const Config *config, State *state, double time, double step,

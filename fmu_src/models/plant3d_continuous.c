@@ -7,6 +7,8 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "plant_limits.h"
+
 /* One axis' drive: its output, its rate, and their derivatives (plant3d_continuous._drive). */
 static void drive(const Axis *a, double u, double d, double t_u, double t_d, double out[4]) {
     double demand = u, t_demand = t_u;
@@ -75,14 +77,6 @@ void plant3_outputs(const ContinuousPlant3 *c, const double s[N_CONTINUOUS3], co
     }
 }
 
-/* limit - value (the room to a limit above), or 1 when there is no limit. */
-static double room(double value, double limit) { return isfinite(limit) ? limit - value : 1.0; }
-
-static void pair(double value, double low, double high, int held, double pressing, double z[2]) {
-    z[0] = held < 0 ? -pressing : room(-value, -low);
-    z[1] = held > 0 ? pressing : room(value, high);
-}
-
 void plant3_event_indicators(const ContinuousPlant3 *c, const double s[N_CONTINUOUS3], const double in[N_INPUTS3],
                              PlantMode3 mode, double z[N_INDICATORS3]) {
     double tx[4], ty[4];
@@ -93,23 +87,6 @@ void plant3_event_indicators(const ContinuousPlant3 *c, const double s[N_CONTINU
     pair(s[DY3], -c->y.v_max, c->y.v_max, mode.speed_y, ty[0], z + 6);
     pair(s[L13], c->l1_min, c->l1_max, mode.cable, in[IN_HOIST], z + 8);
     pair(s[DL13], -c->dl1_max, c->dl1_max, mode.hoist, in[IN_HOIST], z + 10);
-}
-
-/* One limited quantity after an event (plant_continuous._hold): let go when pressed away from its limit; set onto
-   a limit it reached while moving or pressed towards it (or passed), and held while pressed on. Returns reached. */
-static int hold(double *value, double rate, double pressing, int *held, double low, double high) {
-    if ((*held > 0 && pressing < 0) || (*held < 0 && pressing > 0)) *held = 0;
-    if (*held == 0) {
-        if (*value > high || (*value == high && (rate > 0 || pressing > 0))) {
-            *value = high, *held = pressing > 0 ? 1 : 0;
-            return 1;
-        }
-        if (*value < low || (*value == low && (rate < 0 || pressing < 0))) {
-            *value = low, *held = pressing < 0 ? -1 : 0;
-            return 1;
-        }
-    }
-    return 0;
 }
 
 /* The rail end the trolley is at and moving past along one axis: +1 (high), -1 (low), 0 none. */
