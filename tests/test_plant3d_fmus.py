@@ -253,7 +253,8 @@ def test_a_rail_end_along_y_ends_the_run_at_its_state_event(native, tmp_path):
         assert abs(result["time"][-1] - 1.0) < EVENT and abs(result["y"][-1] - 0.5) < EVENT
 
 
-def test_the_component_is_registered_and_nothing_else_names_it():
-    """Registered once; the build knows it by its table (nothing in the application layer names it yet)."""
+def test_the_component_is_registered_with_one_order_of_inputs():
+    """Registered as a plant; its table's inputs are those its Model Exchange reads by name (IN), in one order."""
     assert components.get(NAME) is COMPONENT and COMPONENT.role == "plant"
     assert COMPONENT.names("input") == me.INPUTS and tuple(plant3d.IN._fields) == me.INPUTS
+    assert tuple(me.IN._fields) == me.INPUTS and COMPONENT.continuous.states == me.STATES
