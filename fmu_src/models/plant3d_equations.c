@@ -32,10 +32,10 @@ static void cable(double a, double da, double b, double db, Cable *c) {
     for (int i = 0; i < 3; i++) c->w[i] = -s * c->v[i] + db * c->u[i];
 }
 
-/* (q1, q2) of (S4): L S q1 = r1 - m2 C r2 with S = mu I - m2 C C^T by Cramer's rule, then q2 = (r2 - L C^T q1) / l2. */
-static void solve(double mu, double m2, double big_l, double l2, const double c[2][2], const double r1[2],
+/* (q1, q2) of (S4) for C = [[c[0], c[1]], [c[2], c[3]]]: L S q1 = r1 - m2 C r2 with S = mu I - m2 C C^T by Cramer's rule, then q2 = (r2 - L C^T q1) / l2. */
+static void solve(double mu, double m2, double big_l, double l2, const double c[4], const double r1[2],
                   const double r2[2], double q1[2], double q2[2]) {
-    double c11 = c[0][0], c12 = c[0][1], c21 = c[1][0], c22 = c[1][1];
+    double c11 = c[0], c12 = c[1], c21 = c[2], c22 = c[3];
     double s11 = mu - m2 * (c11 * c11 + c12 * c12);
     double s12 = -m2 * (c11 * c21 + c12 * c22);
     double s22 = mu - m2 * (c21 * c21 + c22 * c22);
@@ -52,7 +52,7 @@ static void solve(double mu, double m2, double big_l, double l2, const double c[
 /* The cables' kinematics and the terms of (S4)-(S6) (plant3d_equations._system). */
 typedef struct {
     Cable one, two;
-    double c[2][2], r1[2], r2[2], g1[3], g2[3], d[3];
+    double c[4], r1[2], r2[2], g1[3], g2[3], d[3]; /* c: C's rows */
 } System;
 
 static void system_of(const double angles[8], double ux, double uy, const PlantParameters *p, double big_l, double dl1,
@@ -85,7 +85,7 @@ static void system_of(const double angles[8], double ux, double uy, const PlantP
         s->r2[0] += (u2[0] * f2x + c2 * dot(d, v2) / l2) / m2;
         s->r2[1] += (v2[0] * f2x + v2[1] * f2y - c2 * dot(d, u2) / l2) / m2;
     }
-    s->c[0][0] = dot(u1, u2), s->c[0][1] = dot(u1, v2), s->c[1][0] = dot(v1, u2), s->c[1][1] = dot(v1, v2);
+    s->c[0] = dot(u1, u2), s->c[1] = dot(u1, v2), s->c[2] = dot(v1, u2), s->c[3] = dot(v1, v2);
 }
 
 void spatial_accelerations(const double angles[8], double ux, double uy, const PlantParameters *p, double l1,
@@ -137,7 +137,7 @@ void spatial_accelerations_tangent(const double angles[8], double ux, double uy,
     dd[0] = q1[0] / s.one.cb, dd[1] = q1[1], dd[2] = q2[0] / s.two.cb, dd[3] = q2[1];
     const Cable *one = &s.one, *two = &s.two;
     const double *e1 = one->e, *u1 = one->u, *v1 = one->v, *de1 = one->de, *k1 = one->k, *u2 = two->u, *v2 = two->v;
-    const double *g1 = s.g1, *g2 = s.g2, *d = s.d, (*c)[2] = s.c;
+    const double *g1 = s.g1, *g2 = s.g2, *d = s.d, *c = s.c;
     Cable t1, t2;
     cable_tangent(one, angles[1], angles[3], ta[0], ta[1], ta[2], ta[3], &t1);
     cable_tangent(two, angles[5], angles[7], ta[4], ta[5], ta[6], ta[7], &t2);
@@ -163,14 +163,13 @@ void spatial_accelerations_tangent(const double angles[8], double ux, double uy,
         tr2[1] += (tv2[0] * f2x + v2[0] * tf2x + tv2[1] * f2y + v2[1] * tf2y - c2 * (dot(td, u2) + dot(d, tu2)) / l2) /
                   m2;
     }
-    double tc[2][2] = {{dot(tu1, u2) + dot(u1, tu2), dot(tu1, v2) + dot(u1, tv2)},
-                       {dot(tv1, u2) + dot(v1, tu2), dot(tv1, v2) + dot(v1, tv2)}};
+    double tc[4] = {dot(tu1, u2) + dot(u1, tu2), dot(tu1, v2) + dot(u1, tv2), dot(tv1, u2) + dot(v1, tu2),
+                    dot(tv1, v2) + dot(v1, tv2)};
     /* M' q moved to the right-hand side: M' = [[mu L' I, m2 l2 C'], [L' C^T + L C'^T, 0]] */
-    double rhs1[2] = {tr1[0] - mu * tl * q1[0] - m2l2 * (tc[0][0] * q2[0] + tc[0][1] * q2[1]),
-                      tr1[1] - mu * tl * q1[1] - m2l2 * (tc[1][0] * q2[0] + tc[1][1] * q2[1])};
-    double rhs2[2] = {
-        tr2[0] - tl * (c[0][0] * q1[0] + c[1][0] * q1[1]) - big_l * (tc[0][0] * q1[0] + tc[1][0] * q1[1]),
-        tr2[1] - tl * (c[0][1] * q1[0] + c[1][1] * q1[1]) - big_l * (tc[0][1] * q1[0] + tc[1][1] * q1[1])};
+    double rhs1[2] = {tr1[0] - mu * tl * q1[0] - m2l2 * (tc[0] * q2[0] + tc[1] * q2[1]),
+                      tr1[1] - mu * tl * q1[1] - m2l2 * (tc[2] * q2[0] + tc[3] * q2[1])};
+    double rhs2[2] = {tr2[0] - tl * (c[0] * q1[0] + c[2] * q1[1]) - big_l * (tc[0] * q1[0] + tc[2] * q1[1]),
+                      tr2[1] - tl * (c[1] * q1[0] + c[3] * q1[1]) - big_l * (tc[1] * q1[0] + tc[3] * q1[1])};
     double tq1[2], tq2[2];
     solve(mu, m2, big_l, l2, c, rhs1, rhs2, tq1, tq2);
     /* a'' = q / cos b: (a'')' = (q' + a'' sin(b) b') / cos b */
@@ -218,7 +217,7 @@ void spatial_rk4_step(double s[N_SPATIAL], double ux, double uy, double dt, cons
 }
 
 /* The angle of a cable of direction e from the downward vertical, in [0, pi]. */
-static double swing(const double e[3]) { return atan2(sqrt(e[0] * e[0] + e[1] * e[1]), -e[2]); }
+static double swing(const double e[3]) { return ATAN2(sqrt(e[0] * e[0] + e[1] * e[1]), -e[2]); }
 
 void spatial_outputs(const double s[N_SPATIAL], const PlantParameters *p, double out[9]) {
     double big_l = s[L13], dl1 = s[DL13], m1 = p->m1, m2 = p->m2, l2 = p->l2;
