@@ -11,9 +11,10 @@ fails) is held to a stated bound in ULP (units in the last place):
 The bounds are fdlibm's documented errors, whose methods portable_math.c follows: sin, cos, exp and log
 below 1 ULP, so each result is one of the two doubles around the exact value (at most 1 ULP from the
 correctly rounded one, and from glibc's, which is correctly rounded in practice); tanh within 3 ULP of
-glibc's and of the exact value (fdlibm's tanh is built on expm1; glibc's is within 2 ULP); atan below 1 ULP, and
-atan2 (from it, by quadrant) within 2 ULP of glibc's in every quadrant. The arguments cover what the models pass (swing angles, the planner's and the gust's phases, the sensor's uniform
-numbers) and the ranges each method treats apart (argument reduction, tiny and huge arguments, the ends of
+glibc's and of the exact value (fdlibm's tanh is built on expm1; glibc's is within 2 ULP); atan below 1 ULP,
+and atan2 (from it, by quadrant) within 2 ULP of glibc's in every quadrant. The arguments cover what the
+models pass (swing angles, the planner's and the gust's phases, the sensor's uniform numbers) and the
+ranges each method treats apart (argument reduction, tiny and huge arguments, the ends of
 exp's range, subnormal logarithms).
 """
 
