@@ -279,11 +279,6 @@ def rk4_step(state, ux, uy, dt, p, hoist=0.0, forces=(0.0,) * 6):
             ls[2], dls[2])
 
 
-def _swing(e):
-    """The angle of a cable of direction ``e`` from the downward vertical [rad], in [0, pi]."""
-    return math.atan2(math.sqrt(e[0] * e[0] + e[1] * e[1]), -e[2])
-
-
 def outputs(state, p):
     """Hook and load positions ``x1, y1, z1, x2, y2, z2`` (z up), the cables' swing angles and the energy.
 
@@ -292,18 +287,28 @@ def outputs(state, p):
     ``r1 = (x, y, 0) + L e1``, ``r2 = r1 + l2 e2``; kinetic energy of hook and load (with the hoisting speed)
     plus their potential energy ``g (m1 z1 + m2 z2)``: conserved with the trolley at constant velocity, no
     hoisting, no forces and no damping. The swing angle of a cable is its angle from the vertical,
-    ``atan2(|e_horizontal|, -e_z)``.
+    ``atan2(|e_horizontal|, -e_z)``. Written out on scalars (every output of every step): the directions and
+    rates of :func:`_cable`, the same numbers.
     """
-    x, dx, y, dy = state[X:DY + 1]
-    big_l, dl1, m1, m2, l2 = state[L1], state[DL1], p.m1, p.m2, p.l2
-    _, _, e1, _, _, _, de1, _, _ = _cable(*state[A1:DB1 + 1])
-    _, _, e2, _, _, _, de2, _, _ = _cable(*state[A2:DB2 + 1])
-    r1 = (x + big_l * e1[0], y + big_l * e1[1], big_l * e1[2])
-    r2 = (r1[0] + l2 * e2[0], r1[1] + l2 * e2[1], r1[2] + l2 * e2[2])
-    v1 = (dx + dl1 * e1[0] + big_l * de1[0], dy + dl1 * e1[1] + big_l * de1[1], dl1 * e1[2] + big_l * de1[2])
-    v2 = (v1[0] + l2 * de2[0], v1[1] + l2 * de2[1], v1[2] + l2 * de2[2])
-    kinetic = 0.5 * (m1 * _dot(v1, v1) + m2 * _dot(v2, v2))
-    return r1 + r2 + (_swing(e1), _swing(e2), kinetic + p.g * (m1 * r1[2] + m2 * r2[2]))
+    x, dx, y, dy, a1, da1, b1, db1, a2, da2, b2, db2, big_l, dl1 = state[:DL1 + 1]
+    m1, m2, l2 = p.m1, p.m2, p.l2
+    sin, cos = math.sin, math.cos
+    sa1, ca1, sb1, cb1 = sin(a1), cos(a1), sin(b1), cos(b1)
+    sa2, ca2, sb2, cb2 = sin(a2), cos(a2), sin(b2), cos(b2)
+    e10, e12, e20, e22 = sa1 * cb1, -ca1 * cb1, sa2 * cb2, -ca2 * cb2
+    s1, s2 = cb1 * da1, cb2 * da2
+    x1, y1, z1 = x + big_l * e10, y + big_l * sb1, big_l * e12
+    x2, y2, z2 = x1 + l2 * e20, y1 + l2 * sb2, z1 + l2 * e22
+    # e' = s u + b' v, u = (cos a, 0, sin a), v = (-sin a sin b, cos b, cos a sin b)
+    vx1 = dx + dl1 * e10 + big_l * (s1 * ca1 + db1 * (-sa1 * sb1))
+    vy1 = dy + dl1 * sb1 + big_l * (db1 * cb1)
+    vz1 = dl1 * e12 + big_l * (s1 * sa1 + db1 * (ca1 * sb1))
+    vx2 = vx1 + l2 * (s2 * ca2 + db2 * (-sa2 * sb2))
+    vy2 = vy1 + l2 * (db2 * cb2)
+    vz2 = vz1 + l2 * (s2 * sa2 + db2 * (ca2 * sb2))
+    kinetic = 0.5 * (m1 * (vx1 * vx1 + vy1 * vy1 + vz1 * vz1) + m2 * (vx2 * vx2 + vy2 * vy2 + vz2 * vz2))
+    return (x1, y1, z1, x2, y2, z2, math.atan2(math.sqrt(e10 * e10 + sb1 * sb1), -e12),
+            math.atan2(math.sqrt(e20 * e20 + sb2 * sb2), -e22), kinetic + p.g * (m1 * z1 + m2 * z2))
 
 
 def _swing_tangent(e, te):
