@@ -23,9 +23,10 @@ def test_build_writes_every_component_and_every_builtin_system(build_record, fmu
     code, printed = build_record
     assert code == 0
     build = fmu_dir.parent
-    fmus = ["BacksteppingController.fmu", "CranePlant.fmu", "CraneSensor.fmu", "EnergyController.fmu", "Gust.fmu",
-            "HardHitController.fmu", "LqrController.fmu", "MpcController.fmu", "Sensor.fmu", "StateEstimator.fmu",
-            "TrajectoryPlanner.fmu", "TrivialController.fmu", "TrivialPlant.fmu", "Wind.fmu"]
+    fmus = ["BacksteppingController.fmu", "CranePlant.fmu", "CranePlant3D.fmu", "CraneSensor.fmu",
+            "EnergyController.fmu", "Gust.fmu", "HardHitController.fmu", "LqrController.fmu", "MpcController.fmu",
+            "Sensor.fmu", "StateEstimator.fmu", "TrajectoryPlanner.fmu", "TrivialController.fmu", "TrivialPlant.fmu",
+            "Wind.fmu"]
     names = ["energy", "free", "hard-hit", "hoist-transport", "lqg", "lqg-transport", "lqr", "mpc", "mpc-transport",
              "paper", "transport"]
     assert sorted(p.name for p in (build / "fmus").iterdir()) == sorted(
