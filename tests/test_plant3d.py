@@ -238,6 +238,20 @@ def test_the_jacobian_at_rest_is_two_planar_cranes(values):
         assert not b3[rows, me3.INPUTS.index("u" + ("y" if axis == "x" else "x"))].any()
 
 
+@quick
+@pytest.mark.parametrize("values", [{}, {"m1": 2.0, "m2": 0.5, "l1": 2.5, "l2": 0.8, "g": 9.81}])
+def test_linearised_is_the_exact_jacobian_at_rest(values):
+    """plant3d.linearised (two planar cranes, what phase 2's controllers design from) against the Model Exchange
+    plant's exact Jacobian at the hanging rest: its swing-state rows and columns, its ux and uy columns."""
+    config = COMPONENT.check({**values, "theta1x_0": 0.0})
+    a3, b3, _, _ = me3.jacobians(config, me3.initial(config), (0.0,) * 7, me3.FREE)
+    rows = [me3.STATES.index(n) for n in plant3d.SWING_STATE]
+    a, b = plant3d.linearised(values)
+    assert np.array(a3)[np.ix_(rows, rows)] == pytest.approx(np.array(a), rel=1e-12, abs=1e-12)
+    assert np.array(b3)[np.ix_(rows, [me3.INPUTS.index("ux"), me3.INPUTS.index("uy")])] == pytest.approx(
+        np.array(b), rel=1e-12, abs=1e-12)
+
+
 # --- the co-simulation's step ----------------------------------------------------------------------------------------
 
 @quick

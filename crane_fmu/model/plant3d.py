@@ -22,6 +22,7 @@ from .limits import NO_LIMIT, unlimited
 from .linalg import total
 from .parameters import finite, plant_parameters, positive
 from .plant3d_equations import DL1, DX, DY, L1, X, Y, outputs, rk4_step, substeps, swing_stepper
+from .plant_equations import linearisation
 from .plant_limits import clamp, drive_factors, held_cable, past_rail_end, reached_limit, within_speed
 from .tables import PLANT_MODEL, input_, local, output, parameter, positions
 
@@ -252,6 +253,30 @@ def general_update(config, state, inputs, time, step):
         raise _not_finite(time, inputs)
     state = swing + (drives[0], drives[1], accels[0], accels[1])
     return Step(state, messages, notes) if messages or notes else state
+
+
+def linearised(values):
+    """The swing state (:data:`SWING_STATE`) at rest linearised: ``(A, B)``, inputs ``(ux, uy)`` (lists of rows).
+
+    ``values``: the crane's model parameters (``m1``, ``m2``, ``l1``, ``l2``, ``g``), each defaulting to its start.
+
+    Notes
+    -----
+    Two planar cranes, one per axis (the axes' tests: ``tests/test_plant3d.py``): each axis' rows are
+    :func:`.plant_equations.linearisation`'s ``q'' = -W q - w u`` and the trolley's ``x'' = u``; no coupling.
+    """
+    big_w, small_w = linearisation(plant_parameters({**{v.name: v.start for v in PLANT_MODEL}, **values}))
+    n = len(SWING_STATE)
+    a, b = [[0.0] * n for _ in range(n)], [[0.0, 0.0] for _ in range(n)]
+    for column, axis in enumerate("xy"):
+        x, dx, q1, w1, q2, w2 = (SWING_STATE.index(name) for name in (
+            axis, "d" + axis, "theta1" + axis, "dtheta1" + axis, "theta2" + axis, "dtheta2" + axis))
+        a[x][dx] = a[q1][w1] = a[q2][w2] = 1.0
+        for row, i in ((w1, 0), (w2, 1)):
+            a[row][q1], a[row][q2] = -big_w[i][0], -big_w[i][1]
+            b[row][column] = -small_w[i]
+        b[dx][column] = 1.0
+    return a, b
 
 
 def _outputs(config, state, inputs):
