@@ -17,14 +17,15 @@ import math
 from collections import namedtuple
 
 from . import plant3d_continuous as continuous
-from .component import Component, Continuous, Discard, Step
+from .component import Axis, Component, Continuous, Crane, Discard, Step
 from .limits import NO_LIMIT, unlimited
 from .linalg import total
-from .parameters import finite, plant_parameters, positive
+from .parameters import PLANT_RULES, plant_parameters
 from .plant3d_equations import DL1, DX, DY, L1, X, Y, outputs, rk4_step, substeps, swing_stepper
 from .plant_equations import linearisation
 from .plant_limits import clamp, drive_factors, held_cable, past_rail_end, reached_limit, within_speed
-from .tables import PLANT_MODEL, input_, local, output, parameter, positions
+from .rules import check, finite, limit, non_negative, positive, rule
+from .tables import CRANE_MODEL, PLANT_MODEL, input_, local, output, parameter, positions
 
 DRIVE_X, DRIVE_Y = continuous.DRIVE_X, continuous.DRIVE_Y  # the drives' accelerations (after the lag)
 ACCEL_X, ACCEL_Y = DRIVE_Y + 1, DRIVE_Y + 2  # the trolley's mean accelerations over the last sub-step
@@ -100,8 +101,8 @@ VARIABLES = PLANT_MODEL + tuple(
 
 IN = positions(VARIABLES, "input")  # inputs[IN.hoist]: the inputs by name (continuous.INPUTS, the same order)
 
-Axis = namedtuple("Axis", "u_max v_max tau low high")
-Axis.__doc__ = ("One horizontal axis' drive and rail: ``|u| <= u_max``, lag ``tau``, ``|v| <= v_max``, "
+Drive = namedtuple("Drive", "u_max v_max tau low high")
+Drive.__doc__ = ("One horizontal axis' drive and rail: ``|u| <= u_max``, lag ``tau``, ``|v| <= v_max``, "
                 "``low <= x <= high``.")
 
 # The parameters that the fast path (the swing stepper with the demands limited to their u_max and the rail and
@@ -111,47 +112,34 @@ FAST_PATH_PARAMETERS = {"m1", "m2", "l1", "l2", "g", *INITIAL_STATE, "max_subste
                         "x_max", "y_min", "y_max", "l1_min", "l1_max", "dl1_max"}  # dl1_max: no hoisting on it
 
 Config = namedtuple("Config", "params max_substep state0 damping x_axis y_axis l1_min l1_max dl1_max swing_step fast")
-Config.__doc__ = ("The plant's validated parameters (each axis an :class:`Axis`; limits that are off are inf); "
+Config.__doc__ = ("The plant's validated parameters (each axis a :class:`Drive`; limits that are off are inf); "
                   "``swing_step`` is :func:`.plant3d_equations.swing_stepper` for them, ``fast`` that every "
                   "parameter outside :data:`FAST_PATH_PARAMETERS` is neutral.")
 
 
-def _at_least_zero(name, value):
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (value >= 0 and math.isfinite(value)):
-        raise ValueError(f"{name} must be >= 0 and finite, got {value!r}")
-
-
-def _limit(name, value):
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
-        raise ValueError(f"{name} must be > 0 (INF: no limit), got {value!r}")
+# The parameter rules, in the order they are checked (rules.py).
+RULES = (
+    *positive("max_substep"),
+    *PLANT_RULES,
+    *non_negative("c1", "c2", "tau_x", "tau_y", "l1_min"),
+    *limit("ux_max", "vx_max", "uy_max", "vy_max", "dl1_max", note="INF: no limit"),
+    rule("m2 != 0 or c2 == 0", "c2 must be 0 when m2 = 0 (the hook joint then moves no mass), got {c2}"),
+    rule("x_min < x_max", "x_min must be < x_max, got {x_min} and {x_max}"),
+    rule("y_min < y_max", "y_min must be < y_max, got {y_min} and {y_max}"),
+    *finite(*INITIAL_STATE),
+    rule("x_min <= x0 <= x_max", "x0 must lie on the rail [{x_min}, {x_max}], got {x0}"),
+    rule("y_min <= y0 <= y_max", "y0 must lie on the rail [{y_min}, {y_max}], got {y0}"),
+    rule("l1_min <= l1 <= l1_max", "l1 must lie within [l1_min, l1_max] = [{l1_min}, {l1_max}], got {l1}"),
+)
 
 
 def configure(values):
     """Validated :class:`Config` from the CranePlant3D parameter values; the state starts at rest in the drives."""
-    positive("max_substep", values["max_substep"])
+    check(RULES, values)
     p = plant_parameters(values)
-    for name in ("c1", "c2", "tau_x", "tau_y", "l1_min"):
-        _at_least_zero(name, values[name])
-    for name in ("ux_max", "vx_max", "uy_max", "vy_max", "dl1_max"):
-        _limit(name, values[name])
-    if p.m2 == 0 and values["c2"] != 0:
-        raise ValueError(f"c2 must be 0 when m2 = 0 (the hook joint then moves no mass), got {values['c2']!r}")
-    for axis in ("x", "y"):
-        if not values[f"{axis}_min"] < values[f"{axis}_max"]:
-            raise ValueError(f"{axis}_min must be < {axis}_max, got {values[axis + '_min']!r} and "
-                             f"{values[axis + '_max']!r}")
     state0 = tuple(values[name] for name in INITIAL_STATE)
-    for name, value in zip(INITIAL_STATE, state0):
-        finite(name, value)
-    for axis in ("x", "y"):
-        low, high, start = values[f"{axis}_min"], values[f"{axis}_max"], values[f"{axis}0"]
-        if not low <= start <= high:
-            raise ValueError(f"{axis}0 must lie on the rail [{low!r}, {high!r}], got {start!r}")
-    if not values["l1_min"] <= p.l1 <= values["l1_max"]:
-        raise ValueError(f"l1 must lie within [l1_min, l1_max] = [{values['l1_min']!r}, {values['l1_max']!r}], "
-                         f"got {p.l1!r}")
     v = {**values, **{name: unlimited(values[name]) for name in UNLIMITED}}  # validated: numbers
-    axes = [Axis(v[f"u{a}_max"], v[f"v{a}_max"], v[f"tau_{a}"], v[f"{a}_min"], v[f"{a}_max"]) for a in "xy"]
+    axes = [Drive(v[f"u{a}_max"], v[f"v{a}_max"], v[f"tau_{a}"], v[f"{a}_min"], v[f"{a}_max"]) for a in "xy"]
     fast = all(v[row.name] == (unlimited(row.start) if row.name in UNLIMITED else row.start) for row in VARIABLES
                if row.causality == "parameter" and row.name not in FAST_PATH_PARAMETERS)
     return Config(params=p, max_substep=v["max_substep"], state0=state0 + (p.l1, 0.0, 0.0, 0.0, 0.0, 0.0),
@@ -308,6 +296,12 @@ CONTINUOUS = Continuous(
     free_mode=continuous.FREE,
 )
 
+CRANE = Crane(
+    state=SWING_STATE, starts=INITIAL_STATE, axes=(Axis("x", "dx", "ux"), Axis("y", "dy", "uy")),
+    swing=("swing1", "swing2"), sensed=("x", "y", "theta1x", "theta1y", "theta2x", "theta2y"),
+    model=tuple(v.name for v in PLANT_MODEL), hook=("x1", "y1", "z1"), load=("x2", "y2", "z2"), hoist="hoist",
+    cable="l1_now", forces=("F1x", "F1y", "F2x", "F2y"), start_swing="theta1x_0", linearised=linearised)
+
 COMPONENT = Component(
     "CranePlant3D", "plant",
     "Overhead crane in three dimensions: a trolley moving in x and y (a drive per axis), the hook (m1 on cable l1) "
@@ -315,4 +309,4 @@ COMPONENT = Component(
     "accelerations, horizontal forces; fixed-step RK4 inside doStep",
     VARIABLES, configure, _outputs,
     initial_state=lambda config: config.state0, update=update, continuous=CONTINUOUS,
-    native="crane_plant3d.c")
+    crane_model=CRANE_MODEL, native="crane_plant3d.c", crane=CRANE, rules=RULES)

@@ -1,8 +1,8 @@
 /*
- * The CranePlant3D component in C: the native twin of crane_fmu/model/plant3d.py (its configure() rules and
- * messages, initial_state(), output() and update()), registered as a component a host can also integrate (Model
- * Exchange: plant3d_continuous.c). Its variables, value references and start values come from
- * CranePlant3D_variables.h, which `crane-fmu build` generates from the same table (plant3d.VARIABLES).
+ * The CranePlant3D component in C: the native twin of crane_fmu/model/plant3d.py (its configure() after its
+ * declared rules, initial_state(), output() and update()), registered as a component a host can also integrate
+ * (Model Exchange: plant3d_continuous.c). Its variables, value references, start values and rules come from
+ * CranePlant3D_variables.h, which `crane-fmu build` generates from the same table (plant3d.VARIABLES, RULES).
  */
 #include <math.h>
 #include <stdio.h>
@@ -37,37 +37,8 @@ static const unsigned INITIAL[] = {VR_x0,        VR_dx0,        VR_y0,        VR
                                    VR_theta1x_0, VR_dtheta1x_0, VR_theta1y_0, VR_dtheta1y_0,
                                    VR_theta2x_0, VR_dtheta2x_0, VR_theta2y_0, VR_dtheta2y_0};
 
-/* The rules of plant3d.configure() and parameters.py, in their order and words. */
+/* plant3d.configure(), after its RULES (the generated parameter_rules()). */
 static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
-    if (!(isfinite(V(max_substep)) && V(max_substep) > 0)) return rule(r, "max_substep", "> 0 and finite", V(max_substep));
-    ModelStatus plant = plant_rules(V(m1), V(m2), V(l1), V(l2), V(g), r);
-    if (plant != MODEL_OK) return plant;
-    static const unsigned at_least_zero[] = {VR_c1, VR_c2, VR_tau_x, VR_tau_y, VR_l1_min};
-    for (unsigned i = 0; i < 5; i++) {
-        double value = values[at_least_zero[i]];
-        if (!(value >= 0.0 && isfinite(value)))
-            return rule(r, VARIABLE_TABLE[at_least_zero[i]].name, ">= 0 and finite", value);
-    }
-    static const unsigned limits[] = {VR_ux_max, VR_vx_max, VR_uy_max, VR_vy_max, VR_dl1_max};
-    for (unsigned i = 0; i < 5; i++) {
-        double value = values[limits[i]];
-        if (!(value > 0.0)) return rule(r, VARIABLE_TABLE[limits[i]].name, "> 0 (INF: no limit)", value);
-    }
-    if (V(m2) == 0 && V(c2) != 0)
-        return report(r, MODEL_ERROR, "c2 must be 0 when m2 = 0 (the hook joint then moves no mass), got %s", R(V(c2)));
-    if (!(V(x_min) < V(x_max)))
-        return report(r, MODEL_ERROR, "x_min must be < x_max, got %s and %s", R(V(x_min)), R(V(x_max)));
-    if (!(V(y_min) < V(y_max)))
-        return report(r, MODEL_ERROR, "y_min must be < y_max, got %s and %s", R(V(y_min)), R(V(y_max)));
-    for (unsigned i = 0; i < 12; i++)
-        if (!isfinite(values[INITIAL[i]])) return rule(r, VARIABLE_TABLE[INITIAL[i]].name, "finite", values[INITIAL[i]]);
-    if (!(V(x_min) <= V(x0) && V(x0) <= V(x_max)))
-        return report(r, MODEL_ERROR, "x0 must lie on the rail [%s, %s], got %s", R(V(x_min)), R(V(x_max)), R(V(x0)));
-    if (!(V(y_min) <= V(y0) && V(y0) <= V(y_max)))
-        return report(r, MODEL_ERROR, "y0 must lie on the rail [%s, %s], got %s", R(V(y_min)), R(V(y_max)), R(V(y0)));
-    if (!(V(l1_min) <= V(l1) && V(l1) <= V(l1_max)))
-        return report(r, MODEL_ERROR, "l1 must lie within [l1_min, l1_max] = [%s, %s], got %s", R(V(l1_min)),
-                      R(V(l1_max)), R(V(l1)));
     /* 1e60 and beyond: no limit */
     *c = (Config){{{V(m1), V(m2), V(l1), V(l2), V(g)},
                    V(c1),
