@@ -12,7 +12,7 @@ import subprocess
 import sys
 
 import pytest
-from plant3d_cases import cases
+from helpers import spatial_plant_cases as cases
 
 from crane_fmu.build_scripts.native import MODELS_DIR, NativeUnavailable, compilers
 from crane_fmu.model import plant3d

@@ -7,7 +7,7 @@ import random
 
 import numpy as np
 import pytest
-from plant3d_cases import cases
+from helpers import spatial_plant_cases as cases
 
 from crane_fmu.model import plant, plant3d
 from crane_fmu.model import plant3d_continuous as me3

@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
-from native_fmus import close, messages, native_folders, open_native, python_folder
+from native_fmus import close, messages, open_native, python_folder
 from third_party_hosts import CLEAN_ENV, FMUSIM, run_tool, tool
 
 from crane_fmu import compare, components, systems
-from crane_fmu.analysis import scoreboard
+from crane_fmu.analysis import scenarios
 from crane_fmu.cli import main
 from crane_fmu.cosim import Connection, run
 from crane_fmu.model import plant3d
@@ -25,11 +25,6 @@ from crane_fmu.model.component import Step
 
 NAME = "CranePlant3D"
 COMPONENT = plant3d.COMPONENT
-
-
-@pytest.fixture(scope="module")
-def native(fmu_dir):
-    return native_folders(fmu_dir, [NAME])
 
 
 # ---- one table, both interfaces ------------------------------------------------------------------------------------
@@ -141,8 +136,8 @@ def _planar_runs():
     runs = [(system.name, system) for system in systems.registered()
             if "CranePlant" in systems.kinds(system).values()]
     lqr, = compare.contenders(("LqrController",), only=True)
-    for scenario in scoreboard.SCENARIOS:
-        for case in scoreboard.systems_for(lqr, scenario, cases=1):
+    for scenario in (s.id for s in scenarios.scenarios().values() if s.plant == "CranePlant"):
+        for case in scenarios.systems_for(lqr, scenario, cases=1):
             runs.append((f"{scenario} {case.label}", systems.prepare(case.system, case.step, case.stop_time)))
     return runs
 
