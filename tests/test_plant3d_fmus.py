@@ -162,10 +162,11 @@ def test_without_y_it_is_the_planar_crane_in_every_built_in_planar_run(native):
         twins = tuple(Connection(c.source, c.output, "twin", INPUTS[c.input]) for c in into) + tuple(
             Connection(c.source, c.output, "ulp", c.input) for c in into)
         values = {PLANAR_TO_SPATIAL.get(k, k): v for k, v in planar.items()}
-        with_twins = replace(system, instances={**system.instances, "twin": NAME, "ulp": "CranePlant"},
-                             connections=tuple(connections) + twins, match_names=False,
-                             parameters={**system.parameters, "twin": values,
-                                         "ulp": {**planar, "theta1_0": math.nextafter(start, math.inf)}})
+        with_twins = systems.prepare(replace(
+            system, instances={**system.instances, "twin": NAME, "ulp": "CranePlant"},
+            connections=tuple(connections) + twins, match_names=False,
+            parameters={**system.parameters, "twin": values,
+                        "ulp": {**planar, "theta1_0": math.nextafter(start, math.inf)}}))  # crane.*: on both twins
         result = run(with_twins, native[2]).columns()
         apart = np.max([np.abs(result[f"ulp.{a}"] - result[f"{plant}.{a}"]) for a in SAME], axis=0)
         end = len(apart) if apart.max() <= 1e-6 else int(np.argmax(apart > 1e-14))
