@@ -13,7 +13,7 @@ import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 from native_fmus import close, messages, open_native, python_folder
-from third_party_hosts import CLEAN_ENV, FMUSIM, run_tool, tool
+from third_party_hosts import fmusim_me
 
 from crane_fmu import compare, components, systems
 from crane_fmu.analysis import scenarios
@@ -217,15 +217,7 @@ def _fmpy(path, interface, start, stop, step=0.05):
 
 
 def _fmusim(path, start, stop, tmp_path, step=0.05):
-    out = tmp_path / "me.csv"
-    command = [tool(FMUSIM), "--interface-type", "me", "--solver", "cvode", "--tolerance", repr(RTOL),
-               "--stop-time", repr(stop), "--output-interval", repr(step), "--output-file", out]
-    for name, value in start.items():
-        command += ["--start-value", name, repr(value)]
-    code, log = run_tool([*command, path], tmp_path, CLEAN_ENV)
-    assert code == 0 and "[Error]" not in log, log[-2000:]
-    table = np.genfromtxt(out, delimiter=",", names=True, deletechars="", dtype=float)
-    return {name: table[name] for name in table.dtype.names}
+    return fmusim_me(path, start, stop, step, tmp_path / "me.csv", RTOL)
 
 
 @pytest.mark.parametrize("version", [2, 3])
