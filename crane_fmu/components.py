@@ -17,6 +17,7 @@ from crane_fmu.model import (
     mpc,
     planner,
     plant,
+    plant3d,
     wind,
 )
 from crane_fmu.registry import Registry
@@ -59,5 +60,5 @@ def check_parameters(model_identifier, values):
 for _component in (plant.COMPONENT, backstepping.COMPONENT, lqr.COMPONENT, energy.COMPONENT, hard_hit.COMPONENT,
                    mpc.COMPONENT, planner.COMPONENT,
                    disturbances.GUST, disturbances.SENSOR, disturbances.CRANE_SENSOR, wind.COMPONENT,
-                   estimator.COMPONENT, benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
+                   estimator.COMPONENT, plant3d.COMPONENT, benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
     register(_component)

@@ -26,7 +26,7 @@ from crane_fmu.build_scripts.one_fmu import one_fmu_name, plan
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cli import main
 from crane_fmu.cosim import read_result
-from crane_fmu.model import mpc, plant, qp
+from crane_fmu.model import mpc, plant, plant3d, plant3d_continuous, qp
 from crane_fmu.model.component import Step
 from crane_fmu.model.plant_continuous import FREE, Mode
 
@@ -223,4 +223,24 @@ def continuous_plant_cases(n=30, seed=3):
                  rng.uniform(0.3, 3), rng.uniform(-1, 1), rng.uniform(-2, 2))
         inputs = (rng.uniform(-5, 5), rng.uniform(-2, 2), rng.uniform(-50, 50), rng.uniform(-50, 50))
         mode = FREE if k % 3 == 0 else Mode(rng.choice((-1, 0, 1)), rng.choice((-1, 0, 1)), rng.choice((-1, 0, 1)))
+        yield config, state, inputs, mode
+
+
+def spatial_plant_cases(n=20, seed=3):
+    """Random parameters (damping, drive lags, finite limits), states, inputs and modes of the CranePlant3D's Model
+    Exchange plant (its Python and its C tests)."""
+    rng = random.Random(seed)
+    for k in range(n):
+        values = {"m1": rng.uniform(0.5, 10), "m2": rng.uniform(0.1, 10), "l1": rng.uniform(0.3, 3),
+                  "l2": rng.uniform(0.1, 2), "g": rng.uniform(1, 20), "c1": rng.uniform(0, 5), "c2": rng.uniform(0, 5),
+                  "tau_x": rng.choice((0.0, rng.uniform(0.05, 1))), "tau_y": rng.choice((0.0, rng.uniform(0.05, 1))),
+                  "ux_max": rng.choice((math.inf, 3.0)), "uy_max": rng.choice((math.inf, 3.0))}
+        config = plant3d.COMPONENT.check(values)
+        state = tuple(rng.uniform(-1.2, 1.2) for _ in range(12)) + (rng.uniform(0.3, 3), rng.uniform(-1, 1),
+                                                                   rng.uniform(-2, 2), rng.uniform(-2, 2))
+        inputs = (rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-2, 2),
+                  *(rng.uniform(-50, 50) for _ in range(4)))
+        mode = plant3d_continuous.FREE
+        if k % 3:
+            mode = plant3d_continuous.Mode(*(rng.choice((-1, 0, 1)) for _ in range(4)))
         yield config, state, inputs, mode

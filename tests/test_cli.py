@@ -23,9 +23,10 @@ def test_build_writes_every_component_and_every_builtin_system(build_record, fmu
     code, printed = build_record
     assert code == 0
     build = fmu_dir.parent
-    fmus = ["BacksteppingController.fmu", "CranePlant.fmu", "CraneSensor.fmu", "EnergyController.fmu", "Gust.fmu",
-            "HardHitController.fmu", "LqrController.fmu", "MpcController.fmu", "Sensor.fmu", "StateEstimator.fmu",
-            "TrajectoryPlanner.fmu", "TrivialController.fmu", "TrivialPlant.fmu", "Wind.fmu"]
+    fmus = ["BacksteppingController.fmu", "CranePlant.fmu", "CranePlant3D.fmu", "CraneSensor.fmu",
+            "EnergyController.fmu", "Gust.fmu", "HardHitController.fmu", "LqrController.fmu", "MpcController.fmu",
+            "Sensor.fmu", "StateEstimator.fmu", "TrajectoryPlanner.fmu", "TrivialController.fmu", "TrivialPlant.fmu",
+            "Wind.fmu"]
     names = ["energy", "free", "hard-hit", "hoist-transport", "lqg", "lqg-transport", "lqr", "mpc", "mpc-transport",
              "paper", "transport"]
     assert sorted(p.name for p in (build / "fmus").iterdir()) == sorted(
@@ -321,7 +322,10 @@ NUMBER = r"(\d+(?:\.\d+)?)"
     (["bench", "--endurance", "--stop-time", "0.5"], [rf"resident memory: {NUMBER} MB at t = 0"]),
     (["bench", "--sweep", "--cases", "2", "--stop-time", "0.2", "--repeat", "1"],
      [rf"1 worker: +{NUMBER} cases/s", rf"2 workers: {NUMBER} cases/s", rf"efficiency on 2 workers: {NUMBER} %"]),
-], ids=["pair", "endurance", "sweep"])
+    (["bench", "--spatial", "--stop-time", "0.2", "--repeat", "1"],
+     [rf"Python FMUs: +{NUMBER} us/step, ratio {NUMBER}", rf"native FMUs: +{NUMBER} us/step, ratio {NUMBER}",
+      rf"ratio {NUMBER}$"]),
+], ids=["pair", "endurance", "sweep", "spatial"])
 def test_benchmarks_run_and_print_their_figures(capsys, argv, figures):
     """Each benchmark at a few hundred steps prints each of its figures, and each is a positive number. The figures
     themselves are measured with crane-fmu bench at full length, not asserted here."""

@@ -23,7 +23,7 @@ import pytest
 from fmpy.fmi2 import FMU2Model, FMU2Slave
 from fmpy.fmi3 import FMU3Model, FMU3Slave
 from fmpy.validation import validate_fmu
-from third_party_hosts import CLEAN_ENV, FMUCHECK, FMUSIM, OMSIMULATOR, SAME, read_oms_mat, run_tool, tool
+from third_party_hosts import CLEAN_ENV, FMUCHECK, OMSIMULATOR, SAME, fmusim_me, read_oms_mat, run_tool, tool
 
 from crane_fmu.analysis.linearize import linearize
 from crane_fmu.build_scripts.model_exchange import ROUNDING
@@ -93,15 +93,7 @@ def test_the_cable_is_held_from_the_state_event_at_its_limit(plant_fmu):
 
 
 def _fmusim(path, start, stop, tmp_path, step=0.05):
-    out = tmp_path / f"{path.parent.name}.csv"
-    command = [tool(FMUSIM), "--interface-type", "me", "--solver", "cvode", "--tolerance", repr(RTOL),
-               "--stop-time", repr(stop), "--output-interval", repr(step), "--output-file", out]
-    for name, value in start.items():
-        command += ["--start-value", name, repr(value)]
-    code, log = run_tool([*command, path], tmp_path, CLEAN_ENV)
-    assert code == 0 and "[Error]" not in log, log[-2000:]
-    table = np.genfromtxt(out, delimiter=",", names=True, deletechars="", dtype=float)
-    return {name: table[name] for name in table.dtype.names}
+    return fmusim_me(path, start, stop, step, tmp_path / f"{path.parent.name}.csv", RTOL)
 
 
 @pytest.mark.parametrize("case", CASES)

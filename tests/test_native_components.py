@@ -359,6 +359,8 @@ HOST_CASES = {  # component: (parameters and inputs set by the host, steps of 1 
     "EnergyController": ({"x": 0.3, "dx": -0.2, "theta1": 0.1, "dtheta1": 0.4, "theta2": -0.2, "dtheta2": 0.5}, 3),
     "Sensor": ({"x": 0.3, "theta2": -0.2, "sigma_dx": 0.0}, 1000),
     "Wind": ({"dx": 0.3, "theta1": 0.1, "dtheta1": -0.4, "theta2": -0.2, "dtheta2": 0.5, "seed": 7.0}, 1000),
+    "CranePlant3D": ({"theta1y_0": 0.3, "dtheta2x_0": 0.5, "ux": 0.4, "uy": -0.3, "F2y": 2.0, "c1": 0.1, "hoist": 0.1,
+                      "tau_y": 0.1}, 2000),
 }
 
 

@@ -11,9 +11,10 @@ fails) is held to a stated bound in ULP (units in the last place):
 The bounds are fdlibm's documented errors, whose methods portable_math.c follows: sin, cos, exp and log
 below 1 ULP, so each result is one of the two doubles around the exact value (at most 1 ULP from the
 correctly rounded one, and from glibc's, which is correctly rounded in practice); tanh within 3 ULP of
-glibc's and of the exact value (fdlibm's tanh is built on expm1; glibc's is within 2 ULP). The arguments
-cover what the models pass (swing angles, the planner's and the gust's phases, the sensor's uniform
-numbers) and the ranges each method treats apart (argument reduction, tiny and huge arguments, the ends of
+glibc's and of the exact value (fdlibm's tanh is built on expm1; glibc's is within 2 ULP); atan below 1 ULP,
+and atan2 (from it, by quadrant) within 2 ULP of glibc's in every quadrant. The arguments cover what the
+models pass (swing angles, the planner's and the gust's phases, the sensor's uniform numbers) and the
+ranges each method treats apart (argument reduction, tiny and huge arguments, the ends of
 exp's range, subnormal logarithms).
 """
 
@@ -29,7 +30,7 @@ from crane_fmu.build_scripts.native import MODELS_DIR
 
 DECLARED = re.findall(r"double crane_(\w+)\(double x\);", (MODELS_DIR / "plant_math.h").read_text())
 # function: (most ULP from glibc's, most ULP from the exact value)
-BOUNDS = {"sin": (1, 1), "cos": (1, 1), "exp": (1, 1), "log": (1, 1), "tanh": (3, 3)}
+BOUNDS = {"sin": (1, 1), "cos": (1, 1), "exp": (1, 1), "log": (1, 1), "tanh": (3, 3), "atan": (1, 1)}
 AGREE = 0.8  # of the arguments at least, ours is glibc's: a systematic bias in the last bit shows at about half
 
 
@@ -53,6 +54,10 @@ def _arguments(name, n):
         xs = [((rng.getrandbits(53) >> 11) + 0.5) / 2 ** 53 for _ in range(n // 2)]  # the Sensor's u1
         xs += [10 ** rng.uniform(-320, 308) for _ in range(n // 2)]
         xs += [5e-324, 1e-310, 0.5, 1.0, 1.0000001, 0.9999999, 2.0, 1e300]
+    elif name == "atan":  # the swing angle's atan2(horizontal, vertical) of a cable: |y / x| of any size
+        xs = [rng.uniform(-3, 3) for _ in range(n // 2)]  # each of its reductions: 7/16, 11/16, 19/16, 39/16
+        xs += [rng.choice((-1, 1)) * 10 ** rng.uniform(-20, 25) for _ in range(n // 2)]
+        xs += [0.0, -0.0, 1e-300, 0.4375, 0.6875, 1.1875, 2.4375, 1.0, -1.0, 2.0 ** 66, 1e300]
     else:  # tanh
         xs = [rng.uniform(-1, 1) * 10 ** rng.uniform(-20, 1.7) for _ in range(n)]
         xs += [1e-300, 0.5, 1.0, 2.0, 22.0, -22.0, 1e300]
@@ -118,3 +123,41 @@ def test_the_portable_function_is_within_its_bound_of_the_exact_value(name, tmp_
     worst = int(np.argmax(ulps))
     assert ulps[worst] <= most, f"crane_{name}({xs[worst]!r}) = {ours[worst]!r}, exactly {exact[worst]!r}: " \
                                 f"{ulps[worst]} ULP apart, more than {most}"
+
+
+HARNESS2 = r"""
+#include <math.h>
+#include <stdio.h>
+double crane_atan2(double, double);
+int main(void) {
+    double y, x;
+    while (scanf("%la %la", &y, &x) == 2) printf("%a %a\n", crane_atan2(y, x), atan2(y, x));
+    return 0;
+}
+"""
+
+
+def test_the_portable_atan2_is_within_two_ulp_of_glibcs_in_every_quadrant(tmp_path):
+    """crane_atan2 is crane_atan (below 1 ULP) of |y / x| (one rounding) and the quadrant's pi with its tail: within
+    2 ULP of glibc's, and exactly its special values (zeros, infinities, NaN, the axes)."""
+    rng = random.Random(2)
+    pairs = [(rng.choice((-1, 1)) * 10 ** rng.uniform(-10, 10), rng.choice((-1, 1)) * 10 ** rng.uniform(-10, 10))
+             for _ in range(40_000)]
+    pairs += [(rng.uniform(0, 1), rng.uniform(-1, 1)) for _ in range(20_000)]  # a cable's (horizontal, vertical)
+    special = [0.0, -0.0, 1.0, -1.0, float("inf"), -float("inf"), 1e300, 5e-324]
+    pairs += [(y, x) for y in special for x in special] + [(float("nan"), 1.0), (1.0, float("nan"))]
+    (tmp_path / "harness.c").write_text(HARNESS2)
+    subprocess.run([compiler(), "-O2", "-Wall", "-Werror", "-ffp-contract=off", "-DCRANE_OWN_MATH", f"-I{MODELS_DIR}",
+                    str(tmp_path / "harness.c"), str(MODELS_DIR / "portable_math.c"), "-o", str(tmp_path / "h"), "-lm"],
+                   check=True)
+    out = subprocess.run([str(tmp_path / "h")], input="\n".join(f"{y.hex()} {x.hex()}" for y, x in pairs),
+                         capture_output=True, text=True, check=True).stdout
+    ours, glibc = np.array([[float.fromhex(v) for v in line.split()] for line in out.splitlines()]).T
+    assert len(ours) == len(pairs)
+    same_nan = np.isnan(ours) == np.isnan(glibc)
+    assert same_nan.all()
+    finite = ~np.isnan(glibc)
+    ulps = _ulps(ours[finite], glibc[finite])
+    assert ulps.max() <= 2, pairs[int(np.flatnonzero(finite)[np.argmax(ulps)])]
+    exact = [i for i, (y, x) in enumerate(pairs) if not (np.isfinite(y) and np.isfinite(x) and y and x)]
+    assert all(ours[i].hex() == glibc[i].hex() or np.isnan(glibc[i]) for i in exact)

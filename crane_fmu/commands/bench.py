@@ -14,7 +14,8 @@ EXAMPLES = (
     "  crane-fmu bench --endurance            # one simulated hour at 1 ms\n"
     "  crane-fmu bench --realtime             # the real-time loop, OPC UA and Modbus round trips\n"
     "  crane-fmu bench --mpc                  # the MPC's solve and its whole process against transport's\n"
-    "  crane-fmu bench --derivatives          # the native plant's Model Exchange derivatives"
+    "  crane-fmu bench --derivatives          # the native plant's Model Exchange derivatives\n"
+    "  crane-fmu bench --spatial              # the crane in three dimensions against the planar crane"
 )
 
 
@@ -28,6 +29,8 @@ MODES = {
                 "OPC UA and Modbus TCP (needs the 'serve' extra)",
     "derivatives": "the cost of the native plant's derivatives and directional derivatives (Model Exchange), in a "
                    "C loop",
+    "spatial": "the spatial crane pair (CranePlant3D with the LQR) against the planar pair (CranePlant with the "
+               "LQR), Python and native FMUs",
 }
 
 
@@ -51,7 +54,11 @@ def run(args):
     if args.cases < 2:
         raise UsageError(f"--cases must be >= 2, got {args.cases}")
     try:
-        if args.derivatives:
+        if args.spatial:
+            from crane_fmu.bench_spatial import run_spatial_bench
+
+            run_spatial_bench(args.stop_time or 20.0, args.step, args.repeat)
+        elif args.derivatives:
             from crane_fmu.bench_native import run_derivative_bench
 
             run_derivative_bench(repeat=args.repeat)

@@ -21,6 +21,7 @@ from . import (  # noqa: F401
     parameters,
     planner,
     plant,
+    plant3d,
     plant_continuous,
     rules,
     tables,

@@ -33,10 +33,10 @@ def within_speed(accel, speed, speed_max, dt):
     return clamp(accel, (-speed_max - speed) / dt, (speed_max - speed) / dt)
 
 
-def past_rail_end(x_min, x_max, x, t, time):
-    """The Discard of a step in which the trolley (at ``x`` at time ``t``) would pass a rail end."""
-    end, at = ("x_max", x_max) if x > x_max else ("x_min", x_min)
-    return Discard(f"the trolley would pass the rail end {end} = {at!r} m (x = {x!r} m) "
+def past_rail_end(x_min, x_max, x, t, time, axis="x"):
+    """The Discard of a step in which the trolley (at ``x`` along ``axis`` at time ``t``) would pass a rail end."""
+    end, at = (f"{axis}_max", x_max) if x > x_max else (f"{axis}_min", x_min)
+    return Discard(f"the trolley would pass the rail end {end} = {at!r} m ({axis} = {x!r} m) "
                    f"at t = {t!r} s: the step from t = {time!r} s is discarded")
 
 

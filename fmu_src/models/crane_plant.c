@@ -12,6 +12,7 @@
 #include "CranePlant_variables.h"
 #include "plant_continuous.h"
 #include "plant_equations.h"
+#include "plant_limits.h"
 #include "plant_math.h"
 #include "py_repr.h"
 #include "rules.h"
@@ -59,18 +60,6 @@ static ModelStatus outputs(const double values[], const Config *c, const State *
     plant_outputs(state->s, &c->p, out);
     out[11] = state->s[L1], out[12] = state->s[DL1], out[13] = state->s[ACCEL];
     return MODEL_OK;
-}
-
-/* Python's min(max(value, low), high). */
-static double clamp(double value, double low, double high) {
-    double v = low > value ? low : value;
-    return high < v ? high : v;
-}
-
-/* `accel` limited so that `speed` ends the sub-step dt within +-speed_max (plant_limits.within_speed). */
-static double within_speed(double accel, double speed, double speed_max, double dt) {
-    if (speed_max == INFINITY) return accel;
-    return clamp(accel, (-speed_max - speed) / dt, (speed_max - speed) / dt);
 }
 
 static ModelStatus update(const double values[], const Config *c, State *state, double time, double step,

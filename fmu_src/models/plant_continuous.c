@@ -7,6 +7,8 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "plant_limits.h"
+
 /* The demand within u_max, and its derivative by u (1 within the limit, 0 beyond it). */
 static double demand_of(const ContinuousPlant *c, double u, double *gain) {
     *gain = 0.0;
@@ -76,14 +78,6 @@ void plant_continuous_outputs(const ContinuousPlant *c, const double s[N_CONTINU
     }
 }
 
-/* limit - value (the room to a limit above), or 1 when there is no limit. */
-static double room(double value, double limit) { return isfinite(limit) ? limit - value : 1.0; }
-
-static void pair(double value, double low, double high, int held, double pressing, double z[2]) {
-    z[0] = held < 0 ? -pressing : room(-value, -low);
-    z[1] = held > 0 ? pressing : room(value, high);
-}
-
 void plant_event_indicators(const ContinuousPlant *c, const double s[N_CONTINUOUS], const double in[N_PLANT_INPUTS],
                             PlantMode mode, double z[N_INDICATORS]) {
     double tr[4];
@@ -92,23 +86,6 @@ void plant_event_indicators(const ContinuousPlant *c, const double s[N_CONTINUOU
     pair(s[DX], -c->v_max, c->v_max, mode.speed, tr[0], z + 2);
     pair(s[L1], c->l1_min, c->l1_max, mode.cable, in[1], z + 4);
     pair(s[DL1], -c->dl1_max, c->dl1_max, mode.hoist, in[1], z + 6);
-}
-
-/* One limited quantity after an event (plant_continuous._hold): let go when pressed away from its limit; set onto
-   a limit it reached while moving or pressed towards it (or passed), and held while pressed on. Returns reached. */
-static int hold(double *value, double rate, double pressing, int *held, double low, double high) {
-    if ((*held > 0 && pressing < 0) || (*held < 0 && pressing > 0)) *held = 0;
-    if (*held == 0) {
-        if (*value > high || (*value == high && (rate > 0 || pressing > 0))) {
-            *value = high, *held = pressing > 0 ? 1 : 0;
-            return 1;
-        }
-        if (*value < low || (*value == low && (rate < 0 || pressing < 0))) {
-            *value = low, *held = pressing < 0 ? -1 : 0;
-            return 1;
-        }
-    }
-    return 0;
 }
 
 void plant_event_update(const ContinuousPlant *c, double s[N_CONTINUOUS], const double in[N_PLANT_INPUTS],

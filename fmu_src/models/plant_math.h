@@ -13,11 +13,14 @@ double crane_cos(double x);
 double crane_exp(double x);
 double crane_tanh(double x);
 double crane_log(double x);
+double crane_atan(double x);
+double crane_atan2(double y, double x);
 #define SIN crane_sin
 #define COS crane_cos
 #define EXP crane_exp
 #define TANH crane_tanh
 #define LOG crane_log
+#define ATAN2 crane_atan2
 #else
 #include <math.h>
 #define SIN sin
@@ -25,6 +28,7 @@ double crane_log(double x);
 #define EXP exp
 #define TANH tanh
 #define LOG log
+#define ATAN2 atan2
 #endif
 
 /* Python's x ** 2: the C library's pow(x, 2.0), which glibc's does not always round as x * x, kept from being

@@ -1,11 +1,12 @@
 /*
- * Portable sin, cos, exp, tanh and log: the same double operations on every platform and compiler, for
+ * Portable sin, cos, exp, tanh, log, atan and atan2: the same double operations on every platform and compiler, for
  * the builds whose C library differs from glibc (mingw-w64's sin and cos are the x87 instructions) and
  * for builds from the FMU's sources. The method is fdlibm's (Sun Microsystems, 1993: "Permission to use,
  * copy, modify, and distribute this software is freely granted, provided that this notice is
  * preserved"): for sin and cos Cody-Waite reduction by pi/2 in three parts, then minimax polynomials on
  * [-pi/4, pi/4]; for exp, expm1 (under tanh) and log a reduction by ln2 or to [sqrt(2)/2, sqrt(2)], then
- * their rational or polynomial forms; with fdlibm's coefficients, written anew here. Errors below 1 ULP
+ * their rational or polynomial forms; for atan a reduction around atan(1/2), atan(1), atan(3/2), atan(inf) and an
+ * odd polynomial, atan2 from it by quadrant; with fdlibm's coefficients, written anew here. Errors below 1 ULP
  * (tanh: below 3 ULP of glibc's), so they agree with glibc's except in a rare last bit; the reduction of
  * sin and cos is exact enough for |x| < 2^20 pi/2 (angles far beyond any swing; larger ones lose digits).
  * Compiled only with CRANE_OWN_MATH (see plant_math.h).
@@ -228,6 +229,78 @@ double crane_log(double x) {
         return k == 0 ? f - (hfsq - s * (hfsq + R)) : dk * ln2_hi - ((hfsq - (s * (hfsq + R) + dk * ln2_lo)) - f);
     }
     return k == 0 ? f - s * (f - R) : dk * ln2_hi - ((s * (f - R) - dk * ln2_lo) - f);
+}
+
+/* atan(x): fdlibm's method, x reduced to |x| < 7/16 around one of atan(1/2), atan(1), atan(3/2), atan(inf), then an
+   odd polynomial in x (coefficients as fdlibm's). */
+double crane_atan(double x) {
+    static const double atanhi[] = {4.63647609000806093515e-01, 7.85398163397448278999e-01,
+                                    9.82793723247329054082e-01, 1.57079632679489655800e+00};
+    static const double atanlo[] = {2.26987774529616870924e-17, 3.06161699786838301793e-17,
+                                    1.39033110312309984516e-17, 6.12323399573676603587e-17};
+    static const double aT[] = {3.33333333333329318027e-01,  -1.99999999998764832476e-01, 1.42857142725034663711e-01,
+                                -1.11111104054623557880e-01, 9.09088713343650656196e-02,  -7.69187620504482999495e-02,
+                                6.66107313738753120669e-02,  -5.83357013379057348645e-02, 4.97687799461593236017e-02,
+                                -3.65315727442169155270e-02, 1.62858201153657823623e-02};
+    uint32_t hx = (uint32_t)(bits(x) >> 32), ix = hx & 0x7fffffffu;
+    int id;
+    if (ix >= 0x44100000u) { /* |x| >= 2^66 */
+        if (x != x) return x + x;
+        return (hx >> 31) ? -atanhi[3] - atanlo[3] : atanhi[3] + atanlo[3];
+    }
+    if (ix < 0x3fdc0000u) {                     /* |x| < 7/16 */
+        if (ix < 0x3e400000u) return x;         /* |x| < 2^-27 */
+        id = -1;
+    } else {
+        x = x < 0 ? -x : x;
+        if (ix < 0x3ff30000u) {                 /* |x| < 19/16 */
+            if (ix < 0x3fe60000u) {             /* 7/16 <= |x| < 11/16 */
+                id = 0, x = (2.0 * x - 1.0) / (2.0 + x);
+            } else {                            /* 11/16 <= |x| < 19/16 */
+                id = 1, x = (x - 1.0) / (x + 1.0);
+            }
+        } else if (ix < 0x40038000u) {          /* |x| < 39/16 */
+            id = 2, x = (x - 1.5) / (1.0 + 1.5 * x);
+        } else {                                /* 39/16 <= |x| < 2^66 */
+            id = 3, x = -1.0 / x;
+        }
+    }
+    double z = x * x, w = z * z;
+    double s1 = z * (aT[0] + w * (aT[2] + w * (aT[4] + w * (aT[6] + w * (aT[8] + w * aT[10])))));
+    double s2 = w * (aT[1] + w * (aT[3] + w * (aT[5] + w * (aT[7] + w * aT[9]))));
+    if (id < 0) return x - x * (s1 + s2);
+    z = atanhi[id] - ((x * (s1 + s2) - atanlo[id]) - x);
+    return (hx >> 31) ? -z : z;
+}
+
+/* atan2(y, x): fdlibm's, on crane_atan(|y / x|) with the quadrant's pi and its tail. */
+double crane_atan2(double y, double x) {
+    static const double pi_o_4 = 7.8539816339744827900e-01, pi_o_2 = 1.5707963267948965580e+00,
+                        pi = 3.1415926535897931160e+00, pi_lo = 1.2246467991473531772e-16;
+    if (x != x || y != y) return x + y;
+    if (x == 1.0) return crane_atan(y);
+    int m = (int)(bits(y) >> 63) | (int)(bits(x) >> 63) << 1; /* 2 sign(x) + sign(y) */
+    if (y == 0) return m == 0 || m == 1 ? y : m == 2 ? pi : -pi;
+    if (x == 0) return m & 1 ? -pi_o_2 : pi_o_2;
+    if (x == INFINITY || x == -INFINITY) {
+        if (y == INFINITY || y == -INFINITY) {
+            static const double both[] = {pi_o_4, -pi_o_4, 3.0 * pi_o_4, -3.0 * pi_o_4};
+            return both[m];
+        }
+        return m == 0 ? 0.0 : m == 1 ? -0.0 : m == 2 ? pi : -pi;
+    }
+    if (y == INFINITY || y == -INFINITY) return m & 1 ? -pi_o_2 : pi_o_2;
+    int k = exponent_of(y) - exponent_of(x);
+    double z;
+    if (k > 60) z = pi_o_2 + 0.5 * pi_lo;    /* |y / x| > 2^60 */
+    else if (m & 2 && k < -60) z = 0.0;       /* |y| / x < -2^60 */
+    else z = crane_atan(y / x < 0 ? -(y / x) : y / x);
+    switch (m) {
+    case 0: return z;
+    case 1: return -z;
+    case 2: return pi - (z - pi_lo);
+    default: return (z - pi_lo) - pi;
+    }
 }
 #else
 typedef int portable_math_unused; /* an empty translation unit is not ISO C */
