@@ -7,14 +7,17 @@ JSON-able row with a ``case_id``) is appended to it at once, so an interrupted b
 from :func:`read_journal`; a worker that dies has its running items rescheduled by Dask.
 """
 
+import itertools
 import json
 import math
 import os
+import queue
 import signal
 import sys
 import time
+import uuid
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from contextlib import nullcontext
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 JOURNAL = "cases.jsonl"
@@ -35,38 +38,51 @@ def read_journal(out_dir):
 
 
 class Progress:
-    """A one-line progress bar on stderr (a line per 10 % when stderr is not a terminal).
+    """A one-line progress bar on stderr (a line per 10 % when stderr is not a terminal): the cases done, those not
+    ok, the rate and the time left.
 
     ``total`` items, ``done`` of them finished before, ``failed`` of those not ok (so that a resumed
     batch counts as its summary does); ``ok(result)`` tells a result that is not counted as "not ok"
-    (default: its ``status`` is ``ok``).
+    (default: its ``status`` is ``ok``). The rate is of the items run now, and the time left is what the
+    items still to run take at that rate.
     """
 
     def __init__(self, total, done=0, stream=None, ok=lambda result: result.get("status") == "ok", failed=0):
         stream = sys.stderr if stream is None else stream
         self.total, self.done, self.failed, self.stream, self.ok = total, done, failed, stream, ok
-        self.start, self.tty = time.perf_counter(), stream.isatty()
-        self._shown = -1
+        self.start, self.tty, self.done_before = time.perf_counter(), stream.isatty(), done
+        self._shown, self._drawn = -1, -1.0
 
     def update(self, result):
         self.done += 1
         self.failed += not self.ok(result)
-        tenth = 10 * self.done // max(self.total, 1)
-        if not self.tty and tenth == self._shown:
-            return
-        self._shown = tenth
+        tenth, now = 10 * self.done // max(self.total, 1), time.perf_counter()
+        if (tenth == self._shown if not self.tty else now - self._drawn < 0.1) and self.done < self.total:
+            return  # a line per tenth in a file, at most ten a second on a terminal
+        self._shown, self._drawn = tenth, now
         filled = 30 * self.done // max(self.total, 1)
-        rate = self.done / max(time.perf_counter() - self.start, 1e-9)
+        rate = (self.done - self.done_before) / max(now - self.start, 1e-9)
+        left = f", {_duration((self.total - self.done) / rate)} left" if rate > 0 and self.done < self.total else ""
         text = (f"[{'#' * filled}{'.' * (30 - filled)}] {self.done}/{self.total} cases, "
-                f"{self.failed} not ok, {rate:.1f}/s")
-        self.stream.write(("\r" + text) if self.tty else text + "\n")
+                f"{self.failed} not ok, {rate:.1f}/s{left}")
+        self.stream.write(("\r" + text + "\x1b[K") if self.tty else text + "\n")  # on a terminal: the rest cleared
         if self.tty and self.done == self.total:
             self.stream.write("\n")
         self.stream.flush()
 
 
+def _duration(seconds):
+    """``"42 s"``, ``"3 min 05 s"``, ``"2 h 07 min"``."""
+    seconds = round(seconds)
+    if seconds < 60:
+        return f"{seconds} s"
+    if seconds < 3600:
+        return f"{seconds // 60} min {seconds % 60:02d} s"
+    return f"{seconds // 3600} h {seconds % 3600 // 60:02d} min"
+
+
 def run_batch(task, items, shared=None, *, on="processes", workers=None, scheduler=None, journal=None, known=(),
-              progress=None, **kwargs):
+              progress=None, chunked=False, collect=True, **kwargs):
     """Run ``task(item, **kwargs)`` (``task(item, shared, **kwargs)`` with ``shared``) for every item.
 
     Parameters
@@ -80,15 +96,31 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
         it finishes, are appended to it at once.
     progress : Progress, optional
         Told of every row (``known`` ones too).
+    chunked : bool
+        Each item is a chunk (a list) of cases and ``task`` yields the row of each case (a dict with a
+        ``case_id``) as it finishes. On Dask each row is reported the moment it is yielded, so a worker
+        that dies in a chunk loses none of the rows it yielded: Dask runs the chunk again elsewhere and
+        the rows already kept are not kept twice. ``items`` may then be any iterable: on Dask a few
+        chunks per worker are sent at a time, the next as one ends (a batch of any size).
+    collect : bool
+        Return the results; False: only how many there were (the journal has them).
 
     Returns
     -------
-    list
-        The results of ``items``, in the order they finished.
+    list or int
+        The results of ``items`` (with ``chunked``: the rows of their cases), in the order they finished,
+        ``known`` ones first (their number, without ``collect``).
     """
     extra = () if shared is None else (shared,)
+    kept = set()
     with open(journal, "a") if journal else nullcontext() as sink:
+        if sink and not _ends_a_line(journal):
+            sink.write("\n")  # a line torn when a run was killed: ended, so that the next row is a line of its own
         def keep(result):
+            if chunked:
+                if result["case_id"] in kept:  # reported by a chunk that then ran again
+                    return None
+                kept.add(result["case_id"])
             if sink:
                 sink.write(json.dumps(result, default=_plain) + "\n")
                 sink.flush()
@@ -96,30 +128,54 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
                 progress.update(result)
             return result
 
-        for row in known:
-            keep(row)
-        if not items:
-            return []
+        def kept_rows(results, before=()):
+            results = (r for r in map(keep, results) if r is not None)
+            return [*before, *results] if collect else len(before) + sum(1 for _ in results)
+
+        known = [keep(row) for row in known]
+        if chunked:  # any iterable: look at its first chunk
+            items = iter(items)
+            first = next(items, None)
+            items = itertools.chain([first], items) if first is not None else []
+        if not items:  # nothing to run: no cluster started
+            return kept_rows((), known)
         if on == "dask":
-            return [keep(r) for r in _on_dask(task, items, extra, workers, scheduler, kwargs)]
+            run = _chunks_on_dask if chunked else _on_dask
+            return kept_rows(run(task, items, extra, workers, scheduler, kwargs), known)
         if on != "processes":
             raise ValueError(f"on must be processes or dask, got {on!r}")
         workers = workers or os.cpu_count() or 1
         if workers == 1:
-            return [keep(task(item, *extra, **kwargs)) for item in items]
+            return kept_rows((r for item in items for r in (task(item, *extra, **kwargs) if chunked else
+                                                            [task(item, *extra, **kwargs)])), known)
         with ProcessPoolExecutor(max_workers=workers, initializer=ignore_interrupts) as pool:
-            futures = [pool.submit(task, item, *extra, **kwargs) for item in items]
+            futures = [pool.submit(_listed, task, item, *extra, **kwargs) if chunked else
+                       pool.submit(task, item, *extra, **kwargs) for item in items]
             try:
-                return [keep(future.result()) for future in as_completed(futures)]
+                return kept_rows((r for future in as_completed(futures) for r in
+                                  (future.result() if chunked else [future.result()])), known)
             except BaseException:  # Ctrl-C (the workers ignore it) or a failed item: drop what has not begun
                 pool.shutdown(wait=True, cancel_futures=True)
                 raise
 
 
-def _on_dask(task, items, extra, workers, scheduler, kwargs):
-    """The results of ``task`` on Dask as they finish; ``extra`` (the shared data) scattered to every worker once."""
+def _ends_a_line(path):
+    """Whether the file at ``path`` is empty or ends with a newline."""
+    with open(path, "rb") as f:
+        if f.seek(0, os.SEEK_END) == 0:
+            return True
+        f.seek(-1, os.SEEK_END)
+        return f.read(1) == b"\n"
+
+
+def _listed(task, chunk, *extra, **kwargs):
+    return list(task(chunk, *extra, **kwargs))
+
+
+@contextmanager
+def _dask_client(workers, scheduler):
+    """A Dask client of the cluster at ``scheduler``, or of a local cluster of ``workers`` processes (closed after)."""
     from distributed import Client, LocalCluster  # optional: the dask extra
-    from distributed import as_completed as finished
 
     if scheduler:
         try:
@@ -137,13 +193,69 @@ def _on_dask(task, items, extra, workers, scheduler, kwargs):
             signal.signal(signal.SIGINT, handler)
         client = Client(cluster)
     try:
-        columns = [items] + ([[client.scatter([extra[0]], broadcast=True)[0]] * len(items)] if extra else [])
-        for future in finished(client.map(task, *columns, pure=False, **kwargs)):
-            yield future.result()
+        yield client
     finally:
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def _shared_column(client, items, extra):
+    """The columns of ``client.map``'s arguments after the items: the shared data scattered to every worker once."""
+    return [[client.scatter([extra[0]], broadcast=True)[0]] * len(items)] if extra else []
+
+
+def _on_dask(task, items, extra, workers, scheduler, kwargs):
+    """The results of ``task`` on Dask as they finish; ``extra`` (the shared data) scattered to every worker once."""
+    from distributed import as_completed as finished
+
+    with _dask_client(workers, scheduler) as client:
+        for future in finished(client.map(task, items, *_shared_column(client, items, extra), pure=False,
+                                          **kwargs)):
+            yield future.result()
+
+
+def _chunks_on_dask(task, chunks, extra, workers, scheduler, kwargs):
+    """The rows of ``task``'s chunks on Dask: each as its worker reports it (an event of a topic of this batch),
+    then each chunk's rows again when it finishes (those of a chunk whose worker died before it could report
+    them). Chunks are taken from the iterable as they are sent: four per worker thread (16 at least) at a time."""
+    with _dask_client(workers, scheduler) as client:
+        topic = f"crane-fmu-batch-{uuid.uuid4().hex}"
+        reported = queue.SimpleQueue()
+        client.subscribe_topic(topic, lambda event: reported.put(event[1]["row"]))  # the scheduler adds "worker"
+        try:
+            shared = [client.scatter([extra[0]], broadcast=True)[0]] if extra else []
+            chunks, remaining = iter(chunks), set()
+
+            def send(count):
+                for chunk in itertools.islice(chunks, count):
+                    remaining.add(client.submit(_reporting, chunk, *shared, pure=False, task=task, topic=topic,
+                                                **kwargs))
+
+            send(max(16, 4 * sum(client.nthreads().values())))
+            while remaining:
+                try:
+                    yield reported.get(timeout=0.05)
+                    continue
+                except queue.Empty:
+                    pass
+                for future in [f for f in remaining if f.done()]:
+                    remaining.discard(future)
+                    yield from future.result()
+                    send(1)
+        finally:
+            client.unsubscribe_topic(topic)
+
+
+def _reporting(chunk, *extra, task, topic, **kwargs):
+    """Run ``task`` on a chunk on a Dask worker, reporting each row under ``topic`` as it is yielded; return them."""
+    from distributed import get_worker
+
+    worker, rows = get_worker(), []
+    for row in task(chunk, *extra, **kwargs):
+        worker.log_event(topic, {"row": row})
+        rows.append(row)
+    return rows
 
 
 def ignore_interrupts():

@@ -3,7 +3,9 @@
 Medians of ``repeat`` alternating runs, 20 s at h = 1 ms by default:
 
 1. the native plant with the Python BacksteppingController FMU through our master, CSV of every step;
-2. the native pair (plant and BacksteppingController) through our master, CSV of every step;
+2. the native pair (plant and BacksteppingController) through our master, CSV of every step; and on the batch path
+   of sweeps and the board (:mod:`crane_fmu.native_batch`: instances reset, the outputs of the sweep's figures kept
+   and the figures computed, no rows written);
 3. the native pair in the C host (``fmu_src/host/host.c pair-bench``), the two FMUs exchanged by
    value references at each step, no recording;
 4. the whole ``crane-fmu simulate --fmu-dir build/native`` process (the paper system: both native)
@@ -22,6 +24,7 @@ from fmpy import read_model_description
 
 from crane_fmu import components, systems
 from crane_fmu.bench import ANCHOR_LOOP, _process_seconds, _timed_run, build_anchor
+from crane_fmu.bench_batch import pair_per_step
 from crane_fmu.build_scripts.build_fmus import build_all
 from crane_fmu.build_scripts.native import (
     DERIVATIVE_BENCH,
@@ -82,17 +85,20 @@ def run_native_bench(stop_time=20.0, step=1e-3, repeat=5, out=print):
         simulate = [*command, "simulate", "--fmu-dir", str(native), "--stop-time", repr(stop_time), "--step",
                     repr(step), "--out", str(tmp / "process.csv")]
         anchor_loop = [sys.executable, "-c", ANCHOR_LOOP, *anchor, str(n), repr(step)]
-        times = {name: [] for name in ("with_python", "pair_csv", "c_host_pair", "process", "anchor_process")}
+        times = {name: [] for name in ("with_python", "pair_csv", "pair_batch", "c_host_pair", "process",
+                                       "anchor_process")}
         for _ in range(repeat):  # alternate, so drifts in machine load hit all
             times["with_python"].append(_timed_run(paper, mixed, tmp / "mixed.csv")[0] / n)
             times["pair_csv"].append(_timed_run(paper, native, tmp / "pair.csv")[0] / n)
+            times["pair_batch"].append(pair_per_step(native, stop_time, step)[0])
             done = subprocess.run([str(host), "pair-bench", *libraries, str(n), repr(step), *vrs], check=True,
                                   capture_output=True, text=True)
-            times["c_host_pair"].append(float(done.stdout))
+            times["c_host_pair"].append(float(done.stdout.split()[0]))
             times["process"].append(_process_seconds(simulate))
             times["anchor_process"].append(_process_seconds(anchor_loop))
     med = {name: statistics.median(t) for name, t in times.items()}
     figures = {"steps": n, "with_python_us": 1e6 * med["with_python"], "pair_csv_us": 1e6 * med["pair_csv"],
+               "pair_batch_us": 1e6 * med["pair_batch"],
                "c_host_pair_us": 1e6 * med["c_host_pair"],
                "process_s": med["process"], "anchor_process_s": med["anchor_process"],
                "process_ratio": med["process"] / med["anchor_process"]}
@@ -101,6 +107,8 @@ def run_native_bench(stop_time=20.0, step=1e-3, repeat=5, out=print):
         f"{figures['with_python_us']:6.2f} us/step")
     out(f"2. native pair (plant + controller), our master, CSV of every step:  {figures['pair_csv_us']:6.2f} us/step"
         "  (target <= 4)")
+    out(f"   the same on the batch path (reset, the sweep's figures, no rows written): {figures['pair_batch_us']:6.3f} "
+        f"us/step = {med['pair_batch'] / med['c_host_pair']:.2f}x the C host's  (target <= 2.0)")
     out(f"3. native pair in the C host, exchanged by value references, no recording: "
         f"{figures['c_host_pair_us']:6.3f} us/step  (target <= 0.5)")
     out(f"4. whole processes: crane-fmu simulate --fmu-dir build/native (paper, both native) {med['process']:.2f} s, "

@@ -33,7 +33,7 @@ import fmpy
 import numpy as np
 import scipy
 
-from crane_fmu import components, systems
+from crane_fmu import components, native_batch, systems
 from crane_fmu.analysis import board_page, board_tables, metrics, ranking, score_plots
 from crane_fmu.analysis import scenarios as scenario_registry
 from crane_fmu.analysis.floor import stored_scenario_floors
@@ -148,29 +148,12 @@ def plan(chosen, fmu_dir, scenarios=None, cases=scenario_registry.CASES):
                         "keep_signals": sid in ANIMATE and len(runs) == 1}
                 case["case_id"] = hashlib.sha256(json.dumps(case, sort_keys=True).encode()).hexdigest()[:16]
                 try:
-                    _check_parameters(system, checked)
+                    systems.check_parameters(system, checked)  # each component's values once per board
                 except ValueError as exc:
                     refused.append({**_identity(case), "status": "invalid", "error": str(exc)})
                     continue
                 planned.append(case)
     return planned, blobs, refused
-
-
-def _check_parameters(system, checked):
-    """:func:`crane_fmu.systems.check_parameters`, each component's parameters checked once per board (``checked``:
-    the message of each (model identifier, parameters) seen, None when valid): a controller that designs itself
-    from its parameters (LQR, MPC, estimator) has the same ones in every case of a scenario."""
-    for name, identifier in systems.kinds(system).items():
-        values = system.parameters.get(name, {})
-        key = (identifier, json.dumps(values, sort_keys=True))
-        if key not in checked:
-            try:
-                components.check_parameters(identifier, values)
-                checked[key] = None
-            except ValueError as exc:
-                checked[key] = str(exc)
-        if checked[key] is not None:
-            raise ValueError(f"{name}: {checked[key]}")
 
 
 def provenance(case):
@@ -192,33 +175,42 @@ def _identity(case):
 def run_score_case(case, blobs):
     """Co-simulate one case on a worker; return its row: identity, provenance, status, error, metrics (and
     signals)."""
-    row = {**_identity(case), "status": "ok", "error": None, **provenance(case),
-           "versions": json.dumps(versions(), sort_keys=True), "date": _now()}
     start = time.perf_counter()
     fmus = local_fmus({name: (digest, blobs[digest]) for name, digest in case["fmus"].items()})
-    recorder = ArrayRecorder()
+    recorder, error = ArrayRecorder(), None
     try:
         simulate(fmus, [Connection(*c) for c in case["connections"]], case["stop_time"], case["step"],
                  case["master"], parameters=case["parameters"], recorder=recorder)
     except FmiError as exc:
-        row.update(status="failed", error=str(exc))
-    columns = recorder.columns() if recorder.names else None
-    if columns and len(columns["time"]) > 1:
-        row.update(case_metrics(columns, case, row["status"] == "ok"))
-        if case["keep_signals"]:
-            row["signals"] = kept_signals(columns, max(1, round(SIGNAL_EVERY / case["step"])))
+        error = exc
+    row = score_row(case, recorder.columns() if recorder.names else None, error)
     row["duration_s"] = time.perf_counter() - start
     return row
 
 
-def case_metrics(columns, case, completed):
+def score_row(case, columns, error, measure=metrics):
+    """A case's row (without ``duration_s``) from its recorded ``columns`` (``{name: array}`` or None) and the
+    :class:`FmiError` that stopped it (None: none did); ``measure``: the metrics module, or its twin of the same
+    figures (``crane_fmu.analysis.fast_metrics``)."""
+    row = {**_identity(case), "status": "ok" if error is None else "failed",
+           "error": None if error is None else str(error), **provenance(case),
+           "versions": json.dumps(versions(), sort_keys=True), "date": _now()}
+    if columns and len(columns["time"]) > 1:
+        row.update(case_metrics(columns, case, row["status"] == "ok", measure))
+        if case["keep_signals"]:
+            row["signals"] = kept_signals(columns, max(1, round(SIGNAL_EVERY / case["step"])))
+    return row
+
+
+def case_metrics(columns, case, completed, measure=metrics):
     """The figures of a board's case from its recorded columns: :func:`~crane_fmu.analysis.metrics.move_metrics`
-    of the plant's signals (read by its roles) to the case's target, and the outcome."""
-    s = metrics.crane_signals(columns)
+    of the plant's signals (read by its roles) to the case's target, and the outcome (``measure``: the metrics
+    module, or its twin of the same figures)."""
+    s = measure.crane_signals(columns)
     swing = list(s["swing"].values())
-    figures = metrics.move_metrics(s["time"], s["position"], s["velocity"], swing, s["demand"], case["x_d"],
+    figures = measure.move_metrics(s["time"], s["position"], s["velocity"], swing, s["demand"], case["x_d"],
                                    case["residual_from"], bounds=case["bounds"])
-    figures["outcome"] = metrics.classify(s["time"], swing, completed)
+    figures["outcome"] = measure.classify(s["time"], swing, completed)
     return figures
 
 
@@ -333,8 +325,8 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     pending = [c for c in planned if c["case_id"] not in done]
     failed_before = sum(done[c["case_id"]]["status"] != "ok" for c in planned if c["case_id"] in done)
     bar = Progress(len(planned), len(planned) - len(pending), failed=failed_before) if progress else None
-    ran = run_batch(run_score_case, pending, blobs, on="dask", workers=workers, scheduler=scheduler,
-                    journal=out_dir / JOURNAL, progress=bar)
+    ran = run_batch(native_batch.score_chunk, _items(pending, blobs), blobs, on="dask", workers=workers,
+                    scheduler=scheduler, journal=out_dir / JOURNAL, progress=bar, chunked=True)
     done.update({r["case_id"]: r for r in ran})
     rows = [done[c["case_id"]] for c in planned] + refused
     for row in rows:
@@ -349,10 +341,14 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
                 _design_seeds(planned), "date": _now()}
     _write(out_dir / MANIFEST, json.dumps(manifest, indent=1))
     board_md = out_dir / "scoreboard.md"
-    stats = ranking.board_statistics(rows)
-    with _drawing(workers) as pool:  # the pictures in two other processes while this one writes the board
-        plots = pool.submit(score_plots.plot_all, rows, out_dir, {c.name for c in chosen if c.user}, stats)
+    with _drawing(workers) as pool:  # the statistics and the pictures in two other processes and this one
+        paired = scenario_registry.paired()
+        parts = [pool.submit(ranking.board_statistics, rows, (sid,)) for sid in paired[1:]]
         animations = pool.submit(_animate, rows, animate, out_dir / "animations")
+        stats = ranking.board_statistics(rows, paired[:1])  # each scenario's alone: the same figures
+        for part in parts:
+            stats.update(part.result())
+        plots = pool.submit(score_plots.plot_all, rows, out_dir, {c.name for c in chosen if c.user}, stats)
         _write(board_md, board_tables.render(rows, chosen, quick, cases, _provenance_lines(manifest), stats,
                                         stored_scenario_floors()))
         new = animations.result()
@@ -370,6 +366,18 @@ def _design_seeds(planned):
     plants = {scenario_registry.get(c["scenario"]).plant for c in planned}
     seeds = {scenario_registry.notes(plant)["seed"] for plant in plants}
     return seeds.pop() if len(seeds) == 1 else sorted(seeds)
+
+
+def _items(cases, blobs):
+    """The board's cases as items of the batch path (:func:`crane_fmu.native_batch.items`): chunks of the cases of one
+    system whose FMUs are all native, every other case alone."""
+    def batched(case):
+        return native_batch.batchable([(d, blobs[d]) for d in case["fmus"].values()], case["master"])
+
+    def system_of(case):
+        return json.dumps([case[k] for k in ("fmus", "connections", "master", "step", "stop_time")], sort_keys=True)
+
+    return native_batch.items(cases, batched, system_of)
 
 
 def _drawing(workers=None):

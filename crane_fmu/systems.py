@@ -11,6 +11,7 @@ which instances exist. A built-in system's tags say what else is made of it:
 """
 
 import contextlib
+import json
 import math
 from dataclasses import replace
 from pathlib import Path
@@ -236,19 +237,30 @@ def write_ssp(system, fmu_dir, path):
         (instance, name) for instance in instances]) for name, (value, instances) in shared.items()})
 
 
-def check_parameters(system):
+def check_parameters(system, checked=None):
     """Apply each instance's component rules (by model identifier, never by instance name).
+
+    ``checked``: a dict that keeps each (model identifier, values) checked and its message (None: valid), for
+    many systems of the same components (a study's cases, a board's): a component that designs itself from
+    its parameters (the LQR, the MPC, the estimator) then does so once for its values, not once a case.
 
     Raises
     ------
     ValueError
         ``"plant: l1 must be > 0 and finite, got -1.0"``.
     """
+    checked = {} if checked is None else checked
     for name, identifier in kinds(system).items():
-        try:
-            components.check_parameters(identifier, system.parameters.get(name, {}))
-        except ValueError as exc:
-            raise ValueError(f"{name}: {exc}") from None
+        values = system.parameters.get(name, {})
+        key = (identifier, json.dumps(values, sort_keys=True))
+        if key not in checked:
+            try:
+                components.check_parameters(identifier, values)
+                checked[key] = None
+            except ValueError as exc:
+                checked[key] = str(exc)
+        if checked[key] is not None:
+            raise ValueError(f"{name}: {checked[key]}")
 
 
 LOOP = ("container", "one-fmu")  # a closed loop packed as one FMU both ways

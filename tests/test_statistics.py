@@ -29,6 +29,19 @@ def test_quantiles_are_figures_some_case_had():
     assert statistics.describe([2.5] * 5) == (2.5,) * 6  # one value: the interval is that value
 
 
+@pytest.mark.quick
+def test_the_quantiles_are_numpys_inverted_cdf_ones():
+    """The order statistics picked by np.partition are np.quantile's (inverted_cdf) on samples of every size from 1
+    to 130, with ties and never, along the last axis of a batch of resamples as the bootstrap passes them."""
+    rng = np.random.default_rng(48)
+    for n in range(1, 131):
+        x = rng.standard_normal((3, 5, n))
+        x[0, 0, : n // 3] = math.inf
+        x[1] = np.round(x[1])
+        assert np.array_equal(statistics._quantiles(x), np.quantile(x, statistics.QUANTILES, axis=-1,
+                                                                    method="inverted_cdf")), n
+
+
 def _exact_bootstrap_bounds(n, k, confidence=0.95):
     """Order-statistic indices (1-based) of the percentile bootstrap interval of the k-th smallest of n distinct
     values: the k-th smallest of a resample is <= the j-th value when at least k of its n draws are among the

@@ -159,7 +159,7 @@ def test_study_completes_when_a_worker_dies(fmu_dir, tmp_path):
         def kill_a_busy_worker():
             deadline = time.monotonic() + 60
             while time.monotonic() < deadline:
-                busy = [w for w, keys in client.processing().items() if any("run_case" in str(k) for k in keys)]
+                busy = [w for w, keys in client.processing().items() if keys]  # this cluster runs only the study
                 if busy:
                     # the call cannot answer: its worker exits; on_error="ignore" gives that worker no result
                     client.run(os._exit, 1, workers=[busy[0]], on_error="ignore")

@@ -21,7 +21,8 @@ EXAMPLES = (
 
 # The other benchmarks, one flag each, run instead of the default one: what each measures.
 MODES = {
-    "sweep": "cases per second of a Dask sweep with 1 and 2 workers",
+    "sweep": "cases per second of a Dask sweep with 1 and 2 workers; the batch path of the native FMUs against the "
+             "C host's limit, a large study and the full board on them",
     "native": "the native (C) plant and controller FMUs in our master, in a C host and as a whole process",
     "mpc": "the MpcController's solve times and whole simulate process against transport's",
     "endurance": "one long run (default one simulated hour) recorded to CSV, memory sampled",
@@ -41,6 +42,13 @@ def arguments(p):
     p.add_argument("--repeat", type=int, default=5,
                    help="runs per pair (with --sweep: batches per cluster); the median is reported")
     p.add_argument("--cases", type=int, default=16, help="with --sweep: cases per measurement")
+    p.add_argument("--native-dir", default="build/native", help="with --sweep: the native FMUs of the batch path's "
+                   "figures (default build/native)")
+    p.add_argument("--batch-cases", type=int, default=240, help="with --sweep: cases of the native sweep (default 240)")
+    p.add_argument("--study-cases", type=int, default=10_000,
+                   help="with --sweep: cases of the large study (default 10000)")
+    p.add_argument("--board-cases", type=int, default=None,
+                   help="with --sweep: paired cases of the native board (default: the full board's; 0: no board)")
     modes = p.add_mutually_exclusive_group()  # separate benchmarks: argparse refuses two
     for name, text in MODES.items():
         modes.add_argument("--" + name, action="store_true", help="instead: " + text)
@@ -51,8 +59,11 @@ def run(args):
 
     if args.repeat < 1:
         raise UsageError(f"--repeat must be >= 1, got {args.repeat}")
-    if args.cases < 2:
-        raise UsageError(f"--cases must be >= 2, got {args.cases}")
+    for name in ("cases", "batch_cases", "study_cases"):
+        if getattr(args, name) < 2:
+            raise UsageError(f"--{name.replace('_', '-')} must be >= 2, got {getattr(args, name)}")
+    if args.board_cases is not None and args.board_cases < 0:
+        raise UsageError(f"--board-cases must be >= 0, got {args.board_cases}")
     try:
         if args.spatial:
             from crane_fmu.bench_spatial import run_spatial_bench
@@ -77,7 +88,11 @@ def run(args):
         elif args.endurance:
             run_endurance(args.stop_time or 3600.0, args.step)
         elif args.sweep:
+            from crane_fmu.bench_batch import run_batch_bench
+
             run_sweep_bench(args.cases, args.stop_time or 10.0, args.step, args.repeat)
+            run_batch_bench(args.native_dir, args.batch_cases, args.stop_time or 20.0, args.step, args.repeat,
+                            args.study_cases, args.board_cases)
         else:
             run_bench(args.stop_time or 20.0, args.step, args.repeat)
     except ValueError as exc:

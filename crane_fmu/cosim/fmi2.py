@@ -124,3 +124,8 @@ class Fmi2Instance(Instance):
 
     def terminate(self):
         self._call("fmi2Terminate", self._fmu.terminate)
+
+    def reset(self):
+        """Back to the state right after instantiation (fmi2Reset), to run again."""
+        self._call("fmi2Reset", self._fmu.reset)
+        self.time = None

@@ -83,3 +83,8 @@ class Fmi3Instance(Instance):
 
     def terminate(self):
         self._call("fmi3Terminate", self._fmu.terminate)
+
+    def reset(self):
+        """Back to the state right after instantiation (fmi3Reset), to run again."""
+        self._call("fmi3Reset", self._fmu.reset)
+        self.time = self._start = self._stop = None

@@ -16,13 +16,14 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from crane_fmu import DEFAULT_FMU_DIR, crane_parameters, systems
+from crane_fmu import DEFAULT_FMU_DIR, crane_parameters, native_batch, systems
 from crane_fmu.analysis import metrics
-from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch
+from crane_fmu.batch import JOURNAL, Progress, run_batch
 from crane_fmu.cosim import ArrayRecorder, FmiError, simulate
 from crane_fmu.cosim.system import read_fmu, split_name
 
 from .plots import plot_study
+from .results import JournalIndex, write_results
 from .spec import case_id
 
 
@@ -81,28 +82,35 @@ def run_case(case, system, settings, metric_names):
     Status is ``ok`` (ran to the stop time) or ``failed`` (an FMU stopped the
     run; the metrics cover the run up to there).
     """
-    row = {"case_id": case_id(case, settings), **case, "status": "ok", "error": None,
-           "metrics_version": settings.get("metrics_version")}
     start = time.perf_counter()
-    recorder = ArrayRecorder()
+    recorder, error = ArrayRecorder(), None
     try:
         simulate(local_fmus(system["blobs"]), system["connections"], settings["stop_time"], settings["step"],
                  settings["algorithm"], case_parameters(case, system["parameters"], system["binding"]), recorder)
     except FmiError as exc:
-        row.update(status="failed", error=str(exc))
+        error = exc
+    row = case_row(case, settings, metric_names, recorder.columns() if recorder.names else None, error)
+    row["duration_s"] = time.perf_counter() - start
+    return row
+
+
+def case_row(case, settings, metric_names, columns, error, measure=metrics):
+    """A case's row (without ``duration_s``) from its recorded ``columns`` (``{name: array}``, None when the run
+    stopped before its first communication point) and the :class:`FmiError` that stopped it (None: none did);
+    ``measure``: the metrics module, or its twin of the same figures (``crane_fmu.analysis.fast_metrics``)."""
+    row = {"case_id": case_id(case, settings), **case, "status": "ok" if error is None else "failed",
+           "error": None if error is None else str(error), "metrics_version": settings.get("metrics_version")}
     values = dict.fromkeys(metric_names)
-    columns = recorder.columns() if recorder.names else None
     if columns and len(columns["time"]):  # else: failed before the first communication point
-        s = metrics.crane_signals(columns)
+        s = measure.crane_signals(columns)
         swing = list(s["swing"].values())
-        values = metrics.closed_loop_metrics(s["time"], s["position"][0], s["swing"], s["demand"][0],
+        values = measure.closed_loop_metrics(s["time"], s["position"][0], s["swing"], s["demand"][0],
                                              row["status"] == "ok")
         band = math.radians(settings["settling_band_deg"])
-        values["settling_band_s"] = metrics.settling_time(s["time"], swing, band)
+        values["settling_band_s"] = measure.settling_time(s["time"], swing, band)
         # "converges" only where the study's settling time exists too (a narrower band than 0.1 deg)
-        values["outcome"] = metrics.classify(s["time"], swing, row["status"] == "ok", min(band, metrics.SETTLED_BAND))
+        values["outcome"] = measure.classify(s["time"], swing, row["status"] == "ok", min(band, metrics.SETTLED_BAND))
     row.update({name: values.get(name) for name in metric_names})
-    row["duration_s"] = time.perf_counter() - start
     return row
 
 
@@ -124,40 +132,56 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
     out_dir = Path(out_dir)
     # in every case's id: rows of another metrics version run again
     settings = {**study.settings(), "metrics_version": metrics.VERSION}
-    cases = study.cases()
-    done = read_journal(out_dir)
-    pending = [c for c in cases if case_id(c, settings) not in done]
-    failed_before = sum(done[case_id(c, settings)]["status"] != "ok" for c in cases if case_id(c, settings) in done)
+    total, done = study.case_count(), JournalIndex(out_dir / JOURNAL)
     start = time.perf_counter()
-    rows_ran = []
     with systems.open_system(study.system) as system:
         systems.resolve(system, fmu_dir)
         units = _check_names(study, system, fmu_dir)
         out_dir.mkdir(parents=True, exist_ok=True)  # only now: a refused study leaves no folder behind
-        bar = Progress(len(cases), len(cases) - len(pending), failed=failed_before) if progress else None
-        if pending:
-            binding = crane_parameters.bound(system, systems.modelled(system))  # before prepare binds the crane's
-            shipped = shippable(systems.prepare(system, study.step, study.stop_time, check=False), fmu_dir, binding)
-            to_run, invalid = [], []
-            for case in pending:  # the model's parameter rules, before anything is shipped
-                try:
-                    systems.check_parameters(replace(system, parameters=case_parameters(
-                        case, shipped["parameters"], shipped["binding"])))
-                    to_run.append(case)
-                except ValueError as exc:
-                    invalid.append(_invalid_row(case, settings, str(exc), study.metrics))
-            rows_ran = invalid + run_batch(run_case, to_run, shipped, on="dask", workers=workers, scheduler=scheduler,
-                                           journal=out_dir / JOURNAL, known=invalid, progress=bar, settings=settings,
-                                           metric_names=study.metrics)
-    done.update({r["case_id"]: r for r in rows_ran})
-    rows = [done[case_id(c, settings)] for c in cases]
-    write_table(rows, out_dir / "results.parquet")
+        binding = crane_parameters.bound(system, systems.modelled(system))  # before prepare binds the crane's
+        shipped = shippable(systems.prepare(system, study.step, study.stop_time, check=False), fmu_dir, binding)
+        skipped = failed_before = to_run = 0
+        invalid, checked = {}, {}
+        for case in study.iter_cases():  # the model's parameter rules, before anything is shipped
+            key = case_id(case, settings)
+            if key in done:
+                skipped += 1
+                failed_before += not done.ok(key)
+                continue
+            try:
+                systems.check_parameters(replace(system, parameters=case_parameters(
+                    case, shipped["parameters"], shipped["binding"])), checked)
+                to_run += 1
+            except ValueError as exc:
+                invalid[key] = _invalid_row(case, settings, str(exc), study.metrics)
+        bar = Progress(total, skipped, failed=failed_before) if progress else None
+        ran = len(invalid)
+        if ran or to_run:
+            cases = (c for c in study.iter_cases() if (key := case_id(c, settings)) not in done and key not in invalid)
+            # the batch path where the FMUs are native, else a case at a time; the cases made as they are sent
+            native = native_batch.batchable(shipped["blobs"].values(), study.algorithm)
+            ran += run_batch(native_batch.sweep_chunk, native_batch.chunked(cases, native, to_run), shipped, on="dask",
+                             workers=workers, scheduler=scheduler, journal=out_dir / JOURNAL,
+                             known=invalid.values(), progress=bar, chunked=True, collect=False, settings=settings,
+                             metric_names=study.metrics) - len(invalid)
+    # the table from the journal, in the study's order, a block at a time
+    done = JournalIndex(out_dir / JOURNAL)
+    not_ok = write_results(done, lambda: (case_id(c, settings) for c in study.iter_cases()),
+                           out_dir / "results.parquet")
     if csv:
-        write_table(rows, out_dir / "results.csv")
+        write_results(done, lambda: (case_id(c, settings) for c in study.iter_cases()), out_dir / "results.csv")
     if study.plot or len(study.grid) + len(study.sampled) >= 2:
-        plot_study(rows, study, out_dir / "plot.png", units=units)
-    return {"cases": len(cases), "skipped": len(cases) - len(pending), "ran": len(rows_ran),
-            "not_ok": sum(r["status"] != "ok" for r in rows), "seconds": time.perf_counter() - start}
+        plot_study(_plotted(out_dir / "results.parquet", study), study, out_dir / "plot.png", units=units)
+    return {"cases": total, "skipped": skipped, "ran": ran, "not_ok": not_ok, "seconds": time.perf_counter() - start}
+
+
+def _plotted(path, study):
+    """The rows of the results table with only the columns :func:`plot_study` reads."""
+    import pyarrow.parquet as pq
+
+    names = [n[0] for n, *_ in list(study.grid.values()) + list(study.sampled.values())]
+    wanted = {study.plot.get("metric", "outcome"), *names, *study.plot.values()}
+    return pq.read_table(path, columns=[n for n in pq.read_schema(path).names if n in wanted]).to_pylist()
 
 
 def _check_names(study, system, fmu_dir):

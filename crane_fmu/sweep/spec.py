@@ -70,19 +70,24 @@ class Study:
 
     def cases(self):
         """Every case as ``{"instance.variable": value}``, in a reproducible order."""
+        return list(self.iter_cases())
+
+    def iter_cases(self):
+        """The cases of :meth:`cases`, one at a time (a study of any size: only its samples are held, as numbers)."""
         grid_axes = list(self.grid.values())
-        grid_points = itertools.product(*(values for _, values in grid_axes))
-        sample_points = self._samples() or [()]
-        cases = []
-        for point in grid_points:
+        sample_points = self._samples() if self.sampled else [()]
+        for point in itertools.product(*(values for _, values in grid_axes)):
             for sample in sample_points:
                 case = dict(self.fixed)
                 for (names, _), value in zip(grid_axes, point):
                     case.update(dict.fromkeys(names, value))
                 for (names, _, _), value in zip(self.sampled.values(), sample):
-                    case.update(dict.fromkeys(names, value))
-                cases.append(case)
-        return cases
+                    case.update(dict.fromkeys(names, float(value)))
+                yield case
+
+    def case_count(self):
+        """How many cases :meth:`cases` gives."""
+        return math.prod(len(values) for _, values in self.grid.values()) * (self.samples if self.sampled else 1)
 
     def _samples(self):
         if not self.sampled:
@@ -95,7 +100,8 @@ class Study:
             unit = np.random.default_rng(self.seed).random((self.samples, len(bounds)))
         else:
             unit = qmc.LatinHypercube(d=len(bounds), seed=self.seed).random(self.samples)
-        return [tuple(float(lo + u * (hi - lo)) for u, (_, lo, hi) in zip(row, bounds)) for row in unit]
+        lows, highs = (np.array([b[i] for b in bounds]) for i in (1, 2))
+        return lows + unit * (highs - lows)  # each row a sample, the same numbers as lo + u * (hi - lo) one by one
 
     def settings(self):
         return {"system": self.system, "stop_time": self.stop_time, "step": self.step, "algorithm": self.algorithm,

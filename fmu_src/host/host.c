@@ -14,7 +14,8 @@
  *                                                       controller (CLIB: its six measured inputs from CX, its
  *                                                       output CU), exchanged by value references at each step as
  *                                                       our master does: rows "t,6 states,u"
- *   host pair-bench LIB GUID CLIB CGUID STEPS H X U CX CU  seconds per step of that loop, no recording
+ *   host pair-bench LIB GUID CLIB CGUID STEPS H X U CX CU  seconds per step of that loop, no recording, and
+ *                                                       its CPU seconds per step
  *   host outputs LIB GUID STEPS H [VR=VALUE]... VR...    any FMI 2.0 FMU (e.g. a system as one FMU): Real
  *                                                       parameters set (and Strings: "VRs=TEXT"), then rows
  *                                                       "t,the Reals of VR..." at t = k H after k steps
@@ -28,6 +29,9 @@
  *                                                       (not located within the step); rows as `outputs`' until
  *                                                       the FMU asks to terminate
  *   host me3 LIB TOKEN STEPS H NX NZ [VR=VALUE]... VR... the same for an FMI 3.0 Model Exchange FMU
+ *   host cases PLAN                                     the cases of a system of FMI 2.0 FMUs (PLAN: a file written by
+ *                                                       crane_fmu/bench_batch.py, its format at run_cases below) as the
+ *                                                       batch path runs them, without recording: "CASES SECONDS CPU"
  */
 #include <stdarg.h>
 #include <stdio.h>
@@ -207,8 +211,9 @@ typedef struct {
 } Loop;
 
 /* A closed loop on two FMUs, Gauss-Seidel as our master: the plant's states into the controller, its u into
-   the plant, then both step. Rows "t,6 states,u" when `rows` is given; seconds per step returned. */
-static double run_pair(const Api *plant, const Api *law, Loop vr, int steps, double h, FILE *rows) {
+   the plant, then both step. Rows "t,6 states,u" when `rows` is given; seconds per step returned (and the CPU
+   seconds per step in *cpu). */
+static double run_pair(const Api *plant, const Api *law, Loop vr, int steps, double h, FILE *rows, double *cpu) {
     const fmi2ValueReference states[6] = {vr.x, vr.x + 1, vr.x + 2, vr.x + 3, vr.x + 4, vr.x + 5}, u_vr = vr.u;
     const fmi2ValueReference cx = vr.cx, out_vr = vr.cu;
     const fmi2ValueReference measured[6] = {cx, cx + 1, cx + 2, cx + 3, cx + 4, cx + 5};
@@ -217,6 +222,7 @@ static double run_pair(const Api *plant, const Api *law, Loop vr, int steps, dou
     fmi2Component c = start(law, 0, NULL, NULL);
     if (!p || !c) exit(6);
     double y[6], u, t0 = seconds();
+    clock_t c0 = clock();
     for (int k = 0; k <= steps; k++) {
         if (plant->get(p, states, 6, y) > fmi2Warning || law->set(c, measured, 6, y) > fmi2Warning ||
             law->get(c, &out_vr, 1, &u) > fmi2Warning || plant->set(p, &u_vr, 1, &u) > fmi2Warning)
@@ -227,6 +233,7 @@ static double run_pair(const Api *plant, const Api *law, Loop vr, int steps, dou
         if (plant->step(p, k * h, h, fmi2True) > fmi2Warning || law->step(c, k * h, h, fmi2True) > fmi2Warning) exit(6);
     }
     double per_step = (seconds() - t0) / steps;
+    *cpu = (double)(clock() - c0) / CLOCKS_PER_SEC / steps;
     plant->free_instance(p);
     law->free_instance(c);
     return per_step;
@@ -547,9 +554,9 @@ static int mode_pair(const Api *api, const char *mode, int n, char **a) { /* CLI
     if (n != 8) return 2;
     Api law = load(a[0], a[1]);
     int bench = !strcmp(mode, "pair-bench");
-    double per_step = run_pair(api, &law, (Loop){VR(a[4]), VR(a[5]), VR(a[6]), VR(a[7])}, atoi(a[2]), atof(a[3]),
-                           bench ? NULL : stdout);
-    if (bench) printf("%.9g\n", per_step);
+    double cpu, per_step = run_pair(api, &law, (Loop){VR(a[4]), VR(a[5]), VR(a[6]), VR(a[7])}, atoi(a[2]),
+                                    atof(a[3]), bench ? NULL : stdout, &cpu);
+    if (bench) printf("%.9g %.9g\n", per_step, cpu);
     return 0;
 }
 
@@ -630,6 +637,132 @@ static int mode_maps(const Api *api, const char *mode, int n, char **a) {
 }
 #endif
 
+/*
+ * The cases of a system as our master's batch path runs them (crane_fmu/cosim/reused.py), with nothing recorded: the
+ * instances made once, then for each case reset (not the first), the experiment set up, the case's parameters set,
+ * initialisation with the exchange, the steps (exchange, then every instance steps), the last exchange, terminate.
+ * PLAN, whitespace-separated:
+ *   N, then N times LIB GUID NAME                     the instances
+ *   B                                                 the outputs' buffer: B doubles
+ *   R, then R times I K VR*K SLOT                     the reads: K outputs of instance I into the buffer from SLOT
+ *   W, then W times I K VR*K SLOT*K                   the writes: K inputs of instance I from the buffer's SLOTs
+ *   E, then E times r|w INDEX                         the exchange: the reads and writes in order
+ *   S, then S times I                                 the steps' order
+ *   STEPS H STOP                                      t = k H for k < STEPS, then STOP
+ *   C, then C times (N times: NR VR VALUE..., NS VR TEXT...)   the cases: each instance's parameters
+ * Prints the cases run, the seconds they took (from the first instantiation to the last terminate) and the CPU
+ * seconds.
+ */
+enum { MAX_INSTANCES = 16, MAX_CALLS = 64, MAX_SETTINGS = 64 };
+typedef struct {
+    int instance, k, slot[MAX_VR];
+    fmi2ValueReference vr[MAX_VR];
+    double values[MAX_VR];
+} Call;
+
+static int read_call(FILE *f, Call *c, int slots_each) {
+    if (fscanf(f, "%d %d", &c->instance, &c->k) != 2 || c->instance < 0 || c->instance >= MAX_INSTANCES || c->k < 0 ||
+        c->k > MAX_VR)
+        return 0;
+    for (int i = 0; i < c->k; i++)
+        if (fscanf(f, "%u", &c->vr[i]) != 1) return 0;
+    for (int i = 0; i < (slots_each ? c->k : 1); i++)
+        if (fscanf(f, "%d", &c->slot[i]) != 1) return 0;
+    return 1;
+}
+
+/* The exchange: the reads into the buffer and the writes from it, in order; 0 when a call fails. */
+static int exchange(const Api api[], fmi2Component c[], double buffer[], const char kind[], const int index[], int n,
+                    const Call reads[], Call writes[]) {
+    for (int e = 0; e < n; e++) {
+        if (kind[e] == 'r') {
+            const Call *call = &reads[index[e]];
+            if (api[call->instance].get(c[call->instance], call->vr, call->k, buffer + call->slot[0]) > fmi2Warning)
+                return 0;
+        } else {
+            Call *call = &writes[index[e]];
+            for (int j = 0; j < call->k; j++) call->values[j] = buffer[call->slot[j]];
+            if (api[call->instance].set(c[call->instance], call->vr, call->k, call->values) > fmi2Warning) return 0;
+        }
+    }
+    return 1;
+}
+
+static int run_cases(const char *plan_file) {
+    FILE *f = fopen(plan_file, "r");
+    static char libs[MAX_INSTANCES][1024], guids[MAX_INSTANCES][128], names[MAX_INSTANCES][128];
+    static char texts[MAX_INSTANCES][MAX_SETTINGS][128];
+    static Call reads[MAX_CALLS], writes[MAX_CALLS];
+    Api api[MAX_INSTANCES];
+    fmi2Component c[MAX_INSTANCES] = {0};
+    fmi2ResetTYPE *reset[MAX_INSTANCES];
+    fmi2TerminateTYPE *end[MAX_INSTANCES];
+    char kind[MAX_CALLS];
+    int n, b, n_reads, n_writes, n_exchange, n_steps, steps, cases, index[MAX_CALLS], order[MAX_INSTANCES];
+    double h, stop;
+    if (!f || fscanf(f, "%d", &n) != 1 || n < 1 || n > MAX_INSTANCES) return 2;
+    for (int i = 0; i < n; i++) {
+        if (fscanf(f, "%1023s %127s %127s", libs[i], guids[i], names[i]) != 3) return 2;
+        api[i] = load(libs[i], guids[i]);
+        reset[i] = (fmi2ResetTYPE *)SYMBOL(api[i].lib, "fmi2Reset");
+        end[i] = (fmi2TerminateTYPE *)SYMBOL(api[i].lib, "fmi2Terminate");
+    }
+    if (fscanf(f, "%d", &b) != 1 || b < 1 || fscanf(f, "%d", &n_reads) != 1 || n_reads > MAX_CALLS) return 2;
+    double *buffer = calloc((size_t)b, sizeof *buffer);
+    for (int i = 0; i < n_reads; i++)
+        if (!read_call(f, &reads[i], 0)) return 2;
+    if (fscanf(f, "%d", &n_writes) != 1 || n_writes > MAX_CALLS) return 2;
+    for (int i = 0; i < n_writes; i++)
+        if (!read_call(f, &writes[i], 1)) return 2;
+    if (fscanf(f, "%d", &n_exchange) != 1 || n_exchange > MAX_CALLS) return 2;
+    for (int i = 0; i < n_exchange; i++)
+        if (fscanf(f, " %c %d", &kind[i], &index[i]) != 2) return 2;
+    if (fscanf(f, "%d", &n_steps) != 1 || n_steps > MAX_INSTANCES) return 2;
+    for (int i = 0; i < n_steps; i++)
+        if (fscanf(f, "%d", &order[i]) != 1) return 2;
+    if (fscanf(f, "%d %lf %lf %d", &steps, &h, &stop, &cases) != 4 || !buffer) return 2;
+    quiet = 1;
+    double t0 = seconds();
+    clock_t c0 = clock();
+    for (int done = 0; done < cases; done++) {
+        for (int i = 0; i < n; i++) {
+            size_t nr, ns;
+            Call real = {0};
+            const char *text[MAX_SETTINGS];
+            fmi2ValueReference string_vr[MAX_SETTINGS];
+            if (fscanf(f, "%zu", &nr) != 1 || nr > MAX_VR) return 2;
+            for (size_t j = 0; j < nr; j++)
+                if (fscanf(f, "%u %lf", &real.vr[j], &real.values[j]) != 2) return 2;
+            if (fscanf(f, "%zu", &ns) != 1 || ns > MAX_SETTINGS) return 2;
+            for (size_t j = 0; j < ns; j++) {
+                if (fscanf(f, "%u %127s", &string_vr[j], texts[i][j]) != 2) return 2;
+                text[j] = texts[i][j];
+            }
+            instance_name = names[i];
+            if (!c[i]) c[i] = api[i].instantiate(names[i], fmi2CoSimulation, guids[i], "", &callbacks, fmi2False, fmi2False);
+            else if (reset[i](c[i]) > fmi2Warning) return 6;
+            if (!c[i] || api[i].setup(c[i], fmi2False, 0.0, 0.0, fmi2True, stop) > fmi2Warning ||
+                (nr && api[i].set(c[i], real.vr, nr, real.values) > fmi2Warning) ||
+                (ns && api[i].set_string(c[i], string_vr, ns, text) > fmi2Warning) || api[i].enter(c[i]) > fmi2Warning)
+                return 6;
+        }
+        if (!exchange(api, c, buffer, kind, index, n_exchange, reads, writes)) return 6; /* the initial exchange */
+        for (int i = 0; i < n; i++)
+            if (api[i].exit_init(c[i]) > fmi2Warning) return 6;
+        for (long k = 0; k <= steps; k++) {
+            if (!exchange(api, c, buffer, kind, index, n_exchange, reads, writes)) return 6;
+            if (k == steps) break;
+            for (int i = 0; i < n_steps; i++)
+                if (api[order[i]].step(c[order[i]], k * h, h, fmi2True) > fmi2Warning) return 6;
+        }
+        for (int i = 0; i < n; i++)
+            if (end[i](c[i]) > fmi2Warning) return 6;
+    }
+    printf("%d %.9g %.9g\n", cases, seconds() - t0, (double)(clock() - c0) / CLOCKS_PER_SEC);
+    fclose(f);
+    return 0;
+}
+
 static const struct {
     const char *name;
     int (*run)(const Api *api, const char *mode, int n, char **args);
@@ -641,6 +774,7 @@ static const struct {
 };
 
 int main(int argc, char **argv) {
+    if (argc == 3 && !strcmp(argv[1], "cases")) return run_cases(argv[2]);
     if (argc < 4) return 2;
     const char *mode = argv[1];
     if (!strcmp(mode, "outputs3"))
