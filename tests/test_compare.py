@@ -293,7 +293,7 @@ def test_animate_a_simulate_result(fmu_dir, tmp_path, capsys):
     write_csv(tmp_path / "no_crane.csv", free)
     assert main(["animate", str(tmp_path / "no_crane.csv"), "--out", str(tmp_path / "x.gif")]) == 2
     err = capsys.readouterr().err
-    assert "has no crane to animate: it needs a plant's outputs (CranePlant: x, x1, y1, x2, y2)" in err
+    assert "has no crane to animate: it needs a plant's outputs (CranePlant: x, x1, y1, x2, y2" in err
 
 
 @pytest.mark.parametrize("every", [32, 7, 250])
