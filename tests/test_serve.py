@@ -318,7 +318,7 @@ def test_bad_opcua_requests_get_error_replies_and_change_nothing(server):
                     codes[label] = type(exc).__name__
             for label, n, variant in (("zero steps", 0, ua.VariantType.UInt32),
                                       ("text steps", "1", ua.VariantType.String),
-                                      ("past the stop time", 10**6, ua.VariantType.UInt32)):
+                                      ("past the stop time", 10**4, ua.VariantType.UInt32)):
                 try:
                     await _call_step(client, n, variant)
                     codes[label] = "Good"
@@ -521,3 +521,176 @@ def test_a_port_in_use_is_one_line(fmu_dir, tmp_path, capsys):
                      f"127.0.0.1:{port}", "--out", str(tmp_path / "serve.csv")]) == 2
     err = capsys.readouterr().err
     assert err == f"crane-fmu: error: --modbus 127.0.0.1:{port}: cannot listen (Address already in use)\n"
+
+
+# --- no client write ends a run: ranges, refused steps rolled back, bounded requests, signals (issue 50) ---
+
+
+async def _write(node, value):
+    """The name of the status a write of the Double ``value`` got."""
+    try:
+        await node.write_value(ua.Variant(value, ua.VariantType.Double))
+        return "Good"
+    except ua.UaStatusCodeError as exc:
+        return type(exc).__name__
+
+
+async def _step_status(client, *n):
+    """The name of the status of ``Step(*n)`` (``Step()`` without one)."""
+    ns, node = await _nodes(client)
+    step = node("Step")
+    try:
+        await (await step.get_parent()).call_method(step, *(ua.Variant(k, ua.VariantType.UInt32) for k in n))
+        return "Good"
+    except ua.UaStatusCodeError as exc:
+        return type(exc).__name__
+
+
+def test_a_write_outside_the_drive_range_is_refused_over_both_protocols(fmu_dir, tmp_path):
+    """The plant's drive limit (--set plant.u_max=3) is the range of the controller's u that drives it: 3.5 and
+    1e20 are refused with BadOutOfRange, 3.4e38 and -3.5 over Modbus with exception 03, +-3 and 2.5 taken. Without
+    a limit (the lqr plant's u_max is INF) the stated default of an unlimited drive holds instead: 1e20 refused,
+    the default itself taken. After every refusal the run steps on, its values finite."""
+    from crane_fmu.cosim.write_ranges import DEFAULT_LIMITS
+
+    limited = Server(fmu_dir, tmp_path / "limited", "--system", "lqr", "--external", "controller", "--lock-step",
+                     "--set", "plant.u_max=3", "--opcua", "127.0.0.1:0", "--modbus", "127.0.0.1:0")
+    address = {r.name: r.address for r in register_map(_served_lqr(fmu_dir))}["controller.u"]
+
+    async def opcua(url, values):
+        async with Client(url) as client:
+            ns, node = await _nodes(client)
+            codes = [await _write(node("controller.u"), value) for value in values]
+            codes.append(await _step_status(client, 10))
+            state = await client.read_values([node(f"plant.{name}") for name in STATE] + [node("Time")])
+            return codes, state
+
+    client = ModbusTcpClient(limited.modbus[0], port=limited.modbus[1], timeout=10)
+    try:
+        codes, state = _run(opcua(limited.opcua, [3.5, 1e20, -3.0, 3.0, 2.5]))
+        assert client.connect()
+        replies = [client.write_registers(address, float32_words(v), device_id=1) for v in (3.4e38, -3.5, -2.5)]
+        replies.append(client.write_register(0, 10, device_id=1))
+    finally:
+        client.close()
+        status, _, err = limited.stop()
+    assert codes == ["BadOutOfRange", "BadOutOfRange", "Good", "Good", "Good", "Good"]
+    assert [(r.isError(), r.exception_code if r.isError() else None) for r in replies] == [
+        (True, 3), (True, 3), (False, None), (False, None)]
+    assert all(map(math.isfinite, state)) and state[-1] == pytest.approx(0.01)
+    assert status == 0, err[-2000:]
+    served = read_csv(limited.out)
+    assert set(served["controller.u"]) <= {0.0, 2.5, -2.5}  # never 3.5, 1e20 or 3.4e38
+
+    default = DEFAULT_LIMITS["m/s2"]
+    unlimited = Server(fmu_dir, tmp_path / "unlimited", "--system", "lqr", "--external", "controller", "--lock-step",
+                       "--opcua", "127.0.0.1:0")
+    try:
+        codes, state = _run(opcua(unlimited.opcua, [1e20, default * 1.01, -default]))
+    finally:
+        status, _, err = unlimited.stop()
+    assert codes == ["BadOutOfRange", "BadOutOfRange", "Good", "Good"]
+    assert all(map(math.isfinite, state)) and status == 0, err[-2000:]
+
+
+def test_a_step_the_plant_refuses_is_rolled_back_and_the_run_goes_on(fmu_dir, tmp_path):
+    """A step the plant refuses ends nothing: with a drive limit of 1e30 a written u of 1e20 is in range, and the
+    step makes the plant's state non-finite (the issue's case); with a rail end at x_min = -0.05 m, u = -3 drives
+    the trolley past it. Each Step is answered BadOutOfRange (Modbus: 03), the run rolled back to where the
+    request began (time and state as before); the next request with a sane u steps on. The recorded file has
+    every time once, in order, and only finite values."""
+    server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--lock-step", "--set",
+                    "plant.u_max=1e30", "--set", "plant.x_min=-0.05", "--opcua", "127.0.0.1:0", "--modbus",
+                    "127.0.0.1:0")
+
+    async def drive(url):
+        async with Client(url) as client:
+            ns, node = await _nodes(client)
+            watched = [node("Time"), node("plant.x"), node("plant.dx")]
+            seen = [await _write(node("controller.u"), 0.5), await _step_status(client, 20),
+                    await client.read_values(watched)]
+            for u in (1e20, -3.0):
+                seen += [await _write(node("controller.u"), u), await _step_status(client, 500),
+                         await client.read_values(watched)]
+            seen += [await _write(node("controller.u"), 0.5), await _step_status(client, 30),
+                     await client.read_values(watched)]
+            return seen
+
+    client = ModbusTcpClient(server.modbus[0], port=server.modbus[1], timeout=10)
+    address = {r.name: r.address for r in register_map(_served_lqr(fmu_dir))}["controller.u"]
+    try:
+        seen = _run(drive(server.opcua))
+        assert client.connect()
+        assert not client.write_registers(address, float32_words(-3.0), device_id=1).isError()
+        refused = client.write_register(0, 500, device_id=1)
+        t_modbus = client.read_input_registers(0, count=4, device_id=1).registers
+    finally:
+        client.close()
+        status, out, err = server.stop()
+    assert seen[:2] == ["Good", "Good"] and seen[2][0] == pytest.approx(0.02)
+    for k in (3, 6):  # 1e20, then -3 past the rail end: refused, nothing moved
+        assert seen[k:k + 2] == ["Good", "BadOutOfRange"] and seen[k + 2] == seen[2], seen[k:k + 3]
+    assert seen[9:11] == ["Good", "Good"] and seen[11][0] == pytest.approx(0.05) and seen[11][1] > seen[2][1]
+    assert (refused.isError(), refused.exception_code) == (True, 3)
+    assert struct.unpack(">d", struct.pack(">4H", *t_modbus))[0] == seen[11][0]
+    assert status == 0, err[-2000:]
+    assert "non-finite" in err and "rail end x_min" in err and err.count("rolled back") == 3
+    served = read_csv(server.out)
+    assert np.all(np.diff(served["time"]) > 0) and served["time"][-1] == pytest.approx(0.05)
+    assert all(np.all(np.isfinite(column)) for column in served.values())
+
+
+def test_step_without_n_takes_one_and_a_request_is_bounded(fmu_dir, tmp_path):
+    """Step() takes one step (not BadUnexpectedError); Step(n) takes at most 65535 (the Modbus step register's
+    range; one call of 2**32 - 1 steps would hold the server for hours): more is BadInvalidArgument. Without a stop
+    time the bound is that; with one, no request passes it."""
+    server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--lock-step", "--opcua",
+                    "127.0.0.1:0")
+
+    async def ask(url):
+        async with Client(url) as client:
+            codes = [await _step_status(client), await _step_status(client, 2**32 - 1),
+                     await _step_status(client, 65536)]
+            ns, node = await _nodes(client)
+            return codes, await node("Time").read_value()
+
+    try:
+        codes, t = _run(ask(server.opcua))
+    finally:
+        status, _, err = server.stop()
+    assert codes == ["Good", "BadInvalidArgument", "BadInvalidArgument"] and t == pytest.approx(1e-3)
+    assert status == 0, err[-2000:]
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_signal_stops_a_long_step_request_at_the_next_step_boundary(fmu_dir, tmp_path, signum):
+    """Step(65535) (over a minute of simulated time, seconds of work) running when SIGINT or SIGTERM comes: the server
+    ends within a few seconds, the request cut at a step boundary (Bad status, the steps taken kept), status 0,
+    the rows up to there recorded, each time once."""
+    import time
+
+    server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--lock-step", "--opcua",
+                    "127.0.0.1:0")
+
+    async def long_request(url):
+        async with Client(url) as client:
+            return await _step_status(client, 65535)
+
+    async def signal_meanwhile():
+        request = asyncio.ensure_future(long_request(server.opcua))
+        await asyncio.sleep(1.5)
+        server.proc.send_signal(signum)
+        sent = time.monotonic()
+        code = await request
+        return code, time.monotonic() - sent
+
+    try:
+        code, after = _run(signal_meanwhile())
+    finally:
+        status, out, err = server.wait(60)
+    assert code == "BadInvalidState" and after < 5.0, (code, after)
+    assert status == 0, err[-2000:]
+    stopped = re.search(r"stopped at t = (\S+) s", out)
+    assert stopped and 0 < float(stopped.group(1)) < 65.0, out
+    served = read_csv(server.out)
+    assert np.all(np.diff(served["time"]) > 0) and served["time"][-1] == pytest.approx(float(stopped.group(1)))

@@ -1,5 +1,6 @@
 """``crane-fmu serve``: a system in real time or lock-step, reachable over OPC UA and Modbus TCP."""
 
+import asyncio
 import gc
 import importlib.util
 import math
@@ -205,6 +206,8 @@ def _serve_until_stopped(args, system, runner, recorder, endpoints):
         wall = time.monotonic() - started
         if normal is not None:
             os.sched_setscheduler(0, *normal)
+        runner.wait_idle()  # a request cut short by the stop ends at a step boundary, and its reply goes out
+        network.run(asyncio.sleep(0.2))
         network.stop()  # no client request comes after this
         if live:
             runner.listeners.remove(live)

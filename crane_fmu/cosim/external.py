@@ -89,6 +89,18 @@ class ExternalInstance(Instance):
     def terminate(self):
         pass
 
+    def get_state(self):
+        """Its inputs as the master last wrote them (its outputs are the program's, never rolled back)."""
+        with self._lock:
+            return list(self._in)
+
+    def set_state(self, state):
+        with self._lock:
+            self._in[:] = state
+
+    def free_state(self, state):
+        pass
+
     def free(self):
         pass
 

@@ -20,6 +20,12 @@ After every advance the master exchanges once more at the new time, so the exter
 (what the program reads) are those of the new time; the next advance exchanges at that time again and then
 takes what the program has written since. In lock-step with a program that reads, computes and writes
 before every step, this is the offline run's Gauss-Seidel exchange exactly.
+
+No write ends the run: a written value must lie in its range (:mod:`.write_ranges`), and where every FMU
+can save its state, the steps are taken in blocks of at most :data:`BLOCK`, each from a saved state: a block
+that an FMU refuses (a state that would become non-finite, a rail end passed) is rolled back to it and
+:class:`StepRefused` raised, the run going on from there. :meth:`Runner.stop` (a signal) ends a request of
+many steps at the next block boundary. One request takes at most :data:`MAX_STEPS` steps.
 """
 
 import math
@@ -31,6 +37,8 @@ from concurrent.futures import Future
 from .external import ExternalInstance
 from .instance import FmiError
 from .pacing import Pacer
+from .recorder import ArrayRecorder
+from .write_ranges import write_ranges
 
 Served = namedtuple("Served", "name role unit description writable")
 Served.__doc__ = ("A served variable: ``name`` is ``instance.variable``; ``role`` is ``output``, ``input`` (of the "
@@ -42,6 +50,17 @@ Snapshot.__doc__ = ("What is served at one moment: the simulated ``time``, the `
 
 # status codes, as the Modbus register map gives them
 STATUS_CODES = {"waiting": 1, "running": 2, "holding": 3, "finished": 4, "failed": 5, "stopped": 6}
+MAX_STEPS = 65535  # the most communication steps one request takes (as Modbus' 16-bit step register holds)
+BLOCK = 1000  # steps between two saved states and two looks for a stop
+
+
+class StepRefused(ValueError):
+    """An FMU refused a step: the steps since the last saved state were rolled back; the run goes on.
+    ``error`` is the FmiError."""
+
+    def __init__(self, error, time):
+        self.error = error
+        super().__init__(f"{error}; refused: the run is rolled back to t = {time:.9g} s and goes on")
 
 
 class Runner:
@@ -97,6 +116,9 @@ class Runner:
         self._last_write = None
         self._status = ("waiting", "starting")  # (code, line)
         self._snapshot = None
+        self.ranges = {}  # {name: (low, high)} of the writable variables, known once initialised
+        self.guarded = all(isinstance(inst, ExternalInstance) or inst.md.coSimulation.canGetAndSetFMUstate
+                           for inst in master.instances.values())
 
     def _served(self, writable):
         served = []
@@ -124,7 +146,8 @@ class Runner:
         """Write ``{instance.variable: value}`` of writable variables, all or none.
 
         The external instance's outputs take effect at the next exchange; parameters before the next
-        advance. ValueError (one line) for a name that is not writable or a value that is not finite.
+        advance. ValueError (one line) for a name that is not writable or a value that is not finite or
+        lies outside its range (:attr:`ranges`).
         """
         writable = {v.name: v for v in self.variables if v.writable}
         checked = {}
@@ -133,9 +156,7 @@ class Runner:
                 known = any(v.name == name for v in self.variables)
                 raise ValueError(f"{name} is {'read-only' if known else 'not served'}; writable: "
                                  + (", ".join(writable) or "none"))
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise ValueError(f"{name} must be a finite number, got {value!r}")
-            checked[name] = float(value)
+            checked[name] = self.check(name, value)
         outputs = {n.partition(".")[2]: v for n, v in checked.items() if writable[n].role == "output"}
         if outputs:
             self.external.set_outputs(outputs)
@@ -143,21 +164,34 @@ class Runner:
         with self._pending_lock:
             self._pending.update({n: v for n, v in checked.items() if writable[n].role == "parameter"})
 
+    def check(self, name, value):
+        """``value`` as a float if it may be written to the writable variable ``name``, else ValueError (one
+        line naming the value and the rule)."""
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ValueError(f"{name} must be a finite number, got {value!r}")
+        low, high = self.ranges.get(name, (-math.inf, math.inf))
+        if not low <= value <= high:
+            unit = next((v.unit for v in self.variables if v.name == name), "")
+            raise ValueError(f"{name} = {value!r} {unit} lies outside its range [{low:g}, {high:g}]")
+        return float(value)
+
     def request_steps(self, n):
         """Lock-step: take ``n`` communication steps now, on the calling thread; a done Future of the simulated
         time after them.
 
-        The Future holds a ValueError instead when ``n`` is not a whole number >= 1, when the runner is not in
-        lock-step, when the steps would pass the stop time, when the run has ended, or when an FMU failed (the
-        run then ends; :attr:`error` holds the FmiError). Requests from several threads are taken one after
-        another.
+        The Future holds a ValueError instead when ``n`` is not a whole number from 1 to :data:`MAX_STEPS`,
+        when the runner is not in lock-step, when the steps would pass the stop time, when the run has ended or
+        is stopped on the way (the steps taken are kept), a :class:`StepRefused` when an FMU refused a step (rolled
+        back: the run goes on), or when an FMU failed where no state could be saved (the run then ends;
+        :attr:`error` holds the FmiError). Requests from several threads are taken one after another.
         """
         future = Future()
         if not self.lock_step:
             future.set_exception(ValueError("the run is in real time: steps are taken by the clock, not asked for"))
             return future
-        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-            future.set_exception(ValueError(f"the number of steps must be a whole number >= 1, got {n!r}"))
+        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_STEPS:
+            future.set_exception(ValueError(f"the number of steps must be a whole number from 1 to {MAX_STEPS}, "
+                                            f"got {n!r}"))
             return future
         with self._lock:
             if self._stopping.is_set() or self._snapshot is None:
@@ -168,8 +202,15 @@ class Runner:
                     f"({self.last_steps - self.steps} steps left)"))
             else:
                 try:
-                    self.advance(n)
-                    future.set_result(self.time())
+                    taken = self.advance(n)
+                    if taken < n:
+                        future.set_exception(ValueError(f"the run was stopped at t = {self.time():.9g} s, after "
+                                                        f"{taken} of {n} steps"))
+                    else:
+                        future.set_result(self.time())
+                except StepRefused as exc:
+                    self.log(str(exc))
+                    future.set_exception(exc)
                 except FmiError as exc:
                     self._failed(exc)
                     future.set_exception(ValueError(str(exc)))
@@ -179,11 +220,17 @@ class Runner:
         """End :meth:`run` at its next safe point (from any thread or a signal handler)."""
         self._stopping.set()
 
+    def wait_idle(self):
+        """Wait until no request is taking steps (a stopped one ends at its next block boundary)."""
+        with self._lock:
+            pass
+
     # --- the runner's own thread ---
 
     def start(self):
         """Initialise the master, start the observers and serve the first snapshot."""
         self.master.initialize(self.start_time, self.stop_time, self.parameters)
+        self.ranges = write_ranges(self.master, self.variables, self.external)
         self._parameter_values = {}
         for v in self.variables:
             if v.role == "parameter":
@@ -240,13 +287,23 @@ class Runner:
         self.pacer = Pacer(self.period_steps * self.step, self.clock, self.sleep)
         self._last_write = self.clock()  # the watchdog counts from the first deadline
         m = self.period_steps
+        refused = None
         while not self._stopping.is_set():
             n = m if self.last_steps is None else min(m, self.last_steps - self.steps)
             if n <= 0:
                 self._stopping.set()
                 break
-            if not self.pacer.cycle(lambda n=n: self._cycle(n)):
-                break
+            try:
+                if not self.pacer.cycle(lambda n=n: self._cycle(n)):
+                    break
+                refused = None
+            except StepRefused as exc:
+                if refused is not None or self.external is None:  # refused again: the cause is not the client's
+                    raise refused.error if refused is not None else exc.error from None
+                refused = exc
+                self.external.set_outputs(dict.fromkeys(self.external.outputs, 0.0))
+                self.log(f"{exc}; {self.external.name}'s outputs held at zero until the client writes")
+                self._set_status(f"holding: {exc}", "holding")
 
     def _cycle(self, n):
         if self.watchdog and self.external:
@@ -269,13 +326,49 @@ class Runner:
 
     def advance(self, n):
         """Take ``n`` communication steps (parameters written since are set first), exchange at the new time and
-        serve the new snapshot."""
+        serve the new snapshot; the steps taken (fewer than ``n`` when stopped on the way). In blocks of at most
+        :data:`BLOCK` steps, each rolled back if an FMU refuses it (:class:`StepRefused`) where states can be
+        saved."""
         self._apply_parameters()
+        taken = 0
+        try:
+            while taken < n and not (taken and self._stopping.is_set()):
+                block = min(BLOCK, n - taken)
+                self._block(block)
+                taken += block
+        finally:
+            self.master.algorithm.exchange(self.time())
+            self._publish()
+        return taken
+
+    def _block(self, n):
         k = self.steps
-        self.master.advance(self.start_time, self.step, k, k + n, self.observers)
+        if not self.guarded:
+            self.master.advance(self.start_time, self.step, k, k + n, self.observers)
+            self.steps = k + n
+            return
+        saved = {name: inst.get_state() for name, inst in self.master.instances.items()}
+        held = ArrayRecorder()  # the block's rows, for the observers once it is taken
+        held.start(self.master.output_names)
+        try:
+            self.master.advance(self.start_time, self.step, k, k + n, [held])
+        except FmiError as exc:
+            for name, inst in self.master.instances.items():
+                inst.set_state(saved[name])
+                inst.time = self.time()
+            raise StepRefused(exc, self.time()) from exc
+        finally:
+            for name, inst in self.master.instances.items():
+                inst.free_state(saved[name])
         self.steps = k + n
-        self.master.algorithm.exchange(self.time())
-        self._publish()
+        rows = memoryview(held._rows)
+        width = len(held.names)
+        for o in self.observers:
+            if hasattr(o, "observe_rows"):
+                o.observe_rows(rows)
+            else:
+                for i in range(0, len(rows), width):
+                    o.observe(rows[i], rows[i + 1:i + width])
 
     def _apply_parameters(self):
         with self._pending_lock:

@@ -6,14 +6,16 @@ Namespace ``urn:crane-fmu``; under ``Objects``, one object named after the syste
   (``ns=<urn:crane-fmu>;s=plant.x``), its SI unit in the description (``trolley position [m]``);
   read-only, except the external instance's outputs (and, with ``--writable``, the tunable parameters);
 - ``Time`` (Double, the simulated time [s]) and ``Status`` (String);
-- the method ``Step(n)`` (UInt32): in lock-step, takes ``n`` communication steps and returns the new time;
-  a Bad status code otherwise (``BadInvalidArgument``: n is not a whole number >= 1; ``BadInvalidState``: the
-  run is in real time, has ended, or the steps would pass the stop time).
+- the method ``Step(n)`` (UInt32; ``Step()``: one step): in lock-step, takes ``n`` communication steps and
+  returns the new time; a Bad status code otherwise (``BadInvalidArgument``: n is not a whole number from 1 to
+  65535; ``BadInvalidState``: the run is in real time, has ended, the steps would pass the stop time, or it
+  was stopped on the way; ``BadOutOfRange``: an FMU refused a step, which was rolled back, the run going on).
 
-A write of a non-finite number is refused (``BadOutOfRange``, the whole write request), of another type than
-Double too (``BadTypeMismatch``), to a read-only node too (``BadUserAccessDenied``). Anonymous access without
-encryption; logging in as ``admin`` grants nothing more. Every client is served: reads by all, writes by any
-(the last write wins), Step calls one after another in the order they arrive.
+A write of a non-finite number or one outside the variable's range (its description gives it: the plant's
+drive limit, :mod:`crane_fmu.cosim.write_ranges`) is refused (``BadOutOfRange``, the whole write request), of
+another type than Double too (``BadTypeMismatch``), to a read-only node too (``BadUserAccessDenied``).
+Anonymous access without encryption; logging in as ``admin`` grants nothing more. Every client is served:
+reads by all, writes by any (the last write wins), Step calls one after another in the order they arrive.
 """
 
 import asyncio
@@ -23,6 +25,8 @@ from datetime import datetime, timezone
 
 from asyncua import Server, ua
 from asyncua.common.callback import CallbackType
+
+from crane_fmu.cosim.realtime import MAX_STEPS, StepRefused
 
 from . import cannot_listen
 
@@ -64,10 +68,11 @@ class OpcUaServer:
             node = await folder.add_variable(ua.NodeId(v.name, idx), ua.QualifiedName(v.name, idx),
                                              ua.Variant(value, ua.VariantType.Double))
             await node.write_attribute(ua.AttributeIds.Description, ua.DataValue(ua.Variant(
-                ua.LocalizedText(_description(v)), ua.VariantType.LocalizedText)))
+                ua.LocalizedText(_description(v, self.runner.ranges.get(v.name))), ua.VariantType.LocalizedText)))
             if v.writable:
                 await node.set_writable()
-                server.iserver.aspace.set_attribute_value_setter(node.nodeid, ua.AttributeIds.Value, _finite_only)
+                server.iserver.aspace.set_attribute_value_setter(node.nodeid, ua.AttributeIds.Value,
+                                                                 self._checked_setter(v.name))
                 self.writable[node.nodeid] = v.name
             self.nodes.append(node.nodeid)
         self.time_node = (await folder.add_variable(ua.NodeId("Time", idx), ua.QualifiedName("Time", idx),
@@ -137,29 +142,46 @@ class OpcUaServer:
         if values:
             self.runner.write(values)
 
-    async def _step(self, _parent, n):
-        """``Step(n)``: the new time, or a Bad status code."""
+    def _checked_setter(self, name):
+        """The setter of the writable node of ``name``: a Double the runner accepts (:meth:`Runner.check`: finite,
+        within its range), else the write is refused (BadOutOfRange)."""
+        def setter(node, attribute, value):
+            number = value.Value.Value if value.Value is not None else None
+            if not isinstance(number, float):
+                raise ua.uaerrors.BadOutOfRange()
+            try:
+                self.runner.check(name, number)
+            except ValueError:
+                raise ua.uaerrors.BadOutOfRange() from None
+            node.attributes[attribute].value = value
+
+        return setter
+
+    async def _step(self, _parent, *arguments):
+        """``Step(n)``, ``Step()`` one step: the new time, or a Bad status code."""
+        if len(arguments) > 1:
+            return ua.StatusCode(ua.StatusCodes.BadTooManyArguments)
+        n = arguments[0] if arguments else 1
         count = n.Value if isinstance(n, ua.Variant) else n
-        if isinstance(count, bool) or not isinstance(count, int) or count < 1:
+        if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= MAX_STEPS:
             return ua.StatusCode(ua.StatusCodes.BadInvalidArgument)
         try:
             time = await asyncio.wrap_future(self.runner.request_steps(count))
+        except StepRefused:
+            await self._write(self.runner.snapshot())
+            return ua.StatusCode(ua.StatusCodes.BadOutOfRange)
         except ValueError:
+            await self._write(self.runner.snapshot())
             return ua.StatusCode(ua.StatusCodes.BadInvalidState)
         await self._write(self.runner.snapshot())  # the client reads the new values after the reply
         return [ua.Variant(time, ua.VariantType.Double)]
 
 
-def _finite_only(node, attribute, value):
-    """The setter of writable nodes: a Double that is finite, else the write is refused (BadOutOfRange)."""
-    number = value.Value.Value if value.Value is not None else None
-    if not isinstance(number, float) or not math.isfinite(number):
-        raise ua.uaerrors.BadOutOfRange()
-    node.attributes[attribute].value = value
-
-
-def _description(v):
+def _description(v, limits=None):
+    """``trolley position [m]``; of a writable variable with a range: ``...; written within [-2, 2] [m/s2]``."""
     text = v.description.rstrip(".") if v.description else v.name
+    if limits is not None and any(map(math.isfinite, limits)):
+        text += f"; written within [{limits[0]:g}, {limits[1]:g}]"
     return f"{text} [{v.unit}]"
 
 
