@@ -238,7 +238,7 @@ def test_the_opcua_address_space(server, printed_names):
         assert bool(access.Value.Value & (1 << writable)) == (name == "controller.u"), name
     assert facts["Time"][2] == ua.VariantType.Double and facts["Status"][2] == ua.VariantType.String
     assert step_argument.Name == "n" and step_argument.DataType == ua.NodeId(ua.ObjectIds.UInt32)
-    assert count == len(printed_names) + 3  # Time, Status, Step
+    assert count == len(printed_names) + 7  # Time, Status, StatusCode, System, RunId, StartTime, Step
 
 
 @pytest.fixture(scope="module")
@@ -287,7 +287,9 @@ def test_modbus_registers_hold_what_opcua_serves(server, printed_names):
     client = ModbusTcpClient(server.modbus[0], port=server.modbus[1], timeout=10)
     try:
         assert client.connect()
-        words = client.read_input_registers(0, count=FIRST_INPUT + 2 * len(inputs), device_id=1).registers
+        count = FIRST_INPUT + 2 * len(inputs)  # in requests of at most 100 (Modbus reads at most 125 at once)
+        words = [w for start in range(0, count, 100)
+                 for w in client.read_input_registers(start, count=min(100, count - start), device_id=1).registers]
         held = client.read_holding_registers(0, count=FIRST_HOLDING + 2, device_id=1).registers
     finally:
         client.close()
@@ -405,8 +407,8 @@ def test_the_example_pd_client_moves_the_trolley(server):
     done = subprocess.run([sys.executable, str(ROOT / "examples" / "opcua_pd_client.py"), server.opcua,
                            "--target", "0.5", "--seconds", "1"], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr[-2000:]
-    found = re.fullmatch(r"x = (-?\d+\.\d+) m after 1 s \(target 0\.5 m\); largest hook swing (\d+\.\d+) deg\n",
-                         done.stdout)
+    found = re.fullmatch(r"run [0-9a-f]{16}: x = (-?\d+\.\d+) m after 1 s \(target 0\.5 m\); largest hook swing "
+                         r"(\d+\.\d+) deg\n", done.stdout)
     assert found and 0.2 < float(found.group(1)) < 0.7, done.stdout
 
 
@@ -487,7 +489,8 @@ def test_a_missing_protocol_package_is_one_line(fmu_dir, capsys, monkeypatch):
 @pytest.mark.quick
 def test_the_register_map_and_the_float32_words_of_a_value():
     """The map's rule (crane_fmu/serve/modbus.py): the variables in their order, read-only ones from input
-    register 8, writable ones from holding register 2, two registers each; a value is its IEEE 754 float32,
+    register 32 (after the header and the run's identity), writable ones from holding register 2, two registers
+    each; a value is its IEEE 754 float32,
     high word first (1.0 is 0x3F80 0x0000), read back as that float32; beyond float32 it is +-inf."""
     from types import SimpleNamespace
 
@@ -497,7 +500,7 @@ def test_the_register_map_and_the_float32_words_of_a_value():
               for name, writable in (("plant.x", False), ("controller.u", True), ("plant.theta1", False))]
     placed = [(r.table, r.address, r.name) for r in register_map(served) if r.type == "float32"]
     assert placed == [("input", FIRST_INPUT, "plant.x"), ("holding", FIRST_HOLDING, "controller.u"),
-                      ("input", FIRST_INPUT + 2, "plant.theta1")] and (FIRST_INPUT, FIRST_HOLDING) == (8, 2)
+                      ("input", FIRST_INPUT + 2, "plant.theta1")] and (FIRST_INPUT, FIRST_HOLDING) == (32, 2)
     assert float32_words(1.0) == [0x3F80, 0x0000] and words_float32(0x3F80, 0x0000) == 1.0
     assert words_float32(*float32_words(0.1)) == float(np.float32(0.1))
     assert float32_words(-1e39) == float32_words(-math.inf)
@@ -694,3 +697,98 @@ def test_a_signal_stops_a_long_step_request_at_the_next_step_boundary(fmu_dir, t
     assert stopped and 0 < float(stopped.group(1)) < 65.0, out
     served = read_csv(server.out)
     assert np.all(np.diff(served["time"]) > 0) and served["time"][-1] == pytest.approx(float(stopped.group(1)))
+
+
+# --- which run, and its end: identity nodes and registers, finished, one value table (issue 50) ---
+
+
+def _run_id(server):
+    return re.search(r"; run ([0-9a-f]{16})$", server.first_line.strip()).group(1)
+
+
+def test_the_run_says_which_it_is_and_when_it_finished_over_both_protocols(fmu_dir, tmp_path):
+    """System, RunId (the first line's) and StartTime (between the launch and now) as OPC UA nodes, and the same
+    in Modbus input registers 8-31 (uint64, float64 Unix time, ASCII name). At --stop-time in lock-step the
+    status is finished, as a code (4, in StatusCode and in register 6) with the line beside it; a further Step
+    is refused. A u written over Modbus is what the OPC UA node reads at once, and the other way round."""
+    import time
+    from datetime import timezone
+
+    launched = time.time()
+    server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--lock-step", "--stop-time",
+                    "0.05", "--opcua", "127.0.0.1:0", "--modbus", "127.0.0.1:0")
+    address = {r.name: r.address for r in register_map(_served_lqr(fmu_dir))}["controller.u"]
+    client = ModbusTcpClient(server.modbus[0], port=server.modbus[1], timeout=10)
+
+    async def identity_and_end(url):
+        async with Client(url) as opc:
+            ns, node = await _nodes(opc)
+            identity = await opc.read_values([node("System"), node("RunId"), node("StartTime"), node("StatusCode")])
+            assert not client.write_registers(address, float32_words(1.25), device_id=1).isError()
+            after_modbus = await node("controller.u").read_value()
+            await node("controller.u").write_value(ua.Variant(-0.75, ua.VariantType.Double))
+            held = client.read_holding_registers(address, count=2, device_id=1).registers
+            steps = [await _step_status(opc, 20), await _step_status(opc, 30), await _step_status(opc)]
+            end = await opc.read_values([node("StatusCode"), node("Status"), node("Time")])
+            return identity, after_modbus, words_float32(*held), steps, end
+
+    try:
+        assert client.connect()
+        identity, after_modbus, held, steps, end = _run(identity_and_end(server.opcua))
+        words = client.read_input_registers(0, count=32, device_id=1).registers
+    finally:
+        client.close()
+        status, out, err = server.stop()
+    system, run_id, started, code = identity
+    assert system == "lqr" and run_id == _run_id(server) and code == 1
+    assert launched <= started.replace(tzinfo=timezone.utc).timestamp() <= time.time()
+    header = struct.unpack(">Qd", struct.pack(">8H", *words[8:16]))
+    assert f"{header[0]:016x}" == run_id
+    assert header[1] == pytest.approx(started.replace(tzinfo=timezone.utc).timestamp(), abs=1e-3)
+    assert struct.pack(">16H", *words[16:32]).rstrip(b"\0") == b"lqr"
+    assert after_modbus == 1.25 and held == -0.75
+    assert steps == ["Good", "Good", "BadInvalidState"]
+    assert end[0] == 4 and end[1].startswith("finished") and end[2] == pytest.approx(0.05) and words[6] == 4
+    assert status == 0 and "finished at t = 0.05 s" in out, err[-2000:]
+
+
+def test_real_time_reads_finished_at_the_stop_time(fmu_dir, tmp_path):
+    """In real time the run ends by itself at --stop-time; a client polling StatusCode sees 4 (finished) before
+    the server goes, with Status saying so."""
+    server = Server(fmu_dir, tmp_path, "--system", "lqr", "--stop-time", "0.5", "--opcua", "127.0.0.1:0")
+
+    async def poll(url):
+        seen = []
+        async with Client(url) as opc:
+            ns, node = await _nodes(opc)
+            for _ in range(500):  # at most ~10 s
+                try:
+                    seen.append(tuple(await opc.read_values([node("StatusCode"), node("Status")])))
+                except (ConnectionError, ua.UaError, asyncio.TimeoutError):
+                    break
+                if seen[-1][0] == 4:
+                    break
+                await asyncio.sleep(0.02)
+        return seen
+
+    try:
+        seen = _run(poll(server.opcua))
+    finally:
+        status, out, err = server.wait(60)
+    assert seen and seen[0][0] == 2 and seen[-1][0] == 4 and seen[-1][1].startswith("finished"), seen[-3:]
+    assert status == 0, err[-2000:]
+
+
+def test_the_example_client_drives_only_the_run_it_was_started_for(server):
+    """examples/opcua_pd_client.py against the shared lqr server: told another system, or another run id, it says
+    so in one line, exits 2 and writes nothing; told the server's own run id it drives it."""
+    example = [sys.executable, str(ROOT / "examples" / "opcua_pd_client.py"), server.opcua, "--seconds", "0.05"]
+    t0 = _run(_read_time(server.opcua))
+    wrong = [subprocess.run(example + extra, capture_output=True, text=True, timeout=120)
+             for extra in (["--system", "transport"], ["--run-id", "0123456789abcdef"])]
+    assert _run(_read_time(server.opcua)) == t0  # nothing stepped
+    for done, says in zip(wrong, ("runs system 'lqr'", "not 0123456789abcdef")):
+        assert done.returncode == 2 and done.stdout == "", done.stderr
+        assert len(done.stderr.splitlines()) == 1 and says in done.stderr and "nothing written" in done.stderr
+    right = subprocess.run(example + ["--run-id", _run_id(server)], capture_output=True, text=True, timeout=120)
+    assert right.returncode == 0 and right.stdout.startswith(f"run {_run_id(server)}: "), right.stderr

@@ -145,7 +145,8 @@ def _serve(args, system):
             watchdog = Watchdog(1.0 if args.watchdog is None else args.watchdog, args.hold)
         master = Master(instances, connections, args.algorithm)
         runner = Runner(master, system.start_time, step, stop_time, system.parameters, lock_step=args.lock_step,
-                        period_steps=period_steps, watchdog=watchdog, writable=args.writable, log=_say)
+                        period_steps=period_steps, watchdog=watchdog, writable=args.writable, log=_say,
+                        name=system.name)
         if args.print_map:
             from crane_fmu.serve.modbus import markdown, register_map
 
@@ -275,7 +276,8 @@ def _first_line(args, system, runner, endpoints):
     mode = "in lock-step" if args.lock_step else f"in real time every {runner.period_steps * runner.step:g} s"
     external = f", {args.external} external" if args.external else ""
     names = [("OPC UA" if "opc.tcp" in e else "Modbus TCP") + " " + e for e in endpoints]
-    return f"crane-fmu serve: {system.name} {mode} (h = {runner.step:g} s{external}); " + "; ".join(names)
+    return (f"crane-fmu serve: {system.name} {mode} (h = {runner.step:g} s{external}); " + "; ".join(names)
+            + f"; run {runner.run_id:016x}")
 
 
 def _say(line):

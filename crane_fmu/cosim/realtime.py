@@ -29,6 +29,7 @@ many steps at the next block boundary. One request takes at most :data:`MAX_STEP
 """
 
 import math
+import secrets
 import threading
 import time
 from collections import namedtuple
@@ -90,16 +91,27 @@ class Runner:
         For the pacing; the default sleep waits on the runner's stop event.
     log : callable
         Gets the lines that say what changed (the watchdog), e.g. ``print`` to stderr.
+    name : str
+        The system's name, served with :attr:`run_id` and :attr:`started` so that a client can tell which run
+        it drives.
+
+    Attributes
+    ----------
+    run_id : int
+        A random 64-bit number, new for every runner.
+    started : float or None
+        The wall-clock time (Unix time, s) :meth:`start` was called at.
     """
 
     def __init__(self, master, start_time, step, stop_time=None, parameters=None, observers=(), lock_step=False,
-                 period_steps=1, watchdog=None, writable=False, clock=time.monotonic, sleep=None, log=None):
+                 period_steps=1, watchdog=None, writable=False, clock=time.monotonic, sleep=None, log=None, name=""):
         if not isinstance(period_steps, int) or period_steps < 1:
             raise ValueError(f"steps per period must be a whole number >= 1, got {period_steps!r}")
         self.master, self.start_time, self.step, self.stop_time = master, start_time, step, stop_time
         self.parameters, self.observers = parameters or {}, list(observers)
         self.lock_step, self.period_steps, self.watchdog = lock_step, period_steps, watchdog
         self.clock, self.log = clock, log or (lambda line: None)
+        self.name, self.run_id, self.started = name, secrets.randbits(64), None
         self._stopping = threading.Event()
         self.sleep = sleep or self._stopping.wait
         self.last_steps = None if stop_time is None else round((stop_time - start_time) / step)
@@ -108,6 +120,7 @@ class Runner:
             raise ValueError("at most one external instance: " + ", ".join(e.name for e in externals))
         self.external = externals[0] if externals else None
         self.variables = self._served(writable)
+        self._index = {v.name: i for i, v in enumerate(self.variables)}
         self.listeners = []  # callables getting every new Snapshot, on the runner's thread
         self.steps, self.pacer, self.error = 0, None, None
         self._lock = threading.Lock()  # one advance at a time
@@ -116,6 +129,7 @@ class Runner:
         self._last_write = None
         self._status = ("waiting", "starting")  # (code, line)
         self._snapshot = None
+        self._publishing = threading.Lock()  # one snapshot made at a time: the steps' and the writes'
         self.ranges = {}  # {name: (low, high)} of the writable variables, known once initialised
         self.guarded = all(isinstance(inst, ExternalInstance) or inst.md.coSimulation.canGetAndSetFMUstate
                            for inst in master.instances.values())
@@ -163,6 +177,7 @@ class Runner:
             self._last_write = self.clock()
         with self._pending_lock:
             self._pending.update({n: v for n, v in checked.items() if writable[n].role == "parameter"})
+        self._publish(written=checked)  # one table for every protocol: what was written is what is read
 
     def check(self, name, value):
         """``value`` as a float if it may be written to the writable variable ``name``, else ValueError (one
@@ -229,6 +244,7 @@ class Runner:
 
     def start(self):
         """Initialise the master, start the observers and serve the first snapshot."""
+        self.started = time.time()
         self.master.initialize(self.start_time, self.stop_time, self.parameters)
         self.ranges = write_ranges(self.master, self.variables, self.external)
         self._parameter_values = {}
@@ -338,7 +354,10 @@ class Runner:
                 taken += block
         finally:
             self.master.algorithm.exchange(self.time())
-            self._publish()
+            if self.last_steps is not None and self.steps == self.last_steps:
+                self._set_status(f"finished at t = {self.time():.9g} s", "finished")
+            else:
+                self._publish()
         return taken
 
     def _block(self, n):
@@ -401,14 +420,27 @@ class Runner:
         if publish and hasattr(self, "_sources"):
             self._publish()
 
-    def _publish(self):
-        values = self.master.values
-        inputs = self.external.input_values() if self.external else {}
-        parameters = self._parameter_values
-        served = tuple(values[i] if kind == "out" else inputs[i] if kind == "in" else parameters[i]
-                       for kind, i in self._sources)
-        code, line = self._status
-        snapshot = Snapshot(self.time(), self.steps, served, line, STATUS_CODES[code])
-        self._snapshot = snapshot
-        for listener in self.listeners:
-            listener(snapshot)
+    def _publish(self, written=None):
+        """Serve a new snapshot: of the values in effect, or the latest one with the values ``written``
+        (``{name: value}``) in place, which take effect at the next step."""
+        with self._publishing:
+            if written is not None:
+                if self._snapshot is None:
+                    return
+                served = list(self._snapshot.values)
+                for name, value in written.items():
+                    served[self._index[name]] = value
+                served = tuple(served)
+            else:
+                values = self.master.values
+                inputs = self.external.input_values() if self.external else {}
+                parameters = self._parameter_values
+                served = tuple(values[i] if kind == "out" else inputs[i] if kind == "in" else parameters[i]
+                               for kind, i in self._sources)
+                with self._pending_lock:  # a parameter written, not yet applied, reads as written
+                    served = tuple(self._pending.get(v.name, value) for v, value in zip(self.variables, served))
+            code, line = self._status
+            snapshot = Snapshot(self.time(), self.steps, served, line, STATUS_CODES[code])
+            self._snapshot = snapshot
+            for listener in self.listeners:
+                listener(snapshot)

@@ -9,7 +9,10 @@ Input registers (function 4, read-only):
 
 - 0-3: the simulated time [s], float64; 4-5: steps taken, uint32; 6: the status code
   (:data:`~crane_fmu.cosim.realtime.STATUS_CODES`); 7: reserved (0);
-- from 8: every variable that is not writable (outputs, the external instance's inputs, parameters).
+- which run this is: 8-11: the run id, uint64 (OPC UA's ``RunId``, in hex); 12-15: the start time, Unix time [s]
+  UTC, float64; 16-31: the system's name, ASCII, two characters a register (the first in the high byte),
+  padded with zeros (32 characters; a longer name is cut);
+- from 32: every variable that is not writable (outputs, the external instance's inputs, parameters).
 
 Holding registers (function 3 to read, 16 to write; 6 only for the step register):
 
@@ -40,13 +43,17 @@ from . import cannot_listen
 Register = namedtuple("Register", "table address name type unit access description")
 Register.__doc__ = "One entry of the map: ``table`` is ``input`` or ``holding``; ``address`` of its first register."
 
-FIRST_INPUT = 8  # the first variable's input register
+FIRST_INPUT = 32  # the first variable's input register
+NAME_CHARACTERS = 32  # the system's name in registers 16-31
 FIRST_HOLDING = 2  # the first writable variable's holding register
 STEP_REGISTER = 0
 HEADER = (Register("input", 0, "Time", "float64", "s", "read", "simulated time"),
           Register("input", 4, "Steps", "uint32", "1", "read", "communication steps taken"),
           Register("input", 6, "Status", "uint16", "1", "read",
                    "status: " + ", ".join(f"{code} {name}" for name, code in STATUS_CODES.items())),
+          Register("input", 8, "RunId", "uint64", "1", "read", "run id, new for every run"),
+          Register("input", 12, "StartTime", "float64", "s", "read", "when the run started (Unix time, UTC)"),
+          Register("input", 16, "System", "char[32]", "1", "read", "the system's name (ASCII, zero-padded)"),
           Register("holding", STEP_REGISTER, "Step", "uint16", "1", "write",
                    "lock-step: write n to take n communication steps; reads 0"))
 
@@ -67,7 +74,7 @@ def register_map(variables):
 def markdown(entries):
     """The map as a Markdown table (the docs' page prints the one of a built-in system)."""
     lines = ["| table | registers | name | type | unit | access | description |", "|---|---|---|---|---|---|---|"]
-    sizes = {"float64": 4, "uint32": 2, "float32": 2, "uint16": 1}
+    sizes = {"float64": 4, "uint32": 2, "float32": 2, "uint16": 1, "uint64": 4, "char[32]": 16}
     for r in sorted(entries, key=lambda r: (r.table != "input", r.address)):
         span = f"{r.address}" if sizes[r.type] == 1 else f"{r.address}-{r.address + sizes[r.type] - 1}"
         description = r.description.replace("|", "&#124;")  # a bar would end the cell
@@ -84,6 +91,12 @@ def float32_words(value):
     return list(struct.unpack(">HH", packed))
 
 
+def identity_words(run_id, started, system):
+    """Registers 8-31: the run id (uint64), the start time (float64) and the system's name (ASCII)."""
+    name = system.encode("ascii", "replace")[:NAME_CHARACTERS].ljust(NAME_CHARACTERS, b"\0")
+    return list(struct.unpack(">4H4H16H", struct.pack(">Qd", run_id, started) + name))
+
+
 def words_float32(high, low):
     """The float32 of two registers, high word first."""
     return struct.unpack(">f", struct.pack(">HH", high, low))[0]
@@ -98,6 +111,7 @@ class ModbusServer:
         self._inputs = [i for i, v in enumerate(runner.variables) if not v.writable]
         self._holding = [i for i, v in enumerate(runner.variables) if v.writable]
         self.server = None
+        self._identity = identity_words(runner.run_id, runner.started or 0.0, runner.name)
 
     async def start(self):
         """Listen; returns ``host:port`` (with the port the OS chose)."""
@@ -167,7 +181,8 @@ class ModbusServer:
     def _fill_inputs(self, registers):
         snapshot = self.runner.snapshot()
         header = (list(struct.unpack(">HHHH", struct.pack(">d", snapshot.time)))
-                  + list(struct.unpack(">HH", struct.pack(">I", snapshot.steps % 2**32))) + [snapshot.code, 0])
+                  + list(struct.unpack(">HH", struct.pack(">I", snapshot.steps % 2**32))) + [snapshot.code, 0]
+                  + self._identity)
         words = header + [w for i in self._inputs for w in float32_words(snapshot.values[i])]
         registers[:len(words)] = words
 

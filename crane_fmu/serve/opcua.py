@@ -5,7 +5,11 @@ Namespace ``urn:crane-fmu``; under ``Objects``, one object named after the syste
 - a Double variable per served variable, browse name and string NodeId exactly ``instance.variable``
   (``ns=<urn:crane-fmu>;s=plant.x``), its SI unit in the description (``trolley position [m]``);
   read-only, except the external instance's outputs (and, with ``--writable``, the tunable parameters);
-- ``Time`` (Double, the simulated time [s]) and ``Status`` (String);
+- ``Time`` (Double, the simulated time [s]), ``StatusCode`` (UInt16, :data:`~crane_fmu.cosim.realtime.STATUS_CODES`:
+  1 waiting, 2 running, 3 holding, 4 finished, 5 failed, 6 stopped) and beside it ``Status`` (String, the line
+  that says more);
+- which run this is: ``System`` (String, the system's name), ``RunId`` (String, 16 hex digits, new for every
+  run: the Modbus registers' number) and ``StartTime`` (DateTime, when the run started, UTC);
 - the method ``Step(n)`` (UInt32; ``Step()``: one step): in lock-step, takes ``n`` communication steps and
   returns the new time; a Bad status code otherwise (``BadInvalidArgument``: n is not a whole number from 1 to
   65535; ``BadInvalidState``: the run is in real time, has ended, the steps would pass the stop time, or it
@@ -79,6 +83,13 @@ class OpcUaServer:
                                                     ua.Variant(snapshot.time, ua.VariantType.Double))).nodeid
         self.status_node = (await folder.add_variable(ua.NodeId("Status", idx), ua.QualifiedName("Status", idx),
                                                       ua.Variant(snapshot.status, ua.VariantType.String))).nodeid
+        self.code_node = (await folder.add_variable(ua.NodeId("StatusCode", idx), ua.QualifiedName("StatusCode", idx),
+                                                    ua.Variant(snapshot.code, ua.VariantType.UInt16))).nodeid
+        started = datetime.fromtimestamp(self.runner.started, timezone.utc)
+        for name, value, kind in (("System", self.system, ua.VariantType.String),
+                                  ("RunId", f"{self.runner.run_id:016x}", ua.VariantType.String),
+                                  ("StartTime", started, ua.VariantType.DateTime)):
+            await folder.add_variable(ua.NodeId(name, idx), ua.QualifiedName(name, idx), ua.Variant(value, kind))
         steps = ua.Argument(Name="n", DataType=ua.NodeId(ua.ObjectIds.UInt32), ValueRank=-1,
                             Description=ua.LocalizedText("communication steps to take"))
         time = ua.Argument(Name="time", DataType=ua.NodeId(ua.ObjectIds.Double), ValueRank=-1,
@@ -127,6 +138,8 @@ class OpcUaServer:
                                                  SourceTimestamp=now, ServerTimestamp=now))
         await write(self.status_node, ua.DataValue(ua.Variant(snapshot.status, ua.VariantType.String),
                                                    SourceTimestamp=now, ServerTimestamp=now))
+        await write(self.code_node, ua.DataValue(ua.Variant(snapshot.code, ua.VariantType.UInt16),
+                                                 SourceTimestamp=now, ServerTimestamp=now))
 
     # --- what clients do ---
 
