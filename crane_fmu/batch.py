@@ -21,6 +21,8 @@ from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 JOURNAL = "cases.jsonl"
+LOOPBACK = "127.0.0.1"  # a local cluster's scheduler, workers and nannies listen here only
+DASHBOARD = "127.0.0.1:0"  # its dashboard: this machine only, a port the OS picks (--dashboard sets another)
 
 
 def read_journal(out_dir):
@@ -188,7 +190,7 @@ def _dask_client(workers, scheduler):
         handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
             cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                                   dashboard_address=":0", silence_logs=50)  # a free port: no warning
+                                   host=LOOPBACK, dashboard_address=DASHBOARD, silence_logs=50)
         finally:
             signal.signal(signal.SIGINT, handler)
         client = Client(cluster)

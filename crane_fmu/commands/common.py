@@ -35,6 +35,9 @@ def dask_options(p):
     p.add_argument("--fmu-dir", default=DEFAULT_FMU_DIR, help=f"folder of the built FMUs (default {DEFAULT_FMU_DIR})")
     p.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
     p.add_argument("--scheduler", help="address of an existing Dask scheduler (no local cluster)")
+    p.add_argument("--dashboard", metavar="HOST:PORT",
+                   help="where the local cluster's Dask dashboard listens (default 127.0.0.1 at a port the OS picks: "
+                        "this machine only; another address lets any machine that reaches it watch the run)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -140,8 +143,21 @@ def check_workers(args):
         raise UsageError(f"--workers must be >= 1, got {args.workers}")
     if args.workers is not None and getattr(args, "scheduler", None):
         raise UsageError("--workers and --scheduler exclude each other: the scheduler's cluster has its workers")
+    if getattr(args, "dashboard", None) is not None and getattr(args, "scheduler", None):
+        raise UsageError("--dashboard and --scheduler exclude each other: the scheduler's cluster has its dashboard")
     if getattr(args, "scheduler", None):
         check_scheduler(args.scheduler)
+    if getattr(args, "dashboard", None) is not None:
+        from crane_fmu import batch
+        from crane_fmu.serve import is_loopback, parse_endpoint
+
+        try:
+            host, port = parse_endpoint(args.dashboard, "--dashboard")
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+        batch.DASHBOARD = f"{host}:{port}"
+        where = "" if is_loopback(host) else " (any machine that reaches it can watch the run)"
+        print(f"crane-fmu: the Dask dashboard listens on {host}:{port}{where}", file=sys.stderr)
 
 
 def require_dask(command):
