@@ -164,9 +164,9 @@ def test_ctrl_c_in_simulate_is_one_line_and_keeps_the_rows_so_far(fmu_dir, tmp_p
     monkeypatch.setattr(crane_fmu.cosim.master.Master, "advance", interrupted)
     code, out, err = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--stop-time", "1", "--out", str(csv))
     cut = tmp_path / "run.cut-short.csv"
-    assert (code, out, err) == (130, "", f"crane-fmu: interrupted; the rows so far are in {cut}\n")
+    assert (code, out, err) == (130, "", f"crane-fmu: interrupted (SIGINT); the rows so far are in {cut}\n")
     assert csv.read_text() == "an earlier result\n"
-    assert cut.read_text().splitlines()[-1] == "# run cut short: interrupted"
+    assert cut.read_text().splitlines()[-1] == "# run cut short: interrupted (SIGINT)"
     assert len(read_csv(cut)["time"]) > 1
 
 

@@ -2,6 +2,7 @@
 
 import argparse
 import os
+import signal
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -10,6 +11,7 @@ from crane_fmu import DEFAULT_FMU_DIR, DEFAULT_SYSTEM
 from crane_fmu.cosim.algorithms import ALGORITHMS
 
 from .common import UsageError, number, parse_sets, writable_file
+from .stopping import StopOnSignal, Stopped
 
 NAME = "simulate"
 HELP = "co-simulate a system of FMUs"
@@ -163,16 +165,21 @@ def _simulate(args, system):
     recorder = open_recorder(args.out)
     progress = [ProgressLine(system.start_time, stop_time, sys.stderr)] if sys.stderr.isatty() else []
     try:
-        simulate(fmus, connections, stop_time, step, args.algorithm, system.parameters, recorder, system.start_time,
-                 not args.no_initial_exchange, observers=progress)
+        with StopOnSignal() as stopper:
+            simulate(fmus, connections, stop_time, step, args.algorithm, system.parameters, recorder,
+                     system.start_time, not args.no_initial_exchange, observers=[*progress, stopper])
+    except Stopped as exc:  # SIGINT or SIGTERM: at a communication point, outside every FMU
+        _end(progress)
+        return _interrupted(recorder, exc.signum)
     except FmiError as exc:
+        if "KeyboardInterrupt" in str(exc):  # a second Ctrl-C while an FMU's Python code ran: it returned an error
+            _end(progress)
+            return _interrupted(recorder)
         # Bad parameter values are refused when initialisation ends: the user's mistake.
         if exc.time is None or exc.function.endswith(("ExitInitializationMode", "SetReal", "SetFloat64",
                                                        "SetString")):
             raise UsageError(str(exc)) from None
         _end(progress)
-        if "KeyboardInterrupt" in str(exc):  # Ctrl-C while an FMU's Python code ran: it returned an error
-            return _interrupted(recorder)
         print(f"crane-fmu: simulation failed: {exc} (results up to t={exc.time:.9g} s in {recorder.written}; "
               f"{args.out} is {'as it was' if os.path.exists(args.out) else 'not written'})", file=sys.stderr)
         return 1
@@ -214,9 +221,11 @@ def _end(progress):
         line.close()
 
 
-def _interrupted(recorder):
-    """Ctrl-C: one line saying where the rows so far went; exit status 130 (the shell's for SIGINT)."""
-    recorder.close(reason="interrupted")
+def _interrupted(recorder, signum=signal.SIGINT):
+    """Ctrl-C or SIGTERM: one line saying where the rows so far went; exit status 128 + the signal's number (130,
+    143: the shell's)."""
+    name = signal.Signals(signum).name
+    recorder.close(reason=f"interrupted ({name})")
     where = f"the rows so far are in {recorder.written}" if recorder.written else "nothing was recorded"
-    print(f"crane-fmu: interrupted; {where}", file=sys.stderr)
-    return 130
+    print(f"crane-fmu: interrupted ({name}); {where}", file=sys.stderr)
+    return 128 + signum

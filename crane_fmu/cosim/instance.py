@@ -68,6 +68,7 @@ class Instance:
     """
 
     def _describe(self, path, name):
+        self._path = path
         self._interface(path, name)
         self.messages = deque(maxlen=20)  # the FMU's latest log messages
         self.time = None
@@ -155,11 +156,22 @@ class Instance:
         """fmpy's ``kind`` (FMU2Slave, FMU3Slave) over this instance's folder: the spare one that came with the
         folder, its library still loaded, else a new one (which loads it)."""
         if self._spare is None:
+            self._check_binary()
             return kind(guid=self.md.guid, unzipDirectory=self._unzip,
                         modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=self.name)
         fmu, self._spare = self._spare, None
         fmu.instanceName = self.name
         return fmu
+
+    def _check_binary(self):
+        """ValueError (one line) when a library of the FMU for this platform is truncated: loading it would crash."""
+        from fmpy import platform, platform_tuple, sharedLibraryExtension
+
+        from .binary_check import check_library
+
+        for folder in (platform, platform_tuple):  # FMI 2.0's name of this platform, FMI 3.0's
+            for library in sorted(Path(self._unzip, "binaries", folder).glob(f"*{sharedLibraryExtension}")):
+                check_library(library, self._path)  # the FMU's own and those it loads (pythonfmu's wrapper)
 
     def free(self):
         """Free the instance (fmi2FreeInstance, fmi3FreeInstance); safe to call twice. The extracted folder and

@@ -1,0 +1,102 @@
+"""A run ended by a signal or met with a broken FMU says so in one line and keeps what it wrote (issues 49, 50).
+
+The runs are `crane-fmu simulate` processes on the Python FMUs (conftest.fmu_dir), as a user starts them; every
+process is waited for with a timeout and killed if it does not end.
+"""
+
+import _ctypes
+import shutil
+import signal
+import subprocess
+import sys
+import time
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from crane_fmu.cosim import read_csv
+from crane_fmu.cosim.binary_check import check_library
+
+
+def _simulate(fmu_dir, out, *args):
+    return subprocess.Popen([sys.executable, "-m", "crane_fmu", "simulate", "--fmu-dir", str(fmu_dir), "--out",
+                             str(out), *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _rows_written(partial, timeout=60):
+    """Wait until the run's partial file holds some rows (its first chunk of 2048 has been written)."""
+    ends = time.monotonic() + timeout
+    while time.monotonic() < ends:
+        if partial.exists() and partial.stat().st_size > 100_000:
+            return
+        time.sleep(0.02)
+    raise AssertionError(f"{partial} never grew")
+
+
+@pytest.mark.parametrize("signum, delay", [(signal.SIGINT, 0.0), (signal.SIGINT, 0.3), (signal.SIGINT, 0.7),
+                                           (signal.SIGTERM, 0.0), (signal.SIGTERM, 0.5)],
+                         ids=["SIGINT-1", "SIGINT-2", "SIGINT-3", "SIGTERM-1", "SIGTERM-2"])
+def test_a_signal_ends_simulate_in_one_line_and_keeps_the_rows(fmu_dir, tmp_path, signum, delay):
+    """Ctrl-C (SIGINT) or SIGTERM in the middle of a long run on the Python FMUs, at several moments: exit 130 or
+    143, one line on stderr naming the signal and the file, the rows so far in run.cut-short.csv with a trailer
+    naming the signal (no FMU blamed), no .partial left, no run.csv (it would claim a whole run)."""
+    out = tmp_path / "run.csv"
+    proc = _simulate(fmu_dir, out, "--system", "lqr", "--stop-time", "2000")
+    try:
+        _rows_written(Path(str(out) + ".partial"))
+        time.sleep(delay)
+        proc.send_signal(signum)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    cut = tmp_path / "run.cut-short.csv"
+    name = signal.Signals(signum).name
+    assert (proc.returncode, err) == (128 + signum, f"crane-fmu: interrupted ({name}); the rows so far are in {cut}\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.cut-short.csv"]
+    assert cut.read_text().splitlines()[-1] == f"# run cut short: interrupted ({name})"
+    times = read_csv(cut)["time"]
+    assert len(times) > 2048 and all(b > a for a, b in zip(times, times[1:]))
+
+
+def _truncated_copy(fmu, folder, library):
+    """``fmu`` copied into ``folder`` with the shared library whose name ends with ``library`` cut to half."""
+    copy = Path(folder) / Path(fmu).name
+    with zipfile.ZipFile(fmu) as z, zipfile.ZipFile(copy, "w") as out:
+        for info in z.infolist():
+            data = z.read(info)
+            if info.filename.endswith(library):
+                data = data[:len(data) // 2]
+            out.writestr(info, data)
+    return copy
+
+
+@pytest.mark.parametrize("library", ["LqrController.so", "PythonWrapper.so"])
+def test_an_fmu_with_a_truncated_binary_is_one_line(fmu_dir, tmp_path, library):
+    """On main a truncated library was loaded and crashed the process: "Bus error", status 135, no message, a
+    0-byte .partial. Now: status 2, one line naming the FMU file and the library, nothing written."""
+    broken = _truncated_copy(Path(fmu_dir) / "LqrController.fmu", tmp_path, library)
+    out = tmp_path / "r.csv"
+    proc = _simulate(fmu_dir, out, "--system", "lqr", "--stop-time", "1", "--use", f"controller={broken}")
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 2, err
+    assert err.count("\n") == 1 and str(broken) in err and f"its binary {library} is truncated" in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == [broken.name]
+
+
+@pytest.mark.quick
+def test_the_library_check_refuses_every_cut_of_a_real_library(tmp_path):
+    """An ELF library cut anywhere (inside its headers, its segments or its section table) is refused in one line;
+    the whole one passes. The library is one of this Python's own extension modules."""
+    whole = Path(_ctypes.__file__)
+    check_library(whole)
+    data = whole.read_bytes()
+    for cut in (0, 3, 40, 63, 1000, len(data) // 3, len(data) // 2, len(data) - 1):
+        part = tmp_path / f"cut{cut}.so"
+        part.write_bytes(data[:cut])
+        with pytest.raises(ValueError, match=r"is truncated \(\d+ bytes, its headers need \d+\)"):
+            check_library(part)
+    shutil.copy(whole, tmp_path / "copy.so")
+    check_library(tmp_path / "copy.so")
