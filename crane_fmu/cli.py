@@ -6,12 +6,15 @@ status 2; an FMU failing during a run prints one line and exits with status 1.
 """
 
 import argparse
+import errno
 import os
 import sys
 
 from crane_fmu import __version__
 from crane_fmu.commands import COMMANDS
 from crane_fmu.commands.common import Parser, UsageError
+
+CANNOT_WRITE = {errno.ENOSPC, errno.EFBIG, errno.EDQUOT}  # a full disk, a file-size limit, a full quota
 
 
 def parser():
@@ -45,6 +48,14 @@ def main(argv=None):
     except BrokenPipeError:  # the reader (e.g. head) has gone: not an error
         sys.stdout = open(os.devnull, "w")
         return 0
+    except OSError as exc:
+        if exc.errno not in CANNOT_WRITE:
+            raise
+        # a full disk or a file-size limit (ulimit -f), wherever it struck; what was written before stays (a
+        # sweep's or a board's journal: a re-run resumes from it)
+        where = f" {exc.filename}" if exc.filename else ""
+        print(f"crane-fmu: cannot write{where}: {exc.strerror} (what was written before is kept)", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

@@ -100,3 +100,82 @@ def test_the_library_check_refuses_every_cut_of_a_real_library(tmp_path):
             check_library(part)
     shutil.copy(whole, tmp_path / "copy.so")
     check_library(tmp_path / "copy.so")
+
+
+# --- a run that cannot write: a file-size limit (ulimit -f) or a full disk (issue 50) ---
+
+
+def _file_size_limit(limit):
+    import resource
+
+    return lambda: resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 128 KiB tmpfs at ``tmp_path/small``: a disk that fills (root's mount; skips, saying so, where it is not
+    permitted)."""
+    folder = tmp_path / "small"
+    folder.mkdir()
+    mount = shutil.which("mount")
+    done = subprocess.run([mount or "mount", "-t", "tmpfs", "-o", "size=128k", "tmpfs", str(folder)],
+                          capture_output=True, text=True) if mount else None
+    if done is None or done.returncode != 0:
+        pytest.skip(f"mount -t tmpfs not permitted here ({done.stderr.strip() if done else 'no mount'}): no full disk")
+    try:
+        yield folder
+    finally:
+        subprocess.run(["umount", "-l", str(folder)], capture_output=True)
+
+
+def _whole_rows(cut):
+    """The rows of a .cut-short.csv: every line whole (the same number of fields), times increasing."""
+    lines = cut.read_text().splitlines()
+    rows = [line for line in lines[1:] if not line.startswith("#")]
+    width = lines[0].count(",")
+    assert all(line.count(",") == width for line in rows)
+    times = [float(line.split(",", 1)[0]) for line in rows]
+    assert all(b > a for a, b in zip(times, times[1:]))
+    return rows
+
+
+@pytest.mark.parametrize("fault", ["ulimit -f", "full disk"])
+def test_simulate_that_cannot_write_says_so_and_keeps_the_rows(fmu_dir, tmp_path, fault, request):
+    """A file-size limit of 1 MB (RLIMIT_FSIZE, as `ulimit -f` sets it) or a disk of 128 KiB in the middle of a
+    20 s run: exit 1, one line naming the file and the reason, the whole rows written before it in
+    run.cut-short.csv (a torn last line cut off), no .partial, no run.csv."""
+    if fault == "full disk":
+        folder, limit = request.getfixturevalue("small_disk"), None
+        reason = "No space left on device"
+    else:
+        folder, limit = tmp_path / "out", 1_000_000
+        reason = "File too large"
+    out = folder / "run.csv"
+    done = subprocess.run([sys.executable, "-m", "crane_fmu", "simulate", "--fmu-dir", str(fmu_dir), "--system", "lqr",
+                           "--out", str(out)], capture_output=True, text=True, timeout=300,
+                          preexec_fn=_file_size_limit(limit) if limit else None)
+    cut = folder / "run.cut-short.csv"
+    assert (done.returncode, done.stderr) == (
+        1, f"crane-fmu: cannot write {out}: {reason}; the rows written before are in {cut}\n")
+    assert sorted(p.name for p in folder.iterdir()) == ["run.cut-short.csv"]
+    assert len(_whole_rows(cut)) > 100
+
+
+@pytest.mark.parametrize("command", ["sweep", "compare"])
+def test_sweep_and_compare_on_a_full_disk_say_so_and_keep_the_finished_cases(fmu_dir, tmp_path, small_disk, command):
+    """Their results folder on a disk of 128 KiB that fills while the cases are recorded: exit 1, one line, and the
+    journal keeps every case recorded before (whole JSON lines, a torn last one aside: a re-run resumes)."""
+    import json
+
+    (tmp_path / "s.toml").write_text("stop_time = 1.0\nstep = 0.01\n[parameters]\n\"plant.theta1_0\" = ["
+                                     + ", ".join(f"{0.01 * k:.2f}" for k in range(1, 1201)) + "]\n")
+    out = small_disk / "o"
+    argv = {"sweep": ["sweep", str(tmp_path / "s.toml")], "compare": ["compare", "--quick"]}[command]
+    done = subprocess.run([sys.executable, "-m", "crane_fmu", *argv, "--out", str(out), "--workers", "2",
+                           "--fmu-dir", str(fmu_dir), "--no-progress"], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 1, done.stderr[-2000:]
+    assert done.stderr.count("\n") == 1 and "No space left on device" in done.stderr, done.stderr[-2000:]
+    journal = out / ("quick" if command == "compare" else "") / "cases.jsonl"
+    lines = journal.read_text().split("\n")
+    kept = [json.loads(line) for line in lines[:-1]]  # every line but a torn last one
+    assert kept and all("case_id" in row for row in kept)

@@ -153,7 +153,7 @@ def _simulate(args, system):
     """Run a system, writing the CSV (and plot) of ``args``; ``--parameters`` and ``--set`` override its values."""
     from crane_fmu.cosim import FmiError, ProgressLine, read_result, simulate
     from crane_fmu.cosim.master import communication_points
-    from crane_fmu.cosim.recorder import RESULT_SUFFIXES
+    from crane_fmu.cosim.recorder import RESULT_SUFFIXES, WriteError
 
     stop_time = system.stop_time if args.stop_time is None else args.stop_time
     step = system.step if args.step is None else args.step
@@ -171,6 +171,9 @@ def _simulate(args, system):
     except Stopped as exc:  # SIGINT or SIGTERM: at a communication point, outside every FMU
         _end(progress)
         return _interrupted(recorder, exc.signum)
+    except WriteError as exc:  # a full disk, a file-size limit
+        _end(progress)
+        return _cannot_write(args.out, recorder, exc)
     except FmiError as exc:
         if "KeyboardInterrupt" in str(exc):  # a second Ctrl-C while an FMU's Python code ran: it returned an error
             _end(progress)
@@ -219,6 +222,17 @@ def open_recorder(out):
 def _end(progress):
     for line in progress:
         line.close()
+
+
+def _cannot_write(out, recorder, error):
+    """A result that cannot be written: one line saying why and where the rows written before it are; status 1."""
+    try:
+        recorder.close()  # after a write error: the rows written before kept, a no-op where closing failed
+    except OSError:
+        pass
+    kept = f"the rows written before are in {recorder.written}" if recorder.written else "no row could be kept"
+    print(f"crane-fmu: cannot write {out}: {error.strerror}; {kept}", file=sys.stderr)
+    return 1
 
 
 def _interrupted(recorder, signum=signal.SIGINT):

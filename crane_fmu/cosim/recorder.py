@@ -5,11 +5,21 @@ numpy, pyarrow and scipy.io are imported where a recorder or reader needs them: 
 imports the master would pay otherwise.
 """
 
+import contextlib
 import os
 import re
 import threading
 import time
 from array import array
+
+
+class WriteError(OSError):
+    """The result file could not be written (a full disk, a file-size limit, ...): ``errno``, ``strerror`` and
+    ``filename`` as the OSError's. The rows written before it are kept (:meth:`_StreamingRecorder.close`)."""
+
+
+def _write_error(exc, path):
+    return WriteError(exc.errno, exc.strerror or str(exc), path)
 
 
 class ArrayRecorder:
@@ -96,17 +106,23 @@ class _StreamingRecorder(ArrayRecorder):
             self._pending = (table, claim)
             threading.Thread(target=self._write_keeping_error, args=(table, claim), daemon=True).start()
         else:
-            self._write(table)
+            self._write_checked(table)
 
     def _write_keeping_error(self, table, claim):
         if not claim.acquire(blocking=False):
             return
         try:
-            self._write(table)
+            self._write_checked(table)
         except BaseException as exc:  # raised in the recording thread by _wait
             self._write_error = exc
         finally:
             self._done.set()
+
+    def _write_checked(self, table):
+        try:
+            self._write(table)
+        except OSError as exc:
+            raise _write_error(exc, self.path) from None
 
     def _wait(self):
         """Wait for the chunk being written (or write it here if its thread never began); raise its error."""
@@ -114,7 +130,7 @@ class _StreamingRecorder(ArrayRecorder):
             table, claim = self._pending
             if claim.acquire(blocking=False):
                 self._pending = None
-                self._write(table)
+                self._write_checked(table)
             else:
                 self._done.wait()
                 self._done.clear()
@@ -127,17 +143,39 @@ class _StreamingRecorder(ArrayRecorder):
         raise TypeError(f"{type(self).__name__} streams to disk; read the file with crane_fmu.cosim.read_result")
 
     def close(self, reason=None):
-        """Finish the file; ``reason`` marks a run that was cut short."""
+        """Finish the file; ``reason`` marks a run cut short. Where the file cannot be written (a full disk, a
+        file-size limit), the rows written before are kept in :func:`cut_short_path` as far as the format allows
+        (:meth:`_salvage`) and the :class:`WriteError` is raised."""
         if self._closed:
             return
         self._closed = True
         if self.names is None:  # nothing recorded: leave any existing result alone
             self._discard()
             return
-        self._flush()
-        self._finish(reason)
+        try:
+            if self._write_error is None:
+                self._flush()
+                self._finish(reason)
+            else:  # an earlier chunk could not be written: nothing more will be
+                raise self._write_error
+        except OSError as exc:
+            error = exc if isinstance(exc, WriteError) else _write_error(exc, self.path)
+            self._write_error = None
+            self.written = cut_short_path(self.path)
+            if self._salvage(f"{reason + '; ' if reason else ''}cannot write: {error.strerror}"):
+                os.replace(self._partial, self.written)
+            else:
+                self.written = None
+                with contextlib.suppress(OSError):
+                    os.remove(self._partial)
+            raise error from None
         self.written = cut_short_path(self.path) if reason else self.path
         os.replace(self._partial, self.written)
+
+    def _salvage(self, reason):
+        """After a write error: the file as far as it is whole, with ``reason`` where there is room; whether it
+        holds anything worth keeping."""
+        return False
 
 
 def cut_short_path(path):
@@ -175,6 +213,35 @@ class CsvRecorder(_StreamingRecorder):
     def _discard(self):
         self._file.close()
         os.remove(self._partial)
+
+    def _salvage(self, reason):
+        """The rows written before the error, to the last whole line, and the trailer if there is room for it."""
+        try:
+            self._file.close()  # its buffer may not fit either
+        except OSError:
+            pass
+        whole = _last_line_end(self._partial)
+        os.truncate(self._partial, whole)
+        try:
+            with open(self._partial, "ab") as f:
+                f.write(f"# run cut short: {reason}\n".encode())
+        except OSError:
+            os.truncate(self._partial, whole)  # no room for the trailer: the rows alone
+        return whole > 0
+
+
+def _last_line_end(path, block=65536):
+    """The size of the file at ``path`` up to and with its last newline (0: none)."""
+    with open(path, "rb") as f:
+        end = f.seek(0, os.SEEK_END)
+        while end > 0:
+            start = max(0, end - block)
+            f.seek(start)
+            found = f.read(end - start).rfind(b"\n")
+            if found >= 0:
+                return start + found + 1
+            end = start
+    return 0
 
 
 class ParquetRecorder(_StreamingRecorder):
