@@ -792,3 +792,119 @@ def test_the_example_client_drives_only_the_run_it_was_started_for(server):
         assert len(done.stderr.splitlines()) == 1 and says in done.stderr and "nothing written" in done.stderr
     right = subprocess.run(example + ["--run-id", _run_id(server)], capture_output=True, text=True, timeout=120)
     assert right.returncode == 0 and right.stdout.startswith(f"run {_run_id(server)}: "), right.stderr
+
+
+# --- a derandomised fuzz of both protocols (issue 50) ---
+
+FUZZ_SEED, FUZZ_OPERATIONS = 50, 600  # operations in all, both protocols interleaved; the seed fixes every one
+
+
+def _fuzz_value(rng):
+    """A value a careless or hostile client might send: in range, out of it, huge, non-finite, of another type."""
+    kind = rng.randrange(8)
+    if kind < 3:
+        return ua.Variant(rng.uniform(-3.0, 3.0), ua.VariantType.Double)
+    if kind == 3:
+        return ua.Variant(rng.choice([3.0000001, -3.5, 1e20, -3.4e38, 1e308, 5e-324]), ua.VariantType.Double)
+    if kind == 4:
+        return ua.Variant(rng.choice([math.nan, math.inf, -math.inf]), ua.VariantType.Double)
+    if kind == 5:
+        return ua.Variant(rng.uniform(-5, 5), ua.VariantType.Float)
+    if kind == 6:
+        return ua.Variant(rng.randrange(-10, 10), ua.VariantType.Int32)
+    return rng.choice([ua.Variant("1.0", ua.VariantType.String), ua.Variant(True, ua.VariantType.Boolean)])
+
+
+async def _fuzz_opcua(client, node, names, rng):
+    """One random OPC UA request: a write of a random node, a read, or a Step call with random arguments."""
+    action = rng.randrange(4)
+    target = rng.choice(names + ["Time", "Status", "StatusCode", "RunId", "System", "Step", "nosuch.node", "",
+                                 "x" * 300])
+    try:
+        if action == 0:
+            await node(target).write_value(_fuzz_value(rng))
+        elif action == 1:
+            await node(target).read_value()
+        else:
+            step = node("Step")
+            n = rng.choice([0, 1, 2, rng.randrange(1, 200), 65536, 2**32 - 1])
+            kind = rng.choice([ua.VariantType.UInt32, ua.VariantType.UInt32, ua.VariantType.Int32,
+                               ua.VariantType.Double, ua.VariantType.String])
+            arguments = [] if rng.random() < 0.1 else [ua.Variant(str(n) if kind == ua.VariantType.String else
+                                                                  float(n) if kind == ua.VariantType.Double else
+                                                                  n if kind == ua.VariantType.UInt32 else
+                                                                  max(-2**31, min(2**31 - 1, n)), kind)]
+            if rng.random() < 0.05:
+                arguments.append(ua.Variant(1, ua.VariantType.UInt32))
+            await (await step.get_parent()).call_method(step, *arguments)
+    except (ua.UaError, ua.UaStatusCodeError):
+        pass  # a refused request: the reply is the point
+
+
+def _fuzz_modbus(client, rng):
+    """One random Modbus request: any function on any address with any count and words."""
+    address, count = rng.randrange(0, 140), rng.randrange(1, 20)
+    words = [rng.randrange(0, 65536) for _ in range(count)]
+    if rng.random() < 0.4:  # a float32 value whole at a random even address
+        words = float32_words(rng.choice([rng.uniform(-3.0, 3.0), 1e20, -3.4e38, math.nan, 3.01]))
+    action = rng.randrange(6)
+    reply = (client.read_input_registers(address, count=count, device_id=1) if action == 0 else
+             client.read_holding_registers(address, count=count, device_id=1) if action == 1 else
+             client.write_registers(address, words, device_id=1) if action == 2 else
+             client.write_register(rng.choice([0, 0, 1, address]), rng.choice([0, 1, 5, 199, 65535]), device_id=1)
+             if action == 3 else
+             client.read_coils(address, count=count, device_id=1) if action == 4 else
+             client.write_coil(address, True, device_id=1))
+    return reply
+
+
+def test_a_fuzz_of_both_protocols_never_ends_the_server_nor_leaves_a_value_out_of_range(fmu_dir, tmp_path):
+    """600 random requests (seed 50: the same every run), OPC UA and Modbus interleaved, against a lock-step server
+    with a drive limit of 3 m/s2 and rail ends at +-0.3 m (so that steps are refused too): random node ids,
+    registers, values (in and out of range, non-finite, of other types), functions, Step arguments and orders.
+    After every request the server is running; every 50, and at the end, u as both protocols read it lies within
+    +-3 and time has not gone back. Ctrl-C then ends it with status 0, and every recorded value is finite, u within
+    its range, each time once."""
+    import random
+
+    rng = random.Random(FUZZ_SEED)
+    server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--lock-step", "--set",
+                    "plant.u_max=3", "--set", "plant.x_min=-0.3", "--set", "plant.x_max=0.3", "--opcua", "127.0.0.1:0",
+                    "--modbus", "127.0.0.1:0")
+    served = _served_lqr(fmu_dir)
+    names = [v.name for v in served]
+    address = {r.name: r.address for r in register_map(served)}["controller.u"]
+    modbus = ModbusTcpClient(server.modbus[0], port=server.modbus[1], timeout=10)
+
+    async def fuzz(url):
+        checks = []
+        async with Client(url) as opc:
+            ns, node = await _nodes(opc)
+            last_time = 0.0
+            for k in range(FUZZ_OPERATIONS):
+                if rng.random() < 0.5:
+                    await _fuzz_opcua(opc, node, names, rng)
+                else:
+                    _fuzz_modbus(modbus, rng)
+                assert server.proc.poll() is None, f"the server ended at request {k}"
+                if k % 50 == 49 or k == FUZZ_OPERATIONS - 1:
+                    u, t = await opc.read_values([node("controller.u"), node("Time")])
+                    held = modbus.read_holding_registers(address, count=2, device_id=1).registers
+                    checks.append((u, words_float32(*held), t, last_time))
+                    last_time = t
+        return checks
+
+    try:
+        assert modbus.connect()
+        checks = _run(fuzz(server.opcua), timeout=600)
+    finally:
+        modbus.close()
+        status, out, err = server.stop()
+    assert len(checks) == FUZZ_OPERATIONS // 50
+    for u, u_modbus, t, before in checks:
+        assert -3.0 <= u <= 3.0 and -3.0 <= u_modbus <= 3.0 and t >= before
+    assert status == 0, err[-2000:]
+    recorded = read_csv(server.out)
+    assert all(np.all(np.isfinite(column)) for column in recorded.values())
+    assert np.all(np.abs(recorded["controller.u"]) <= 3.0) and np.all(np.diff(recorded["time"]) > 0)
+    assert checks[-1][2] > 0 and "rolled back" in err  # steps were taken, and refused (rail ends)
