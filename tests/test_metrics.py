@@ -292,3 +292,53 @@ def test_closed_loop_metrics_settling_needs_both_angles():
     short = metrics.closed_loop_metrics(t[:15], np.zeros(15), {"theta1": theta1[:15], "theta2": theta2[:15]},
                                           np.zeros(15), True)
     assert short["residual_after_15s_deg"] is None and short["corr_theta1_theta2"] == pytest.approx(-1.0, abs=1e-12)
+
+
+# --- the scale of every figure that integrates or averages over time, on a grid where h != 1 s (issue 50, item 7:
+# a metric's scale was changed and no test noticed: the known answers above sit on 1 s steps, where a missing
+# or doubled factor of the step reads the same) ---
+
+H, PERIODS, F = 0.01, 6, 2.0  # s, whole periods, Hz: a sine sampled 50 times a period over 3 s
+TF = np.arange(round(PERIODS / F / H) + 1) * H  # 0 .. 3 s
+N = len(TF) - 1
+
+
+def test_move_metrics_scale_with_the_step_against_closed_forms():
+    """Closed forms of sines over whole periods sampled uniformly (sum of sin^2 over N samples = N/2, and the
+    trapezoid of cos^2 with both ends 1 is the same): with u = A sin(2 pi f t) held over each step the effort is
+    A^2 T / 2 [m2/s3]; theta1 = a sin, theta2 = b cos give ISE = deg(a)^2 T/2 + deg(b)^2 T/2 [deg2 s] and RMS
+    deg(sqrt((a^2 + b^2) / 2)); the total variation of a u that flips between +c and -c every step is 2c per
+    step [m/s2]; a trolley that reaches 1 m at t = 1.5 s and stays arrives there, in seconds."""
+    a_u, a, b, c = 0.7, 0.01, 0.004, 0.3
+    T_END = N * H
+    u = a_u * np.sin(2 * np.pi * F * TF)
+    theta1, theta2 = a * np.sin(2 * np.pi * F * TF), b * np.cos(2 * np.pi * F * TF)
+    x = np.minimum(TF / 1.5, 1.0)
+    dx = np.where(TF < 1.5, 1 / 1.5, 0.0)
+    m = metrics.move_metrics(TF, x, dx, (theta1, theta2), u, 1.0, angle_band=math.radians(1.0))
+    assert m["effort"] == pytest.approx(a_u ** 2 * T_END / 2, rel=1e-9)
+    ise = (math.degrees(a) ** 2 + math.degrees(b) ** 2) * T_END / 2
+    assert m["ise_swing_deg2s"] == pytest.approx(ise, rel=1e-9)
+    assert m["rms_swing_deg"] == pytest.approx(math.degrees(math.sqrt((a * a + b * b) / 2)), rel=1e-9)
+    assert m["peak_abs_v"] == pytest.approx(1 / 1.5, rel=1e-12)
+    assert m["arrival_s"] == pytest.approx(1.5, abs=H / 2)
+    flips = c * (-1.0) ** np.arange(N + 1)
+    assert metrics.move_metrics(TF, x, dx, (theta1, theta2), flips, 1.0)["u_total_variation"] == pytest.approx(
+        2 * c * N, rel=1e-12)
+
+
+def test_closed_loop_metrics_scale_with_the_step_against_closed_forms():
+    """theta1 = A sin(2 pi f t) over whole periods: its RMS over the N + 1 samples is A sqrt(N / (2 (N + 1))) in
+    degrees (the sum of the squares is A^2 N / 2), its peak A cos(2 pi f h / 2) (the crest falls half a step from
+    the nearest samples); an exponential decay theta1 = A exp(-t / tau) settles into
+    0.5 deg at tau ln(A / 0.5 deg), within one step of 10 ms, in seconds; the trolley's excursion in metres."""
+    amplitude = math.radians(3.0)
+    swing = {"theta1": amplitude * np.sin(2 * np.pi * F * TF), "theta2": np.zeros_like(TF)}
+    m = metrics.closed_loop_metrics(TF, 0.2 * np.sin(np.pi * TF / 3), swing, np.zeros_like(TF), True)
+    assert m["rms_theta1_deg"] == pytest.approx(3.0 * math.sqrt(N / (2 * (N + 1))), rel=1e-9)
+    assert m["max_theta1_deg"] == pytest.approx(3.0 * math.cos(2 * np.pi * F * H / 2), rel=1e-9)  # crest mid-step
+    assert m["trolley_excursion_m"] == pytest.approx(0.2, rel=1e-9) and m["end_time_s"] == pytest.approx(3.0)
+    tau = 0.4
+    decay = {"theta1": amplitude * np.exp(-TF / tau), "theta2": np.zeros_like(TF)}
+    m = metrics.closed_loop_metrics(TF, np.zeros_like(TF), decay, np.zeros_like(TF), True)
+    assert m["settling_0.5deg_s"] == pytest.approx(tau * math.log(3.0 / 0.5), abs=H)
