@@ -908,3 +908,41 @@ def test_a_fuzz_of_both_protocols_never_ends_the_server_nor_leaves_a_value_out_o
     assert all(np.all(np.isfinite(column)) for column in recorded.values())
     assert np.all(np.abs(recorded["controller.u"]) <= 3.0) and np.all(np.diff(recorded["time"]) > 0)
     assert checks[-1][2] > 0 and "rolled back" in err  # steps were taken, and refused (rail ends)
+
+
+def test_real_time_a_refused_step_holds_the_client_at_zero_and_the_run_goes_on(fmu_dir, tmp_path):
+    """In real time a cycle the plant refuses (u = 1e20 within a drive limit of 1e30 makes its state non-finite) is
+    rolled back: the controller's u is held at zero, one line on stderr says so (Status: holding and why, code 3);
+    with u = 0 the next cycle steps ("the steps are taken again"), and the run goes on to its stop time
+    and ends with status 0, every recorded value finite, u never 1e20."""
+    server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--period", "0.01",
+                    "--watchdog", "5", "--stop-time", "1.0", "--set", "plant.u_max=1e30", "--opcua", "127.0.0.1:0")
+
+    async def push(url):
+        async with Client(url) as opc:
+            ns, node = await _nodes(opc)
+            await asyncio.sleep(0.2)
+            await node("controller.u").write_value(ua.Variant(1e20, ua.VariantType.Double))
+            seen = []
+            for _ in range(300):  # until the server ends, at most ~6 s
+                try:
+                    seen.append(tuple(await opc.read_values([node("StatusCode"), node("Status"),
+                                                              node("controller.u")])))
+                except (ConnectionError, ua.UaError, asyncio.TimeoutError):
+                    break
+                if seen[-1][0] == 4:
+                    break
+                await asyncio.sleep(0.01)
+            return seen
+
+    try:
+        seen = _run(push(server.opcua))
+    finally:
+        status, out, err = server.wait(60)
+    assert seen[-1][0] == 4, seen[-3:]  # (the holding lasts one 10 ms cycle: stderr says it, not a poll)
+    assert status == 0 and "finished at t = 1 s" in out, err[-2000:]
+    assert err.count("rolled back") == 1 and "non-finite" in err and "held at zero" in err, err
+    assert "the steps are taken again" in err
+    served = read_csv(server.out)
+    assert all(np.all(np.isfinite(column)) for column in served.values()) and served["time"][-1] == 1.0
+    assert np.all(np.abs(served["controller.u"]) < 1e20) and served["controller.u"][-1] == 0.0

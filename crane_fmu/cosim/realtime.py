@@ -303,28 +303,41 @@ class Runner:
         self.pacer = Pacer(self.period_steps * self.step, self.clock, self.sleep)
         self._last_write = self.clock()  # the watchdog counts from the first deadline
         m = self.period_steps
-        refused = None
+        self._refused = None
         while not self._stopping.is_set():
             n = m if self.last_steps is None else min(m, self.last_steps - self.steps)
             if n <= 0:
                 self._stopping.set()
                 break
-            try:
-                if not self.pacer.cycle(lambda n=n: self._cycle(n)):
-                    break
-                refused = None
-            except StepRefused as exc:
-                if refused is not None or self.external is None:  # refused again: the cause is not the client's
-                    raise refused.error if refused is not None else exc.error from None
-                refused = exc
-                self.external.set_outputs(dict.fromkeys(self.external.outputs, 0.0))
-                self.log(f"{exc}; {self.external.name}'s outputs held at zero until the client writes")
-                self._set_status(f"holding: {exc}", "holding")
+            if not self.pacer.cycle(lambda n=n: self._cycle(n)):
+                break
 
     def _cycle(self, n):
         if self.watchdog and self.external:
             self._watch()
-        self.advance(n)
+        try:
+            self.advance(n)
+        except StepRefused as exc:
+            self._hold_refused(exc)
+            return
+        if self._refused is not None:
+            self._refused = None
+            self.log(f"t = {self.time():.6g} s: the steps are taken again")
+            self._set_status("running in real time", "running")
+
+    def _hold_refused(self, exc):
+        """Real time: a cycle an FMU refused was rolled back; the run waits at its time (the cycles go on, time
+        does not) until the values written let it step. The first refusal in a row holds the external instance's
+        outputs at zero and says so; without an external instance no write can change it: the run fails."""
+        if self.external is None:
+            raise exc.error from None
+        if self._refused is None:
+            self.external.set_outputs(dict.fromkeys(self.external.outputs, 0.0))
+            self.log(f"{exc}; {self.external.name}'s outputs held at zero until a write lets the run step")
+            self._publish(written={f"{self.external.name}.{name}": 0.0 for name in self.external.outputs
+                                   if f"{self.external.name}.{name}" in self._index})
+        self._refused = exc
+        self._set_status(f"holding: {exc}", "holding")
 
     def _watch(self):
         now = self.clock()
