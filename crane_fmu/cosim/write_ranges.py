@@ -1,7 +1,7 @@
 """The range in which a program outside may write each writable served variable (``serve``).
 
 A value is only as good as what it drives. An external instance's output connected to an input that the
-receiving FMU limits with a parameter ``<input>_max`` (the plant's drive: ``u`` by ``u_max``, ``ux`` by
+receiving FMU limits with a parameter ``<input>_max`` (a drive: ``u`` by ``u_max``, ``ux`` by
 ``ux_max``) may be written within ``+-<input>_max``, the value in effect after initialisation; where that
 parameter says no limit (1e60 or more), or where there is none, within the stated default of its unit
 (:data:`DEFAULT_LIMITS`, else :data:`DEFAULT_LIMIT`). The ``min``/``max`` that either variable declares in its
@@ -12,8 +12,8 @@ any finite value).
 import math
 
 UNLIMITED = 1e60  # the FMUs' "no limit" (crane_fmu.model.limits)
-# The stated default limit of an unlimited drive: 50 m/s2 (about 5 g), ten times and more what an overhead crane's
-# trolley or hoist drive gives, and small enough that no step of the plant held at it leaves finite numbers.
+# The stated default limit of an unlimited drive: 50 m/s2 (about 5 g), ten times and more what an industrial
+# travelling or hoisting drive gives, and small enough that a step with it held stays within finite numbers.
 DEFAULT_LIMITS = {"m/s2": 50.0}
 DEFAULT_LIMIT = 1e6  # any other unit (SI): a force of 1 MN, a position of 1000 km
 
