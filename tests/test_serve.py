@@ -667,9 +667,9 @@ def test_step_without_n_takes_one_and_a_request_is_bounded(fmu_dir, tmp_path):
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_a_signal_stops_a_long_step_request_at_the_next_step_boundary(fmu_dir, tmp_path, signum):
-    """Step(65535) (over a minute of simulated time, seconds of work) running when SIGINT or SIGTERM comes: the server
-    ends within a few seconds, the request cut at a step boundary (Bad status, the steps taken kept), status 0,
-    the rows up to there recorded, each time once."""
+    """Step(65535) (over a minute of simulated time, seconds of work) running when SIGINT or SIGTERM comes (once its
+    first rows are written): the server ends within a few seconds, the request cut at a step boundary (Bad status,
+    the steps taken kept), status 0, the rows up to there recorded, each time once."""
     import time
 
     server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--lock-step", "--opcua",
@@ -681,7 +681,9 @@ def test_a_signal_stops_a_long_step_request_at_the_next_step_boundary(fmu_dir, t
 
     async def signal_meanwhile():
         request = asyncio.ensure_future(long_request(server.opcua))
-        await asyncio.sleep(1.5)
+        partial = Path(str(server.out) + ".partial")
+        while not request.done() and not (partial.exists() and partial.stat().st_size > 100_000):
+            await asyncio.sleep(0.005)  # the request runs: its rows are being written
         server.proc.send_signal(signum)
         sent = time.monotonic()
         code = await request
