@@ -162,8 +162,8 @@ def test_omsimulator_over_a_built_in_ssp_files_full_stop_time_ends_on_our_master
                                                                                          name, folder):
     """OMSimulator over an SSP file for its whole stop time ends with a remainder step of about 1e-13 s (its summed
     time's rounding), which every component, Python and native, takes as no step, as the one-FMU systems do: the
-    last row equals our master's (SAME). On main the Python controllers took it as a step: lqg-transport's last u
-    differed by 8.6e-3 relative (issue 50); the tests of 1 s could not see it."""
+    last row equals our master's (SAME). On main the components took it as a step: lqg-transport's last row
+    differed by 1.7e-2 (the state estimator's update; issue 50); the tests of 1 s could not see it."""
     system = systems.get(name)
     if folder == "python":
         ssp = systems_dir(fmu_dir) / f"{name}.ssp"
