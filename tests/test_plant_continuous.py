@@ -171,3 +171,22 @@ def test_a_host_stops_at_the_speed_limit_and_the_speed_stays_there():
     assert time == pytest.approx(0.5, abs=1e-9) and event.mode.speed == 1
     assert np.all(states[501:, 1] == 0.5)
     assert states[-1, 0] == pytest.approx(0.125 + 0.5 * 1.5, abs=1e-9)
+
+
+@pytest.mark.parametrize("u, lift", [(-0.7, 0.4), (0.6, -0.3)])
+def test_a_held_limits_indicator_is_the_acceleration_pressing_into_it_at_both_ends(u, lift):
+    """Every held limit, lower and upper, of the trolley's speed, the cable's length and the cable's speed (issue
+    50, item 7: one sign of these was turned and a single test saw it): its indicator is the demand pressing into
+    the limit, positive while it presses and negative once it pulls away (the event that releases it): at the
+    lower limit -demand, at the upper +demand (the trolley's demand u, the hoist's acceleration)."""
+    config = COMPONENT.check({"x_min": -1.0, "x_max": 2.0, "v_max": 0.5, "l1_min": 0.5, "l1_max": 1.5,
+                              "dl1_max": 0.3})
+    state = (0.5, 0.2, 0.0, 0.0, 0.0, 0.0, 1.2, -0.1, 0.0)
+    inputs = (u, lift, 0.0, 0.0)
+    expected = {"-v_max": -u, "v_max": u, "l1_min": -lift, "l1_max": lift, "-dl1_max": -lift, "dl1_max": lift}
+    position = {name: i for i, name in enumerate(me.INDICATORS)}
+    for field, (lower, upper) in (("speed", ("-v_max", "v_max")), ("cable", ("l1_min", "l1_max")),
+                                  ("hoist", ("-dl1_max", "dl1_max"))):
+        for held, name in ((-1, lower), (1, upper)):
+            z = me.event_indicators(config, state, inputs, FREE._replace(**{field: held}))
+            assert z[position[name]] == pytest.approx(expected[name], rel=1e-12), (field, held, name)
