@@ -30,6 +30,11 @@ from crane_fmu.model import mpc, plant, plant3d, plant3d_continuous, qp
 from crane_fmu.model.component import Step
 from crane_fmu.model.plant_continuous import FREE, Mode
 
+# The free swing's largest theta2 [deg]: Section V's plant released at theta1 = 10 deg, 20 s on a 1 ms grid. The
+# independent answer (DOP853 on the sympy equations, tests/derivation.py) is 15.59762 (test_fmus.py
+# test_the_free_swings_peak_is_the_independent_answer); every host of the native and Python FMUs must give it.
+FREE_SWING_MAX_THETA2_DEG = 15.5976
+
 # ---- the quick board of the built-in controllers (conftest.py's builtin_quick_board) -------------------------------
 
 BOARD_CASES = 2  # of the paired design on builtin_quick_board: every scenario, the fewest cases (16 cases, as

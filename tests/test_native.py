@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
+from helpers import FREE_SWING_MAX_THETA2_DEG
 from native_fmus import close, compiler, messages, open_native, steps_after_restore
 
 from crane_fmu import components, systems
@@ -31,7 +32,6 @@ from crane_fmu.model import plant
 from crane_fmu.model.parameters import PlantParameters
 
 PLANT = components.get("CranePlant")
-FREE_SWING_MAX_THETA2_DEG = 15.5976  # the Python FMU's free swing from 10 deg, 20 s at 1 ms
 
 
 def _python_fmu(fmu_dir, version):

@@ -17,6 +17,7 @@ import zipfile
 import numpy as np
 import pytest
 from fmpy import read_model_description
+from helpers import FREE_SWING_MAX_THETA2_DEG
 from native_fmus import compiler
 
 from crane_fmu import systems
@@ -26,7 +27,6 @@ from crane_fmu.cosim import run
 from crane_fmu.model.tables import STATE
 
 CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # what `env -i PATH=/usr/bin:/bin` leaves: no venv, no pyenv
-FREE_SWING_MAX_THETA2_DEG = 15.5976  # the Python FMU's
 
 
 
