@@ -158,13 +158,14 @@ def plan(chosen, fmu_dir, scenarios=None, cases=scenario_registry.CASES):
 
 def provenance(case):
     """What a case's figures were made of, for its row: the sha256 of every FMU, the seeds, the master, the
-    step (and, added when it runs, the versions and the date)."""
+    step, the stop time (and, added when it runs, the versions and the date)."""
     seeds = {f"{instance}.seed": values["seed"] for instance, values in sorted(case["parameters"].items())
              if "seed" in values}
     plant = case["parameters"].get("plant", {})
     return {"fmus_sha256": json.dumps({case["files"][n]: case["sha256"][n] for n in case["sha256"]},
                                       sort_keys=True),
             "seeds": json.dumps(seeds, sort_keys=True), "master": case["master"], "step": case["step"],
+            "stop_time": case["stop_time"],
             **{f"plant_{k}": plant.get(k) for k in ("l1", "l2", "m1", "m2")}}
 
 

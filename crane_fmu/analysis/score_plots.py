@@ -207,11 +207,16 @@ def summary_figure(rows, users=(), stats=None):
                 Line2D([], [], color="k", marker="o", ls="none", ms=4, label="90th percentile (paired; marker "
                        "per controller)")]
     fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 4), fontsize=8, frameon=False)
-    quick = any(r.get("quick") for r in rows)
-    fig.suptitle(("QUICK board: " if quick else "") + "each scenario's ranking figure; lower is better; the rank "
-                 "right of each bar (= a tie); " + ", ".join(s for s in paired() if s in shown) + " on the paired "
-                 "design", fontsize=10)
+    fig.suptitle(summary_title(rows, shown), fontsize=10)
     return fig
+
+
+def summary_title(rows, shown):
+    """The summary's title; it names the scenarios of ``shown`` on the paired design, where there are any."""
+    on_design = [s for s in paired() if s in shown]
+    return (("QUICK board: " if any(r.get("quick") for r in rows) else "") + "each scenario's ranking figure; lower "
+            "is better; the rank right of each bar (= a tie)"
+            + (f"; {', '.join(on_design)} on the paired design" if on_design else ""))
 
 
 def plot_all(rows, out_dir, users=(), stats=None, store=None):
