@@ -354,11 +354,13 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
                                         stored_scenario_floors()))
         new = animations.result()
         paths, drawn = plots.result() + new, len(new)
+    removed = score_plots.prune(rows, out_dir, animate)  # an earlier board's pictures, never shown as this one's
     page = board_page.write_page(out_dir)
     not_ok = sum(r["status"] not in ("ok", "n/a") for r in rows)
     log(f"{len(planned)} cases: {len(ran)} run now, {len(planned) - len(pending)} already done, {not_ok} not ok, "
         f"in {time.perf_counter() - start:.1f} s; wrote {board_md}{' (a QUICK board)' if quick else ''}, {page}, "
-        f"{out_dir / 'scores.parquet'}, {len(paths) - drawn} plots and {drawn} animations drawn now")
+        f"{out_dir / 'scores.parquet'}, {len(paths) - drawn} plots and {drawn} animations drawn now"
+        + (f"; removed {len(removed)} pictures of an earlier board" if removed else ""))
     return rows
 
 
@@ -422,7 +424,8 @@ def check(out_dir, sample=5, workers=None, scheduler=None, log=print, seed=None)
     Parameters
     ----------
     out_dir : path
-        A board's folder (with board.json and scores.parquet; a quick board's is ``OUT/quick``).
+        A board's folder (with board.json and scores.parquet); where it holds none, its quick board
+        (``OUT/quick``).
     sample : int
         How many of its cases to run again.
 
@@ -439,6 +442,9 @@ def check(out_dir, sample=5, workers=None, scheduler=None, log=print, seed=None)
     import pyarrow.parquet as pq
 
     out_dir = Path(out_dir)
+    if not (out_dir / MANIFEST).exists() and (out_dir / "quick" / MANIFEST).exists():
+        out_dir = out_dir / "quick"  # where `compare --quick --out OUT` wrote it
+        log(f"no full board in {out_dir.parent}: checking the quick board in {out_dir}")
     try:
         manifest = json.loads((out_dir / MANIFEST).read_text())
         recorded = {r["case_id"]: r for r in pq.read_table(out_dir / "scores.parquet").to_pylist() if r["case_id"]}

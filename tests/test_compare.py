@@ -13,7 +13,7 @@ from crane_fmu import components, systems
 from crane_fmu.analysis import board_tables, ranking, scenarios
 from crane_fmu.analysis import planar_scenarios as planar
 from crane_fmu.cli import main
-from crane_fmu.compare import compare, contenders
+from crane_fmu.compare import check, compare, contenders
 from crane_fmu.cosim import ArrayRecorder, read_csv, run
 from crane_fmu.sweep.runner import JOURNAL
 
@@ -446,6 +446,14 @@ def test_check_confirms_the_figures_bit_for_bit_or_names_the_case_that_differs(u
     assert f"differs: UserLqr, S1, nominal: settling_0.5deg_s: {row['settling_0.5deg_s']!r} recorded, " in out
     assert main(["compare", "--check", str(tmp_path / "nothing")]) == 2
     assert "--check " in capsys.readouterr().err
+
+
+def test_check_finds_a_quick_board_in_OUT_quick(quick_board, dask_scheduler):
+    """`compare --quick --out OUT` writes OUT/quick; `compare --check OUT` finds it there (OUT holds no full board)."""
+    out, _, _ = quick_board
+    log = []
+    assert check(out.parent, 2, scheduler=dask_scheduler, log=log.append) == []
+    assert log[0] == f"no full board in {out.parent}: checking the quick board in {out}"
 
 
 def test_the_page_is_one_file_that_a_browser_shows_with_its_tables_and_pictures(quick_board, tmp_path):

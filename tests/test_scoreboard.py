@@ -4,6 +4,7 @@ No FMU runs here: each rule is shown on rows written to isolate it (test_compare
 """
 
 import itertools
+import json
 import math
 import re
 
@@ -476,3 +477,28 @@ def test_every_scenario_says_how_long_it_runs_and_the_summary_title_names_only_t
     assert not summary_title(rows, ["S1", "S7"]).endswith(("design", ";", " ")) and "paired" not in summary_title(
         rows, ["S1", "S7"])
     assert summary_title(rows, ["S1", "S3", "S9"]).endswith("; S3, S9 on the paired design")
+
+
+def test_a_board_removes_only_the_pictures_of_an_earlier_board_it_does_not_draw_again(tmp_path, monkeypatch):
+    """An earlier board's S7 picture and its animations of runs this board does not animate go; this board's
+    pictures, files it never writes (notes.txt, S3.png) and an animation not in its ledger stay."""
+    from crane_fmu.analysis import score_plots
+
+    monkeypatch.setattr(score_plots, "animation_needs", lambda signals: "")  # every run here can be animated
+    animations = tmp_path / "animations"
+    animations.mkdir()
+    for name in ("S1.png", "S7.png", "summary.png", "S3.png", "notes.txt", "animations/S2_A.gif",
+                 "animations/S2_Old.gif", "animations/S2_Old.mp4", "animations/S2_mine.gif"):
+        (tmp_path / name).write_text("earlier")
+    (animations / ".drawn.json").write_text('{"S2_A.gif": "1 15 fps", "S2_Old.gif": "2 15 fps", '
+                                            '"S2_Old.mp4": "2 15 fps"}')
+    rows = [_row("A", "S1", signals={"time": [0.0]}), _row("A", "S2", signals={"time": [0.0]})]
+    removed = score_plots.prune(rows, tmp_path, ("S2",))
+    assert sorted(p.relative_to(tmp_path).as_posix() for p in removed) == [
+        "S7.png", "animations/S2_Old.gif", "animations/S2_Old.mp4"]
+    left = sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*") if p.is_file())
+    assert left == ["S1.png", "S3.png", "animations/.drawn.json", "animations/S2_A.gif", "animations/S2_mine.gif",
+                    "notes.txt", "summary.png"]
+    assert list(json.loads((animations / ".drawn.json").read_text())) == ["S2_A.gif"]
+    score_plots.prune(rows, tmp_path, ())  # a board that animates nothing: no animation of an earlier one stays
+    assert not (animations / "S2_A.gif").exists() and (animations / "S2_mine.gif").exists()

@@ -34,8 +34,9 @@ def arguments(p):
     p.add_argument("--scenario", metavar="S1,S6", help="the scenarios to run (default: every one)")
     p.add_argument("--animate", default="S2", metavar="none|all|S1|S2|S7",
                    help="whose nominal runs to animate (default S2); drawn again only when the run changed")
-    p.add_argument("--check", metavar="OUT", help="instead: run a random sample of the board in OUT again and "
-                                                  "compare every figure, bit for bit (exit 1 when one differs)")
+    p.add_argument("--check", metavar="OUT", help="instead: run a random sample of the board in OUT (or, where OUT "
+                                                  "holds none, of the quick board in OUT/quick) again and compare "
+                                                  "every figure, bit for bit (exit 1 when one differs)")
     p.add_argument("--sample", type=int, default=5, metavar="N", help="with --check: how many cases (default 5)")
 
 
