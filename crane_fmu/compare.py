@@ -350,12 +350,13 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
         for part in parts:
             stats.update(part.result())
         plots = pool.submit(score_plots.plot_all, rows, out_dir, {c.name for c in chosen if c.user}, stats)
-        _write(board_md, board_tables.render(rows, chosen, quick, cases, _provenance_lines(manifest), stats,
-                                        stored_scenario_floors()))
+        floors = stored_scenario_floors()
+        _write(board_md, board_tables.render(rows, chosen, quick, cases, _provenance_lines(manifest), stats, floors))
         new = animations.result()
         paths, drawn = plots.result() + new, len(new)
     removed = score_plots.prune(rows, out_dir, animate)  # an earlier board's pictures, never shown as this one's
     page = board_page.write_page(out_dir)
+    log(board_tables.render_terminal(rows, {c.name for c in chosen if c.user}, quick, cases, stats, floors))
     not_ok = sum(r["status"] not in ("ok", "n/a") for r in rows)
     log(f"{len(planned)} cases: {len(ran)} run now, {len(planned) - len(pending)} already done, {not_ok} not ok, "
         f"in {time.perf_counter() - start:.1f} s; wrote {board_md}{' (a QUICK board)' if quick else ''}, {page}, "

@@ -448,6 +448,19 @@ def test_check_confirms_the_figures_bit_for_bit_or_names_the_case_that_differs(u
     assert "--check " in capsys.readouterr().err
 
 
+def test_compare_prints_the_ranking_in_the_terminal(quick_board):
+    """Not only file paths: every scenario's line (how long it runs), then its controllers by rank, one a line,
+    in the board's order."""
+    _, rows, log = quick_board
+    printed = "\n".join(log).splitlines()
+    for sid in ("S1", "S2", "S3"):
+        at = next(i for i, line in enumerate(printed) if line.startswith(f"{sid}") and "ranked by" in line)
+        assert "10 s; ranked by" in printed[at]
+        ranked = ranking.summarise(rows, sid)
+        for k, line in enumerate(ranked, start=1):
+            assert printed[at + k].startswith(f"  {line['rank']}. {line['controller']}"), printed[at:at + 4]
+
+
 def test_check_finds_a_quick_board_in_OUT_quick(quick_board, dask_scheduler):
     """`compare --quick --out OUT` writes OUT/quick; `compare --check OUT` finds it there (OUT holds no full board)."""
     out, _, _ = quick_board

@@ -66,12 +66,9 @@ def floor_ratio(value, floor):
     return "" if floor is None or value is None else f" ({value / floor.seconds:.2f}x floor)"
 
 
-def render_summary(rows, users=(), quick=False, cases=CASES, stats=None, floors=None):
-    """One table: per scenario the controllers by rank, with their ranking figure (the worst case, and its ratio to
-    the scenario's floor where ``floors`` gives one; on the paired design the median with its 95 % interval), the
-    targets they met and ties; then those it does not apply to."""
-    stats = board_statistics(rows) if stats is None else stats
-    floors = floors or {}
+def _summary_cells(rows, users, stats, floors):
+    """``[(scenario, cells)]``: per scenario with a row, its controllers by rank (each cell one controller's rank,
+    figure, targets and tie), then those it does not apply to."""
     lines = []
     for sid, s in scenarios().items():
         ranked, absent = summarise(rows, sid), not_applicable(rows, sid)
@@ -96,12 +93,32 @@ def render_summary(rows, users=(), quick=False, cases=CASES, stats=None, floors=
                          + (", tie" if line["tie"] else "") + _p_above(line))
         cells += [f"{_name(name, users)}: {why}" for name, why in sorted(absent.items())]
         lines.append((sid, cells))
+    return lines
+
+
+def render_summary(rows, users=(), quick=False, cases=CASES, stats=None, floors=None):
+    """One table: per scenario the controllers by rank, with their ranking figure (the worst case, and its ratio to
+    the scenario's floor where ``floors`` gives one; on the paired design the median with its 95 % interval), the
+    targets they met and ties; then those it does not apply to."""
+    stats = board_statistics(rows) if stats is None else stats
+    lines = _summary_cells(rows, users, stats, floors or {})
     width = max(len(cells) for _, cells in lines)
     out = [table_row(["scenario", "runs", "ranked by", "controllers by rank"] + [""] * (width - 1)),
            "|---|---|---|" + "---|" * width]
     for sid, cells in lines:
         out.append(table_row([_scenario_label(sid, cases, quick), run_length(rows, sid), _ranked_by(sid)] + cells
                              + [""] * (width - len(cells))))
+    return "\n".join(out)
+
+
+def render_terminal(rows, users=(), quick=False, cases=CASES, stats=None, floors=None):
+    """The summary table for a terminal: per scenario a line (what it is, how long it runs, what ranks), then its
+    controllers by rank, one a line."""
+    stats = board_statistics(rows) if stats is None else stats
+    out = []
+    for sid, cells in _summary_cells(rows, users, stats, floors or {}):
+        out.append(f"{_scenario_label(sid, cases, quick)} ({run_length(rows, sid)}; ranked by {_ranked_by(sid)})")
+        out += [f"  {cell.replace('`', '')}" for cell in cells]
     return "\n".join(out)
 
 
