@@ -40,6 +40,7 @@ from crane_fmu.analysis.floor import stored_scenario_floors
 from crane_fmu.analysis.scenarios import Contender
 from crane_fmu.batch import JOURNAL, Progress, ignore_interrupts, read_journal, run_batch
 from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
+from crane_fmu.cosim.suggest import did_you_mean
 from crane_fmu.cosim.system import read_fmu
 from crane_fmu.sweep.runner import local_fmus, write_table
 
@@ -79,7 +80,7 @@ def contenders(chosen=(), fmu_dir="build/fmus", only=False):
             component = components.find(item)
             if component is None or component.role != "controller":
                 raise ValueError(f"no controller {item!r}; controllers: {', '.join(builtin)} (or a controller .fmu "
-                                 "file)")
+                                 "file)" + did_you_mean(item, builtin))
             variables = {v.name: v.causality for v in component.variables}
             name, source, user = item, item, False
         if name in result:
@@ -302,7 +303,8 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     scenarios = list(known) if scenarios is None else list(dict.fromkeys(scenarios))
     wrong = [s for s in scenarios if s not in known]
     if wrong or not scenarios:
-        raise ValueError(f"--scenario {','.join(wrong)}: no such scenario; the scenarios are {', '.join(known)}")
+        raise ValueError(f"--scenario {','.join(wrong)}: no such scenario; the scenarios are {', '.join(known)}"
+                         + (did_you_mean(wrong[0], known) if wrong else ""))
     cases = (scenario_registry.QUICK_CASES if quick else scenario_registry.CASES) if cases is None else cases
     if isinstance(cases, bool) or not isinstance(cases, int) or cases < 1:
         raise ValueError(f"--cases must be a whole number >= 1, got {cases!r}")

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from crane_fmu import DEFAULT_FMU_DIR, DEFAULT_SYSTEM
 from crane_fmu.cosim.algorithms import ALGORITHMS
+from crane_fmu.cosim.suggest import did_you_mean
 
 from .common import UsageError, number, parse_sets, writable_file
 
@@ -87,7 +88,7 @@ def _use(items, system):
             raise UsageError(f"--use {item!r}: expected INSTANCE=FILE.fmu, e.g. controller=mine.fmu")
         if instance not in system.instances:
             raise UsageError(f"--use {item!r}: system {system.name} has no instance {instance!r}; instances: "
-                             f"{', '.join(system.instances)}")
+                             f"{', '.join(system.instances)}" + did_you_mean(instance, system.instances))
         if Path(path).suffix != ".fmu":
             raise UsageError(f"--use {item!r}: {path} is not an FMU file (the name must end in .fmu)")
         if not Path(path).is_file():

@@ -2,6 +2,8 @@
 
 from collections import namedtuple
 
+from .suggest import did_you_mean
+
 Connection = namedtuple("Connection", "source output target input")
 Connection.__doc__ = "``source.output`` feeds ``target.input`` (instance and variable names)."
 
@@ -29,13 +31,14 @@ def connect(interfaces, connections=(), match_names=True):
         for instance in (c.source, c.target):
             if instance not in interfaces:
                 raise ValueError(f"connection {c.source}.{c.output} -> {c.target}.{c.input}: unknown instance "
-                                 f"{instance!r}; instances: {', '.join(interfaces)}")
+                                 f"{instance!r}; instances: {', '.join(interfaces)}"
+                                 + did_you_mean(instance, interfaces))
         if c.output not in interfaces[c.source][1]:
             raise ValueError(f"connection: {c.source}.{c.output} is not an output; outputs: "
-                             + ", ".join(interfaces[c.source][1]))
+                             + ", ".join(interfaces[c.source][1]) + did_you_mean(c.output, interfaces[c.source][1]))
         if c.input not in interfaces[c.target][0]:
             raise ValueError(f"connection: {c.target}.{c.input} is not an input; inputs: "
-                             + ", ".join(interfaces[c.target][0]))
+                             + ", ".join(interfaces[c.target][0]) + did_you_mean(c.input, interfaces[c.target][0]))
         if (c.target, c.input) in fed:
             raise ValueError(f"connection: {c.target}.{c.input} is fed twice")
         fed.add((c.target, c.input))
