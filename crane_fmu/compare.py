@@ -41,7 +41,7 @@ from crane_fmu.analysis.scenarios import Contender
 from crane_fmu.batch import JOURNAL, Progress, ignore_interrupts, read_journal, run_batch
 from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
 from crane_fmu.cosim.suggest import did_you_mean
-from crane_fmu.cosim.system import read_fmu
+from crane_fmu.cosim.system import read_fmu, unfed_inputs
 from crane_fmu.sweep.runner import local_fmus, write_table
 
 SIGNAL_EVERY = 0.02  # s: the signals kept for plots and animations
@@ -157,6 +157,21 @@ def plan(chosen, fmu_dir, scenarios=None, cases=scenario_registry.CASES):
     return planned, blobs, refused
 
 
+def unfed(chosen, fmu_dir, scenarios=None):
+    """One line per input that nothing feeds in a contender's scenarios (:func:`crane_fmu.cosim.system.unfed_inputs`,
+    from the first case of each: every case of a scenario has the same connections), naming the scenarios."""
+    found = {}
+    for contender in chosen:
+        for sid in scenario_registry.scenarios() if scenarios is None else scenarios:
+            if scenario_registry.applicable(contender, sid):
+                continue
+            for run in scenario_registry.systems_for(contender, sid, 1):
+                fmus, connections = systems.resolve(run.system, fmu_dir)
+                for line in unfed_inputs(fmus, connections, run.system.parameters):
+                    found.setdefault(f"{contender.name}: {line}", []).append(sid)
+    return [f"{line} (in {', '.join(dict.fromkeys(sids))})" for line, sids in found.items()]
+
+
 def provenance(case):
     """What a case's figures were made of, for its row: the sha256 of every FMU, the seeds, the master, the
     step, the stop time (and, added when it runs, the versions and the date)."""
@@ -262,7 +277,7 @@ def _same_columns(rows):
 
 
 def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=None, quick=False, progress=True,
-            animate=("S2",), only=False, log=print, scenarios=None, cases=None):
+            animate=("S2",), only=False, log=print, scenarios=None, cases=None, strict=False, warn=None):
     """Score the contenders; write scoreboard.md, scores.parquet, board.json, plots and animations to ``out_dir``.
 
     Parameters
@@ -280,6 +295,9 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     cases : int, optional
         Cases of the paired design (default :data:`~crane_fmu.analysis.scenarios.CASES`, quick
         :data:`~crane_fmu.analysis.scenarios.QUICK_CASES`).
+    strict : bool
+        Refuse (ValueError) a board where an input of a contender's scenario is fed by nothing (:func:`unfed`);
+        else each is a warning, given to ``warn`` (default: a line on stderr).
 
     Returns
     -------
@@ -317,6 +335,11 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
             raise ValueError(f"{contender.name}: no scenario of {', '.join(scenarios)} applies to it: "
                              f"{reasons.pop()}; it can run {', '.join(runs)}")
     planned, blobs, refused = plan(chosen, fmu_dir, scenarios, cases)
+    lines = unfed(chosen, fmu_dir, scenarios)
+    if strict and lines:
+        raise ValueError(f"--strict: {'; '.join(lines)}")
+    for line in lines:
+        (warn or (lambda text: print(f"crane-fmu: warning: {text}", file=sys.stderr)))(line)
     out_dir.mkdir(parents=True, exist_ok=True)  # only now: a refused board leaves no folder behind
     done = read_journal(out_dir)
     why = stale(done, planned)

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from .adapters import open_instance
-from .connections import check_both_ends, connect
+from .connections import check_both_ends, connect, unfed
 from .instance import FmiError, read_fmu
 from .master import Master, communication_points
 from .recorder import ArrayRecorder
@@ -127,6 +127,22 @@ def _interfaces(fmus):
         interfaces[name] = ([v.name for v in md.modelVariables if v.causality == "input"],
                             [v.name for v in md.modelVariables if v.causality == "output"])
     return interfaces
+
+
+def unfed_inputs(fmus, connections, parameters=None):
+    """One line per input of the FMUs ``{instance: path}`` that no connection feeds and ``parameters`` (``{instance:
+    {variable: value}}``) gives no value: it is read as its start value through the run. An input whose description
+    says what it means unconnected (:data:`~crane_fmu.cosim.connections.UNCONNECTED`) is left out."""
+    inputs, outputs, starts = {}, {}, {}
+    for name, path in fmus.items():
+        variables = read_fmu(path).modelVariables
+        inputs[name] = {v.name: v.description for v in variables if v.causality == "input"}
+        outputs[name] = [v.name for v in variables if v.causality == "output"]
+        starts.update({(name, v.name): v.start for v in variables if v.causality == "input"})
+    given = [(instance, variable) for instance, values in (parameters or {}).items() for variable in values]
+    return [f"input {instance}.{name} is fed by nothing: it stays at its start value {starts[instance, name]}"
+            + (f" (the nearest output: {near})" if near else "")
+            for instance, name, near in unfed(inputs, outputs, connections, given)]
 
 
 def settable(fmus):
