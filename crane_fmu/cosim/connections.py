@@ -88,7 +88,7 @@ def check_both_ends(designed, interfaces, fmus, optional=None):
 
 
 # An input meant to be left unconnected says so in its description, with what its start value then means
-# (``"horizontal force on the hook; unconnected: 0, no force"``): :func:`unfed` does not report it.
+# (``"an external force; unconnected: 0, none"``): :func:`unfed` does not report it.
 UNCONNECTED = "unconnected: "
 
 
