@@ -502,3 +502,14 @@ def test_a_board_removes_only_the_pictures_of_an_earlier_board_it_does_not_draw_
     assert list(json.loads((animations / ".drawn.json").read_text())) == ["S2_A.gif"]
     score_plots.prune(rows, tmp_path, ())  # a board that animates nothing: no animation of an earlier one stays
     assert not (animations / "S2_A.gif").exists() and (animations / "S2_mine.gif").exists()
+
+
+def test_the_mpc_targets_report_prints_the_digits_that_show_a_miss():
+    """`crane-fmu targets`: a worst arrival of 5.004 s against the 5.0 s target is MISSED and prints as 5.004 s."""
+    from crane_fmu.analysis import controller_targets as targets
+
+    run = targets.Run("mpc_S3", "#00", None, None, 1e-3, 10.0)
+    lines = []
+    targets.report_mpc([(run, {"arrival_s": 5.004, "residual_deg": 0.1, "error": None})], {}, lines.append)
+    assert "  S3: worst arrival: 5.004 s (target <= 5 s, ambition 4 s): MISSED" in lines
+    assert "  S3 (plants unknown to it): every residual: 0.100 deg (target <= 0.1 deg): met" in lines

@@ -7,7 +7,7 @@ from .scenarios import CASES, notes, scenarios
 from .scenarios import plants as scenario_plants
 
 
-def _cell(value, digits=2, unit="", against=()):
+def figure_text(value, digits=2, unit="", against=()):
     """A figure with ``digits`` decimals, or more where fewer would print it as one of the limits ``against`` it
     is not (4.004 s against a 4.0 s target prints 4.004 s, not 4.00 s)."""
     if value is None or value == math.inf:
@@ -15,6 +15,9 @@ def _cell(value, digits=2, unit="", against=()):
     while digits < 12 and any(value != limit and f"{value:.{digits}f}" == f"{limit:.{digits}f}" for limit in against):
         digits += 1
     return f"{value:.{digits}f}{unit}"
+
+
+_cell = figure_text
 
 
 def _limits(sid, metric):
