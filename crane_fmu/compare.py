@@ -40,7 +40,8 @@ from crane_fmu.analysis.floor import stored_scenario_floors
 from crane_fmu.analysis.scenarios import Contender
 from crane_fmu.batch import JOURNAL, Progress, ignore_interrupts, read_journal, run_batch
 from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
-from crane_fmu.cosim.system import read_fmu
+from crane_fmu.cosim.suggest import did_you_mean
+from crane_fmu.cosim.system import read_fmu, unfed_inputs
 from crane_fmu.sweep.runner import local_fmus, write_table
 
 SIGNAL_EVERY = 0.02  # s: the signals kept for plots and animations
@@ -79,7 +80,7 @@ def contenders(chosen=(), fmu_dir="build/fmus", only=False):
             component = components.find(item)
             if component is None or component.role != "controller":
                 raise ValueError(f"no controller {item!r}; controllers: {', '.join(builtin)} (or a controller .fmu "
-                                 "file)")
+                                 "file)" + did_you_mean(item, builtin))
             variables = {v.name: v.causality for v in component.variables}
             name, source, user = item, item, False
         if name in result:
@@ -156,15 +157,31 @@ def plan(chosen, fmu_dir, scenarios=None, cases=scenario_registry.CASES):
     return planned, blobs, refused
 
 
+def unfed(chosen, fmu_dir, scenarios=None):
+    """One line per input that nothing feeds in a contender's scenarios (:func:`crane_fmu.cosim.system.unfed_inputs`,
+    from the first case of each: every case of a scenario has the same connections), naming the scenarios."""
+    found = {}
+    for contender in chosen:
+        for sid in scenario_registry.scenarios() if scenarios is None else scenarios:
+            if scenario_registry.applicable(contender, sid):
+                continue
+            for run in scenario_registry.systems_for(contender, sid, 1):
+                fmus, connections = systems.resolve(run.system, fmu_dir)
+                for line in unfed_inputs(fmus, connections, run.system.parameters):
+                    found.setdefault(f"{contender.name}: {line}", []).append(sid)
+    return [f"{line} (in {', '.join(dict.fromkeys(sids))})" for line, sids in found.items()]
+
+
 def provenance(case):
     """What a case's figures were made of, for its row: the sha256 of every FMU, the seeds, the master, the
-    step (and, added when it runs, the versions and the date)."""
+    step, the stop time (and, added when it runs, the versions and the date)."""
     seeds = {f"{instance}.seed": values["seed"] for instance, values in sorted(case["parameters"].items())
              if "seed" in values}
     plant = case["parameters"].get("plant", {})
     return {"fmus_sha256": json.dumps({case["files"][n]: case["sha256"][n] for n in case["sha256"]},
                                       sort_keys=True),
             "seeds": json.dumps(seeds, sort_keys=True), "master": case["master"], "step": case["step"],
+            "stop_time": case["stop_time"],
             **{f"plant_{k}": plant.get(k) for k in ("l1", "l2", "m1", "m2")}}
 
 
@@ -260,7 +277,7 @@ def _same_columns(rows):
 
 
 def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=None, quick=False, progress=True,
-            animate=("S2",), only=False, log=print, scenarios=None, cases=None):
+            animate=("S2",), only=False, log=print, scenarios=None, cases=None, strict=False, warn=None):
     """Score the contenders; write scoreboard.md, scores.parquet, board.json, plots and animations to ``out_dir``.
 
     Parameters
@@ -278,6 +295,9 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     cases : int, optional
         Cases of the paired design (default :data:`~crane_fmu.analysis.scenarios.CASES`, quick
         :data:`~crane_fmu.analysis.scenarios.QUICK_CASES`).
+    strict : bool
+        Refuse (ValueError) a board where an input of a contender's scenario is fed by nothing (:func:`unfed`);
+        else each is a warning, given to ``warn`` (default: a line on stderr).
 
     Returns
     -------
@@ -301,7 +321,8 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     scenarios = list(known) if scenarios is None else list(dict.fromkeys(scenarios))
     wrong = [s for s in scenarios if s not in known]
     if wrong or not scenarios:
-        raise ValueError(f"--scenario {','.join(wrong)}: no such scenario; the scenarios are {', '.join(known)}")
+        raise ValueError(f"--scenario {','.join(wrong)}: no such scenario; the scenarios are {', '.join(known)}"
+                         + (did_you_mean(wrong[0], known) if wrong else ""))
     cases = (scenario_registry.QUICK_CASES if quick else scenario_registry.CASES) if cases is None else cases
     if isinstance(cases, bool) or not isinstance(cases, int) or cases < 1:
         raise ValueError(f"--cases must be a whole number >= 1, got {cases!r}")
@@ -314,6 +335,11 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
             raise ValueError(f"{contender.name}: no scenario of {', '.join(scenarios)} applies to it: "
                              f"{reasons.pop()}; it can run {', '.join(runs)}")
     planned, blobs, refused = plan(chosen, fmu_dir, scenarios, cases)
+    lines = unfed(chosen, fmu_dir, scenarios)
+    if strict and lines:
+        raise ValueError(f"--strict: {'; '.join(lines)}")
+    for line in lines:
+        (warn or (lambda text: print(f"crane-fmu: warning: {text}", file=sys.stderr)))(line)
     out_dir.mkdir(parents=True, exist_ok=True)  # only now: a refused board leaves no folder behind
     done = read_journal(out_dir)
     why = stale(done, planned)
@@ -349,15 +375,18 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
         for part in parts:
             stats.update(part.result())
         plots = pool.submit(score_plots.plot_all, rows, out_dir, {c.name for c in chosen if c.user}, stats)
-        _write(board_md, board_tables.render(rows, chosen, quick, cases, _provenance_lines(manifest), stats,
-                                        stored_scenario_floors()))
+        floors = stored_scenario_floors()
+        _write(board_md, board_tables.render(rows, chosen, quick, cases, _provenance_lines(manifest), stats, floors))
         new = animations.result()
         paths, drawn = plots.result() + new, len(new)
+    removed = score_plots.prune(rows, out_dir, animate)  # an earlier board's pictures, never shown as this one's
     page = board_page.write_page(out_dir)
+    log(board_tables.render_terminal(rows, {c.name for c in chosen if c.user}, quick, cases, stats, floors))
     not_ok = sum(r["status"] not in ("ok", "n/a") for r in rows)
     log(f"{len(planned)} cases: {len(ran)} run now, {len(planned) - len(pending)} already done, {not_ok} not ok, "
         f"in {time.perf_counter() - start:.1f} s; wrote {board_md}{' (a QUICK board)' if quick else ''}, {page}, "
-        f"{out_dir / 'scores.parquet'}, {len(paths) - drawn} plots and {drawn} animations drawn now")
+        f"{out_dir / 'scores.parquet'}, {len(paths) - drawn} plots and {drawn} animations drawn now"
+        + (f"; removed {len(removed)} pictures of an earlier board" if removed else ""))
     return rows
 
 
@@ -421,7 +450,8 @@ def check(out_dir, sample=5, workers=None, scheduler=None, log=print, seed=None)
     Parameters
     ----------
     out_dir : path
-        A board's folder (with board.json and scores.parquet; a quick board's is ``OUT/quick``).
+        A board's folder (with board.json and scores.parquet); where it holds none, its quick board
+        (``OUT/quick``).
     sample : int
         How many of its cases to run again.
 
@@ -438,6 +468,9 @@ def check(out_dir, sample=5, workers=None, scheduler=None, log=print, seed=None)
     import pyarrow.parquet as pq
 
     out_dir = Path(out_dir)
+    if not (out_dir / MANIFEST).exists() and (out_dir / "quick" / MANIFEST).exists():
+        out_dir = out_dir / "quick"  # where `compare --quick --out OUT` wrote it
+        log(f"no full board in {out_dir.parent}: checking the quick board in {out_dir}")
     try:
         manifest = json.loads((out_dir / MANIFEST).read_text())
         recorded = {r["case_id"]: r for r in pq.read_table(out_dir / "scores.parquet").to_pylist() if r["case_id"]}

@@ -1,5 +1,7 @@
 """Things registered once under a name: the components (by model identifier) and the systems (by name)."""
 
+from .cosim.suggest import did_you_mean
+
 
 class Registry:
     """Items in registration order under ``key(item)``; ``kind`` names them in messages."""
@@ -23,7 +25,8 @@ class Registry:
         try:
             return self._items[name]
         except KeyError:
-            raise ValueError(f"no {self.kind} {name!r}; {self.kind}s: {', '.join(self._items)}{self.hint}") from None
+            raise ValueError(f"no {self.kind} {name!r}; {self.kind}s: {', '.join(self._items)}{self.hint}"
+                             + did_you_mean(name, self._items)) from None
 
     def find(self, name):
         """The item, or None."""

@@ -284,7 +284,8 @@ CRANE, REST, DRIVE, MOVE = _planar()
 register(System("paper", {"plant": "CranePlant", "controller": "BacksteppingController"},
                 description="Section V: the plant and the paper's backstepping controller (eq 21, derived b3), "
                             "theta1(0) = 10 deg", tags=(*LOOP, "regulation")))
-register(System("free", {"plant": "CranePlant"}, description="the plant alone, u = 0: free swing from 10 deg"))
+register(System("free", {"plant": "CranePlant"}, parameters={"plant": {"u": 0.0}},  # u = 0 on purpose, not unfed
+                description="the plant alone, u = 0: free swing from 10 deg"))
 register(System("lqr", {"plant": "CranePlant", "controller": "LqrController"},
                 description="Section V regulation from theta1(0) = 10 deg by the discrete LQR, |u| <= 2 m/s2, "
                             "|v| <= 1 m/s", tags=(*LOOP, "regulation")))

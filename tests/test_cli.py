@@ -117,6 +117,22 @@ def test_simulate_user_errors_give_one_line_and_status_2(fmu_dir, tmp_path, caps
     assert out_file.read_text() == "previous result\n"  # nothing the user had is lost
 
 
+def test_a_limit_set_to_inf_is_no_limit_as_1e60_is(fmu_dir, tmp_path, capsys):
+    """The drive's u_max is documented as "1e60 or INF: no limit": --set takes INF, and the run is 1e60's, bit for
+    bit (limits.py); a length set to INF is refused by the plant's own rule, in one line."""
+    runs = {}
+    for text in ("INF", "1e60"):
+        out = tmp_path / f"{text}.csv"
+        code, _, err = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--system", "lqr", "--stop-time", "0.5",
+                            "--set", f"plant.u_max={text}", "--set", "controller.u_max=INF", "--out", str(out))
+        assert code == 0, err
+        runs[text] = out.read_text()
+    assert runs["INF"] == runs["1e60"]
+    code, _, err = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--system", "lqr", "--set", "plant.l1=INF",
+                        "--out", str(tmp_path / "no.csv"))
+    assert code == 2 and err == "crane-fmu: error: plant: l1 must be > 0 and finite, got inf\n"
+
+
 def test_missing_fmus_and_unwritable_output(tmp_path, fmu_dir, capsys):
     code, _, err = _run(capsys, "simulate", "--fmu-dir", str(tmp_path / "nowhere"))
     assert code == 2 and "CranePlant.fmu not found: build the FMUs first (crane-fmu build)" in err

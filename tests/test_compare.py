@@ -13,7 +13,7 @@ from crane_fmu import components, systems
 from crane_fmu.analysis import board_tables, ranking, scenarios
 from crane_fmu.analysis import planar_scenarios as planar
 from crane_fmu.cli import main
-from crane_fmu.compare import compare, contenders
+from crane_fmu.compare import check, compare, contenders
 from crane_fmu.cosim import ArrayRecorder, read_csv, run
 from crane_fmu.sweep.runner import JOURNAL
 
@@ -168,12 +168,14 @@ def test_animations_are_drawn_only_when_their_run_changed(quick_board, template_
     for _ in range(2):
         compare(out.parent, chosen, board_dir, scheduler=dask_scheduler, quick=True, only=True, progress=False,
                 animate=("S2",), log=logs.append, cases=QUICK_CASES)
-    assert logs[0].endswith("4 plots and 2 animations drawn now") and "38 already done" in logs[0]
-    assert logs[1].endswith("4 plots and 0 animations drawn now")
+    ends = [line for line in logs if re.match(r"\d+ cases: ", line)]  # each run's last line (the board before it)
+    assert ends[0].endswith("4 plots and 2 animations drawn now") and "38 already done" in ends[0]
+    assert ends[1].endswith("4 plots and 0 animations drawn now")
     (out / "animations" / "S2_LqrController.gif").unlink()
     compare(out.parent, chosen, board_dir, scheduler=dask_scheduler, quick=True, only=True, progress=False,
             animate=("S2",), log=logs.append, cases=QUICK_CASES)
-    assert logs[2].endswith("4 plots and 1 animations drawn now")
+    ends = [line for line in logs if re.match(r"\d+ cases: ", line)]
+    assert ends[2].endswith("4 plots and 1 animations drawn now")
     assert (out / "animations" / "S2_LqrController.gif").stat().st_size > 10_000
 
 
@@ -458,6 +460,27 @@ def test_check_confirms_the_figures_bit_for_bit_or_names_the_case_that_differs(u
     assert f"differs: UserLqr, S1, nominal: settling_0.5deg_s: {row['settling_0.5deg_s']!r} recorded, " in out
     assert main(["compare", "--check", str(tmp_path / "nothing")]) == 2
     assert "--check " in capsys.readouterr().err
+
+
+def test_compare_prints_the_ranking_in_the_terminal(quick_board):
+    """Not only file paths: every scenario's line (how long it runs), then its controllers by rank, one a line,
+    in the board's order."""
+    _, rows, log = quick_board
+    printed = "\n".join(log).splitlines()
+    for sid in ("S1", "S2", "S3"):
+        at = next(i for i, line in enumerate(printed) if line.startswith(f"{sid}") and "ranked by" in line)
+        assert "10 s; ranked by" in printed[at]
+        ranked = ranking.summarise(rows, sid)
+        for k, line in enumerate(ranked, start=1):
+            assert printed[at + k].startswith(f"  {line['rank']}. {line['controller']}"), printed[at:at + 4]
+
+
+def test_check_finds_a_quick_board_in_OUT_quick(quick_board, dask_scheduler):
+    """`compare --quick --out OUT` writes OUT/quick; `compare --check OUT` finds it there (OUT holds no full board)."""
+    out, _, _ = quick_board
+    log = []
+    assert check(out.parent, 2, scheduler=dask_scheduler, log=log.append) == []
+    assert log[0] == f"no full board in {out.parent}: checking the quick board in {out}"
 
 
 def test_the_page_is_one_file_that_a_browser_shows_with_its_tables_and_pictures(quick_board, tmp_path):

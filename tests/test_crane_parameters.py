@@ -110,7 +110,7 @@ def test_a_name_that_is_no_crane_parameter_is_refused_in_one_line(capsys):
         crane_parameters.with_values(systems.get("lqr"), {"crane": {"x0": 1.0}})
     assert main(["info", "--system", "lqr", "--set", "crane.L2=0.6"]) == 2
     assert capsys.readouterr().err.strip() == ("crane-fmu: error: --set 'crane.L2=0.6': crane has no parameter or "
-                                               "input 'L2'; valid: m1, m2, l1, l2, g")
+                                               "input 'L2'; valid: m1, m2, l1, l2, g; did you mean 'l2'?")
 
 
 @pytest.mark.quick

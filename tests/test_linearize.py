@@ -87,6 +87,10 @@ def test_cli_prints_and_saves(fmu_dir, tmp_path, capsys):
     (["--set", "l1=-1"], "l1 must be > 0 and finite, got -1.0"),
     (["--out", "plant.txt"], "--out plant.txt: writes a .npz or .mat file"),
     (["--horizon", "0"], "--horizon must be > 0"),
+    (["--at", "theta1=foo"], "--at 'theta1=foo': 'foo' is not a number"),
+    (["--at", "theta1=nan"], "--at 'theta1=nan': 'nan' is not a finite number"),
+    (["--at", "u=inf"], "--at 'u=inf': 'inf' is not a finite number"),
+    (["--set", "l1=INF"], "l1 must be > 0 and finite, got inf"),
 ])
 def test_cli_refuses_bad_input_in_one_line(fmu_dir, capsys, argv, message):
     assert main(["linearize", str(fmu_dir / "CranePlant.fmu"), *argv]) == 2
@@ -117,3 +121,10 @@ def test_the_documented_example_prints_what_the_docs_show(fmu_dir, capsys):
     for name, shown in excerpt:
         got = [float(v) for v in printed[name].split()]
         assert [float(v) for v in shown.split()] == pytest.approx(got, rel=5e-6, abs=1e-9), name
+
+
+@pytest.mark.parametrize("text", ["INF", "inf", "1e60"])
+def test_a_limit_set_to_no_limit_as_the_docs_write_it(fmu_dir, capsys, text):
+    """u_max's description says "1e60 or INF: no limit"; --set takes both (the same run, limits.py)."""
+    assert main(["linearize", str(fmu_dir / "CranePlant.fmu"), "--at", "theta1=0", "--set", f"u_max={text}"]) == 0
+    assert "1e60 or INF" in next(v.description for v in plant.COMPONENT.variables if v.name == "u_max")

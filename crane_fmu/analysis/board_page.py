@@ -33,7 +33,9 @@ def _inline(text):
 
 
 def _cells(line):
-    return [c.strip() for c in line.strip().strip("|").split("|")]
+    """A table row's cells: split at every ``|`` but an escaped one (``\\|``, which stays in its cell as ``|``)."""
+    inner = line.strip().removeprefix("|").removesuffix("|")
+    return [c.strip().replace("\\|", "|") for c in re.split(r"(?<!\\)\|", inner)]
 
 
 def markdown_to_html(text):

@@ -7,10 +7,27 @@ from .scenarios import CASES, notes, scenarios
 from .scenarios import plants as scenario_plants
 
 
-def _cell(value, digits=2, unit=""):
+def figure_text(value, digits=2, unit="", against=()):
+    """A figure with ``digits`` decimals, or more where fewer would print it as one of the limits ``against`` it
+    is not (4.004 s against a 4.0 s target prints 4.004 s, not 4.00 s)."""
     if value is None or value == math.inf:
         return "never" if unit == " s" else "-"  # a time not reached; a figure of a run that ended early
+    while digits < 12 and any(value != limit and f"{value:.{digits}f}" == f"{limit:.{digits}f}" for limit in against):
+        digits += 1
     return f"{value:.{digits}f}{unit}"
+
+
+_cell = figure_text
+
+
+def _limits(sid, metric):
+    """The limits of the scenario's targets on ``metric``."""
+    return tuple(t.limit for t in scenarios()[sid].targets if t.metric == metric)
+
+
+def table_row(cells):
+    """A Markdown table row; a ``|`` in a cell (``|u|``) escaped as ``\\|``, so it stays in its cell."""
+    return "| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |"
 
 
 def _interval(low, high, digits):
@@ -36,6 +53,12 @@ def _scenario_label(sid, cases=CASES, quick=False):
     return f"{sid} ({'QUICK: ' if quick else ''}{n} case{'s' if n > 1 else ''}): {s.title}"
 
 
+def run_length(rows, sid):
+    """``10 s`` (``10 s, 12 s``): how long the scenario's cases run, from its rows; ``-`` where no row says."""
+    times = sorted({r["stop_time"] for r in rows if r["scenario"] == sid and r.get("stop_time") is not None})
+    return ", ".join(f"{t:g} s" for t in times) or "-"
+
+
 def _ranked_by(sid):
     s = scenarios()[sid]
     return f"{s.rank_by}, median, paired Wilcoxon" if s.paired else s.rank_by
@@ -46,12 +69,9 @@ def floor_ratio(value, floor):
     return "" if floor is None or value is None else f" ({value / floor.seconds:.2f}x floor)"
 
 
-def render_summary(rows, users=(), quick=False, cases=CASES, stats=None, floors=None):
-    """One table: per scenario the controllers by rank, with their ranking figure (the worst case, and its ratio to
-    the scenario's floor where ``floors`` gives one; on the paired design the median with its 95 % interval), the
-    targets they met and ties; then those it does not apply to."""
-    stats = board_statistics(rows) if stats is None else stats
-    floors = floors or {}
+def _summary_cells(rows, users, stats, floors):
+    """``[(scenario, cells)]``: per scenario with a row, its controllers by rank (each cell one controller's rank,
+    figure, targets and tie), then those it does not apply to."""
     lines = []
     for sid, s in scenarios().items():
         ranked, absent = summarise(rows, sid), not_applicable(rows, sid)
@@ -65,22 +85,49 @@ def render_summary(rows, users=(), quick=False, cases=CASES, stats=None, floors=
                 figure = "failed"
             elif sid in stats:
                 d = stats[sid]["describe"][line["controller"]][s.rank_by]
-                figure = f"median {_cell(d.median, digits, unit)} {_interval(d.median_low, d.median_high, digits)}"
+                figure = (f"median {_cell(d.median, digits, unit, _limits(sid, s.rank_by))} "
+                          f"{_interval(d.median_low, d.median_high, digits)}")
             else:
-                figure = _cell(line[s.rank_by], digits, unit) + floor_ratio(line[s.rank_by], floors.get(sid))
+                figure = (_cell(line[s.rank_by], digits, unit, _limits(sid, s.rank_by))
+                          + floor_ratio(line[s.rank_by], floors.get(sid)))
             verdict = "all targets met" if all(line["targets"]) and not line["failed"] else (
                 f"{sum(line['targets'])} of {len(line['targets'])} targets met")
             cells.append(f"{line['rank']}. {_name(line['controller'], users)}: {figure}, {verdict}"
-                         + (", tie" if line["tie"] else ""))
+                         + (", tie" if line["tie"] else "") + _p_above(line))
         cells += [f"{_name(name, users)}: {why}" for name, why in sorted(absent.items())]
         lines.append((sid, cells))
+    return lines
+
+
+def render_summary(rows, users=(), quick=False, cases=CASES, stats=None, floors=None):
+    """One table: per scenario the controllers by rank, with their ranking figure (the worst case, and its ratio to
+    the scenario's floor where ``floors`` gives one; on the paired design the median with its 95 % interval), the
+    targets they met and ties; then those it does not apply to."""
+    stats = board_statistics(rows) if stats is None else stats
+    lines = _summary_cells(rows, users, stats, floors or {})
     width = max(len(cells) for _, cells in lines)
-    out = ["| scenario | ranked by | " + " | ".join(["controllers by rank"] + [""] * (width - 1)) + " |",
-           "|---|---|" + "---|" * width]
+    out = [table_row(["scenario", "runs", "ranked by", "controllers by rank"] + [""] * (width - 1)),
+           "|---|---|---|" + "---|" * width]
     for sid, cells in lines:
-        out.append(f"| {_scenario_label(sid, cases, quick)} | {_ranked_by(sid)} | "
-                   + " | ".join(cells + [""] * (width - len(cells))) + " |")
+        out.append(table_row([_scenario_label(sid, cases, quick), run_length(rows, sid), _ranked_by(sid)] + cells
+                             + [""] * (width - len(cells))))
     return "\n".join(out)
+
+
+def render_terminal(rows, users=(), quick=False, cases=CASES, stats=None, floors=None):
+    """The summary table for a terminal: per scenario a line (what it is, how long it runs, what ranks), then its
+    controllers by rank, one a line."""
+    stats = board_statistics(rows) if stats is None else stats
+    out = []
+    for sid, cells in _summary_cells(rows, users, stats, floors or {}):
+        out.append(f"{_scenario_label(sid, cases, quick)} ({run_length(rows, sid)}; ranked by {_ranked_by(sid)})")
+        out += [f"  {cell.replace('`', '')}" for cell in cells]
+    return "\n".join(out)
+
+
+def _p_above(line):
+    """`` (p = 0.031 to the one above)``: on the paired design, the Wilcoxon p-value to the line above."""
+    return "" if line.get("p_above") is None else f" (p = {line['p_above']:.2g} to the one above)"
 
 
 def _statistics_section(sid, stats, users):
@@ -89,14 +136,14 @@ def _statistics_section(sid, stats, users):
     describe, pairs = stats["describe"], stats["pairs"]
     names = list(describe)
     out = ["Over the cases: median [95 % interval]; 90th percentile [95 % interval] (bootstrap):", "",
-           "| figure | " + " | ".join(_name(n, users) for n in names) + " |", "|---|" + "---|" * len(names)]
+           table_row(["figure"] + [_name(n, users) for n in names]), "|---|" + "---|" * len(names)]
     for header, metric, digits, unit in FIGURES:
         cells = []
         for n in names:
             d = describe[n][metric]
             cells.append(f"{_cell(d.median, digits)} {_interval(d.median_low, d.median_high, digits)}; "
                          f"{_cell(d.p90, digits)} {_interval(d.p90_low, d.p90_high, digits)}")
-        out.append(f"| {header} [{unit.strip()}] | " + " | ".join(cells) + " |")
+        out.append(table_row([f"{header} [{unit.strip()}]"] + cells))
     metric = scenarios()[sid].rank_by
     digits, unit = FORMAT[metric]
     digits = max(digits, 3)
@@ -104,8 +151,8 @@ def _statistics_section(sid, stats, users):
             "| A | B | median difference [95 % interval] | Wilcoxon p | verdict |", "|---|---|---|---|---|"]
     for a, b, paired in pairs:
         verdict = "tie" if paired.better == 0 else f"{_name(a if paired.better < 0 else b, users)} lower"
-        out.append(f"| {_name(a, users)} | {_name(b, users)} | {_cell(paired.difference, digits, unit)} "
-                   f"{_interval(paired.low, paired.high, digits)} | {paired.p:.3g} | {verdict} |")
+        out.append(table_row([_name(a, users), _name(b, users), f"{_cell(paired.difference, digits, unit)} "
+                              f"{_interval(paired.low, paired.high, digits)}", f"{paired.p:.3g}", verdict]))
     return out + [""]
 
 
@@ -126,11 +173,16 @@ def render(rows, contenders, quick=False, cases=CASES, provenance=None, stats=No
                                          if quick else "")
     plants = {scenarios()[r["scenario"]].plant for r in rows}
     about = [notes(plant, cases) for plant in scenario_plants() if plant in plants]
-    out = [title, "",
-           "Every controller on the same crane (" + "; ".join(n["crane"] for n in about) + "), through the same "
-           "master, on the same scenarios (registered with their targets: `crane_fmu/analysis/scenarios.py`). Times "
-           "are from the start of the run; *never* means not within the run. A row's figure is the worst over the "
-           "scenario's cases.", ""]
+    out = [title, "", render_summary(rows, users, quick, cases, stats, floors), "",
+           "Controllers: " + ", ".join(_name(c.name, users) for c in sorted(contenders, key=lambda c: c.name)), ""]
+    if floors:
+        method = next(iter(floors.values())).method
+        out += [f"The floor of a scenario is the least time the crane needs for its task: {method}.", ""]
+    out += ["## How the board is made", "",
+            "Every controller on the same crane (" + "; ".join(n["crane"] for n in about) + "), through the same "
+            "master, on the same scenarios (registered with their targets: `crane_fmu/analysis/scenarios.py`). "
+            "Times are from the start of the run; *never* means not within the run. A row's figure is the worst over "
+            "the scenario's cases.", ""]
     for n in about:
         out += n["design"]
     out += [f"Ranking: {RULES}.", "",
@@ -138,17 +190,16 @@ def render(rows, contenders, quick=False, cases=CASES, provenance=None, stats=No
             f"nine tenths, of the cases at or below it); their 95 % intervals are percentile bootstraps "
             f"(scipy.stats.bootstrap, {statistics.RESAMPLES} resamples, seed {statistics.SEED}); {statistics.RULE} "
             "(scipy.stats.wilcoxon; each pair on its own, at 5 %).", "",
-           "Controllers: " + ", ".join(_name(c.name, users) for c in sorted(contenders, key=lambda c: c.name)), "",
-           render_summary(rows, users, quick, cases, stats, floors), ""]
-    if floors:
-        method = next(iter(floors.values())).method
-        out += [f"The floor of a scenario is the least time the crane needs for its task: {method}.", ""]
+            "Figures print with the digits of their column, and more where fewer would show a figure as its target "
+            "(4.004 s against a 4.0 s target prints 4.004 s).", ""]
     for sid, s in scenarios().items():
         lines, absent = summarise(rows, sid), not_applicable(rows, sid)
         if not lines and not absent:
             continue
         out += [f"## {_scenario_label(sid, cases, quick)}", "", "Targets:", ""]
         out += [f"- {t.text} ({t.source})" for t in s.targets] + [""]
+        if run_length(rows, sid) != "-":
+            out += [f"Each case runs {run_length(rows, sid)} of simulated time{s.duration_note}.", ""]
         if sid in floors:
             out += [f"Floor: {floors[sid].seconds:.2f} s ({floors[sid].task})", ""]
         if lines:
@@ -159,9 +210,9 @@ def render(rows, contenders, quick=False, cases=CASES, provenance=None, stats=No
             verdict = ", ".join(("met" if ok else "**missed**") for ok in line["targets"])
             if line["failed"]:
                 verdict = f"**failed** in {line['failed']} of {line['cases']}: {line['error']}"[:300]
-            out.append(f"| {line['rank']}{' (tie)' if line['tie'] else ''} | {_name(line['controller'], users)} | "
-                       + " | ".join(_cell(line[metric], digits, unit) for _, metric, digits, unit in FIGURES)
-                       + f" | {_bounds(line)} | {verdict.replace('|', '/')} |")
+            out.append(table_row([f"{line['rank']}{' (tie)' if line['tie'] else ''}", _name(line["controller"], users)]
+                                 + [_cell(line[metric], digits, unit, _limits(sid, metric))
+                                    for _, metric, digits, unit in FIGURES] + [_bounds(line), verdict]))
         out.append("")
         out += [f"- {_name(name, users)}: {why}" for name, why in sorted(absent.items())] + ([""] if absent else [])
         if sid in stats:

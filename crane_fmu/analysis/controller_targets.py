@@ -16,7 +16,7 @@ from crane_fmu.cosim import ArrayRecorder, FmiError, run
 
 from . import metrics, scenarios
 from . import planar_scenarios as planar
-from .board_tables import floor_ratio
+from .board_tables import figure_text, floor_ratio
 
 Run = namedtuple("Run", "group label system parameters step stop_time residual_from", defaults=(None,))
 Run.__doc__ = ("One co-simulation: its group and label, a system (a registered name or a System), its settings, "
@@ -205,7 +205,9 @@ def report_mpc(results, floors, out=print):
         ambition = f", ambition {t.ambition:g}{unit}" if t.ambition is not None else ""
         where = "" if len(cases) == 1 or worst is None else \
             " at " + max(cases, key=lambda c: c[1][t.metric] if c[1][t.metric] is not None else math.inf)[0]
-        out(f"  {t.text}: {_fmt(worst, 3 if unit == ' deg' else 2, unit)}{ratio}{where} (target <= "
+        shown = "never" if worst is None else figure_text(worst, 3 if unit == " deg" else 2, unit, (t.target,) + (
+            () if t.ambition is None else (t.ambition,)))  # 5.004 s against 5.0 s: not "5.00 s"
+        out(f"  {t.text}: {shown}{ratio}{where} (target <= "
             f"{t.target:g}{unit}{ambition}): {verdict}")
 
 

@@ -7,15 +7,21 @@ its cases (:func:`board_statistics`, :mod:`crane_fmu.analysis.statistics`).
 
 import math
 
+import numpy as np
+
 from .scenarios import met, paired, scenarios
 
-RULES = ("a controller's rank is 1 + the number of controllers better than it in the scenario. A is better than B when "
-         "B failed in a case and A did not; else when A meets more targets (in every case); else, on the paired design "
-         "(" + ", ".join(paired()) + "), when the two-sided Wilcoxon signed-rank test of their paired ranking figures "
-         "gives p < 0.05 with A's figures lower (cases with equal figures left out); "
-         "elsewhere when A's ranking figure (its worst case) is lower, *never* after every finite value, or, equal, "
-         "when A leaves less swing over the last quarter of the run (a law that keeps swinging below one that "
-         "converges slowly). Controllers of one rank tie and the board says so; they are listed by name")
+RULES = ("controllers are listed best first, and a controller's rank is 1 + the number listed above it, except "
+         "that one the board cannot tell from the one just above shares that one's rank (ranks like 1, 2, 2, 4; of "
+         "two that met the same targets, the one with the better figure is never ranked lower). The order: a "
+         "controller that failed in a case after every one that did not; then more targets met (in every case) "
+         "first; then on the paired design (" + ", ".join(paired()) + ") the lower median of the ranking figure "
+         "over the cases first, and one shares the rank above when the two-sided Wilcoxon signed-rank test of the "
+         "two's paired figures (cases with equal figures left out) does not give p < 0.05 in favour of the one "
+         "above (the p-value to the one above is shown; every pair's is in the scenario's statistics); elsewhere "
+         "the lower ranking figure (the worst case) first, *never* after every finite value, or, equal, the one "
+         "that leaves less swing over the last quarter of the run (a law that keeps swinging below one that "
+         "converges slowly), and only equal figures share a rank. Equal figures are listed by name")
 
 
 def _figure_key(line, metric):
@@ -51,25 +57,37 @@ def _pairs(line_a, line_b):
     return [line_a["values"][c] for c in common], [line_b["values"][c] for c in common]
 
 
-def _better(a, b, scenario, verdicts):
-    """Whether line ``a`` is better than line ``b`` by :data:`RULES`."""
-    key_a, key_b = (a["failed"] > 0, -sum(a["targets"])), (b["failed"] > 0, -sum(b["targets"]))
-    if key_a != key_b:
-        return key_a < key_b
-    if scenario in paired() and not a["failed"] and not b["failed"]:
-        pair = (a["controller"], b["controller"])
-        if pair not in verdicts:
-            from crane_fmu.analysis import statistics
+def _median(line):
+    """The median (numpy's ``inverted_cdf``: a figure some case had) of a line's ranking figure over its cases."""
+    values = [math.inf if v is None else v for _, v in sorted(line["values"].items())]
+    return float(np.quantile(values, 0.5, method="inverted_cdf")) if values else math.inf
 
-            verdicts[pair] = statistics.wilcoxon(*_pairs(a, b))[1]
-        return verdicts[pair] < 0
-    metric = scenarios()[scenario].rank_by
-    return _figure_key(a, metric) < _figure_key(b, metric)
+
+def _order_key(line, scenario):
+    """A line's place in the list (see :data:`RULES`), before the name."""
+    key = (line["failed"] > 0, -sum(line["targets"]))
+    if scenario in paired() and not line["failed"]:
+        return key + (_median(line), line["end_swing_deg"] is None, line["end_swing_deg"] or 0.0)
+    return key + _figure_key(line, scenarios()[scenario].rank_by)
+
+
+def _separated(above, below, scenario):
+    """``(separated, p)``: whether the board tells ``below`` from the line just ``above`` it (see :data:`RULES`),
+    and on the paired design the Wilcoxon p-value of the two (None elsewhere)."""
+    if _order_key(above, scenario)[:2] != _order_key(below, scenario)[:2]:
+        return True, None
+    if scenario in paired() and not above["failed"] and not below["failed"]:
+        from crane_fmu.analysis import statistics
+
+        p, better = statistics.wilcoxon(*_pairs(above, below))
+        return better < 0, p
+    return _order_key(above, scenario) != _order_key(below, scenario), None
 
 
 def summarise(rows, scenario):
     """One line per contender for a scenario: the worst case of each metric, the targets met, the ranking figure
-    of every case (``values``), its ``rank`` by :data:`RULES` and whether it ties (``tie``); by rank, then name.
+    of every case (``values``), its ``rank`` by :data:`RULES`, whether it ties (``tie``) and, on the paired design,
+    the Wilcoxon p-value to the line above (``p_above``; None elsewhere); in the order of :data:`RULES`.
 
     Contenders the scenario does not apply to have no line (:func:`not_applicable`).
     """
@@ -92,12 +110,13 @@ def summarise(rows, scenario):
                       "error": min(r["error"] or "" for r in failed) if failed else None, **worst,
                       "bounds_held": None if None in held else all(held), "bounds_broken": ", ".join(broken),
                       "targets": targets, "values": {r["case"]: r.get(s.rank_by) for r in cases}})
-    verdicts = {}
-    for line in lines:
-        line["rank"] = 1 + sum(_better(other, line, scenario, verdicts) for other in lines if other is not line)
+    lines.sort(key=lambda line: _order_key(line, scenario) + (line["controller"],))
+    for i, line in enumerate(lines):
+        separated, line["p_above"] = _separated(lines[i - 1], line, scenario) if i else (True, None)
+        line["rank"] = i + 1 if separated else lines[i - 1]["rank"]
     for line in lines:
         line["tie"] = any(other["rank"] == line["rank"] for other in lines if other is not line)
-    return sorted(lines, key=lambda line: (line["rank"], line["controller"]))
+    return lines
 
 
 def board_statistics(rows, chosen=None):

@@ -70,6 +70,9 @@ class Scenario:
     bounds : dict
         What the board checks at every step (:func:`~crane_fmu.analysis.metrics.bounds_check`): ``u_max``,
         ``v_max``, ``x_min``, ``x_max``.
+    duration_note : str
+        Why its cases run as long as they do, where a reader would expect otherwise (``" (...)"``; the board
+        adds it to the line that says how long they run).
     """
 
     id: str
@@ -84,6 +87,7 @@ class Scenario:
     steps: int = 1
     variants: int = 1
     bounds: dict | None = None
+    duration_note: str = ""
 
     def __post_init__(self):
         crane = components.get(self.plant).crane

@@ -207,11 +207,16 @@ def summary_figure(rows, users=(), stats=None):
                 Line2D([], [], color="k", marker="o", ls="none", ms=4, label="90th percentile (paired; marker "
                        "per controller)")]
     fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 4), fontsize=8, frameon=False)
-    quick = any(r.get("quick") for r in rows)
-    fig.suptitle(("QUICK board: " if quick else "") + "each scenario's ranking figure; lower is better; the rank "
-                 "right of each bar (= a tie); " + ", ".join(s for s in paired() if s in shown) + " on the paired "
-                 "design", fontsize=10)
+    fig.suptitle(summary_title(rows, shown), fontsize=10)
     return fig
+
+
+def summary_title(rows, shown):
+    """The summary's title; it names the scenarios of ``shown`` on the paired design, where there are any."""
+    on_design = [s for s in paired() if s in shown]
+    return (("QUICK board: " if any(r.get("quick") for r in rows) else "") + "each scenario's ranking figure; lower "
+            "is better; the rank right of each bar (= a tie)"
+            + (f"; {', '.join(on_design)} on the paired design" if on_design else ""))
 
 
 def plot_all(rows, out_dir, users=(), stats=None, store=None):
@@ -222,7 +227,7 @@ def plot_all(rows, out_dir, users=(), stats=None, store=None):
     """
     quick, users = any(r.get("quick") for r in rows), sorted(users)
     paths = []
-    for s in ("S1", "S2", "S7"):
+    for s in RUN_PICTURES:
         runs = sorted(_nominal(rows, s), key=lambda r: r["controller"])
         if runs:
             made_of = [s, users, quick, [[r["case_id"], r["status"]] for r in runs]]
@@ -420,3 +425,31 @@ def animate_all(rows, scenario, out_dir, fps=15, store=None):
             partial.write_text(json.dumps(drawn, indent=1, sort_keys=True))
             partial.replace(ledger)
     return paths
+
+
+RUN_PICTURES = ("S1", "S2", "S7")  # the scenarios whose nominal runs plot_all draws, as OUT/<scenario>.png
+
+
+def prune(rows, out_dir, scenarios):
+    """Remove the pictures an earlier board left in ``out_dir`` that this one (``rows``; animated: ``scenarios``)
+    does not draw: ``<scenario>.png`` of :data:`RUN_PICTURES` without a run now, and the animations the folder's
+    ledger (``animations/.drawn.json``) lists of other runs. Only those: nothing else in the folder is touched.
+    Returns the paths removed."""
+    out_dir, removed = Path(out_dir), []
+    for s in RUN_PICTURES:
+        if not _nominal(rows, s) and (out_dir / f"{s}.png").is_file():
+            (out_dir / f"{s}.png").unlink()
+            removed.append(out_dir / f"{s}.png")
+    ledger = out_dir / "animations" / ".drawn.json"
+    if ledger.exists():
+        drawn = json.loads(ledger.read_text())
+        now = {f"{s}_{r['controller']}" for s in scenarios for r in _nominal(rows, s)
+               if not animation_needs(r["signals"])}
+        for name in [n for n in drawn if Path(n).stem not in now]:
+            (ledger.parent / name).unlink(missing_ok=True)
+            removed.append(ledger.parent / name)
+            del drawn[name]
+        partial = ledger.with_suffix(".partial")
+        partial.write_text(json.dumps(drawn, indent=1, sort_keys=True))
+        partial.replace(ledger)
+    return removed

@@ -44,14 +44,19 @@ def dask_options(p):
 LARGEST_SWING = math.pi / 2  # rad: no swing the model is meant for is larger
 
 
-def convert(text, fmi_type, unit=None):
-    """A --set value as the variable's FMI type; an angle may be given in degrees (``10deg``, ``5deg/s``)."""
+def convert(text, fmi_type, unit=None, infinite=False):
+    """A --set value as the variable's FMI type; an angle may be given in degrees (``10deg``, ``5deg/s``).
+
+    ``infinite``: a Real may be ``INF`` or ``-INF`` (any case; a limit's "no limit", which the component's rules
+    refuse where a value must be finite); NaN never. A ValueError (or argparse's) names the value and the rule."""
     if fmi_type in ("Real", "Float64", "Float32"):
         for suffix, si in (("deg/s", "rad/s"), ("deg", "rad")):
             if text.endswith(suffix):
                 if unit != si:
                     raise ValueError(f"{text!r}: a {suffix} value needs a variable in {si}, this one is in {unit}")
                 return math.radians(number(text[:-len(suffix)]))
+        if infinite and text.strip().lower().lstrip("+-") in ("inf", "infinity"):
+            return float(text)
         return number(text)
     if fmi_type in ("Integer", "Int32"):
         return int(text)
@@ -78,7 +83,7 @@ def parse_sets(items, variables):
                 raise ValueError("expected INSTANCE.VARIABLE=VALUE")
             instance, name = split_name(target, variables)
             fmi_type, unit = variables[instance][name]
-            value = convert(text, fmi_type, unit)
+            value = convert(text, fmi_type, unit, infinite=True)
         except (argparse.ArgumentTypeError, ValueError) as exc:
             raise UsageError(f"--set {item!r}: {exc}") from None
         if unit == "rad" and not text.endswith("deg") and abs(value) > LARGEST_SWING:

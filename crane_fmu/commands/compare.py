@@ -4,6 +4,7 @@ import os
 from pathlib import Path
 
 from .common import UsageError, check_workers, dask_options, require_dask, writable_file
+from .simulate import strict_option
 
 NAME = "compare"
 HELP = "score controller FMUs on the same scenarios (the scoreboard)"
@@ -34,9 +35,11 @@ def arguments(p):
     p.add_argument("--scenario", metavar="S1,S6", help="the scenarios to run (default: every one)")
     p.add_argument("--animate", default="S2", metavar="none|all|S1|S2|S7",
                    help="whose nominal runs to animate (default S2); drawn again only when the run changed")
-    p.add_argument("--check", metavar="OUT", help="instead: run a random sample of the board in OUT again and "
-                                                  "compare every figure, bit for bit (exit 1 when one differs)")
+    p.add_argument("--check", metavar="OUT", help="instead: run a random sample of the board in OUT (or, where OUT "
+                                                  "holds none, of the quick board in OUT/quick) again and compare "
+                                                  "every figure, bit for bit (exit 1 when one differs)")
     p.add_argument("--sample", type=int, default=5, metavar="N", help="with --check: how many cases (default 5)")
+    strict_option(p)
 
 
 def run(args):
@@ -70,7 +73,7 @@ def run(args):
     try:
         compare(args.out, args.controller, args.fmu_dir, args.workers, args.scheduler, args.quick,
                 progress=not args.no_progress, animate=choices[args.animate], only=args.only, scenarios=scenarios,
-                cases=args.cases)
+                cases=args.cases, strict=args.strict)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     return 0

@@ -1,5 +1,8 @@
 """``crane-fmu linearize``: a plant FMU's A, B, C, D at an operating point."""
 
+from argparse import ArgumentTypeError
+
+from ..cosim.suggest import did_you_mean
 from .common import UsageError, convert, number, writable_file
 
 NAME = "linearize"
@@ -37,10 +40,11 @@ def _pairs(items, option, variables):
         variable = variables.get(name)
         if variable is None:
             what = "parameter" if option == "--set" else "state or input"
-            raise UsageError(f"{option} {item!r}: the FMU has no {what} {name!r}; valid: {', '.join(variables)}")
+            raise UsageError(f"{option} {item!r}: the FMU has no {what} {name!r}; valid: {', '.join(variables)}"
+                             + did_you_mean(name, variables))
         try:
-            result[name] = convert(text, variable.type, variable.unit)
-        except ValueError as exc:
+            result[name] = convert(text, variable.type, variable.unit, infinite=option == "--set")
+        except (ArgumentTypeError, ValueError) as exc:
             raise UsageError(f"{option} {item!r}: {exc}") from None
     return result
 

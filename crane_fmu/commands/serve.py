@@ -11,6 +11,7 @@ import sys
 import time
 from pathlib import Path
 
+from ..cosim.suggest import did_you_mean
 from .common import UsageError, number, writable_file
 from .simulate import on_system, open_recorder, prepare, run_options
 
@@ -98,7 +99,7 @@ def _check(args, system):
         raise UsageError("nothing to serve: give --opcua HOST:PORT, --modbus HOST:PORT or both")
     if args.external is not None and args.external not in system.instances:
         raise UsageError(f"--external {args.external}: system {system.name} has no instance {args.external!r}; "
-                         f"instances: {', '.join(system.instances)}")
+                         f"instances: {', '.join(system.instances)}" + did_you_mean(args.external, system.instances))
     step = system.step if args.step is None else args.step
     if not step > 0:
         raise UsageError(f"--step must be > 0, got {step!r}")

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from crane_fmu import DEFAULT_FMU_DIR, DEFAULT_SYSTEM
 from crane_fmu.cosim.algorithms import ALGORITHMS
+from crane_fmu.cosim.suggest import did_you_mean
 
 from .common import UsageError, number, parse_sets, writable_file
 from .stopping import StopOnSignal, Stopped
@@ -39,6 +40,23 @@ def arguments(p):
                    help="result file: .csv (default results/simulation.csv), .parquet (pyarrow, for long runs) or "
                         ".mat (MATLAB, scipy.io.savemat: the CSV's columns and data)")
     p.add_argument("--plot", help="also write a PNG plot of x, theta1, theta2 and u (or of every output)")
+    strict_option(p)
+
+
+def strict_option(p):
+    """``--strict``: refuse a run with an input nothing feeds (simulate, compare, sweep)."""
+    p.add_argument("--strict", action="store_true",
+                   help="refuse (exit 2) a run with an input that nothing feeds and no value is given for (by "
+                        "default: a warning naming the nearest output, and the input keeps its start value)")
+
+
+def check_unfed(lines, strict, where=""):
+    """Each line of an input nothing feeds (:func:`crane_fmu.cosim.system.unfed_inputs`) as a warning on stderr, or
+    under ``strict`` one UsageError naming them all."""
+    if strict and lines:
+        raise UsageError(f"--strict: {where}{'; '.join(lines)}; connect each, or give it a value with --set")
+    for line in lines:
+        print(f"crane-fmu: warning: {where}{line}", file=sys.stderr)
 
 
 def run_options(p, stop_time_help):
@@ -89,7 +107,7 @@ def _use(items, system):
             raise UsageError(f"--use {item!r}: expected INSTANCE=FILE.fmu, e.g. controller=mine.fmu")
         if instance not in system.instances:
             raise UsageError(f"--use {item!r}: system {system.name} has no instance {instance!r}; instances: "
-                             f"{', '.join(system.instances)}")
+                             f"{', '.join(system.instances)}" + did_you_mean(instance, system.instances))
         if Path(path).suffix != ".fmu":
             raise UsageError(f"--use {item!r}: {path} is not an FMU file (the name must end in .fmu)")
         if not Path(path).is_file():
@@ -154,11 +172,13 @@ def _simulate(args, system):
     from crane_fmu.cosim import FmiError, ProgressLine, read_result, simulate
     from crane_fmu.cosim.master import communication_points
     from crane_fmu.cosim.recorder import RESULT_SUFFIXES, WriteError
+    from crane_fmu.cosim.system import unfed_inputs
 
     stop_time = system.stop_time if args.stop_time is None else args.stop_time
     step = system.step if args.step is None else args.step
     communication_points(system.start_time, stop_time, step)
     system, fmus, connections = prepare(args, system, step)
+    check_unfed(unfed_inputs(fmus, connections, system.parameters), args.strict)
     writable_file(args.out, "--out", RESULT_SUFFIXES)
     if args.plot:
         writable_file(args.plot, "--plot", ".png")

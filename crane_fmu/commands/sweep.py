@@ -3,6 +3,7 @@
 from pathlib import Path
 
 from .common import UsageError, check_workers, dask_options, require_dask, writable_file
+from .simulate import strict_option
 
 NAME = "sweep"
 HELP = "run a parameter study of the FMUs on Dask"
@@ -21,6 +22,7 @@ def arguments(p):
     p.add_argument("--out", required=True, help="output folder: results.parquet, cases.jsonl, plot.png")
     dask_options(p)
     p.add_argument("--csv", action="store_true", help="also write results.csv")
+    strict_option(p)
 
 
 def run(args):
@@ -36,7 +38,7 @@ def run(args):
     writable_file(Path(args.out) / "results.parquet", "--out")
     try:
         summary = run_study(study, args.out, args.fmu_dir, args.workers, args.scheduler, args.csv,
-                            progress=not args.no_progress)
+                            progress=not args.no_progress, strict=args.strict)
     except (ValueError, FileNotFoundError) as exc:
         raise UsageError(str(exc)) from None
     print(f"{summary['cases']} cases: {summary['ran']} run now, {summary['skipped']} already done, "

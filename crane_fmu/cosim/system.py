@@ -9,10 +9,11 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from .adapters import open_instance
-from .connections import check_both_ends, connect
+from .connections import check_both_ends, connect, unfed
 from .instance import FmiError, read_fmu
 from .master import Master, communication_points
 from .recorder import ArrayRecorder
+from .suggest import did_you_mean
 
 
 @dataclass(frozen=True)
@@ -66,7 +67,8 @@ class System:
         merged = {name: dict(values) for name, values in self.parameters.items()}
         for name, values in overrides.items():
             if name not in self.instances:
-                raise ValueError(f"unknown instance {name!r}; instances: {', '.join(self.instances)}")
+                raise ValueError(f"unknown instance {name!r}; instances: {', '.join(self.instances)}"
+                                 + did_you_mean(name, self.instances))
             merged.setdefault(name, {}).update(values)
         return replace(self, parameters=merged)
 
@@ -78,7 +80,8 @@ class System:
         """
         unknown = [name for name in overrides if name not in self.instances]
         if unknown:
-            raise ValueError(f"unknown instance {unknown[0]!r}; instances: {', '.join(self.instances)}")
+            raise ValueError(f"unknown instance {unknown[0]!r}; instances: {', '.join(self.instances)}"
+                             + did_you_mean(unknown[0], self.instances))
         designed = {name: self.instances[name] for name in overrides if name not in self.replaced}
         return replace(self, instances={**self.instances, **overrides}, replaced={**self.replaced, **designed})
 
@@ -126,6 +129,22 @@ def _interfaces(fmus):
     return interfaces
 
 
+def unfed_inputs(fmus, connections, parameters=None):
+    """One line per input of the FMUs ``{instance: path}`` that no connection feeds and ``parameters`` (``{instance:
+    {variable: value}}``) gives no value: it is read as its start value through the run. An input whose description
+    says what it means unconnected (:data:`~crane_fmu.cosim.connections.UNCONNECTED`) is left out."""
+    inputs, outputs, starts = {}, {}, {}
+    for name, path in fmus.items():
+        variables = read_fmu(path).modelVariables
+        inputs[name] = {v.name: v.description for v in variables if v.causality == "input"}
+        outputs[name] = [v.name for v in variables if v.causality == "output"]
+        starts.update({(name, v.name): v.start for v in variables if v.causality == "input"})
+    given = [(instance, variable) for instance, values in (parameters or {}).items() for variable in values]
+    return [f"input {instance}.{name} is fed by nothing: it stays at its start value {starts[instance, name]}"
+            + (f" (the nearest output: {near})" if near else "")
+            for instance, name, near in unfed(inputs, outputs, connections, given)]
+
+
 def settable(fmus):
     """``{instance: {name: (FMI type, unit)}}``: the parameters and inputs of the FMUs ``{instance: path}``."""
     return {name: {v.name: (v.type, v.unit) for v in read_fmu(path).modelVariables
@@ -139,10 +158,11 @@ def split_name(name, variables):
     if not dot or not instance or not variable:
         raise ValueError("expected INSTANCE.VARIABLE")
     if instance not in variables:
-        raise ValueError(f"unknown instance {instance!r}; instances: {', '.join(variables)}")
+        raise ValueError(f"unknown instance {instance!r}; instances: {', '.join(variables)}"
+                         + did_you_mean(instance, variables))
     if variable not in variables[instance]:
         raise ValueError(f"{instance} has no parameter or input {variable!r}; valid: "
-                         + ", ".join(variables[instance]))
+                         + ", ".join(variables[instance]) + did_you_mean(variable, variables[instance]))
     return instance, variable
 
 
@@ -180,7 +200,7 @@ def simulate(fmus, connections, stop_time, step, algorithm="gauss-seidel", param
     communication_points(start_time, stop_time, step)  # fail before loading anything
     for name in parameters or {}:
         if name not in fmus:
-            raise KeyError(f"unknown instance {name!r}; instances: {', '.join(fmus)}")
+            raise KeyError(f"unknown instance {name!r}; instances: {', '.join(fmus)}" + did_you_mean(name, fmus))
     recorder = ArrayRecorder() if recorder is None else recorder
     instances = {}
     try:

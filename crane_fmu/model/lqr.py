@@ -123,10 +123,12 @@ def report(config):
 
 DEFAULT_WEIGHTS = dict(zip(WEIGHTS, (50.0, 0.0, 400.0, 10.0, 50.0, 5.0)))
 # the planner's references, tracked by this controller and the HardHitController
-REFERENCE_INPUTS = tuple(input_(name, unit, f"reference {text}") for name, unit, text in zip(
-    REFERENCE, ("m", "m/s", "rad", "rad/s", "rad", "rad/s"),
-    ("trolley position (plus x_d)", "trolley velocity", "hook swing angle", "hook swing rate", "payload swing angle",
-     "payload swing rate"))) + (input_("ddx_ref", "m/s2", "reference trolley acceleration (feedforward)"),)
+# (unconnected, as in regulation: 0, the target x_d alone; cosim.connections.UNCONNECTED)
+REFERENCE_INPUTS = tuple(input_(name, unit, f"reference {text}; unconnected: 0, regulation to x_d") for name, unit, text
+                         in zip(REFERENCE, ("m", "m/s", "rad", "rad/s", "rad", "rad/s"),
+                                ("trolley position (plus x_d)", "trolley velocity", "hook swing angle",
+                                 "hook swing rate", "payload swing angle", "payload swing rate"))) + (
+    input_("ddx_ref", "m/s2", "reference trolley acceleration (feedforward); unconnected: 0, none"),)
 
 VARIABLES = controller_model() + tuple(
     parameter(name, value, "1", f"LQR state weight on {name[2:]} (Q diagonal, SI units)")

@@ -63,9 +63,10 @@ VARIABLES = PLANT_MODEL + (
     parameter("l1_max", INF, "m", "hoist: longest main cable; 1e60 or INF: no limit"),
     parameter("dl1_max", INF, "m/s", "hoist: largest |cable speed|; 1e60 or INF: no limit"),
     input_("u", "m/s2", "trolley acceleration demanded (held over each step)"),
-    input_("hoist", "m/s2", "hoist acceleration l1'' (held over each step), positive lowers the hook"),
-    input_("F1", "N", "horizontal force on the hook (wind, a push)"),
-    input_("F2", "N", "horizontal force on the payload (wind, a push)"),
+    input_("hoist", "m/s2", "hoist acceleration l1'' (held over each step), positive lowers the hook; unconnected: "
+           "0, no hoisting"),
+    input_("F1", "N", "horizontal force on the hook (wind, a push); unconnected: 0, none"),
+    input_("F2", "N", "horizontal force on the payload (wind, a push); unconnected: 0, none"),
     output("x", "m", "trolley position"),
     output("dx", "m/s", "trolley velocity"),
     output("theta1", "rad", "hook swing angle from vertical"),

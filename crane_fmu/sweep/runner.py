@@ -11,6 +11,7 @@ dies has its running cases rescheduled by Dask on the others.
 import hashlib
 import math
 import os
+import sys
 import tempfile
 import time
 from dataclasses import replace
@@ -20,7 +21,7 @@ from crane_fmu import DEFAULT_FMU_DIR, crane_parameters, native_batch, systems
 from crane_fmu.analysis import metrics
 from crane_fmu.batch import JOURNAL, Progress, run_batch
 from crane_fmu.cosim import ArrayRecorder, FmiError, simulate
-from crane_fmu.cosim.system import read_fmu, split_name
+from crane_fmu.cosim.system import read_fmu, split_name, unfed_inputs
 
 from .plots import plot_study
 from .results import JournalIndex, write_results
@@ -114,7 +115,8 @@ def case_row(case, settings, metric_names, columns, error, measure=metrics):
     return row
 
 
-def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=None, csv=False, progress=True):
+def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=None, csv=False, progress=True,
+              strict=False, warn=None):
     """Run every case of ``study`` not yet in ``out_dir``; write the results table and plot.
 
     Parameters
@@ -123,6 +125,10 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
         Worker processes of the local cluster (default: one per core).
     scheduler : str, optional
         Address of an existing Dask scheduler; no local cluster is started.
+    strict : bool
+        Refuse (ValueError) a study whose system has an input that nothing feeds and neither the system nor the
+        study gives a value (:func:`crane_fmu.cosim.system.unfed_inputs`); else each is given to ``warn``
+        (default: a warning on stderr).
 
     Returns
     -------
@@ -135,8 +141,16 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
     total, done = study.case_count(), JournalIndex(out_dir / JOURNAL)
     start = time.perf_counter()
     with systems.open_system(study.system) as system:
-        systems.resolve(system, fmu_dir)
+        fmus, connections = systems.resolve(system, fmu_dir)
         units = _check_names(study, system, fmu_dir)
+        given = {name: dict(values) for name, values in system.parameters.items()}
+        for instance, variable in (name.split(".", 1) for name in units):  # the study's varied and fixed values
+            given.setdefault(instance, {})[variable] = None
+        lines = unfed_inputs(fmus, connections, given)
+        if strict and lines:
+            raise ValueError(f"--strict: {'; '.join(lines)}")
+        for line in lines:
+            (warn or (lambda text: print(f"crane-fmu: warning: {text}", file=sys.stderr)))(line)
         out_dir.mkdir(parents=True, exist_ok=True)  # only now: a refused study leaves no folder behind
         binding = crane_parameters.bound(system, systems.modelled(system))  # before prepare binds the crane's
         shipped = shippable(systems.prepare(system, study.step, study.stop_time, check=False), fmu_dir, binding)
