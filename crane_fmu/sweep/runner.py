@@ -47,12 +47,13 @@ def local_fmus(blobs):
     cache.mkdir(exist_ok=True)
     paths = {}
     for name, (digest, data) in blobs.items():
-        path = cache / f"{digest}.fmu"
+        digest, dot, law = digest.partition(".")  # a law file's: "<digest>.py" or "<digest>.py:NAME"
+        path = cache / (f"{digest}.py" if dot else f"{digest}.fmu")
         if not path.exists():
             partial = cache / f".{digest}.{os.getpid()}.partial"
             partial.write_bytes(data)
             os.replace(partial, path)
-        paths[name] = path
+        paths[name] = f"{path}{law[2:]}" if dot else path
     return paths
 
 
