@@ -127,3 +127,28 @@ def test_what_export_cannot_write_is_one_line(fmus, tmp_path, capsys, use, out, 
     err = capsys.readouterr().err
     assert code == 2 and message.format(**names) in err and err.count("\n") == 1, err
     assert not (tmp_path / out).exists()
+
+
+def test_a_sweep_studies_your_fmu_and_its_law_file_alike(fmus, tmp_path, capsys, dask_scheduler):
+    """A gains study of the user's controller: `use` in the study file (the FMU) or `--use` (its law file) give the
+    same rows; the files' digests are in the case ids, so another controller's study never reuses them."""
+    pytest.importorskip("distributed")
+    import pyarrow.parquet as pq
+
+    study = tmp_path / "gains.toml"
+    study.write_text(f'system = "transport"\nstop_time = 4.0\nstep = 0.001\nmetrics = ["trolley_final_m", '
+                     f'"max_theta1_deg"]\n[parameters]\n"controller.k_x" = [1.0, 4.0]\n'
+                     f'[use]\ncontroller = "{fmus / "mine" / "PdController.fmu"}"\n')
+    tables = {}
+    for name, more in (("fmu", []), ("law", ["--use", f"controller={ROOT / 'tests' / 'pd_controller.py'}"])):
+        said = _main(capsys, "sweep", study, "--out", tmp_path / name, "--fmu-dir", fmus / "fmus", "--scheduler",
+                     dask_scheduler,
+                     "--no-progress", *more)
+        assert "2 cases: 2 run now, 0 already done, 0 not ok" in said, said
+        tables[name] = pq.read_table(tmp_path / name / "results.parquet").to_pydict()
+    fmu, law = tables["fmu"], tables["law"]
+    assert list(fmu["status"]) == ["ok", "ok"]
+    assert fmu["trolley_final_m"] == law["trolley_final_m"] and fmu["max_theta1_deg"] == law["max_theta1_deg"]
+    assert set(fmu["case_id"]).isdisjoint(law["case_id"])  # each study's rows are its controller's
+    assert fmu["trolley_final_m"][1] != fmu["trolley_final_m"][0]  # the gain reaches the user's FMU
+    assert 1.0 < fmu["trolley_final_m"][1] < 2.2  # told the move (x_d = 2 m) and on its way there
