@@ -152,3 +152,28 @@ def test_a_sweep_studies_your_fmu_and_its_law_file_alike(fmus, tmp_path, capsys,
     assert set(fmu["case_id"]).isdisjoint(law["case_id"])  # each study's rows are its controller's
     assert fmu["trolley_final_m"][1] != fmu["trolley_final_m"][0]  # the gain reaches the user's FMU
     assert 1.0 < fmu["trolley_final_m"][1] < 2.2  # told the move (x_d = 2 m) and on its way there
+
+
+def test_the_python_route_builds_your_system_and_its_ssp_file(tmp_path):
+    """The controller interface page's Python route, as written, in a clone's folder: the system file of a system
+    with the user's controller names FMUs of one folder, so the plant is built beside it; the page's first call,
+    without the plant, is one ValueError naming it (it was a traceback from deep inside the SSP writer)."""
+    import re
+    import subprocess
+    import sys
+
+    page = (ROOT / "docs" / "reference" / "controller-interface.md").read_text()
+    block = re.search(r"tests/test_export.py::test_the_python_route_builds_your_system_and_its_ssp_file -->\n"
+                      r"```python\n(.*?)```", page, re.S).group(1)
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
+    done = subprocess.run([sys.executable, "-c", block], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert re.fullmatch(r"theta1 = -?\d\.\d{4} rad at 5 s; wrote build/systems/pd.ssp\n", done.stdout), done.stdout
+    with zipfile.ZipFile(tmp_path / "build" / "systems" / "pd.ssp") as ssp:
+        assert {"resources/CranePlant.fmu", "resources/PdSway.fmu"} <= set(ssp.namelist())
+    alone = block.replace('["PdSway", "CranePlant"]', '["PdSway"]').replace('"build/mine"', '"build/alone"')
+    done = subprocess.run([sys.executable, "-c", alone], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert done.returncode != 0
+    assert done.stderr.strip().splitlines()[-1] == (
+        "ValueError: system pd needs CranePlant.fmu in build/alone: build it there too, e.g. "
+        "build_all('build/alone', ['PdSway', 'CranePlant'], systems=['pd'])")
