@@ -99,10 +99,23 @@ def test_a_controller_with_memory_has_its_poles_where_one_plus_l_vanishes():
 def test_the_loop_command_prints_the_analysis_and_plots(fmu_folder, tmp_path, capsys):
     code = main(["linearize", "--loop", "--system", "lqr", "--fmu-dir", str(fmu_folder), "--plot",
                  str(tmp_path / "loop.png")])
-    out = capsys.readouterr().out
-    assert code == 0
+    out, err = capsys.readouterr()
+    assert code == 0, err
     assert "closed loop: stable" in out and "phase margin:" in out and "sensitivity peak: Ms = " in out
     assert (tmp_path / "loop.png").stat().st_size > 10000
+
+
+def test_a_moving_systems_loop_is_taken_at_rest_at_the_target(fmu_folder, capsys):
+    """transport gives the plant its start values (theta1_0 = 0) and the law the move's target: the point is the
+    load at rest at x = 2 m, where the law is off its limit (its gains, not zero)."""
+    use = ROOT / "examples" / "my_controller" / "pd_sway.py"
+    build_all(fmu_folder, ["TrajectoryPlanner"], systems=[], containers=[], native=False, fmi3=False,
+              log=lambda line: None)
+    code = main(["linearize", "--loop", "--system", "transport", "--fmu-dir", str(fmu_folder), "--use",
+                 f"controller={use}"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert "at x = 2, dx = 0, theta1 = 0" in out and "u[k] = -1 x -1.5 dx +0 theta1 +2 dtheta1" in out
 
 
 @pytest.mark.parametrize("argv, message", [

@@ -244,7 +244,9 @@ def of_system(system, fmus, connections, at=None, memory=MEMORY):
     if unknown:
         raise ValueError(f"--at {unknown[0]}: not a state of {kinds[plant]} ({', '.join(point)})")
     point.update(at or {})
-    plant_lin = lin.linearize(fmus[plant], point, {k: v for k, v in system.parameters.get(plant, {}).items()})
+    starts = {f"{name}{sep}0" for name in point for sep in ("", "_")}  # the point sets the states, not these
+    plant_lin = lin.linearize(fmus[plant], point, {k: v for k, v in system.parameters.get(plant, {}).items()
+                                                   if k not in starts})
     x = np.array([plant_lin.point[n] for n in plant_lin.states])
     v = np.array([plant_lin.point[n] for n in plant_lin.inputs])
     y = plant_lin.C @ x + plant_lin.D @ v
