@@ -145,6 +145,7 @@ def test_a_sweep_studies_your_fmu_and_its_law_file_alike(fmus, tmp_path, capsys,
                      dask_scheduler,
                      "--no-progress", *more)
         assert "2 cases: 2 run now, 0 already done, 0 not ok" in said, said
+        assert "it is told the move's target, controller.x_d = 2 m" in said  # as simulate says
         tables[name] = pq.read_table(tmp_path / name / "results.parquet").to_pydict()
     fmu, law = tables["fmu"], tables["law"]
     assert list(fmu["status"]) == ["ok", "ok"]

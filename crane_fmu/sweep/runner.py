@@ -11,6 +11,7 @@ dies has its running cases rescheduled by Dask on the others.
 import hashlib
 import math
 import os
+import sys
 import tempfile
 import time
 from dataclasses import replace
@@ -199,7 +200,9 @@ def _used(system, use, fmu_dir, settings):
     system = system.with_instances(overrides)
     fmus, _ = systems.resolve(system, fmu_dir)
     system = _keep_known(system, fmus, list(system.replaced))
-    system, _ = systems.tell_controllers(system, fmu_dir)
+    system, notes = systems.tell_controllers(system, fmu_dir)
+    for note in notes:
+        print(f"crane-fmu: note: {note}", file=sys.stderr)
     _, connections = systems.resolve(system, fmu_dir)  # as checked (a controller's optional inputs left out)
     system = replace(system, connections=tuple(connections), match_names=False, replaced={})
     digests = {name: hashlib.sha256(Path(inprocess.law_file(p) if inprocess.is_law(p) else p).read_bytes())
