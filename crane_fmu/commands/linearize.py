@@ -23,7 +23,8 @@ def arguments(p):
     p.add_argument("--at", action="append", default=[], metavar="NAME=VALUE",
                    help="a state or input at the operating point (repeatable); angles in rad, or with a deg suffix")
     p.add_argument("--set", action="append", default=[], metavar="VARIABLE=VALUE",
-                   help="a parameter before initialisation (repeatable), as simulate's --set without the instance")
+                   help="a parameter before initialisation (repeatable), as simulate's --set without the instance; "
+                        "with --loop, as simulate's: INSTANCE.VARIABLE=VALUE")
     p.add_argument("--out", help="also write the matrices and the names: .npz (numpy) or .mat (MATLAB)")
     p.add_argument("--horizon", type=number, default=None,
                    help="a co-simulation-only FMU's step for its map [s] (default 0.01)")
