@@ -304,6 +304,13 @@ def _build_all(record, out_dir, kinds, systems, fmi3, containers, native, log, f
             paths += build_one_fmus(out_dir, kinds=kinds, log=log, record=record)
     names = systems if systems is not None else [
         s.name for s in registry.registered() if set(s.instances.values()) <= set(kinds)]
+    for name in names:  # a system file names FMUs of this folder: every one built here, now or before
+        missing = [k for k in dict.fromkeys(registry.kinds(registry.get(name)).values())
+                   if k not in kinds and not (Path(out_dir) / f"{k}.fmu").is_file()]
+        if missing:
+            raise ValueError(f"system {name} needs {', '.join(k + '.fmu' for k in missing)} in {out_dir}: build "
+                             f"{'it' if len(missing) == 1 else 'them'} there too, e.g. build_all({str(out_dir)!r}, "
+                             f"{list(kinds) + missing!r}, systems=[{name!r}])")
     for name in names:
         system = registry.get(name)
         fmus = system.fmus(out_dir).values()

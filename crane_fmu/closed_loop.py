@@ -5,7 +5,8 @@ The plant's outputs and the controller's demands (``u``); as parameters the cran
 ``g`` (``crane_parameters.packed``: each set on the instances that model the crane, by the rule of ``crane.l2``,
 and agree on its value with the system's crane value or the first of them: hoist-transport's planner, designed for
 l1 = 1.5 m, keeps its own l1, so that a host that sets every parameter to its start value gets the system's own run),
-each axis's target ``x_d`` (to the planner if there is one, else to the controller) and the plant's start swing
+each axis's target ``x_d`` (to the planner if there is one, and to a controller told the move's target by
+its ``x_d``; else to the controller) and the plant's start swing
 ``theta1_0``, whose start values are the system's; as inputs the plant's inputs that nothing inside feeds (``F1``,
 ``F2``, ``hoist``). The plant, controller, planner and estimator are the first instances of those roles (their
 components' ``role``), never found by name, and what the plant's roles name (``Component.crane``: its axes,
@@ -46,6 +47,9 @@ def interface(system, kinds, variables, fed):
         raise ValueError(f"system {system.name} has no instance whose component is a plant to expose")
     plant, exposed = by_role["plant"], []
     crane = components.get(kinds[plant]).crane
+    if "controller" not in by_role:  # a user's FMU in the controller's place: the one that gives the demands
+        by_role["controller"] = next((i for i in kinds if components.find(kinds[i]) is None and all(
+            variables[i].get(d, ("",))[0] == "output" for d in crane.demands)), None)
 
     def start(instance, name):
         return system.parameters.get(instance, {}).get(name, variables[instance][name][1])
@@ -53,10 +57,14 @@ def interface(system, kinds, variables, fed):
     models = crane_parameters.modelled(kinds, lambda i: [n for n, (c, _) in variables[i].items() if c == "parameter"])
     for name, (value, holders) in crane_parameters.packed(system, models, start).items():
         exposed.append(Exposed(name, "parameter", [(i, name) for i in holders], value))
-    target = by_role.get("planner", by_role.get("controller"))
+    target, controller = by_role.get("planner", by_role.get("controller")), by_role.get("controller")
     for axis in crane.axes:
         if target and axis.target in variables[target]:
-            exposed.append(Exposed(axis.target, "parameter", [(target, axis.target)], start(target, axis.target)))
+            # a controller told the move's target (a user's, without the planner's inputs) gets it too
+            told = [controller] if controller not in (None, target) and axis.target in system.parameters.get(
+                controller, {}) else []
+            exposed.append(Exposed(axis.target, "parameter", [(target, axis.target)] + [(c, axis.target) for c in told],
+                                   start(target, axis.target)))
     if crane.start_swing:
         exposed.append(Exposed(crane.start_swing, "parameter", [(plant, crane.start_swing)],
                                start(plant, crane.start_swing)))

@@ -39,7 +39,7 @@ from crane_fmu.analysis import scenarios as scenario_registry
 from crane_fmu.analysis.floor import stored_scenario_floors
 from crane_fmu.analysis.scenarios import Contender
 from crane_fmu.batch import JOURNAL, Progress, ignore_interrupts, read_journal, run_batch
-from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
+from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, inprocess, simulate
 from crane_fmu.cosim.suggest import did_you_mean
 from crane_fmu.cosim.system import read_fmu, unfed_inputs
 from crane_fmu.sweep.runner import local_fmus, write_table
@@ -69,7 +69,12 @@ def contenders(chosen=(), fmu_dir="build/fmus", only=False):
     items = list(chosen) + ([] if only and chosen else builtin)
     result = {}
     for item in items:
-        if str(item).endswith(".fmu"):
+        if inprocess.is_law(item):  # a law file: run in the workers' processes, no FMU built
+            law = inprocess.component(item)
+            variables = {v.name: v.causality for v in law.variables}
+            source = str(inprocess.law_file(item).resolve()) + str(item)[len(str(inprocess.law_file(item))):]
+            name, user = law.model_identifier, True
+        elif str(item).endswith(".fmu"):
             try:
                 md = read_fmu(item)
             except (OSError, ValueError) as exc:
@@ -132,14 +137,17 @@ def plan(chosen, fmu_dir, scenarios=None, cases=scenario_registry.CASES):
                 fmus, connections = systems.resolve(system, fmu_dir)
                 system = systems.prepare(system, step, stop_time, check=False)
                 hashes = {}
+                laws = {}  # a law file's source is its file's digest, then its suffix and name (.py:NAME)
                 for name, path in fmus.items():
                     if path not in digests:  # each FMU file read once
-                        data = Path(path).read_bytes()
+                        data = Path(inprocess.law_file(path) if inprocess.is_law(path) else path).read_bytes()
                         digests[path] = hashlib.sha256(data).hexdigest()
                         blobs[digests[path][:20]] = data
                     hashes[name] = digests[path]
+                    if inprocess.is_law(path):
+                        laws[name] = str(path)[len(str(inprocess.law_file(path).with_suffix(""))):]
                 case = {"controller": contender.name, "scenario": sid, "case": label,
-                        "fmus": {name: digest[:20] for name, digest in hashes.items()},
+                        "fmus": {name: digest[:20] + laws.get(name, "") for name, digest in hashes.items()},
                         "sha256": {name: hashes[name] for name in sorted(hashes)},
                         "files": {name: Path(fmus[name]).name for name in sorted(fmus)},
                         "connections": [list(c) for c in connections], "parameters": system.parameters,
@@ -193,7 +201,7 @@ def run_score_case(case, blobs):
     """Co-simulate one case on a worker; return its row: identity, provenance, status, error, metrics (and
     signals)."""
     start = time.perf_counter()
-    fmus = local_fmus({name: (digest, blobs[digest]) for name, digest in case["fmus"].items()})
+    fmus = local_fmus({name: (digest, blobs[digest.partition(".")[0]]) for name, digest in case["fmus"].items()})
     recorder, error = ArrayRecorder(), None
     try:
         simulate(fmus, [Connection(*c) for c in case["connections"]], case["stop_time"], case["step"],
@@ -401,6 +409,8 @@ def _items(cases, blobs):
     """The board's cases as items of the batch path (:func:`crane_fmu.native_batch.items`): chunks of the cases of one
     system whose FMUs are all native, every other case alone."""
     def batched(case):
+        if any("." in d for d in case["fmus"].values()):  # a law file (<digest>.py) runs in Python
+            return False
         return native_batch.batchable([(d, blobs[d]) for d in case["fmus"].values()], case["master"])
 
     def system_of(case):

@@ -18,10 +18,11 @@ from pathlib import Path
 
 from crane_fmu import components, crane_parameters
 from crane_fmu.controller_interface import references, told, tracked
-from crane_fmu.cosim import ssp
+from crane_fmu.cosim import inprocess, ssp
 from crane_fmu.cosim.connections import Connection
+from crane_fmu.cosim.inprocess import is_law
 from crane_fmu.cosim.ssp import load_system
-from crane_fmu.cosim.system import System, read_fmu
+from crane_fmu.cosim.system import System, is_file, read_fmu
 from crane_fmu.registry import Registry
 
 _SYSTEMS = Registry("system", lambda s: s.name, " (or an .ssp/.ssd file)")
@@ -60,7 +61,9 @@ def resolve(system, fmu_dir):
     """
     crane_parameters.check_reserved(system)
     for path in system.fmus(fmu_dir).values():
-        if not path.is_file():
+        if is_law(path):
+            inprocess.component(path)  # its file, its import, its component: one line
+        elif not path.is_file():
             raise ValueError(f"{path} not found: build the FMUs first (crane-fmu build)")
     fmus, optional, plant = system.fmus(fmu_dir), {}, plant_of(system)
     for name, designed in system.replaced.items():
@@ -99,7 +102,7 @@ def cable_source(system):
 
 def _component(source):
     """The registered component of an instance's source (a model identifier or an ``.fmu`` file), or None."""
-    if str(source).endswith(".fmu"):
+    if is_file(source):
         return components.find(read_fmu(source).coSimulation.modelIdentifier)
     return components.find(str(source))
 
@@ -150,7 +153,7 @@ def tell_controllers(system, fmu_dir):
 
 def kinds(system):
     """``{instance: model identifier}``; an instance given as an ``.fmu`` file is named by its modelDescription."""
-    return {name: read_fmu(source).coSimulation.modelIdentifier if str(source).endswith(".fmu") else source
+    return {name: read_fmu(source).coSimulation.modelIdentifier if is_file(source) else source
             for name, source in system.instances.items()}
 
 
@@ -206,7 +209,7 @@ def modelled(system):
     def parameters(name):
         source = system.instances[name]
         return [v.name for v in read_fmu(source).modelVariables if v.causality == "parameter"] \
-            if str(source).endswith(".fmu") else ()
+            if is_file(source) else ()
     return crane_parameters.modelled(kinds(system), parameters)
 
 
@@ -252,10 +255,15 @@ def check_parameters(system, checked=None):
     checked = {} if checked is None else checked
     for name, identifier in kinds(system).items():
         values = system.parameters.get(name, {})
-        key = (identifier, json.dumps(values, sort_keys=True))
+        key = (str(system.instances[name]) if is_law(system.instances[name]) else identifier,
+               json.dumps(values, sort_keys=True))
         if key not in checked:
             try:
-                components.check_parameters(identifier, values)
+                source = system.instances[name]
+                if is_law(source):  # a law file's own rules, as its FMU would check them
+                    inprocess.component(source).check(values)
+                else:
+                    components.check_parameters(identifier, values)
                 checked[key] = None
             except ValueError as exc:
                 checked[key] = str(exc)

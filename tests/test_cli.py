@@ -238,7 +238,8 @@ def test_use_swaps_one_instances_fmu(fmu_dir, tmp_path, capsys):
     for item, message in [("controller", "expected INSTANCE=FILE.fmu"),
                           (f"crane={energy}", "system lqr has no instance 'crane'; instances: plant, controller"),
                           (f"controller={tmp_path / 'nowhere.fmu'}", "nowhere.fmu not found"),
-                          (f"controller={tmp_path / 'swap.csv'}", "is not an FMU file (the name must end in .fmu)")]:
+                          (f"controller={tmp_path / 'swap.csv'}",
+                           "is neither an FMU file (.fmu) nor a law file (.py, .py:NAME)")]:
         code, _, err = _run(capsys, *common, "--use", item, "--out", str(tmp_path / "x.csv"))
         assert code == 2 and err.count("\n") == 1 and message in err, err
     assert not (tmp_path / "x.csv").exists()

@@ -10,6 +10,6 @@ interpreters, ``python -c "import time; t = time.perf_counter(); import fmpy; pr
 fmpy 0.4 s, numpy 0.3 s, pyarrow.parquet 0.4 s, scipy.io 0.9 s, scipy.stats 2.5 s, matplotlib.pyplot 1.5 s.
 """
 
-from . import animate, bench, build, compare, info, linearize, plot, reproduce, serve, simulate, sweep, targets
+from . import animate, bench, build, compare, export, info, linearize, plot, reproduce, serve, simulate, sweep, targets
 
-COMMANDS = (build, simulate, info, linearize, reproduce, sweep, compare, targets, plot, animate, bench, serve)
+COMMANDS = (build, simulate, export, info, linearize, reproduce, sweep, compare, targets, plot, animate, bench, serve)

@@ -22,9 +22,10 @@ EXAMPLES = (
 
 
 def arguments(p):
-    p.add_argument("--controller", action="append", default=[], metavar="NAME|FILE.fmu",
-                   help="a built-in controller's name or a controller FMU (repeatable); every built-in one is "
-                        "scored beside them unless --only")
+    p.add_argument("--controller", action="append", default=[], metavar="NAME|FILE.fmu|FILE.py",
+                   help="a built-in controller's name, a controller FMU or a law file (FILE.py or FILE.py:NAME, run "
+                        "without building an FMU) (repeatable); every built-in one is scored beside them unless "
+                        "--only")
     p.add_argument("--only", action="store_true", help="score only the --controller ones")
     p.add_argument("--out", help="output folder: scoreboard.md, index.html, scores.parquet, plots, animations")
     dask_options(p)

@@ -27,6 +27,7 @@ EXAMPLES = (
     "  crane-fmu simulate --set crane.l1=1.5 --set plant.theta1_0=0.2   # the crane's l1: plant and controller\n"
     "  crane-fmu simulate --system lqr --set crane.l2=0.6 --set controller.l2=0.5   # a controller told another\n"
     "  crane-fmu simulate --system transport --use controller=build/mine/PdSway.fmu --out mine.csv\n"
+    "  crane-fmu simulate --system transport --use controller=pd_sway.py --out mine.csv   # no FMU built\n"
     "  crane-fmu simulate --system transport --out move.mat          # for MATLAB: columns and data\n"
     "On a terminal a long run shows its progress on stderr; Ctrl-C stops it and keeps the rows so far."
 )
@@ -79,7 +80,9 @@ def run_options(p, stop_time_help):
                         "models it (crane-fmu info --system NAME lists them) and has no value of its own")
     p.add_argument("--use", action="append", default=[], metavar="INSTANCE=FILE.fmu",
                    help="run this FMU as the instance instead of the system's (repeatable), e.g. "
-                        "controller=mine.fmu; the system's values for the instance are kept where the FMU has them")
+                        "controller=mine.fmu; the system's values for the instance are kept where the FMU has them; "
+                        "a Python file (controller=mylaw.py, or mylaw.py:NAME for its component or law function "
+                        "NAME) runs its law in this process, no FMU built, with the same numbers as its FMU")
 
 
 def run(args):
@@ -108,12 +111,27 @@ def _use(items, system):
         if instance not in system.instances:
             raise UsageError(f"--use {item!r}: system {system.name} has no instance {instance!r}; instances: "
                              f"{', '.join(system.instances)}" + did_you_mean(instance, system.instances))
-        if Path(path).suffix != ".fmu":
-            raise UsageError(f"--use {item!r}: {path} is not an FMU file (the name must end in .fmu)")
-        if not Path(path).is_file():
-            raise UsageError(f"--use {item!r}: {path} not found")
-        overrides[instance] = str(Path(path).resolve())
+        overrides[instance] = used_file(item, path)
     return system.with_instances(overrides) if overrides else system
+
+
+def used_file(item, path):
+    """The resolved source of ``--use INSTANCE=path``: an FMU file, or a law file (``mylaw.py``, ``mylaw.py:NAME``:
+    a component or law function run in this process, no FMU built); one line for anything else."""
+    from crane_fmu.cosim import inprocess
+
+    if inprocess.is_law(path):
+        try:
+            inprocess.component(path)
+        except ValueError as exc:
+            raise UsageError(f"--use {item!r}: {exc}") from None
+        name = path[len(str(inprocess.law_file(path))):]
+        return str(inprocess.law_file(path).resolve()) + name
+    if Path(path).suffix != ".fmu":
+        raise UsageError(f"--use {item!r}: {path} is neither an FMU file (.fmu) nor a law file (.py, .py:NAME)")
+    if not Path(path).is_file():
+        raise UsageError(f"--use {item!r}: {path} not found")
+    return str(Path(path).resolve())
 
 
 def _keep_known(system, fmus, replaced):

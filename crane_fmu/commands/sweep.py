@@ -1,5 +1,6 @@
 """``crane-fmu sweep``: run a parameter study of the FMUs on Dask."""
 
+from dataclasses import replace
 from pathlib import Path
 
 from .common import UsageError, check_workers, dask_options, require_dask, writable_file
@@ -13,6 +14,7 @@ EXAMPLES = (
     "  crane-fmu sweep builtin:region-of-attraction --out results/roa\n"
     "  crane-fmu sweep builtin:theta2-gain-sensitivity --out results/gains --csv\n"
     "  crane-fmu sweep study.toml --out results/study --scheduler tcp://scheduler-host:8786\n"
+    "  crane-fmu sweep gains.toml --use controller=build/mine/PdSway.fmu --out results/mine   # your controller\n"
     "Re-running the same command resumes: finished cases are skipped."
 )
 
@@ -23,6 +25,9 @@ def arguments(p):
     dask_options(p)
     p.add_argument("--csv", action="store_true", help="also write results.csv")
     strict_option(p)
+    p.add_argument("--use", action="append", default=[], metavar="INSTANCE=FILE.fmu",
+                   help="run this FMU (or law file, FILE.py) as the instance in every case, over the study's "
+                        "[use] table (repeatable): a study of your own controller")
 
 
 def run(args):
@@ -35,6 +40,14 @@ def run(args):
         study = spec.load(args.study)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    if args.use:
+        use = dict(study.use)
+        for item in args.use:
+            instance, sep, path = item.partition("=")
+            if not sep or not instance or not path:
+                raise UsageError(f"--use {item!r}: expected INSTANCE=FILE.fmu, e.g. controller=mine.fmu")
+            use[instance] = path
+        study = replace(study, use=use)
     writable_file(Path(args.out) / "results.parquet", "--out")
     try:
         summary = run_study(study, args.out, args.fmu_dir, args.workers, args.scheduler, args.csv,

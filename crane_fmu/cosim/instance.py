@@ -221,8 +221,13 @@ def _remove_spare_folders():
 def read_fmu(path):
     """The model description of a readable FMI 2.0 or 3.0 co-simulation FMU, else ValueError (one line).
 
-    Read once per file version (path, size, modification time): treat it as read-only.
+    Read once per file version (path, size, modification time): treat it as read-only. A law file
+    (``mylaw.py``) has the description its FMU will have (:mod:`~crane_fmu.cosim.inprocess`).
     """
+    from .inprocess import is_law, model_description
+
+    if is_law(path):
+        return model_description(path)
     if not Path(path).is_file():
         raise ValueError(f"{path} not found")
     return _read_fmu(_file_version(path), str(path))

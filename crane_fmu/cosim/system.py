@@ -10,6 +10,7 @@ from pathlib import Path
 
 from .adapters import open_instance
 from .connections import check_both_ends, connect, unfed
+from .inprocess import is_law
 from .instance import FmiError, read_fmu
 from .master import Master, communication_points
 from .recorder import ArrayRecorder
@@ -59,7 +60,7 @@ class System:
 
     def fmus(self, fmu_dir):
         """``{instance: Path}`` of the FMU files; a model identifier names ``fmu_dir/<identifier>.fmu``."""
-        return {name: Path(source) if str(source).endswith(".fmu") else Path(fmu_dir) / f"{source}.fmu"
+        return {name: Path(source) if is_file(source) else Path(fmu_dir) / f"{source}.fmu"
                 for name, source in self.instances.items()}
 
     def with_parameters(self, overrides):
@@ -117,6 +118,11 @@ class System:
             connections = tuple(c for c in connections if c.target not in self.replaced
                                 or c.input in interfaces[c.target][0])
         return fmus, connect(interfaces, connections, self.match_names)
+
+
+def is_file(source):
+    """Whether an instance's source names a file (an ``.fmu``, or a law file ``mylaw.py``), not a model identifier."""
+    return str(source).endswith(".fmu") or is_law(source)
 
 
 def _interfaces(fmus):

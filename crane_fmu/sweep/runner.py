@@ -20,7 +20,7 @@ from pathlib import Path
 from crane_fmu import DEFAULT_FMU_DIR, crane_parameters, native_batch, systems
 from crane_fmu.analysis import metrics
 from crane_fmu.batch import JOURNAL, Progress, run_batch
-from crane_fmu.cosim import ArrayRecorder, FmiError, simulate
+from crane_fmu.cosim import ArrayRecorder, FmiError, inprocess, simulate
 from crane_fmu.cosim.system import read_fmu, split_name, unfed_inputs
 
 from .plots import plot_study
@@ -37,8 +37,10 @@ def shippable(system, fmu_dir, binding=None):
     fmus, connections = system.resolve(fmu_dir)
     blobs = {}
     for name, path in fmus.items():
-        data = Path(path).read_bytes()
-        blobs[name] = (hashlib.sha256(data).hexdigest()[:20], data)
+        law = inprocess.is_law(path)  # a law file: its bytes, named <digest>.py[:NAME] (local_fmus)
+        data = Path(inprocess.law_file(path) if law else path).read_bytes()
+        suffix = str(path)[len(str(inprocess.law_file(path).with_suffix(""))):] if law else ""
+        blobs[name] = (hashlib.sha256(data).hexdigest()[:20] + suffix, data)
     return {"blobs": blobs, "connections": connections, "parameters": system.parameters, "binding": binding or {}}
 
 
@@ -48,12 +50,13 @@ def local_fmus(blobs):
     cache.mkdir(exist_ok=True)
     paths = {}
     for name, (digest, data) in blobs.items():
-        path = cache / f"{digest}.fmu"
+        digest, dot, law = digest.partition(".")  # a law file's: "<digest>.py" or "<digest>.py:NAME"
+        path = cache / (f"{digest}.py" if dot else f"{digest}.fmu")
         if not path.exists():
             partial = cache / f".{digest}.{os.getpid()}.partial"
             partial.write_bytes(data)
             os.replace(partial, path)
-        paths[name] = path
+        paths[name] = f"{path}{law[2:]}" if dot else path
     return paths
 
 
@@ -141,6 +144,8 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
     total, done = study.case_count(), JournalIndex(out_dir / JOURNAL)
     start = time.perf_counter()
     with systems.open_system(study.system) as system:
+        if study.use:
+            system, settings = _used(system, study.use, fmu_dir, settings)
         fmus, connections = systems.resolve(system, fmu_dir)
         units = _check_names(study, system, fmu_dir)
         given = {name: dict(values) for name, values in system.parameters.items()}
@@ -173,7 +178,8 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
         if ran or to_run:
             cases = (c for c in study.iter_cases() if (key := case_id(c, settings)) not in done and key not in invalid)
             # the batch path where the FMUs are native, else a case at a time; the cases made as they are sent
-            native = native_batch.batchable(shipped["blobs"].values(), study.algorithm)
+            native = all("." not in d for d, _ in shipped["blobs"].values()) and native_batch.batchable(
+                shipped["blobs"].values(), study.algorithm)  # a law file (<digest>.py) runs in Python
             ran += run_batch(native_batch.sweep_chunk, native_batch.chunked(cases, native, to_run), shipped, on="dask",
                              workers=workers, scheduler=scheduler, journal=out_dir / JOURNAL,
                              known=invalid.values(), progress=bar, chunked=True, collect=False, settings=settings,
@@ -187,6 +193,34 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
     if study.plot or len(study.grid) + len(study.sampled) >= 2:
         plot_study(_plotted(out_dir / "results.parquet", study), study, out_dir / "plot.png", units=units)
     return {"cases": total, "skipped": skipped, "ran": ran, "not_ok": not_ok, "seconds": time.perf_counter() - start}
+
+
+def _used(system, use, fmu_dir, settings):
+    """``(system, settings)``: the study's system with the FMUs of its ``use`` table in their places, told the
+    move as simulate tells them, and the settings (so every case id) naming those files by their sha256."""
+    from crane_fmu.commands.common import UsageError
+    from crane_fmu.commands.simulate import _keep_known, used_file
+
+    overrides = {}
+    for instance, path in use.items():
+        if instance not in system.instances:
+            raise ValueError(f"use.{instance}: system {system.name} has no instance {instance!r}; instances: "
+                             f"{', '.join(system.instances)}")
+        try:
+            overrides[instance] = used_file(f"{instance}={path}", path)
+        except UsageError as exc:
+            raise ValueError(str(exc).replace("--use", "use")) from None
+    system = system.with_instances(overrides)
+    fmus, _ = systems.resolve(system, fmu_dir)
+    system = _keep_known(system, fmus, list(system.replaced))
+    system, notes = systems.tell_controllers(system, fmu_dir)
+    for note in notes:
+        print(f"crane-fmu: note: {note}", file=sys.stderr)
+    _, connections = systems.resolve(system, fmu_dir)  # as checked (a controller's optional inputs left out)
+    system = replace(system, connections=tuple(connections), match_names=False, replaced={})
+    digests = {name: hashlib.sha256(Path(inprocess.law_file(p) if inprocess.is_law(p) else p).read_bytes())
+               .hexdigest() for name, p in overrides.items()}
+    return system, {**settings, "use": digests}
 
 
 def _plotted(path, study):

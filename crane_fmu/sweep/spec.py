@@ -22,6 +22,9 @@ A study is a TOML (or, with PyYAML installed, YAML) file::
     [fixed]                          # set in every case
     "controller.w_theta2" = 0.0
 
+    [use]                            # optional: your FMU (or law file) in an instance's place
+    controller = "build/mine/PdSway.fmu"   # a path from the folder the sweep runs in, as --use
+
     [plot]                           # optional: metric over two parameters
     metric = "settling_0.5deg_s"
     x = "plant.theta1_0"
@@ -67,6 +70,7 @@ class Study:
     seed: int = 0
     fixed: dict = field(default_factory=dict)  # variable -> value
     plot: dict = field(default_factory=dict)
+    use: dict = field(default_factory=dict)  # instance -> FMU file or law file in its place
 
     def cases(self):
         """Every case as ``{"instance.variable": value}``, in a reproducible order."""
@@ -155,7 +159,7 @@ def _axis(key, value):
 def parse(data, source="study"):
     """Build a :class:`Study` from the loaded file contents (a dict)."""
     known = {"system", "stop_time", "step", "algorithm", "metrics", "parameters", "sampling", "fixed", "plot",
-             "settling_band_deg"}
+             "settling_band_deg", "use"}
     if "master" in data and "algorithm" not in data:  # the key's former name
         data = {("algorithm" if key == "master" else key): value for key, value in data.items()}
     if "controller" in data:
@@ -215,8 +219,11 @@ def parse(data, source="study"):
             if plot.get(axis) not in axes:
                 raise ValueError(f"plot.{axis} must be a varied parameter ({', '.join(sorted(axes))}), "
                                  f"got {plot.get(axis)!r}")
+    use = data.get("use", {})
+    if not isinstance(use, dict) or not all(isinstance(v, str) and v for v in use.values()):
+        raise ValueError(f"use must be a table of INSTANCE = \"FILE.fmu\", got {use!r}")
     return Study(stop_time, step, algorithm, system, metrics, band, grid, sampled, method, samples, seed, fixed,
-                 plot)
+                 plot, dict(use))
 
 
 def load(path):

@@ -1,0 +1,180 @@
+"""`crane-fmu export`: a system with a user's FMU in its place, as an SSP file or as one FMU.
+
+- The SSP file carries the user's FMU, the move it is told (its x_d) and every value; our master runs the
+  file as it runs `simulate --use` (bit for bit), and OMSimulator (where ../shared/tools has it) gives the
+  same last row.
+- As one FMU: fmpy's container when a component is the user's (it runs as our Jacobi master without the
+  initial exchange, which is what the container does), one native FMU when every component is native.
+- A law file (no FMU) cannot go into a file: one line saying how to build it.
+"""
+
+import shutil
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+from third_party_hosts import OMSIMULATOR, SAME, omsimulator_log_problems, read_oms_mat, run_tool, tool
+
+from crane_fmu.build_scripts.build_fmus import build_all
+from crane_fmu.cli import main
+from crane_fmu.cosim import read_csv
+
+ROOT = Path(__file__).resolve().parents[1]
+STOP = 2.0  # s: the move is under way (x passes 1 m), the swing large
+
+
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory):
+    """The designs' FMUs (plant, planner, LQR) and the user's PD controller (tests/pd_controller.py) built as a
+    user builds it."""
+    out = tmp_path_factory.mktemp("export")
+    build_all(out / "fmus", ["CranePlant", "TrajectoryPlanner", "LqrController"], systems=[], containers=[],
+              native=False, fmi3=False, log=lambda line: None)
+    assert main(["build", "--component", str(ROOT / "tests" / "pd_controller.py"), "--out", str(out / "mine")]) == 0
+    return out
+
+
+def _main(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    return out + err
+
+
+def _simulate(capsys, tmp_path, name, *argv):
+    _main(capsys, "simulate", *argv, "--stop-time", STOP, "--out", tmp_path / name)
+    return read_csv(tmp_path / name)
+
+
+def test_an_exported_ssp_with_your_fmu_runs_as_simulate_use(fmus, tmp_path, capsys):
+    mine = f"controller={fmus / 'mine' / 'PdController.fmu'}"
+    said = _main(capsys, "export", "--system", "transport", "--fmu-dir", fmus / "fmus", "--use", mine,
+                 "--set", "controller.k_v=2.5", "--out", tmp_path / "mine.ssp")
+    assert "controller.x_d = 2 m" in said and "wrote" in said
+    with zipfile.ZipFile(tmp_path / "mine.ssp") as ssp:
+        assert "resources/PdController.fmu" in ssp.namelist()
+    (tmp_path / "elsewhere").mkdir()  # the file alone: no build folder beside it
+    shutil.move(tmp_path / "mine.ssp", tmp_path / "elsewhere" / "mine.ssp")
+    theirs = _simulate(capsys, tmp_path, "ssp.csv", "--system", tmp_path / "elsewhere" / "mine.ssp")
+    ours = _simulate(capsys, tmp_path, "use.csv", "--system", "transport", "--fmu-dir", fmus / "fmus", "--use", mine,
+                     "--set", "controller.k_v=2.5")
+    assert list(theirs) == list(ours)
+    for column in ours:
+        assert np.array_equal(theirs[column], ours[column]), column
+    assert ours["plant.x"][-1] > 1.0  # told the move: the load is on its way to 2 m
+    other = _simulate(capsys, tmp_path, "other.csv", "--system", "transport", "--fmu-dir", fmus / "fmus", "--use",
+                      mine)
+    assert other["plant.x"][-1] != ours["plant.x"][-1]  # the --set value is in the file
+
+
+def test_omsimulator_runs_the_exported_ssp_to_the_same_last_row(fmus, tmp_path, capsys):
+    oms = tool(OMSIMULATOR)
+    mine = f"controller={fmus / 'mine' / 'PdController.fmu'}"
+    _main(capsys, "export", "--system", "transport", "--fmu-dir", fmus / "fmus", "--use", mine, "--out",
+          tmp_path / "mine.ssp")
+    code, log = run_tool([oms, f"--tempDir={tmp_path / 'oms'}", f"--stopTime={STOP}",
+                          f"--resultFile={tmp_path / 'oms.mat'}", tmp_path / "mine.ssp"], tmp_path)
+    assert code == 0 and not omsimulator_log_problems(log), log[-3000:]
+    theirs = read_oms_mat(tmp_path / "oms.mat", 1e-3)
+    ours = _simulate(capsys, tmp_path, "use.csv", "--system", "transport", "--fmu-dir", fmus / "fmus", "--use", mine)
+    for column in ("plant.x", "plant.theta1", "plant.theta2", "controller.u"):
+        scale = max(1.0, abs(ours[column]).max())
+        assert abs(theirs[f"transport.transport.{column}"][-1] - ours[column][-1]) <= SAME * scale, column
+
+
+def test_an_exported_fmu_with_your_fmu_is_a_container_that_runs_as_the_jacobi_master(fmus, tmp_path, capsys):
+    mine = f"controller={fmus / 'mine' / 'PdController.fmu'}"
+    said = _main(capsys, "export", "--system", "transport", "--fmu-dir", fmus / "fmus", "--use", mine, "--out",
+                 tmp_path / "MyMove.fmu")
+    assert "container" in said
+    md = read_model_description(tmp_path / "MyMove.fmu")
+    assert md.fmiVersion == "3.0" and {"x", "theta1", "u", "x_d"} <= {v.name for v in md.modelVariables}
+    theirs = simulate_fmu(str(tmp_path / "MyMove.fmu"), stop_time=STOP, output_interval=1e-3, step_size=1e-3)
+    ours = _simulate(capsys, tmp_path, "jacobi.csv", "--system", "transport", "--fmu-dir", fmus / "fmus", "--use", mine,
+                     "--algorithm", "jacobi", "--no-initial-exchange")
+    for name in ("x", "theta1", "theta2"):  # the plant's state; the container shows u as its last inner step set it
+        assert np.array_equal(theirs[name], ours[f"plant.{name}"]), name
+    assert ours["plant.x"][-1] > 1.0
+
+
+def test_an_exported_fmu_of_native_components_is_one_native_fmu(fmus, tmp_path, capsys):
+    if shutil.which("cc") is None and shutil.which("gcc") is None:
+        pytest.skip("no C compiler: a one native FMU cannot be built")
+    said = _main(capsys, "export", "--system", "lqr", "--fmu-dir", fmus / "fmus", "--set", "crane.l2=0.6",
+                 "--out", tmp_path / "MyLqr.fmu")
+    assert "one native FMU" in said
+    md = read_model_description(tmp_path / "MyLqr.fmu")
+    assert md.coSimulation.modelIdentifier == "MyLqr"
+    theirs = simulate_fmu(str(tmp_path / "MyLqr.fmu"), stop_time=STOP, output_interval=1e-3, step_size=1e-3)
+    ours = _simulate(capsys, tmp_path, "lqr.csv", "--system", "lqr", "--fmu-dir", fmus / "fmus", "--set",
+                     "crane.l2=0.6")
+    for name in ("x", "theta1", "theta2"):  # the native twins of the Python FMUs: rounding, not behaviour
+        assert abs(theirs[name][-1] - ours[f"plant.{name}"][-1]) <= SAME * max(1.0, abs(ours[f"plant.{name}"]).max())
+
+
+@pytest.mark.parametrize("use, out, message", [
+    ("controller={root}/examples/my_controller/pd_sway.py", "x.ssp",
+     "a law file runs only in this toolkit's master; build its FMU first (crane-fmu build --component"),
+    ("controller={mine}/PdController.fmu", "x.csv", "--out {tmp}/x.csv: writes a .ssp or .fmu file"),
+    ("planner={mine}/PdController.fmu", "x.ssp", "has no output x_ref, which the system connects to controller.x_ref"),
+])
+def test_what_export_cannot_write_is_one_line(fmus, tmp_path, capsys, use, out, message):
+    names = {"root": ROOT, "mine": fmus / "mine", "tmp": tmp_path}
+    code = main(["export", "--system", "transport", "--fmu-dir", str(fmus / "fmus"), "--use", use.format(**names),
+                 "--out", str(tmp_path / out)])
+    err = capsys.readouterr().err
+    assert code == 2 and message.format(**names) in err and err.count("\n") == 1, err
+    assert not (tmp_path / out).exists()
+
+
+def test_a_sweep_studies_your_fmu_and_its_law_file_alike(fmus, tmp_path, capsys, dask_scheduler):
+    """A gains study of the user's controller: `use` in the study file (the FMU) or `--use` (its law file) give the
+    same rows; the files' digests are in the case ids, so another controller's study never reuses them."""
+    pytest.importorskip("distributed")
+    import pyarrow.parquet as pq
+
+    study = tmp_path / "gains.toml"
+    study.write_text(f'system = "transport"\nstop_time = 4.0\nstep = 0.001\nmetrics = ["trolley_final_m", '
+                     f'"max_theta1_deg"]\n[parameters]\n"controller.k_x" = [1.0, 4.0]\n'
+                     f'[use]\ncontroller = "{fmus / "mine" / "PdController.fmu"}"\n')
+    tables = {}
+    for name, more in (("fmu", []), ("law", ["--use", f"controller={ROOT / 'tests' / 'pd_controller.py'}"])):
+        said = _main(capsys, "sweep", study, "--out", tmp_path / name, "--fmu-dir", fmus / "fmus", "--scheduler",
+                     dask_scheduler,
+                     "--no-progress", *more)
+        assert "2 cases: 2 run now, 0 already done, 0 not ok" in said, said
+        assert "it is told the move's target, controller.x_d = 2 m" in said  # as simulate says
+        tables[name] = pq.read_table(tmp_path / name / "results.parquet").to_pydict()
+    fmu, law = tables["fmu"], tables["law"]
+    assert list(fmu["status"]) == ["ok", "ok"]
+    assert fmu["trolley_final_m"] == law["trolley_final_m"] and fmu["max_theta1_deg"] == law["max_theta1_deg"]
+    assert set(fmu["case_id"]).isdisjoint(law["case_id"])  # each study's rows are its controller's
+    assert fmu["trolley_final_m"][1] != fmu["trolley_final_m"][0]  # the gain reaches the user's FMU
+    assert 1.0 < fmu["trolley_final_m"][1] < 2.2  # told the move (x_d = 2 m) and on its way there
+
+
+def test_the_python_route_builds_your_system_and_its_ssp_file(tmp_path):
+    """The controller interface page's Python route, as written, in a clone's folder: the system file of a system
+    with the user's controller names FMUs of one folder, so the plant is built beside it; the page's first call,
+    without the plant, is one ValueError naming it (it was a traceback from deep inside the SSP writer)."""
+    import re
+    import subprocess
+    import sys
+
+    page = (ROOT / "docs" / "reference" / "controller-interface.md").read_text()
+    block = re.search(r"tests/test_export.py::test_the_python_route_builds_your_system_and_its_ssp_file -->\n"
+                      r"```python\n(.*?)```", page, re.S).group(1)
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
+    done = subprocess.run([sys.executable, "-c", block], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert re.fullmatch(r"theta1 = -?\d\.\d{4} rad at 5 s; wrote build/systems/pd.ssp\n", done.stdout), done.stdout
+    with zipfile.ZipFile(tmp_path / "build" / "systems" / "pd.ssp") as ssp:
+        assert {"resources/CranePlant.fmu", "resources/PdSway.fmu"} <= set(ssp.namelist())
+    alone = block.replace('["PdSway", "CranePlant"]', '["PdSway"]').replace('"build/mine"', '"build/alone"')
+    done = subprocess.run([sys.executable, "-c", alone], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert done.returncode != 0
+    assert done.stderr.strip().splitlines()[-1] == (
+        "ValueError: system pd needs CranePlant.fmu in build/alone: build it there too, e.g. "
+        "build_all('build/alone', ['PdSway', 'CranePlant'], systems=['pd'])")

@@ -1,0 +1,121 @@
+"""A control law as a plain Python file, run without building an FMU (``--use controller=mylaw.py``).
+
+- The law file runs in ``simulate`` and ``compare`` and gives the same bits as the FMU built from it
+  later (``crane-fmu build --component``): the same runtime runs the same Python code on the same doubles.
+- A plain function ``law(config, state, inputs)`` runs too, as a stateless controller of the measured state.
+- A mistake in the file (missing, an import that fails, no such name, a rule broken) is one line, exit 2.
+"""
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from crane_fmu.build_scripts.build_fmus import build_all
+from crane_fmu.cli import main
+from crane_fmu.cosim import read_csv
+
+ROOT = Path(__file__).resolve().parents[1]
+PD_SWAY = ROOT / "examples" / "my_controller" / "pd_sway.py"
+
+PLAIN = '''
+def law(config, state, inputs):
+    """The PdSway example's law at its default gains, as a bare function."""
+    x, dx, theta1, dtheta1, theta2, dtheta2 = inputs
+    u = -1.0 * (x - 0.0) - 1.5 * dx + 2.0 * dtheta1
+    return (max(-2.0, min(2.0, u)),)
+'''
+
+
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory):
+    """The plant, planner and LQR (the systems' designs) and the PdSway example built as its user builds it."""
+    out = tmp_path_factory.mktemp("laws")
+    build_all(out / "fmus", ["CranePlant", "TrajectoryPlanner", "LqrController"], systems=[], containers=[],
+              native=False, fmi3=False, log=lambda line: None)
+    assert main(["build", "--component", str(PD_SWAY), "--out", str(out / "mine")]) == 0
+    return out
+
+
+def _run(capsys, fmus, tmp_path, system, use, *more):
+    out = tmp_path / f"{len(list(tmp_path.iterdir()))}.csv"
+    code = main(["simulate", "--system", system, "--fmu-dir", str(fmus / "fmus"), "--use", use, "--out", str(out),
+                 *more])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    return read_csv(out), err
+
+
+def _same_bits(a, b):
+    assert list(a) == list(b)
+    for name in a:
+        assert np.array_equal(np.asarray(a[name]).view(np.uint64), np.asarray(b[name]).view(np.uint64)), name
+
+
+@pytest.mark.parametrize("system", ["transport", "lqr"])
+def test_the_law_file_gives_the_bits_of_the_fmu_built_from_it(fmus, tmp_path, capsys, system):
+    law, law_err = _run(capsys, fmus, tmp_path, system, f"controller={PD_SWAY}", "--set", "controller.k_s=1.5")
+    fmu, fmu_err = _run(capsys, fmus, tmp_path, system, f"controller={fmus / 'mine' / 'PdSway.fmu'}",
+                        "--set", "controller.k_s=1.5")
+    _same_bits(law, fmu)
+    if system == "transport":  # told the move's target as its x_d, as the FMU is, and it takes the load there
+        assert "x_d = 2 m" in law_err and "x_d = 2 m" in fmu_err
+        assert abs(law["plant.x"][-1] - 2.0) < 0.05
+
+
+def test_a_plain_function_runs_as_the_component_of_the_same_arithmetic(fmus, tmp_path, capsys):
+    (tmp_path / "mylaw.py").write_text(PLAIN)
+    law, _ = _run(capsys, fmus, tmp_path, "lqr", f"controller={tmp_path / 'mylaw.py'}:law")
+    fmu, _ = _run(capsys, fmus, tmp_path, "lqr", f"controller={fmus / 'mine' / 'PdSway.fmu'}")
+    _same_bits(law, fmu)
+    assert abs(law["plant.theta1"][0]) > 0.1 and abs(law["plant.theta1"][-1]) < 0.5 * abs(law["plant.theta1"][0])
+
+
+@pytest.mark.parametrize("use, message", [
+    ("controller={tmp}/none.py", "none.py not found"),
+    ("controller={tmp}/broken.py", "importing broken.py failed: ZeroDivisionError"),
+    ("controller={tmp}/plain.py:missing", "plain.py defines no component or function 'missing'"),
+    ("controller={tmp}/two.py", "expected one Component in two.py"),
+    ("controller={tmp}/law.txt", "is neither an FMU file (.fmu) nor a law file (.py, .py:NAME)"),
+])
+def test_a_bad_law_file_is_one_line(fmus, tmp_path, capsys, use, message):
+    (tmp_path / "broken.py").write_text("1 / 0\n")
+    (tmp_path / "plain.py").write_text(PLAIN)
+    (tmp_path / "two.py").write_text(PD_SWAY.read_text() + "\nfrom dataclasses import replace\n"
+                                     "OTHER = replace(COMPONENT, model_identifier='PdOther')\n")
+    code = main(["simulate", "--system", "lqr", "--fmu-dir", str(fmus / "fmus"), "--use", use.format(tmp=tmp_path),
+                 "--out", str(tmp_path / "x.csv")])
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and err.count("\n") == 1, err
+    assert not (tmp_path / "x.csv").exists()
+
+
+def test_a_broken_rule_of_the_law_is_one_line_before_it_runs(fmus, tmp_path, capsys):
+    code = main(["simulate", "--system", "lqr", "--fmu-dir", str(fmus / "fmus"), "--use", f"controller={PD_SWAY}",
+                 "--set", "controller.k_x=-1", "--out", str(tmp_path / "x.csv")])
+    err = capsys.readouterr().err
+    assert code == 2 and "k_x must be > 0 and finite, got -1" in err and err.count("\n") == 1, err
+
+
+def test_compare_scores_the_law_file_as_its_fmu(fmus, tmp_path, dask_scheduler):
+    """The board's rows of the law file and of its FMU hold the same figures (the law runs in the workers)."""
+    pytest.importorskip("distributed")
+    from crane_fmu.compare import compare
+
+    copied = tmp_path / "pd_law.py"  # another name than the FMU's: two contenders
+    shutil.copy(PD_SWAY, copied)
+    text = copied.read_text().replace('"PdSway", "controller"', '"PdLaw", "controller"')
+    copied.write_text(text)
+    rows = compare(tmp_path / "board", [str(copied), str(fmus / "mine" / "PdSway.fmu")], fmu_dir=fmus / "fmus",
+                   quick=True, only=True, scenarios=("S1",), scheduler=dask_scheduler)
+    by = {}
+    for row in rows:
+        by.setdefault(row["controller"], {})[row["case"]] = row
+    assert set(by) == {"PdLaw", "PdSway"} and by["PdLaw"].keys() == by["PdSway"].keys()
+    own = {"case_id", "controller", "fmus_sha256", "date", "duration_s", "versions"}
+    for case, row in by["PdLaw"].items():
+        assert row["status"] == "ok"
+        figures = [k for k, v in row.items() if k not in own and isinstance(v, float)]
+        assert len(figures) >= 5, sorted(row)
+        assert {k: row[k] for k in set(row) - own} == {k: by["PdSway"][case][k] for k in set(row) - own}, case
