@@ -33,13 +33,13 @@ import fmpy
 import numpy as np
 import scipy
 
-from crane_fmu import components, native_batch, systems
+from crane_fmu import components, laws, native_batch, systems
 from crane_fmu.analysis import board_page, board_tables, metrics, ranking, score_plots
 from crane_fmu.analysis import scenarios as scenario_registry
 from crane_fmu.analysis.floor import stored_scenario_floors
 from crane_fmu.analysis.scenarios import Contender
 from crane_fmu.batch import JOURNAL, Progress, ignore_interrupts, read_journal, run_batch
-from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, inprocess, simulate
+from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
 from crane_fmu.cosim.suggest import did_you_mean
 from crane_fmu.cosim.system import read_fmu, unfed_inputs
 from crane_fmu.sweep.runner import local_fmus, write_table
@@ -69,10 +69,10 @@ def contenders(chosen=(), fmu_dir="build/fmus", only=False):
     items = list(chosen) + ([] if only and chosen else builtin)
     result = {}
     for item in items:
-        if inprocess.is_law(item):  # a law file: run in the workers' processes, no FMU built
-            law = inprocess.component(item)
+        if laws.is_law(item):  # a law file: run in the workers' processes, no FMU built
+            law = laws.component(item)
             variables = {v.name: v.causality for v in law.variables}
-            source = str(inprocess.law_file(item).resolve()) + str(item)[len(str(inprocess.law_file(item))):]
+            source = str(laws.law_file(item).resolve()) + str(item)[len(str(laws.law_file(item))):]
             name, user = law.model_identifier, True
         elif str(item).endswith(".fmu"):
             try:
@@ -137,17 +137,17 @@ def plan(chosen, fmu_dir, scenarios=None, cases=scenario_registry.CASES):
                 fmus, connections = systems.resolve(system, fmu_dir)
                 system = systems.prepare(system, step, stop_time, check=False)
                 hashes = {}
-                laws = {}  # a law file's source is its file's digest, then its suffix and name (.py:NAME)
+                suffixes = {}  # a law file's source is its file's digest, then its suffix and name (.py:NAME)
                 for name, path in fmus.items():
                     if path not in digests:  # each FMU file read once
-                        data = Path(inprocess.law_file(path) if inprocess.is_law(path) else path).read_bytes()
+                        data = Path(laws.law_file(path) if laws.is_law(path) else path).read_bytes()
                         digests[path] = hashlib.sha256(data).hexdigest()
                         blobs[digests[path][:20]] = data
                     hashes[name] = digests[path]
-                    if inprocess.is_law(path):
-                        laws[name] = str(path)[len(str(inprocess.law_file(path).with_suffix(""))):]
+                    if laws.is_law(path):
+                        suffixes[name] = str(path)[len(str(laws.law_file(path).with_suffix(""))):]
                 case = {"controller": contender.name, "scenario": sid, "case": label,
-                        "fmus": {name: digest[:20] + laws.get(name, "") for name, digest in hashes.items()},
+                        "fmus": {name: digest[:20] + suffixes.get(name, "") for name, digest in hashes.items()},
                         "sha256": {name: hashes[name] for name in sorted(hashes)},
                         "files": {name: Path(fmus[name]).name for name in sorted(fmus)},
                         "connections": [list(c) for c in connections], "parameters": system.parameters,

@@ -16,11 +16,10 @@ import math
 from dataclasses import replace
 from pathlib import Path
 
-from crane_fmu import components, crane_parameters
+from crane_fmu import components, crane_parameters, laws
 from crane_fmu.controller_interface import references, told, tracked
-from crane_fmu.cosim import inprocess, ssp
+from crane_fmu.cosim import ssp
 from crane_fmu.cosim.connections import Connection
-from crane_fmu.cosim.inprocess import is_law
 from crane_fmu.cosim.ssp import load_system
 from crane_fmu.cosim.system import System, is_file, read_fmu
 from crane_fmu.registry import Registry
@@ -61,8 +60,8 @@ def resolve(system, fmu_dir):
     """
     crane_parameters.check_reserved(system)
     for path in system.fmus(fmu_dir).values():
-        if is_law(path):
-            inprocess.component(path)  # its file, its import, its component: one line
+        if laws.is_law(path):
+            laws.component(path)  # its file, its import, its component: one line
         elif not path.is_file():
             raise ValueError(f"{path} not found: build the FMUs first (crane-fmu build)")
     fmus, optional, plant = system.fmus(fmu_dir), {}, plant_of(system)
@@ -255,13 +254,13 @@ def check_parameters(system, checked=None):
     checked = {} if checked is None else checked
     for name, identifier in kinds(system).items():
         values = system.parameters.get(name, {})
-        key = (str(system.instances[name]) if is_law(system.instances[name]) else identifier,
+        key = (str(system.instances[name]) if laws.is_law(system.instances[name]) else identifier,
                json.dumps(values, sort_keys=True))
         if key not in checked:
             try:
                 source = system.instances[name]
-                if is_law(source):  # a law file's own rules, as its FMU would check them
-                    inprocess.component(source).check(values)
+                if laws.is_law(source):  # a law file's own rules, as its FMU would check them
+                    laws.component(source).check(values)
                 else:
                     components.check_parameters(identifier, values)
                 checked[key] = None

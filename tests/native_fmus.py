@@ -32,6 +32,12 @@ _LIBC = ctypes.CDLL(None)
 _LIBC.calloc.restype, _LIBC.calloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t, ctypes.c_size_t]
 _LIBC.free.argtypes = [ctypes.c_void_p]
 
+# fmpy's logger proxy keeps the last logger it was given for the whole process (one global pointer), and an FMU
+# opened with fmpy's default callbacks logs through it: a logger made for one test and then freed crashes a later
+# test. Ours lives as long as the process and writes to the log of the run that set it (LOG[0]).
+LOG = [[]]
+LOGGER = fmi2CallbackLoggerTYPE(lambda env, name, status, category, message: LOG[0].append(message.decode()))
+
 
 def open_native(path, version, parameters=None, instance_name="c", model_exchange=False):
     """An instance in initialisation mode with ``parameters`` set: ``(fmu, vr, set, get)``.
@@ -81,9 +87,9 @@ def messages(path, settings, steps=(), read=(), read_at_end=(), instance_name="c
     """
     md = read_model_description(str(path))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    log = []
+    log = LOG[0] = []
     callbacks = fmi2CallbackFunctions()
-    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, category, message: log.append(message.decode()))
+    callbacks.logger = LOGGER
     callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_LIBC.calloc)
     callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_LIBC.free)
     addLoggerProxy(ctypes.byref(callbacks))

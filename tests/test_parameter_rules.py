@@ -27,12 +27,11 @@ from fmpy.fmi2 import (
     fmi2CallbackAllocateMemoryTYPE,
     fmi2CallbackFreeMemoryTYPE,
     fmi2CallbackFunctions,
-    fmi2CallbackLoggerTYPE,
 )
 from fmpy.logging import addLoggerProxy
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from native_fmus import compiler
+from native_fmus import LOG, LOGGER, compiler
 
 from crane_fmu import components
 from crane_fmu.build_scripts.native import FOLDERS, native_dir
@@ -56,7 +55,8 @@ def logger():
     """``(log, callbacks)``: FMI 2.0 callbacks whose logger appends each message to ``log``. fmpy's logger proxy
     keeps one logger for the process: the FMUs of a test share these, made anew for the test."""
     log, callbacks = [], fmi2CallbackFunctions()
-    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, category, message: log.append(message.decode()))
+    LOG[0] = log  # the process's one logger (native_fmus.LOGGER): fmpy's proxy keeps it past this test
+    callbacks.logger = LOGGER
     callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_LIBC.calloc)
     callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_LIBC.free)
     addLoggerProxy(ctypes.byref(callbacks))

@@ -49,16 +49,15 @@ def run(args):
 def exported(args, system):
     """The system as the file carries it: ``--use``'s FMUs (told the move), then ``--parameters`` and ``--set``,
     every value checked by its component's rules; a law file is refused (it runs only in this toolkit)."""
-    from crane_fmu import crane_parameters, systems
-    from crane_fmu.cosim import inprocess
+    from crane_fmu import crane_parameters, laws, systems
 
     from .simulate import _keep_known, _parameter_file, parse_sets
 
     for name, source in system.instances.items():
-        if inprocess.is_law(source):
-            law = inprocess.component(source).model_identifier
+        if laws.is_law(source):
+            law = laws.component(source).model_identifier
             raise UsageError(f"--use {name}={source}: a law file runs only in this toolkit's master; build its FMU "
-                             f"first (crane-fmu build --component {inprocess.law_file(source)} --out build/mine) and "
+                             f"first (crane-fmu build --component {laws.law_file(source)} --out build/mine) and "
                              f"use it: --use {name}=build/mine/{law}.fmu")
     fmus, _ = systems.resolve(system, args.fmu_dir)
     system = _keep_known(system, fmus, list(system.replaced))

@@ -118,15 +118,15 @@ def _use(items, system):
 def used_file(item, path):
     """The resolved source of ``--use INSTANCE=path``: an FMU file, or a law file (``mylaw.py``, ``mylaw.py:NAME``:
     a component or law function run in this process, no FMU built); one line for anything else."""
-    from crane_fmu.cosim import inprocess
+    from crane_fmu import laws
 
-    if inprocess.is_law(path):
+    if laws.is_law(path):
         try:
-            inprocess.component(path)
+            laws.component(path)
         except ValueError as exc:
             raise UsageError(f"--use {item!r}: {exc}") from None
-        name = path[len(str(inprocess.law_file(path))):]
-        return str(inprocess.law_file(path).resolve()) + name
+        name = path[len(str(laws.law_file(path))):]
+        return str(laws.law_file(path).resolve()) + name
     if Path(path).suffix != ".fmu":
         raise UsageError(f"--use {item!r}: {path} is neither an FMU file (.fmu) nor a law file (.py, .py:NAME)")
     if not Path(path).is_file():

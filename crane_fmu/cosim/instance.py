@@ -222,12 +222,13 @@ def read_fmu(path):
     """The model description of a readable FMI 2.0 or 3.0 co-simulation FMU, else ValueError (one line).
 
     Read once per file version (path, size, modification time): treat it as read-only. A law file
-    (``mylaw.py``) has the description its FMU will have (:mod:`~crane_fmu.cosim.inprocess`).
+    (``mylaw.py``) has the description its FMU will have (a source run in process:
+    :mod:`~crane_fmu.cosim.in_process`).
     """
-    from .inprocess import is_law, model_description
+    from .in_process import kind_of
 
-    if is_law(path):
-        return model_description(path)
+    if kind_of(path) is not None:
+        return kind_of(path).model_description(path)
     if not Path(path).is_file():
         raise ValueError(f"{path} not found")
     return _read_fmu(_file_version(path), str(path))

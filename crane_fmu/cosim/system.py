@@ -10,7 +10,7 @@ from pathlib import Path
 
 from .adapters import open_instance
 from .connections import check_both_ends, connect, unfed
-from .inprocess import is_law
+from .in_process import kind_of
 from .instance import FmiError, read_fmu
 from .master import Master, communication_points
 from .recorder import ArrayRecorder
@@ -121,8 +121,9 @@ class System:
 
 
 def is_file(source):
-    """Whether an instance's source names a file (an ``.fmu``, or a law file ``mylaw.py``), not a model identifier."""
-    return str(source).endswith(".fmu") or is_law(source)
+    """Whether an instance's source names a file (an ``.fmu``, or a source run in process:
+    :mod:`~crane_fmu.cosim.in_process`), not a model identifier."""
+    return str(source).endswith(".fmu") or kind_of(source) is not None
 
 
 def _interfaces(fmus):

@@ -17,10 +17,10 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from crane_fmu import DEFAULT_FMU_DIR, crane_parameters, native_batch, systems
+from crane_fmu import DEFAULT_FMU_DIR, crane_parameters, laws, native_batch, systems
 from crane_fmu.analysis import metrics
 from crane_fmu.batch import JOURNAL, Progress, run_batch
-from crane_fmu.cosim import ArrayRecorder, FmiError, inprocess, simulate
+from crane_fmu.cosim import ArrayRecorder, FmiError, simulate
 from crane_fmu.cosim.system import read_fmu, split_name, unfed_inputs
 
 from .plots import plot_study
@@ -37,9 +37,9 @@ def shippable(system, fmu_dir, binding=None):
     fmus, connections = system.resolve(fmu_dir)
     blobs = {}
     for name, path in fmus.items():
-        law = inprocess.is_law(path)  # a law file: its bytes, named <digest>.py[:NAME] (local_fmus)
-        data = Path(inprocess.law_file(path) if law else path).read_bytes()
-        suffix = str(path)[len(str(inprocess.law_file(path).with_suffix(""))):] if law else ""
+        law = laws.is_law(path)  # a law file: its bytes, named <digest>.py[:NAME] (local_fmus)
+        data = Path(laws.law_file(path) if law else path).read_bytes()
+        suffix = str(path)[len(str(laws.law_file(path).with_suffix(""))):] if law else ""
         blobs[name] = (hashlib.sha256(data).hexdigest()[:20] + suffix, data)
     return {"blobs": blobs, "connections": connections, "parameters": system.parameters, "binding": binding or {}}
 
@@ -218,7 +218,7 @@ def _used(system, use, fmu_dir, settings):
         print(f"crane-fmu: note: {note}", file=sys.stderr)
     _, connections = systems.resolve(system, fmu_dir)  # as checked (a controller's optional inputs left out)
     system = replace(system, connections=tuple(connections), match_names=False, replaced={})
-    digests = {name: hashlib.sha256(Path(inprocess.law_file(p) if inprocess.is_law(p) else p).read_bytes())
+    digests = {name: hashlib.sha256(Path(laws.law_file(p) if laws.is_law(p) else p).read_bytes())
                .hexdigest() for name, p in overrides.items()}
     return system, {**settings, "use": digests}
 
