@@ -161,7 +161,8 @@ def test_without_y_it_is_the_planar_crane_in_every_built_in_planar_run(native):
         start = planar.get("theta1_0", components.get("CranePlant").defaults()["theta1_0"])
         twins = tuple(Connection(c.source, c.output, "twin", INPUTS[c.input]) for c in into) + tuple(
             Connection(c.source, c.output, "ulp", c.input) for c in into)
-        values = {PLANAR_TO_SPATIAL.get(k, k): v for k, v in planar.items()}
+        # the planar values on the twin: parameters, and an input's start (free sets u)
+        values = {PLANAR_TO_SPATIAL.get(k, INPUTS.get(k, k)): v for k, v in planar.items()}
         with_twins = systems.prepare(replace(
             system, instances={**system.instances, "twin": NAME, "ulp": "CranePlant"},
             connections=tuple(connections) + twins, match_names=False,
