@@ -185,6 +185,35 @@ def test_the_residual_is_not_bounded_by_the_arrival_band():
     assert wide["arrival_s"] == 6.0 and wide["residual_deg"] == m["residual_deg"]
 
 
+def _slow_and_fast_periods(m1=3.0, m2=7.0, l1=1.0, l2=0.5, g=9.8):
+    """The held-trolley swing periods in closed form: m1 l1 l2 w^4 - (m1 + m2) g (l1 + l2) w^2 + (m1 + m2) g^2 = 0."""
+    mu = m1 + m2
+    a, b, c = m1 * l1 * l2, -mu * g * (l1 + l2), mu * g * g
+    slow = (-b - math.sqrt(b * b - 4 * a * c)) / (2 * a)
+    fast = (-b + math.sqrt(b * b - 4 * a * c)) / (2 * a)
+    return 2 * math.pi / math.sqrt(slow), 2 * math.pi / math.sqrt(fast)
+
+
+@pytest.mark.parametrize("plant", [None, {"l1": 1.1, "l2": 0.6, "m2": 3.5}, {"l1": 0.9, "l2": 0.4, "m2": 10.5}],
+                         ids=["nominal", "long light", "short heavy"])
+def test_the_residual_window_of_a_move_is_its_closed_form(plant):
+    """The window opens at the planned move's end plus one slow period of the plant as it is. The ZV-ZV move
+    (designed on the Section V crane: periods Ts, Tf) has four impulses of 1/4 at 0, Tf/2, Ts/2, (Ts + Tf)/2; its
+    base acceleration a = 4 u_max = 8 m/s2 gives windows of v_max / a = 0.125 s, shorter than Tf/2 (none overlap:
+    the shaped peak is a / 4 = u_max), so the move ends at (Ts + Tf)/2 + 2 v_max / a + (d / v_max - v_max / a).
+    The plant's slow period is the closed form's for its own crane. Regulation: the last quarter of the run."""
+    from crane_fmu.analysis import planar_scenarios as planar
+
+    u_max, v_max, d = 2.0, 1.0, planar.DISTANCE
+    design_slow, design_fast = _slow_and_fast_periods()
+    a = 4 * u_max
+    assert v_max / a < design_fast / 2  # the accelerating windows of the four impulses do not overlap
+    end = (design_slow + design_fast) / 2 + 2 * v_max / a + (d / v_max - v_max / a)
+    plant_slow = _slow_and_fast_periods(**(plant or {}))[0]
+    assert planar.residual_from(10.0, planar.PLAN, plant) == pytest.approx(end + plant_slow, abs=1e-9)
+    assert planar.residual_from(12.0) == 9.0
+
+
 def test_move_metrics_of_the_mirrored_move():
     """The same move towards x_d = -2 m: the same figures; the overshoot is measured past -2 m, away from 0."""
     m = metrics.move_metrics(T11, -MOVE_X, -MOVE_DX, (-MOVE_THETA1, -MOVE_THETA2), -MOVE_U, -2.0, 6.5)
