@@ -382,3 +382,27 @@ def test_dominant_frequencies_between_the_bins_are_interpolated():
     signal = np.sin(2 * np.pi * f1 * T) + 0.3 * np.sin(2 * np.pi * f2 * T + 0.4)
     found = metrics.dominant_frequencies(T, signal)
     assert found[0] == pytest.approx(f1, abs=1e-4) and found[1] == pytest.approx(f2, abs=1e-4)
+
+
+def test_move_metrics_off_the_grid_of_the_other_known_answers():
+    """A run that starts at t = 5 s, sampled every 4 ms over 3 s (the other known answers start at 0 on a 10 ms
+    grid, where a time taken from 0 instead of the run's start, or a step factor of 1/100, does not show). Sines of
+    2.5 Hz, 100 samples a period: the effort of u = A sin held over each step is A^2 T / 2 [m2/s3] with T = 3 s,
+    the ISE of theta1 = a sin and theta2 = b cos is (deg(a)^2 + deg(b)^2) T / 2 [deg2 s] and the RMS over the run's
+    3 s deg(sqrt((a^2 + b^2) / 2)); the swing from 7 s on is c sin, so the last quarter (from 7.25 s, not from
+    0.75 of 8 s = 6 s) ends at deg(c), and so does the residual without a window given."""
+    h, f, start = 0.004, 2.5, 5.0
+    t = start + np.arange(751) * h
+    a_u, a, b, c = 0.7, 0.02, 0.004, 0.005
+    wave = np.sin(2 * np.pi * f * (t - start))
+    theta1 = np.where(t < 7.0 - h / 2, a, c) * wave
+    theta2 = b * np.cos(2 * np.pi * f * (t - start))
+    x = np.minimum((t - start) / 1.5, 1.0)
+    m = metrics.move_metrics(t, x, np.gradient(x, t), (theta1, theta2 * (t < 7.0 - h / 2)), a_u * wave, 1.0,
+                             angle_band=math.radians(1.0))
+    assert m["effort"] == pytest.approx(a_u ** 2 * 3.0 / 2, rel=1e-9)
+    assert m["end_swing_deg"] == pytest.approx(math.degrees(c), rel=1e-12)
+    assert m["residual_deg"] == pytest.approx(math.degrees(c), rel=1e-12)
+    whole = metrics.move_metrics(t, x, np.gradient(x, t), (a * wave, theta2), a_u * wave, 1.0)
+    assert whole["ise_swing_deg2s"] == pytest.approx((math.degrees(a) ** 2 + math.degrees(b) ** 2) * 3.0 / 2, rel=1e-9)
+    assert whole["rms_swing_deg"] == pytest.approx(math.degrees(math.sqrt((a * a + b * b) / 2)), rel=1e-9)
