@@ -5,10 +5,11 @@ The plant's outputs and the controller's demands (``u``); as parameters the cran
 ``g`` (``crane_parameters.packed``: each set on the instances that model the crane, by the rule of ``crane.l2``,
 and agree on its value with the system's crane value or the first of them: hoist-transport's planner, designed for
 l1 = 1.5 m, keeps its own l1, so that a host that sets every parameter to its start value gets the system's own run),
-each axis's target ``x_d`` (to the planner if there is one, and to a controller told the move's target by
-its ``x_d``; else to the controller) and the plant's start swing
+each axis's target ``x_d`` (to the axis's planner if there is one, :func:`axis_planners`, and to a controller
+told the move's target by its ``x_d``; else to the controller) and the plant's start swing
 ``theta1_0``, whose start values are the system's; as inputs the plant's inputs that nothing inside feeds (``F1``,
-``F2``, ``hoist``). The plant, controller, planner and estimator are the first instances of those roles (their
+``F2``, ``hoist``); a system without a controller (an open loop) shows each axis's planned demand as the
+plant's demand (``ux``). The plant, controller, planner and estimator are the first instances of those roles (their
 components' ``role``), never found by name, and what the plant's roles name (``Component.crane``: its axes,
 demands and start swing) is read from them. Its model structure (which own inputs each own output reads at once)
 follows the instances' along the connections.
@@ -57,14 +58,16 @@ def interface(system, kinds, variables, fed):
     models = crane_parameters.modelled(kinds, lambda i: [n for n, (c, _) in variables[i].items() if c == "parameter"])
     for name, (value, holders) in crane_parameters.packed(system, models, start).items():
         exposed.append(Exposed(name, "parameter", [(i, name) for i in holders], value))
-    target, controller = by_role.get("planner", by_role.get("controller")), by_role.get("controller")
+    planners, controller = axis_planners(crane, kinds, system.connections), by_role.get("controller")
     for axis in crane.axes:
-        if target and axis.target in variables[target]:
+        target = planners.get(axis.position, controller)
+        held = planner_target(axis, variables[target]) if target in planners.values() else axis.target
+        if target is not None and held in variables[target]:
             # a controller told the move's target (a user's, without the planner's inputs) gets it too
             told = [controller] if controller not in (None, target) and axis.target in system.parameters.get(
                 controller, {}) else []
-            exposed.append(Exposed(axis.target, "parameter", [(target, axis.target)] + [(c, axis.target) for c in told],
-                                   start(target, axis.target)))
+            exposed.append(Exposed(axis.target, "parameter", [(target, held)] + [(c, axis.target) for c in told],
+                                   start(target, held)))
     if crane.start_swing:
         exposed.append(Exposed(crane.start_swing, "parameter", [(plant, crane.start_swing)],
                                start(plant, crane.start_swing)))
@@ -75,10 +78,42 @@ def interface(system, kinds, variables, fed):
         if causality == "output":
             exposed.append(Exposed(name, "output", [(plant, name)], None))
     controller = by_role.get("controller")
-    for demand in crane.demands:
-        if controller and demand in variables[controller]:
-            exposed.append(Exposed(demand, "output", [(controller, demand)], None))
+    feeds = {c.input: (c.source, c.output) for c in system.connections if c.target == plant}
+    for axis in crane.axes:
+        if controller and axis.demand in variables[controller]:
+            exposed.append(Exposed(axis.demand, "output", [(controller, axis.demand)], None))
+        elif feeds.get(axis.demand, (None,))[0] == planners.get(axis.position):  # an open loop: the planner's
+            exposed.append(Exposed(axis.demand, "output", [feeds[axis.demand]], None))
     return exposed
+
+
+ONE_AXIS_TARGET = "x_d"  # a planner of one axis (TrajectoryPlanner) plans along its own x, whichever axis it drives
+
+
+def planner_target(axis, names):
+    """The parameter of a planner (its variables' ``names``) that holds the target along ``axis``: the axis's own
+    (``y_d``) where the planner has it, else a one-axis planner's :data:`ONE_AXIS_TARGET`."""
+    return axis.target if axis.target in names else ONE_AXIS_TARGET
+
+
+def axis_planners(crane, kinds, connections):
+    """``{axis position: planner instance}``: per axis of the plant's ``crane``, the planner whose output feeds
+    that axis's demand (an open loop of a planner per axis: ``planner_y.ddx_ref`` to ``plant.uy``); where none
+    does, the system's first planner plans the first axis (it feeds a controller the references by name).
+
+    ``kinds``: ``{instance: model identifier}`` in the system's order; ``connections``: the written-out ones.
+    """
+    by_role = components.by_role(kinds)
+    planners = [name for name, kind in kinds.items() if getattr(components.find(kind), "role", None) == "planner"]
+    plant = by_role.get("plant")
+    found = {}
+    for axis in crane.axes:
+        source = next((c.source for c in connections if c.target == plant and c.input == axis.demand), None)
+        if source in planners:
+            found[axis.position] = source
+    if not found and planners:
+        found[crane.axes[0].position] = planners[0]
+    return found
 
 
 def system_dependencies(dependencies, connections, outputs, inputs):

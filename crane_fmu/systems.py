@@ -17,6 +17,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from crane_fmu import components, crane_parameters, laws
+from crane_fmu.closed_loop import axis_planners, planner_target
 from crane_fmu.controller_interface import references, told, tracked
 from crane_fmu.cosim import ssp
 from crane_fmu.cosim.connections import Connection
@@ -86,10 +87,19 @@ def plant_of(system):
 
 def move_target(system):
     """``{axis position: target}`` of the system's move, by role: each axis's target parameter (``x_d``) of its
-    first planner, else of its first controller, else 0 (regulation at the origin)."""
-    by_role, crane = components.by_role(kinds(system)), plant_of(system).crane
-    given = [system.parameters.get(by_role[role], {}) for role in ("planner", "controller") if role in by_role]
-    return {a.position: next((g[a.target] for g in given if a.target in g), 0.0) for a in crane.axes}
+    planner (``closed_loop.axis_planners``: a planner per axis in an open loop, whose own ``x_d`` it is), else of
+    the first controller, else 0 (regulation at the origin)."""
+    found = kinds(system)
+    by_role, crane = components.by_role(found), plant_of(system).crane
+    planners = axis_planners(crane, found, system.connections)
+    controller = system.parameters.get(by_role["controller"], {}) if "controller" in by_role else {}
+    target = {}
+    for a in crane.axes:
+        planned = system.parameters.get(planners[a.position], {}) if a.position in planners else {}
+        held = planner_target(a, components.get(found[planners[a.position]]).names("parameter")) \
+            if a.position in planners else a.target
+        target[a.position] = planned.get(held, controller.get(a.target, 0.0))
+    return target
 
 
 def cable_source(system):
@@ -344,3 +354,26 @@ register(System("mpc-transport", {"plant": "CranePlant", "controller": "MpcContr
                 stop_time=10.0,
                 description="a 2 m move from rest by the constrained MPC: its own shortest move within the drive's "
                             "limits, tracked by a QP every 50 ms", tags=("one-fmu",)))
+
+
+# ---- the crane in three dimensions (CranePlant3D): its tools' systems -----------------------------------------------
+
+def _spatial():
+    """The spatial crane's roles, and its settings: from rest, each axis's drive limited as the planar crane's."""
+    crane = components.get("CranePlant3D").crane
+    drive = {name: value for axis in crane.axes for name, value in ((f"u{axis.position}_max", DRIVE["u_max"]),
+                                                                    (f"v{axis.position}_max", DRIVE["v_max"]))}
+    return crane, {crane.start_swing: 0.0}, drive
+
+
+CRANE_3D, REST_3D, DRIVE_3D = _spatial()
+# the issue's diagonal move (2 m, 1.5 m); each planner keeps its default ZV shaper (no String value: OMSimulator
+# applies none) and plans along its own x for the axis its ddx_ref drives
+register(System("open-loop-3d", {"plant": "CranePlant3D", "planner_x": "TrajectoryPlanner",
+                                 "planner_y": "TrajectoryPlanner"},
+                connections=tuple(Connection(f"planner_{a.position}", "ddx_ref", "plant", a.demand) for a in CRANE_3D.axes),
+                parameters={"plant": {**REST_3D, **DRIVE_3D}, "planner_x": {"x_d": 2.0}, "planner_y": {"x_d": 1.5}},
+                stop_time=10.0,
+                description="the crane in three dimensions moved open loop from rest by (2 m, 1.5 m): a ZV-shaped "
+                            "planner per axis drives its trolley acceleration, |u| <= 2 m/s2, |v| <= 1 m/s on each "
+                            "axis", tags=("one-fmu",)))

@@ -98,10 +98,11 @@ def unpack_fmu(fmu, folder):
 LIBCOSIM = Path(__file__).parent / "libcosim_run.py"
 
 
-def libcosim_run(kind, path, steps=1000, instance="plant"):
-    """libcosim's trajectories of x, theta1, theta2 for a system file, from a subprocess."""
+def libcosim_run(kind, path, steps=1000, instance="plant", names=("x", "theta1", "theta2")):
+    """libcosim's trajectories of ``names`` (the planar plant's x, theta1, theta2) for a system file, from a
+    subprocess."""
     pytest.importorskip("libcosimpy")
-    proc = subprocess.run([sys.executable, str(LIBCOSIM), kind, str(path), str(steps), instance],
+    proc = subprocess.run([sys.executable, str(LIBCOSIM), kind, str(path), str(steps), instance, ",".join(names)],
                           capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr[-2000:]
     return json.loads(proc.stdout.strip().splitlines()[-1])
@@ -117,7 +118,14 @@ def assert_libcosim_matches(theirs, ours, instance="plant", bound=1e-12):
 
 # ---- a system as one native FMU (test_one_fmu, test_native_mpc) -----------------------------------------------------
 
-OBSERVED = ("x", "theta1", "theta2", "u")
+OBSERVED = ("x", "theta1", "theta2", "u")  # the planar systems' observed(name)
+
+
+def observed(name):
+    """The one-FMU outputs of system ``name`` a host prints, by its plant's roles: ``(states, demands)``, each
+    axis's position and the swing angles, then the demands (the planar plant's x, theta1, theta2; u)."""
+    crane = systems.plant_of(systems.get(name)).crane
+    return (*(a.position for a in crane.axes), *crane.swing), crane.demands
 # the host's command and the binary folders (Linux, Windows) of each FMI version
 HOST_COMMAND = {2: "outputs", 3: "outputs3"}
 BINARIES = {2: ("linux64", "win64"), 3: ("x86_64-linux", "x86_64-windows")}
@@ -151,14 +159,14 @@ def one_fmu_outputs(name):
 
 
 def unpack_one_fmu(native, name, folder, version=2):
-    """The one-FMU unpacked into folder: its guid (FMI 3.0: instantiationToken) and the value references of OBSERVED
+    """The one-FMU unpacked into folder: its guid (FMI 3.0: instantiationToken) and the value references of observed()
     (FMI 3.0's are FMI 2.0's plus one: vr 0 is time)."""
     fmu = one_fmu(native, name, version)
     with zipfile.ZipFile(fmu) as z:
         z.extractall(folder)
     md = read_model_description(str(fmu))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    return md.guid, [str(vr[v]) for v in OBSERVED]
+    return md.guid, [str(vr[v]) for v in sum(observed(name), ())]
 
 
 def host_rows(command, *args, **kwargs):
@@ -169,9 +177,9 @@ def host_rows(command, *args, **kwargs):
 
 
 def observed_columns(columns, name):
-    """Our master's columns of the one-FMU's :data:`OBSERVED` outputs, after its time: the host's rows."""
+    """Our master's columns of the one-FMU's :func:`observed` outputs, after its time: the host's rows."""
     outputs = one_fmu_outputs(name)
-    return np.column_stack([columns["time"]] + [columns[outputs[v]] for v in OBSERVED])
+    return np.column_stack([columns["time"]] + [columns[outputs[v]] for v in sum(observed(name), ())])
 
 
 # ---- the MPC and its QP solver (test_mpc, test_native_mpc) ----------------------------------------------------------

@@ -52,3 +52,16 @@ def test_realtime_bench_prints_the_loops_lateness_and_the_protocols_round_trips(
         for median, p99 in (figures[f"{protocol}_write_read"], figures[f"{protocol}_cycle"]):
             assert 0 < median <= p99, (protocol, lines)
     assert any("lateness p50" in line and "real-time factor" in line for line in lines), lines
+
+
+def test_the_spatial_benchmarks_planned_pairs_move_the_trolley_alike(fmu_dir):
+    """``bench --spatial``'s planned pairs (crane_fmu/bench_spatial.py), 3 s on the run's FMUs: the planner's
+    ddx_ref drives each plant's first axis, so the trolley's x and dx are the same in both (the drive integrates
+    the demand whatever the swing), while the spatial plant swings out of the plane."""
+    from crane_fmu.bench_spatial import PLANAR, SPATIAL, planned_pair
+    from crane_fmu.cosim import run
+
+    planar, spatial = (run(planned_pair(p, 1e-3, 3.0), fmu_dir).columns() for p in (PLANAR, SPATIAL))
+    for name in ("x", "dx"):
+        assert np.abs(planar[f"plant.{name}"] - spatial[f"plant.{name}"]).max() <= 1e-12, name
+    assert planar["plant.x"][-1] > 1.5 and np.abs(spatial["plant.theta1y"]).max() > 0.08

@@ -28,7 +28,7 @@ def test_build_writes_every_component_and_every_builtin_system(build_record, fmu
             "Sensor.fmu", "StateEstimator.fmu", "TrajectoryPlanner.fmu", "TrivialController.fmu", "TrivialPlant.fmu",
             "Wind.fmu"]
     names = ["energy", "free", "hard-hit", "hoist-transport", "lqg", "lqg-transport", "lqr", "mpc", "mpc-transport",
-             "paper", "transport"]
+             "open-loop-3d", "paper", "transport"]
     assert sorted(p.name for p in (build / "fmus").iterdir()) == sorted(
         fmus + [f"{n}.OspSystemStructure.xml" for n in names])
     assert sorted(p.name for p in (build / "fmi3").iterdir()) == fmus

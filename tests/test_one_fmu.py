@@ -22,6 +22,7 @@ from helpers import (
     host_rows,
     libcosim_run,
     master_run,
+    observed,
     observed_columns,
     one_fmu,
     one_fmu_outputs,
@@ -62,7 +63,8 @@ def test_judged_per_variable_our_master_reads_the_plant_twice_and_runs_every_sys
     """The native plant lists that ddx reads u (Model Exchange's acceleration now); nothing reads ddx, so no
     closed loop through u is algebraic. Our master reads the plant before setting u and again after it; the
     one-FMU's exchange, from the components' co-simulation tables (ddx reads no input), reads it once. Every
-    built-in system closed through u gives the same numbers both ways, bit for bit (50 steps)."""
+    built-in system closed through u gives the same numbers both ways, bit for bit (50 steps); so does the open
+    loop of a planner per axis, whose plant our master reads once, after the planners."""
     folder = native[version]
     for name in SYSTEMS:
         system = systems.get(name)
@@ -78,8 +80,12 @@ def test_judged_per_variable_our_master_reads_the_plant_twice_and_runs_every_sys
         finally:
             for instance in instances.values():
                 instance.free()
-        assert [i for i, _ in reads].count("plant") == 2 and ("plant", "u") in {(c.target, c.input)
-                                                                                for c in connections}, name
+        demands = systems.plant_of(system).crane.demands
+        fed = {(c.source, c.input) for c in connections if c.target == "plant" and c.input in demands}
+        if any(source == "controller" for source, _ in fed):  # closed through the demands
+            assert [i for i, _ in reads].count("plant") == 2, name
+        else:  # an open loop (open-loop-3d): the planners' demands are set before the plant is read, once
+            assert [i for i, _ in reads] == [*sorted({s for s, _ in fed}), "plant"] and len(fed) == len(demands), name
         ours = recorder.columns()
         one = simulate({"one": one_fmu(native, name, version)}, [], stop, system.step).columns()
         for own, column in one_fmu_outputs(name).items():
@@ -180,7 +186,17 @@ REACHES = {
             "F1": {"plant"}, "F2": {"plant"}, "hoist": {"plant"}},
     "lqg-transport": {**dict.fromkeys(CRANE, TRIO | {"estimator"}), "x_d": {"planner"}, "theta1_0": {"plant"},
                       "F1": {"plant"}, "F2": {"plant"}, "hoist": {"plant"}},
+    # a planner per axis, each planning along its own x: y_d is planner_y's x_d; no controller, so each axis's
+    # planned acceleration shows as its demand (an output)
+    "open-loop-3d": {**dict.fromkeys(CRANE, {"plant", "planner_x", "planner_y"}), "x_d": {"planner_x"},
+                     "y_d": {("planner_y", "x_d")}, "theta1x_0": {"plant"}, "hoist": {"plant"},
+                     **dict.fromkeys(("F1x", "F1y", "F2x", "F2y"), {"plant"})},
 }
+
+
+def _reached(name, own):
+    """``[(instance, variable)]`` that the one-FMU's ``own`` sets by :data:`REACHES` (an instance: its ``own``)."""
+    return sorted(i if isinstance(i, tuple) else (i, own) for i in REACHES[name][own])
 
 
 @pytest.mark.quick
@@ -189,18 +205,23 @@ def test_each_parameter_and_input_reaches_the_instances_the_rule_names(name):
     p = plan(systems.get(name))
     settable = {v.name for v in p.variables if v.causality in ("parameter", "input")}
     assert settable == set(REACHES[name])
-    for own, instances in REACHES[name].items():
-        assert sorted(p.links[own]) == sorted((instance, own) for instance in instances), own
+    for own in REACHES[name]:
+        assert sorted(p.links[own]) == _reached(name, own), own
+    outputs = {v.name for v in p.variables if v.causality == "output"}
+    assert set(systems.plant_of(systems.get(name)).crane.demands) <= outputs
 
 
-SETTINGS = [{"m1": 4.0, "l1": 1.2}, {"theta1_0": 0.1, "x_d": 0.5}, {"F1": 2.0, "F2": -1.0}]
+SETTINGS = {"CranePlant": [{"m1": 4.0, "l1": 1.2}, {"theta1_0": 0.1, "x_d": 0.5}, {"F1": 2.0, "F2": -1.0}],
+            "CranePlant3D": [{"m1": 4.0, "l1": 1.2}, {"theta1x_0": 0.1, "x_d": 0.5, "y_d": -1.0},
+                             {"F1x": 2.0, "F2y": -1.0}]}
 
 
-@pytest.mark.parametrize("values", SETTINGS, ids=lambda s: ",".join(s))
-@pytest.mark.parametrize("name", SYSTEMS)
+@pytest.mark.parametrize("name, values", [(name, values) for name in SYSTEMS for values in SETTINGS[
+    systems.plant_of(systems.get(name)).model_identifier]], ids=lambda s: ",".join(s) if isinstance(s, dict) else s)
 def test_values_set_on_the_one_fmu_reach_every_instance_that_has_them(native, tmp_path_factory, name, values):
     """As our master with the same values set on each instance the rule names (REACHES); and they act."""
-    settings = [f"{instance}.{own}={value!r}" for own, value in values.items() for instance in REACHES[name][own]]
+    settings = [f"{instance}.{variable}={value!r}" for own, value in values.items()
+                for instance, variable in _reached(name, own)]
     stop_time = 5.0
     columns = master_run(native, name, settings, stop_time, tmp=tmp_path_factory.mktemp("runs"))
     plain = master_run(native, name, (), stop_time, tmp=tmp_path_factory.mktemp("runs"))
@@ -235,9 +256,10 @@ def test_libcosim_runs_the_one_fmu_from_an_ssp_like_our_master(native, tmp_path,
     ssp = write_ssp(System(name, {"crane": str(one_fmu(native, name))}, stop_time=system.stop_time), native[2],
                     tmp_path / f"{name}.ssp")
     steps = round(system.stop_time / system.step)
-    theirs = libcosim_run("ssp", ssp, steps=steps, instance="crane")
     ours = master_run(native, name, tmp=tmp_path)
-    for signal in ("x", "theta1", "theta2"):
+    states, _ = observed(name)
+    theirs = libcosim_run("ssp", ssp, steps=steps, instance="crane", names=states)
+    for signal in states:
         times, values = np.array(theirs[signal][0]), np.array(theirs[signal][1])
         assert len(times) >= steps
         index = np.rint(times / system.step).astype(int)
@@ -276,8 +298,10 @@ def test_the_windows_dll_under_wine_gives_the_linux_run(native, windows_host, wi
                    *vrs, env=wine_env, cwd=tmp_path)
     expected = observed_columns(master_run(native, name, tmp=tmp_path), name)
     assert windows.shape == expected.shape
-    assert np.max(np.abs(windows[:, :4] - expected[:, :4])) <= SAME
-    assert np.max(np.abs(windows[:, 4] - expected[:, 4]) / np.maximum(np.abs(expected[:, 4]), 1.0)) <= SAME
+    states = 1 + len(observed(name)[0])  # time, then the states; the demands after them
+    assert np.max(np.abs(windows[:, :states] - expected[:, :states])) <= SAME
+    assert np.max(np.abs(windows[:, states:] - expected[:, states:]) / np.maximum(np.abs(expected[:, states:]), 1.0)) \
+        <= SAME
 
 
 # ---- the command ----------------------------------------------------------------------------------------------------

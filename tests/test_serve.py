@@ -16,13 +16,16 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pd_xy
 import pytest
 from asyncua import Client, ua
 from pymodbus.client import ModbusTcpClient
 
-from crane_fmu import systems
+from crane_fmu import components, systems
+from crane_fmu.build_scripts.build_fmus import build_all, systems_dir
 from crane_fmu.cli import main
-from crane_fmu.cosim import read_csv, simulate
+from crane_fmu.cosim import System, read_csv, simulate
+from crane_fmu.cosim.ssp import load_system
 from crane_fmu.model import lqr
 from crane_fmu.serve.modbus import FIRST_HOLDING, FIRST_INPUT, float32_words, register_map, words_float32
 
@@ -130,6 +133,76 @@ def test_lock_step_over_opcua_equals_the_offline_run_and_ctrl_c_keeps_it(fmu_dir
     assert list(served) == list(offline)
     for name in offline:
         assert np.max(np.abs(served[name] - offline[name])) <= 1e-12, name
+
+
+# --- a plant of two axes: a PD law for x and y in this process, the spatial crane served ---
+
+PD_XY = System("pd-xy", {"plant": "CranePlant3D", "controller": "PdXyController"},
+               parameters={"plant": {"theta1y_0": 0.05}, "controller": {"x_d": 0.5, "y_d": -0.3}},
+               description="test: PD on the trolley's x and y of the crane in three dimensions")
+XY = ("x", "dx", "y", "dy")
+
+
+@pytest.fixture(scope="module")
+def pd_xy_ssp(tmp_path_factory):
+    """The pd-xy system's SSP file (CranePlant3D and PdXyController, Python FMUs): a registered system only here."""
+    components.register(pd_xy.COMPONENT)
+    systems.register(PD_XY)
+    try:
+        out = tmp_path_factory.mktemp("pd_xy") / "fmus"
+        build_all(out, ["CranePlant3D", "PdXyController"], systems=["pd-xy"], fmi3=False, native=False,
+                  log=lambda _: None)
+        yield systems_dir(out) / "pd-xy.ssp"
+    finally:
+        components.unregister("PdXyController")
+        systems.unregister("pd-xy")
+
+
+async def _pd_xy_over_opcua(url, steps, config):
+    """Apply the PD law for x and y over OPC UA before every step: what the client read and wrote, per step."""
+    async with Client(url) as client:
+        ns, node = await _nodes(client)
+        inputs, demands = [node(f"controller.{name}") for name in XY], [node("controller.ux"), node("controller.uy")]
+        seen = []
+        for k in range(steps + 1):
+            state = await client.read_values(inputs + [node("Time")])
+            ux, uy = pd_xy.law(state[:4], *config)
+            for demand, value in zip(demands, (ux, uy)):
+                await demand.write_value(ua.Variant(value, ua.VariantType.Double))
+            seen.append(state + [ux, uy])
+            if k < steps:
+                await _call_step(client, 1)
+        return np.array(seen)
+
+
+def test_a_two_axis_plant_served_in_lock_step_equals_the_offline_run(pd_xy_ssp, tmp_path):
+    """CranePlant3D with the controller external: this process applies a PD law for x and y (tests/pd_xy.py) over
+    OPC UA before every Step(1), 200 steps. What it reads (x, dx, y, dy, time), what it writes (ux, uy) and every
+    column the server records equal the offline run of the same system file with the PdXyController FMU to 1e-12;
+    both axes moved."""
+    steps = 200
+    server = Server(pd_xy_ssp.parent, tmp_path, "--system", str(pd_xy_ssp), "--external", "controller",
+                    "--lock-step", "--opcua", "127.0.0.1:0")
+    try:
+        seen = _run(_pd_xy_over_opcua(server.opcua, steps, pd_xy.configure(
+            {"k_x": 4.0, "k_v": 3.0, **PD_XY.parameters["controller"]})))
+    finally:
+        status, out, err = server.stop()
+    assert status == 0, err[-2000:]
+    with load_system(pd_xy_ssp) as system:
+        offline = simulate(*system.resolve(pd_xy_ssp.parent), steps * 1e-3, 1e-3,
+                           parameters=systems.bind(system).parameters).columns()
+    assert np.max(np.abs(seen[:, 4] - offline["time"])) <= 1e-12
+    for i, name in enumerate(XY):
+        assert np.max(np.abs(seen[:, i] - offline[f"plant.{name}"])) <= 1e-12, name
+    for i, name in enumerate(("ux", "uy"), start=5):
+        assert np.max(np.abs(seen[:, i] - offline[f"controller.{name}"])) <= 1e-12, name
+    served = read_csv(server.out)
+    assert list(served) == list(offline)
+    for name in offline:
+        assert np.max(np.abs(served[name] - offline[name])) <= 1e-12, name
+    assert abs(offline["plant.x"][-1]) > 0.01 and abs(offline["plant.y"][-1]) > 0.005  # both axes moved
+    assert np.abs(offline["plant.theta1y"]).max() > 0.04  # the swing out of the plane
 
 
 def test_lock_step_over_modbus_matches_the_offline_run_to_float32(fmu_dir, tmp_path):

@@ -44,11 +44,12 @@ def fmusim(fmu, stop_time, step, out):
     return {name: table[name] for name in table.dtype.names}
 
 
-def fmusim_me(fmu, start, stop_time, step, out, tolerance):
-    """``fmusim --interface-type me --solver cvode`` with start values ``{name: value}``, under ``env -i``:
-    ``{column: array}`` of its CSV."""
+def fmusim_me(fmu, start, stop_time, step, out, tolerance, inputs=None):
+    """``fmusim --interface-type me --solver cvode`` with start values ``{name: value}`` (and ``--input-file
+    inputs``), under ``env -i``: ``{column: array}`` of its CSV."""
     command = [tool(FMUSIM), "--interface-type", "me", "--solver", "cvode", "--tolerance", repr(tolerance),
                "--stop-time", repr(stop_time), "--output-interval", repr(step), "--output-file", out]
+    command += ["--input-file", inputs] if inputs else []
     for name, value in start.items():
         command += ["--start-value", name, repr(value)]
     code, log = run_tool([*command, fmu], out.parent, CLEAN_ENV)
@@ -86,3 +87,18 @@ def worst_difference(theirs, ours, pairs):
     """The largest ``|theirs - ours| / max(1, max |ours|)`` over ``pairs`` of (their column, our column)."""
     return max(float(np.max(np.abs(theirs[a] - ours[b])) / max(1.0, float(np.max(np.abs(ours[b])))))
                for a, b in pairs)
+
+
+def held_inputs(path, time, columns):
+    """Write an fmusim input file of inputs held over each step (``columns``: ``{input: array}`` on ``time``): a row
+    at the start, two rows at each time an input jumps (the value before it, then after: fmusim's event) and one at
+    the end; fmusim interpolates between rows, which here hold the same values."""
+    names = list(columns)
+    values = np.column_stack([columns[n] for n in names])
+    rows = [(time[0], *values[0])]
+    for k in np.flatnonzero(np.any(values[1:] != values[:-1], axis=1)) + 1:
+        rows += [(time[k], *values[k - 1]), (time[k], *values[k])]
+    rows.append((time[-1], *values[-1]))
+    path.write_text("time," + ",".join(names) + "\n" + "".join(",".join(repr(float(v)) for v in row) + "\n"
+                                                               for row in rows))
+    return path

@@ -34,17 +34,19 @@ def _key(instance, name):  # columns without an instance prefix (one FMU, e.g. a
 def find_crane(columns, wanted=needs):
     """``(instance, plant)``: the first instance of a recorded run that has a registered plant's outputs
     (``wanted(crane)``, none: not this plant; by default :func:`needs` of its crane roles), and that plant's
-    component; ``(None, None)`` when there is none."""
+    component; ``(None, None)`` when there is none. Where the run has the outputs of several plants (the spatial
+    crane has the planar one's ``x1``, ``y1``, ...), the plant that names the most of them."""
     from crane_fmu import components
 
     instances = list(dict.fromkeys(name.rpartition(".")[0] for name in columns))
+    found, most = (None, None), 0
     for plant in components.registered("plant"):
         if plant.crane is not None:
             names = wanted(plant.crane)
-            for instance in instances:
-                if names and all(_key(instance, n) in columns for n in names):
-                    return instance, plant
-    return None, None
+            instance = next((i for i in instances if names and all(_key(i, n) in columns for n in names)), None)
+            if instance is not None and len(names) > most:
+                found, most = (instance, plant), len(names)
+    return found
 
 
 def crane_signals(columns, extra=()):

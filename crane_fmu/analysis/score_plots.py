@@ -277,9 +277,9 @@ def _drawn_by():
 
 
 def _animated(crane):
-    """What an animation draws of a crane: the first axis's position, the hook's and the load's positions (none:
-    a crane without them is not animated)."""
-    return (crane.axes[0].position, *crane.hook, *crane.load) if crane.hook and crane.load else ()
+    """What an animation draws of a crane: its axes' positions, the hook's and the load's positions (none: a crane
+    without them is not animated)."""
+    return (*(a.position for a in crane.axes), *crane.hook, *crane.load) if crane.hook and crane.load else ()
 
 
 def animation_needs(columns):
@@ -296,7 +296,9 @@ def animate(signals, path, title="", fps=15, progress=False):
     """An animation of the crane: rail, trolley, both cables, hook and payload, with the time.
 
     ``signals`` holds ``time`` and the plant's outputs (any instance prefix) that its roles name: the first axis's
-    position, the hook's and the load's positions (a side view: their first and last coordinates). Written as
+    position, the hook's and the load's positions (a side view: their first and last coordinates); a crane in two
+    horizontal axes (hook and load in three coordinates) is drawn in both vertical planes and from above
+    (:func:`.spatial_plots.spatial_frames`). Written as
     GIF (pillow), or MP4 when the path ends in .mp4 (needs ffmpeg).
 
     Parameters
@@ -316,17 +318,43 @@ def animate(signals, path, title="", fps=15, progress=False):
     every frame whole, as ``FuncAnimation.save`` does (twice per frame), took 56 s for a 20 s run at
     25 frames per second, two thirds of it laying out tick labels.
     """
-    plt = pyplot()
-
     def column(name):
         return np.asarray(next(v for k, v in signals.items() if k == name or k.endswith("." + name)))
 
     crane = find_crane(signals, _animated)[1].crane
-    names = ("time", crane.axes[0].position, crane.hook[0], crane.hook[-1], crane.load[0], crane.load[-1])
-    t, x, x1, y1, x2, y2 = (column(n) for n in names)
+    t = column("time")
     delay = frame_delay(fps)
     count = int(math.floor((t[-1] - t[0]) / delay + 1e-9)) + 1
     frames = np.searchsorted(t, t[0] + delay * np.arange(count) + 1e-9, side="right") - 1
+    if len(crane.hook) == 3:  # two horizontal axes: both vertical planes and the top view (spatial_plots.py)
+        from .spatial_plots import spatial_frames
+
+        images = spatial_frames(column, crane, t, frames, title, progress)
+    else:
+        images = _side_frames(column, crane, t, frames, title, progress)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    partial = path.with_name(f".{path.stem}.partial{path.suffix}")
+    if path.suffix == ".mp4":
+        _write_mp4(images, partial, 1.0 / delay)
+    else:
+        _write_gif(images, partial, round(100 * delay))
+    partial.replace(path)
+    return path
+
+
+def show_progress(n, count, progress):
+    """``frame k/n`` on stderr every 10 frames and at the last, when ``progress``."""
+    if progress and ((n + 1) % 10 == 0 or n + 1 == count):
+        sys.stderr.write(f"\rframe {n + 1}/{count}" + ("\n" if n + 1 == count else ""))
+        sys.stderr.flush()
+
+
+def _side_frames(column, crane, t, frames, title, progress):
+    """The frames of a planar crane seen from the side (RGB arrays)."""
+    plt = pyplot()
+    names = (crane.axes[0].position, crane.hook[0], crane.hook[-1], crane.load[0], crane.load[-1])
+    x, x1, y1, x2, y2 = (column(n) for n in names)
     fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=80)
     span = [min(x.min(), x2.min()) - 0.6, max(x.max(), x2.max()) + 0.6]
     ax.set_xlim(*span)
@@ -357,19 +385,9 @@ def animate(signals, path, title="", fps=15, progress=False):
         for artist in (trail, cables, trolley, hook, payload, clock):
             ax.draw_artist(artist)
         images.append(np.asarray(fig.canvas.buffer_rgba())[..., :3].copy())
-        if progress and ((n + 1) % 10 == 0 or n + 1 == len(frames)):
-            sys.stderr.write(f"\rframe {n + 1}/{len(frames)}" + ("\n" if n + 1 == len(frames) else ""))
-            sys.stderr.flush()
+        show_progress(n, len(frames), progress)
     plt.close(fig)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(f".{path.stem}.partial{path.suffix}")
-    if path.suffix == ".mp4":
-        _write_mp4(images, partial, 1.0 / delay)
-    else:
-        _write_gif(images, partial, round(100 * delay))
-    partial.replace(path)
-    return path
+    return images
 
 
 def frame_delay(fps):

@@ -30,8 +30,8 @@ MODES = {
                 "OPC UA and Modbus TCP (needs the 'serve' extra)",
     "derivatives": "the cost of the native plant's derivatives and directional derivatives (Model Exchange), in a "
                    "C loop",
-    "spatial": "the spatial crane pair (CranePlant3D with the LQR) against the planar pair (CranePlant with the "
-               "LQR), Python and native FMUs",
+    "spatial": "the spatial crane against the planar crane, Python and native FMUs: the LQR pair, the planned pair "
+               "(a TrajectoryPlanner, no LQR) and the open loop of two axes (open-loop-3d)",
 }
 
 

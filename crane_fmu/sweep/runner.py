@@ -147,7 +147,8 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
         if study.use:
             system, settings = _used(system, study.use, fmu_dir, settings)
         fmus, connections = systems.resolve(system, fmu_dir)
-        units = _check_names(study, system, fmu_dir)
+        units, crane = _check_names(study, system, fmu_dir)
+        metric_names = study.metrics_of(crane, f"system {system.name}")
         given = {name: dict(values) for name, values in system.parameters.items()}
         for instance, variable in (name.split(".", 1) for name in units):  # the study's varied and fixed values
             given.setdefault(instance, {})[variable] = None
@@ -172,7 +173,7 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
                     case, shipped["parameters"], shipped["binding"])), checked)
                 to_run += 1
             except ValueError as exc:
-                invalid[key] = _invalid_row(case, settings, str(exc), study.metrics)
+                invalid[key] = _invalid_row(case, settings, str(exc), metric_names)
         bar = Progress(total, skipped, failed=failed_before) if progress else None
         ran = len(invalid)
         if ran or to_run:
@@ -183,7 +184,7 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
             ran += run_batch(native_batch.sweep_chunk, native_batch.chunked(cases, native, to_run), shipped, on="dask",
                              workers=workers, scheduler=scheduler, journal=out_dir / JOURNAL,
                              known=invalid.values(), progress=bar, chunked=True, collect=False, settings=settings,
-                             metric_names=study.metrics) - len(invalid)
+                             metric_names=metric_names) - len(invalid)
     # the table from the journal, in the study's order, a block at a time
     done = JournalIndex(out_dir / JOURNAL)
     not_ok = write_results(done, lambda: (case_id(c, settings) for c in study.iter_cases()),
@@ -234,7 +235,8 @@ def _plotted(path, study):
 
 def _check_names(study, system, fmu_dir):
     """Check that every varied or fixed variable is a parameter or input of its instance, and that the
-    system has a crane; return ``{"instance.variable": unit}`` of the varied and fixed variables."""
+    system has a crane; return ``({"instance.variable": unit}, crane)``: the varied and fixed variables, and the
+    crane roles of the system's plant (what the metrics are named after)."""
     fmus = system.fmus(fmu_dir)
     known = systems.settable(system, fmus)
     names = list(study.fixed) + [n for names, *_ in list(study.grid.values()) + list(study.sampled.values())
@@ -246,10 +248,11 @@ def _check_names(study, system, fmu_dir):
             raise ValueError(f"parameter {name!r}: system {system.name}: {exc}") from None
     outputs = {f"{name}.{v.name}": None for name, path in fmus.items() for v in read_fmu(path).modelVariables
                if v.causality == "output"}
-    if metrics.find_crane(outputs)[0] is None:
+    instance, plant = metrics.find_crane(outputs)
+    if instance is None:
         raise ValueError(f"the sweep's metrics need a crane: an instance with a registered plant's outputs; system "
                          f"{system.name} has none")
-    return {name: known[name.partition(".")[0]][name.partition(".")[2]][1] for name in names}
+    return {name: known[name.partition(".")[0]][name.partition(".")[2]][1] for name in names}, plant.crane
 
 
 def write_table(rows, path):

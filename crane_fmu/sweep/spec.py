@@ -6,7 +6,7 @@ A study is a TOML (or, with PyYAML installed, YAML) file::
     stop_time = 10.0                 # [s], required
     step = 0.002                     # communication step [s], required
     algorithm = "gauss-seidel"       # the master algorithm, or "jacobi", "iterative-jacobi"
-    metrics = ["outcome", "settling_0.5deg_s"]   # default: every metric
+    metrics = ["outcome", "settling_0.5deg_s"]   # default: every metric of the system's plant (metric_names)
     settling_band_deg = 0.25         # band of the metric "settling_band_s" (default 0.5)
 
     [parameters]                     # the grid: every combination of the listed values
@@ -48,7 +48,24 @@ from crane_fmu.cosim.master import communication_points
 
 METRICS = ("outcome", "settling_band_s", "settling_0.5deg_s", "settling_0.1deg_s", "max_theta1_deg", "max_theta2_deg",
            "rms_theta1_deg", "residual_after_15s_deg", "trolley_excursion_m", "trolley_final_m", "peak_abs_u",
-           "end_time_s")
+           "end_time_s")  # the planar crane's: metric_names(CranePlant's roles)
+
+
+def metric_names(crane):
+    """The metrics of a study of a plant, by its roles (:class:`~crane_fmu.model.component.Crane`): the swing's
+    figures named after its swing angles (``max_theta1_deg``; the spatial crane's ``max_swing1_deg``), the
+    trolley's and the demand's along its first axis."""
+    return ("outcome", "settling_band_s", "settling_0.5deg_s", "settling_0.1deg_s",
+            *(f"max_{name}_deg" for name in crane.swing), f"rms_{crane.swing[0]}_deg", "residual_after_15s_deg",
+            "trolley_excursion_m", "trolley_final_m", "peak_abs_u", "end_time_s")
+
+
+def known_metrics():
+    """Every registered plant's :func:`metric_names`, in order, once each."""
+    from crane_fmu import components
+
+    return tuple(dict.fromkeys(name for plant in components.registered("plant") if plant.crane
+                               for name in metric_names(plant.crane)))
 SAMPLING = ("latin-hypercube", "random")
 BUILTIN_DIR = Path(__file__).parent / "builtin"
 
@@ -61,7 +78,7 @@ class Study:
     step: float
     algorithm: str = "gauss-seidel"
     system: str = DEFAULT_SYSTEM
-    metrics: tuple = METRICS
+    metrics: tuple = METRICS  # as given; the system's plant's every metric when not (every_metric)
     settling_band_deg: float = 0.5
     grid: dict = field(default_factory=dict)  # axis name -> (variable names, values)
     sampled: dict = field(default_factory=dict)  # axis name -> (variable names, low, high)
@@ -71,6 +88,18 @@ class Study:
     fixed: dict = field(default_factory=dict)  # variable -> value
     plot: dict = field(default_factory=dict)
     use: dict = field(default_factory=dict)  # instance -> FMU file or law file in its place
+    every_metric: bool = True  # no metrics given: every metric of the system's plant
+
+    def metrics_of(self, crane, system="the system"):
+        """The metrics a row of this study has for a plant's ``crane`` roles: those given, each one of the plant's
+        (:func:`metric_names`), else all of the plant's; ValueError (one line) names one it has not."""
+        names = metric_names(crane)
+        if self.every_metric:
+            return names
+        for name in self.metrics:
+            if name not in names:
+                raise ValueError(f"metrics: {name} is no metric of {system}'s plant; its metrics: {', '.join(names)}")
+        return self.metrics
 
     def cases(self):
         """Every case as ``{"instance.variable": value}``, in a reproducible order."""
@@ -182,9 +211,10 @@ def parse(data, source="study"):
     if not isinstance(system, str) or not system:
         raise ValueError(f"system must be a system's name or an SSP file, got {system!r}")
     metrics = tuple(data.get("metrics", METRICS))
+    known = known_metrics()
     for m in metrics:
-        if m not in METRICS:
-            raise ValueError(f"metrics: unknown metric {m!r}; known: {', '.join(METRICS)}")
+        if m not in known:
+            raise ValueError(f"metrics: unknown metric {m!r}; known: {', '.join(known)}")
 
     band = _number("settling_band_deg", data.get("settling_band_deg", 0.5), "a number > 0")
     if not band > 0:
@@ -212,8 +242,8 @@ def parse(data, source="study"):
             fixed[name] = value if isinstance(value, str) else _number(f"fixed.{key!r}", value)
     plot = dict(data.get("plot", {}))
     if plot:
-        if plot.get("metric") not in METRICS:
-            raise ValueError(f"plot.metric must be one of {', '.join(METRICS)}, got {plot.get('metric')!r}")
+        if plot.get("metric") not in known:
+            raise ValueError(f"plot.metric must be one of {', '.join(known)}, got {plot.get('metric')!r}")
         axes = {n for names, *_ in list(grid.values()) + list(sampled.values()) for n in names}
         for axis in ("x", "y"):
             if plot.get(axis) not in axes:
@@ -223,7 +253,7 @@ def parse(data, source="study"):
     if not isinstance(use, dict) or not all(isinstance(v, str) and v for v in use.values()):
         raise ValueError(f"use must be a table of INSTANCE = \"FILE.fmu\", got {use!r}")
     return Study(stop_time, step, algorithm, system, metrics, band, grid, sampled, method, samples, seed, fixed,
-                 plot, dict(use))
+                 plot, dict(use), every_metric="metrics" not in data)
 
 
 def load(path):
