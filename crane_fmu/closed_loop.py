@@ -6,7 +6,7 @@ The plant's outputs and the controller's demands (``u``); as parameters the cran
 and agree on its value with the system's crane value or the first of them: hoist-transport's planner, designed for
 l1 = 1.5 m, keeps its own l1, so that a host that sets every parameter to its start value gets the system's own run),
 each axis's target ``x_d`` (to the planner if there is one, and to a controller told the move's target by
-its ``x_d``; else to the controller) and the plant's start swing
+its ``x_d``; else to the planner of that axis alone, ``y_d`` to ``planner_y.x_d``; else to the controller) and the plant's start swing
 ``theta1_0``, whose start values are the system's; as inputs the plant's inputs that nothing inside feeds (``F1``,
 ``F2``, ``hoist``). The plant, controller, planner and estimator are the first instances of those roles (their
 components' ``role``), never found by name, and what the plant's roles name (``Component.crane``: its axes,
@@ -17,6 +17,7 @@ follows the instances' along the connections.
 from collections import namedtuple
 
 from crane_fmu import components, crane_parameters
+from crane_fmu.controller_interface import planned_target
 
 Exposed = namedtuple("Exposed", "name causality targets start")
 Exposed.__doc__ = """One variable of the packed FMU: ``targets`` is ``[(instance, variable)]``, the first of which
@@ -65,6 +66,9 @@ def interface(system, kinds, variables, fed):
                 controller, {}) else []
             exposed.append(Exposed(axis.target, "parameter", [(target, axis.target)] + [(c, axis.target) for c in told],
                                    start(target, axis.target)))
+        elif planned_target(system.connections, controller, axis):  # a planner of this axis alone: planner_y.x_d
+            source, name = planned_target(system.connections, controller, axis)
+            exposed.append(Exposed(axis.target, "parameter", [(source, name)], start(source, name)))
     if crane.start_swing:
         exposed.append(Exposed(crane.start_swing, "parameter", [(plant, crane.start_swing)],
                                start(plant, crane.start_swing)))

@@ -14,6 +14,7 @@ from crane_fmu.model import (
     estimator,
     hard_hit,
     lqr,
+    lqr3d,
     mpc,
     planner,
     plant,
@@ -60,5 +61,5 @@ def check_parameters(model_identifier, values):
 for _component in (plant.COMPONENT, backstepping.COMPONENT, lqr.COMPONENT, energy.COMPONENT, hard_hit.COMPONENT,
                    mpc.COMPONENT, planner.COMPONENT,
                    disturbances.GUST, disturbances.SENSOR, disturbances.CRANE_SENSOR, wind.COMPONENT,
-                   estimator.COMPONENT, plant3d.COMPONENT, benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
+                   estimator.COMPONENT, plant3d.COMPONENT, lqr3d.COMPONENT, benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
     register(_component)

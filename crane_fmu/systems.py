@@ -17,7 +17,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from crane_fmu import components, crane_parameters, laws
-from crane_fmu.controller_interface import references, told, tracked
+from crane_fmu.controller_interface import planned_target, references, told, tracked
 from crane_fmu.cosim import ssp
 from crane_fmu.cosim.connections import Connection
 from crane_fmu.cosim.ssp import load_system
@@ -85,11 +85,18 @@ def plant_of(system):
 
 
 def move_target(system):
-    """``{axis position: target}`` of the system's move, by role: each axis's target parameter (``x_d``) of its
-    first planner, else of its first controller, else 0 (regulation at the origin)."""
+    """``{axis position: target}`` of the system's move, by role: each axis's target parameter of the planner
+    connected to the controller's references of the axis (:func:`~crane_fmu.controller_interface.planned_target`:
+    ``planner_y.x_d`` for ``y``), else the axis's target parameter (``x_d``) of the first planner, else of the first
+    controller, else 0 (regulation at the origin)."""
     by_role, crane = components.by_role(kinds(system)), plant_of(system).crane
     given = [system.parameters.get(by_role[role], {}) for role in ("planner", "controller") if role in by_role]
-    return {a.position: next((g[a.target] for g in given if a.target in g), 0.0) for a in crane.axes}
+    targets = {}
+    for a in crane.axes:
+        planned_by = planned_target(system.connections, by_role.get("controller"), a)
+        targets[a.position] = system.parameters.get(planned_by[0], {}).get(planned_by[1], 0.0) if planned_by else \
+            next((g[a.target] for g in given if a.target in g), 0.0)
+    return targets
 
 
 def cable_source(system):
@@ -344,3 +351,70 @@ register(System("mpc-transport", {"plant": "CranePlant", "controller": "MpcContr
                 stop_time=10.0,
                 description="a 2 m move from rest by the constrained MPC: its own shortest move within the drive's "
                             "limits, tracked by a QP every 50 ms", tags=("one-fmu",)))
+
+
+# ---- the crane in three dimensions: the LQR and the MPC of two axes (issue 52) ---------------------------------------
+def _spatial():
+    """The spatial crane's roles; its drive on each axis (the planar crane's limits); the elliptic start swing (S12:
+    the hook 10 deg along x, 5 deg along y a quarter of the slow mode's period later: at its fastest now)."""
+    from crane_fmu.model.parameters import plant_parameters
+    from crane_fmu.model.planner import modes
+    from crane_fmu.model.plant3d import COMPONENT
+
+    crane = COMPONENT.crane
+    slow = modes(plant_parameters(COMPONENT.defaults()))[0][0]
+    drive = {f"{k}{a}_max": v for a in "xy" for k, v in (("u", 2.0), ("v", 1.0))}
+    swing = {"theta1x_0": math.radians(10.0), "dtheta1y_0": math.radians(5.0) * slow}
+    return crane, drive, swing
+
+
+CRANE3D, DRIVE3D, ELLIPTIC = _spatial()
+REST3D = {CRANE3D.start_swing: 0.0}
+DIAGONAL = {"x": 2.0, "y": 1.5}  # S11's move [m]
+L_PATH = ((0.0, 0.0), (3.0, 0.0), (3.0, 2.0))  # S13's path [m]
+CORRIDOR = 0.3  # S13: the load within this of the path's centre line [m]
+
+
+def planned(crane, planners, controller="controller"):
+    """Connections from one TrajectoryPlanner per axis (``{axis position: instance}``) to the controller's references
+    of that axis: the planner's ``x_ref``, ``dx_ref``, ``ddx_ref`` to the axis' (``y_ref``, ...), its swing
+    references to the axis' (``theta1_ref`` to ``theta1y_ref``, ...)."""
+    connections = []
+    for axis in crane.axes:
+        ours = (*axis.references, *(f"{name}{axis.position}_ref" for name in ("theta1", "dtheta1", "theta2",
+                                                                                  "dtheta2")))
+        theirs = ("x_ref", "dx_ref", "ddx_ref", "theta1_ref", "dtheta1_ref", "theta2_ref", "dtheta2_ref")
+        connections += [Connection(planners[axis.position], out, controller, into) for out, into in zip(theirs, ours)]
+    return tuple(connections)
+
+
+def _path_plan():
+    """Each axis' planner parameters along S13's L path, the reference kept within half the corridor (the other
+    half is the load's swing): :func:`crane_fmu.model.path.plan`."""
+    from crane_fmu.model import path
+
+    return path.plan(L_PATH, CORRIDOR / 2)
+
+
+PATH_PLAN = _path_plan()
+_PLANNERS = {"x": "planner", "y": "planner_y"}
+_MOVE3D = {"planner": {"x_d": DIAGONAL["x"]}, "planner_y": {"x_d": DIAGONAL["y"]}}
+_PATH3D = {_PLANNERS[a]: {k: v for k, v in plan.items() if v != 0.0} for a, plan in PATH_PLAN.items()}
+register(System("lqr3d", {"plant": "CranePlant3D", "controller": "LqrController3D"},
+                parameters={"plant": {**DRIVE3D, **ELLIPTIC}},
+                description="the crane in three dimensions regulated from an elliptic swing (hook 10 deg along x, 5 "
+                            "deg along y a quarter period later) by the LQR of each axis, |u| <= 2 m/s2, |v| <= 1 m/s "
+                            "per axis", stop_time=10.0, tags=("one-fmu",)))
+register(System("lqr3d-move", {"plant": "CranePlant3D", "planner": "TrajectoryPlanner",
+                                "planner_y": "TrajectoryPlanner", "controller": "LqrController3D"},
+                connections=planned(CRANE3D, _PLANNERS), parameters={"plant": {**REST3D, **DRIVE3D}, **_MOVE3D},
+                description="a diagonal move from rest (2 m along x, 1.5 m along y): a ZV-shaped reference per "
+                            "axis (planner.x_d, planner_y.x_d) tracked by the LQR of each axis", stop_time=10.0,
+                tags=("one-fmu",)))
+register(System("lqr3d-path", {"plant": "CranePlant3D", "planner": "TrajectoryPlanner",
+                                "planner_y": "TrajectoryPlanner", "controller": "LqrController3D"},
+                connections=planned(CRANE3D, _PLANNERS), parameters={"plant": {**REST3D, **DRIVE3D}, **_PATH3D},
+                description="an L path from rest (3 m along x, then 2 m along y): ZV-shaped references per axis, the "
+                            "y leg started once the x leg's reference is within 0.15 m of the corner "
+                            "(crane_fmu.model.path), tracked by the LQR of each axis", stop_time=15.0,
+                tags=("one-fmu",)))
