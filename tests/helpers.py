@@ -98,10 +98,10 @@ def unpack_fmu(fmu, folder):
 LIBCOSIM = Path(__file__).parent / "libcosim_run.py"
 
 
-def libcosim_run(kind, path, steps=1000, instance="plant"):
-    """libcosim's trajectories of x, theta1, theta2 for a system file, from a subprocess."""
+def libcosim_run(kind, path, steps=1000, instance="plant", names=("x", "theta1", "theta2")):
+    """libcosim's trajectories of the outputs ``names`` of ``instance`` for a system file, from a subprocess."""
     pytest.importorskip("libcosimpy")
-    proc = subprocess.run([sys.executable, str(LIBCOSIM), kind, str(path), str(steps), instance],
+    proc = subprocess.run([sys.executable, str(LIBCOSIM), kind, str(path), str(steps), instance, ",".join(names)],
                           capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr[-2000:]
     return json.loads(proc.stdout.strip().splitlines()[-1])
@@ -118,6 +118,13 @@ def assert_libcosim_matches(theirs, ours, instance="plant", bound=1e-12):
 # ---- a system as one native FMU (test_one_fmu, test_native_mpc) -----------------------------------------------------
 
 OBSERVED = ("x", "theta1", "theta2", "u")
+OBSERVED_3D = ("x", "y", "swing2", "ux")  # the spatial crane's: both axes, the load's swing, a demand
+
+
+def observed(name):
+    """What the hosts' tests observe of the system ``name``'s one-FMU: :data:`OBSERVED`, or :data:`OBSERVED_3D` on
+    the crane in three dimensions (a plant of two axes)."""
+    return OBSERVED_3D if len(systems.plant_of(systems.get(name)).crane.axes) == 2 else OBSERVED
 # the host's command and the binary folders (Linux, Windows) of each FMI version
 HOST_COMMAND = {2: "outputs", 3: "outputs3"}
 BINARIES = {2: ("linux64", "win64"), 3: ("x86_64-linux", "x86_64-windows")}
@@ -158,7 +165,7 @@ def unpack_one_fmu(native, name, folder, version=2):
         z.extractall(folder)
     md = read_model_description(str(fmu))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    return md.guid, [str(vr[v]) for v in OBSERVED]
+    return md.guid, [str(vr[v]) for v in observed(name)]
 
 
 def host_rows(command, *args, **kwargs):
@@ -171,7 +178,7 @@ def host_rows(command, *args, **kwargs):
 def observed_columns(columns, name):
     """Our master's columns of the one-FMU's :data:`OBSERVED` outputs, after its time: the host's rows."""
     outputs = one_fmu_outputs(name)
-    return np.column_stack([columns["time"]] + [columns[outputs[v]] for v in OBSERVED])
+    return np.column_stack([columns["time"]] + [columns[outputs[v]] for v in observed(name)])
 
 
 # ---- the MPC and its QP solver (test_mpc, test_native_mpc) ----------------------------------------------------------

@@ -22,6 +22,7 @@ from helpers import (
     host_rows,
     libcosim_run,
     master_run,
+    observed,
     observed_columns,
     one_fmu,
     one_fmu_outputs,
@@ -78,8 +79,9 @@ def test_judged_per_variable_our_master_reads_the_plant_twice_and_runs_every_sys
         finally:
             for instance in instances.values():
                 instance.free()
-        assert [i for i, _ in reads].count("plant") == 2 and ("plant", "u") in {(c.target, c.input)
-                                                                                for c in connections}, name
+        demand = systems.plant_of(system).crane.demands[0]
+        assert [i for i, _ in reads].count("plant") == 2 and ("plant", demand) in {(c.target, c.input)
+                                                                                   for c in connections}, name
         ours = recorder.columns()
         one = simulate({"one": one_fmu(native, name, version)}, [], stop, system.step).columns()
         for own, column in one_fmu_outputs(name).items():
@@ -167,6 +169,7 @@ def test_paper_interface_is_the_containers():
 # controller; theta1_0 to the plant. Not from plan(), the code under test.
 PAIR, TRIO = {"plant", "controller"}, {"plant", "controller", "planner"}
 CRANE = ("m1", "m2", "l1", "l2", "g")
+FORCES_3D = ("F1x", "F1y", "F2x", "F2y")
 REACHES = {
     **{name: {**dict.fromkeys(CRANE, PAIR), "x_d": {"controller"}, "theta1_0": {"plant"}, "F1": {"plant"},
               "F2": {"plant"}, "hoist": {"plant"}} for name in ("paper", "lqr", "energy", "hard-hit", "mpc",
@@ -180,7 +183,18 @@ REACHES = {
             "F1": {"plant"}, "F2": {"plant"}, "hoist": {"plant"}},
     "lqg-transport": {**dict.fromkeys(CRANE, TRIO | {"estimator"}), "x_d": {"planner"}, "theta1_0": {"plant"},
                       "F1": {"plant"}, "F2": {"plant"}, "hoist": {"plant"}},
+    # the crane in three dimensions: y_d to the controller, or to the planner of the y axis alone as its x_d
+    "lqr3d": {**dict.fromkeys(CRANE, PAIR), "x_d": {"controller"}, "y_d": {"controller"}, "theta1x_0": {"plant"},
+              **dict.fromkeys(FORCES_3D, {"plant"}), "hoist": {"plant"}},
+    **{name: {**dict.fromkeys(CRANE, TRIO | {"planner_y"}), "x_d": {"planner"}, "y_d": {"planner_y": "x_d"},
+              "theta1x_0": {"plant"}, **dict.fromkeys(FORCES_3D, {"plant"}), "hoist": {"plant"}}
+       for name in ("lqr3d-move", "lqr3d-path")},
 }
+
+
+def _reached(own, instances):
+    """``[(instance, variable)]`` a REACHES entry names: an instance's variable of the own name, or the one given."""
+    return sorted((i, own) for i in instances) if isinstance(instances, set) else sorted(instances.items())
 
 
 @pytest.mark.quick
@@ -190,17 +204,20 @@ def test_each_parameter_and_input_reaches_the_instances_the_rule_names(name):
     settable = {v.name for v in p.variables if v.causality in ("parameter", "input")}
     assert settable == set(REACHES[name])
     for own, instances in REACHES[name].items():
-        assert sorted(p.links[own]) == sorted((instance, own) for instance in instances), own
+        assert sorted(p.links[own]) == _reached(own, instances), own
 
 
 SETTINGS = [{"m1": 4.0, "l1": 1.2}, {"theta1_0": 0.1, "x_d": 0.5}, {"F1": 2.0, "F2": -1.0}]
+SETTINGS_3D = [{"m1": 4.0, "l1": 1.2}, {"theta1x_0": 0.1, "x_d": 0.5, "y_d": -0.3}, {"F1x": 2.0, "F2y": -1.0}]
 
 
-@pytest.mark.parametrize("values", SETTINGS, ids=lambda s: ",".join(s))
+@pytest.mark.parametrize("values", range(len(SETTINGS)), ids=lambda i: ",".join(SETTINGS[i]))
 @pytest.mark.parametrize("name", SYSTEMS)
 def test_values_set_on_the_one_fmu_reach_every_instance_that_has_them(native, tmp_path_factory, name, values):
     """As our master with the same values set on each instance the rule names (REACHES); and they act."""
-    settings = [f"{instance}.{own}={value!r}" for own, value in values.items() for instance in REACHES[name][own]]
+    values = (SETTINGS_3D if "y_d" in REACHES[name] else SETTINGS)[values]
+    settings = [f"{instance}.{variable}={value!r}" for own, value in values.items()
+                for instance, variable in _reached(own, REACHES[name][own])]
     stop_time = 5.0
     columns = master_run(native, name, settings, stop_time, tmp=tmp_path_factory.mktemp("runs"))
     plain = master_run(native, name, (), stop_time, tmp=tmp_path_factory.mktemp("runs"))
@@ -235,9 +252,9 @@ def test_libcosim_runs_the_one_fmu_from_an_ssp_like_our_master(native, tmp_path,
     ssp = write_ssp(System(name, {"crane": str(one_fmu(native, name))}, stop_time=system.stop_time), native[2],
                     tmp_path / f"{name}.ssp")
     steps = round(system.stop_time / system.step)
-    theirs = libcosim_run("ssp", ssp, steps=steps, instance="crane")
+    theirs = libcosim_run("ssp", ssp, steps=steps, instance="crane", names=observed(name)[:3])
     ours = master_run(native, name, tmp=tmp_path)
-    for signal in ("x", "theta1", "theta2"):
+    for signal in observed(name)[:3]:
         times, values = np.array(theirs[signal][0]), np.array(theirs[signal][1])
         assert len(times) >= steps
         index = np.rint(times / system.step).astype(int)
