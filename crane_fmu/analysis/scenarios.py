@@ -217,3 +217,4 @@ def met(row, target):
 
 
 from crane_fmu.analysis import planar_scenarios  # noqa: E402, F401 (registers S1-S10)
+from crane_fmu.analysis import spatial_scenarios  # noqa: E402, F401 (registers S11-S14)
