@@ -174,6 +174,14 @@ def sweep_chunk(item, system, settings, metric_names):
         yield row
 
 
+def measures(scenario):
+    """Whether the scenario measures figures of its own (``Scenario.measures``), which read the hook and load."""
+    from crane_fmu.analysis import scenarios
+
+    found = scenarios.scenarios().get(scenario)
+    return found is not None and found.measures is not None
+
+
 def score_chunk(item, blobs):
     """The rows of ``crane_fmu.compare.run_score_case`` of an item of :func:`items` (board cases), yielded as they
     finish."""
@@ -189,7 +197,7 @@ def score_chunk(item, blobs):
         start = time.perf_counter()
         runs = runner(local_fmus({name: (digest, blobs[digest]) for name, digest in case["fmus"].items()}),
                       case["connections"], case["master"])
-        kept = kept_outputs(runs.output_names, case["keep_signals"])
+        kept = kept_outputs(runs.output_names, case["keep_signals"] or measures(case["scenario"]))
         columns, error = run(runs, case["stop_time"], case["step"], case["parameters"], kept)
         row = score_row(case, columns, error, figures)
         row["duration_s"] = time.perf_counter() - start

@@ -73,6 +73,11 @@ class Scenario:
     duration_note : str
         Why its cases run as long as they do, where a reader would expect otherwise (``" (...)"``; the board
         adds it to the line that says how long they run).
+    measures : callable, optional
+        ``measures(signals) -> {figure: value}``: figures of its own beside
+        :func:`~crane_fmu.analysis.metrics.move_metrics`', from the case's
+        :func:`~crane_fmu.analysis.metrics.crane_signals` with the plant's hook and load (S13's
+        ``path_deviation_m``); its targets may name them.
     """
 
     id: str
@@ -88,6 +93,7 @@ class Scenario:
     variants: int = 1
     bounds: dict | None = None
     duration_note: str = ""
+    measures: Callable | None = None
 
     def __post_init__(self):
         crane = components.get(self.plant).crane
@@ -205,6 +211,17 @@ def systems_for(contender, scenario, cases=CASES):
     if why:
         raise ValueError(f"{contender.name}: {scenario} {why}")
     return s.runs(contender, cases)
+
+
+def measured(scenario, columns):
+    """The figures of a scenario's own ``measures`` (empty when it has none) from a case's recorded columns."""
+    s = scenarios().get(scenario)
+    if s is None or s.measures is None:
+        return {}
+    from crane_fmu.analysis import metrics
+
+    crane = s.crane
+    return s.measures(metrics.crane_signals(columns, (*crane.hook, *crane.load)))
 
 
 def met(row, target):

@@ -11,9 +11,11 @@ plane, the swing both cables' angles from the vertical in space (``swing1``, ``s
 
 import math
 
+import numpy as np
+
 from crane_fmu import components
 from crane_fmu.cosim import System
-from crane_fmu.systems import DIAGONAL, DRIVE3D, ELLIPTIC, REST3D, planned
+from crane_fmu.systems import CORRIDOR, DIAGONAL, DRIVE3D, ELLIPTIC, L_PATH, PATH_PLAN, REST3D, planned
 
 from crane_fmu.model.parameters import plant_parameters
 from crane_fmu.model.planner import modes
@@ -29,6 +31,9 @@ RAIL = 1.0  # m of track beyond either end of a move: checked, not enforced (as 
 
 # the floors (crane_fmu.analysis.floor.scenario_floors), rounded as the planar ones are; the issue's figures
 S11_FLOOR_S, S12_FLOOR_S = 2.70, 2.02
+# S13: the planar floors of its legs one after the other (3 m: 4.27 s, then 2 m: 2.70 s), the time to beat
+S13_LEGS_S = (4.27, 2.70)
+S13_SEQUENTIAL_S = round(sum(S13_LEGS_S), 2)
 
 _REQUIRED = ("the requirement on the Section V crane in three dimensions (|u| <= 2 m/s2 and |v| <= 1 m/s on each "
              "axis, 1 ms step)")
@@ -49,8 +54,34 @@ SPECS = {
             (Target("settling_0.1deg_s", 3.0, "both cables within 0.1 deg of the vertical by 3.0 s",
                     f"the issue's target, 1.5 times the floor ({S12_FLOOR_S:.2f} s, the x axis': the planar S1 "
                     f"task; the y axis' 5 deg at its fastest needs 1.37 s); " + _REQUIRED),)),
+    "S13": ("S13", f"L path: {L_PATH[1][0]:g} m along x, then {L_PATH[2][1] - L_PATH[1][1]:g} m along y, the load "
+                   f"within {CORRIDOR:g} m of the path's centre line (a corridor between racks)", "arrival_s",
+            (Target("path_deviation_m", CORRIDOR, f"the load within {CORRIDOR:g} m of the path's centre line at every "
+                                                  "step", "the corridor between racks: never left"),
+             Target("arrival_s", S13_SEQUENTIAL_S, f"within 5 mm and 0.5 deg from {S13_SEQUENTIAL_S:.2f} s",
+                    f"no slower than the legs one after the other, each at its planar floor ({S13_LEGS_S[0]:.2f} s "
+                    f"and {S13_LEGS_S[1]:.2f} s): a path is planned to overlap them"),
+             Target("residual_deg", STOPPED_DEG, "residual swing <= 0.1 deg", _RESIDUAL))),
 }
-MOVES = ("S11",)
+MOVES = ("S11", "S13")
+
+
+def path_deviation(x, y, waypoints=L_PATH):
+    """The largest distance [m] of the points ``(x[k], y[k])`` from the polyline through ``waypoints``."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    nearest = np.full(x.shape, np.inf)
+    for (ax, ay), (bx, by) in zip(waypoints, waypoints[1:]):
+        dx, dy = bx - ax, by - ay
+        length2 = dx * dx + dy * dy
+        f = np.zeros_like(x) if length2 == 0 else np.clip(((x - ax) * dx + (y - ay) * dy) / length2, 0.0, 1.0)
+        nearest = np.minimum(nearest, np.hypot(x - ax - f * dx, y - ay - f * dy))
+    return float(np.max(nearest))
+
+
+def _path_measures(signals):
+    """S13's own figure: ``path_deviation_m``, the load's largest distance from the path's centre line."""
+    crane = signals["crane"]
+    return {"path_deviation_m": path_deviation(signals[crane.load[0]], signals[crane.load[1]])}
 
 
 def plan_end(axes_plan):
@@ -67,10 +98,14 @@ def _runs(sid):
             system = System(f"{c.name}-elliptic", instances, parameters={"plant": {**DRIVE3D, **ELLIPTIC}},
                             stop_time=10.0)
             return [ScenarioRun("nominal", system, 1e-3, system.stop_time, [0.0, 0.0], 0.75 * system.stop_time)]  # regulation: the last quarter, as S1's
-        targets = {a.position: DIAGONAL[a.position] for a in CRANE.axes}
+        if sid == "S13":
+            targets = dict(zip((a.position for a in CRANE.axes), L_PATH[-1]))
+            axes_plan = PATH_PLAN
+        else:
+            targets = {a.position: DIAGONAL[a.position] for a in CRANE.axes}
+            axes_plan = {a: {"x_d": v} for a, v in targets.items()}
         move = told_in(c, sid, targets)
         parameters, connections = {"plant": {**REST3D, **DRIVE3D}, "controller": {}}, ()
-        axes_plan = {a: {"x_d": v} for a, v in targets.items()}
         if move.references:
             for axis, planner in PLANNERS.items():
                 instances[planner] = "TrajectoryPlanner"
@@ -78,15 +113,20 @@ def _runs(sid):
             connections = planned(CRANE, PLANNERS)
         else:
             parameters["controller"].update(move.targets)
-        system = System(f"{c.name}-diagonal", instances, connections, parameters=parameters, stop_time=10.0)
+            if sid == "S13" and {"x_via", "y_via", "corridor"} <= set(c.parameters):  # a controller told the path
+                parameters["controller"].update(x_via=L_PATH[1][0], y_via=L_PATH[1][1], corridor=CORRIDOR)
+        system = System(f"{c.name}-{'path' if sid == 'S13' else 'diagonal'}", instances, connections,
+                        parameters=parameters, stop_time=15.0 if sid == "S13" else 10.0)
         return [ScenarioRun("nominal", system, 1e-3, system.stop_time, list(targets.values()),
                             plan_end(axes_plan) + T_SLOW)]
     return runs
 
 
-BOUNDS = {**DRIVE, "x_min": -RAIL, "x_max": max(DIAGONAL.values()) + RAIL}
+BOUNDS = {**DRIVE, "x_min": -RAIL, "x_max": max(max(DIAGONAL.values()), *map(max, L_PATH)) + RAIL}
+MEASURES = {"S13": _path_measures}
 for _spec in SPECS.values():
-    register(Scenario(*_spec, plant=PLANT, runs=_runs(_spec[0]), moves=_spec[0] in MOVES, bounds=BOUNDS))
+    register(Scenario(*_spec, plant=PLANT, runs=_runs(_spec[0]), moves=_spec[0] in MOVES, bounds=BOUNDS,
+                      measures=MEASURES.get(_spec[0])))
 
 
 def _notes(cases):
