@@ -65,7 +65,10 @@ def test_a_s13_row_measures_the_corridor_and_no_other_row_does():
     assert figures["path_deviation_m"] == pytest.approx(0.25, abs=1e-15)
     other = compare.case_metrics(_columns([0.0, 1.0], [0.0, 0.25]), {**case, "scenario": "S11"}, True)
     assert "path_deviation_m" not in other
-    assert native_batch.measures("S13") and not native_batch.measures("S11")
+    assert {"x2", "y2"} <= set(scenarios.measured_outputs("S13")) and not scenarios.measured_outputs("S11")
+    kept = dict(native_batch.kept_outputs(components.get("CranePlant3D").names("output"), False,
+                                          scenarios.measured_outputs("S13")))
+    assert kept["x2"] == "x2" and kept["y2"] == "y2"
 
 
 # ---- the cases -----------------------------------------------------------------------------------------------------

@@ -74,10 +74,11 @@ class Scenario:
         Why its cases run as long as they do, where a reader would expect otherwise (``" (...)"``; the board
         adds it to the line that says how long they run).
     measures : callable, optional
-        ``measures(signals) -> {figure: value}``: figures of its own beside
+        ``measures(signals, case) -> {figure: value}``: figures of its own beside
         :func:`~crane_fmu.analysis.metrics.move_metrics`', from the case's
-        :func:`~crane_fmu.analysis.metrics.crane_signals` with the plant's hook and load (S13's
-        ``path_deviation_m``); its targets may name them.
+        :func:`~crane_fmu.analysis.metrics.crane_signals` with the plant's hook, load and state
+        (:func:`measured_outputs`) and the case (its ``x_d``, ``residual_from``): S13's ``path_deviation_m``;
+        its targets may name them.
     """
 
     id: str
@@ -213,15 +214,24 @@ def systems_for(contender, scenario, cases=CASES):
     return s.runs(contender, cases)
 
 
-def measured(scenario, columns):
-    """The figures of a scenario's own ``measures`` (empty when it has none) from a case's recorded columns."""
+def measured_outputs(scenario):
+    """The plant's outputs a scenario's own ``measures`` read beside the metrics' (its hook, load and state), or
+    none when it has no measures."""
     s = scenarios().get(scenario)
     if s is None or s.measures is None:
+        return ()
+    crane = s.crane
+    return (*crane.hook, *crane.load, *crane.state)
+
+
+def measured(case, columns):
+    """The figures of a case's scenario's own ``measures`` (empty when it has none) from its recorded columns."""
+    names = measured_outputs(case["scenario"])
+    if not names:
         return {}
     from crane_fmu.analysis import metrics
 
-    crane = s.crane
-    return s.measures(metrics.crane_signals(columns, (*crane.hook, *crane.load)))
+    return get(case["scenario"]).measures(metrics.crane_signals(columns, names), case)
 
 
 def met(row, target):

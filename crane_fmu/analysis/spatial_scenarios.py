@@ -14,19 +14,24 @@ import math
 import numpy as np
 
 from crane_fmu import components
-from crane_fmu.cosim import System
+from crane_fmu.cosim import Connection, System
 from crane_fmu.systems import CORRIDOR, DIAGONAL, DRIVE3D, ELLIPTIC, L_PATH, PATH_PLAN, REST3D, planned
 
 from crane_fmu.model.parameters import plant_parameters
 from crane_fmu.model.planner import modes
 
+from .wind_equilibrium import wind_deflection
 from .scenarios import CASES, STOPPED_DEG, Scenario, ScenarioRun, Target, register, register_notes, told_in
 
 PLANT = "CranePlant3D"
 CRANE = components.get(PLANT).crane
 PLANNERS = {"x": "planner", "y": "planner_y"}
 DRIVE = {"u_max": 2.0, "v_max": 1.0}  # each axis' (DRIVE3D on the plant), as the planar crane's
-T_SLOW = 2 * math.pi / modes(plant_parameters(components.get(PLANT).defaults()))[0][0]  # 2.37 s, the slow mode's
+T_SLOW, T_FAST = (2 * math.pi / w for w in modes(plant_parameters(components.get(PLANT).defaults()))[0])  # 2.37, 0.66 s
+MOVE_S = 2.0 / DRIVE["v_max"] + DRIVE["v_max"] / DRIVE["u_max"]  # S2's 2 m, swing ignored: 2.5 s
+WIND_S = round(round(MOVE_S + (T_SLOW + T_FAST) / 2, 1) + T_SLOW, 1)  # S10's (and S4's) arrival target: 6.4 s
+WIND_SEED = 1.0  # the Wind's seed of S14's one case
+EQUILIBRIUM = wind_deflection()  # (theta1, theta2) [rad]: the mean wind's static deflection, about 0.56 deg
 RAIL = 1.0  # m of track beyond either end of a move: checked, not enforced (as the planar scenarios')
 
 # the floors (crane_fmu.analysis.floor.scenario_floors), rounded as the planar ones are; the issue's figures
@@ -62,8 +67,36 @@ SPECS = {
                     f"no slower than the legs one after the other, each at its planar floor ({S13_LEGS_S[0]:.2f} s "
                     f"and {S13_LEGS_S[1]:.2f} s): a path is planned to overlap them"),
              Target("residual_deg", STOPPED_DEG, "residual swing <= 0.1 deg", _RESIDUAL))),
+    "S14": ("S14", "S2's move (2 m along x) in S10's turbulent wind (10 m/s mean, moderate Dryden turbulence, seed 1) "
+                   "blowing across it, along y; the swing measured about the mean wind's equilibrium", "residual_eq_deg",
+            (Target("arrival_eq_s", WIND_S, f"within 5 mm and 0.5 deg of the wind's equilibrium from {WIND_S:.1f} s",
+                    "as S10's arrival, the angles taken from where the mean wind holds the cables (about "
+                    f"{math.degrees(EQUILIBRIUM[0]):.2f} and {math.degrees(EQUILIBRIUM[1]):.2f} deg, "
+                    "crane_fmu/analysis/wind_equilibrium.py), which no trolley motion along x takes away"),
+             Target("residual_eq_deg", STOPPED_DEG, "residual swing about the equilibrium <= 0.1 deg",
+                    "as S10's, about the equilibrium: what the turbulence leaves and a controller could remove"))),
 }
-MOVES = ("S11", "S13")
+MOVES = ("S11", "S13", "S14")
+
+
+def cable_angle(a, b, a_eq, b_eq):
+    """The angle [rad] between a cable of angles ``(a, b)`` (:mod:`crane_fmu.model.plant3d`'s) and one of
+    ``(a_eq, b_eq)``: from the unit vectors ``(sin a cos b, sin b, -cos a cos b)``."""
+    u = np.array([np.sin(a) * np.cos(b), np.sin(b), -np.cos(a) * np.cos(b)])
+    e = np.array([np.sin(a_eq) * np.cos(b_eq), np.sin(b_eq), -np.cos(a_eq) * np.cos(b_eq)])
+    e = np.broadcast_to(e.reshape(3, *([1] * np.ndim(a))), u.shape)
+    return np.arctan2(np.linalg.norm(np.cross(u, e, axis=0), axis=0), np.sum(u * e, axis=0))
+
+
+def _about_equilibrium(signals, case):
+    """S14's own figures: :func:`~crane_fmu.analysis.metrics.move_metrics`' arrival and residual swing with both
+    cables' angles taken from the mean wind's equilibrium (across the move: along y) instead of the vertical."""
+    from crane_fmu.analysis import metrics
+
+    swing = [cable_angle(signals[f"theta{i}x"], signals[f"theta{i}y"], 0.0, EQUILIBRIUM[i - 1]) for i in (1, 2)]
+    figures = metrics.move_metrics(signals["time"], signals["position"], signals["velocity"], swing,
+                                   signals["demand"], case["x_d"], case["residual_from"])
+    return {"arrival_eq_s": figures["arrival_s"], "residual_eq_deg": figures["residual_deg"]}
 
 
 def path_deviation(x, y, waypoints=L_PATH):
@@ -78,7 +111,7 @@ def path_deviation(x, y, waypoints=L_PATH):
     return float(np.max(nearest))
 
 
-def _path_measures(signals):
+def _path_measures(signals, case):
     """S13's own figure: ``path_deviation_m``, the load's largest distance from the path's centre line."""
     crane = signals["crane"]
     return {"path_deviation_m": path_deviation(signals[crane.load[0]], signals[crane.load[1]])}
@@ -98,9 +131,13 @@ def _runs(sid):
             system = System(f"{c.name}-elliptic", instances, parameters={"plant": {**DRIVE3D, **ELLIPTIC}},
                             stop_time=10.0)
             return [ScenarioRun("nominal", system, 1e-3, system.stop_time, [0.0, 0.0], 0.75 * system.stop_time)]  # regulation: the last quarter, as S1's
+        extra = {}
         if sid == "S13":
             targets = dict(zip((a.position for a in CRANE.axes), L_PATH[-1]))
             axes_plan = PATH_PLAN
+        elif sid == "S14":  # S2's move; the wind across it, its drag on the y axis' swing
+            targets, axes_plan = {"x": 2.0, "y": 0.0}, {"x": {"x_d": 2.0}, "y": {"x_d": 0.0}}
+            extra = {"wind": ("Wind", {"seed": WIND_SEED})}
         else:
             targets = {a.position: DIAGONAL[a.position] for a in CRANE.axes}
             axes_plan = {a: {"x_d": v} for a, v in targets.items()}
@@ -115,18 +152,26 @@ def _runs(sid):
             parameters["controller"].update(move.targets)
             if sid == "S13" and {"x_via", "y_via", "corridor"} <= set(c.parameters):  # a controller told the path
                 parameters["controller"].update(x_via=L_PATH[1][0], y_via=L_PATH[1][1], corridor=CORRIDOR)
-        system = System(f"{c.name}-{'path' if sid == 'S13' else 'diagonal'}", instances, connections,
+        for name, (kind, values) in extra.items():
+            instances[name], parameters[name] = kind, values
+            connections = connections + WIND_ACROSS
+        system = System(f"{c.name}-{ {'S13': 'path', 'S14': 'wind'}.get(sid, 'diagonal')}", instances, connections,
                         parameters=parameters, stop_time=15.0 if sid == "S13" else 10.0)
         return [ScenarioRun("nominal", system, 1e-3, system.stop_time, list(targets.values()),
                             plan_end(axes_plan) + T_SLOW)]
     return runs
 
 
+# the Wind reads the y axis' swing (the hook's and the load's velocities along y, exactly: y1' = y' + l1 cos b1 b1')
+# and pushes along y
+WIND_ACROSS = tuple(Connection("plant", ours, "wind", theirs) for ours, theirs in (
+    ("dy", "dx"), ("theta1y", "theta1"), ("dtheta1y", "dtheta1"), ("theta2y", "theta2"), ("dtheta2y", "dtheta2"))) + (
+    Connection("wind", "F1", "plant", "F1y"), Connection("wind", "F2", "plant", "F2y"))
 BOUNDS = {**DRIVE, "x_min": -RAIL, "x_max": max(max(DIAGONAL.values()), *map(max, L_PATH)) + RAIL}
-MEASURES = {"S13": _path_measures}
+MEASURES = {"S13": _path_measures, "S14": _about_equilibrium}
 for _spec in SPECS.values():
     register(Scenario(*_spec, plant=PLANT, runs=_runs(_spec[0]), moves=_spec[0] in MOVES, bounds=BOUNDS,
-                      measures=MEASURES.get(_spec[0])))
+                      measures=MEASURES.get(_spec[0]), needs=("forces",) if _spec[0] == "S14" else ()))
 
 
 def _notes(cases):
