@@ -136,3 +136,48 @@ def test_the_mpc_of_the_x_axis_is_the_planar_mpc():
         state = ours.update(config, state, tuple(inputs), k * 1e-3, 1e-3)
         theirs = mpc.COMPONENT.update(planar, theirs, x_states + (0.0,), k * 1e-3, 1e-3)
         state, theirs = getattr(state, "state", state), getattr(theirs, "state", theirs)
+
+
+# ---- S14: the wind's equilibrium -----------------------------------------------------------------------------------
+
+@pytest.mark.quick
+def test_the_static_deflection_is_the_statics_by_hand():
+    """The load pushed by its own weight (F2 = m2 g): its cable at 45 deg; the upper cable carries m2 g sideways
+    against (m1 + m2) g: atan(7 / 10)."""
+    from crane_fmu.analysis.wind_equilibrium import mean_drag, static_deflection
+
+    theta1, theta2 = static_deflection(3.0, 7.0, 9.8, 0.0, 7.0 * 9.8)
+    assert theta2 == pytest.approx(math.pi / 4, rel=1e-15) and theta1 == pytest.approx(math.atan(0.7), rel=1e-15)
+    f1, f2 = mean_drag()
+    assert f2 == pytest.approx(0.5 * 1.225 * 1.05 * 0.01 * 10.0 ** 2, rel=1e-15)  # 0.5 rho Cd A2 U^2
+    assert f1 == pytest.approx(f2 / 2, rel=1e-15)  # A1 = A2 / 2
+
+
+def test_the_spatial_plant_settles_at_the_static_deflection():
+    """The Python CranePlant3D held under steady forces along y (the mean drag), its swing damped: after 30 s it
+    hangs at the static deflection (1e-9 rad), out of the x-z plane."""
+    from crane_fmu.analysis.wind_equilibrium import mean_drag, wind_deflection
+
+    plant = components.get("CranePlant3D")
+    config = plant.check({"theta1x_0": 0.0, "c1": 30.0, "c2": 5.0})
+    f1, f2 = mean_drag()
+    inputs = [0.0] * len(plant.names("input"))
+    for name, value in (("F1y", f1), ("F2y", f2)):
+        inputs[plant.names("input").index(name)] = value
+    state = plant.initial_state(config)
+    for k in range(3000):
+        state = plant.update(config, state, tuple(inputs), k * 0.01, 0.01)
+    out = dict(zip(plant.names("output"), plant.output(config, state, tuple(inputs))))
+    theta1, theta2 = wind_deflection()
+    assert out["theta1y"] == pytest.approx(theta1, abs=1e-9) and out["theta2y"] == pytest.approx(theta2, abs=1e-9)
+    assert theta2 > math.radians(0.5)
+
+
+@pytest.mark.quick
+def test_the_angle_between_two_cables_is_the_hand_computed_one():
+    from crane_fmu.analysis.spatial_scenarios import cable_angle
+
+    assert cable_angle(0.1, 0.0, 0.0, 0.0) == pytest.approx(0.1, rel=1e-14)  # in the x-z plane
+    assert cable_angle(0.0, 0.2, 0.0, 0.05) == pytest.approx(0.15, rel=1e-14)  # in the y-z plane
+    # (a, b) = (pi/2, 0) is along +x; (0, pi/2) along +y: a right angle
+    assert cable_angle(np.array([math.pi / 2]), np.array([0.0]), 0.0, math.pi / 2)[0] == pytest.approx(math.pi / 2)
