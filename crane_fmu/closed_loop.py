@@ -98,17 +98,19 @@ def planner_target(axis, names):
 
 def axis_planners(crane, kinds, connections):
     """``{axis position: planner instance}``: per axis of the plant's ``crane``, the planner whose output feeds
-    that axis's demand (an open loop of a planner per axis: ``planner_y.ddx_ref`` to ``plant.uy``); where none
+    that axis's demand (an open loop of a planner per axis: ``planner_y.ddx_ref`` to ``plant.uy``) or the
+    controller's position reference of the axis (``planner_y.x_ref`` to ``controller.y_ref``); where none
     does, the system's first planner plans the first axis (it feeds a controller the references by name).
 
     ``kinds``: ``{instance: model identifier}`` in the system's order; ``connections``: the written-out ones.
     """
     by_role = components.by_role(kinds)
     planners = [name for name, kind in kinds.items() if getattr(components.find(kind), "role", None) == "planner"]
-    plant = by_role.get("plant")
+    plant, controller = by_role.get("plant"), by_role.get("controller")
     found = {}
     for axis in crane.axes:
-        source = next((c.source for c in connections if c.target == plant and c.input == axis.demand), None)
+        fed = {(plant, axis.demand), (controller, axis.references[0])}
+        source = next((c.source for c in connections if (c.target, c.input) in fed), None)
         if source in planners:
             found[axis.position] = source
     if not found and planners:

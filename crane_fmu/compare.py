@@ -236,6 +236,7 @@ def case_metrics(columns, case, completed, measure=metrics):
     figures = measure.move_metrics(s["time"], s["position"], s["velocity"], swing, s["demand"], case["x_d"],
                                    case["residual_from"], bounds=case["bounds"])
     figures["outcome"] = measure.classify(s["time"], swing, completed)
+    figures.update(scenario_registry.measured(case, columns))  # a scenario's own (S13's corridor)
     return figures
 
 

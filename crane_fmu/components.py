@@ -14,7 +14,9 @@ from crane_fmu.model import (
     estimator,
     hard_hit,
     lqr,
+    lqr3d,
     mpc,
+    mpc3d,
     planner,
     plant,
     plant3d,
@@ -60,5 +62,5 @@ def check_parameters(model_identifier, values):
 for _component in (plant.COMPONENT, backstepping.COMPONENT, lqr.COMPONENT, energy.COMPONENT, hard_hit.COMPONENT,
                    mpc.COMPONENT, planner.COMPONENT,
                    disturbances.GUST, disturbances.SENSOR, disturbances.CRANE_SENSOR, wind.COMPONENT,
-                   estimator.COMPONENT, plant3d.COMPONENT, benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
+                   estimator.COMPONENT, plant3d.COMPONENT, lqr3d.COMPONENT, mpc3d.COMPONENT, benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
     register(_component)

@@ -108,11 +108,11 @@ def runner(fmus, connections, algorithm):
     return made
 
 
-def kept_outputs(output_names, signals=False):
+def kept_outputs(output_names, signals=False, extra=()):
     """``[(signal, output)]``: the outputs a row is made from, asked of :func:`crane_fmu.analysis.metrics.crane_signals`
     itself on a run of outputs ``output_names`` (the plant's positions, velocities and swing angles, the demands;
-    with ``signals`` also its hook, load and cable, which a board keeps for its pictures); a signal it makes of
-    zeros is not an output."""
+    with ``signals`` also its hook, load and cable, which a board keeps for its pictures; the plant's outputs
+    ``extra``, which a scenario's own measures read); a signal it makes of zeros is not an output."""
     import numpy as np
 
     from crane_fmu.analysis import metrics
@@ -120,7 +120,7 @@ def kept_outputs(output_names, signals=False):
     names = ["time", *output_names]
     probe = {name: np.array([i + 1.0]) for i, name in enumerate(names)}  # each column holds its place, from 1
     crane = metrics.crane_signals(probe)["crane"]
-    extra = (*crane.hook, *crane.load, *filter(None, [crane.cable])) if signals else ()
+    extra = ((*crane.hook, *crane.load, *filter(None, [crane.cable])) if signals else ()) + tuple(extra)
     found = []
 
     def collect(value, signal):
@@ -177,6 +177,7 @@ def sweep_chunk(item, system, settings, metric_names):
 def score_chunk(item, blobs):
     """The rows of ``crane_fmu.compare.run_score_case`` of an item of :func:`items` (board cases), yielded as they
     finish."""
+    from crane_fmu.analysis.scenarios import measured_outputs
     from crane_fmu.compare import run_score_case, score_row
     from crane_fmu.sweep.runner import local_fmus
 
@@ -189,7 +190,7 @@ def score_chunk(item, blobs):
         start = time.perf_counter()
         runs = runner(local_fmus({name: (digest, blobs[digest]) for name, digest in case["fmus"].items()}),
                       case["connections"], case["master"])
-        kept = kept_outputs(runs.output_names, case["keep_signals"])
+        kept = kept_outputs(runs.output_names, case["keep_signals"], measured_outputs(case["scenario"]))
         columns, error = run(runs, case["stop_time"], case["step"], case["parameters"], kept)
         row = score_row(case, columns, error, figures)
         row["duration_s"] = time.perf_counter() - start

@@ -356,24 +356,95 @@ register(System("mpc-transport", {"plant": "CranePlant", "controller": "MpcContr
                             "limits, tracked by a QP every 50 ms", tags=("one-fmu",)))
 
 
-# ---- the crane in three dimensions (CranePlant3D): its tools' systems -----------------------------------------------
-
+# ---- the crane in three dimensions (CranePlant3D, issue 52): open loop, the LQR and the MPC of two axes --------------
 def _spatial():
-    """The spatial crane's roles, and its settings: from rest, each axis's drive limited as the planar crane's."""
-    crane = components.get("CranePlant3D").crane
-    drive = {name: value for axis in crane.axes for name, value in ((f"u{axis.position}_max", DRIVE["u_max"]),
-                                                                    (f"v{axis.position}_max", DRIVE["v_max"]))}
-    return crane, {crane.start_swing: 0.0}, drive
+    """The spatial crane's roles; its drive on each axis (the planar crane's limits); the elliptic start swing (S12:
+    the hook 10 deg along x, 5 deg along y a quarter of the slow mode's period later: at its fastest now)."""
+    from crane_fmu.model.parameters import plant_parameters
+    from crane_fmu.model.planner import modes
+    from crane_fmu.model.plant3d import COMPONENT
+
+    crane = COMPONENT.crane
+    slow = modes(plant_parameters(COMPONENT.defaults()))[0][0]
+    drive = {f"{k}{a}_max": v for a in "xy" for k, v in (("u", 2.0), ("v", 1.0))}
+    swing = {"theta1x_0": math.radians(10.0), "dtheta1y_0": math.radians(5.0) * slow}
+    return crane, drive, swing
 
 
-CRANE_3D, REST_3D, DRIVE_3D = _spatial()
+CRANE3D, DRIVE3D, ELLIPTIC = _spatial()
+REST3D = {CRANE3D.start_swing: 0.0}
+DIAGONAL = {"x": 2.0, "y": 1.5}  # S11's move [m]
+L_PATH = ((0.0, 0.0), (3.0, 0.0), (3.0, 2.0))  # S13's path [m]
+CORRIDOR = 0.3  # S13: the load within this of the path's centre line [m]
+
+
 # the issue's diagonal move (2 m, 1.5 m); each planner keeps its default ZV shaper (no String value: OMSimulator
 # applies none) and plans along its own x for the axis its ddx_ref drives
 register(System("open-loop-3d", {"plant": "CranePlant3D", "planner_x": "TrajectoryPlanner",
                                  "planner_y": "TrajectoryPlanner"},
-                connections=tuple(Connection(f"planner_{a.position}", "ddx_ref", "plant", a.demand) for a in CRANE_3D.axes),
-                parameters={"plant": {**REST_3D, **DRIVE_3D}, "planner_x": {"x_d": 2.0}, "planner_y": {"x_d": 1.5}},
+                connections=tuple(Connection(f"planner_{a.position}", "ddx_ref", "plant", a.demand) for a in CRANE3D.axes),
+                parameters={"plant": {**REST3D, **DRIVE3D}, "planner_x": {"x_d": DIAGONAL["x"]}, "planner_y": {"x_d": DIAGONAL["y"]}},
                 stop_time=10.0,
                 description="the crane in three dimensions moved open loop from rest by (2 m, 1.5 m): a ZV-shaped "
                             "planner per axis drives its trolley acceleration, |u| <= 2 m/s2, |v| <= 1 m/s on each "
                             "axis", tags=("one-fmu",)))
+
+
+def planned(crane, planners, controller="controller"):
+    """Connections from one TrajectoryPlanner per axis (``{axis position: instance}``) to the controller's references
+    of that axis: the planner's ``x_ref``, ``dx_ref``, ``ddx_ref`` to the axis' (``y_ref``, ...), its swing
+    references to the axis' (``theta1_ref`` to ``theta1y_ref``, ...)."""
+    connections = []
+    for axis in crane.axes:
+        ours = (*axis.references, *(f"{name}{axis.position}_ref" for name in ("theta1", "dtheta1", "theta2",
+                                                                                  "dtheta2")))
+        theirs = ("x_ref", "dx_ref", "ddx_ref", "theta1_ref", "dtheta1_ref", "theta2_ref", "dtheta2_ref")
+        connections += [Connection(planners[axis.position], out, controller, into) for out, into in zip(theirs, ours)]
+    return tuple(connections)
+
+
+def _path_plan():
+    """Each axis' planner parameters along S13's L path, the reference kept within half the corridor (the other
+    half is the load's swing): :func:`crane_fmu.model.path.plan`."""
+    from crane_fmu.model import path
+
+    return path.plan(L_PATH, CORRIDOR / 2)
+
+
+PATH_PLAN = _path_plan()
+_PLANNERS = {"x": "planner", "y": "planner_y"}
+_MOVE3D = {"planner": {"x_d": DIAGONAL["x"]}, "planner_y": {"x_d": DIAGONAL["y"]}}
+_PATH3D = {_PLANNERS[a]: {k: v for k, v in plan.items() if v != 0.0} for a, plan in PATH_PLAN.items()}
+register(System("lqr3d", {"plant": "CranePlant3D", "controller": "LqrController3D"},
+                parameters={"plant": {**DRIVE3D, **ELLIPTIC}},
+                description="the crane in three dimensions regulated from an elliptic swing (hook 10 deg along x, 5 "
+                            "deg along y a quarter period later) by the LQR of each axis, |u| <= 2 m/s2, |v| <= 1 m/s "
+                            "per axis", stop_time=10.0, tags=("one-fmu",)))
+register(System("lqr3d-move", {"plant": "CranePlant3D", "planner": "TrajectoryPlanner",
+                                "planner_y": "TrajectoryPlanner", "controller": "LqrController3D"},
+                connections=planned(CRANE3D, _PLANNERS), parameters={"plant": {**REST3D, **DRIVE3D}, **_MOVE3D},
+                description="a diagonal move from rest (2 m along x, 1.5 m along y): a ZV-shaped reference per "
+                            "axis (planner.x_d, planner_y.x_d) tracked by the LQR of each axis", stop_time=10.0,
+                tags=("one-fmu",)))
+register(System("lqr3d-path", {"plant": "CranePlant3D", "planner": "TrajectoryPlanner",
+                                "planner_y": "TrajectoryPlanner", "controller": "LqrController3D"},
+                connections=planned(CRANE3D, _PLANNERS), parameters={"plant": {**REST3D, **DRIVE3D}, **_PATH3D},
+                description="an L path from rest (3 m along x, then 2 m along y): ZV-shaped references per axis, the "
+                            "y leg started once the x leg's reference is within 0.15 m of the corner "
+                            "(crane_fmu.model.path), tracked by the LQR of each axis", stop_time=15.0,
+                tags=("one-fmu",)))
+register(System("mpc3d", {"plant": "CranePlant3D", "controller": "MpcController3D"},
+                parameters={"plant": {**DRIVE3D, **ELLIPTIC}},
+                description="the crane in three dimensions regulated from the elliptic swing of lqr3d by the "
+                            "constrained MPC of each axis (Python), |u| <= 2 m/s2, |v| <= 1 m/s per axis",
+                stop_time=10.0))
+register(System("mpc3d-move", {"plant": "CranePlant3D", "controller": "MpcController3D"},
+                parameters={"plant": {**REST3D, **DRIVE3D}, "controller": {"x_d": DIAGONAL["x"], "y_d": DIAGONAL["y"]}},
+                description="lqr3d-move's diagonal move by the constrained MPC of each axis (Python): its own "
+                            "shortest move per axis within the drive's limits", stop_time=10.0))
+register(System("mpc3d-path", {"plant": "CranePlant3D", "controller": "MpcController3D"},
+                parameters={"plant": {**REST3D, **DRIVE3D}, "controller": {
+                    "x_d": L_PATH[-1][0], "y_d": L_PATH[-1][1], "x_via": L_PATH[1][0], "y_via": L_PATH[1][1],
+                    "corridor": CORRIDOR}},
+                description="lqr3d-path's L path by the constrained MPC of each axis (Python), the y leg started "
+                            "as early as the corridor lets a time-optimal move", stop_time=15.0))

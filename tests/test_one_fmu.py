@@ -173,6 +173,7 @@ def test_paper_interface_is_the_containers():
 # controller; theta1_0 to the plant. Not from plan(), the code under test.
 PAIR, TRIO = {"plant", "controller"}, {"plant", "controller", "planner"}
 CRANE = ("m1", "m2", "l1", "l2", "g")
+FORCES_3D = ("F1x", "F1y", "F2x", "F2y")
 REACHES = {
     **{name: {**dict.fromkeys(CRANE, PAIR), "x_d": {"controller"}, "theta1_0": {"plant"}, "F1": {"plant"},
               "F2": {"plant"}, "hoist": {"plant"}} for name in ("paper", "lqr", "energy", "hard-hit", "mpc",
@@ -190,7 +191,13 @@ REACHES = {
     # planned acceleration shows as its demand (an output)
     "open-loop-3d": {**dict.fromkeys(CRANE, {"plant", "planner_x", "planner_y"}), "x_d": {"planner_x"},
                      "y_d": {("planner_y", "x_d")}, "theta1x_0": {"plant"}, "hoist": {"plant"},
-                     **dict.fromkeys(("F1x", "F1y", "F2x", "F2y"), {"plant"})},
+                     **dict.fromkeys(FORCES_3D, {"plant"})},
+    # the crane in three dimensions: y_d to the controller, or to the planner of the y axis alone as its x_d
+    "lqr3d": {**dict.fromkeys(CRANE, PAIR), "x_d": {"controller"}, "y_d": {"controller"}, "theta1x_0": {"plant"},
+              **dict.fromkeys(FORCES_3D, {"plant"}), "hoist": {"plant"}},
+    **{name: {**dict.fromkeys(CRANE, TRIO | {"planner_y"}), "x_d": {"planner"}, "y_d": {("planner_y", "x_d")},
+              "theta1x_0": {"plant"}, **dict.fromkeys(FORCES_3D, {"plant"}), "hoist": {"plant"}}
+       for name in ("lqr3d-move", "lqr3d-path")},
 }
 
 

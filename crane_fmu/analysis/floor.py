@@ -172,6 +172,14 @@ def crane_floor(p=None, start=(0.0,) * 6, target=(0.0,) * 6, u_max=2.0, v_max=1.
     return None if steps is None else round(steps * dt, 9)
 
 
+def spatial_floor(tasks, **kwargs):
+    """The least time [s] of a task on both axes of the crane in three dimensions: the larger of the axes' planar
+    floors (:func:`crane_floor` of each ``{start, target}`` in ``tasks``), as its linearisation at rest is a planar
+    crane per axis, uncoupled, each with its own drive limits."""
+    floors = [crane_floor(**task, **kwargs) for task in tasks]
+    return None if None in floors else max(floors)
+
+
 def rigid_floor(distance, u_max, v_max, dt=GRID):
     """The least time [s] of a rest-to-rest move of a rigid load, by the same linear programs."""
     a, b, _ = rigid_model()
@@ -182,7 +190,8 @@ def rigid_floor(distance, u_max, v_max, dt=GRID):
 
 @functools.cache
 def scenario_floors():
-    """``{scenario: Floor}`` for the scoreboard's scenarios on the nominal plant (S1, S2, S4, S6, S7).
+    """``{scenario: Floor}`` for the scoreboard's scenarios on the nominal plant (S1, S2, S4, S6, S7; S11, S12 of
+    the crane in three dimensions, :func:`spatial_scenario_floors`).
 
     Each is the task its ranking figure measures, under the scenario's limits: S1 and S6
     end at rest with the trolley back at ``x_d = 0`` (S6 with the input held over its
@@ -204,8 +213,27 @@ def scenario_floors():
         "S7": (f"{DISTANCE:g} m from rest to rest while hoisting, the hoist's motion known in advance",
                dict(target=moved, hoist=hoist, p=PlantParameters(l1=HOIST["from"])), GRID),
     }
-    return {sid: Floor(sid, crane_floor(u_max=DRIVE["u_max"], v_max=DRIVE["v_max"], **kwargs), task, grid, METHOD)
-            for sid, (task, kwargs, grid) in tasks.items()}
+    floors = {sid: Floor(sid, crane_floor(u_max=DRIVE["u_max"], v_max=DRIVE["v_max"], **kwargs), task, grid, METHOD)
+              for sid, (task, kwargs, grid) in tasks.items()}
+    return {**floors, **spatial_scenario_floors()}
+
+
+def spatial_scenario_floors():
+    """``{scenario: Floor}`` of the crane in three dimensions (S11, S12): each the larger of its axes' planar
+    floors (:func:`spatial_floor`) under the drive limits of each axis."""
+    from crane_fmu.systems import DIAGONAL, ELLIPTIC
+
+    from .spatial_scenarios import DRIVE
+
+    limits = {"u_max": DRIVE["u_max"], "v_max": DRIVE["v_max"]}
+    diagonal = [dict(target=(DIAGONAL[a], 0.0, 0.0, 0.0, 0.0, 0.0)) for a in "xy"]
+    elliptic = [dict(start=(0.0, 0.0, ELLIPTIC.get(f"theta1{a}_0", 0.0), ELLIPTIC.get(f"dtheta1{a}_0", 0.0), 0.0,
+                            0.0)) for a in "xy"]
+    tasks = {"S11": (f"({DIAGONAL['x']:g} m, {DIAGONAL['y']:g} m) from rest to rest, each axis' planar floor",
+                     diagonal),
+             "S12": ("the elliptic swing (10 deg along x, 5 deg along y a quarter period later) to rest, trolley back "
+                     "where it started: each axis' planar floor", elliptic)}
+    return {sid: Floor(sid, spatial_floor(axes, **limits), task, GRID, METHOD) for sid, (task, axes) in tasks.items()}
 
 
 def code_key():

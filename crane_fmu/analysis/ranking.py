@@ -43,7 +43,9 @@ FIGURES = (("0.5 deg from", "settling_0.5deg_s", 2, " s"), ("0.1 deg from", "set
            ("peak abs v", "peak_abs_v", 2, " m/s"), ("effort", "effort", 1, " m2/s3"),
            ("u total variation", "u_total_variation", 1, " m/s2"))
 WORST = tuple(metric for _, metric, _, _ in FIGURES) + ("position_1cm_s", "end_swing_deg")
-FORMAT = {metric: (digits, unit) for _, metric, digits, unit in FIGURES}
+# ... and the scenarios' own figures (Scenario.measures), shown where a scenario ranks by them or sets a target
+FORMAT = {**{metric: (digits, unit) for _, metric, digits, unit in FIGURES}, "path_deviation_m": (3, " m"),
+          "arrival_eq_s": (2, " s"), "residual_eq_deg": (3, " deg")}
 
 
 def not_applicable(rows, scenario):
@@ -100,7 +102,8 @@ def summarise(rows, scenario):
     for name, cases in by.items():
         failed = [r for r in cases if r["status"] != "ok"]
         worst = {}
-        for metric in WORST:
+        own = tuple(dict.fromkeys(m for m in (s.rank_by, *(t.metric for t in s.targets)) if m not in WORST))
+        for metric in WORST + own:  # the scenario's own figures too (S13's path_deviation_m)
             values = [r.get(metric) for r in cases]
             worst[metric] = None if any(v is None for v in values) else max(values)
         held = [r.get("bounds_held") for r in cases]

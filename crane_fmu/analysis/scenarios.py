@@ -73,6 +73,12 @@ class Scenario:
     duration_note : str
         Why its cases run as long as they do, where a reader would expect otherwise (``" (...)"``; the board
         adds it to the line that says how long they run).
+    measures : callable, optional
+        ``measures(signals, case) -> {figure: value}``: figures of its own beside
+        :func:`~crane_fmu.analysis.metrics.move_metrics`', from the case's
+        :func:`~crane_fmu.analysis.metrics.crane_signals` with the plant's hook, load and state
+        (:func:`measured_outputs`) and the case (its ``x_d``, ``residual_from``): S13's ``path_deviation_m``;
+        its targets may name them.
     """
 
     id: str
@@ -88,6 +94,7 @@ class Scenario:
     variants: int = 1
     bounds: dict | None = None
     duration_note: str = ""
+    measures: Callable | None = None
 
     def __post_init__(self):
         crane = components.get(self.plant).crane
@@ -207,6 +214,26 @@ def systems_for(contender, scenario, cases=CASES):
     return s.runs(contender, cases)
 
 
+def measured_outputs(scenario):
+    """The plant's outputs a scenario's own ``measures`` read beside the metrics' (its hook, load and state), or
+    none when it has no measures."""
+    s = scenarios().get(scenario)
+    if s is None or s.measures is None:
+        return ()
+    crane = s.crane
+    return (*crane.hook, *crane.load, *crane.state)
+
+
+def measured(case, columns):
+    """The figures of a case's scenario's own ``measures`` (empty when it has none) from its recorded columns."""
+    names = measured_outputs(case["scenario"])
+    if not names:
+        return {}
+    from crane_fmu.analysis import metrics
+
+    return get(case["scenario"]).measures(metrics.crane_signals(columns, names), case)
+
+
 def met(row, target):
     """Whether one case meets a target: it ran to the end and its metric is within the limit (a target of
     another case: met)."""
@@ -217,3 +244,4 @@ def met(row, target):
 
 
 from crane_fmu.analysis import planar_scenarios  # noqa: E402, F401 (registers S1-S10)
+from crane_fmu.analysis import spatial_scenarios  # noqa: E402, F401 (registers S11-S14)

@@ -39,14 +39,20 @@ def continuous_model(p):
 
 
 def design(p, weights, r, h):
-    """The state-feedback gains ``K`` (6) of the discrete LQR for the communication step ``h``.
+    """The state-feedback gains ``K`` (6) of the discrete LQR of :func:`continuous_model` for the step ``h``."""
+    return design_of(*continuous_model(p), weights, r, h)
+
+
+def design_of(a, b, weights, r, h):
+    """The gains ``K`` of the discrete LQR of one axis ``s' = A s + B u`` (one input) for the step ``h``.
 
     Minimises ``sum_k s_k' Q s_k + r u_k^2`` for the zero-order-hold
-    discretisation of :func:`continuous_model`, ``Q = diag(weights)``:
+    discretisation, ``Q = diag(weights)``:
     ``K = (r + Bd' P Bd)^-1 Bd' P Ad`` with ``P`` from the discrete algebraic Riccati equation.
     """
-    ad, bd = linalg.zoh(*continuous_model(p), h)
-    q = [[weights[i] if i == j else 0.0 for j in range(6)] for i in range(6)]
+    ad, bd = linalg.zoh(a, b, h)
+    n = len(weights)
+    q = [[weights[i] if i == j else 0.0 for j in range(n)] for i in range(n)]
     big_p = linalg.dare(ad, bd, q, [[r]])
     pb = linalg.matmul(big_p, bd)
     bt_p_b = linalg.dot([row[0] for row in bd], [row[0] for row in pb])

@@ -27,11 +27,19 @@ const char *continuous_model(const PlantParameters *p, Matrix *a, Matrix *b) {
    discrete algebraic Riccati equation. */
 const char *lqr_design(const PlantParameters *p, const double weights[N_STATE], double r, double h,
                        double gains[N_STATE]) {
-    Matrix a, b, ad, bd, big_p, q = la_zeros(N_STATE, N_STATE), rr = la_zeros(1, 1);
+    Matrix a, b;
+    const char *error = continuous_model(p, &a, &b);
+    return error ? error : lqr_design_of(a, b, weights, r, h, gains);
+}
+
+/* lqr.design_of(): the same for one axis' s' = A s + B u given (6 states, one input). */
+const char *lqr_design_of(Matrix a, Matrix b, const double weights[N_STATE], double r, double h,
+                          double gains[N_STATE]) {
+    Matrix ad, bd, big_p, q = la_zeros(N_STATE, N_STATE), rr = la_zeros(1, 1);
     for (int i = 0; i < N_STATE; i++) q.v[i][i] = weights[i];
     rr.v[0][0] = r;
-    const char *error = continuous_model(p, &a, &b);
-    if (error || (error = la_zoh(a, b, h, &ad, &bd)) || (error = la_dare(ad, bd, q, rr, &big_p))) return error;
+    const char *error = la_zoh(a, b, h, &ad, &bd);
+    if (error || (error = la_dare(ad, bd, q, rr, &big_p))) return error;
     Matrix pb = la_matmul(big_p, bd), bd_t = la_transpose(bd), pb_t = la_transpose(pb);
     double bt_p_b = la_dot(bd_t.v[0], pb_t.v[0], N_STATE);
     Matrix bt_p_a = la_matmul(pb_t, ad);

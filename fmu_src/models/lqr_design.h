@@ -21,4 +21,8 @@ const char *continuous_model(const PlantParameters *p, Matrix *a, Matrix *b);
 const char *lqr_design(const PlantParameters *p, const double weights[N_STATE], double r, double h,
                        double gains[N_STATE]);
 
+/* lqr.design_of(): the gains K (6) of the discrete LQR of one axis s' = A s + B u (6 states, one input). */
+const char *lqr_design_of(Matrix a, Matrix b, const double weights[N_STATE], double r, double h,
+                          double gains[N_STATE]);
+
 #endif

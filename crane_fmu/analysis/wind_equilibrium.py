@@ -1,0 +1,37 @@
+"""Where the mean wind holds a hanging load: the static deflection of the double pendulum under the mean drag.
+
+A steady horizontal force ``F1`` on the hook and ``F2`` on the load, the trolley at rest: the lower cable carries
+the load's weight and ``F2``, the upper one both masses' weights and ``F1 + F2``, so (statics of eqs (4)-(5))
+
+    tan theta2 = F2 / (m2 g),   tan theta1 = (F1 + F2) / ((m1 + m2) g).
+
+The mean drag is the Wind component's at rest, ``0.5 rho Cd A U |U|`` (:func:`crane_fmu.model.wind.drag`). A
+swing measured about this equilibrium is what a controller can take away; the deflection itself no trolley
+motion removes (S10, S14).
+"""
+
+import dataclasses
+import math
+
+from crane_fmu.model import wind
+from crane_fmu.model.parameters import PlantParameters
+
+
+def static_deflection(m1, m2, g, f1, f2):
+    """``(theta1, theta2)`` [rad]: the cables' angles from the vertical under the steady forces ``f1`` (hook) and
+    ``f2`` (load) [N], towards the forces."""
+    return math.atan((f1 + f2) / ((m1 + m2) * g)), (math.atan(f2 / (m2 * g)) if m2 > 0 else 0.0)
+
+
+def mean_drag(values=None):
+    """``(F1, F2)`` [N]: the Wind component's drag on hook and load at rest in its mean wind (its parameters,
+    ``values`` over its defaults)."""
+    c = wind.COMPONENT.check(values or {})
+    return wind.drag(c.drag1, c.mean, 0.0), wind.drag(c.drag2, c.mean, 0.0)
+
+
+def wind_deflection(plant=None, values=None):
+    """``(theta1, theta2)`` [rad] of the crane (``plant``: m1, m2, g over Section V's) in the Wind component's mean
+    wind (``values``)."""
+    p = dataclasses.replace(PlantParameters(), **{k: v for k, v in (plant or {}).items() if k in ("m1", "m2", "g")})
+    return static_deflection(p.m1, p.m2, p.g, *mean_drag(values))
