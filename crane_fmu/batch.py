@@ -10,6 +10,7 @@ from :func:`read_journal`; a worker that dies has its running items rescheduled 
 import itertools
 import json
 import math
+import multiprocessing
 import os
 import queue
 import signal
@@ -177,7 +178,7 @@ def _listed(task, chunk, *extra, **kwargs):
 @contextmanager
 def _dask_client(workers, scheduler):
     """A Dask client of the cluster at ``scheduler``, or of a local cluster of ``workers`` processes (closed after)."""
-    from distributed import Client, LocalCluster  # optional: the dask extra
+    from distributed import Client  # optional: the dask extra
 
     if scheduler:
         try:
@@ -189,8 +190,7 @@ def _dask_client(workers, scheduler):
         # process stops, closes the cluster and says so in one line, no traceback from every worker.
         handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
-            cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                                   host=LOOPBACK, dashboard_address=DASHBOARD, silence_logs=50)
+            cluster = local_cluster(workers or os.cpu_count() or 1)
         finally:
             signal.signal(signal.SIGINT, handler)
         client = Client(cluster)
@@ -200,6 +200,19 @@ def _dask_client(workers, scheduler):
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def local_cluster(workers):
+    """A local Dask cluster of ``workers`` single-threaded worker processes on the loopback, its workers forked from
+    this process where the platform can (they start with everything this process imported: no second import of
+    numpy, scipy, fmpy and this package per worker, about 2 s of CPU each), else started as fresh processes."""
+    import dask
+    from distributed import LocalCluster
+
+    forked = "fork" in multiprocessing.get_all_start_methods()
+    with dask.config.set({"distributed.worker.multiprocessing-method": "fork" if forked else "spawn"}):
+        return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host=LOOPBACK,
+                            dashboard_address=DASHBOARD, silence_logs=50)
 
 
 def _shared_column(client, items, extra):

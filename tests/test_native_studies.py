@@ -193,3 +193,22 @@ def test_bench_sweep_prints_the_batch_paths_figures(native):
                    rf"CPU a case: batch path \(its workers\) {number} ms, the C host {number} ms = {number}x"):
         found = re.search(figure, out)
         assert found and all(float(g) > 0 for g in found.groups()), (figure, out)
+
+
+def test_a_board_on_its_own_cluster_leaves_no_extracted_fmu(native, tmp_path, monkeypatch):
+    """A board on the batch path on a local cluster of its own (its workers forked, their instances reused and never
+    freed): when it ends, no FMU it extracted is left in the temporary folder, by this process or its workers."""
+    import tempfile
+
+    from crane_fmu.compare import compare
+    from crane_fmu.cosim.instance import _EXTRACTED
+
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    monkeypatch.setenv("TMPDIR", str(temporary))  # the workers' temporary folder too: they are forked
+    monkeypatch.setattr(tempfile, "tempdir", str(temporary))
+    rows = compare(tmp_path / "board", ["LqrController"], fmu_dir=native[2], workers=2, quick=True, cases=2,
+                   scenarios=["S1", "S3"], animate=(), only=True, progress=False, log=lambda *_: None)
+    assert [r["status"] for r in rows] == ["ok"] * 3
+    ours = {Path(folder) for folder, pid in _EXTRACTED.items() if pid == os.getpid()}  # removed at our exit
+    assert [p for p in temporary.glob("*/modelDescription.xml") if p.parent not in ours] == []
