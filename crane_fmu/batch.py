@@ -85,7 +85,7 @@ def _duration(seconds):
 
 
 def run_batch(task, items, shared=None, *, on="processes", workers=None, scheduler=None, journal=None, known=(),
-              progress=None, chunked=False, collect=True, **kwargs):
+              progress=None, chunked=False, collect=True, on_row=None, **kwargs):
     """Run ``task(item, **kwargs)`` (``task(item, shared, **kwargs)`` with ``shared``) for every item.
 
     Parameters
@@ -107,6 +107,8 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
         chunks per worker are sent at a time, the next as one ends (a batch of any size).
     collect : bool
         Return the results; False: only how many there were (the journal has them).
+    on_row : callable, optional
+        Given each result (``known`` ones too) as it is kept, after the journal.
 
     Returns
     -------
@@ -129,6 +131,8 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
                 sink.flush()
             if progress:
                 progress.update(result)
+            if on_row:
+                on_row(result)
             return result
 
         def kept_rows(results, before=()):
