@@ -212,3 +212,17 @@ def test_a_board_on_its_own_cluster_leaves_no_extracted_fmu(native, tmp_path, mo
     assert [r["status"] for r in rows] == ["ok"] * 3
     ours = {Path(folder) for folder, pid in _EXTRACTED.items() if pid == os.getpid()}  # removed at our exit
     assert [p for p in temporary.glob("*/modelDescription.xml") if p.parent not in ours] == []
+
+
+def test_bench_sweep_prints_the_boards_cold_and_warm_times():
+    """The board's line of `crane-fmu bench --sweep` gives its cold and warm wall and CPU times, each its own."""
+    from crane_fmu.bench_batch import _print
+
+    figures = {"pair_us": 1.0, "host_pair_us": 0.5, "pair_cpu_us": 1.0, "host_pair_cpu_us": 0.5, "batch_1": 10.0,
+               "host_1": 20.0, "batch_2": 18.0, "host_2": 36.0, "batch_cpu_ms": 5.0, "host_cpu_ms": 4.0,
+               "study_s": 50.0, "study_cpu_s": 90.0, "study_mb": 600.0, "board_cold_s": 21.5, "board_cold_cpu_s": 33.0,
+               "board_cold_mb": 700.0, "board_warm_s": 12.25, "board_warm_cpu_s": 20.0, "board_warm_mb": 650.0}
+    lines = []
+    _print(figures, 240, 20.0, 1e-3, 3, 10_000, None, lines.append)
+    assert lines[-1] == ("full board on the native FMUs (crane-fmu compare --workers 2): cold 21.5 s (33.0 CPU-s), "
+                         "warm 12.2 s (20.0 CPU-s), peak memory 700 MB  (target: cold <= 10 s)")
