@@ -214,7 +214,12 @@ def local_cluster(workers):
     from distributed import LocalCluster
 
     forked = "fork" in multiprocessing.get_all_start_methods()
-    with dask.config.set({"distributed.worker.multiprocessing-method": "fork" if forked else "spawn"}):
+    with dask.config.set({"distributed.worker.multiprocessing-method": "fork" if forked else "spawn",
+                          # not what a batch looks at: Dask's profiler (a look at every thread's stack each 10 ms)
+                          # and its monitors of memory and system (each 0.1 and 0.5 s) less often
+                          "distributed.worker.profile.enabled": False,
+                          "distributed.worker.memory.monitor-interval": "1s",
+                          "distributed.admin.system-monitor.interval": "2s"}):
         return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host=LOOPBACK,
                             dashboard_address=DASHBOARD, silence_logs=50)
 
