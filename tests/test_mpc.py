@@ -100,7 +100,8 @@ def crane_qps():
 def test_the_solver_gives_daqps_answer_on_the_cranes_qps(crane_qps):
     plans = [q for q in crane_qps if q[0].n != mpc.COMPONENT.check({}).steps]
     tracking = [q for q in crane_qps if q[0].n == mpc.COMPONENT.check({}).steps]
-    assert len(plans) >= 3 and len(tracking) == 71 + 41  # bisections; one QP every 50 ms
+    # bisections; one QP every 50 ms until the MPC hands over to its LQR, at rest on the target (2.85 s of 3.5 s)
+    assert len(plans) >= 3 and len(tracking) == 57 + 41
     assert any(len(q[4].active) > 10 for q in plans) and any(len(q[4].active) > 3 for q in tracking)  # limits bind
     for prepared, f, lower, upper, solution in crane_qps:
         _check_against_daqp(prepared, f, lower, upper, solution)
