@@ -65,7 +65,9 @@ MISFIT = 1e-5  # ... that explains the data to this share of their squares (0.3 
 PLAUSIBLE = 2.0  # ... within this factor of the configured cable lengths
 PLAUSIBLE_PAYLOAD = 3.0  # ... and of the configured payload
 STANDARD_ERROR = 0.01  # ... each parameter's standard error at most this share of its value
-MOST_REPLANS = 6  # the safety envelope: the MPC hands over to its LQR instead of a plan for a deviation past these
+UNEXPLAINED = 1e-3  # the envelope hands over to the LQR when the data leave this share of their squares (3 % RMS)
+# unexplained: the states the MPC is given are not the crane's (an estimator's, noisy, late, a force it does not know)
+MOST_REPLANS = 2  # the safety envelope: the MPC hands over to its LQR instead of a plan for a deviation past these
 SWING_MARGIN = math.radians(10.0)  # ... or when the swing exceeds the plan's largest by this (as an amplitude)
 TOLERANCE = 0.01  # ... and the controller plans again with it when a swing mode's frequency differs by more
 
@@ -352,7 +354,8 @@ def _identifying(config, state):
 
 
 def identify(config, state, measured):
-    """The identification's normal equations with the interval that ends now, and the model they give (or None).
+    """The identification's normal equations with the interval that ends now, the model they give (or None), and
+    whether the data are beyond any crane's equations (their least-squares residual above :data:`UNEXPLAINED`).
 
     Notes
     -----
@@ -380,7 +383,7 @@ def identify(config, state, measured):
     first = HEADER.n11
     sums = list(s[first:first + 11])
     if not _identifying(c, s):  # off, or done: nothing more to add
-        return sums, None
+        return sums, None, False
     if s[HEADER.count] > 0:
         d1, d2, a1, a2, c1, c2, s1, s2 = integrate(c.h, s[HEADER.d1:HEADER.s2 + 1], s[HEADER.w1:HEADER.sin2 + 1],
                                                    _sample(measured))
@@ -396,7 +399,7 @@ def identify(config, state, measured):
         sums[8] += a2 * y1
         sums[9] += y1 * y1 + y2 * y2
         sums[10] += 1.0
-    model = None
+    model, unexplained = None, False
     if sums[10] >= c.samples:
         n11, n12, n13, n22, n23, n33, z1, z2, z3, yy, _ = sums
         normal = [[n11, n12, n13], [n12, n22, n23], [n13, n23, n33]]
@@ -407,6 +410,7 @@ def identify(config, state, measured):
         if factor is not None and min(factor[i][i] * factor[i][i] / normal[i][i] for i in range(3)) >= WELL_POSED:
             l1, l2, k = qp.cholesky_solve(factor, [z1, z2, z3])
             misfit = (yy - (l1 * z1 + l2 * z2 + k * z3)) / yy  # the residual's share of the data's squares
+            unexplained = misfit > UNEXPLAINED
             p = c.plant
             plausible = all(b / PLAUSIBLE <= a <= b * PLAUSIBLE for a, b in ((l1, p.l1), (l2, p.l2)))
             if misfit <= MISFIT and plausible and 0.0 < k < l2:
@@ -415,7 +419,7 @@ def identify(config, state, measured):
                 if p.m2 / PLAUSIBLE_PAYLOAD <= m2 <= p.m2 * PLAUSIBLE_PAYLOAD and \
                         precise(factor, (l1, l2, k), residual, 2.0 * sums[10]):
                     model = (l1, l2, m2)
-    return sums, model
+    return sums, model, unexplained
 
 
 def precise(factor, values, residual, rows):
@@ -458,7 +462,7 @@ def solve(config, state, measured, l1_now):
     c, n = config, config.steps
     count = int(state[HEADER.count])
     at = count // c.every  # this interval's number
-    sums, model = identify(c, state, measured)
+    sums, model, unexplained = identify(c, state, measured)
     known = (state[HEADER.l1], state[HEADER.l2], state[HEADER.m2])
     d = identified_design(c, known) if known[0] > 0.0 else nearest_design(c, l1_now)
     if model is not None:  # identified: a new design and plan when a swing mode's frequency moved
@@ -478,14 +482,16 @@ def solve(config, state, measured, l1_now):
     replan = count == 0 or model is not None or (moved and at >= plan_after)
     to_trolley, to_rest = deviation(d, measured, target)
     large = to_rest > LARGEST_SWING  # too far from rest for the linear model's plan
-    # the safety envelope: the LQR takes over, for good, when the plans for a deviation run out, the swing grows
-    # past the plan's largest by SWING_MARGIN, or the plan is over and the crane at rest on the target
+    # the safety envelope: the LQR takes over, for good, when the plan is over and the identification's data are
+    # beyond the crane's equations (mid-move the LQR's kick would swing more than the plan's end), the plans for a
+    # deviation run out, the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on the target
     replans = state[HEADER.replans]
     if replan and count and model is None and not large and (trolley > c.replan_x or swing > c.replan_angle):
         replans += 1.0
     over = step >= len(plan_u)
     at_rest = over and to_trolley <= c.replan_x and to_rest <= c.replan_angle
-    if count and (replans > MOST_REPLANS or to_rest > state[HEADER.bound] + SWING_MARGIN or at_rest):
+    swung = to_rest > state[HEADER.bound] + SWING_MARGIN
+    if count and ((unexplained and over) or replans > MOST_REPLANS or swung or at_rest):
         return handover(c, state, measured, l1_now, replans)
     bound = state[HEADER.bound]
     if replan and large:  # none made: the tracking QP takes the swing down alone, a plan is tried at the next interval

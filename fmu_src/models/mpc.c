@@ -33,7 +33,8 @@
 #define PLAUSIBLE 2.0    /* mpc.PLAUSIBLE */
 #define PLAUSIBLE_PAYLOAD 3.0 /* mpc.PLAUSIBLE_PAYLOAD */
 #define STANDARD_ERROR 0.01   /* mpc.STANDARD_ERROR */
-#define MOST_REPLANS 6.0      /* mpc.MOST_REPLANS */
+#define UNEXPLAINED 1e-3      /* mpc.UNEXPLAINED */
+#define MOST_REPLANS 2.0      /* mpc.MOST_REPLANS */
 #define SWING_MARGIN (10.0 * (3.141592653589793 / 180.0)) /* mpc.SWING_MARGIN: math.radians(10.0) */
 #define TOLERANCE 0.01   /* mpc.TOLERANCE */
 /* SCHEDULE_POINTS, MAX_STEPS (the horizon's rule), MAX_PLAN (mpc.MAX_PLAN: the interval's rule) */
@@ -471,11 +472,12 @@ static int precise(const double packed[6], const double values[3], double residu
 
 static int identifying(const Config *c, const double *s) { return c->samples > 0 && s[H_L1] == 0.0; }
 
-/* mpc.identify(): the normal equations with the interval that ends now (sums), and the model they give (*found). */
+/* mpc.identify(): the normal equations with the interval that ends now (sums), the model they give (*found), and
+   whether the data are beyond any crane's equations (*unexplained). */
 static const char *identify(const Config *c, const double *s, const double measured[N_STATE], double sums[11],
-                            double model[3], int *found) {
+                            double model[3], int *found, int *unexplained) {
     memcpy(sums, s + H_N11, 11 * sizeof *sums);
-    *found = 0;
+    *found = 0, *unexplained = 0;
     if (!identifying(c, s)) return NULL;
     if (s[H_COUNT] > 0) {
         double now[8], in[8];
@@ -507,6 +509,7 @@ static const char *identify(const Config *c, const double *s, const double measu
     double l1 = lam[0], l2 = lam[1], k = lam[2], yy = sums[9];
     if (yy == 0.0) return DIVISION_BY_ZERO;
     double misfit = (yy - (l1 * sums[6] + l2 * sums[7] + k * sums[8])) / yy; /* the residual's share */
+    *unexplained = misfit > UNEXPLAINED;
     const PlantParameters *p = &c->plant;
     int plausible = p->l1 / PLAUSIBLE <= l1 && l1 <= p->l1 * PLAUSIBLE && p->l2 / PLAUSIBLE <= l2 &&
                     l2 <= p->l2 * PLAUSIBLE;
@@ -586,8 +589,8 @@ static const char *solve(Config *c, const double *state, const double measured[N
     double count = state[H_COUNT];
     long long at = (long long)count / whole(c->every); /* this interval's number (count // every) */
     double sums[11], model[3], known[3] = {state[H_L1], state[H_L2], state[H_M2]};
-    int found_model;
-    const char *error = identify(c, state, measured, sums, model, &found_model);
+    int found_model, unexplained;
+    const char *error = identify(c, state, measured, sums, model, &found_model, &unexplained);
     if (error) return error;
     Design *d;
     if (known[0] > 0.0) {
@@ -620,12 +623,15 @@ static const char *solve(Config *c, const double *state, const double measured[N
     double *new_plan_u = next + plan_at, to_trolley, to_rest;
     deviation(d, measured, target, &to_trolley, &to_rest);
     int large = to_rest > LARGEST_SWING; /* too far from rest for the linear model's plan */
-    /* the safety envelope: the LQR takes over, for good, when the plans for a deviation run out, the swing grows
-       past the plan's largest by SWING_MARGIN, or the plan is over and the crane at rest on the target */
+    /* the safety envelope: the LQR takes over, for good, when the plan is over and the identification's data are
+       beyond the crane's equations (mid-move the LQR's kick would swing more than the plan's end), the plans for a
+       deviation run out, the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on the
+       target */
     double replans = state[H_REPLANS], bound = state[H_BOUND];
     if (replan && count != 0 && !found_model && !large && (trolley > c->replan_x || swing > c->replan_angle)) replans += 1.0;
-    int at_rest = step >= n_plan && to_trolley <= c->replan_x && to_rest <= c->replan_angle;
-    if (count != 0 && (replans > MOST_REPLANS || to_rest > bound + SWING_MARGIN || at_rest))
+    int over = step >= n_plan, swung = to_rest > bound + SWING_MARGIN;
+    int at_rest = over && to_trolley <= c->replan_x && to_rest <= c->replan_angle;
+    if (count != 0 && ((unexplained && over) || replans > MOST_REPLANS || swung || at_rest))
         return handover(c, state, measured, l1_now, replans, next);
     if (replan && large) { /* none made: the tracking QP takes the swing down alone, a plan tried next interval */
         replan = n_plan > 0 || found_model; /* the last solve's warm start holds unless a plan or model changed */
