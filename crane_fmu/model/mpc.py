@@ -490,7 +490,7 @@ def solve(config, state, measured, l1_now):
         replans += 1.0
     over = step >= len(plan_u)
     at_rest = over and to_trolley <= c.replan_x and to_rest <= c.replan_angle
-    swung = to_rest > state[HEADER.bound] + SWING_MARGIN
+    swung = bool(plan_u) and to_rest > state[HEADER.bound] + SWING_MARGIN  # past the plan's largest (a plan made)
     if count and ((unexplained and over) or replans > MOST_REPLANS or swung or at_rest):
         return handover(c, state, measured, l1_now, replans)
     bound = state[HEADER.bound]
