@@ -170,9 +170,9 @@ def _instantiations(md, unzipped, version):
         addLoggerProxy(byref(_CALLBACKS2))
         fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
                         instanceName="c")
-        location = Path(unzipped, "resources").as_uri().encode()
+        location, token, callbacks = Path(unzipped, "resources").as_uri().encode(), md.guid.encode(), byref(_CALLBACKS2)
 
-        def call(name=b"c", guid=md.guid.encode(), where=location, callbacks=byref(_CALLBACKS2), kind=fmi2CoSimulation):
+        def call(name=b"c", guid=token, where=location, callbacks=callbacks, kind=fmi2CoSimulation):
             return fmu.fmi2Instantiate(name, kind, guid, where, callbacks, False, False)
 
         free = fmu.fmi2FreeInstance
@@ -181,9 +181,9 @@ def _instantiations(md, unzipped, version):
     else:
         fmu = FMU3Slave(guid=md.instantiationToken, unzipDirectory=unzipped,
                         modelIdentifier=md.coSimulation.modelIdentifier, instanceName="c")
-        location = (str(Path(unzipped, "resources")) + "/").encode()
+        location, token = (str(Path(unzipped, "resources")) + "/").encode(), md.instantiationToken.encode()
 
-        def call(name=b"c", guid=md.instantiationToken.encode(), where=location, event_mode=False, model_exchange=False):
+        def call(name=b"c", guid=token, where=location, event_mode=False, model_exchange=False):
             if model_exchange:
                 return fmu.fmi3InstantiateModelExchange(name, guid, where, False, False, None, _LOG3)
             return fmu.fmi3InstantiateCoSimulation(name, guid, where, False, False, event_mode, False, None, 0, None,
