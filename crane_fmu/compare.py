@@ -36,8 +36,8 @@ import scipy
 
 from crane_fmu import components, laws, native_batch, systems
 from crane_fmu.analysis import board_page, board_tables, metrics, score_plots
-from crane_fmu.analysis.board_drawing import BoardDrawer, first_scenarios
 from crane_fmu.analysis import scenarios as scenario_registry
+from crane_fmu.analysis.board_drawing import BoardDrawer, first_scenarios
 from crane_fmu.analysis.floor import stored_scenario_floors
 from crane_fmu.analysis.scenarios import Contender
 from crane_fmu.batch import JOURNAL, Progress, ignore_interrupts, read_journal, run_batch
