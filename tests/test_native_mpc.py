@@ -306,8 +306,8 @@ def test_under_wine_the_windows_dll_plans_again_as_the_linux_one(native, windows
     """CraneMpcTransport pushed by a 2 N force on the hook that its model does not know: its plan made again (the
     deviation's rule) until the safety envelope hands over to the LQR (1.4 s), in the Windows DLL under Wine
     (portable sin and cos), give the Linux run of our master over the native FMUs: the states within 1e-9; u
-    within 1e-9 relative while the MPC plans, within sum(|K|) 1e-9 once it has handed over to its LQR (u = -K s carries the states' 1e-9 agreement, each state's
-    difference times its gain: |du| <= sum(|K|) max|ds|)."""
+    within 1e-9 relative while the MPC plans, within sum(|K|) 1e-9 once it has handed over to its LQR (u = -K s
+    carries the states' 1e-9 agreement, each state's difference times its gain: |du| <= sum(|K|) max|ds|)."""
     name, stop_time = "mpc-transport", 4.0
     guid, vrs = unpack_one_fmu(native, name, tmp_path, version)
     fmu = one_fmu(native, name, version)
