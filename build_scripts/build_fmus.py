@@ -31,6 +31,7 @@ import sys
 import tempfile
 import zipfile
 from pathlib import Path
+from xml.etree import ElementTree
 
 import crane_fmu.fmu_src.python
 import crane_fmu.model
@@ -210,6 +211,8 @@ def build_fmu(component, out_dir, binaries=None, fmi_version=2):
                 data = src.read(item)
                 if item.filename == "modelDescription.xml":
                     data = process(data, component.variables, DISPLAY_UNITS, component.dependencies())
+                    token = ElementTree.fromstring(data).get("instantiationToken" if fmi_version == 3 else "guid")
+                    dst.writestr("resources/token.txt", token)  # the wrapper refuses another build's token
                 elif item.filename == f"{linux}/{name}.so" and binaries is not None:
                     data = Path(binaries[0]).read_bytes()
                     dst.write(binaries[1], f"{linux}/PythonWrapper.so")

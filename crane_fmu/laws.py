@@ -21,6 +21,7 @@ from xml.etree.ElementTree import tostring
 from crane_fmu.cosim import in_process
 from crane_fmu.cosim.instance import FmiError, Instance
 
+_PLAIN = set()  # the components made of plain law functions
 _SPEC = re.compile(r"(?P<file>.+\.py)(?::(?P<name>[A-Za-z_]\w*))?")
 
 
@@ -48,6 +49,11 @@ def component(source):
     stat = path.stat()
     return _component(str(path.resolve()), stat.st_size, stat.st_mtime_ns, _SPEC.fullmatch(str(source))["name"],
                       str(source))
+
+
+def is_plain(source):
+    """Whether a law file's source names a plain law function (a component made here, no FMU of its own)."""
+    return component(source) in _PLAIN
 
 
 @functools.lru_cache(maxsize=32)
@@ -91,9 +97,11 @@ def _plain(name, law):
     from crane_fmu.model.component import Component
     from crane_fmu.model.tables import MEASURED_STATE, output
 
-    return Component(name, "controller", f"the law {name} of {law.__module__}", MEASURED_STATE
+    made = Component(name, "controller", f"the law {name} of {law.__module__}", MEASURED_STATE
                      + (output("u", "m/s2", "demanded trolley acceleration"),), _no_parameters, law,
                      feedthrough=True)
+    _PLAIN.add(made)
+    return made
 
 
 def _no_parameters(values):

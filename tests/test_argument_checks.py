@@ -8,15 +8,37 @@ The functions are called through ctypes as a C host calls them, without fmpy's c
 """
 
 import ctypes
+import zipfile
 from ctypes import POINTER, byref, c_double, c_int, c_size_t, c_uint, c_void_p
+from pathlib import Path
 
 import pytest
 from fmpy import read_model_description
+from fmpy.fmi2 import (
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CoSimulation,
+)
+from fmpy.fmi3 import FMU3Slave, fmi3IntermediateUpdateCallback, fmi3LogMessageCallback
+from fmpy.logging import addLoggerProxy
 from fmu_kinds import FMU_KINDS
-from native_fmus import close, open_native
+from native_fmus import LOG, LOGGER, close, open_native
 
 OK, ERROR = 0, 3
 VR = POINTER(c_uint)
+_LIBC = ctypes.CDLL(None)
+_LIBC.calloc.restype, _LIBC.calloc.argtypes = c_void_p, [c_size_t, c_size_t]
+_LIBC.free.argtypes = [c_void_p]
+
+
+def _calloc(n, size):
+    return _LIBC.calloc(n, size)
+
+
+def _free(pointer):
+    _LIBC.free(pointer)
 
 
 def _fresh(folder, version, initialised=True):
@@ -126,3 +148,84 @@ def test_every_bad_argument_is_refused_and_the_good_one_taken(fmu_kinds, kind, v
                             f.freeInstance()
         results[check] = tuple(statuses)
     assert results == {check: (OK, ERROR) for check in results}
+
+
+# ---- instantiation: every argument the standard's instantiate functions check --------------------------------------
+
+# FMI 2.0's logger is variadic: fmpy's proxy formats the message for the tests' logger, which lives as long as the
+# process (native_fmus.py says why); FMI 3.0's takes the message itself.
+_MESSAGES = []
+_CALLBACKS2 = fmi2CallbackFunctions(logger=LOGGER, allocateMemory=fmi2CallbackAllocateMemoryTYPE(_calloc),
+                                    freeMemory=fmi2CallbackFreeMemoryTYPE(_free))
+_LOG3 = fmi3LogMessageCallback(lambda env, status, category, message: _MESSAGES.append(message.decode()))
+ANOTHER_BUILDS_TOKEN = "{00000000-0000-0000-0000-000000000000}"
+
+
+def _instantiations(md, unzipped, version):
+    """``{check: (made, refused)}``: whether the good call made an instance and the bad one (the same call with
+    one argument wrong) made none (freed when made). fmi2Instantiate and fmi3InstantiateCoSimulation (and
+    fmi3InstantiateModelExchange where the FMU has Model Exchange) through ctypes as a C host calls them."""
+    if version == 2:
+        LOG[0] = _MESSAGES
+        addLoggerProxy(byref(_CALLBACKS2))
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
+                        instanceName="c")
+        location, token, callbacks = Path(unzipped, "resources").as_uri().encode(), md.guid.encode(), byref(_CALLBACKS2)
+
+        def call(name=b"c", guid=token, where=location, callbacks=callbacks, kind=fmi2CoSimulation):
+            return fmu.fmi2Instantiate(name, kind, guid, where, callbacks, False, False)
+
+        free = fmu.fmi2FreeInstance
+        bad = {"another build's GUID": {"guid": ANOTHER_BUILDS_TOKEN.encode()}, "NULL instance name": {"name": None},
+               "NULL callback functions": {"callbacks": None}}
+    else:
+        fmu = FMU3Slave(guid=md.instantiationToken, unzipDirectory=unzipped,
+                        modelIdentifier=md.coSimulation.modelIdentifier, instanceName="c")
+        location, token = (str(Path(unzipped, "resources")) + "/").encode(), md.instantiationToken.encode()
+
+        def call(name=b"c", guid=token, where=location, event_mode=False, model_exchange=False):
+            if model_exchange:
+                return fmu.fmi3InstantiateModelExchange(name, guid, where, False, False, None, _LOG3)
+            return fmu.fmi3InstantiateCoSimulation(name, guid, where, False, False, event_mode, False, None, 0, None,
+                                                   _LOG3, fmi3IntermediateUpdateCallback())
+
+        free = fmu.fmi3FreeInstance
+        bad = {"another build's token": {"guid": ANOTHER_BUILDS_TOKEN.encode()}, "NULL instance name": {"name": None},
+               "event mode asked for (it has none)": {"event_mode": True}}
+        if md.modelExchange is not None:
+            bad["another build's token (Model Exchange)"] = {"guid": ANOTHER_BUILDS_TOKEN.encode(),
+                                                              "model_exchange": True}
+    results = {}
+    try:
+        for check, wrong in bad.items():
+            made = []
+            for arguments in ({k: v for k, v in wrong.items() if k == "model_exchange"}, wrong):
+                instance = call(**arguments)
+                made.append(bool(instance))
+                if instance:
+                    free(instance)
+            results[check] = (made[0], not made[1])
+    finally:
+        fmu.freeLibrary()
+    return results
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("kind", list(FMU_KINDS))
+def test_every_bad_instantiation_is_refused_and_the_good_one_made(fmu_kinds, kind, version, tmp_path):
+    """Another build's GUID / instantiation token (a modelDescription.xml beside the wrong binary: the Python FMUs,
+    whose runtime is shared, took any), a NULL instance name, NULL callbacks (FMI 2.0), an event mode the FMU does
+    not have (FMI 3.0): no instance, and a refusal of the token says so in one message. Each is first made with
+    the good arguments (an instance: the control). Every FMU of the kind's build, not only the plant."""
+    folder = fmu_kinds[kind][version]
+    paths = sorted(folder.glob("*.fmu"))
+    assert len(paths) >= 5
+    for path in paths:
+        md = read_model_description(str(path))
+        unzipped = tmp_path / path.stem
+        with zipfile.ZipFile(path) as archive:
+            archive.extractall(unzipped)
+        _MESSAGES.clear()
+        results = _instantiations(md, unzipped, version)
+        assert results == {check: (True, True) for check in results}, path.name
+        assert sum("not this FMU's" in m for m in _MESSAGES) == len([c for c in results if "another build" in c])

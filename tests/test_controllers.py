@@ -178,6 +178,36 @@ def test_planner_swing_references_and_zero_residual_in_the_linear_model():
         assert np.abs(after[[0, 2]]).max() < 1e-6  # rad: the shaped move leaves no swing in the linear model
 
 
+def _closed_form_periods(m1, m2, l1, l2, g):
+    """The two swing periods of the double pendulum on a held trolley, linearised about rest, in closed form: with
+    mu = m1 + m2, det(K - w^2 M) = 0 for M = [[mu l1, m2 l2], [l1, l2]], K = diag(mu g, g) is
+    m1 l1 l2 w^4 - mu g (l1 + l2) w^2 + mu g^2 = 0 (eqs (8)-(9) with sin q = q, cos q = 1, u = 0)."""
+    mu = m1 + m2
+    a, b, c = m1 * l1 * l2, -mu * g * (l1 + l2), mu * g * g
+    roots = ((-b - math.sqrt(b * b - 4 * a * c)) / (2 * a), (-b + math.sqrt(b * b - 4 * a * c)) / (2 * a))
+    return tuple(2 * math.pi / math.sqrt(w2) for w2 in roots)  # the slow mode's first
+
+
+@pytest.mark.quick
+@pytest.mark.parametrize("crane", [{}, {"l1": 2.0, "l2": 0.3}, {"m1": 5.0, "m2": 1.0, "l1": 0.6, "l2": 1.2},
+                                   {"m2": 20.0, "g": 9.81}], ids=str)
+def test_the_shapers_impulses_are_at_half_periods_of_the_closed_form_modes(crane):
+    """ZV: 1/2 at 0 and T/2 per mode; ZVD: 1/4, 1/2, 1/4 at 0, T/2, T; the planner applies one shaper per mode, one
+    after the other: every sum of one impulse of each, its amplitude the product. Times to 1e-12 s, the closed-form
+    periods from the quadratic in w^2 (the Section V crane: 2.36825 s and 0.65880 s)."""
+    values = {**planner.COMPONENT.defaults(), **crane, "x_d": 2.0}
+    slow, fast = _closed_form_periods(*(values[n] for n in ("m1", "m2", "l1", "l2", "g")))
+    if not crane:
+        assert (slow, fast) == pytest.approx((2.36825, 0.65880), abs=1e-5)  # 0.42225 Hz and 1.51792 Hz
+    one = {"zv": [(0.0, 0.5), (0.5, 0.5)], "zvd": [(0.0, 0.25), (0.5, 0.5), (1.0, 0.25)]}  # (time / T, amplitude)
+    for kind, impulses in one.items():
+        c = planner.configure({**values, "shaper": kind})
+        wanted = sorted((ts * slow + tf * fast, a_s * a_f) for ts, a_s in impulses for tf, a_f in impulses)
+        assert len(c.impulses) == len(wanted)
+        for (t, amplitude), (t_wanted, a_wanted) in zip(c.impulses, wanted):
+            assert t == pytest.approx(t_wanted, abs=1e-12) and amplitude == pytest.approx(a_wanted, abs=1e-15)
+
+
 def test_zvd_and_ei_are_more_robust_than_zv_to_a_wrong_cable_length():
     """Planned for l2 = 0.5 m, run on a linear model with l2 = 0.6 m: residual swing by shaper."""
     residual = {}

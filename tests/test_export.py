@@ -5,7 +5,8 @@
   same last row.
 - As one FMU: fmpy's container when a component is the user's (it runs as our Jacobi master without the
   initial exchange, which is what the container does), one native FMU when every component is native.
-- A law file (no FMU) cannot go into a file: one line saying how to build it.
+- A law file's Component is built as an FMU into the file; a plain law function cannot go into a file: one line.
+- `info --system NAME --use INSTANCE=FILE` shows the user's FMU in the system.
 """
 
 import shutil
@@ -115,18 +116,56 @@ def test_an_exported_fmu_of_native_components_is_one_native_fmu(fmus, tmp_path, 
 
 
 @pytest.mark.parametrize("use, out, message", [
-    ("controller={root}/examples/my_controller/pd_sway.py", "x.ssp",
-     "a law file runs only in this toolkit's master; build its FMU first (crane-fmu build --component"),
+    ("controller={tmp}/plain.py:law", "x.ssp",
+     "a plain law function runs only in this toolkit's master; write it as a Component"),
     ("controller={mine}/PdController.fmu", "x.csv", "--out {tmp}/x.csv: writes a .ssp or .fmu file"),
     ("planner={mine}/PdController.fmu", "x.ssp", "has no output x_ref, which the system connects to controller.x_ref"),
 ])
 def test_what_export_cannot_write_is_one_line(fmus, tmp_path, capsys, use, out, message):
     names = {"root": ROOT, "mine": fmus / "mine", "tmp": tmp_path}
+    (tmp_path / "plain.py").write_text("def law(config, state, inputs):\n    return (-inputs[0],)\n")
     code = main(["export", "--system", "transport", "--fmu-dir", str(fmus / "fmus"), "--use", use.format(**names),
                  "--out", str(tmp_path / out)])
     err = capsys.readouterr().err
     assert code == 2 and message.format(**names) in err and err.count("\n") == 1, err
     assert not (tmp_path / out).exists()
+
+
+def test_a_law_files_component_is_built_into_the_exported_ssp_and_runs_as_its_law_file(fmus, tmp_path, capsys):
+    """`export --use controller=pd_sway.py`: the file's Component built as an FMU into the SSP file; the file
+    run alone equals `simulate --use controller=pd_sway.py` (the law run in process) on every column, bit for bit."""
+    law = f"controller={ROOT / 'examples' / 'my_controller' / 'pd_sway.py'}"
+    said = _main(capsys, "export", "--system", "transport", "--fmu-dir", fmus / "fmus", "--use", law,
+                 "--set", "controller.k_x=1.5", "--out", tmp_path / "law.ssp")
+    assert "wrote" in said
+    with zipfile.ZipFile(tmp_path / "law.ssp") as ssp:
+        assert "resources/PdSway.fmu" in ssp.namelist()
+    theirs = _simulate(capsys, tmp_path, "ssp.csv", "--system", tmp_path / "law.ssp")
+    ours = _simulate(capsys, tmp_path, "law.csv", "--system", "transport", "--fmu-dir", fmus / "fmus", "--use", law,
+                     "--set", "controller.k_x=1.5")
+    assert list(theirs) == list(ours)
+    for column in ours:
+        assert np.array_equal(theirs[column], ours[column]), column
+    assert ours["plant.x"][-1] > 0.5  # told the move
+
+
+def test_info_shows_your_fmu_in_the_system(fmus, capsys):
+    """`info --system transport --use controller=PdController.fmu`: the file in the LQR's place, each parameter with
+    the value the system sets (told the move: x_d = 2; --set k_v) or its start value, and the note on the move."""
+    mine = fmus / "mine" / "PdController.fmu"
+    said = _main(capsys, "info", "--system", "transport", "--fmu-dir", fmus / "fmus", "--use", f"controller={mine}",
+                 "--set", "controller.k_v=2.5").splitlines()
+    at = said.index("  controller = PdController.fmu (yours: PdController, in place of LqrController)")
+    assert said[at + 1:at + 4] == ["    k_x = 4.0 (its start value)", "    k_v = 2.5 (set)", "    x_d = 2 (set)"]
+    assert any("told the move's target, controller.x_d = 2 m" in line for line in said)
+    assert "  planner = TrajectoryPlanner" in said  # the rest of the system as before
+    for argv, message in [(["--use", f"controller={mine}"], "--use needs --system NAME"),
+                          (["--system", "transport", "--use", f"controler={mine}"], "did you mean"),
+                          (["--system", "transport", "--use", f"controller={mine}", "--set", "controller.k_q=1"],
+                           "k_q")]:
+        assert main(["info", *map(str, argv), "--fmu-dir", str(fmus / "fmus")]) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1, err
 
 
 def test_a_sweep_studies_your_fmu_and_its_law_file_alike(fmus, tmp_path, capsys, dask_scheduler):

@@ -185,6 +185,35 @@ def test_the_residual_is_not_bounded_by_the_arrival_band():
     assert wide["arrival_s"] == 6.0 and wide["residual_deg"] == m["residual_deg"]
 
 
+def _slow_and_fast_periods(m1=3.0, m2=7.0, l1=1.0, l2=0.5, g=9.8):
+    """The held-trolley swing periods in closed form: m1 l1 l2 w^4 - (m1 + m2) g (l1 + l2) w^2 + (m1 + m2) g^2 = 0."""
+    mu = m1 + m2
+    a, b, c = m1 * l1 * l2, -mu * g * (l1 + l2), mu * g * g
+    slow = (-b - math.sqrt(b * b - 4 * a * c)) / (2 * a)
+    fast = (-b + math.sqrt(b * b - 4 * a * c)) / (2 * a)
+    return 2 * math.pi / math.sqrt(slow), 2 * math.pi / math.sqrt(fast)
+
+
+@pytest.mark.parametrize("plant", [None, {"l1": 1.1, "l2": 0.6, "m2": 3.5}, {"l1": 0.9, "l2": 0.4, "m2": 10.5}],
+                         ids=["nominal", "long light", "short heavy"])
+def test_the_residual_window_of_a_move_is_its_closed_form(plant):
+    """The window opens at the planned move's end plus one slow period of the plant as it is. The ZV-ZV move
+    (designed on the Section V crane: periods Ts, Tf) has four impulses of 1/4 at 0, Tf/2, Ts/2, (Ts + Tf)/2; its
+    base acceleration a = 4 u_max = 8 m/s2 gives windows of v_max / a = 0.125 s, shorter than Tf/2 (none overlap:
+    the shaped peak is a / 4 = u_max), so the move ends at (Ts + Tf)/2 + 2 v_max / a + (d / v_max - v_max / a).
+    The plant's slow period is the closed form's for its own crane. Regulation: the last quarter of the run."""
+    from crane_fmu.analysis import planar_scenarios as planar
+
+    u_max, v_max, d = 2.0, 1.0, planar.DISTANCE
+    design_slow, design_fast = _slow_and_fast_periods()
+    a = 4 * u_max
+    assert v_max / a < design_fast / 2  # the accelerating windows of the four impulses do not overlap
+    end = (design_slow + design_fast) / 2 + 2 * v_max / a + (d / v_max - v_max / a)
+    plant_slow = _slow_and_fast_periods(**(plant or {}))[0]
+    assert planar.residual_from(10.0, planar.PLAN, plant) == pytest.approx(end + plant_slow, abs=1e-9)
+    assert planar.residual_from(12.0) == 9.0
+
+
 def test_move_metrics_of_the_mirrored_move():
     """The same move towards x_d = -2 m: the same figures; the overshoot is measured past -2 m, away from 0."""
     m = metrics.move_metrics(T11, -MOVE_X, -MOVE_DX, (-MOVE_THETA1, -MOVE_THETA2), -MOVE_U, -2.0, 6.5)
@@ -353,3 +382,27 @@ def test_dominant_frequencies_between_the_bins_are_interpolated():
     signal = np.sin(2 * np.pi * f1 * T) + 0.3 * np.sin(2 * np.pi * f2 * T + 0.4)
     found = metrics.dominant_frequencies(T, signal)
     assert found[0] == pytest.approx(f1, abs=1e-4) and found[1] == pytest.approx(f2, abs=1e-4)
+
+
+def test_move_metrics_off_the_grid_of_the_other_known_answers():
+    """A run that starts at t = 5 s, sampled every 4 ms over 3 s (the other known answers start at 0 on a 10 ms
+    grid, where a time taken from 0 instead of the run's start, or a step factor of 1/100, does not show). Sines of
+    2.5 Hz, 100 samples a period: the effort of u = A sin held over each step is A^2 T / 2 [m2/s3] with T = 3 s,
+    the ISE of theta1 = a sin and theta2 = b cos is (deg(a)^2 + deg(b)^2) T / 2 [deg2 s] and the RMS over the run's
+    3 s deg(sqrt((a^2 + b^2) / 2)); the swing from 7 s on is c sin, so the last quarter (from 7.25 s, not from
+    0.75 of 8 s = 6 s) ends at deg(c), and so does the residual without a window given."""
+    h, f, start = 0.004, 2.5, 5.0
+    t = start + np.arange(751) * h
+    a_u, a, b, c = 0.7, 0.02, 0.004, 0.005
+    wave = np.sin(2 * np.pi * f * (t - start))
+    theta1 = np.where(t < 7.0 - h / 2, a, c) * wave
+    theta2 = b * np.cos(2 * np.pi * f * (t - start))
+    x = np.minimum((t - start) / 1.5, 1.0)
+    m = metrics.move_metrics(t, x, np.gradient(x, t), (theta1, theta2 * (t < 7.0 - h / 2)), a_u * wave, 1.0,
+                             angle_band=math.radians(1.0))
+    assert m["effort"] == pytest.approx(a_u ** 2 * 3.0 / 2, rel=1e-9)
+    assert m["end_swing_deg"] == pytest.approx(math.degrees(c), rel=1e-12)
+    assert m["residual_deg"] == pytest.approx(math.degrees(c), rel=1e-12)
+    whole = metrics.move_metrics(t, x, np.gradient(x, t), (a * wave, theta2), a_u * wave, 1.0)
+    assert whole["ise_swing_deg2s"] == pytest.approx((math.degrees(a) ** 2 + math.degrees(b) ** 2) * 3.0 / 2, rel=1e-9)
+    assert whole["rms_swing_deg"] == pytest.approx(math.degrees(math.sqrt((a * a + b * b) / 2)), rel=1e-9)

@@ -42,6 +42,65 @@ def test_a_floor_is_never_below_the_trolleys_own_move():
     assert floor.crane_floor(target=(1.0, 0, 0, 0, 0, 0), u_max=1.0, v_max=0.5) >= floor.rigid_floor(1.0, 1.0, 0.5)
 
 
+def _linear_crane_from_sympy(p):
+    """``(A, B)`` of the crane about rest, s = (x, dx, theta1, dtheta1, theta2, dtheta2), from the Jacobian of the
+    angular accelerations that sympy derives from the Lagrangian (tests/derivation.py), not from the code's model."""
+    import sympy
+    from derivation import SOLUTION, a1, a2, dd1, dd2, g, l1, l2, m1, m2, u, w1, w2
+
+    rest = {a1: 0, w1: 0, a2: 0, w2: 0, u: 0}
+    values = {m1: p.m1, m2: p.m2, l1: p.l1, l2: p.l2, g: p.g}
+    a, b = np.zeros((6, 6)), np.zeros(6)
+    a[0, 1] = a[2, 3] = a[4, 5] = b[1] = 1.0
+    for row, dd in ((3, dd1), (5, dd2)):
+        expression = SOLUTION[dd].subs(values)
+        a[row, 2:] = [float(sympy.diff(expression, q).subs(rest)) for q in (a1, w1, a2, w2)]
+        b[row] = float(sympy.diff(expression, u).subs(rest))
+    return a, b
+
+
+def _reaches(a, b, dt, steps, start, target, u_max, v_max, free=()):
+    """Whether an input held over ``dt`` (scipy's zero-order hold) takes ``start`` to ``target`` in ``steps`` within
+    |u| <= u_max and |v| <= v_max at every grid point: daqp on the least-input QP of the constraints."""
+    import scipy.signal
+
+    ad, bd, *_ = scipy.signal.cont2discrete((a, b[:, None], np.eye(6), np.zeros((6, 1))), dt, method="zoh")
+    gamma, phi = np.zeros((6, steps)), np.eye(6)
+    for k in range(steps):
+        gamma = ad @ gamma
+        gamma[:, k] = bd[:, 0]
+        phi = ad @ phi
+    rows = [i for i in range(6) if i not in free]
+    end = (np.asarray(target) - phi @ np.asarray(start))[rows]
+    speeds = np.tril(np.ones((steps, steps))) * dt  # v_k = v0 + dt (u_0 + ... + u_{k-1}): v0 = 0 here
+    matrix = np.vstack([gamma[rows], speeds, np.eye(steps)])
+    upper = np.concatenate([end, np.full(steps, v_max), np.full(steps, u_max)])
+    lower = np.concatenate([end, np.full(steps, -v_max), np.full(steps, -u_max)])
+    sense = np.concatenate([np.full(len(rows), 5), np.zeros(2 * steps)]).astype(np.int32)  # 5: an equality
+    _, _, flag, _ = daqp.solve(np.eye(steps), np.zeros(steps), matrix, upper, lower, sense)
+    assert flag in (1, -1), flag  # 1: solved, -1: infeasible
+    return flag == 1
+
+
+@pytest.mark.parametrize("scenario, free", [("S1", ()), ("S2", ()), ("S6", ()), ("S1", (0,))],
+                         ids=["S1", "S2", "S6", "S1 trolley free"])
+def test_a_floor_is_reachable_and_one_grid_step_less_is_not_by_an_independent_computation(scenario, free):
+    """The board's floors (and S1's with the trolley free to stop anywhere), checked without the floor's code: the
+    crane linearised by sympy from the Lagrangian, held by scipy's zero-order hold, feasibility by daqp. At the
+    floor the move is feasible; one grid step (10 ms, S6: 50 ms) earlier it is not."""
+    drive = planar.DRIVE
+    found = floor.scenario_floors()[scenario]
+    if free:
+        found = found._replace(seconds=floor.crane_floor(start=(0, 0, TEN_DEG, 0, 0, 0), free=free, **drive))
+    start, target = {"S1": ((0, 0, TEN_DEG, 0, 0, 0), (0,) * 6), "S6": ((0, 0, TEN_DEG, 0, 0, 0), (0,) * 6),
+                     "S2": ((0,) * 6, (planar.DISTANCE, 0, 0, 0, 0, 0))}[scenario]
+    a, b = _linear_crane_from_sympy(PlantParameters())
+    steps = round(found.seconds / found.grid)
+    assert abs(steps * found.grid - found.seconds) < 1e-9
+    assert _reaches(a, b, found.grid, steps, start, target, free=free, **drive)
+    assert not _reaches(a, b, found.grid, steps - 1, start, target, free=free, **drive)
+
+
 # --- our QP solver against daqp ------------------------------------------------------------------
 
 

@@ -5,6 +5,7 @@ both, the same operations in the same order, noise.h's noise of the same seed) t
 ones bit for bit. The Windows DLL under Wine: test_native_components.py's C host (HOST_CASES).
 """
 
+import math
 import random
 import subprocess
 import sys
@@ -12,6 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+import scipy.signal
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 from native_fmus import (
@@ -133,3 +135,48 @@ def test_the_scoreboards_wind_case_on_native_fmus_equals_the_python_fmus(fmu_dir
     if LINUX:
         assert worst == 0.0
     assert np.std(theirs["wind.wind"]) > 0.05 and np.max(np.abs(theirs["wind.F2"])) > 0.1  # turbulent, and pushing
+
+
+# ---- the native FMU against the Dryden closed forms, no Python model in between ------------------------------------
+
+DRYDEN = {"U_mean": 10.0, "L": 1.0, "sigma": 2.0, "seed": 3.0}  # T = L / U = 0.1 s: many time constants per second
+DRYDEN_H, DRYDEN_N = 0.01, 100_000
+
+
+@pytest.fixture(scope="module")
+def native_turbulence(native):
+    """The native Wind FMU's turbulence (its wind speed less U_mean) at 100 001 samples, h = 10 ms, bodies at rest."""
+    fmu, vr, set_, get = open_native(native[2] / "Wind.fmu", 2, DRYDEN)
+    fmu.exitInitializationMode()
+    wind = [vr["wind"]]
+    speeds = [get(wind)[0]]
+    for k in range(DRYDEN_N):
+        fmu.doStep(k * DRYDEN_H, DRYDEN_H)
+        speeds.append(get(wind)[0])
+    close(fmu)
+    return np.array(speeds) - DRYDEN["U_mean"]
+
+
+def test_the_native_winds_variance_and_correlation_are_drydens(native_turbulence):
+    """Dryden's turbulence sampled exactly is an AR(1) with a = exp(-h / T) = exp(-0.1): variance sigma^2 (standard
+    error of the sample variance sigma^2 sqrt(2 (1 + a^2) / (N (1 - a^2))) = 2 %; 4 allowed), mean 0 within 4
+    standard errors sigma sqrt((1 + a) / (N (1 - a))), and the correlation at lag k a^k (k = 1, 5, 20; standard
+    error about sqrt((1 + a^2) / (N (1 - a^2))) = 1 %; 0.04 allowed)."""
+    w = native_turbulence
+    a, n, var = math.exp(-DRYDEN_H * DRYDEN["U_mean"] / DRYDEN["L"]), len(w), DRYDEN["sigma"] ** 2
+    assert abs(w.var() - var) <= 4 * var * math.sqrt(2 * (1 + a * a) / (n * (1 - a * a)))
+    assert abs(w.mean()) <= 4 * DRYDEN["sigma"] * math.sqrt((1 + a) / (n * (1 - a)))
+    for lag in (1, 5, 20):
+        assert np.mean(w[lag:] * w[:-lag]) / w.var() == pytest.approx(a ** lag, abs=0.04)
+
+
+def test_the_native_winds_spectrum_is_drydens(native_turbulence):
+    """Welch's estimate (segments of 4096 samples, 48 of them) against 4 sigma^2 T / (1 + (2 pi f T)^2) from 0.05 Hz
+    to 10 Hz (a fifth of Nyquist: not folded yet): the log-PSDs correlate >= 0.95 and their mean log ratio is 0
+    within 0.1 (each Welch point has a standard error of about 1/sqrt(48); the band averages 400 of them)."""
+    f, measured = scipy.signal.welch(native_turbulence, fs=1 / DRYDEN_H, nperseg=4096)
+    band = (f >= 0.05) & (f <= 10.0)
+    t = DRYDEN["L"] / DRYDEN["U_mean"]
+    dryden = 4 * DRYDEN["sigma"] ** 2 * t / (1 + (2 * math.pi * f[band] * t) ** 2)
+    assert np.corrcoef(np.log(measured[band]), np.log(dryden))[0, 1] >= 0.95
+    assert abs(np.mean(np.log(measured[band] / dryden))) <= 0.1

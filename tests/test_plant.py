@@ -54,6 +54,28 @@ def test_hoisting_run_equals_scipy_on_the_symbolic_equations(plant_dir):
     assert c["dl1_now"][-1] == pytest.approx(0.6, rel=1e-12)
 
 
+def test_the_papers_fast_path_with_a_clamped_demand_equals_scipy_on_the_symbolic_equations(plant_dir):
+    """The fast path (the paper's RK4 of eqs (8)-(9), nothing but u acting) with a demand beyond the drive:
+    u = -3 m/s2 asked, u_max = 1.2, so the trolley takes -1.2. DOP853 at rtol = atol = 1e-12 on the equations sympy
+    derives (tests/derivation.py) with u = -1.2: the angles within 1e-8 rad (RK4 at 1 ms: measured 1.8e-10), the
+    trolley x = -0.6 t^2 to rounding (RK4 integrates a constant acceleration exactly). The free swing (u = 0,
+    test_fmus.py) cannot see a term of u; this run can."""
+    from derivation import ACCEL
+
+    values = {"theta1_0": 0.1, "theta2_0": -0.05, "u": -3.0, "u_max": 1.2}
+    c = _run(plant_dir, values, 3.0, 0.01)
+
+    def field(t, s):
+        dd1, dd2 = ACCEL(s[0], s[1], s[2], s[3], -1.2, P.m1, P.m2, P.l1, P.l2, P.g)
+        return [s[1], dd1, s[3], dd2]
+
+    ref = solve_ivp(field, (0, 3.0), [0.1, 0.0, -0.05, 0.0], method="DOP853", t_eval=c["time"], rtol=1e-12,
+                    atol=1e-12)
+    assert np.abs(c["theta1"] - ref.y[0]).max() < 1e-8 and np.abs(c["theta2"] - ref.y[2]).max() < 1e-8
+    assert np.abs(c["x"] + 0.6 * c["time"] ** 2).max() < 1e-12
+    assert np.abs(c["ddx"][1:] + 1.2).max() == 0.0
+
+
 def test_power_balance(plant_dir):
     """dE/dt (the energy output) = trolley + hoist + forces - damping, with every new input in use.
 

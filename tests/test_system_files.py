@@ -4,6 +4,7 @@ import json
 import math
 import subprocess
 import sys
+import xml.etree.ElementTree as ET
 import zipfile
 
 import numpy as np
@@ -257,3 +258,48 @@ def test_every_engine_moves_the_transport_package_from_rest_to_x_d(transport_ssp
         start, end = _ecos_run(transport_ssp, tmp_path)
     assert start == [0.0, 0.0]
     assert abs(end[0] - 2.0) < 0.01 and abs(end[1]) < math.radians(0.1), end
+
+
+def _pushed(fmu_dir, tmp_path):
+    """The free system with the plant's input u = 0.5 m/s2 (a start value the system sets; nothing feeds u), as an
+    SSP and an OSP file: ``(ssp, osp)``."""
+    from dataclasses import replace
+
+    from crane_fmu.cosim.osp import write_osp
+
+    free = systems.get("free")
+    pushed = replace(free, parameters={"plant": {**free.parameters["plant"], "u": 0.5, "theta1_0": 0.0}})
+    return write_ssp(pushed, fmu_dir, tmp_path / "pushed.ssp"), write_osp(pushed, fmu_dir, tmp_path / "pushed.xml")
+
+
+def test_an_inputs_start_value_the_system_sets_is_in_its_files_and_our_master_takes_it(fmu_dir, tmp_path, capsys):
+    """free.ssp keeps u = 0 (read back: no input left unfed, no warning); a system's u = 0.5 in the SSP and OSP files
+    moves the trolley x = u t^2 / 2 (0.25 m at 1 s: RK4 integrates a constant acceleration exactly)."""
+    with systems.open_system(str(systems_dir(fmu_dir) / "free.ssp")) as free:
+        assert free.parameters["plant"]["u"] == 0.0
+    assert main(["simulate", "--system", str(systems_dir(fmu_dir) / "free.ssp"), "--stop-time", "0.1", "--out",
+                 str(tmp_path / "free.csv")]) == 0
+    assert "warning" not in capsys.readouterr().err
+    ssp, osp = _pushed(fmu_dir, tmp_path)
+    assert main(["simulate", "--system", str(ssp), "--stop-time", "1", "--out", str(tmp_path / "pushed.csv")]) == 0
+    assert read_csv(tmp_path / "pushed.csv")["plant.x"][-1] == pytest.approx(0.25, abs=1e-12)
+    initial = [v.get("variable") for v in ET.parse(osp).getroot().iter() if v.tag.endswith("InitialValue")]
+    assert "u" in initial
+
+
+@pytest.mark.parametrize("engine", ["omsimulator", "libcosim-ssp", "libcosim-osp"])
+def test_other_engines_take_an_inputs_start_value_from_the_files(fmu_dir, tmp_path, engine):
+    """OMSimulator and libcosim apply the files' u = 0.5 to the unfed input: x(t) = u t^2 / 2."""
+    ssp, osp = _pushed(fmu_dir, tmp_path)
+    if engine == "omsimulator":
+        from third_party_hosts import OMSIMULATOR, omsimulator_log_problems, read_oms_mat, run_tool, tool
+
+        code, log = run_tool([tool(OMSIMULATOR), f"--tempDir={tmp_path / 'oms'}", "--stopTime=1.0",
+                              f"--resultFile={tmp_path / 'oms.mat'}", ssp], tmp_path)
+        assert code == 0 and not omsimulator_log_problems(log), log[-3000:]
+        t, x = 1.0, read_oms_mat(tmp_path / "oms.mat", 1e-3)["free.free.plant.x"][-1]
+    else:
+        series = libcosim_run(engine.split("-")[1], ssp if engine.endswith("ssp") else osp, steps=1000)
+        t, x = series["x"][0][-1], series["x"][1][-1]  # its last sample: 0.999 s
+        assert abs(t - 1.0) < 2e-3
+    assert x == pytest.approx(0.5 * t * t / 2, abs=1e-9)

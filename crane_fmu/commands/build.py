@@ -112,7 +112,7 @@ def _build_one_fmus(items, out):
     return paths
 
 
-def _build_component(module_path, out, force=False):
+def _build_component(module_path, out, force=False, log=print):
     """Import a user's module by its file and build the FMUs of the components it defines."""
     path = Path(module_path)
     if path.suffix != ".py" or not path.is_file():
@@ -131,7 +131,7 @@ def _build_component(module_path, out, force=False):
             spec.loader.exec_module(module)
         except Exception as exc:  # the user's code: report it in one line
             raise UsageError(f"--component {module_path}: importing it failed: {type(exc).__name__}: {exc}") from None
-        return _build_components(module, module_path, out, force)
+        return _build_components(module, module_path, out, force, log)
     finally:
         if saved is None:
             sys.modules.pop(name, None)
@@ -139,7 +139,7 @@ def _build_component(module_path, out, force=False):
             sys.modules[name] = saved
 
 
-def _build_components(module, module_path, out, force=False):
+def _build_components(module, module_path, out, force=False, log=print):
     """Register the components a user's module defines, build their FMUs into ``out`` (FMI 3.0: ``out/fmi3``),
     unregister them."""
     from crane_fmu import components
@@ -159,7 +159,7 @@ def _build_components(module, module_path, out, force=False):
         for component in found:
             components.register(component)
         return build_all(out, [c.model_identifier for c in found], systems=[], containers=[], force=force,
-                         fmi3_out=Path(out) / "fmi3")
+                         fmi3_out=Path(out) / "fmi3", log=log)
     except ValueError as exc:
         raise UsageError(f"--component {module_path}: {exc}") from None
     finally:

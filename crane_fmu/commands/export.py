@@ -19,7 +19,8 @@ EXAMPLES = (
     "examples:\n"
     "  crane-fmu export --system transport --use controller=build/mine/PdSway.fmu --out mine.ssp\n"
     "  crane-fmu export --system lqr --use controller=build/mine/PdSway.fmu --out MyLoop.fmu   # a container\n"
-    "  crane-fmu export --system lqr --set crane.l2=0.6 --out CraneLqr.fmu   # every component native: one native FMU"
+    "  crane-fmu export --system lqr --set crane.l2=0.6 --out CraneLqr.fmu   # every component native: one native FMU\n"
+    "  crane-fmu export --system transport --use controller=examples/my_controller/pd_sway.py --out mine.ssp"
 )
 
 
@@ -31,7 +32,8 @@ def arguments(p):
     p.add_argument("--fmu-dir", default=DEFAULT_FMU_DIR, help=f"folder of the built FMUs (default: {DEFAULT_FMU_DIR})")
     p.add_argument("--use", action="append", default=[], metavar="INSTANCE=FILE.fmu",
                    help="put this FMU in the instance's place (repeatable); the system's values for it are kept "
-                        "where the FMU has them, and a controller is told the move as simulate tells it")
+                        "where the FMU has them, and a controller is told the move as simulate tells it; a law "
+                        "file's Component (controller=mylaw.py[:NAME]) is built as an FMU first")
     p.add_argument("--parameters", metavar="FILE.ssv", help="SSP parameter set (INSTANCE.VARIABLE), before --set")
     p.add_argument("--set", action="append", default=[], metavar="INSTANCE.VARIABLE=VALUE",
                    help="a parameter value written into the file (repeatable); crane.l2=0.6 sets the crane's")
@@ -46,19 +48,15 @@ def run(args):
     return on_system(args, _export)
 
 
-def exported(args, system):
+def exported(args, system, built=None):
     """The system as the file carries it: ``--use``'s FMUs (told the move), then ``--parameters`` and ``--set``,
-    every value checked by its component's rules; a law file is refused (it runs only in this toolkit)."""
-    from crane_fmu import crane_parameters, laws, systems
+    every value checked by its component's rules. A law file's Component is built as an FMU into the folder
+    ``built`` (a plain law function has none: refused in one line)."""
+    from crane_fmu import crane_parameters, systems
 
     from .simulate import _keep_known, _parameter_file, parse_sets
 
-    for name, source in system.instances.items():
-        if laws.is_law(source):
-            law = laws.component(source).model_identifier
-            raise UsageError(f"--use {name}={source}: a law file runs only in this toolkit's master; build its FMU "
-                             f"first (crane-fmu build --component {laws.law_file(source)} --out build/mine) and "
-                             f"use it: --use {name}=build/mine/{law}.fmu")
+    system = _laws_built(system, built)
     fmus, _ = systems.resolve(system, args.fmu_dir)
     system = _keep_known(system, fmus, list(system.replaced))
     system, notes = systems.tell_controllers(system, args.fmu_dir)
@@ -77,9 +75,33 @@ def exported(args, system):
 
 
 def _export(args, system):
+    with tempfile.TemporaryDirectory(prefix="crane_export_") as built:
+        return _write(args, exported(args, system, built))
+
+
+def _laws_built(system, folder):
+    """The system with each law file's Component (``--use controller=mylaw.py[:NAME]``) built as an FMU into
+    ``folder`` and in its place; a plain law function is refused (it has no variables of its own to describe)."""
+    from crane_fmu import laws
+
+    from .build import _build_component
+
+    built = {}
+    for name, source in system.instances.items():
+        if not laws.is_law(source):
+            continue
+        component = laws.component(source)
+        if laws.is_plain(source) or folder is None:
+            raise UsageError(f"--use {name}={source}: a plain law function runs only in this toolkit's master; "
+                             f"write it as a Component (docs/reference/controller-interface.md) to export it")
+        _build_component(str(laws.law_file(source)), Path(folder) / name, log=lambda line: None)
+        built[name] = str(Path(folder) / name / f"{component.model_identifier}.fmu")
+    return system.with_instances(built) if built else system
+
+
+def _write(args, system):
     from crane_fmu import systems
 
-    system = exported(args, system)
     out = Path(args.out)
     if out.suffix == ".ssp":
         systems.write_ssp(system, args.fmu_dir, out)

@@ -1,7 +1,7 @@
 """SSP 1.0 in and out: a :class:`~crane_fmu.cosim.system.System` as an ``.ssp`` package, ``.ssd`` or ``.ssv`` file.
 
 Written packages hold SystemStructure.ssd (components with their connectors and
-units, every connection written out, every parameter value, the step in
+units, every connection written out, every parameter value and each input's start value the system sets, the step in
 OMSimulator's annotation, the system's own values with the parameters each sets)
 and the FMUs under ``resources/``. Read are packages and ``.ssd`` files with
 parameter values inline or in ``.ssv`` files, bound to a component (names
@@ -227,7 +227,8 @@ def value_text(value):
 
 
 def parameter_values(md, overrides):
-    """``{name: (variable, value)}`` of the parameters to write for an FMU: its start values with ``overrides``.
+    """``{name: (variable, value)}`` of the parameters to write for an FMU: its start values with ``overrides``,
+    and the inputs ``overrides`` gives a value (a start value the system sets: the free swing's ``u = 0``).
 
     A start value that is not finite (``INF``: no limit) and not overridden is
     left to the FMU: libcosim (0.10) refuses such values in system files; so is
@@ -235,7 +236,9 @@ def parameter_values(md, overrides):
     """
     values = {}
     for v in md.modelVariables:
-        if v.causality == "parameter":
+        if v.causality == "input" and v.name in overrides:
+            values[v.name] = (v, _CONVERT.get(v.type, str)(overrides[v.name]))
+        elif v.causality == "parameter":
             value = overrides.get(v.name, v.start)
             value = _CONVERT.get(v.type, str)(value) if value is not None else None
             if v.name not in overrides and isinstance(value, float) and not math.isfinite(value):

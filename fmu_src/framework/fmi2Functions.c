@@ -40,7 +40,7 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2St
     Instance *c = NULL;
     if (type != fmi2CoSimulation && !(type == fmi2ModelExchange && FMU_MODEL->continuous)) {
         host_log(&bare, MODEL_ERROR, "logStatusError", "fmi2Instantiate: this FMU supports co-simulation only");
-    } else if (guid && FMU_MODEL->token && strcmp(guid, FMU_MODEL->token) != 0) {
+    } else if (token_differs(FMU_MODEL, guid, location)) {
         host_log(&bare, MODEL_ERROR, "logStatusError",
                  "fmi2Instantiate: the GUID is not this FMU's (a modelDescription.xml of another build?)");
     } else {

@@ -43,7 +43,7 @@ FMI3_Export fmi3Instance fmi3InstantiateCoSimulation(
     Instance *c = NULL;
     if (event_mode_used) {
         host_log(&bare, MODEL_ERROR, "logStatusError", "fmi3InstantiateCoSimulation: this FMU has no event mode");
-    } else if (token && FMU_MODEL->token && strcmp(token, FMU_MODEL->token) != 0) {
+    } else if (token_differs(FMU_MODEL, token, resource_path)) {
         host_log(&bare, MODEL_ERROR, "logStatusError",
                  "fmi3InstantiateCoSimulation: the instantiation token is not this FMU's");
     } else {
@@ -68,7 +68,7 @@ FMI3_Export fmi3Instance fmi3InstantiateModelExchange(fmi3String name, fmi3Strin
     *h = (Host){environment, log_message};
     Instance bare = {.name = (char *)name, .logging_on = logging_on, .host = h}; /* logs before an instance exists */
     Instance *c = NULL;
-    if (token && FMU_MODEL->token && strcmp(token, FMU_MODEL->token) != 0) {
+    if (token_differs(FMU_MODEL, token, resource_path)) {
         host_log(&bare, MODEL_ERROR, "logStatusError",
                  "fmi3InstantiateModelExchange: the instantiation token is not this FMU's");
     } else {

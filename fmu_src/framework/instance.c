@@ -87,6 +87,28 @@ static char *resource_folder(const char *location) {
     return out;
 }
 
+/* Whether the host's GUID / instantiation token is another build's: the model's own token, or (a model shared by
+   FMUs, the Python one) the first line of resources/token.txt that the build writes. No token given, or none to
+   compare with: not differing. */
+int token_differs(const ModelType *type, const char *token, const char *location) {
+    if (!token) return 0;
+    if (type->token) return strcmp(token, type->token) != 0;
+    char *resources = location ? resource_folder(location) : NULL;
+    if (!resources) return 0;
+    size_t size = strlen(resources) + sizeof "/token.txt";
+    char *path = malloc(size);
+    FILE *f = NULL;
+    if (path) snprintf(path, size, "%s/token.txt", resources), f = fopen(path, "r");
+    free(path);
+    free(resources);
+    if (!f) return 0;
+    char line[256] = {0};
+    if (!fgets(line, sizeof line, f)) line[0] = 0;
+    fclose(f);
+    line[strcspn(line, "\r\n")] = 0;
+    return line[0] && strcmp(token, line) != 0;
+}
+
 static Instance *new_instance(const char *function, const ModelType *type, const char *name, const char *location,
                               int visible, int logging_on, const char *const *mode_names, HostLog host_log,
                               void *host, int model_exchange) {

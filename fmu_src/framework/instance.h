@@ -44,6 +44,7 @@ typedef struct Instance {
 /* A new instance of the model `type`, instantiated; NULL (logged through `host_log`, which gets a bare instance
    then) if that fails. `location` is the resources' URI (FMI 2.0) or path (FMI 3.0), or NULL. `mode_names`
    names the modes in the order of their bits. */
+int token_differs(const ModelType *type, const char *token, const char *location);
 Instance *instance_new(const char *function, const ModelType *type, const char *name, const char *location,
                        int visible, int logging_on, const char *const *mode_names, HostLog host_log, void *host);
 /* The same for Model Exchange (type->continuous not NULL): the instance goes to event mode, not step mode. */
