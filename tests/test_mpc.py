@@ -323,9 +323,11 @@ def test_no_move_is_planned_from_a_swing_beyond_the_linear_models_reach(degrees,
 # --- the safety envelope (issue 51): made-up failures ---------------------------------------------
 
 
-def _envelope_loop(controller_values, stop_time, kick=None, plant_values=None):
+def _envelope_loop(controller_values, stop_time, kick=None, plant_values=None, noise=0.0):
     """The nominal plant and the MpcController called directly (as ``helpers.mpc_loop``), the plant's hook swing
-    pushed by ``kick = (time [s], angle [rad])`` once: ``(times, inputs, u, controller states)`` per step."""
+    pushed by ``kick = (time [s], angle [rad])`` once, the angles and rates the controller is given with ``noise``
+    [rad, rad/s] of white noise (seeded): ``(config, rows of (time, inputs, u, controller state))``."""
+    rng = np.random.default_rng(1)
     from crane_fmu.model import plant
     from crane_fmu.model.component import Step
 
@@ -340,6 +342,8 @@ def _envelope_loop(controller_values, stop_time, kick=None, plant_values=None):
             ps = ps[:2] + (ps[2] + kick[1],) + ps[3:]
         out = plant.COMPONENT.output(pc, ps, (0.0,) * 4)
         inputs = tuple(out[:6]) + (out[11],)
+        if noise:  # on the angles and their rates (rad, rad/s)
+            inputs = inputs[:2] + tuple(v + noise * rng.normal() for v in inputs[2:6]) + inputs[6:]
         u = mpc.COMPONENT.output(cc, cs, inputs)[0]
         rows.append((k * h, inputs, u, cs))
         ps = plant.update(pc, ps, (u, 0.0, 0.0, 0.0), k * h, h)
@@ -405,3 +409,20 @@ def test_a_plan_without_surprises_is_kept_to_its_end():
     under the nominal move)."""
     config, rows = _envelope_loop({"x_d": 2.0}, 2.7)
     assert not any(state[mpc.HEADER.handed] for _, _, _, state in rows)
+
+
+@pytest.mark.parametrize("noise_deg, unexplained", [(0.0, False), (0.1, True)])
+def test_data_beyond_the_cranes_equations_are_told_from_a_crane(noise_deg, unexplained):
+    """The identification's first full window (0.3 s of the 2 m move): the plant's own states leave nothing
+    unexplained (and give the model); with 0.1 deg (deg/s) of noise on the angles and rates the data leave more
+    than 1e-3 of their squares unexplained (the envelope's sign that the states are not the crane's), no model is
+    taken, and the MPC does not hand over before its plan is over."""
+    config, rows = _envelope_loop({"x_d": 2.0}, 3.0, noise=math.radians(noise_deg))
+    k = next(k for k, (_, _, _, state) in enumerate(rows)
+             if state[mpc.HEADER.samples] == config.samples - 1 and k % config.every == 0)
+    _, model, found = mpc.identify(config, rows[k][3], rows[k][1][:6])
+    assert found == unexplained and (model is None) == unexplained
+    if unexplained:
+        plan_end = (rows[k][3][mpc.HEADER.plan_start] + rows[k][3][mpc.HEADER.plan_steps]) * config.interval
+        handed = next(t for t, _, _, state in rows if state[mpc.HEADER.handed])
+        assert plan_end < handed

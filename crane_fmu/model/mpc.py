@@ -289,7 +289,8 @@ def configure(values):
     own_lqr = lqr.Config(gains=gains, x_d=values["x_d"], u_max=u_max, v_max=v_max, h=h, schedule=schedule)
     return Config(designs=designs, x_d=values["x_d"], u_max=u_max, v_max=v_max, margin=margin, h=h, every=every,
                   interval=interval, steps=steps, max_iterations=int(cap), plant=p, weights=weights, r=values["r"],
-                  samples=samples, replan_x=values["replan_x"], replan_angle=values["replan_angle"], lqr=own_lqr, memo={})
+                  samples=samples, replan_x=values["replan_x"], replan_angle=values["replan_angle"], lqr=own_lqr,
+                  memo={})
 
 
 def nearest_design(config, l1):

@@ -628,7 +628,8 @@ static const char *solve(Config *c, const double *state, const double measured[N
        deviation run out, the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on the
        target */
     double replans = state[H_REPLANS], bound = state[H_BOUND];
-    if (replan && count != 0 && !found_model && !large && (trolley > c->replan_x || swing > c->replan_angle)) replans += 1.0;
+    if (replan && count != 0 && !found_model && !large && (trolley > c->replan_x || swing > c->replan_angle))
+        replans += 1.0;
     int over = step >= n_plan, swung = n_plan > 0 && to_rest > bound + SWING_MARGIN; /* past the plan's largest */
     int at_rest = over && to_trolley <= c->replan_x && to_rest <= c->replan_angle;
     if (count != 0 && ((unexplained && over) || replans > MOST_REPLANS || swung || at_rest))
