@@ -10,6 +10,7 @@ from :func:`read_journal`; a worker that dies has its running items rescheduled 
 import itertools
 import json
 import math
+import multiprocessing
 import os
 import queue
 import signal
@@ -84,7 +85,7 @@ def _duration(seconds):
 
 
 def run_batch(task, items, shared=None, *, on="processes", workers=None, scheduler=None, journal=None, known=(),
-              progress=None, chunked=False, collect=True, **kwargs):
+              progress=None, chunked=False, collect=True, on_row=None, **kwargs):
     """Run ``task(item, **kwargs)`` (``task(item, shared, **kwargs)`` with ``shared``) for every item.
 
     Parameters
@@ -106,6 +107,8 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
         chunks per worker are sent at a time, the next as one ends (a batch of any size).
     collect : bool
         Return the results; False: only how many there were (the journal has them).
+    on_row : callable, optional
+        Given each result (``known`` ones too) as it is kept, after the journal.
 
     Returns
     -------
@@ -128,6 +131,8 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
                 sink.flush()
             if progress:
                 progress.update(result)
+            if on_row:
+                on_row(result)
             return result
 
         def kept_rows(results, before=()):
@@ -177,7 +182,7 @@ def _listed(task, chunk, *extra, **kwargs):
 @contextmanager
 def _dask_client(workers, scheduler):
     """A Dask client of the cluster at ``scheduler``, or of a local cluster of ``workers`` processes (closed after)."""
-    from distributed import Client, LocalCluster  # optional: the dask extra
+    from distributed import Client  # optional: the dask extra
 
     if scheduler:
         try:
@@ -189,8 +194,7 @@ def _dask_client(workers, scheduler):
         # process stops, closes the cluster and says so in one line, no traceback from every worker.
         handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
-            cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                                   host=LOOPBACK, dashboard_address=DASHBOARD, silence_logs=50)
+            cluster = local_cluster(workers or os.cpu_count() or 1)
         finally:
             signal.signal(signal.SIGINT, handler)
         client = Client(cluster)
@@ -200,6 +204,24 @@ def _dask_client(workers, scheduler):
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def local_cluster(workers):
+    """A local Dask cluster of ``workers`` single-threaded worker processes on the loopback, its workers forked from
+    this process where the platform can (they start with everything this process imported: no second import of
+    numpy, scipy, fmpy and this package per worker, about 2 s of CPU each), else started as fresh processes."""
+    import dask
+    from distributed import LocalCluster
+
+    forked = "fork" in multiprocessing.get_all_start_methods()
+    with dask.config.set({"distributed.worker.multiprocessing-method": "fork" if forked else "spawn",
+                          # not what a batch looks at: Dask's profiler (a look at every thread's stack each 10 ms)
+                          # and its monitors of memory and system (each 0.1 and 0.5 s) less often
+                          "distributed.worker.profile.enabled": False,
+                          "distributed.worker.memory.monitor-interval": "1s",
+                          "distributed.admin.system-monitor.interval": "2s"}):
+        return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host=LOOPBACK,
+                            dashboard_address=DASHBOARD, silence_logs=50)
 
 
 def _shared_column(client, items, extra):

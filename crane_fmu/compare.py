@@ -11,9 +11,10 @@ again, saying why. Every row records its provenance (:func:`provenance`), and
 ``OUT/board.json`` what the board was made of, so that :func:`check` can run a
 sample of its cases again and confirm their figures bit for bit.
 
-From a script, call :func:`compare` under ``if __name__ == "__main__":``: the
-local Dask cluster starts its workers as fresh Python processes, which import
-the script again (the ``spawn`` start method), as ``multiprocessing`` does.
+From a script, call :func:`compare` under ``if __name__ == "__main__":``: where
+the platform cannot fork (Windows, macOS), the local Dask cluster starts its
+workers as fresh Python processes, which import the script again (the ``spawn``
+start method), as ``multiprocessing`` does.
 """
 
 import functools
@@ -34,8 +35,9 @@ import numpy as np
 import scipy
 
 from crane_fmu import components, laws, native_batch, systems
-from crane_fmu.analysis import board_page, board_tables, metrics, ranking, score_plots
+from crane_fmu.analysis import board_page, board_tables, metrics, score_plots
 from crane_fmu.analysis import scenarios as scenario_registry
+from crane_fmu.analysis.board_drawing import BoardDrawer, first_scenarios
 from crane_fmu.analysis.floor import stored_scenario_floors
 from crane_fmu.analysis.scenarios import Contender
 from crane_fmu.batch import JOURNAL, Progress, ignore_interrupts, read_journal, run_batch
@@ -359,34 +361,43 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     pending = [c for c in planned if c["case_id"] not in done]
     failed_before = sum(done[c["case_id"]]["status"] != "ok" for c in planned if c["case_id"] in done)
     bar = Progress(len(planned), len(planned) - len(pending), failed=failed_before) if progress else None
-    ran = run_batch(native_batch.score_chunk, _items(pending, blobs), blobs, on="dask", workers=workers,
-                    scheduler=scheduler, journal=out_dir / JOURNAL, progress=bar, chunked=True)
-    done.update({r["case_id"]: r for r in ran})
-    rows = [done[c["case_id"]] for c in planned] + refused
-    for row in rows:
+    users = {c.name for c in chosen if c.user}
+
+    def finished(row):  # a row as the board keeps it
         scope = scenario_registry.get(row["scenario"]).scope(cases)
         row.update(quick=quick, **{f"scenario_{k}": v for k, v in scope.items()})
-    write_table(_same_columns(rows), out_dir / "scores.parquet")
-    manifest = {"contenders": [{"name": c.name, "source": c.source, "user": c.user} for c in chosen],
-                "scenarios": scenarios, "cases": cases, "quick": quick, "fmu_dir": str(Path(fmu_dir).resolve()),
-                "fmus": dict(sorted({f: d for c in planned for f, d in json.loads(provenance(c)["fmus_sha256"])
-                                     .items()}.items())),
-                "versions": versions(), "master": MASTER, "metrics_version": metrics.VERSION, "design_seed":
-                _design_seeds(planned), "date": _now()}
-    _write(out_dir / MANIFEST, json.dumps(manifest, indent=1))
-    board_md = out_dir / "scoreboard.md"
-    with _drawing(workers) as pool:  # the statistics and the pictures in two other processes and this one
-        paired = scenario_registry.paired()
-        parts = [pool.submit(ranking.board_statistics, rows, (sid,)) for sid in paired[1:]]
-        animations = pool.submit(_animate, rows, animate, out_dir / "animations")
-        stats = ranking.board_statistics(rows, paired[:1])  # each scenario's alone: the same figures
-        for part in parts:
-            stats.update(part.result())
-        plots = pool.submit(score_plots.plot_all, rows, out_dir, {c.name for c in chosen if c.user}, stats)
-        floors = stored_scenario_floors()
+        return row
+
+    # The statistics and the pictures in two other processes (and this one), each scenario's begun as soon as its
+    # rows are in, while the cases of the others run (the scenarios drawn longest run first).
+    with _drawing(workers) as pool:
+        floors = pool.submit(stored_scenario_floors)
+        drawer = BoardDrawer(pool, [(c["case_id"], c["scenario"]) for c in planned]
+                             + [(None, r["scenario"]) for r in refused], out_dir, users, animate)
+        for row in [done[c["case_id"]] for c in planned if c["case_id"] in done] + refused:
+            drawer.add(finished(row))
+        first = {sid: i for i, sid in enumerate(dict.fromkeys(first_scenarios(animate)))}
+        pending.sort(key=lambda c: first.get(c["scenario"], len(first)))  # a stable sort: the board's order within
+        ran = run_batch(native_batch.score_chunk, _items(pending, blobs), blobs, on="dask", workers=workers,
+                        scheduler=scheduler, journal=out_dir / JOURNAL, progress=bar, chunked=True,
+                        on_row=lambda row: drawer.add(finished(row)))
+        done.update({r["case_id"]: r for r in ran})
+        rows = [done[c["case_id"]] for c in planned] + refused
+        write_table(_same_columns(rows), out_dir / "scores.parquet")
+        manifest = {"contenders": [{"name": c.name, "source": c.source, "user": c.user} for c in chosen],
+                    "scenarios": scenarios, "cases": cases, "quick": quick, "fmu_dir": str(Path(fmu_dir).resolve()),
+                    "fmus": dict(sorted({f: d for c in planned for f, d in json.loads(provenance(c)["fmus_sha256"])
+                                         .items()}.items())),
+                    "versions": versions(), "master": MASTER, "metrics_version": metrics.VERSION, "design_seed":
+                    _design_seeds(planned), "date": _now()}
+        _write(out_dir / MANIFEST, json.dumps(manifest, indent=1))
+        board_md = out_dir / "scoreboard.md"
+        stats = drawer.statistics()
+        summary = pool.submit(score_plots.plot_board_summary, rows, out_dir, users, stats)
+        floors = floors.result()
         _write(board_md, board_tables.render(rows, chosen, quick, cases, _provenance_lines(manifest), stats, floors))
-        new = animations.result()
-        paths, drawn = plots.result() + new, len(new)
+        new = drawer.animations_drawn()
+        paths, drawn = drawer.pictures_drawn() + [summary.result()] + new, len(new)
     removed = score_plots.prune(rows, out_dir, animate)  # an earlier board's pictures, never shown as this one's
     page = board_page.write_page(out_dir)
     log(board_tables.render_terminal(rows, {c.name for c in chosen if c.user}, quick, cases, stats, floors))
@@ -425,11 +436,6 @@ def _drawing(workers=None):
     return ProcessPoolExecutor(max_workers=max(1, min(2, workers or os.cpu_count() or 1)),
                                mp_context=multiprocessing.get_context("fork") if "fork" in methods else None,
                                initializer=ignore_interrupts)
-
-
-def _animate(rows, scenarios, folder):
-    """The animations of ``scenarios``, one scenario after the other (their files share one ledger)."""
-    return [path for sid in scenarios for path in score_plots.animate_all(rows, sid, folder)]
 
 
 def _write(path, text):

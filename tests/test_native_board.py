@@ -43,3 +43,39 @@ def test_the_native_fmus_give_the_python_board(builtin_quick_board, native, dask
                        for r in (row, theirs[key(row)]))
         assert _close(ours, other), key(row)
     assert board_tables.render_summary(rows) == board_tables.render_summary(python_rows)
+
+
+def test_a_board_drawn_as_its_rows_come_in_is_the_one_drawn_at_the_end(native, dask_scheduler, tmp_path,
+                                                                        monkeypatch):
+    """Each scenario's statistics, picture and animations begun as its rows come in (the scenarios run out of the
+    board's order) give the board's rows in its order, and the very scoreboard, PNG and GIF bytes that drawing them
+    all from the finished rows gives (as the board did before), drawn again here, not copied from the first."""
+    import json
+    import tempfile
+
+    from crane_fmu.analysis import ranking, score_plots
+    from crane_fmu.analysis.floor import stored_scenario_floors
+    from crane_fmu.compare import _provenance_lines, contenders, plan
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # the board's store of pictures: its own
+    chosen, chosen_scenarios = ["LqrController", "BacksteppingController"], ["S1", "S2", "S3", "S7"]
+    board = tmp_path / "board" / "quick"
+    rows = compare(tmp_path / "board", chosen, native[2], scheduler=dask_scheduler, quick=True, cases=2,
+                   scenarios=chosen_scenarios, animate=("S2",), only=True, progress=False, log=lambda _: None)
+    planned, _, refused = plan(contenders(chosen, native[2], True), native[2], chosen_scenarios, 2)
+    assert [r["case_id"] for r in rows] == [c["case_id"] for c in planned] + [r.get("case_id") for r in refused]
+
+    end = tmp_path / "end"
+    end.mkdir()
+    stats = ranking.board_statistics(rows)
+    drawn = score_plots.plot_all(rows, end, (), stats, store=tmp_path / "again")
+    drawn += score_plots.animate_all(rows, "S2", end / "animations", store=tmp_path / "again")
+    assert sorted(p.relative_to(end).as_posix() for p in drawn) == [
+        "S1.png", "S2.png", "S7.png", "animations/S2_BacksteppingController.gif", "animations/S2_LqrController.gif",
+        "summary.png"]
+    for path in drawn:
+        assert (board / path.relative_to(end)).read_bytes() == path.read_bytes(), path.name
+    manifest = json.loads((board / "board.json").read_text())
+    assert (board / "scoreboard.md").read_text() == board_tables.render(
+        rows, contenders(chosen, native[2], True), True, 2, _provenance_lines(manifest), stats,
+        stored_scenario_floors())

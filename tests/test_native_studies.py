@@ -193,3 +193,36 @@ def test_bench_sweep_prints_the_batch_paths_figures(native):
                    rf"CPU a case: batch path \(its workers\) {number} ms, the C host {number} ms = {number}x"):
         found = re.search(figure, out)
         assert found and all(float(g) > 0 for g in found.groups()), (figure, out)
+
+
+def test_a_board_on_its_own_cluster_leaves_no_extracted_fmu(native, tmp_path, monkeypatch):
+    """A board on the batch path on a local cluster of its own (its workers forked, their instances reused and never
+    freed): when it ends, no FMU it extracted is left in the temporary folder, by this process or its workers."""
+    import tempfile
+
+    from crane_fmu.compare import compare
+    from crane_fmu.cosim.instance import _EXTRACTED
+
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    monkeypatch.setenv("TMPDIR", str(temporary))  # the workers' temporary folder too: they are forked
+    monkeypatch.setattr(tempfile, "tempdir", str(temporary))
+    rows = compare(tmp_path / "board", ["LqrController"], fmu_dir=native[2], workers=2, quick=True, cases=2,
+                   scenarios=["S1", "S3"], animate=(), only=True, progress=False, log=lambda *_: None)
+    assert [r["status"] for r in rows] == ["ok"] * 3
+    ours = {Path(folder) for folder, pid in _EXTRACTED.items() if pid == os.getpid()}  # removed at our exit
+    assert [p for p in temporary.glob("*/modelDescription.xml") if p.parent not in ours] == []
+
+
+def test_bench_sweep_prints_the_boards_cold_and_warm_times():
+    """The board's line of `crane-fmu bench --sweep` gives its cold and warm wall and CPU times, each its own."""
+    from crane_fmu.bench_batch import _print
+
+    figures = {"pair_us": 1.0, "host_pair_us": 0.5, "pair_cpu_us": 1.0, "host_pair_cpu_us": 0.5, "batch_1": 10.0,
+               "host_1": 20.0, "batch_2": 18.0, "host_2": 36.0, "batch_cpu_ms": 5.0, "host_cpu_ms": 4.0,
+               "study_s": 50.0, "study_cpu_s": 90.0, "study_mb": 600.0, "board_cold_s": 21.5, "board_cold_cpu_s": 33.0,
+               "board_cold_mb": 700.0, "board_warm_s": 12.25, "board_warm_cpu_s": 20.0, "board_warm_mb": 650.0}
+    lines = []
+    _print(figures, 240, 20.0, 1e-3, 3, 10_000, None, lines.append)
+    assert lines[-1] == ("full board on the native FMUs (crane-fmu compare --workers 2): cold 21.5 s (33.0 CPU-s), "
+                         "warm 12.2 s (20.0 CPU-s), peak memory 700 MB  (target: cold <= 10 s)")

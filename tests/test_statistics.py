@@ -122,3 +122,31 @@ def test_the_intervals_of_finite_figures_are_finite_and_within_them():
     sample = [4.403, 3.52, 3.561, 4.179, 3.674, 3.654]
     d = statistics.describe(sample)
     assert all(min(sample) <= v <= max(sample) for v in d)
+
+
+@pytest.mark.parametrize("n", [2, 10, 64, 300])
+def test_the_bootstrap_is_scipys_bit_for_bit(n):
+    """Our bootstrap of order statistics (no resample made) gives scipy.stats.bootstrap's percentile interval of the
+    same statistic with the same seed, bit for bit: the median and the 90th percentile of a batch of samples with
+    ties, stand-ins for *never* and a constant one, and the median of one sample (the paired difference), at sizes
+    whose counts take one byte (up to 255 cases) and two."""
+    from scipy import stats
+
+    rng = np.random.default_rng(n)
+    batch = rng.standard_normal((4, n))
+    batch[1] = np.round(batch[1])  # ties
+    batch[2, : n // 3] = 1e9  # never's stand-ins above every figure
+    batch[3] = 2.5
+    ranks = statistics._ranks(n)
+
+    def scipys(y, statistic):
+        result = stats.bootstrap((y,), statistic, n_resamples=statistics.RESAMPLES, method="percentile",
+                                 confidence_level=statistics.CONFIDENCE, vectorized=True, axis=-1,
+                                 rng=np.random.default_rng(statistics.SEED))
+        return result.confidence_interval.low, result.confidence_interval.high
+
+    ours = statistics.bootstrap_order_statistics(batch, ranks)
+    for mine, theirs in zip(ours, scipys(batch, statistics._quantiles)):
+        assert mine.shape == theirs.shape == (2, 4) and np.array_equal(mine, theirs), (mine, theirs)
+    low, high = statistics.bootstrap_order_statistics(batch[0], ranks[:1])
+    assert np.array_equal(np.concatenate([low, high]), np.array(scipys(batch[0], statistics._median)))

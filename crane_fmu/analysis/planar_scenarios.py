@@ -12,6 +12,7 @@ of the drive (:data:`MOVE_S`) and the periods of the two swing modes
 Seering's zero-vibration shapers) achieve. None is set from a controller's result.
 """
 
+import functools
 import math
 from collections import namedtuple
 
@@ -209,10 +210,17 @@ def residual_from(stop_time, plan=None, plant=None):
     """
     if plan is None:
         return 0.75 * stop_time
+    end = _planned_end(tuple(sorted(plan.items())))
+    return end + mode_periods(**{k: v for k, v in (plant or {}).items() if k in CRANE.model})[0]
+
+
+@functools.cache
+def _planned_end(plan):
+    """The end [s] of the move the planner plans with the parameters ``plan`` (``((name, value), ...)``): computed once
+    per board, not for each of its cases."""
     from crane_fmu.model import planner
 
-    end = planner.configure({**planner.COMPONENT.defaults(), **plan}).end
-    return end + mode_periods(**{k: v for k, v in (plant or {}).items() if k in CRANE.model})[0]
+    return planner.configure({**planner.COMPONENT.defaults(), **dict(plan)}).end
 
 
 def _runs(sid):

@@ -225,18 +225,30 @@ def plot_all(rows, out_dir, users=(), stats=None, store=None):
     A picture drawn before on this machine from the same cases is copied from ``store`` (see :func:`kept`): a case's
     id is the hash of everything its run is made of, and the summary's statistics are a function of the rows.
     """
+    paths = [plot_scenario(rows, s, out_dir, users, store) for s in RUN_PICTURES]
+    return [p for p in paths if p] + [plot_board_summary(rows, out_dir, users, stats, store)]
+
+
+def plot_scenario(rows, scenario, out_dir, users=(), store=None):
+    """The picture of a scenario's nominal runs (:func:`plot_runs`) as ``out_dir/<scenario>.png``, from the rows of
+    that scenario alone (the board's others change nothing of it), so that a board draws it as soon as they are in;
+    its path, or None where the scenario has no nominal run. Copied from ``store`` where drawn before (:func:`kept`)."""
     quick, users = any(r.get("quick") for r in rows), sorted(users)
-    paths = []
-    for s in RUN_PICTURES:
-        runs = sorted(_nominal(rows, s), key=lambda r: r["controller"])
-        if runs:
-            made_of = [s, users, quick, [[r["case_id"], r["status"]] for r in runs]]
-            paths.append(kept(Path(out_dir) / f"{s}.png", made_of, lambda path, s=s: plot_runs(rows, s, path, users),
-                              store))
+    runs = sorted(_nominal(rows, scenario), key=lambda r: r["controller"])
+    if not runs:
+        return None
+    made_of = [scenario, users, quick, [[r["case_id"], r["status"]] for r in runs]]
+    return kept(Path(out_dir) / f"{scenario}.png", made_of, lambda path: plot_runs(rows, scenario, path, users), store)
+
+
+def plot_board_summary(rows, out_dir, users=(), stats=None, store=None):
+    """The summary (:func:`plot_summary`) of all the board's rows as ``out_dir/summary.png``; its path. Copied from
+    ``store`` where drawn before (:func:`kept`)."""
+    quick, users = any(r.get("quick") for r in rows), sorted(users)
     cases = sorted([str(r.get(k)) for k in ("case_id", "controller", "scenario", "case", "status", "error")]
                    for r in rows)
-    return paths + [kept(Path(out_dir) / "summary.png", ["summary", users, quick, cases],
-                         lambda path: plot_summary(rows, path, users, stats), store)]
+    return kept(Path(out_dir) / "summary.png", ["summary", users, quick, cases],
+                lambda path: plot_summary(rows, path, users, stats), store)
 
 
 STORE = "crane_fmu_pictures"  # in the temporary folder: pictures by what they were drawn from
@@ -404,27 +416,48 @@ def animate_all(rows, scenario, out_dir, fps=15, store=None):
     case id each file was drawn from. One drawn before on this machine from the same run is copied from
     ``store`` (see :func:`kept`). Returns the paths written now.
     """
+    paths = []
+    for job in animation_jobs(rows, scenario, out_dir, fps):
+        paths.append(draw_animation(*job, store=store))
+        record_drawn(job)
+    return paths
+
+
+def animation_jobs(rows, scenario, out_dir, fps=15):
+    """The animations :func:`animate_all` draws now of a scenario's nominal runs (those its ledger does not list as
+    drawn from the same run): ``[(path, case_id, fps, title, signals)]``, each for :func:`draw_animation` (in any
+    process), then :func:`record_drawn` (in one process: the ledger is one file)."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     ledger = out_dir / ".drawn.json"
     drawn = json.loads(ledger.read_text()) if ledger.exists() else {}
-    paths = []
+    jobs = []
     for r in sorted(_nominal(rows, scenario), key=lambda r: r["controller"]):
         if animation_needs(r["signals"]):
             continue
         title = f"{scenario}, {r['controller']}" + ("" if r["status"] == "ok" else " (failed)")
-        key = f"{r['case_id']} {fps} fps"
         for suffix in (".gif", ".mp4") if shutil.which("ffmpeg") else (".gif",):
             path = out_dir / f"{scenario}_{r['controller']}{suffix}"
-            if drawn.get(path.name) == key and path.exists():
+            if drawn.get(path.name) == f"{r['case_id']} {fps} fps" and path.exists():
                 continue
-            paths.append(kept(path, [r["case_id"], fps, title],
-                              lambda path, r=r, title=title: animate(r["signals"], path, title, fps=fps), store))
-            drawn[path.name] = key
-            partial = ledger.with_suffix(".partial")
-            partial.write_text(json.dumps(drawn, indent=1, sort_keys=True))
-            partial.replace(ledger)
-    return paths
+            jobs.append((path, r["case_id"], fps, title, r["signals"]))
+    return jobs
+
+
+def draw_animation(path, case_id, fps, title, signals, store=None):
+    """An animation of :func:`animation_jobs` (:func:`animate`), or its copy from ``store`` (:func:`kept`); its path."""
+    return kept(path, [case_id, fps, title], lambda path: animate(signals, path, title, fps=fps), store)
+
+
+def record_drawn(job):
+    """Write in its folder's ledger that the animation of a job of :func:`animation_jobs` is drawn from its run."""
+    path, case_id, fps = job[:3]
+    ledger = Path(path).parent / ".drawn.json"
+    drawn = json.loads(ledger.read_text()) if ledger.exists() else {}
+    drawn[Path(path).name] = f"{case_id} {fps} fps"
+    partial = ledger.with_suffix(".partial")
+    partial.write_text(json.dumps(drawn, indent=1, sort_keys=True))
+    partial.replace(ledger)
 
 
 RUN_PICTURES = ("S1", "S2", "S7")  # the scenarios whose nominal runs plot_all draws, as OUT/<scenario>.png

@@ -8,6 +8,7 @@ and the simulation time, with the FMU's own log messages attached.
 import atexit
 import ctypes
 import functools
+import multiprocessing.util
 import os
 import shutil
 from collections import deque
@@ -191,9 +192,13 @@ class Instance:
 # loaded: the next instance of the same FMU takes one instead of unzipping it again and loading its library
 # (fmpy binds each FMI function by inspecting its Python signature: about 8 ms an FMU, more than a whole case
 # of the scoreboard simulates). A new instance is made by fmi2Instantiate / fmi3InstantiateCoSimulation, as the
-# standard allows after the library's previous instance was freed. Folders are removed at exit. Instances alive
-# at the same time each have their own folder and library, as if every one had unzipped it.
+# standard allows after the library's previous instance was freed. Instances alive at the same time each have
+# their own folder and library, as if every one had unzipped it.
 _SPARE_FOLDERS = {}
+# Every folder extracted here, with the process that extracted it: that process removes it when it ends
+# (remove_extracted), in use or spare; a forked child leaves its parent's to the parent.
+_EXTRACTED = {}
+_CLEANUP_FOR = [None]  # the process whose exit hook is registered (a forked child registers its own)
 
 
 def _take_folder(path):
@@ -207,15 +212,26 @@ def _take_folder(path):
             return key, folder, fmu
     from fmpy import extract  # start-up: fmpy takes about 0.4 s to import
 
-    return key, extract(str(path)), None
+    folder = extract(str(path))
+    _EXTRACTED[folder] = os.getpid()
+    if _CLEANUP_FOR[0] != os.getpid():
+        _CLEANUP_FOR[0] = os.getpid()
+        # Run at this process's end however it ends normally: at exit, and at the end of a process forked by
+        # multiprocessing (a forked Dask worker), which leaves by os._exit without atexit's handlers.
+        multiprocessing.util.Finalize(None, remove_extracted, exitpriority=10)
+    return key, folder, None
 
 
 @atexit.register
-def _remove_spare_folders():
-    for folders in _SPARE_FOLDERS.values():
-        for folder, _ in folders:
+def remove_extracted():
+    """Remove every folder this process extracted, spare or still in use (its instances must not be used after):
+    called when the process ends (a Dask worker's too)."""
+    for folder, pid in list(_EXTRACTED.items()):
+        if pid == os.getpid():
             shutil.rmtree(folder, ignore_errors=True)
-    _SPARE_FOLDERS.clear()
+            del _EXTRACTED[folder]
+    for key, folders in list(_SPARE_FOLDERS.items()):
+        _SPARE_FOLDERS[key] = [(folder, fmu) for folder, fmu in folders if os.path.isdir(folder)]
 
 
 def read_fmu(path):
