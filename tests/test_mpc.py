@@ -159,7 +159,8 @@ def crane_qps():
 def test_the_solver_gives_daqps_answer_on_the_cranes_qps(crane_qps):
     plans = [q for q in crane_qps if q[0].n != mpc.COMPONENT.check({}).steps]
     tracking = [q for q in crane_qps if q[0].n == mpc.COMPONENT.check({}).steps]
-    assert len(plans) >= 3 and len(tracking) == 71 + 41  # bisections; one QP every 50 ms
+    # bisections; one QP every 50 ms until the MPC hands over to its LQR, at rest on the target (2.85 s of 3.5 s)
+    assert len(plans) >= 3 and len(tracking) == 57 + 41
     assert any(len(q[4].active) > 10 for q in plans) and any(len(q[4].active) > 3 for q in tracking)  # limits bind
     for prepared, f, lower, upper, solution in crane_qps:
         _check_against_daqp(prepared, f, lower, upper, solution)
@@ -317,3 +318,111 @@ def test_no_move_is_planned_from_a_swing_beyond_the_linear_models_reach(degrees,
     assert (mpc.deviation(d, result[0, :6], (0.0,) * 6)[1] <= mpc.LARGEST_SWING) == planned
     assert (state[mpc.HEADER.plan_steps] > 0) == planned
     assert np.max(np.abs(result[:, 6])) == pytest.approx(2.0)
+
+
+# --- the safety envelope (issue 51): made-up failures ---------------------------------------------
+
+
+def _envelope_loop(controller_values, stop_time, kick=None, plant_values=None, noise=0.0):
+    """The nominal plant and the MpcController called directly (as ``helpers.mpc_loop``), the plant's hook swing
+    pushed by ``kick = (time [s], angle [rad])`` once, the angles and rates the controller is given with ``noise``
+    [rad, rad/s] of white noise (seeded): ``(config, rows of (time, inputs, u, controller state))``."""
+    rng = np.random.default_rng(1)
+    from crane_fmu.model import plant
+    from crane_fmu.model.component import Step
+
+    h = 1e-3
+    pc = plant.configure({**plant.COMPONENT.defaults(), "theta1_0": 0.0, "u_max": 2.0, "v_max": 1.0,
+                          **(plant_values or {})})
+    cc = mpc.configure({**mpc.COMPONENT.defaults(), "h": h, **controller_values})
+    ps, cs = pc.state0, mpc.initial_state(cc)
+    rows = []
+    for k in range(round(stop_time / h) + 1):
+        if kick and k == round(kick[0] / h):
+            ps = ps[:2] + (ps[2] + kick[1],) + ps[3:]
+        out = plant.COMPONENT.output(pc, ps, (0.0,) * 4)
+        inputs = tuple(out[:6]) + (out[11],)
+        if noise:  # on the angles and their rates (rad, rad/s)
+            inputs = inputs[:2] + tuple(v + noise * rng.normal() for v in inputs[2:6]) + inputs[6:]
+        u = mpc.COMPONENT.output(cc, cs, inputs)[0]
+        rows.append((k * h, inputs, u, cs))
+        ps = plant.update(pc, ps, (u, 0.0, 0.0, 0.0), k * h, h)
+        cs = mpc.update(cc, cs, inputs, k * h, h)
+        cs = cs.state if isinstance(cs, Step) else cs
+    return cc, rows
+
+
+def test_an_identified_payload_beyond_the_envelope_does_not_reach_the_plan():
+    """A payload of 0.6 kg on a crane configured for 7 kg (the cables as configured): identified as ``k = l2 m2 /
+    (m1 + m2)``, which with the configured ``m1 + m2`` is a payload of 1.7 kg, beyond the factor 3 of the envelope:
+    refused, the model stays the configured one. The same crane with a payload of 1.5 kg (3.3 kg so identified) is
+    taken."""
+    configured = PlantParameters()
+    refused = _envelope_loop({"x_d": 2.0}, 1.0, plant_values={"m2": 0.6})[1][-1][3]
+    taken = _envelope_loop({"x_d": 2.0}, 1.0, plant_values={"m2": 1.5})[1][-1][3]
+    assert refused[mpc.HEADER.l1] == 0.0 and refused[mpc.HEADER.samples] > 0  # the data gathered, no model
+    assert taken[mpc.HEADER.l1] == pytest.approx(configured.l1, rel=0.01)
+    mu = configured.m1 + configured.m2
+    assert taken[mpc.HEADER.m2] == pytest.approx(mu * 1.5 / (configured.m1 + 1.5), rel=0.01)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_envelopes_standard_errors_are_numpys(seed):
+    """:func:`mpc.precise` on least-squares fits of known noise: its verdict is that of the standard errors from
+    numpy's solution (``sigma^2 (X'X)^-1``), on both sides of the 1 % bound."""
+    rng = np.random.default_rng(seed)
+    x = rng.normal(size=(24, 3))
+    beta = np.array([1.0, 0.5, 0.3])
+    verdicts = []
+    for noise in (1e-3, 3e-3, 1e-2, 3e-2, 1e-1):
+        y = x @ beta + noise * rng.normal(size=24)
+        fit, residuals, *_ = np.linalg.lstsq(x, y, rcond=None)
+        errors = np.sqrt(residuals[0] / (24 - 3) * np.diag(np.linalg.inv(x.T @ x)))
+        normal = (x.T @ x).tolist()
+        factor = qp.cholesky(normal)
+        z = (x.T @ y).tolist()
+        values = qp.cholesky_solve(factor, z)
+        residual = float(y @ y) - sum(v * zi for v, zi in zip(values, z))
+        wanted = bool(np.all(errors <= mpc.STANDARD_ERROR * np.abs(fit)))
+        assert mpc.precise(factor, values, residual, 24.0) == wanted
+        verdicts.append(wanted)
+    assert True in verdicts and False in verdicts
+
+
+def test_a_swing_past_the_plans_largest_hands_over_to_the_lqr():
+    """The hook knocked by 20 deg at 1.0 s, mid-move, the way it swings (the plan's largest swing is 16 deg): at the
+    next solve
+    (1.0 s is one) the MPC hands over to its LQR, whose input (:func:`.lqr.control`, the configured crane's) it
+    gives from then on, every step."""
+    from crane_fmu.model import lqr
+
+    config, rows = _envelope_loop({"x_d": 2.0}, 1.5, kick=(1.0, math.radians(-20.0)))
+    handed = [t for t, _, _, state in rows if state[mpc.HEADER.handed]]
+    assert handed and handed[0] == pytest.approx(1.001)  # the state after the solve at 1.0 s
+    assert rows[1000][3][mpc.HEADER.replans] == 0.0  # not for plans run out
+    assert all(u == lqr.control(config.lqr, inputs[:6]) for t, inputs, u, _ in rows if t >= 1.0)
+    assert math.degrees(rows[999][3][mpc.HEADER.bound]) == pytest.approx(15.8, abs=0.1)
+
+
+def test_a_plan_without_surprises_is_kept_to_its_end():
+    """Without a knock the same move keeps its plan to the end: no handover mid-move (the envelope's bounds are not
+    under the nominal move)."""
+    config, rows = _envelope_loop({"x_d": 2.0}, 2.7)
+    assert not any(state[mpc.HEADER.handed] for _, _, _, state in rows)
+
+
+@pytest.mark.parametrize("noise_deg, unexplained", [(0.0, False), (0.1, True)])
+def test_data_beyond_the_cranes_equations_are_told_from_a_crane(noise_deg, unexplained):
+    """The identification's first full window (0.3 s of the 2 m move): the plant's own states leave nothing
+    unexplained (and give the model); with 0.1 deg (deg/s) of noise on the angles and rates the data leave more
+    than 1e-3 of their squares unexplained (the envelope's sign that the states are not the crane's), no model is
+    taken, and the MPC does not hand over before its plan is over."""
+    config, rows = _envelope_loop({"x_d": 2.0}, 3.0, noise=math.radians(noise_deg))
+    k = next(k for k, (_, _, _, state) in enumerate(rows)
+             if state[mpc.HEADER.samples] == config.samples - 1 and k % config.every == 0)
+    _, model, found = mpc.identify(config, rows[k][3], rows[k][1][:6])
+    assert found == unexplained and (model is None) == unexplained
+    if unexplained:
+        plan_end = (rows[k][3][mpc.HEADER.plan_start] + rows[k][3][mpc.HEADER.plan_steps]) * config.interval
+        handed = next(t for t, _, _, state in rows if state[mpc.HEADER.handed])
+        assert plan_end < handed

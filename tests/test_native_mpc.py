@@ -187,7 +187,7 @@ def test_the_c_solver_gives_the_python_solvers_bits_on_the_cranes_qps(c_qp, monk
 
 RUNS = {  # system, plant parameters over the system's, stop time: the limits bind, the move, identification
     "regulation": ("mpc", {}, 1.5),
-    "transport": ("mpc-transport", {}, 3.0),
+    "transport": ("mpc-transport", {}, 3.5),  # handed over to its LQR at rest from 2.85 s
     "unknown plant": ("mpc-transport", MISMATCH, 1.0),
     "hard hit": ("mpc", {"theta1_0": math.radians(60.0)}, 1.0),  # no plan from the large swing: the QP alone
 }
@@ -232,6 +232,13 @@ def test_while_hoisting_the_native_mpc_equals_the_python_mpc_through_our_master(
     assert system.instances["hoist"] == "TrajectoryPlanner"
     theirs = _python_run_equal_to_native(system, fmu_dir, native, version)
     assert theirs["plant.l1_now"][-1] == pytest.approx(planar.HOIST["to"], abs=1e-3)  # hoisted within the run
+
+
+def test_the_transport_run_hands_over_to_the_lqr_at_rest():
+    """What the ``transport`` run above covers: the move over, at rest on the target, the MPC hands over to its LQR
+    (the safety envelope), whose input it gives every step from then on."""
+    _, _, state = mpc_loop({"theta1_0": 0.0}, {"x_d": 2.0}, 3.5, with_state=True)
+    assert state[mpc.HEADER.handed] == 1.0 and state[mpc.HEADER.replans] == 0.0
 
 
 def test_on_the_unknown_plant_the_mpc_identifies_it_and_plans_again():
@@ -329,9 +336,11 @@ def test_a_restored_fmu_state_repeats_the_steps_after_it(native, version):
 
 @pytest.mark.parametrize("version", [2, 3])
 def test_under_wine_the_windows_dll_plans_again_as_the_linux_one(native, windows_host, wine_env, tmp_path, version):
-    """CraneMpcTransport pushed by a 2 N force on the hook that its model does not know: its plans made again and
-    again (the deviation's rule), in the Windows DLL under Wine (portable sin and cos), give the Linux run of our
-    master over the native FMUs: the states within 1e-9, u within 1e-9 relative."""
+    """CraneMpcTransport pushed by a 2 N force on the hook that its model does not know: its plan made again (the
+    deviation's rule) until the safety envelope hands over to the LQR (1.4 s), in the Windows DLL under Wine
+    (portable sin and cos), give the Linux run of our master over the native FMUs: the states within 1e-9; u
+    within 1e-9 relative while the MPC plans, within sum(|K|) 1e-9 once it has handed over to its LQR (u = -K s
+    carries the states' 1e-9 agreement, each state's difference times its gain: |du| <= sum(|K|) max|ds|)."""
     name, stop_time = "mpc-transport", 4.0
     guid, vrs = unpack_one_fmu(native, name, tmp_path, version)
     fmu = one_fmu(native, name, version)
@@ -348,5 +357,32 @@ def test_under_wine_the_windows_dll_plans_again_as_the_linux_one(native, windows
     expected = observed_columns(linux, name)
     assert windows.shape == expected.shape
     assert np.max(np.abs(windows[:, :4] - expected[:, :4])) <= 1e-9
-    assert np.max(np.abs(windows[:, 4] - expected[:, 4]) / np.maximum(np.abs(expected[:, 4]), 1.0)) <= 1e-9
-    assert len(set(linux["controller.plan_end"])) > 5  # planned again, and again
+    gains = mpc.COMPONENT.check({**systems.get(name).parameters["controller"], "h": step}).lqr.gains
+    handed = _handover_step(name, stop_time, step, 2.0)
+    assert 0 < handed < len(expected)  # the LQR's in the run's end
+    relative = np.abs(windows[:, 4] - expected[:, 4]) / np.maximum(np.abs(expected[:, 4]), 1.0)
+    assert np.max(relative[:handed]) <= 1e-9
+    assert np.max(np.abs(windows[handed:, 4] - expected[handed:, 4])) <= sum(map(abs, gains)) * 1e-9
+    assert len(set(linux["controller.plan_end"][:handed])) > 1  # planned again, then handed over (the envelope)
+
+
+def _handover_step(name, stop_time, step, force):
+    """The first row of the system's run (the Python models called as our master calls them), the hook pushed by
+    ``force`` [N], whose u is the LQR's: the MPC's state after the solve that handed over."""
+    from crane_fmu.model import plant
+    from crane_fmu.model.component import Step
+
+    parameters = systems.get(name).parameters
+    pc = plant.configure({**plant.COMPONENT.defaults(), **parameters["plant"]})
+    cc = mpc.configure({**mpc.COMPONENT.defaults(), "h": step, **parameters["controller"]})
+    ps, cs = pc.state0, mpc.initial_state(cc)
+    for k in range(round(stop_time / step) + 1):
+        out = plant.COMPONENT.output(pc, ps, (0.0, 0.0, force, 0.0))
+        inputs = tuple(out[:6]) + (out[11],)
+        u = mpc.COMPONENT.output(cc, cs, inputs)[0]
+        cs = mpc.update(cc, cs, inputs, k * step, step)
+        cs = cs.state if isinstance(cs, Step) else cs
+        if cs[mpc.HEADER.handed]:
+            return k
+        ps = plant.update(pc, ps, (u, 0.0, force, 0.0), k * step, step)
+    return None

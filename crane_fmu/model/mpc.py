@@ -46,6 +46,7 @@ from collections import namedtuple
 
 from . import limits, linalg, planner, qp
 from .component import Component, Step
+from . import lqr
 from .lqr import DEFAULT_WEIGHTS, SCHEDULE_RULES, WEIGHTS, continuous_model
 from .parameters import PLANT_RULES, plant_parameters
 from .rules import check, finite, in_range, non_negative, positive, rule, whole
@@ -62,6 +63,12 @@ LARGEST_SWING = math.radians(17.5)  # rad: no move is planned from a larger swin
 WELL_POSED = 1e-2  # ... and gives a model when no pivot of its normal equations falls below this share
 MISFIT = 1e-5  # ... that explains the data to this share of their squares (0.3 % RMS): clean measurements
 PLAUSIBLE = 2.0  # ... within this factor of the configured cable lengths
+PLAUSIBLE_PAYLOAD = 3.0  # ... and of the configured payload
+STANDARD_ERROR = 0.01  # ... each parameter's standard error at most this share of its value
+UNEXPLAINED = 1e-3  # the envelope hands over to the LQR when the data leave this share of their squares (3 % RMS)
+# unexplained: the states the MPC is given are not the crane's (an estimator's, noisy, late, a force it does not know)
+MOST_REPLANS = 2  # the safety envelope: the MPC hands over to its LQR instead of a plan for a deviation past these
+SWING_MARGIN = math.radians(10.0)  # ... or when the swing exceeds the plan's largest by this (as an amplitude)
 TOLERANCE = 0.01  # ... and the controller plans again with it when a swing mode's frequency differs by more
 
 Design = namedtuple("Design", "l1 ad bd gain qp omegas shapes")
@@ -70,12 +77,13 @@ Design.__doc__ = ("The tracking QP for one model: its cable length, ``(Ad, Bd)``
                   "and the fast swing modes' angular frequencies [rad/s] and shapes (:func:`.planner.modes`).")
 
 Config = namedtuple("Config", "designs x_d u_max v_max margin h every interval steps max_iterations plant weights r "
-                              "samples replan_x replan_angle memo")
+                              "samples replan_x replan_angle lqr memo")
 Config.__doc__ = ("The designs (one, or one per scheduled cable length), the target, the limits, the plan's "
                   "margin, the communication step ``h``, the steps per interval (``every``), the interval, the "
                   "horizon in intervals, the QP's cap, the configured model and weights (for the identified "
                   "model's design), the intervals the identification needs (0: none), the deviations that make "
-                  "a new plan, and ``memo``: the last solve, which the FMU's output and its step share, and the "
+                  "a new plan, the LQR it hands over to (:class:`.lqr.Config`, the configured model's, scheduled as "
+                  "the designs are), and ``memo``: the last solve, which the FMU's output and its step share, and the "
                   "identified model's design.")
 
 # The state: a header, then the last solution du (N), the rows it held at a bound (2N codes: 0, +1 upper,
@@ -84,10 +92,11 @@ Config.__doc__ = ("The designs (one, or one per scheduled cable length), the tar
 # a plan for a deviation may be made at, the cable length of the design it was made with, the identified model
 # (l1, l2, m2; 0: the configured one), and the identification's data (see identify): the last step's sample
 # (_sample), the integrals since the last solve (integrate), the normal equations (n11 n12 n13 n22 n23 n33, z,
-# the data's squares yy) and the intervals in them.
+# the data's squares yy) and the intervals in them; the safety envelope's (see solve): whether the LQR has taken
+# over (1: for good), the plans made for a deviation, and the plan's largest swing (rad, as an amplitude).
 HEADER = namedtuple("Header", "count u iterations warned plan_steps plan_start plan_after plan_l1 l1 l2 "
                               "m2 w1 w2 cos_d sin_d cos1 sin1 cos2 sin2 d1 d2 a1 a2 c1 c2 s1 s2 "
-                              "n11 n12 n13 n22 n23 n33 z1 z2 z3 yy samples")(*range(38))
+                              "n11 n12 n13 n22 n23 n33 z1 z2 z3 yy samples handed replans bound")(*range(41))
 
 
 def predict_rows(ad, bd, steps):
@@ -274,9 +283,14 @@ def configure(values):
     designs = tuple(design(dataclasses.replace(p, l1=length), weights, values["r"], interval, steps)
                     for length in lengths)
     samples = max(1, round(identify / interval)) if identify > 0 and len(designs) == 1 else 0
+    gains = lqr.design(p, weights, values["r"], h)  # the LQR it hands over to: the LqrController's law (lqr.control)
+    schedule = None if len(lengths) == 1 else \
+        (lengths, [lqr.design(dataclasses.replace(p, l1=length), weights, values["r"], h) for length in lengths])
+    own_lqr = lqr.Config(gains=gains, x_d=values["x_d"], u_max=u_max, v_max=v_max, h=h, schedule=schedule)
     return Config(designs=designs, x_d=values["x_d"], u_max=u_max, v_max=v_max, margin=margin, h=h, every=every,
                   interval=interval, steps=steps, max_iterations=int(cap), plant=p, weights=weights, r=values["r"],
-                  samples=samples, replan_x=values["replan_x"], replan_angle=values["replan_angle"], memo={})
+                  samples=samples, replan_x=values["replan_x"], replan_angle=values["replan_angle"], lqr=own_lqr,
+                  memo={})
 
 
 def nearest_design(config, l1):
@@ -341,7 +355,8 @@ def _identifying(config, state):
 
 
 def identify(config, state, measured):
-    """The identification's normal equations with the interval that ends now, and the model they give (or None).
+    """The identification's normal equations with the interval that ends now, the model they give (or None), and
+    whether the data are beyond any crane's equations (their least-squares residual above :data:`UNEXPLAINED`).
 
     Notes
     -----
@@ -359,14 +374,17 @@ def identify(config, state, measured):
 
     The model is the least-squares solution of the intervals so far, given once
     :attr:`Config.samples` intervals are in and no pivot of the normal equations' Cholesky
-    factor falls below :data:`WELL_POSED` of its diagonal, when plausible: each length within a
-    factor :data:`PLAUSIBLE` of the configured one and ``0 < k < l2``.
+    factor falls below :data:`WELL_POSED` of its diagonal, when consistent (the safety envelope): each
+    length within a factor :data:`PLAUSIBLE` of the configured one, ``0 < k < l2``, the payload within
+    :data:`PLAUSIBLE_PAYLOAD` of the configured one, the residual within :data:`MISFIT` of the data and
+    each parameter's standard error within :data:`STANDARD_ERROR` of it (:func:`precise`). Otherwise
+    the model stays the last good one (the configured one) and the data go on being gathered.
     """
     c, s = config, state
     first = HEADER.n11
     sums = list(s[first:first + 11])
     if not _identifying(c, s):  # off, or done: nothing more to add
-        return sums, None
+        return sums, None, False
     if s[HEADER.count] > 0:
         d1, d2, a1, a2, c1, c2, s1, s2 = integrate(c.h, s[HEADER.d1:HEADER.s2 + 1], s[HEADER.w1:HEADER.sin2 + 1],
                                                    _sample(measured))
@@ -382,7 +400,7 @@ def identify(config, state, measured):
         sums[8] += a2 * y1
         sums[9] += y1 * y1 + y2 * y2
         sums[10] += 1.0
-    model = None
+    model, unexplained = None, False
     if sums[10] >= c.samples:
         n11, n12, n13, n22, n23, n33, z1, z2, z3, yy, _ = sums
         normal = [[n11, n12, n13], [n12, n22, n23], [n13, n23, n33]]
@@ -393,11 +411,31 @@ def identify(config, state, measured):
         if factor is not None and min(factor[i][i] * factor[i][i] / normal[i][i] for i in range(3)) >= WELL_POSED:
             l1, l2, k = qp.cholesky_solve(factor, [z1, z2, z3])
             misfit = (yy - (l1 * z1 + l2 * z2 + k * z3)) / yy  # the residual's share of the data's squares
+            unexplained = misfit > UNEXPLAINED
             p = c.plant
             plausible = all(b / PLAUSIBLE <= a <= b * PLAUSIBLE for a, b in ((l1, p.l1), (l2, p.l2)))
             if misfit <= MISFIT and plausible and 0.0 < k < l2:
-                model = (l1, l2, (p.m1 + p.m2) * k / l2)
-    return sums, model
+                m2 = (p.m1 + p.m2) * k / l2
+                residual = yy - (l1 * z1 + l2 * z2 + k * z3)
+                if p.m2 / PLAUSIBLE_PAYLOAD <= m2 <= p.m2 * PLAUSIBLE_PAYLOAD and \
+                        precise(factor, (l1, l2, k), residual, 2.0 * sums[10]):
+                    model = (l1, l2, m2)
+    return sums, model, unexplained
+
+
+def precise(factor, values, residual, rows):
+    """Whether each of the least-squares ``values`` has a standard error within :data:`STANDARD_ERROR` of itself.
+
+    The variance of ``values[i]`` is ``sigma^2 (N^-1)_ii`` with ``sigma^2 = residual / (rows - 3)``, ``N`` the
+    normal equations (``factor``: their Cholesky factor) and ``residual`` the least-squares residual's square.
+    """
+    variance = residual / max(rows - 3.0, 1.0)
+    for i, value in enumerate(values):
+        inverse = qp.cholesky_solve(factor, [1.0 if j == i else 0.0 for j in range(3)])[i]
+        bound = STANDARD_ERROR * value
+        if variance * inverse > bound * bound:
+            return False
+    return True
 
 
 def deviation(d, measured, ref):
@@ -425,7 +463,7 @@ def solve(config, state, measured, l1_now):
     c, n = config, config.steps
     count = int(state[HEADER.count])
     at = count // c.every  # this interval's number
-    sums, model = identify(c, state, measured)
+    sums, model, unexplained = identify(c, state, measured)
     known = (state[HEADER.l1], state[HEADER.l2], state[HEADER.m2])
     d = identified_design(c, known) if known[0] > 0.0 else nearest_design(c, l1_now)
     if model is not None:  # identified: a new design and plan when a swing mode's frequency moved
@@ -443,16 +481,33 @@ def solve(config, state, measured, l1_now):
     rescheduled = len(c.designs) > 1 and d.l1 != state[HEADER.plan_l1]  # the schedule's design changed
     moved = trolley > c.replan_x or swing > c.replan_angle or rescheduled
     replan = count == 0 or model is not None or (moved and at >= plan_after)
-    large = deviation(d, measured, target)[1] > LARGEST_SWING  # too far from rest for the linear model's plan
+    to_trolley, to_rest = deviation(d, measured, target)
+    large = to_rest > LARGEST_SWING  # too far from rest for the linear model's plan
+    # the safety envelope: the LQR takes over, for good, when the plan is over and the identification's data are
+    # beyond the crane's equations (mid-move the LQR's kick would swing more than the plan's end), the plans for a
+    # deviation run out, the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on the target
+    replans = state[HEADER.replans]
+    if replan and count and model is None and not large and (trolley > c.replan_x or swing > c.replan_angle):
+        replans += 1.0
+    over = step >= len(plan_u)
+    at_rest = over and to_trolley <= c.replan_x and to_rest <= c.replan_angle
+    swung = bool(plan_u) and to_rest > state[HEADER.bound] + SWING_MARGIN  # past the plan's largest (a plan made)
+    if count and ((unexplained and over) or replans > MOST_REPLANS or swung or at_rest):
+        return handover(c, state, measured, l1_now, replans)
+    bound = state[HEADER.bound]
     if replan and large:  # none made: the tracking QP takes the swing down alone, a plan is tried at the next interval
         replan = bool(plan_u) or model is not None  # the last solve's warm start holds unless a plan or model changed
         plan_u, plan_s = (), ()
         plan_start, step, plan_after = at, 0, at
+        bound = to_rest
     elif replan:
         shrink = 1.0 - c.margin
         plan_u, plan_s = plan_move(d, measured, target, c.u_max * shrink, c.v_max * shrink, c.interval,
                                    int(LONGEST_PLAN / c.interval))
         plan_start, step = at, 0
+        bound = to_rest
+        for planned in plan_s:  # the plan's largest swing
+            bound = max(bound, abs(planned[2]), abs(planned[4]))
         if plan_u:  # a move: the next one (for a deviation) waits REPLAN_GAP
             plan_after = at + round(REPLAN_GAP / c.interval)
         elif max(abs(a - b) for a, b in zip(measured, target)) > REACHED:  # none within LONGEST_PLAN:
@@ -497,8 +552,18 @@ def solve(config, state, measured, l1_now):
     plan_part = (tuple(plan_u) + tuple(v for s in plan_s for v in s)) if replan else \
         state[len(HEADER) + 3 * n:]
     header = (u, float(solution.iterations), warned, float(len(plan_u)), float(plan_start), float(plan_after),
-              d.l1 if replan else state[HEADER.plan_l1], *known, *_sample(measured), *(0.0,) * 8, *sums)
+              d.l1 if replan else state[HEADER.plan_l1], *known, *_sample(measured), *(0.0,) * 8, *sums, 0.0,
+              replans, bound)
     return u, header + tuple(solution.x) + tuple(new_codes) + plan_part, messages
+
+
+def handover(config, state, measured, l1_now, replans):
+    """The solve that hands over to the LQR: its input (:func:`.lqr.control`), the state kept but marked."""
+    u = lqr.control(config.lqr, measured, l1=l1_now)
+    header = list(state[1:len(HEADER)])
+    header[HEADER.u - 1], header[HEADER.iterations - 1] = u, 0.0
+    header[HEADER.handed - 1], header[HEADER.replans - 1] = 1.0, replans
+    return u, tuple(header) + state[len(HEADER):], ()
 
 
 def _solved(config, state, inputs):
@@ -520,6 +585,9 @@ def _plan_end(config, state):
 
 
 def _output(config, state, inputs):
+    if state[HEADER.handed]:  # the LQR's, every step
+        u = lqr.control(config.lqr, inputs[IN.x:IN.dtheta2 + 1], l1=inputs[IN.l1_now])
+        return u, 0.0, _plan_end(config, state)
     if _due(config, state):
         _, rest, _ = _solved(config, state, inputs)
         state = (state[HEADER.count],) + rest
@@ -528,9 +596,9 @@ def _output(config, state, inputs):
 
 def update(config, state, inputs, time, step):
     """Count the step and add it to the identification's integrals; after a solve keep its input (held until the
-    next), its solution, the plan and the identification's sums."""
-    if not _due(config, state):
-        if not _identifying(config, state):
+    next), its solution, the plan and the identification's sums. Once the LQR has taken over: the count alone."""
+    if not _due(config, state) or state[HEADER.handed]:
+        if state[HEADER.handed] or not _identifying(config, state):
             return (state[HEADER.count] + 1.0,) + state[1:]
         now = _sample(inputs[IN.x:IN.dtheta2 + 1])
         integrals = integrate(config.h, state[HEADER.d1:HEADER.s2 + 1], state[HEADER.w1:HEADER.sin2 + 1], now)

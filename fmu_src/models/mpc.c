@@ -31,6 +31,11 @@
 #define WELL_POSED 1e-2  /* mpc.WELL_POSED */
 #define MISFIT 1e-5      /* mpc.MISFIT */
 #define PLAUSIBLE 2.0    /* mpc.PLAUSIBLE */
+#define PLAUSIBLE_PAYLOAD 3.0 /* mpc.PLAUSIBLE_PAYLOAD */
+#define STANDARD_ERROR 0.01   /* mpc.STANDARD_ERROR */
+#define UNEXPLAINED 1e-3      /* mpc.UNEXPLAINED */
+#define MOST_REPLANS 2.0      /* mpc.MOST_REPLANS */
+#define SWING_MARGIN (10.0 * (3.141592653589793 / 180.0)) /* mpc.SWING_MARGIN: math.radians(10.0) */
 #define TOLERANCE 0.01   /* mpc.TOLERANCE */
 /* SCHEDULE_POINTS, MAX_STEPS (the horizon's rule), MAX_PLAN (mpc.MAX_PLAN: the interval's rule) */
 enum { SCHEDULE_POINTS = 11, MAX_STEPS = 200, MAX_ROWS = 2 * MAX_STEPS, MAX_PLAN = 1200 };
@@ -39,7 +44,8 @@ enum { SCHEDULE_POINTS = 11, MAX_STEPS = 200, MAX_ROWS = 2 * MAX_STEPS, MAX_PLAN
 enum {
     H_COUNT, H_U, H_ITERATIONS, H_WARNED, H_PLAN_STEPS, H_PLAN_START, H_PLAN_AFTER, H_PLAN_L1, H_L1, H_L2, H_M2,
     H_W1, H_W2, H_COS_D, H_SIN_D, H_COS1, H_SIN1, H_COS2, H_SIN2, H_D1, H_D2, H_A1, H_A2, H_C1, H_C2, H_S1, H_S2,
-    H_N11, H_N12, H_N13, H_N22, H_N23, H_N33, H_Z1, H_Z2, H_Z3, H_YY, H_SAMPLES, H_N_HEADER
+    H_N11, H_N12, H_N13, H_N22, H_N23, H_N33, H_Z1, H_Z2, H_Z3, H_YY, H_SAMPLES, H_HANDED, H_REPLANS, H_BOUND,
+    H_N_HEADER
 };
 enum { STATE_SIZE = H_N_HEADER + 3 * MAX_STEPS + MAX_PLAN + N_STATE * (MAX_PLAN + 1) };
 
@@ -63,6 +69,7 @@ typedef struct {
     PlantParameters plant;
     double weights[N_STATE], r, x_d, u_max, v_max, margin, h, every, interval, replan_x, replan_angle;
     int steps, max_iterations, samples;
+    double lqr_gains[N_STATE], lqr_table[SCHEDULE_POINTS][N_STATE]; /* mpc.Config.lqr: the LQR it hands over to */
     int first[MAX_ROWS], length[MAX_ROWS], offset[MAX_ROWS]; /* mpc.constraint_rows() */
     double values[1 + MAX_STEPS];
     double work[QP_WORK(MAX_STEPS, MAX_ROWS)], scratch[3 * MAX_STEPS * MAX_STEPS + 7 * MAX_STEPS * N_STATE];
@@ -195,6 +202,13 @@ static ModelStatus configure(const double values[], const StringValue strings[],
     }
     double identify = V(identify);
     c->samples = identify > 0 && c->n_designs == 1 ? (int)py_max(1.0, rint(identify / interval)) : 0;
+    const char *error = lqr_design(&c->plant, c->weights, c->r, h, c->lqr_gains);
+    for (int i = 0; !error && c->n_designs > 1 && i < SCHEDULE_POINTS; i++) {
+        PlantParameters p = c->plant;
+        p.l1 = c->designs[i].l1;
+        error = lqr_design(&p, c->weights, c->r, h, c->lqr_table[i]);
+    }
+    if (error) return report(r, MODEL_ERROR, "%s", error);
     c->have_identified = c->memo_valid = 0;
     return MODEL_OK;
 }
@@ -442,13 +456,28 @@ static void integrate(double h, const double in[8], const double before[8], cons
     out[6] = in[6] + half * (s1a + s1b), out[7] = in[7] + half * (s2a + s2b);
 }
 
+/* mpc.precise(): whether each least-squares value's standard error, sqrt(residual / (rows - 3) (N^-1)_ii), is
+   within STANDARD_ERROR of itself (packed: the normal equations' Cholesky factor). */
+static int precise(const double packed[6], const double values[3], double residual, double rows) {
+    double variance = residual / py_max(rows - 3.0, 1.0);
+    for (int i = 0; i < 3; i++) {
+        double unit[3] = {0.0, 0.0, 0.0}, column[3], scratch[3];
+        unit[i] = 1.0;
+        qp_cholesky_solve(packed, 3, unit, scratch, column);
+        double bound = STANDARD_ERROR * values[i];
+        if (variance * column[i] > bound * bound) return 0;
+    }
+    return 1;
+}
+
 static int identifying(const Config *c, const double *s) { return c->samples > 0 && s[H_L1] == 0.0; }
 
-/* mpc.identify(): the normal equations with the interval that ends now (sums), and the model they give (*found). */
+/* mpc.identify(): the normal equations with the interval that ends now (sums), the model they give (*found), and
+   whether the data are beyond any crane's equations (*unexplained). */
 static const char *identify(const Config *c, const double *s, const double measured[N_STATE], double sums[11],
-                            double model[3], int *found) {
+                            double model[3], int *found, int *unexplained) {
     memcpy(sums, s + H_N11, 11 * sizeof *sums);
-    *found = 0;
+    *found = 0, *unexplained = 0;
     if (!identifying(c, s)) return NULL;
     if (s[H_COUNT] > 0) {
         double now[8], in[8];
@@ -480,12 +509,17 @@ static const char *identify(const Config *c, const double *s, const double measu
     double l1 = lam[0], l2 = lam[1], k = lam[2], yy = sums[9];
     if (yy == 0.0) return DIVISION_BY_ZERO;
     double misfit = (yy - (l1 * sums[6] + l2 * sums[7] + k * sums[8])) / yy; /* the residual's share */
+    *unexplained = misfit > UNEXPLAINED;
     const PlantParameters *p = &c->plant;
     int plausible = p->l1 / PLAUSIBLE <= l1 && l1 <= p->l1 * PLAUSIBLE && p->l2 / PLAUSIBLE <= l2 &&
                     l2 <= p->l2 * PLAUSIBLE;
     if (misfit <= MISFIT && plausible && 0.0 < k && k < l2) {
-        model[0] = l1, model[1] = l2, model[2] = (p->m1 + p->m2) * k / l2;
-        *found = 1;
+        double m2 = (p->m1 + p->m2) * k / l2, residual = yy - (l1 * sums[6] + l2 * sums[7] + k * sums[8]);
+        if (p->m2 / PLAUSIBLE_PAYLOAD <= m2 && m2 <= p->m2 * PLAUSIBLE_PAYLOAD &&
+            precise(packed, lam, residual, 2.0 * sums[10])) {
+            model[0] = l1, model[1] = l2, model[2] = m2;
+            *found = 1;
+        }
     }
     return NULL;
 }
@@ -520,6 +554,33 @@ static size_t used(const Config *c, const double *s) {
 /* The steps per interval as a whole number (beyond any count a run reaches: as good as infinite). */
 static long long whole(double every) { return every < 1e15 ? (long long)every : (long long)1e15; }
 
+/* lqr.scheduled_gains() over the MPC's own LQR designs (the schedule's lengths, or none) and lqr.control() for the
+   target x_d: the LQR the MPC hands over to. */
+static double lqr_input(const Config *c, const double measured[N_STATE], double l1) {
+    double gains[N_STATE], error[N_STATE];
+    memcpy(gains, c->lqr_gains, sizeof gains);
+    if (c->n_designs > 1 && l1 > 0) {
+        double low = c->designs[0].l1, high = c->designs[SCHEDULE_POINTS - 1].l1;
+        double position = (py_min(py_max(l1, low), high) - low) / (c->designs[1].l1 - low);
+        int i = position >= SCHEDULE_POINTS - 2 ? SCHEDULE_POINTS - 2 : (int)position; /* min(int(position), 9) */
+        double f = position - i;
+        for (int j = 0; j < N_STATE; j++)
+            gains[j] = c->lqr_table[i][j] + f * (c->lqr_table[i + 1][j] - c->lqr_table[i][j]);
+    }
+    for (int i = 0; i < N_STATE; i++) error[i] = measured[i] - 0.0;
+    error[0] -= c->x_d;
+    return limited(0.0 - la_dot(gains, error, N_STATE), measured[1], c->u_max, c->v_max, c->h);
+}
+
+/* mpc.handover(): the solve that hands over to the LQR: its input, the state kept but marked. */
+static const char *handover(const Config *c, const double *state, const double measured[N_STATE], double l1_now,
+                            double replans, double *next) {
+    memcpy(next, state, used(c, state) * sizeof(double));
+    next[H_U] = lqr_input(c, measured, l1_now), next[H_ITERATIONS] = 0.0;
+    next[H_HANDED] = 1.0, next[H_REPLANS] = replans;
+    return NULL;
+}
+
 /* mpc.solve(): one solve, from the state and the measured state, into `next` (the new state with the count as it
    was); *warns when its message is due. */
 static const char *solve(Config *c, const double *state, const double measured[N_STATE], double l1_now,
@@ -528,8 +589,8 @@ static const char *solve(Config *c, const double *state, const double measured[N
     double count = state[H_COUNT];
     long long at = (long long)count / whole(c->every); /* this interval's number (count // every) */
     double sums[11], model[3], known[3] = {state[H_L1], state[H_L2], state[H_M2]};
-    int found_model;
-    const char *error = identify(c, state, measured, sums, model, &found_model);
+    int found_model, unexplained;
+    const char *error = identify(c, state, measured, sums, model, &found_model, &unexplained);
     if (error) return error;
     Design *d;
     if (known[0] > 0.0) {
@@ -562,10 +623,22 @@ static const char *solve(Config *c, const double *state, const double measured[N
     double *new_plan_u = next + plan_at, to_trolley, to_rest;
     deviation(d, measured, target, &to_trolley, &to_rest);
     int large = to_rest > LARGEST_SWING; /* too far from rest for the linear model's plan */
+    /* the safety envelope: the LQR takes over, for good, when the plan is over and the identification's data are
+       beyond the crane's equations (mid-move the LQR's kick would swing more than the plan's end), the plans for a
+       deviation run out, the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on the
+       target */
+    double replans = state[H_REPLANS], bound = state[H_BOUND];
+    if (replan && count != 0 && !found_model && !large && (trolley > c->replan_x || swing > c->replan_angle))
+        replans += 1.0;
+    int over = step >= n_plan, swung = n_plan > 0 && to_rest > bound + SWING_MARGIN; /* past the plan's largest */
+    int at_rest = over && to_trolley <= c->replan_x && to_rest <= c->replan_angle;
+    if (count != 0 && ((unexplained && over) || replans > MOST_REPLANS || swung || at_rest))
+        return handover(c, state, measured, l1_now, replans, next);
     if (replan && large) { /* none made: the tracking QP takes the swing down alone, a plan tried next interval */
         replan = n_plan > 0 || found_model; /* the last solve's warm start holds unless a plan or model changed */
         n_plan = 0, n_states = 0, plan_u = plan_s = new_plan_u;
         plan_start = at, step = 0, plan_after = at;
+        bound = to_rest;
     } else if (replan) {
         double shrink = 1.0 - c->margin, far = 0.0;
         error = plan_move(d, measured, target, c->u_max * shrink, c->v_max * shrink, c->interval,
@@ -577,6 +650,9 @@ static const char *solve(Config *c, const double *state, const double measured[N
         for (int i = 0; i < N_STATE; i++) far = py_max(far, fabs(measured[i] - target[i]));
         if (n_plan) plan_after = at + (long long)rint(REPLAN_GAP / c->interval); /* the next waits REPLAN_GAP */
         else if (far > REACHED) plan_after = at + (long long)rint(RETRY_GAP / c->interval); /* the QP alone */
+        bound = to_rest;
+        for (int k = 0; k < n_states; k++) /* the plan's largest swing */
+            bound = py_max(py_max(bound, fabs(plan_s[k * N_STATE + 2])), fabs(plan_s[k * N_STATE + 4]));
     }
     double *ref_u = c->scratch, *f = ref_u + n, *lower = f + n, *upper = lower + 2 * n, *guess = upper + 2 * n;
     double *absolute = guess + n, *start = absolute + n, *lower_u = start + n, *upper_u = lower_u + n;
@@ -624,6 +700,7 @@ static const char *solve(Config *c, const double *state, const double measured[N
                                known[0], known[1], known[2]};
     sample(measured, header + H_W1);
     memcpy(header + H_N11, sums, sizeof sums);
+    header[H_HANDED] = 0.0, header[H_REPLANS] = replans, header[H_BOUND] = bound;
     memcpy(next, header, sizeof header);
     return NULL;
 }
@@ -655,6 +732,11 @@ static int due(const Config *c, const double *s) { return (long long)s[H_COUNT] 
 /* mpc._output(): the held input, the QP's iterations and the plan's end; at a solve, the solve's. */
 static ModelStatus outputs(const double values[], const Config *c, const State *s, double out[], const Reporter *r) {
     const double *state = s->v;
+    if (state[H_HANDED] != 0.0) { /* the LQR's, every step */
+        out[0] = lqr_input(c, &values[VR_x], V(l1_now)), out[1] = 0.0;
+        out[2] = state[H_PLAN_STEPS] != 0 ? (state[H_PLAN_START] + state[H_PLAN_STEPS]) * c->interval : 0.0;
+        return MODEL_OK;
+    }
     if (due(c, state)) {
         int warns;
         const char *error = solved(c, s, values, &state, &warns);
@@ -670,8 +752,8 @@ static ModelStatus outputs(const double values[], const Config *c, const State *
 static ModelStatus update(const double values[], const Config *c, State *s, double time, double step,
                           const Reporter *r) {
     double *state = s->v, count = state[H_COUNT];
-    if (!due(c, state)) {
-        if (identifying(c, state)) {
+    if (!due(c, state) || state[H_HANDED] != 0.0) {
+        if (state[H_HANDED] == 0.0 && identifying(c, state)) {
             double now[8], integrals[8];
             sample(&values[VR_x], now);
             integrate(c->h, state + H_D1, state + H_W1, now, integrals);
