@@ -6,12 +6,12 @@ The plant's outputs and the controller's demands (``u``); as parameters the cran
 and agree on its value with the system's crane value or the first of them: hoist-transport's planner, designed for
 l1 = 1.5 m, keeps its own l1, so that a host that sets every parameter to its start value gets the system's own run),
 each axis's target ``x_d`` (to the planner if there is one, and to a controller told the move's target by
-its ``x_d``; else to the planner of that axis alone, ``y_d`` to ``planner_y.x_d``; else to the controller) and the plant's start swing
-``theta1_0``, whose start values are the system's; as inputs the plant's inputs that nothing inside feeds (``F1``,
-``F2``, ``hoist``). The plant, controller, planner and estimator are the first instances of those roles (their
-components' ``role``), never found by name, and what the plant's roles name (``Component.crane``: its axes,
-demands and start swing) is read from them. Its model structure (which own inputs each own output reads at once)
-follows the instances' along the connections.
+its ``x_d``; else to the planner of that axis alone, ``y_d`` to ``planner_y.x_d``; else to the controller) and
+the plant's start swing ``theta1_0``, whose start values are the system's; as inputs the plant's inputs that
+nothing inside feeds (``F1``, ``F2``, ``hoist``). The plant, controller, planner and estimator are the first
+instances of those roles (their components' ``role``), never found by name, and what the plant's roles name
+(``Component.crane``: its axes, demands and start swing) is read from them. Its model structure (which own inputs
+each own output reads at once) follows the instances' along the connections.
 """
 
 from collections import namedtuple
