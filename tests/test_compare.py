@@ -187,7 +187,7 @@ def test_a_controller_that_fails_in_one_case_is_scored_failed_there_only(quick_b
     every step longer than its max_step = 0.02 s, and of all the quick suite's cases only S6's h = 50 ms
     step is longer (S6 runs at 1, 10 and 50 ms; every other scenario at 1 ms)."""
     out, rows, _ = quick_board
-    failed = [r for r in rows if r["status"] != "ok"]
+    failed = [r for r in rows if r["status"] not in ("ok", "n/a")]  # n/a: the 3-D crane's S11-S14
     assert [(r["controller"], r["scenario"], r["case"]) for r in failed] == [("MyController", "S6", "h=50ms")]
     assert "controller: fmi2DoStep returned discard at t=0 s" in failed[0]["error"]
     board = (out / "scoreboard.md").read_text()
@@ -259,7 +259,7 @@ def test_a_rerun_resumes(quick_board, template_fmu, board_dir, dask_scheduler):
     again = compare(out.parent, [str(template_fmu), "LqrController"], board_dir, scheduler=dask_scheduler, quick=True,
                     progress=False, animate=(), only=True, log=log.append, cases=QUICK_CASES)
     assert log[-1].startswith("38 cases: 0 run now, 38 already done")
-    assert [r["case_id"] for r in again] == [r["case_id"] for r in rows]
+    assert [r.get("case_id") for r in again] == [r.get("case_id") for r in rows]  # n/a rows: none
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -268,7 +268,7 @@ def test_a_rerun_resumes(quick_board, template_fmu, board_dir, dask_scheduler):
                                                   "dx, theta1, dtheta1, theta2, dtheta2, output u (the interface: "),
     (["--controller", "{user_lqr}", "--only", "--scenario", "S2,S3"],
      "UserLqr: no scenario of S2, S3 applies to it: n/a (needs x_d or x_ref); it can run S1, S6"),
-    (["--scenario", "S1,S11"], "--scenario S11: no such scenario; the scenarios are S1, S2"),
+    (["--scenario", "S1,S99"], "--scenario S99: no such scenario; the scenarios are S1, S2"),
     (["--cases", "0"], "--cases must be a whole number >= 1, got 0"),
     (["--controller", "{fmu_dir}/LqrController.fmu"],
      "LqrController.fmu and LqrController; rename the FMU file or give --only"),
