@@ -62,5 +62,6 @@ def check_parameters(model_identifier, values):
 for _component in (plant.COMPONENT, backstepping.COMPONENT, lqr.COMPONENT, energy.COMPONENT, hard_hit.COMPONENT,
                    mpc.COMPONENT, planner.COMPONENT,
                    disturbances.GUST, disturbances.SENSOR, disturbances.CRANE_SENSOR, wind.COMPONENT,
-                   estimator.COMPONENT, plant3d.COMPONENT, lqr3d.COMPONENT, mpc3d.COMPONENT, benchmark.TRIVIAL_PLANT, benchmark.TRIVIAL_CONTROLLER):
+                   estimator.COMPONENT, plant3d.COMPONENT, lqr3d.COMPONENT, mpc3d.COMPONENT, benchmark.TRIVIAL_PLANT,
+                   benchmark.TRIVIAL_CONTROLLER):
     register(_component)

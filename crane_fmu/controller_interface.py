@@ -30,16 +30,6 @@ def references(crane):
     return tracked(crane) + tuple(f"{name}_ref" for name in crane.state if name not in along)
 
 
-def planned_target(connections, controller, axis):
-    """``(instance, parameter)``: the target parameter of the planner whose position reference a written-out
-    connection feeds to the controller's reference of ``axis`` (a planner's ``x_ref`` to ``y_ref``:
-    ``(planner_y, x_d)``), or None."""
-    for c in connections:
-        if c.target == controller and c.input == axis.references[0] and c.output.endswith("_ref"):
-            return c.source, c.output[:-len("_ref")] + "_d"
-    return None
-
-
 def move_needs(crane):
     """What a controller needs to be told a move: ``a parameter x_d or the inputs x_ref, dx_ref, ddx_ref``."""
     targets = ", ".join(axis.target for axis in crane.axes)

@@ -25,10 +25,11 @@ def test_build_writes_every_component_and_every_builtin_system(build_record, fmu
     build = fmu_dir.parent
     fmus = ["BacksteppingController.fmu", "CranePlant.fmu", "CranePlant3D.fmu", "CraneSensor.fmu",
             "EnergyController.fmu", "Gust.fmu", "HardHitController.fmu", "LqrController.fmu", "LqrController3D.fmu",
-            "MpcController.fmu", "Sensor.fmu", "StateEstimator.fmu", "TrajectoryPlanner.fmu", "TrivialController.fmu",
-            "TrivialPlant.fmu", "Wind.fmu"]
+            "MpcController.fmu", "MpcController3D.fmu", "Sensor.fmu", "StateEstimator.fmu", "TrajectoryPlanner.fmu",
+            "TrivialController.fmu", "TrivialPlant.fmu", "Wind.fmu"]
     names = ["energy", "free", "hard-hit", "hoist-transport", "lqg", "lqg-transport", "lqr", "lqr3d", "lqr3d-move",
-             "lqr3d-path", "mpc", "mpc-transport", "open-loop-3d", "paper", "transport"]
+             "lqr3d-path", "mpc", "mpc-transport", "mpc3d", "mpc3d-move", "mpc3d-path", "open-loop-3d", "paper",
+             "transport"]
     assert sorted(p.name for p in (build / "fmus").iterdir()) == sorted(
         fmus + [f"{n}.OspSystemStructure.xml" for n in names])
     assert sorted(p.name for p in (build / "fmi3").iterdir()) == fmus

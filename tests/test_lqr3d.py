@@ -14,7 +14,7 @@ import pytest
 from native_fmus import close, compare_to_python, open_native
 
 from crane_fmu import components, systems
-from crane_fmu.cosim import Connection, System, run
+from crane_fmu.cosim import run
 from crane_fmu.cosim.recorder import ArrayRecorder
 from crane_fmu.model import lqr, lqr3d
 from crane_fmu.model.parameters import plant_parameters

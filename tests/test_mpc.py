@@ -245,7 +245,7 @@ def test_the_mpc_keeps_its_limits_in_every_board_scenario(native):
     test_native_board.py): 30 runs in a tenth of the time."""
     contender = scenarios.Contender("MpcController", "MpcController",
                                      list(mpc.COMPONENT.names("input")), list(mpc.COMPONENT.names("parameter")))
-    for sid in scenarios.scenarios():
+    for sid in (sid for sid, s in scenarios.scenarios().items() if s.plant == "CranePlant"):  # its plant's
         for label, system, step, *_ in scenarios.systems_for(contender, sid, 3):
             system = systems.prepare(system, step)
             c = run(system, native[2], recorder=ArrayRecorder(), stop_time=3.0).columns()

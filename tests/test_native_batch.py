@@ -110,7 +110,9 @@ def test_the_boards_cases_give_the_per_case_rows_bit_for_bit(native):
     assert {c["scenario"] for c in cases} == set(scenarios.scenarios())
     items = native_batch.items(cases, lambda c: native_batch.batchable([(d, blobs[d]) for d in c["fmus"].values()],
                                                                         c["master"]))
-    assert [kind for kind, _ in items] == ["batch"] * len(items)  # every FMU native
+    python_only = {"MpcController3D"}  # no native model yet: its cases run one by one
+    assert all((kind == "batch") == all(c["controller"] not in python_only for c in group) for kind, group in items)
+    assert any(kind == "batch" for kind, _ in items)
     batch = [row for item in items for row in native_batch.score_chunk(item, blobs)]
     assert len(batch) == len(cases)
     by_id = {row["case_id"]: row for row in batch}

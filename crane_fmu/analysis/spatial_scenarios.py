@@ -15,13 +15,12 @@ import numpy as np
 
 from crane_fmu import components
 from crane_fmu.cosim import Connection, System
-from crane_fmu.systems import CORRIDOR, DIAGONAL, DRIVE3D, ELLIPTIC, L_PATH, PATH_PLAN, REST3D, planned
-
 from crane_fmu.model.parameters import plant_parameters
 from crane_fmu.model.planner import modes
+from crane_fmu.systems import CORRIDOR, DIAGONAL, DRIVE3D, ELLIPTIC, L_PATH, PATH_PLAN, REST3D, planned
 
-from .wind_equilibrium import wind_deflection
 from .scenarios import CASES, STOPPED_DEG, Scenario, ScenarioRun, Target, register, register_notes, told_in
+from .wind_equilibrium import wind_deflection
 
 PLANT = "CranePlant3D"
 CRANE = components.get(PLANT).crane
@@ -68,7 +67,8 @@ SPECS = {
                     f"and {S13_LEGS_S[1]:.2f} s): a path is planned to overlap them"),
              Target("residual_deg", STOPPED_DEG, "residual swing <= 0.1 deg", _RESIDUAL))),
     "S14": ("S14", "S2's move (2 m along x) in S10's turbulent wind (10 m/s mean, moderate Dryden turbulence, seed 1) "
-                   "blowing across it, along y; the swing measured about the mean wind's equilibrium", "residual_eq_deg",
+                   "blowing across it, along y; the swing measured about the mean wind's equilibrium",
+            "residual_eq_deg",
             (Target("arrival_eq_s", WIND_S, f"within 5 mm and 0.5 deg of the wind's equilibrium from {WIND_S:.1f} s",
                     "as S10's arrival, the angles taken from where the mean wind holds the cables (about "
                     f"{math.degrees(EQUILIBRIUM[0]):.2f} and {math.degrees(EQUILIBRIUM[1]):.2f} deg, "
@@ -130,7 +130,8 @@ def _runs(sid):
         if sid == "S12":
             system = System(f"{c.name}-elliptic", instances, parameters={"plant": {**DRIVE3D, **ELLIPTIC}},
                             stop_time=10.0)
-            return [ScenarioRun("nominal", system, 1e-3, system.stop_time, [0.0, 0.0], 0.75 * system.stop_time)]  # regulation: the last quarter, as S1's
+            # regulation: the residual swing over the last quarter, as S1's
+            return [ScenarioRun("nominal", system, 1e-3, system.stop_time, [0.0, 0.0], 0.75 * system.stop_time)]
         extra = {}
         if sid == "S13":
             targets = dict(zip((a.position for a in CRANE.axes), L_PATH[-1]))

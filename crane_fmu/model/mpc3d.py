@@ -130,4 +130,5 @@ COMPONENT = Component(
     "drive's limits as constraints), straight to (x_d, y_d) or along a path through a waypoint; outputs: trolley "
     "accelerations ux, uy",
     VARIABLES, configure, _output, feedthrough=True, initial_state=initial_state, update=update, report=report,
+    depends_on={f"u{a}": axis_states(a) for a in AXES},  # each axis' demand reads its own states alone
     crane_model=CRANE_MODEL, rules=RULES)
