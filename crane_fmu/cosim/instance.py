@@ -198,7 +198,7 @@ _SPARE_FOLDERS = {}
 # Every folder extracted here, with the process that extracted it: that process removes it when it ends
 # (remove_extracted), in use or spare; a forked child leaves its parent's to the parent.
 _EXTRACTED = {}
-_CLEANUP_FOR = [None]  # the process whose exit hook is registered (a forked child registers its own)
+_CLEANUP_FOR = [None]  # the process whose exit handler is registered (a forked child registers its own)
 
 
 def _take_folder(path):
