@@ -371,7 +371,8 @@ CRANE_3D, REST_3D, DRIVE_3D = _spatial()
 # applies none) and plans along its own x for the axis its ddx_ref drives
 register(System("open-loop-3d", {"plant": "CranePlant3D", "planner_x": "TrajectoryPlanner",
                                  "planner_y": "TrajectoryPlanner"},
-                connections=tuple(Connection(f"planner_{a.position}", "ddx_ref", "plant", a.demand) for a in CRANE_3D.axes),
+                connections=tuple(Connection(f"planner_{a.position}", "ddx_ref", "plant", a.demand)
+                                  for a in CRANE_3D.axes),
                 parameters={"plant": {**REST_3D, **DRIVE_3D}, "planner_x": {"x_d": 2.0}, "planner_y": {"x_d": 1.5}},
                 stop_time=10.0,
                 description="the crane in three dimensions moved open loop from rest by (2 m, 1.5 m): a ZV-shaped "
