@@ -382,8 +382,10 @@ CORRIDOR = 0.3  # S13: the load within this of the path's centre line [m]
 # applies none) and plans along its own x for the axis its ddx_ref drives
 register(System("open-loop-3d", {"plant": "CranePlant3D", "planner_x": "TrajectoryPlanner",
                                  "planner_y": "TrajectoryPlanner"},
-                connections=tuple(Connection(f"planner_{a.position}", "ddx_ref", "plant", a.demand) for a in CRANE3D.axes),
-                parameters={"plant": {**REST3D, **DRIVE3D}, "planner_x": {"x_d": DIAGONAL["x"]}, "planner_y": {"x_d": DIAGONAL["y"]}},
+                connections=tuple(Connection(f"planner_{a.position}", "ddx_ref", "plant", a.demand)
+                                  for a in CRANE3D.axes),
+                parameters={"plant": {**REST3D, **DRIVE3D}, "planner_x": {"x_d": DIAGONAL["x"]},
+                            "planner_y": {"x_d": DIAGONAL["y"]}},
                 stop_time=10.0,
                 description="the crane in three dimensions moved open loop from rest by (2 m, 1.5 m): a ZV-shaped "
                             "planner per axis drives its trolley acceleration, |u| <= 2 m/s2, |v| <= 1 m/s on each "

@@ -341,8 +341,9 @@ NUMBER = r"(\d+(?:\.\d+)?)"
     (["bench", "--sweep", "--cases", "2", "--stop-time", "0.2", "--repeat", "1"],
      [rf"1 worker: +{NUMBER} cases/s", rf"2 workers: {NUMBER} cases/s", rf"efficiency on 2 workers: {NUMBER} %"]),
     (["bench", "--spatial", "--stop-time", "0.2", "--repeat", "1"],
-     [rf"Python FMUs: +{NUMBER} us/step, ratio {NUMBER}", rf"native FMUs: +{NUMBER} us/step, ratio {NUMBER}",
-      rf"ratio {NUMBER}$"]),
+     [rf"(?m)^1\. LQR pair, the LqrController on x +python +{NUMBER} vs",
+      rf"(?m)^2\. planned pair, .* = {NUMBER}x native", rf"(?m)^3\. open-loop-3d .* native +{NUMBER} vs",
+      rf"(?m)^3\. open-loop-3d .* = {NUMBER}x$", rf"ratio {NUMBER}$"]),
 ], ids=["pair", "endurance", "sweep", "spatial"])
 def test_benchmarks_run_and_print_their_figures(capsys, argv, figures):
     """Each benchmark at a few hundred steps prints each of its figures, and each is a positive number. The figures

@@ -31,6 +31,20 @@ def test_the_metrics_are_named_after_each_plants_swing_angles():
         spec.parse({"stop_time": 1.0, "step": 1e-3, "metrics": ["max_swing3_deg"]})
 
 
+@pytest.mark.quick
+def test_each_axis_move_target_is_its_own_planners():
+    """open-loop-3d: planner_y plans along its own x (its x_d) and drives uy, so y's target is planner_y's x_d;
+    the planar systems keep theirs (the planner's, the controller's, none: 0)."""
+    from crane_fmu.closed_loop import axis_planners
+
+    system = systems.get("open-loop-3d")
+    assert axis_planners(SPATIAL, systems.kinds(system), system.connections) == {"x": "planner_x", "y": "planner_y"}
+    assert systems.move_target(system) == {"x": 2.0, "y": 1.5}
+    assert systems.move_target(system.with_parameters({"planner_y": {"x_d": -0.7}})) == {"x": 2.0, "y": -0.7}
+    planar = ("transport", "hoist-transport", "mpc-transport", "lqr")
+    assert [systems.move_target(systems.get(name)) for name in planar] == [{"x": 2.0}] * 3 + [{"x": 0.0}]
+
+
 @pytest.mark.parametrize("kind", ["python", "native"])
 def test_a_sweep_of_the_spatial_crane_gives_its_swing_angles_figures(fmu_dir, native, dask_scheduler, tmp_path,
                                                                      kind):

@@ -29,7 +29,7 @@ from .metrics import ARRIVAL_ANGLE, DIVERGED_ANGLE, SETTLED_BAND, _along_move, _
 __all__ = ["available", "classify", "closed_loop_metrics", "crane_signals", "move_metrics", "peak_abs", "rms",
            "settling_time", "swing_deg", "SETTLED_BAND"]
 
-MIRRORS = "f48626a793087783"  # the metrics.VERSION of metrics.py as these functions mirror it
+MIRRORS = "533338505dc72225"  # the metrics.VERSION of metrics.py as these functions mirror it
 SOURCE = Path(__file__).with_name("reductions.c")
 SQUARES, EFFORT, TRAPEZOID, VARIATION, TRAPEZOID_OF = range(5)
 _P, _L, _D = ctypes.c_void_p, ctypes.c_long, ctypes.c_double

@@ -31,7 +31,7 @@ def panels_of(s):
     described = {v.name: v.description for v in s["plant"].variables}
 
     def words(name):  # the description up to its qualifiers: "hook swing angle from vertical" -> "hook swing angle"
-        return described[name].split(" from ")[0].split(",")[0].split(" (")[0]
+        return described[name].split(" from ")[0].split(",")[0].split(" (")[0].removesuffix(f" along {name}")
 
     crane = s["crane"]
     positions = [(f"{words(a.position)} {a.position} [m]", values) for a, values in zip(crane.axes, s["position"])]

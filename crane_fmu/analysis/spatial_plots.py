@@ -101,8 +101,9 @@ def plot_top(runs, path, title="", corridor=None, width=None):
     signals = same_plant(runs)
     s0 = next(iter(signals.values()))
     if not horizontal(s0["crane"]):
+        axes = ", ".join(a.position for a in s0["crane"].axes)
         raise ValueError(f"--view top needs a crane that moves in two horizontal axes; {next(iter(signals))} is a "
-                         f"{s0['plant'].model_identifier} result (axes {', '.join(a.position for a in s0['crane'].axes)})")
+                         f"{s0['plant'].model_identifier} result (axes {axes})")
     crane = s0["crane"]
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(7.5, 6.5))

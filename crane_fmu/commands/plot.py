@@ -71,7 +71,7 @@ def run(args):
         raise UsageError(str(exc)) from None
     os.replace(partial, args.out)
     print(f"wrote {args.out}")
-    for label, apart in drawn.get("apart", {}).items():
+    for label, apart in (drawn["apart"] if args.view == "top" else {}).items():
         inside = "within" if apart <= args.corridor_width / 2 else "OUTSIDE"
         print(f"{label}: the load at most {apart:.4f} m from the corridor's centre line ({inside} "
               f"{args.corridor_width / 2:g} m)")
