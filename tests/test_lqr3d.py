@@ -88,7 +88,7 @@ def test_native_equals_the_python_model_bit_for_bit(native, version):
     """12 random designs (limits on and off) at 20 random inputs each: the same bits on Linux (1e-12 elsewhere)."""
     rng = random.Random(2052 + version)
     ours, theirs = [], []
-    for i in range(12):
+    for _ in range(12):
         parameters = {**_random_design(rng), "x_d": rng.uniform(-3, 3), "y_d": rng.uniform(-3, 3),
                       "u_max": rng.choice([math.inf, rng.uniform(0.1, 5)]),
                       "v_max": rng.choice([math.inf, rng.uniform(0.1, 2)])}

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from crane_fmu import components, compare, native_batch, systems
+from crane_fmu import compare, components, native_batch, systems
 from crane_fmu.analysis import floor, scenarios, spatial_scenarios
 from crane_fmu.analysis.spatial_scenarios import path_deviation
 from crane_fmu.model import mpc, path, planner

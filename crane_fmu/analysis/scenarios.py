@@ -243,5 +243,5 @@ def met(row, target):
     return row.get("status") == "ok" and value is not None and value <= target.limit
 
 
-from crane_fmu.analysis import planar_scenarios  # noqa: E402, F401 (registers S1-S10)
-from crane_fmu.analysis import spatial_scenarios  # noqa: E402, F401 (registers S11-S14)
+# the registrations: S1-S10 on the planar crane, S11-S14 on the crane in three dimensions
+from crane_fmu.analysis import planar_scenarios, spatial_scenarios  # noqa: E402, F401, I001

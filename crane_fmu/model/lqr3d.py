@@ -13,7 +13,7 @@ from . import limits, linalg
 from .component import Component
 from .lqr import DEFAULT_WEIGHTS, WEIGHTS, design_of
 from .parameters import PLANT_RULES
-from .plant3d import CRANE, SWING_STATE, _SWING_ROWS
+from .plant3d import _SWING_ROWS, CRANE, SWING_STATE
 from .rules import check, finite, non_negative, positive
 from .tables import CRANE_MODEL, controller_model, input_, output, parameter, positions
 

@@ -44,9 +44,8 @@ import dataclasses
 import math
 from collections import namedtuple
 
-from . import limits, linalg, planner, qp
+from . import limits, linalg, lqr, planner, qp
 from .component import Component, Step
-from . import lqr
 from .lqr import DEFAULT_WEIGHTS, SCHEDULE_RULES, WEIGHTS, continuous_model
 from .parameters import PLANT_RULES, plant_parameters
 from .rules import check, finite, in_range, non_negative, positive, rule, whole

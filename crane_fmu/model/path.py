@@ -64,7 +64,7 @@ def plan(waypoints, margin=0.0, values=None, axes=("x", "y")):
                 raise ValueError(f"waypoints: the {axes[k]} axis moves in two legs (leg {leg + 1}); a path moves each "
                                  "axis once")
 
-        def within(t0):
+        def within(t0, a=a, b=b, moving=moving, start=start):  # called in this leg only
             trial = {**configs, **{axes[k]: _config(values, a[k], b[k], t0) for k in moving}}
             t, last = start, max(c.end for c in trial.values())
             while t <= last + SAMPLE:
