@@ -3,7 +3,7 @@
 import math
 
 from .ranking import FIGURES, FORMAT, RULES, board_statistics, not_applicable, summarise
-from .scenarios import CASES, notes, scenarios
+from .scenarios import CASES, OTHER_PLANT, notes, scenarios
 from .scenarios import plants as scenario_plants
 
 
@@ -71,10 +71,12 @@ def floor_ratio(value, floor):
 
 def _summary_cells(rows, users, stats, floors):
     """``[(scenario, cells)]``: per scenario with a row, its controllers by rank (each cell one controller's rank,
-    figure, targets and tie), then those it does not apply to."""
+    figure, targets and tie), then those it does not apply to; a controller of another crane (S11's planar ones) is
+    left out, the scenario's section of the board names it."""
     lines = []
     for sid, s in scenarios().items():
-        ranked, absent = summarise(rows, sid), not_applicable(rows, sid)
+        ranked = summarise(rows, sid)
+        absent = {name: why for name, why in not_applicable(rows, sid).items() if not why.startswith(OTHER_PLANT)}
         if not ranked and not absent:
             continue
         digits, unit = FORMAT.get(s.rank_by, (2, " s"))

@@ -52,8 +52,8 @@ def main(argv=None):
 
     found, bound = violations(pq.read_table(f"{args.out}/scores.parquet").to_pylist(), args.controller,
                               args.reference)
-    print(f"{args.controller} against {args.reference}: residual worse by > {RESIDUAL_MARGIN} deg; peak above "
-          (f"its S2 peak + {PEAK_MARGIN:g} deg = {bound:.3f} deg" if bound is not None else "(no S2 run)"))
+    peak = f"its S2 peak + {PEAK_MARGIN:g} deg = {bound:.3f} deg" if bound is not None else "(no S2 run)"
+    print(f"{args.controller} against {args.reference}: residual worse by > {RESIDUAL_MARGIN} deg; peak above {peak}")
     print("| scenario | cases | residual worse | peak higher | worst residual excess [deg] |")
     print("|---|---|---|---|---|")
     for scenario, (cases, worse, higher, excess) in found.items():

@@ -182,6 +182,9 @@ def told_in(contender, scenario, target=None):
     return told(contender.name, contender.inputs, outputs, contender.parameters, plant, target if s.moves else None)
 
 
+OTHER_PLANT = "n/a (no controller of"  # why a contender of another crane does not run a scenario
+
+
 def applicable(contender, scenario):
     """None when the contender can run the scenario, else why not: it is no controller of the scenario's plant
     (``n/a (no controller of CranePlant)``), or it cannot be told the scenario's move (``n/a (needs x_d or
@@ -190,7 +193,7 @@ def applicable(contender, scenario):
     crane = s.crane
     outputs = crane.demands if contender.outputs is None else contender.outputs
     if misses(crane, contender.inputs, outputs, contender.parameters)[0]:
-        return f"n/a (no controller of {s.plant})"
+        return f"{OTHER_PLANT} {s.plant})"
     try:
         told_in(contender, scenario)
     except ValueError:
