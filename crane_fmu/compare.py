@@ -338,7 +338,11 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     if isinstance(cases, bool) or not isinstance(cases, int) or cases < 1:
         raise ValueError(f"--cases must be a whole number >= 1, got {cases!r}")
     out_dir = Path(out_dir) / "quick" if quick else Path(out_dir)
+    named = {str(c) for c in chosen}
     chosen = contenders(chosen, fmu_dir, only)
+    # a built-in controller nobody named is left out where no chosen scenario applies to it (S10: the 3-D ones)
+    chosen = [c for c in chosen if c.user or c.name in named
+              or None in {scenario_registry.applicable(c, sid) for sid in scenarios}]
     for contender in chosen:
         reasons = {scenario_registry.applicable(contender, sid) for sid in scenarios}
         if None not in reasons:

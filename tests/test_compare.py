@@ -268,6 +268,8 @@ def test_a_rerun_resumes(quick_board, template_fmu, board_dir, dask_scheduler):
                                                   "dx, theta1, dtheta1, theta2, dtheta2, output u (the interface: "),
     (["--controller", "{user_lqr}", "--only", "--scenario", "S2,S3"],
      "UserLqr: no scenario of S2, S3 applies to it: n/a (needs x_d or x_ref); it can run S1, S6"),
+    (["--controller", "LqrController3D", "--only", "--scenario", "S1"],
+     "LqrController3D: no scenario of S1 applies to it: n/a (no controller of CranePlant); it can run S11, S12"),
     (["--scenario", "S1,S99"], "--scenario S99: no such scenario; the scenarios are S1, S2"),
     (["--cases", "0"], "--cases must be a whole number >= 1, got 0"),
     (["--controller", "{fmu_dir}/LqrController.fmu"],
@@ -284,6 +286,14 @@ def test_compare_mistakes_are_one_line(fmu_dir, user_lqr, tmp_path, capsys, argv
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err
     assert not (tmp_path / "o").exists()  # not even an empty folder (issue 29)
+
+
+def test_a_scenario_of_one_crane_scores_the_controllers_of_that_crane(native, tmp_path):
+    """``compare --scenario S1`` (every built-in controller) had been refused because the controllers of the crane in
+    three dimensions run no scenario of S1; they are left out, the planar ones scored."""
+    rows = compare(tmp_path, (), native[2], scenarios=["S1"], progress=False, animate=(), workers=1, log=lambda _: None)
+    spatial = {"LqrController3D", "MpcController3D"}  # the controllers of ux and uy
+    assert {r["controller"] for r in rows} == {c.model_identifier for c in components.registered("controller")} - spatial
 
 
 def test_animate_a_simulate_result(fmu_dir, tmp_path, capsys):
