@@ -291,7 +291,8 @@ def test_compare_mistakes_are_one_line(fmu_dir, user_lqr, tmp_path, capsys, argv
 def test_a_scenario_of_one_crane_scores_the_controllers_of_that_crane(native, tmp_path):
     """``compare --scenario S1`` (every built-in controller) had been refused because the controllers of the crane in
     three dimensions run no scenario of S1; they are left out, the planar ones scored."""
-    rows = compare(tmp_path, (), native[2], scenarios=["S1"], progress=False, animate=(), workers=1, log=lambda _: None)
+    rows = compare(tmp_path, (), native[2], scenarios=["S1"], progress=False, animate=(), workers=1,
+                   log=lambda _: None)
     spatial = {"LqrController3D", "MpcController3D"}  # the controllers of ux and uy
     assert {r["controller"] for r in rows} == {c.model_identifier for c in components.registered("controller")} - spatial
 
