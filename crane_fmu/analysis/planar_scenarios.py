@@ -91,11 +91,12 @@ COARSE_S = round(3.0 + T_SLOW, 1)  # 5.4 s
 
 # S10's wind (the Wind component's defaults; each case's plant): where its mean drag holds the cables
 WIND_EQUILIBRIUM = wind_deflection()  # (theta1, theta2) [rad] on the Section V crane: about 0.56 and 0.54 deg
-_HEAVIEST = {"m1": 3.6, "m2": 10.5}  # the design's corner with the smallest deflection (FACTORS' highs)
-_LIGHTEST = {"m1": 2.4, "m2": 3.5}  # ... and with the largest
+_HEAVIEST = {"m1": FACTORS[2].high, "m2": FACTORS[3].high}  # the design's corner with the smallest deflection
+_LIGHTEST = {"m1": FACTORS[2].low, "m2": FACTORS[3].low}  # ... and the one with the largest
+_LONGEST = (FACTORS[0].high, FACTORS[1].high)  # l1, l2 [m]
 WIND_CUT_DEG = math.floor(math.degrees(min(wind_deflection(_HEAVIEST))) * 100) / 100  # 0.35 deg: cut, not met
-LOAD_BAND_M = round(0.005 + sum(length * math.sin(angle) for length, angle in zip((1.1, 0.6), wind_deflection(_LIGHTEST))),
-                    4)  # 5 mm + 29.6 mm
+LOAD_BAND_M = round(0.005 + sum(length * math.sin(angle)
+                                for length, angle in zip(_LONGEST, wind_deflection(_LIGHTEST))), 4)  # 5 + 29.6 mm
 _WIND_FACT = (f"on the Section V crane about {math.degrees(WIND_EQUILIBRIUM[0]):.2f} and "
               f"{math.degrees(WIND_EQUILIBRIUM[1]):.2f} deg, the drag over the weights, each case's computed from its "
               "own masses, crane_fmu/analysis/wind_equilibrium.py; no trolley motion takes it away while the load is "
@@ -196,7 +197,8 @@ SPECS = {
                             "the anchor every case must cut, what the turbulence leaves within it"),
                      Target("load_error_m", LOAD_BAND_M, f"the load within {LOAD_BAND_M * 1e3:.1f} mm of the target "
                             "in the residual window",
-                            "the 5 mm band of arrival plus the load's static offset downwind of a trolley at the target "
+                            "the 5 mm band of arrival plus the load's static offset downwind of a trolley at the "
+                            "target "
                             f"(l1 sin theta1 + l2 sin theta2 at the equilibrium) on the design's lightest crane with "
                             f"the longest cables ({(LOAD_BAND_M - 0.005) * 1e3:.1f} mm): what a crane that holds its "
                             "trolley at the target and its load still shows; a controller that moves the trolley "
