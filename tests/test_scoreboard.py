@@ -260,7 +260,8 @@ def test_every_residual_target_asks_the_swing_stopped():
     from crane_fmu.analysis import metrics
 
     assert scenarios.STOPPED_DEG == pytest.approx(math.degrees(metrics.SETTLED_BAND), rel=1e-12)
-    limits = {(sid, t.metric): t.limit for sid, s in EVERY.items() for t in s.targets if t.metric.startswith("residual")}
+    limits = {(sid, t.metric): t.limit for sid, s in EVERY.items() for t in s.targets
+              if t.metric.startswith("residual")}
     wind = limits.pop(("S10", "residual_eq_deg"))
     assert limits and max(limits.values()) <= scenarios.STOPPED_DEG
     assert wind == planar.WIND_CUT_DEG < math.degrees(min(planar.wind_deflection({"m1": 3.6, "m2": 10.5})))
