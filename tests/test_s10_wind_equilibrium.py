@@ -116,3 +116,8 @@ def test_the_boards_statistics_describe_s10s_ranking_figure():
     describe = ranking.board_statistics(rows, ["S10"])["S10"]["describe"]
     assert describe["A"]["residual_eq_deg"].median == pytest.approx(0.22)
     assert describe["B"]["residual_eq_deg"].median == pytest.approx(0.42)
+    from crane_fmu.analysis import board_tables
+
+    shown = board_tables._statistics_section("S10", ranking.board_statistics(rows, ["S10"])["S10"], set())
+    row = next(line for line in shown if line.startswith("| residual_eq_deg [deg] |"))
+    assert row.startswith("| residual_eq_deg [deg] | 0.220 ") and "| 0.420 " in row
