@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 
 from crane_fmu import components
-from crane_fmu.analysis import planar_scenarios, scenarios
+# board_tables first: through scenarios it registers S1-S10, then S11-S14 (the board's order; planar_scenarios first
+# would register S11-S14 first)
+from crane_fmu.analysis import board_tables, planar_scenarios, ranking, scenarios
 from crane_fmu.analysis.wind_equilibrium import mean_drag, static_deflection, wind_deflection
 
 G, RHO, CD, A1, A2, U = 9.8, 1.225, 1.05, 0.005, 0.01, 10.0  # the Section V g, the Wind component's defaults
@@ -108,16 +110,12 @@ def test_a_stopped_crane_in_the_mean_wind_misses_s10s_residual():
 @pytest.mark.quick
 def test_the_boards_statistics_describe_s10s_ranking_figure():
     """The paired statistics (the board's summary reads them) describe the figure S10 ranks by, its own measure."""
-    from crane_fmu.analysis import ranking
-
     rows = [{"scenario": "S10", "controller": name, "case": f"#{k:02d}", "status": "ok", "error": None,
              "residual_eq_deg": value + 0.01 * k, "residual_deg": 1.0, "load_error_m": 0.01, "arrival_eq_s": 5.0}
             for name, value in (("A", 0.2), ("B", 0.4)) for k in range(5)]
     describe = ranking.board_statistics(rows, ["S10"])["S10"]["describe"]
     assert describe["A"]["residual_eq_deg"].median == pytest.approx(0.22)
     assert describe["B"]["residual_eq_deg"].median == pytest.approx(0.42)
-    from crane_fmu.analysis import board_tables
-
     shown = board_tables._statistics_section("S10", ranking.board_statistics(rows, ["S10"])["S10"], set())
     row = next(line for line in shown if line.startswith("| residual_eq_deg [deg] |"))
     assert row.startswith("| residual_eq_deg [deg] | 0.220 ") and "| 0.420 " in row
