@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from crane_fmu import components
+
 # board_tables first: through scenarios it registers S1-S10, then S11-S14 (the board's order; planar_scenarios first
 # would register S11-S14 first)
 from crane_fmu.analysis import board_tables, planar_scenarios, ranking, scenarios
