@@ -253,12 +253,18 @@ def test_the_residual_window_is_fixed_by_the_scenario_not_the_controller():
 
 
 def test_every_residual_target_asks_the_swing_stopped():
-    """A swing within 0.1 deg counts as stopped (metrics.SETTLED_BAND); no residual target allows more."""
+    """A swing within 0.1 deg counts as stopped (metrics.SETTLED_BAND); no residual target allows more, but S10's
+    about the mean wind's equilibrium: there the turbulence moves the equilibrium itself, and the limit is the swing a
+    stopped crane keeps (the design's smallest static deflection, tests/test_s10_wind_equilibrium.py), below every
+    case's deflection."""
     from crane_fmu.analysis import metrics
 
     assert scenarios.STOPPED_DEG == pytest.approx(math.degrees(metrics.SETTLED_BAND), rel=1e-12)
-    limits = [t.limit for s in EVERY.values() for t in s.targets if t.metric.startswith("residual")]
-    assert limits and max(limits) <= scenarios.STOPPED_DEG
+    limits = {(sid, t.metric): t.limit for sid, s in EVERY.items() for t in s.targets
+              if t.metric.startswith("residual")}
+    wind = limits.pop(("S10", "residual_eq_deg"))
+    assert limits and max(limits.values()) <= scenarios.STOPPED_DEG
+    assert wind == planar.WIND_CUT_DEG < math.degrees(min(planar.wind_deflection({"m1": 3.6, "m2": 10.5})))
 
 
 def _made_up_rows(sid, amplitude_deg):
@@ -274,10 +280,20 @@ def _made_up_rows(sid, amplitude_deg):
         x = r.x_d * np.minimum(t, 1.0)
         wave = np.cos(2 * np.pi * t / planar.T_SLOW)
         theta = np.radians((5.0 * np.exp(-t / 0.3) + amplitude_deg) * wave)
-        figures = metrics.move_metrics(t, x, np.gradient(x, t), (theta, -theta), np.zeros_like(t), r.x_d,
-                                       r.residual_from)
+        swing = (theta, -theta)
+        own = {}
+        if scenarios.get(sid).measures:  # S10: the swing about the case's equilibrium in the mean wind
+            plant = {"l1": 1.0, "l2": 0.5, **r.system.parameters["plant"]}
+            eq = planar.wind_deflection(plant, r.system.parameters["wind"])
+            swing = (theta + eq[0], -theta + eq[1])
+            x2 = x + plant["l1"] * np.sin(swing[0]) + plant["l2"] * np.sin(swing[1])
+            signals = {"time": t, "position": [x], "velocity": [np.gradient(x, t)], "demand": [np.zeros_like(t)],
+                       "swing": dict(zip(planar.CRANE.swing, swing)), "x2": x2}
+            own = scenarios.get(sid).measures(signals, {"x_d": r.x_d, "residual_from": r.residual_from,
+                                                         "parameters": r.system.parameters})
+        figures = metrics.move_metrics(t, x, np.gradient(x, t), swing, np.zeros_like(t), r.x_d, r.residual_from)
         rows.append({"controller": "Made-up", "scenario": sid, "case": r.label, "status": "ok", "error": None,
-                     **figures})
+                     **figures, **own})
     return rows
 
 
@@ -285,8 +301,9 @@ def _made_up_rows(sid, amplitude_deg):
 def test_no_scenario_is_passed_by_a_run_that_never_stops_the_swing(sid):
     """Runs that keep swinging by 0.11 deg (just above the stopped band) or 0.45 deg (inside the arrival band, the
     swing the old residual hid) miss a target in every scenario; the same runs brought to rest meet them all, so
-    the targets can be met."""
-    for amplitude in (0.11, 0.45):
+    the targets can be met. In S10's wind, where the turbulence moves the equilibrium itself, a swing just above its
+    limit (the swing a stopped crane keeps) instead of 0.11 deg."""
+    for amplitude in ((planar.WIND_CUT_DEG + 0.01, 0.45) if sid == "S10" else (0.11, 0.45)):
         line, = ranking.summarise(_made_up_rows(sid, amplitude), sid)
         assert not all(line["targets"]), (sid, amplitude, line)
     line, = ranking.summarise(_made_up_rows(sid, 0.0), sid)

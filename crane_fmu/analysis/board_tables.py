@@ -139,7 +139,9 @@ def _statistics_section(sid, stats, users):
     names = list(describe)
     out = ["Over the cases: median [95 % interval]; 90th percentile [95 % interval] (bootstrap):", "",
            table_row(["figure"] + [_name(n, users) for n in names]), "|---|" + "---|" * len(names)]
-    for header, metric, digits, unit in FIGURES:
+    known = {metric for _, metric, _, _ in FIGURES}
+    own = [(metric, metric, *FORMAT[metric]) for metric in next(iter(describe.values()), {}) if metric not in known]
+    for header, metric, digits, unit in (*FIGURES, *own):  # the scenario's own figures last (S10's residual_eq_deg)
         cells = []
         for n in names:
             d = describe[n][metric]

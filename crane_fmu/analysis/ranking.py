@@ -45,7 +45,7 @@ FIGURES = (("0.5 deg from", "settling_0.5deg_s", 2, " s"), ("0.1 deg from", "set
 WORST = tuple(metric for _, metric, _, _ in FIGURES) + ("position_1cm_s", "end_swing_deg")
 # ... and the scenarios' own figures (Scenario.measures), shown where a scenario ranks by them or sets a target
 FORMAT = {**{metric: (digits, unit) for _, metric, digits, unit in FIGURES}, "path_deviation_m": (3, " m"),
-          "arrival_eq_s": (2, " s"), "residual_eq_deg": (3, " deg")}
+          "arrival_eq_s": (2, " s"), "residual_eq_deg": (3, " deg"), "load_error_m": (4, " m")}
 
 
 def not_applicable(rows, scenario):
@@ -133,6 +133,8 @@ def board_statistics(rows, chosen=None):
         if not lines:
             continue
         metrics = [metric for _, metric, _, _ in FIGURES]
+        s = scenarios()[sid]  # and its own figures it ranks by or sets a target on (S10's residual_eq_deg)
+        metrics += [m for m in dict.fromkeys((s.rank_by, *(t.metric for t in s.targets))) if m not in metrics]
         describe = {}
         for line in lines:
             cases = sorted((r for r in rows if r["scenario"] == sid and r["controller"] == line["controller"]),
