@@ -18,6 +18,7 @@ Latin-hypercube cases of the plant's parameters (:data:`FACTORS`, :func:`design`
 that two controllers' figures pair up case by case (:mod:`crane_fmu.analysis.statistics`).
 """
 
+import re
 from collections import namedtuple
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -121,19 +122,27 @@ _SCENARIOS = Registry("scenario", lambda s: s.id)
 register, unregister, get = _SCENARIOS.register, _SCENARIOS.unregister, _SCENARIOS.get
 
 
+def _registered():
+    """The registered scenarios in their ids' natural order (S2 before S10), whichever module registered first."""
+    def natural(s):
+        return [int(part) if part.isdigit() else part for part in re.split(r"(\d+)", s.id)]
+
+    return sorted(_SCENARIOS.registered(), key=natural)
+
+
 def scenarios():
-    """``{id: Scenario}`` of every registered scenario, in registration order."""
-    return {s.id: s for s in _SCENARIOS.registered()}
+    """``{id: Scenario}`` of every registered scenario, in their ids' natural order."""
+    return {s.id: s for s in _registered()}
 
 
 def paired():
     """The ids of the scenarios on the paired design."""
-    return tuple(s.id for s in _SCENARIOS.registered() if s.paired)
+    return tuple(s.id for s in _registered() if s.paired)
 
 
 def plants():
     """The model identifiers of the plants that scenarios run on, in order."""
-    return list(dict.fromkeys(s.plant for s in _SCENARIOS.registered()))
+    return list(dict.fromkeys(s.plant for s in _registered()))
 
 
 _NOTES = {}
