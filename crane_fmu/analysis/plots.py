@@ -1,6 +1,7 @@
 """Plots of co-simulation results (matplotlib, Agg backend)."""
 
 import math
+import textwrap
 
 from .metrics import crane_signals, demand_columns
 
@@ -84,13 +85,13 @@ def plot_overlay(runs, path, title=""):
         axes[demand].set_yscale("symlog", linthresh=min(nonzero))
         labels[demand] += f"\n(symlog, linear within +-{min(nonzero):.3g})"
     for ax, label in zip(axes, labels):
-        ax.set_ylabel(label)
+        ax.set_ylabel(label if "\n" in label else textwrap.fill(label, 22))  # two lines: no label runs into the next
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize=9)
     axes[-1].set_xlabel("time [s]")
     fig.align_ylabels(axes)
     axes[0].set_title(title or " vs ".join(runs))
-    drawn = {"title": axes[0].get_title(), "panels": [(ax.get_ylabel(), ax.get_yscale()) for ax in axes],
+    drawn = {"title": axes[0].get_title(), "panels": [(label, ax.get_yscale()) for ax, label in zip(axes, labels)],
              "legend": [text.get_text() for text in axes[0].get_legend().get_texts()]}
     save(fig, path)
     return drawn
