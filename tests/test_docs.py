@@ -268,3 +268,19 @@ def test_license_and_ignored_outputs():
     for output in outputs:
         done = subprocess.run(["git", "check-ignore", "-q", "--no-index", output], cwd=ROOT)
         assert done.returncode == 0, f"{output} is not in .gitignore"
+
+
+@pytest.mark.quick
+def test_the_docs_name_every_built_in_one_fmu():
+    """The lists of the one-FMUs `crane-fmu build` writes named `CraneOpenLoop3d.fmu` but not `CraneLqr3d.fmu`,
+    `CraneLqr3dMove.fmu` and `CraneLqr3dPath.fmu`, which it writes too: each page lists every one of them."""
+    from crane_fmu import systems
+    from crane_fmu.build_scripts.one_fmu import not_native, one_fmu_name
+
+    built = [name for name in systems.tagged("one-fmu") if not not_native(systems.get(name))]
+    assert "lqr3d-path" in built
+    interoperability = (DOCS / "guide" / "interoperability.md").read_text()
+    assert [name for name in built if f"`{one_fmu_name(name)}.fmu`" not in interoperability] == []
+    readme = (ROOT / "README.md").read_text()
+    one_fmu_section = readme[readme.index("## One FMU for your tool"):readme.index("## Where it runs")]
+    assert [name for name in built if f"`{name}`" not in one_fmu_section] == []
