@@ -43,7 +43,7 @@ def test_the_distance_to_the_centre_line_has_its_known_answers():
     ("0,0,3,nan", 0.6, "of finite numbers"),
     ("0,0,a,1", 0.6, "numbers X0,Y0,X1,Y1,... [m] separated by commas"),
     ("0,0,3,0", 0.0, "--corridor-width must be > 0 and finite with --corridor, got 0.0"),
-    ("0,0,3,0", None, "--corridor-width must be > 0 and finite with --corridor, got None"),
+    ("0,0,3,0", None, "--corridor needs --corridor-width W: the corridor's width [m], > 0"),  # was "got None"
 ])
 def test_a_bad_corridor_is_refused_in_one_line_naming_it(text, width, message):
     with pytest.raises(ValueError, match=".*" + message.replace("[", r"\[").replace("]", r"\]").replace(".", r"\.")):

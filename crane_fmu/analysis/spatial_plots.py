@@ -44,7 +44,9 @@ def parse_corridor(text, width):
         raise ValueError(f"--corridor {text}: numbers X0,Y0,X1,Y1,... [m] separated by commas") from None
     if len(numbers) < 4 or len(numbers) % 2 or not all(map(math.isfinite, numbers)):
         raise ValueError(f"--corridor {text}: at least two points X0,Y0,X1,Y1 of finite numbers, in pairs")
-    if width is None or not (math.isfinite(width) and width > 0):
+    if width is None:
+        raise ValueError("--corridor needs --corridor-width W: the corridor's width [m], > 0")
+    if not (math.isfinite(width) and width > 0):
         raise ValueError(f"--corridor-width must be > 0 and finite with --corridor, got {width}")
     return list(zip(numbers[0::2], numbers[1::2]))
 
