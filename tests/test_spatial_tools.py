@@ -3,6 +3,7 @@ on Dask) with the metrics named after its swing angles, each figure against a ru
 a metric of another plant refused; ``linearize --loop`` on a plant of two axes refused in one line."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pyarrow.parquet as pq
@@ -13,6 +14,8 @@ from crane_fmu.cli import main
 from crane_fmu.cosim import run
 from crane_fmu.sweep import spec
 from crane_fmu.sweep.runner import run_study
+
+ROOT = Path(__file__).resolve().parent.parent
 
 SPATIAL = components.get("CranePlant3D").crane
 TARGETS = [1.0, 2.0]  # planner_x.x_d of the sweep's cases
@@ -84,3 +87,5 @@ def test_the_loop_analysis_of_a_plant_of_two_axes_is_refused_in_one_line(fmu_dir
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1
     assert "CranePlant3D has the demands ux, uy: the loop analysis takes one" in err
+    page = " ".join((ROOT / "docs" / "guide" / "interoperability.md").read_text().split())
+    assert err.strip().removeprefix("crane-fmu: error: ") in page  # the page says so (it did not)
