@@ -239,12 +239,12 @@ def residual_from(stop_time, plan=None, plant=None):
     """
     if plan is None:
         return 0.75 * stop_time
-    end = _planned_end(tuple(sorted(plan.items())))
+    end = planned_end(tuple(sorted(plan.items())))
     return end + mode_periods(**{k: v for k, v in (plant or {}).items() if k in CRANE.model})[0]
 
 
 @functools.cache
-def _planned_end(plan):
+def planned_end(plan):
     """The end [s] of the move the planner plans with the parameters ``plan`` (``((name, value), ...)``): computed once
     per board, not for each of its cases."""
     from crane_fmu.model import planner

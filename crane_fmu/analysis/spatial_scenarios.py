@@ -19,13 +19,14 @@ from crane_fmu.model.parameters import plant_parameters
 from crane_fmu.model.planner import modes
 from crane_fmu.systems import CORRIDOR, DIAGONAL, DRIVE3D, ELLIPTIC, L_PATH, PATH_PLAN, REST3D, planned
 
+from .planar_scenarios import DRIVE, planned_end  # DRIVE: each axis' (DRIVE3D on the plant)
 from .scenarios import CASES, STOPPED_DEG, Scenario, ScenarioRun, Target, register, register_notes, told_in
+from .spatial_plots import distance_to_path
 from .wind_equilibrium import wind_deflection
 
 PLANT = "CranePlant3D"
 CRANE = components.get(PLANT).crane
 PLANNERS = {"x": "planner", "y": "planner_y"}
-DRIVE = {"u_max": 2.0, "v_max": 1.0}  # each axis' (DRIVE3D on the plant), as the planar crane's
 T_SLOW, T_FAST = (2 * math.pi / w for w in modes(plant_parameters(components.get(PLANT).defaults()))[0])  # 2.37, 0.66 s
 MOVE_S = 2.0 / DRIVE["v_max"] + DRIVE["v_max"] / DRIVE["u_max"]  # S2's 2 m, swing ignored: 2.5 s
 WIND_S = round(round(MOVE_S + (T_SLOW + T_FAST) / 2, 1) + T_SLOW, 1)  # S10's (and S4's) arrival target: 6.4 s
@@ -101,14 +102,7 @@ def _about_equilibrium(signals, case):
 
 def path_deviation(x, y, waypoints=L_PATH):
     """The largest distance [m] of the points ``(x[k], y[k])`` from the polyline through ``waypoints``."""
-    x, y = np.asarray(x, float), np.asarray(y, float)
-    nearest = np.full(x.shape, np.inf)
-    for (ax, ay), (bx, by) in zip(waypoints, waypoints[1:]):
-        dx, dy = bx - ax, by - ay
-        length2 = dx * dx + dy * dy
-        f = np.zeros_like(x) if length2 == 0 else np.clip(((x - ax) * dx + (y - ay) * dy) / length2, 0.0, 1.0)
-        nearest = np.minimum(nearest, np.hypot(x - ax - f * dx, y - ay - f * dy))
-    return float(np.max(nearest))
+    return float(np.max(distance_to_path(waypoints, x, y)))
 
 
 def _path_measures(signals, case):
@@ -119,9 +113,7 @@ def _path_measures(signals, case):
 
 def plan_end(axes_plan):
     """The end [s] of the latest of the axes' planned moves (``{axis: planner parameters}``)."""
-    from crane_fmu.model import planner
-
-    return max(planner.configure({**planner.COMPONENT.defaults(), **p}).end for p in axes_plan.values())
+    return max(planned_end(tuple(sorted(p.items()))) for p in axes_plan.values())
 
 
 def _runs(sid):
