@@ -12,7 +12,6 @@ of the drive (:data:`MOVE_S`) and the periods of the two swing modes
 Seering's zero-vibration shapers) achieve. None is set from a controller's result.
 """
 
-import functools
 import math
 from collections import namedtuple
 
@@ -22,7 +21,7 @@ from crane_fmu import components
 from crane_fmu.cosim import Connection, System
 from crane_fmu.systems import measuring
 
-from .scenarios import CASES, STOPPED_DEG, Scenario, ScenarioRun, Target, register, register_notes, told_in
+from .scenarios import CASES, STOPPED_DEG, Scenario, ScenarioRun, Target, planned_end, register, register_notes, told_in
 from .wind_equilibrium import wind_deflection
 
 PLANT = "CranePlant"
@@ -241,15 +240,6 @@ def residual_from(stop_time, plan=None, plant=None):
         return 0.75 * stop_time
     end = planned_end(tuple(sorted(plan.items())))
     return end + mode_periods(**{k: v for k, v in (plant or {}).items() if k in CRANE.model})[0]
-
-
-@functools.cache
-def planned_end(plan):
-    """The end [s] of the move the planner plans with the parameters ``plan`` (``((name, value), ...)``): computed once
-    per board, not for each of its cases."""
-    from crane_fmu.model import planner
-
-    return planner.configure({**planner.COMPONENT.defaults(), **dict(plan)}).end
 
 
 def _runs(sid):

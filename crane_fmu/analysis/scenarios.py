@@ -18,6 +18,7 @@ Latin-hypercube cases of the plant's parameters (:data:`FACTORS`, :func:`design`
 that two controllers' figures pair up case by case (:mod:`crane_fmu.analysis.statistics`).
 """
 
+import functools
 import re
 from collections import namedtuple
 from collections.abc import Callable
@@ -253,6 +254,15 @@ def met(row, target):
         return True
     value = row.get(target.metric)
     return row.get("status") == "ok" and value is not None and value <= target.limit
+
+
+@functools.cache
+def planned_end(plan):
+    """The end [s] of the move the planner plans with the parameters ``plan`` (``((name, value), ...)``): computed once
+    per board (S1-S14), not for each of its cases."""
+    from crane_fmu.model import planner
+
+    return planner.configure({**planner.COMPONENT.defaults(), **dict(plan)}).end
 
 
 # the registrations: S1-S10 on the planar crane, S11-S14 on the crane in three dimensions

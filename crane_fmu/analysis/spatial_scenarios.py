@@ -19,13 +19,13 @@ from crane_fmu.model.parameters import plant_parameters
 from crane_fmu.model.planner import modes
 from crane_fmu.systems import CORRIDOR, DIAGONAL, DRIVE3D, ELLIPTIC, L_PATH, PATH_PLAN, REST3D, planned
 
-from .planar_scenarios import DRIVE, planned_end  # DRIVE: each axis' (DRIVE3D on the plant)
-from .scenarios import CASES, STOPPED_DEG, Scenario, ScenarioRun, Target, register, register_notes, told_in
+from .scenarios import CASES, STOPPED_DEG, Scenario, ScenarioRun, Target, planned_end, register, register_notes, told_in
 from .spatial_plots import distance_to_path
 from .wind_equilibrium import wind_deflection
 
 PLANT = "CranePlant3D"
 CRANE = components.get(PLANT).crane
+DRIVE = {"u_max": 2.0, "v_max": 1.0}  # each axis' (DRIVE3D on the plant), as the planar crane's
 PLANNERS = {"x": "planner", "y": "planner_y"}
 T_SLOW, T_FAST = (2 * math.pi / w for w in modes(plant_parameters(components.get(PLANT).defaults()))[0])  # 2.37, 0.66 s
 MOVE_S = 2.0 / DRIVE["v_max"] + DRIVE["v_max"] / DRIVE["u_max"]  # S2's 2 m, swing ignored: 2.5 s
