@@ -11,10 +11,12 @@ import itertools
 import json
 import math
 import multiprocessing
+import multiprocessing.forkserver
 import os
 import queue
 import signal
 import sys
+import tempfile
 import time
 import uuid
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -155,7 +157,8 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
         if workers == 1:
             return kept_rows((r for item in items for r in (task(item, *extra, **kwargs) if chunked else
                                                             [task(item, *extra, **kwargs)])), known)
-        with ProcessPoolExecutor(max_workers=workers, initializer=ignore_interrupts) as pool:
+        with ProcessPoolExecutor(max_workers=workers, mp_context=worker_context(), initializer=start_worker,
+                                 initargs=(dict(os.environ),)) as pool:
             futures = [pool.submit(_listed, task, item, *extra, **kwargs) if chunked else
                        pool.submit(task, item, *extra, **kwargs) for item in items]
             try:
@@ -206,22 +209,46 @@ def _dask_client(workers, scheduler):
             cluster.close()
 
 
+# What a worker process runs (a sweep's, a board's case or picture), imported once by the fork server
+WORKER_PRELOAD = ["distributed", "crane_fmu.compare"]
+
+
+def worker_context():
+    """The multiprocessing context of this package's worker processes: 'forkserver' where the platform has it, each
+    worker forked from a server process that has no other thread and has imported :data:`WORKER_PRELOAD` once
+    (a fork of this process can hang for ever: another of its threads may hold a lock at that moment, a logging
+    handler's or a queue's, which stays held in the child), else 'spawn' (Windows)."""
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return multiprocessing.get_context("spawn")
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(WORKER_PRELOAD)
+    multiprocessing.forkserver.ensure_running()  # with this package's preload, not the one Dask would set
+    return context
+
+
+def start_worker(environment):
+    """A worker process's start: the environment of the process that asked for it (a fork server's children have
+    the server's own, as it was when it started), Ctrl-C ignored."""
+    os.environ.clear()
+    os.environ.update(environment)
+    tempfile.tempdir = None  # the temporary folder as TMPDIR now says
+    ignore_interrupts()
+
+
 def local_cluster(workers):
-    """A local Dask cluster of ``workers`` single-threaded worker processes on the loopback, its workers forked from
-    this process where the platform can (they start with everything this process imported: no second import of
-    numpy, scipy, fmpy and this package per worker, about 2 s of CPU each), else started as fresh processes."""
+    """A local Dask cluster of ``workers`` single-threaded worker processes on the loopback, started as
+    :func:`worker_context` starts them."""
     import dask
     from distributed import LocalCluster
 
-    forked = "fork" in multiprocessing.get_all_start_methods()
-    with dask.config.set({"distributed.worker.multiprocessing-method": "fork" if forked else "spawn",
+    with dask.config.set({"distributed.worker.multiprocessing-method": worker_context().get_start_method(),
                           # not what a batch looks at: Dask's profiler (a look at every thread's stack each 10 ms)
                           # and its monitors of memory and system (each 0.1 and 0.5 s) less often
                           "distributed.worker.profile.enabled": False,
                           "distributed.worker.memory.monitor-interval": "1s",
                           "distributed.admin.system-monitor.interval": "2s"}):
         return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host=LOOPBACK,
-                            dashboard_address=DASHBOARD, silence_logs=50)
+                            dashboard_address=DASHBOARD, silence_logs=50, env=dict(os.environ))
 
 
 def _shared_column(client, items, extra):

@@ -11,17 +11,16 @@ again, saying why. Every row records its provenance (:func:`provenance`), and
 ``OUT/board.json`` what the board was made of, so that :func:`check` can run a
 sample of its cases again and confirm their figures bit for bit.
 
-From a script, call :func:`compare` under ``if __name__ == "__main__":``: where
-the platform cannot fork (Windows, macOS), the local Dask cluster starts its
-workers as fresh Python processes, which import the script again (the ``spawn``
-start method), as ``multiprocessing`` does.
+From a script, call :func:`compare` under ``if __name__ == "__main__":``: the
+local Dask cluster's workers, forked from a fork server (Linux, macOS) or started
+as fresh Python processes (Windows), import the script again, as
+``multiprocessing`` does.
 """
 
 import functools
 import hashlib
 import importlib.metadata
 import json
-import multiprocessing
 import os
 import platform
 import sys
@@ -40,7 +39,7 @@ from crane_fmu.analysis import scenarios as scenario_registry
 from crane_fmu.analysis.board_drawing import BoardDrawer, first_scenarios
 from crane_fmu.analysis.floor import stored_scenario_floors
 from crane_fmu.analysis.scenarios import Contender
-from crane_fmu.batch import JOURNAL, Progress, ignore_interrupts, read_journal, run_batch
+from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch, start_worker, worker_context
 from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
 from crane_fmu.cosim.suggest import did_you_mean
 from crane_fmu.cosim.system import read_fmu, unfed_inputs
@@ -436,11 +435,9 @@ def _items(cases, blobs):
 
 
 def _drawing(workers=None):
-    """A pool of (at most) two processes for the board's pictures, forked where the platform can (no start-up)."""
-    methods = multiprocessing.get_all_start_methods()
-    return ProcessPoolExecutor(max_workers=max(1, min(2, workers or os.cpu_count() or 1)),
-                               mp_context=multiprocessing.get_context("fork") if "fork" in methods else None,
-                               initializer=ignore_interrupts)
+    """A pool of (at most) two processes for the board's pictures."""
+    return ProcessPoolExecutor(max_workers=max(1, min(2, workers or os.cpu_count() or 1)), mp_context=worker_context(),
+                               initializer=start_worker, initargs=(dict(os.environ),))
 
 
 def _write(path, text):

@@ -196,8 +196,8 @@ def test_bench_sweep_prints_the_batch_paths_figures(native):
 
 
 def test_a_board_on_its_own_cluster_leaves_no_extracted_fmu(native, tmp_path, monkeypatch):
-    """A board on the batch path on a local cluster of its own (its workers forked, their instances reused and never
-    freed): when it ends, no FMU it extracted is left in the temporary folder, by this process or its workers."""
+    """A board on the batch path on a local cluster of its own (its workers' instances reused and never freed):
+    when it ends, no FMU it extracted is left in the temporary folder, by this process or its workers."""
     import tempfile
 
     from crane_fmu.compare import compare
@@ -205,7 +205,7 @@ def test_a_board_on_its_own_cluster_leaves_no_extracted_fmu(native, tmp_path, mo
 
     temporary = tmp_path / "tmp"
     temporary.mkdir()
-    monkeypatch.setenv("TMPDIR", str(temporary))  # the workers' temporary folder too: they are forked
+    monkeypatch.setenv("TMPDIR", str(temporary))  # the workers' temporary folder too: they take this environment
     monkeypatch.setattr(tempfile, "tempdir", str(temporary))
     rows = compare(tmp_path / "board", ["LqrController"], fmu_dir=native[2], workers=2, quick=True, cases=2,
                    scenarios=["S1", "S3"], animate=(), only=True, progress=False, log=lambda *_: None)

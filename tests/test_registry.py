@@ -90,7 +90,7 @@ def test_swept_on_dask(pd_build, tmp_path, monkeypatch):
                         "parameters": {"controller.k_x": [2.0, 8.0], "controller.k_v": [3.0, -1.0]}})
     temporary = tmp_path / "tmp"
     temporary.mkdir()
-    monkeypatch.setenv("TMPDIR", str(temporary))  # the workers' temporary folder, started or forked
+    monkeypatch.setenv("TMPDIR", str(temporary))  # the workers' temporary folder: they take this environment
     monkeypatch.setattr(tempfile, "tempdir", str(temporary))
     summary = run_study(study, tmp_path / "out", pd_build, workers=2, progress=False)
     ours = {Path(folder) for folders in _SPARE_FOLDERS.values() for folder, _ in folders}  # removed at our exit

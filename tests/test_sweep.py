@@ -310,3 +310,23 @@ def test_ctrl_c_in_a_process_pool_batch_drops_the_items_not_begun():
     with pytest.raises(KeyboardInterrupt):
         run_batch(_nap, list(range(40)), workers=2, progress=Interrupt())
     assert time.monotonic() - start < 5  # 40 items of 0.5 s on 2 workers would take 10 s
+
+
+HELD = threading.Lock()  # held by the test below while workers start
+
+
+def _free_in_worker(item):
+    return {"case_id": item, "status": "ok", "free": HELD.acquire(timeout=3), "tmpdir": os.environ.get("TMPDIR")}
+
+
+@pytest.mark.parametrize("on", ["processes", "dask"])
+def test_workers_are_not_forks_of_a_process_whose_locks_are_held(on, tmp_path, monkeypatch):
+    """A worker is not a fork of this process: a lock held here (by Dask's threads, a logging handler's, a queue's)
+    would stay held in a fork for ever, as it did in a board that hung in CI. Workers see this process's
+    environment as it is when they start."""
+    from crane_fmu.batch import run_batch
+
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    with HELD:
+        rows = run_batch(_free_in_worker, [0, 1], on=on, workers=2)
+    assert sorted((r["free"], r["tmpdir"]) for r in rows) == [(True, str(tmp_path))] * 2
