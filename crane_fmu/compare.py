@@ -47,7 +47,7 @@ from crane_fmu.sweep.runner import local_fmus, write_table
 
 SIGNAL_EVERY = 0.02  # s: the signals kept for plots and animations
 ROW_FORMAT = 4  # the version of what a row holds: a journal of another format is not reused
-ANIMATE = ("S1", "S2", "S7")  # the scenarios whose nominal runs keep their signals
+ANIMATE = ("S1", "S2", "S7", "S11", "S12", "S13", "S14")  # the scenarios whose nominal runs keep their signals
 
 
 def contenders(chosen=(), fmu_dir="build/fmus", only=False):

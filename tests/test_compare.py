@@ -182,6 +182,15 @@ def test_animations_are_drawn_only_when_their_run_changed(quick_board, template_
     assert (out / "animations" / "S2_LqrController.gif").stat().st_size > 10_000
 
 
+def test_a_scenario_of_the_crane_in_three_dimensions_is_animated_in_both_planes_and_from_above(native, tmp_path):
+    from PIL import Image
+
+    compare(tmp_path, ["LqrController3D"], native[2], scenarios=["S12"], progress=False, animate=("S12",), workers=1,
+            log=lambda _: None)
+    gif = Image.open(tmp_path / "animations" / "S12_LqrController3D.gif")
+    assert gif.n_frames > 1 and gif.size[0] > 2 * gif.size[1]  # three views side by side
+
+
 def test_a_controller_that_fails_in_one_case_is_scored_failed_there_only(quick_board):
     """Which case fails follows from the template's own rule, not from today's output: MyController discards
     every step longer than its max_step = 0.02 s, and of all the quick suite's cases only S6's h = 50 ms
@@ -275,7 +284,7 @@ def test_a_rerun_resumes(quick_board, template_fmu, board_dir, dask_scheduler):
     (["--controller", "{fmu_dir}/LqrController.fmu"],
      "LqrController.fmu and LqrController; rename the FMU file or give --only"),
     (["--workers", "0"], "--workers must be >= 1"),
-    (["--animate", "S4"], "--animate S4: choose none, all, S1, S2, S7"),
+    (["--animate", "S4"], "--animate S4: choose none, all, S1, S2, S7, S11, S12, S13, S14"),
     (["--only"], "--only scores only the --controller ones: give at least one --controller"),
     (["--scheduler", "tcp://127.0.0.1:9"], "--scheduler tcp://127.0.0.1:9: no Dask scheduler answers there"),
 ])

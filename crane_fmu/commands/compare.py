@@ -34,7 +34,7 @@ def arguments(p):
                         "OUT/quick")
     p.add_argument("--cases", type=int, metavar="N", help="cases of the paired design (default 64, --quick 16)")
     p.add_argument("--scenario", metavar="S1,S6", help="the scenarios to run (default: every one)")
-    p.add_argument("--animate", default="S2", metavar="none|all|S1|S2|S7",
+    p.add_argument("--animate", default="S2", metavar="none|all|S1|S2|S7|S11-S14",
                    help="whose nominal runs to animate (default S2); drawn again only when the run changed")
     p.add_argument("--check", metavar="OUT", help="instead: run a random sample of the board in OUT (or, where OUT "
                                                   "holds none, of the quick board in OUT/quick) again and compare "
