@@ -15,7 +15,7 @@ every parameter.
 
 import xml.etree.ElementTree as ET
 
-from crane_fmu.model.tables import BASE_UNITS, DEG_PER_RAD, xml_double
+from crane_fmu.model.tables import BASE_UNITS, DEG_PER_RAD, declared_type, enumeration_value, xml_double
 
 
 def _unit_definitions(units, display_units):
@@ -25,6 +25,24 @@ def _unit_definitions(units, display_units):
         ET.SubElement(unit, "BaseUnit", {k: str(v) for k, v in BASE_UNITS[name].items()})
         if name in display_units:
             ET.SubElement(unit, "DisplayUnit", name=display_units[name], factor=repr(DEG_PER_RAD))
+    return node
+
+
+def _type_definitions(table, fmi3):
+    """TypeDefinitions of the table's Enumeration variables (None where it has none): one type per variable, its
+    items valued 1, 2, ... in order (``tables.enumeration``)."""
+    enumerations = [v for v in table if v.type == "Enumeration"]
+    if not enumerations:
+        return None
+    node = ET.Element("TypeDefinitions")
+    for v in enumerations:
+        if fmi3:
+            kind = ET.SubElement(node, "EnumerationType", name=declared_type(v), description=v.description)
+        else:
+            kind = ET.SubElement(ET.SubElement(node, "SimpleType", name=declared_type(v), description=v.description),
+                                 "Enumeration")
+        for value, item in enumerate(v.items, start=1):
+            ET.SubElement(kind, "Item", name=item, value=str(value))
     return node
 
 
@@ -62,6 +80,10 @@ def postprocess(xml_bytes, table, display_units, dependencies):
     units = set()
     for sv, v in zip(scalars, table):
         sv.set("description", v.description)
+        if v.type == "Enumeration":  # pythonfmu's (and the native skeleton's) Integer
+            for child in list(sv):
+                sv.remove(child)
+            ET.SubElement(sv, "Enumeration", declaredType=declared_type(v), start=str(enumeration_value(v, v.start)))
         real = sv.find("Real")
         if real is not None and real.get("start") is not None:
             real.set("start", xml_double(v.start))  # pythonfmu's %.16g turns 9.8 into 9.800000000000001
@@ -74,6 +96,9 @@ def postprocess(xml_bytes, table, display_units, dependencies):
     # Schema order: CoSimulation, UnitDefinitions, ..., LogCategories, ...
     position = list(root).index(root.find("CoSimulation")) + 1
     root.insert(position, _unit_definitions(units, display_units))
+    types = _type_definitions(table, fmi3=False)
+    if types is not None:
+        root.insert(position + 1, types)
 
     index = {v.name: i + 1 for i, v in enumerate(table)}  # FMI 2.0 indices: 1-based ScalarVariable positions
     parameters = [index[v.name] for v in table if v.causality == "parameter"]
@@ -108,6 +133,11 @@ def postprocess3(xml_bytes, table, display_units, dependencies):
         if v is None:
             continue
         vrs[v.name] = int(node.get("valueReference"))
+        if v.type == "Enumeration":  # pythonfmu3's (and the native skeleton's) Int64
+            node.tag = "Enumeration"
+            node.attrib.pop("unit", None)
+            node.set("declaredType", declared_type(v))
+            node.set("start", str(enumeration_value(v, v.start)))
         if node.get("start") is not None and v.type == "Real":
             node.set("start", xml_double(v.start))
         if v.unit in display_units:
@@ -115,6 +145,12 @@ def postprocess3(xml_bytes, table, display_units, dependencies):
     for unit in root.find("UnitDefinitions"):
         if unit.get("name") in display_units:
             ET.SubElement(unit, "DisplayUnit", name=display_units[unit.get("name")], factor=repr(DEG_PER_RAD))
+    types = _type_definitions(table, fmi3=True)
+    if types is not None:
+        old = root.find("TypeDefinitions")
+        if old is not None:
+            root.remove(old)
+        root.insert(list(root).index(root.find("UnitDefinitions")) + 1, types)
     parameters = [vrs[v.name] for v in table if v.causality == "parameter"]
     names = {vr: name for name, vr in vrs.items()}
     structure = root.find("ModelStructure")

@@ -43,7 +43,7 @@ from crane_fmu.build_scripts.folders import fmi3_dir, native_dir
 from crane_fmu.build_scripts.model_description import _unit_definitions, postprocess, postprocess3
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.model import rules
-from crane_fmu.model.tables import DISPLAY_UNITS, xml_double
+from crane_fmu.model.tables import DISPLAY_UNITS, enumeration_value, xml_double
 
 SOURCES = Path(fmu_src.__file__).parent
 FOLDERS = tuple(SOURCES / folder for folder in ("framework", "models", "system"))  # where copy_sources looks
@@ -127,18 +127,24 @@ def variables_header(component, guid=None):
     ``parameter_rules()``, the C check of the component's rules (:func:`.rules.c_function`)."""
     rows, enum = [], []
     causality = {"parameter": "PARAMETER", "input": "INPUT", "output": "OUTPUT"}
-    strings = [v.name for v in component.variables if v.type == "String"]
+    strings = [v.name for v in component.variables if v.type in ("String", "Enumeration")]  # kept by name
+    items = []
     for vr, v in enumerate(component.variables):
-        if v.type not in ("Real", "String") or (v.type == "String" and v.causality != "parameter"):
+        if v.type not in ("Real", "String", "Enumeration") or (v.type != "Real" and v.causality != "parameter"):
             raise ValueError(f"{component.model_identifier}.{v.name}: the native framework has Reals and String "
-                             "parameters only")
-        if v.type == "String":
+                             "and Enumeration parameters only")
+        if v.type == "Enumeration":
+            names = ", ".join(f'"{i}"' for i in v.items)
+            items.append(f"static const char *const ITEMS_{v.name}[] = {{{names}}};")
+            rows.append(f'    {{"{v.name}", {causality[v.causality]}, ENUMERATION, 0.0, "{v.start}", ITEMS_{v.name}, '
+                        f'{len(v.items)}}},')
+        elif v.type == "String":
             text = v.start.encode("unicode_escape").decode("ascii").replace('"', '\\"')
-            rows.append(f'    {{"{v.name}", {causality[v.causality]}, STRING, 0.0, "{text}"}},')
+            rows.append(f'    {{"{v.name}", {causality[v.causality]}, STRING, 0.0, "{text}", NULL, 0}},')
         else:
             start = "0.0" if v.start is None else xml_double(v.start)
             start = {"INF": "INFINITY", "-INF": "-INFINITY"}.get(start, start)
-            rows.append(f'    {{"{v.name}", {causality[v.causality]}, REAL, {start}, NULL}},')
+            rows.append(f'    {{"{v.name}", {causality[v.causality]}, REAL, {start}, NULL, NULL, 0}},')
         enum.append(f"VR_{v.name} = {vr},")
     enum += [f"STRING_{name} = {i}, /* its place among the Strings */" for i, name in enumerate(strings)]
     outputs = [i for i, v in enumerate(component.variables) if v.causality == "output"]
@@ -165,8 +171,11 @@ enum {{
     N_VARIABLES = {len(component.variables)},
     FIRST_OUTPUT = {outputs[0]},
     N_OUTPUTS = {len(outputs)},
-    N_STRINGS = {len(strings)}
+    N_STRINGS = {len(strings)},
+    N_ENUMERATIONS = {len(items)}
 }};
+
+{chr(10).join(items)}
 
 static const VariableRow VARIABLE_TABLE[N_VARIABLES] = {{
 {chr(10).join(rows)}
@@ -212,6 +221,8 @@ def _skeleton2(component, sources, guid):
         sv = ET.SubElement(variables, "ScalarVariable", attrs)
         if v.type == "String":
             ET.SubElement(sv, "String", start=v.start)
+        elif v.type == "Enumeration":  # its type declared by model_description.postprocess
+            ET.SubElement(sv, "Integer", start=str(enumeration_value(v, v.start)))
         else:
             ET.SubElement(sv, "Real", {} if v.start is None else {"start": xml_double(v.start)})
     ET.SubElement(root, "ModelStructure")
@@ -241,6 +252,9 @@ def _skeleton3(component, guid):
             attrs["initial"] = "calculated"
         elif v.type == "String":
             ET.SubElement(ET.SubElement(variables, "String", attrs), "Start", value=v.start)
+            continue
+        elif v.type == "Enumeration":  # its type declared by model_description.postprocess3
+            ET.SubElement(variables, "Int64", attrs, start=str(enumeration_value(v, v.start)))
             continue
         else:
             attrs["start"] = xml_double(v.start)

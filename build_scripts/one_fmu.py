@@ -31,6 +31,7 @@ from crane_fmu import systems as registry
 from crane_fmu.build_scripts import incremental, native
 from crane_fmu.cosim.connections import connect
 from crane_fmu.cosim.exchange import exchange_calls
+from crane_fmu.model.tables import enumeration_value
 
 
 def one_fmu_name(system_name):
@@ -162,8 +163,10 @@ def system_config(system, p, name):
     arrays, rows = [], []
     for i, n in enumerate(instances):
         kind = p.kinds[n]
-        reals = {k: v for k, v in p.values[n].items() if tables[n][vr[n][k]].type != "String"}
+        reals = {k: v for k, v in p.values[n].items() if tables[n][vr[n][k]].type == "Real"}
         strings = {k: v for k, v in p.values[n].items() if tables[n][vr[n][k]].type == "String"}
+        integers = {k: enumeration_value(tables[n][vr[n][k]], v) for k, v in p.values[n].items()
+                    if tables[n][vr[n][k]].type == "Enumeration"}
         items = {
             "outputs": ("unsigned", [str(vr[n][o]) for o in outputs[n]]),
             "inputs": ("unsigned", [str(vr[n][inp]) for inp, _ in p.inputs[n]]),
@@ -172,6 +175,8 @@ def system_config(system, p, name):
             "reals": ("double", [_c_double(v) for v in reals.values()]),
             "string_vrs": ("unsigned", [str(vr[n][k]) for k in strings]),
             "strings": ("char *const", [_c_string(v) for v in strings.values()]),
+            "integer_vrs": ("unsigned", [str(vr[n][k]) for k in integers]),
+            "integers": ("long long", [str(v) for v in integers.values()]),
         }
         refs = {}
         for key, (ctype, values) in items.items():
@@ -179,7 +184,8 @@ def system_config(system, p, name):
             arrays.append(text)
         rows.append(f"    {{{_c_string(n)}, &{kind}_MODEL, {len(outputs[n])}, {refs['outputs']}, {buffer[n]}, "
                     f"{len(p.inputs[n])}, {refs['inputs']}, {refs['sources']}, {len(reals)}, {refs['real_vrs']}, "
-                    f"{refs['reals']}, {len(strings)}, {refs['string_vrs']}, {refs['strings']}}},")
+                    f"{refs['reals']}, {len(strings)}, {refs['string_vrs']}, {refs['strings']}, {len(integers)}, "
+                    f"{refs['integer_vrs']}, {refs['integers']}}},")
     own = {v.name: i for i, v in enumerate(p.variables)}
     links = []
     for var, targets in p.links.items():

@@ -20,6 +20,7 @@ from xml.etree.ElementTree import tostring
 
 from crane_fmu.cosim import in_process
 from crane_fmu.cosim.instance import FmiError, Instance
+from crane_fmu.model.tables import enumeration_name
 
 _PLAIN = set()  # the components made of plain law functions
 _SPEC = re.compile(r"(?P<file>.+\.py)(?::(?P<name>[A-Za-z_]\w*))?")
@@ -162,6 +163,11 @@ class LawInstance(Instance):
 
     def set(self, name, value):
         v = self._variable(name)
+        if v.type == "Enumeration":  # kept by name, as the FMU's runtime keeps it; given by name or value
+            row = next(r for r in self.component.variables if r.name == name)
+            value = self._guard("fmi2SetInteger", enumeration_name, row, self.enumeration_value(name, value))
+            self._guard("fmi2SetInteger", self.runtime.set_parameter, name, value)
+            return
         value = str(value) if v.type == "String" else float(value)
         if v.causality == "input":
             i = self.inputs.index(name)

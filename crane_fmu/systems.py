@@ -206,10 +206,27 @@ def prepare(system, step=None, stop_time=None, values=(), check=True):
         component = components.find(kind)
         if component and "h" in component.names("parameter") and "h" not in system.parameters.get(name, {}):
             designed[name] = {"h": step}
-    system = system.with_parameters(designed)
+    system = named_items(system.with_parameters(designed))
     if check:
         check_parameters(system)
     return system
+
+
+def named_items(system):
+    """The system with each Enumeration value given as its item's value (an SSP or OSP file's Integer, 3) given by
+    the item's name (``zvd``), as the components' rules and their Python models read it; any other value kept (the
+    rules refuse it)."""
+    from crane_fmu.model.tables import enumeration_name
+
+    named = {}
+    for name, kind in kinds(system).items():
+        component = components.find(kind)
+        rows = {v.name: v for v in component.variables if v.type == "Enumeration"} if component else {}
+        for variable, value in system.parameters.get(name, {}).items():
+            if variable in rows and isinstance(value, (int, float)) and not isinstance(value, bool) and \
+                    value in range(1, len(rows[variable].items) + 1):
+                named.setdefault(name, {})[variable] = enumeration_name(rows[variable], int(value))
+    return system.with_parameters(named) if named else system
 
 
 def modelled(system):
@@ -378,8 +395,8 @@ L_PATH = ((0.0, 0.0), (3.0, 0.0), (3.0, 2.0))  # S13's path [m]
 CORRIDOR = 0.3  # S13: the load within this of the path's centre line [m]
 
 
-# the issue's diagonal move (2 m, 1.5 m); each planner keeps its default ZV shaper (no String value: OMSimulator
-# applies none) and plans along its own x for the axis its ddx_ref drives
+# the issue's diagonal move (2 m, 1.5 m); each planner keeps its default ZV shaper and plans along its own x for the
+# axis its ddx_ref drives
 register(System("open-loop-3d", {"plant": "CranePlant3D", "planner_x": "TrajectoryPlanner",
                                  "planner_y": "TrajectoryPlanner"},
                 connections=tuple(Connection(f"planner_{a.position}", "ddx_ref", "plant", a.demand)

@@ -39,10 +39,22 @@ LOG = [[]]
 LOGGER = fmi2CallbackLoggerTYPE(lambda env, name, status, category, message: LOG[0].append(message.decode()))
 
 
+def enumerations(md):
+    """``{variable: {item: value}}`` of the Enumeration variables of a model description."""
+    return {v.name: {item.name: int(item.value) for item in v.declaredType.items}
+            for v in md.modelVariables if v.type == "Enumeration"}
+
+
+def item_value(items, value):
+    """An Enumeration's value given by its item's name (a str) or as a number."""
+    return items[value] if isinstance(value, str) else int(value)
+
+
 def open_native(path, version, parameters=None, instance_name="c", model_exchange=False):
     """An instance in initialisation mode with ``parameters`` set: ``(fmu, vr, set, get)``.
 
-    The real parameters are set in one call, in their order, then each str one as a String. With
+    The real parameters are set in one call, in their order, then each str one as a String, an Enumeration (by
+    its item's name or value) as an Integer (Int64). With
     ``model_exchange`` an instance of the FMU's Model Exchange interface.
     """
     md = read_model_description(str(path))
@@ -62,11 +74,14 @@ def open_native(path, version, parameters=None, instance_name="c", model_exchang
         fmu.instantiate()
         fmu.enterInitializationMode(startTime=0.0)
         set_, get = fmu.setFloat64, fmu.getFloat64
-    reals = {k: v for k, v in (parameters or {}).items() if not isinstance(v, str)}
+    enums = enumerations(md)
+    reals = {k: v for k, v in (parameters or {}).items() if not isinstance(v, str) and k not in enums}
     if reals:
         set_([vr[k] for k in reals], list(reals.values()))
     for key, value in (parameters or {}).items():
-        if isinstance(value, str):
+        if key in enums:
+            (fmu.setInteger if version == 2 else fmu.setInt64)([vr[key]], [item_value(enums[key], value)])
+        elif isinstance(value, str):
             fmu.setString([vr[key]], [value])
     return fmu, vr, set_, get
 
@@ -79,7 +94,8 @@ def close(fmu):
 def messages(path, settings, steps=(), read=(), read_at_end=(), instance_name="c", logging_on=False):
     """``(statuses, log)`` of an FMI 2.0 run, call by call, of the FMU at ``path``.
 
-    The run sets ``settings`` in initialisation mode (one call each; a str is set as a String), gets ``read``
+    The run sets ``settings`` in initialisation mode (one call each; a str is set as a String, an Enumeration
+    by its item's name or value as an Integer), gets ``read``
     (names; a call named ``get``) before and after initialisation ends, makes ``steps``, each ``(t, h)`` or
     ``(t, h, {input: value})`` with the inputs set before the step, and at last gets ``read_at_end`` (a call
     named ``get`` and the names). It stops at the first call that fails; that call's name and status end the
@@ -97,7 +113,11 @@ def messages(path, settings, steps=(), read=(), read_at_end=(), instance_name="c
                     modelIdentifier=md.coSimulation.modelIdentifier, instanceName=instance_name)
     fmu.instantiate(callbacks=callbacks, loggingOn=logging_on)
 
+    enums = enumerations(md)
+
     def setter(name, value):
+        if name in enums:
+            return lambda: fmu.setInteger([vr[name]], [item_value(enums[name], value)])
         if isinstance(value, str):
             return lambda: fmu.setString([vr[name]], [value])
         return lambda: fmu.setReal([vr[name]], [value])

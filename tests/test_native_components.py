@@ -25,6 +25,8 @@ from native_fmus import (
     close,
     compare_to_python,
     compiler,
+    enumerations,
+    item_value,
     messages,
     open_native,
     outputs_beside_python,
@@ -127,18 +129,37 @@ def test_planner_outputs_equal_the_python_model_at_random_parameters_and_times(n
     assert np.count_nonzero(theirs[:, 3]) > 1000 and np.count_nonzero(theirs[:, 2]) > 500  # moves and swing
 
 
-def test_the_shaper_string_is_read_back_and_changes_the_plan(native):
-    fmu, vr, set_, get = open_native(native[2] / "TrajectoryPlanner.fmu", 2, {"x_d": 2.0})
-    assert fmu.getString([vr["shaper"]]) == [b"zv"]
-    fmu.setString([vr["shaper"]], ["ei"])
-    assert fmu.getString([vr["shaper"]]) == [b"ei"]
+@pytest.mark.parametrize("version", [2, 3])
+def test_the_shaper_enumeration_is_read_back_and_changes_the_plan(native, version):
+    """The shaper is an Enumeration (none 1, zv 2, zvd 3, ei 4): got and set as an Integer (FMI 3.0: Int64), not a
+    String."""
+    fmu, vr, set_, get = open_native(native[version] / "TrajectoryPlanner.fmu", version, {"x_d": 2.0})
+    ref = vr["shaper"]
+    get_int, set_int = (fmu.getInteger, fmu.setInteger) if version == 2 else (fmu.getInt64, fmu.setInt64)
+    assert list(get_int([ref])) == [2]
+    set_int([ref], [4])
+    assert list(get_int([ref])) == [4]
     fmu.exitInitializationMode()
     fmu.doStep(0.0, 1.0)
     ei, zv = (PLANNER.output(PLANNER.check({"x_d": 2.0, "shaper": k}), (1.0,), ()) for k in ("ei", "zv"))
-    assert get([vr["x_ref"], vr["theta1_ref"]]) == [ei[0], ei[3]] and ei[0] != zv[0]
+    assert list(get([vr["x_ref"], vr["theta1_ref"]])) == [ei[0], ei[3]] and ei[0] != zv[0]
     with pytest.raises(FMICallException):  # a fixed parameter once initialisation has ended
-        fmu.setString([vr["shaper"]], ["zv"])
+        set_int([ref], [2])
     fmu.freeInstance()
+    fmu, *_ = open_native(native[version] / "TrajectoryPlanner.fmu", version)
+    with pytest.raises(FMICallException):  # a String it is not
+        fmu.setString([ref], ["zv"])
+    fmu.freeInstance()
+
+
+@pytest.mark.parametrize("value", [0, 5, -1, 2 ** 31 - 1])
+def test_a_shaper_value_no_item_has_is_refused_when_set_like_the_python_fmu(fmu_dir, native, value):
+    """One line naming the value and every item's value and name, from both FMUs, at the fmi2SetInteger."""
+    ours = messages(native[2] / "TrajectoryPlanner.fmu", {"x_d": 2.0, "shaper": value})
+    theirs = messages(fmu_dir / "TrajectoryPlanner.fmu", {"x_d": 2.0, "shaper": value})
+    assert ours == theirs
+    assert ours[0][-2] == "set shaper: 3"
+    assert ours[1][-1] == f"fmi2SetInteger: shaper must be one of 1 (none), 2 (zv), 3 (zvd), 4 (ei), got {value}"
 
 
 # ---- EnergyController: outputs at random inputs and parameters ---------------------------------------------------
@@ -212,9 +233,8 @@ def test_disturbance_outputs_equal_the_python_model_over_random_steps(native, ve
 
 REFUSED = {
     "TrajectoryPlanner": [{"m1": -1.0}, {"m2": NAN}, {"l1": 0.0}, {"l2": INF}, {"g": -INF}, {"u_max": 0.0},
-                          {"v_max": NAN}, {"u_max": INF}, {"v_max": INF}, {"shaper": "ZV"}, {"shaper": ""},
-                          {"shaper": "it's"}, {"x0": NAN}, {"x_d": INF}, {"t0": -INF},
-                          {"u_max": -1.0, "shaper": "zz", "x0": NAN},
+                          {"v_max": NAN}, {"u_max": INF}, {"v_max": INF}, {"x0": NAN}, {"x_d": INF}, {"t0": -INF},
+                          {"u_max": -1.0, "shaper": "zvd", "x0": NAN},
                           {"m2": 0.0, "l1": 1.0, "l2": 1.0},  # modes coincide: Python's ZeroDivisionError
                           {"m2": 0.0, "l1": 1.0, "l2": 1.0 + 1e-15}],  # sqrt of a rounded negative: its ValueError
     "EnergyController": [{"m1": 0.0}, {"m2": -0.5}, {"l1": NAN}, {"g": INF}, {"k_c": 0.0}, {"k_p": -1.0},
@@ -382,9 +402,11 @@ def _python_rows(component, settings, steps, h):
 def _host_arguments(path, settings, steps, h):
     md = read_model_description(str(path))
     vr = {v.name: v.valueReference for v in md.modelVariables}
+    enums = enumerations(md)
     outputs = [v.valueReference for v in md.modelVariables if v.causality == "output"]
     return [md.coSimulation.modelIdentifier, md.guid, steps, h,
-            *[f"{vr[k]}s={v}" if isinstance(v, str) else f"{vr[k]}={v!r}" for k, v in settings.items()], *outputs]
+            *[f"{vr[k]}i={item_value(enums[k], v)}" if k in enums else f"{vr[k]}s={v}" if isinstance(v, str) else
+              f"{vr[k]}={v!r}" for k, v in settings.items()], *outputs]
 
 
 @pytest.fixture(scope="module")
@@ -440,7 +462,8 @@ OTHER_SHAPERS = [s for s in SHAPERS if s != PLANNER.defaults()["shaper"]]
 @pytest.mark.parametrize("shaper", OTHER_SHAPERS)
 def test_the_planners_other_shapers_in_the_c_host_and_under_wine_give_the_python_models_outputs(native, unpacked, host,
                                                                                               wine, shaper):
-    """The host sets the String ``shaper``: Linux's rows bit for bit, the Windows DLL's to 1e-12 relative."""
+    """The host sets the Enumeration ``shaper`` (fmi2SetInteger): Linux's rows bit for bit, the Windows DLL's to 1e-12
+    relative."""
     command, folder, env = wine
     settings = {**HOST_CASES["TrajectoryPlanner"][0], "shaper": shaper}
     _, guid, *rest = _host_arguments(native[2] / "TrajectoryPlanner.fmu", settings, 5000, 1e-3)
@@ -498,7 +521,8 @@ def test_the_planners_source_fmu_compiles_with_fmpy_and_runs(native, version, tm
     monkeypatch.setenv("PATH", str(Path(sys.executable).parent) + os.pathsep + os.environ["PATH"])  # the venv's cmake
     (tmp_path / "cmake").mkdir()
     build_platform_binary(folder, build_dir=tmp_path / "cmake")
-    settings = dict(start_values={"x_d": 2.0, "shaper": "ei"}, output_interval=1e-3, stop_time=10.0)
+    ei = enumerations(read_model_description(str(native[version] / "TrajectoryPlanner.fmu")))["shaper"]["ei"]
+    settings = dict(start_values={"x_d": 2.0, "shaper": ei}, output_interval=1e-3, stop_time=10.0)  # fmpy: a value
     result = fmpy.simulate_fmu(str(folder), **settings)
     reference = fmpy.simulate_fmu(str(native[version] / "TrajectoryPlanner.fmu"), **settings)
     assert result["x_ref"][-1] == 2.0 and np.max(result["dx_ref"]) > 0.5

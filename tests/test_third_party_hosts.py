@@ -86,9 +86,6 @@ def test_fmusim_runs_every_fmu_like_our_master(fmu_dir, tmp_path, kind, version,
 
 # ---- OMSimulator: every SSP file we write, as it is --------------------------------------------------------------
 
-STRING_ERROR = "[importStartValuesHelper] Failed to import ssv:Parameter:Unknown ParameterBinding-type"
-
-
 def _omsimulator(ssp, stop_time, tmp_path):
     """OMSimulator on an SSP file or FMU, from a temporary folder: ``(result, log)``."""
     out = tmp_path / "result.mat"
@@ -98,40 +95,46 @@ def _omsimulator(ssp, stop_time, tmp_path):
     return out, log
 
 
-def _strings(system):
-    """``{instance: {String parameter: value}}`` the system sets."""
-    return {name: {k: v for k, v in values.items() if isinstance(v, str)}
-            for name, values in system.parameters.items() if any(isinstance(v, str) for v in values.values())}
-
-
 @pytest.mark.parametrize("name", [s.name for s in systems.registered()])
 def test_omsimulator_runs_every_built_in_ssp_file_like_our_master(fmu_dir, tmp_path, name):
     """``OMSimulator --stopTime=T --resultFile=R FILE.ssp`` on the file ``crane-fmu build`` wrote: at the file's step
     (its OMSimulator annotation; OMSimulator reads no other) and stop time (paper; the others 1 s), no warning or
     error in its log (no +-inf parameter, no String connector) and no algebraic loop (the plant's outputs read no
-    input). It applies no String value: a system that sets one (hoist-transport's shapers) runs with the FMUs'
-    own Strings, with one error per value; it then equals our master's run of that, and not the system's."""
+    input); the system's values applied, Enumerations too (hoist-transport's shapers)."""
     ssp = systems_dir(fmu_dir) / f"{name}.ssp"
     with load_system(ssp) as system:
         assert (system.step, system.stop_time) == (systems.get(name).step, systems.get(name).stop_time)
     stop_time = system.stop_time if name == "paper" else SHORT
     out, log = _omsimulator(ssp, stop_time, tmp_path)
-    strings = _strings(systems.get(name))
-    assert omsimulator_log_problems(log) == [f"error:   {STRING_ERROR}"] * sum(map(len, strings.values()))
+    assert omsimulator_log_problems(log) == []
     assert "Alg. loop" not in log
     system = systems.bind(systems.get(name))
-    applied = dataclasses.replace(system, parameters={
-        instance: {k: v for k, v in values.items() if not isinstance(v, str)}
-        for instance, values in system.parameters.items()})
-    ours = run(applied, fmu_dir, stop_time=stop_time).columns()
+    ours = run(system, fmu_dir, stop_time=stop_time).columns()
     theirs = read_oms_mat(out, system.step)
     prefix = re.sub(r"\W", "_", name)
     pairs = [(f"{prefix}.{prefix}.{column}", column) for column in ours if column != "time"]
     assert np.array_equal(theirs["k"], np.arange(len(ours["time"])))
     assert worst_difference(theirs, ours, pairs) <= SAME
-    if strings:
-        own = run(system, fmu_dir, stop_time=stop_time).columns()
-        assert worst_difference(theirs, own, pairs) > 1e-3
+
+
+def test_omsimulator_applies_hoist_transports_shapers_over_its_whole_run(fmu_dir, tmp_path):
+    """hoist-transport.ssp sets the planners' shapers (zvd, none: Enumerations, not the FMU's zv): OMSimulator's 12 s
+    equal our master's (fmpy) run of the system, and differ from its run with the FMUs' own shaper (zv), which is
+    what OMSimulator ran while the shaper was a String it does not apply."""
+    ssp = systems_dir(fmu_dir) / "hoist-transport.ssp"
+    system = systems.bind(systems.get("hoist-transport"))
+    shapers = {name: values["shaper"] for name, values in system.parameters.items() if "shaper" in values}
+    assert shapers == {"planner": "zvd", "hoist": "none"}
+    out, log = _omsimulator(ssp, system.stop_time, tmp_path)
+    assert omsimulator_log_problems(log) == []
+    ours = run(system, fmu_dir).columns()
+    theirs = read_oms_mat(out, system.step)
+    pairs = [(f"hoist_transport.hoist_transport.{column}", column) for column in ours if column != "time"]
+    assert np.array_equal(theirs["k"], np.arange(len(ours["time"])))
+    assert worst_difference(theirs, ours, pairs) <= SAME
+    default = dataclasses.replace(system, parameters={
+        instance: {k: v for k, v in values.items() if k != "shaper"} for instance, values in system.parameters.items()})
+    assert worst_difference(theirs, run(default, fmu_dir).columns(), pairs) > 1e-3
 
 
 @pytest.mark.parametrize("name", ["paper", "lqr"])

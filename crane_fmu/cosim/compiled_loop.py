@@ -27,6 +27,7 @@ KINDS = {"fmi2GetReal": 0, "fmi2SetReal": 0, "fmi3GetFloat64": 1, "fmi3SetFloat6
          "fmi3DoStep": 4}
 GET_SET_2, GET_SET_3, COPY = 0, 1, 2
 CALL, SETUP_2, ENTER_3, SET_STRINGS_2, SET_STRINGS_3 = 5, 6, 7, 8, 9  # run_calls' kinds of operation (step_loop.c)
+SET_INTEGERS_2, SET_INT64S_3 = 10, 11  # run_calls' sets of Enumerations (step_loop.c)
 ROWS_PER_CALL = 4096
 
 

@@ -73,13 +73,17 @@ class Fmi2Instance(Instance):
     def set(self, name, value):
         """Set one variable by name, converting ``value`` to the variable's type."""
         v = self._variable(name)
-        setter = getattr(self._fmu, f"set{v.type}")
-        self._call(f"fmi2Set{v.type}", setter, [v.valueReference], [_CONVERT[v.type](value)])
+        if v.type == "Enumeration":  # by name or value; FMI 2.0 sets it as an Integer
+            value = self.enumeration_value(name, value)
+        kind = "Integer" if v.type == "Enumeration" else v.type
+        setter = getattr(self._fmu, f"set{kind}")
+        self._call(f"fmi2Set{kind}", setter, [v.valueReference], [_CONVERT[kind](value)])
 
     def get(self, name):
         """Get one variable by name."""
         v = self._variable(name)
-        value = self._call(f"fmi2Get{v.type}", getattr(self._fmu, f"get{v.type}"), [v.valueReference])[0]
+        kind = "Integer" if v.type == "Enumeration" else v.type
+        value = self._call(f"fmi2Get{kind}", getattr(self._fmu, f"get{kind}"), [v.valueReference])[0]
         return value.decode("utf-8") if isinstance(value, bytes) else value
 
     def setup(self, start_time, stop_time=None):

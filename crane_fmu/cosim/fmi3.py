@@ -30,14 +30,17 @@ class Fmi3Instance(Instance):
 
     def set(self, name, value):
         v = self._variable(name)
-        kind = {"Float64": "Float64", "Float32": "Float32", "String": "String", "Boolean": "Boolean"}.get(
-            v.type, "Int32")
+        if v.type == "Enumeration":  # by name or value; FMI 3.0 sets it as an Int64
+            value = self.enumeration_value(name, value)
+        kind = {"Float64": "Float64", "Float32": "Float32", "String": "String", "Boolean": "Boolean",
+                "Enumeration": "Int64"}.get(v.type, "Int32")
         convert = {"String": str, "Boolean": bool}.get(kind, float if kind.startswith("Float") else int)
         self._call(f"fmi3Set{kind}", getattr(self._fmu, f"set{kind}"), [v.valueReference], [convert(value)])
 
     def get(self, name):
         v = self._variable(name)
-        kind = v.type if v.type in ("Float64", "Float32", "String", "Boolean") else "Int32"
+        kind = v.type if v.type in ("Float64", "Float32", "String", "Boolean") else (
+            "Int64" if v.type == "Enumeration" else "Int32")
         return self._call(f"fmi3Get{kind}", getattr(self._fmu, f"get{kind}"), [v.valueReference])[0]
 
     def setup(self, start_time, stop_time=None):

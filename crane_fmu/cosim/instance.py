@@ -119,6 +119,10 @@ class Instance:
             raise KeyError(f"{self.name} has no variable {name!r}; valid names: " + ", ".join(self.variables))
         return v
 
+    def enumeration_value(self, name, value):
+        """The value of the item ``value`` (its name, or its value) of the Enumeration variable ``name``."""
+        return enumeration_value(self._variable(name), value, f"{self.name}.")
+
     def _hot_library(self):
         """The FMU's library for the hot path. An FMU that says it runs Python in this process under its GIL
         (ours export ``crane_fmu_runs_in_host_python``) is called without releasing the GIL; others as fmpy
@@ -232,6 +236,21 @@ def remove_extracted():
             del _EXTRACTED[folder]
     for key, folders in list(_SPARE_FOLDERS.items()):
         _SPARE_FOLDERS[key] = [(folder, fmu) for folder, fmu in folders if os.path.isdir(folder)]
+
+
+def enumeration_value(v, value, prefix=""):
+    """The value of the item ``value`` (its name, or its value as a number or text) of fmpy's Enumeration variable
+    ``v``; ValueError naming the value and the items."""
+    items = {item.name: int(item.value) for item in v.declaredType.items}
+    if isinstance(value, str):
+        if value in items:
+            return items[value]
+        if value.strip().lstrip("-").isdigit() and int(value) in items.values():
+            return int(value)
+    elif isinstance(value, (int, float)) and not isinstance(value, bool) and value in items.values():
+        return int(value)
+    raise ValueError(f"{prefix}{v.name} must be one of {', '.join(f'{k} ({n})' for k, n in items.items())}, "
+                     f"got {value!r}")
 
 
 def read_fmu(path):

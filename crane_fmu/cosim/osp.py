@@ -28,7 +28,8 @@ def write_osp(system, fmu_dir, path):
         initial = ET.SubElement(simulator, f"{OSP}InitialValues")
         for pname, (v, value) in parameter_values(read_fmu(fmu), system.parameters.get(name, {})).items():
             if value is not None:
-                kind = {"Float64": "Real", "Int32": "Integer"}.get(v.type, v.type)
+                kind = {"Float64": "Real", "Int32": "Integer", "Int64": "Integer", "Enumeration": "Integer"}.get(
+                    v.type, v.type)  # an Enumeration by its item's value
                 node = ET.SubElement(ET.SubElement(initial, f"{OSP}InitialValue", variable=pname), f"{OSP}{kind}")
                 node.set("value", value_text(value))
     links = ET.SubElement(root, f"{OSP}Connections")

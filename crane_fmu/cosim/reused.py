@@ -24,6 +24,8 @@ from .compiled_loop import (
     ENTER_3,
     GET_SET_2,
     GET_SET_3,
+    SET_INT64S_3,
+    SET_INTEGERS_2,
     SET_STRINGS_2,
     SET_STRINGS_3,
     SETUP_2,
@@ -102,8 +104,8 @@ class ReusedRunner:
     def _operations(self, parameters):
         """``(init, exits, ends)``: the operations of run_calls that reset (unless the instances are new), set up,
         set ``parameters`` and enter initialisation; exit it; terminate; each ``(Operation array, [(instance,
-        function)] of each, what they point to)``. None where a parameter is neither a Real nor a String (the
-        master's way sets it)."""
+        function)] of each, what they point to)``. None where a parameter is neither a Real nor a String nor an
+        Enumeration (the master's way sets it)."""
         init, exits, ends = ([], [], []), ([], [], []), ([], [], [])
 
         def add(ops, inst, kind, function, vr=None, values=None):
@@ -119,12 +121,16 @@ class ReusedRunner:
                 add(init, inst, CALL, f"fmi{inst.md.fmiVersion[0]}Reset")
         for name, inst in self.instances.items():
             fmi3 = inst.md.fmiVersion.startswith("3")
-            reals, texts = [], []
+            reals, texts, items = [], [], []
             for variable, value in (parameters or {}).get(name, {}).items():
                 kind = inst._variable(variable).type
-                if kind not in ("Real", "Float64", "String"):
+                if kind not in ("Real", "Float64", "String", "Enumeration"):
                     return None
-                (texts if kind == "String" else reals).append((inst.variables[variable].valueReference, value))
+                vr = inst.variables[variable].valueReference
+                if kind == "Enumeration":  # by name or value, as the master's set
+                    items.append((vr, inst.enumeration_value(variable, value)))
+                else:
+                    (texts if kind == "String" else reals).append((vr, value))
             if not fmi3:
                 add(init, inst, SETUP_2, "fmi2SetupExperiment")
             if reals:
@@ -135,6 +141,10 @@ class ReusedRunner:
                 add(init, inst, SET_STRINGS_3 if fmi3 else SET_STRINGS_2, "fmi3SetString" if fmi3 else "fmi2SetString",
                     (ctypes.c_uint * len(texts))(*(vr for vr, _ in texts)),
                     (ctypes.c_char_p * len(texts))(*(str(value).encode() for _, value in texts)))
+            if items:
+                add(init, inst, SET_INT64S_3 if fmi3 else SET_INTEGERS_2, "fmi3SetInt64" if fmi3 else "fmi2SetInteger",
+                    (ctypes.c_uint * len(items))(*(vr for vr, _ in items)),
+                    ((ctypes.c_longlong if fmi3 else ctypes.c_int) * len(items))(*(value for _, value in items)))
             if fmi3:
                 add(init, inst, ENTER_3, "fmi3EnterInitializationMode")
             else:

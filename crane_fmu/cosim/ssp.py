@@ -28,6 +28,7 @@ import zipfile
 from pathlib import Path
 
 from .connections import Connection
+from .instance import enumeration_value
 from .system import System, read_fmu
 
 SSD_NS = "http://ssp-standard.org/SSP1/SystemStructureDescription"
@@ -46,8 +47,12 @@ SSD, SSC, SSV, OMS, SSM = (f"{{{ns}}}" for ns in (SSD_NS, SSC_NS, SSV_NS, OMS_NS
 # a value only where it differs from the FMU's start value: OMSimulator 3.0 applies no String and logs
 # an error for each String connector and value.
 PARAMETER_SET = "initialValues"
-_CONVERT = {"Real": float, "Float64": float, "Integer": int, "Int32": int,
-            "Boolean": lambda v: v.lower() in ("true", "1"), "String": str}
+_CONVERT = {"Real": float, "Float64": float, "Integer": int, "Int32": int, "Int64": int,
+            "Boolean": lambda v: v.lower() in ("true", "1"), "String": str, "Enumeration": str}
+# An FMU's Enumeration parameter is written as an ssv:Integer of the item's value, its connector an ssc:Integer:
+# OMSimulator 3.0 applies that, and refuses SSP 1.0's ssv:Enumeration (the item's name) with one error each,
+# running the FMU's own value (tried on hoist-transport.ssp). The reader takes either.
+ENUMERATION_AS = "Integer"
 _BASE_UNITS = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
 
 
@@ -213,7 +218,7 @@ def _write_xml(root, path):
 
 def _typed(parent, ns, kind, **attrs):
     """An ssc/ssv typed element: Real (units) or String, Integer, Boolean."""
-    kind = {"Float64": "Real", "Int32": "Integer"}.get(kind, kind)
+    kind = {"Float64": "Real", "Int32": "Integer", "Int64": "Integer", "Enumeration": ENUMERATION_AS}.get(kind, kind)
     return ET.SubElement(parent, f"{ns}{kind}", {k: v for k, v in attrs.items() if v is not None})
 
 
@@ -232,11 +237,16 @@ def parameter_values(md, overrides):
 
     A start value that is not finite (``INF``: no limit) and not overridden is
     left to the FMU: libcosim (0.10) refuses such values in system files; so is
-    a String equal to the FMU's start value (OMSimulator 3.0 applies no String).
+    a String equal to the FMU's start value (OMSimulator 3.0 applies no String), and an Enumeration equal to
+    it (an engine that sets it only as what it is, not as an Integer, is not asked to).
     """
     values = {}
     for v in md.modelVariables:
-        if v.causality == "input" and v.name in overrides:
+        if v.type == "Enumeration" and v.causality == "parameter":  # the item's value, by name or value
+            value = enumeration_value(v, overrides.get(v.name, v.start))
+            if value != enumeration_value(v, v.start):  # as a String: only where it is not the FMU's own
+                values[v.name] = (v, value)
+        elif v.causality == "input" and v.name in overrides:
             values[v.name] = (v, _CONVERT.get(v.type, str)(overrides[v.name]))
         elif v.causality == "parameter":
             value = overrides.get(v.name, v.start)

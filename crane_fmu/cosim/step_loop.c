@@ -13,7 +13,8 @@
 #include <stdbool.h>
 #include <stddef.h>
 
-enum { GET_SET_2, GET_SET_3, COPY, DO_STEP_2, DO_STEP_3, CALL, SETUP_2, ENTER_3, SET_STRINGS_2, SET_STRINGS_3 };
+enum { GET_SET_2, GET_SET_3, COPY, DO_STEP_2, DO_STEP_3, CALL, SETUP_2, ENTER_3, SET_STRINGS_2, SET_STRINGS_3,
+       SET_INTEGERS_2, SET_INT64S_3 };
 
 typedef struct {
     int kind;
@@ -21,7 +22,7 @@ typedef struct {
     void *instance;        /* fmi2Component / fmi3Instance */
     const unsigned *vr;    /* get/set: the value references */
     size_t n;              /* get/set: how many */
-    double *values;        /* get/set: the values (set Strings: the strings); copy: where to */
+    double *values;        /* get/set: the values (set Strings: the strings; Integers, Int64s: those); copy: where to */
     const double *source;  /* copy: from where */
 } Operation;
 
@@ -34,6 +35,8 @@ typedef int (*Setup2)(void *, int, double, double, int, double);
 typedef int (*Enter3)(void *, bool, double, double, bool, double);
 typedef int (*SetStrings2)(void *, const unsigned *, size_t, const char *const *);
 typedef int (*SetStrings3)(void *, const unsigned *, size_t, const char *const *, size_t);
+typedef int (*SetIntegers2)(void *, const unsigned *, size_t, const int *);
+typedef int (*SetInt64s3)(void *, const unsigned *, size_t, const long long *, size_t);
 
 /* One operation at time t with step h; the calls that set up an experiment (SETUP_2, ENTER_3) take t as its start and
    h as its stop time, as fmpy's setupExperiment and enterInitializationMode pass them (no tolerance, a stop time). */
@@ -63,6 +66,10 @@ static int call(const Operation *op, double t, double h) {
         return ((SetStrings2)op->function)(op->instance, op->vr, op->n, (const char *const *)op->values);
     case SET_STRINGS_3:
         return ((SetStrings3)op->function)(op->instance, op->vr, op->n, (const char *const *)op->values, op->n);
+    case SET_INTEGERS_2:
+        return ((SetIntegers2)op->function)(op->instance, op->vr, op->n, (const int *)op->values);
+    case SET_INT64S_3:
+        return ((SetInt64s3)op->function)(op->instance, op->vr, op->n, (const long long *)op->values, op->n);
     }
     return 3; /* an unknown kind: fmi2Error */
 }

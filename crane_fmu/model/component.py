@@ -278,8 +278,10 @@ class Component:
                                  "is True")
 
     def _check_rules(self):
-        """Every rule reads parameters of the table, a String one only as a string."""
-        kinds = {v.name: v.type for v in self.variables if v.causality == "parameter"}
+        """Every rule reads parameters of the table, a String one (or an Enumeration, by its items' names) only as a
+        string."""
+        kinds = {v.name: "String" if v.type == "Enumeration" else v.type for v in self.variables
+                 if v.causality == "parameter"}
         for name in set(kinds) & RESERVED:
             raise ValueError(f"{self.model_identifier}: parameter {name!r} has a name the rules reserve")
         for rule in self.rules:

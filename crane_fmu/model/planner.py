@@ -29,7 +29,7 @@ from .component import Component
 from .parameters import PLANT_RULES, plant_parameters
 from .plant import linearisation
 from .rules import check, finite, one_of, rule
-from .tables import CRANE_MODEL, PLANT_MODEL, output, parameter
+from .tables import CRANE_MODEL, PLANT_MODEL, enumeration, output, parameter
 
 EI_TOLERANCE = 0.05
 # A time at most this much (relative, of at least 1 s) past a step of the plan counts as at it, before it: the
@@ -37,6 +37,8 @@ EI_TOLERANCE = 0.05
 # first switch is at 0.125 s, which 125 steps of 1 ms add up to 0.12500000000000008).
 TIME_ROUNDING = 1e-9
 SHAPERS = ("zv", "zvd", "ei", "none")
+# The Enumeration type Shaper's items in the order of their values 1, 2, 3, 4 (modelDescription.xml's TypeDefinitions)
+SHAPER_ITEMS = ("none", "zv", "zvd", "ei")
 
 
 def shaper(kind, period):
@@ -139,8 +141,8 @@ def reference(c, t):
     x, v, a = c.x0, 0.0, 0.0
     eta = [0.0, 0.0]
     deta = [0.0, 0.0]
-    moving = t < c.end
     rounding = TIME_ROUNDING * max(1.0, abs(t))
+    moving = t < c.end - rounding  # a summed time just short of the end is at it, at rest (OMSimulator's 3000 ms)
     for tau, jump in c.steps:
         dt = t - tau
         if dt <= rounding:
@@ -170,7 +172,7 @@ VARIABLES = tuple(v._replace(description="planner's model: " + v.description) fo
     parameter("x0", 0.0, "m", "start position of the move"),
     parameter("x_d", 0.0, "m", "target position of the move"),
     parameter("t0", 0.0, "s", "start time of the move"),
-    parameter("shaper", "zv", None, "input shaper for both swing modes: zv, zvd, ei or none", "String"),
+    enumeration("shaper", "zv", SHAPER_ITEMS, "input shaper for both swing modes: none (1), zv (2), zvd (3) or ei (4)"),
     *limits.parameters(what="ddx_ref"),
     output("x_ref", "m", "reference trolley position"),
     output("dx_ref", "m/s", "reference trolley velocity"),

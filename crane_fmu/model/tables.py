@@ -11,8 +11,8 @@ from collections import namedtuple
 
 from .parameters import PlantParameters
 
-Variable = namedtuple("Variable", "name causality variability start unit description type")
-Variable.__new__.__defaults__ = ("Real",)
+Variable = namedtuple("Variable", "name causality variability start unit description type items")
+Variable.__new__.__defaults__ = ("Real", ())
 
 # Display units for the SI units that users prefer to read in other units.
 DISPLAY_UNITS = {"rad": "deg", "rad/s": "deg/s"}
@@ -61,6 +61,38 @@ def positions(variables, causality):
 
 def parameter(name, start, unit, description, type="Real"):
     return Variable(name, "parameter", "fixed", start, unit, description, type)
+
+
+def enumeration(name, start, items, description):
+    """A parameter of FMI type Enumeration: one of ``items`` (names), kept by name in the models, exchanged with a host
+    as the item's value, its position in ``items`` plus one (``enumeration_value``); its declared type is the name
+    with a capital (``shaper``: ``Shaper``). Hosts apply an Enumeration from a system file where they apply no String
+    (OMSimulator 3.0)."""
+    if start not in items:
+        raise ValueError(f"{name}: the start value {start!r} must be one of {', '.join(items)}")
+    return Variable(name, "parameter", "fixed", start, None, description, "Enumeration", tuple(items))
+
+
+def declared_type(v):
+    """The name of an Enumeration variable's type in modelDescription.xml: ``Shaper`` for ``shaper``."""
+    return v.name[:1].upper() + v.name[1:]
+
+
+def enumeration_value(v, name):
+    """The value a host exchanges for the item ``name`` of the Enumeration variable ``v`` (1 for the first item);
+    ValueError naming the value and the items."""
+    if name not in v.items:
+        raise ValueError(f"{v.name} must be one of {', '.join(v.items)}, got {name!r}")
+    return v.items.index(name) + 1
+
+
+def enumeration_name(v, value):
+    """The item of the Enumeration variable ``v`` whose value is ``value``; ValueError naming the value and the
+    values allowed."""
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= len(v.items):
+        allowed = ", ".join(f"{i + 1} ({n})" for i, n in enumerate(v.items))
+        raise ValueError(f"{v.name} must be one of {allowed}, got {value!r}")
+    return v.items[value - 1]
 
 
 def input_(name, unit, description, start=0.0):

@@ -89,14 +89,31 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
     return set_strings(c, "fmi2SetString", vr, n, v);
 }
 
+/* Enumerations (FMI 2.0 gets and sets them as Integers): through the model's long long values. */
+fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Integer v[]) {
+    long long small[16], *wide = n <= 16 ? small : malloc(n * sizeof *wide);
+    if (!wide) return c ? refuse(c, "fmi2GetInteger", "out of memory") : fmi2Error;
+    fmi2Status status = get_integers(c, "fmi2GetInteger", vr, n, wide);
+    if (status <= fmi2Warning && v)
+        for (size_t i = 0; i < n; i++) v[i] = (fmi2Integer)wide[i];
+    if (wide != small) free(wide);
+    return status;
+}
+fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Integer v[]) {
+    long long small[16], *wide = n <= 16 ? small : malloc(n * sizeof *wide);
+    if (!wide) return c ? refuse(c, "fmi2SetInteger", "out of memory") : fmi2Error;
+    for (size_t i = 0; v && i < n; i++) wide[i] = v[i];
+    fmi2Status status = set_integers(c, "fmi2SetInteger", vr, n, v ? wide : NULL);
+    if (wide != small) free(wide);
+    return status;
+}
+
 #define NO_VALUES(Name, modes, ctype)                                                                        \
     fmi2Status Name(fmi2Component c, const fmi2ValueReference vr[], size_t n, ctype v[]) {                   \
         (void)vr, (void)v;                                                                                   \
         return no_such_values(c, #Name, modes, n);                                                           \
     }
-NO_VALUES(fmi2GetInteger, GETTABLE, fmi2Integer)
 NO_VALUES(fmi2GetBoolean, GETTABLE, fmi2Boolean)
-NO_VALUES(fmi2SetInteger, SETTABLE, const fmi2Integer)
 NO_VALUES(fmi2SetBoolean, SETTABLE, const fmi2Boolean)
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean no_prior) {

@@ -174,8 +174,43 @@ fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t 
         (void)vr, (void)nvr, (void)v;                                                                        \
         return no_such_values(c, "fmi3Set" #Type, SETTABLE, n);                                              \
     }
-NO_GET(Int32) NO_GET(Int64) NO_GET(UInt64) NO_GET(Boolean)
-NO_SET(Int32) NO_SET(Int64) NO_SET(UInt64) NO_SET(Boolean)
+NO_GET(Int32) NO_GET(UInt64) NO_GET(Boolean)
+NO_SET(Int32) NO_SET(UInt64) NO_SET(Boolean)
+
+/* Enumerations (FMI 3.0 gets and sets them as Int64). */
+static const char *const TIME_NOT_INT64 = "value reference 0 is time, a Float64";
+fmi3Status fmi3GetInt64(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, fmi3Int64 v[], size_t n) {
+    if (!allowed(c, "fmi3GetInt64", GETTABLE)) return fmi3Error;
+    if (n != nvr) return refuse(c, "fmi3GetInt64", "arrays are not supported (nValues != nValueReferences)");
+    if (nvr == 0) return fmi3OK;
+    if (!vr || !v) return refuse(c, "fmi3GetInt64", "NULL array");
+    unsigned small[SMALL], *mapped;
+    size_t n_model;
+    if (!map_vrs(c, "fmi3GetInt64", vr, nvr, TIME_NOT_INT64, small, &mapped, &n_model)) return fmi3Error;
+    long long *wide = malloc(nvr * sizeof *wide);
+    fmi3Status status = wide ? get_integers(c, "fmi3GetInt64", mapped, nvr, wide) : refuse(c, "fmi3GetInt64", "out of memory");
+    if (wide && status <= fmi3Warning)
+        for (size_t i = 0; i < nvr; i++) v[i] = (fmi3Int64)wide[i];
+    free(wide);
+    if (mapped != small) free(mapped);
+    return status;
+}
+
+fmi3Status fmi3SetInt64(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, const fmi3Int64 v[], size_t n) {
+    if (!allowed(c, "fmi3SetInt64", SETTABLE)) return fmi3Error;
+    if (n != nvr) return refuse(c, "fmi3SetInt64", "arrays are not supported (nValues != nValueReferences)");
+    if (nvr == 0) return fmi3OK;
+    if (!vr || !v) return refuse(c, "fmi3SetInt64", "NULL array");
+    unsigned small[SMALL], *mapped;
+    size_t n_model;
+    if (!map_vrs(c, "fmi3SetInt64", vr, nvr, TIME_NOT_INT64, small, &mapped, &n_model)) return fmi3Error;
+    long long *wide = malloc(nvr * sizeof *wide);
+    for (size_t i = 0; wide && i < nvr; i++) wide[i] = v[i];
+    fmi3Status status = wide ? set_integers(c, "fmi3SetInt64", mapped, nvr, wide) : refuse(c, "fmi3SetInt64", "out of memory");
+    free(wide);
+    if (mapped != small) free(mapped);
+    return status;
+}
 
 fmi3Status fmi3GetString(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, fmi3String v[], size_t n) {
     if (!allowed(c, "fmi3GetString", GETTABLE)) return fmi3Error;

@@ -264,6 +264,21 @@ int set_strings(Instance *c, const char *function, const unsigned vr[], size_t n
                            : settle(c, c->type->set_strings(c->type, c->model, vr, n, v, fixed_allowed(c), &r), 0);
 }
 
+int get_integers(Instance *c, const char *function, const unsigned vr[], size_t n, long long v[]) {
+    if (!c || !c->type->get_integers) return no_such_values(c, function, GETTABLE, n);
+    int status = first_checks(c, function, GETTABLE, n, vr, v);
+    Reporter r = reporter(c, function);
+    return status != GO_ON ? status : settle(c, c->type->get_integers(c->type, c->model, vr, n, v, &r), 0);
+}
+
+int set_integers(Instance *c, const char *function, const unsigned vr[], size_t n, const long long v[]) {
+    if (!c || !c->type->set_integers) return no_such_values(c, function, SETTABLE, n);
+    int status = first_checks(c, function, SETTABLE, n, vr, v);
+    Reporter r = reporter(c, function);
+    return status != GO_ON ? status
+                           : settle(c, c->type->set_integers(c->type, c->model, vr, n, v, fixed_allowed(c), &r), 0);
+}
+
 int no_such_values(Instance *c, const char *function, int modes, size_t n) {
     if (!allowed(c, function, modes)) return MODEL_ERROR;
     return n == 0 ? MODEL_OK : settle(c, refuse(c, function, "this FMU has no variables of this type"), 0);

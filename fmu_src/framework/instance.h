@@ -72,6 +72,9 @@ int set_reals(Instance *c, const char *function, const unsigned vr[], size_t n, 
 int get_strings(Instance *c, const char *function, const unsigned vr[], size_t n, const char *v[]);
 int set_strings(Instance *c, const char *function, const unsigned vr[], size_t n, const char *const v[]);
 /* Values of a type this FMU has none of: only an empty call succeeds. */
+/* Enumerations by their items' values (model.h's get_integers, set_integers). */
+int get_integers(Instance *c, const char *function, const unsigned vr[], size_t n, long long v[]);
+int set_integers(Instance *c, const char *function, const unsigned vr[], size_t n, const long long v[]);
 int no_such_values(Instance *c, const char *function, int modes, size_t n);
 int do_step(Instance *c, const char *function, double t, double h);
 

@@ -106,6 +106,12 @@ struct ModelType {
                                const Reporter *r);
     ModelStatus (*set_strings)(const ModelType *type, void *m, const unsigned vr[], size_t n, const char *const v[],
                                int fixed_allowed, const Reporter *r);
+    /* Enumerations, by their items' values (FMI 2.0 fmi2GetInteger/fmi2SetInteger, FMI 3.0 fmi3GetInt64/fmi3SetInt64),
+       like the Strings. NULL: the model has none. */
+    ModelStatus (*get_integers)(const ModelType *type, void *m, const unsigned vr[], size_t n, long long v[],
+                                const Reporter *r);
+    ModelStatus (*set_integers)(const ModelType *type, void *m, const unsigned vr[], size_t n, const long long v[],
+                                int fixed_allowed, const Reporter *r);
     /* One communication step from `time` of length `step` (> 0 and finite: the framework checks it). */
     ModelStatus (*do_step)(const ModelType *type, void *m, double time, double step, const Reporter *r);
     const StateFunctions *states; /* NULL: the model is plain data */

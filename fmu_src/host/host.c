@@ -17,7 +17,8 @@
  *   host pair-bench LIB GUID CLIB CGUID STEPS H X U CX CU  seconds per step of that loop, no recording, and
  *                                                       its CPU seconds per step
  *   host outputs LIB GUID STEPS H [VR=VALUE]... VR...    any FMI 2.0 FMU (e.g. a system as one FMU): Real
- *                                                       parameters set (and Strings: "VRs=TEXT"), then rows
+ *                                                       parameters set (and Strings: "VRs=TEXT", Enumerations:
+ *                                                       "VRi=VALUE", as an Integer), then rows
  *                                                       "t,the Reals of VR..." at t = k H after k steps
  *   host outputs3 LIB TOKEN STEPS H [VR=VALUE]... VR... the same for any FMI 3.0 co-simulation FMU (TOKEN: its
  *                                                       instantiationToken): Float64 (and String) parameters set,
@@ -63,6 +64,7 @@ typedef struct {
     fmi2SetRealTYPE *set;
     fmi2DoStepTYPE *step;
     fmi2SetStringTYPE *set_string;
+    fmi2SetIntegerTYPE *set_integer;
     const char *guid;
     void *lib; /* the library, for the functions a mode needs beyond these */
 } Api;
@@ -104,6 +106,7 @@ static Api load(const char *library, const char *guid) {
                (fmi2SetRealTYPE *)SYMBOL(lib, "fmi2SetReal"),
                (fmi2DoStepTYPE *)SYMBOL(lib, "fmi2DoStep"),
                (fmi2SetStringTYPE *)SYMBOL(lib, "fmi2SetString"),
+               (fmi2SetIntegerTYPE *)SYMBOL(lib, "fmi2SetInteger"),
                guid,
                lib};
     if (!api.instantiate || !api.step) {
@@ -122,6 +125,13 @@ static struct {
     size_t n;
 } strings;
 
+/* The Enumeration settings ("VRi=VALUE", an item's value) of the same modes, set after the Strings. */
+static struct {
+    unsigned int vr[MAX_VR];
+    int value[MAX_VR];
+    size_t n;
+} integers;
+
 /* An initialised instance with the given parameter settings (and `strings`), or NULL (the FMU logged why). */
 static fmi2Component start(const Api *api, size_t n, const fmi2ValueReference vr[], const fmi2Real v[]) {
     fmi2Component c = api->instantiate(instance_name, fmi2CoSimulation, api->guid, "", &callbacks, fmi2False, fmi2False);
@@ -129,6 +139,8 @@ static fmi2Component start(const Api *api, size_t n, const fmi2ValueReference vr
     if (api->setup(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) > fmi2Warning || api->enter(c) > fmi2Warning ||
         (n && api->set(c, vr, n, v) > fmi2Warning) ||
         (strings.n && (!api->set_string || api->set_string(c, strings.vr, strings.n, strings.value) > fmi2Warning)) ||
+        (integers.n &&
+         (!api->set_integer || api->set_integer(c, integers.vr, integers.n, integers.value) > fmi2Warning)) ||
         api->exit_init(c) > fmi2Warning) {
         api->free_instance(c);
         return NULL;
@@ -243,13 +255,18 @@ static double run_pair(const Api *plant, const Api *law, Loop vr, int steps, dou
    VRs to read (into get_vr). */
 static int parse_vrs(int n_args, char **args, unsigned int set_vr[], double set_v[], size_t *n_set,
                      unsigned int get_vr[], size_t *n_get) {
-    *n_set = *n_get = strings.n = 0;
+    *n_set = *n_get = strings.n = integers.n = 0;
     for (int i = 0; i < n_args; i++) {
         char *end;
         unsigned int vr = (unsigned int)strtoul(args[i], &end, 10);
         if (end[0] == 's' && end[1] == '=') {
             if (strings.n == MAX_VR) return 0;
             strings.vr[strings.n] = vr, strings.value[strings.n++] = end + 2;
+            continue;
+        }
+        if (end[0] == 'i' && end[1] == '=') {
+            if (integers.n == MAX_VR) return 0;
+            integers.vr[integers.n] = vr, integers.value[integers.n++] = atoi(end + 2);
             continue;
         }
         const char *eq = strchr(args[i], '=');
@@ -281,6 +298,13 @@ static int print_outputs(const Api *api, int steps, double h, int n_args, char *
 
 /* ---- FMI 3.0: the `outputs3` mode ---------------------------------------------------------------------------- */
 
+/* The Enumeration settings of `integers` on an FMI 3.0 instance (as Int64s); 1 when set (or none). */
+static int set_int64s(fmi3SetInt64TYPE *set_int64, fmi3Instance c) {
+    fmi3Int64 values[MAX_VR];
+    for (size_t i = 0; i < integers.n; i++) values[i] = integers.value[i];
+    return !integers.n || (set_int64 && set_int64(c, integers.vr, integers.n, values, integers.n) <= fmi3Warning);
+}
+
 static void logger3(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category, fmi3String message) {
     (void)env, (void)category;
     if (!quiet) fprintf(stderr, "[%d] %s\n", status, message);
@@ -300,6 +324,7 @@ static int print_outputs3(const char *library, const char *token, int steps, dou
     fmi3GetFloat64TYPE *get = (fmi3GetFloat64TYPE *)SYMBOL(lib, "fmi3GetFloat64");
     fmi3DoStepTYPE *step = (fmi3DoStepTYPE *)SYMBOL(lib, "fmi3DoStep");
     fmi3SetStringTYPE *set_string = (fmi3SetStringTYPE *)SYMBOL(lib, "fmi3SetString");
+    fmi3SetInt64TYPE *set_int64 = (fmi3SetInt64TYPE *)SYMBOL(lib, "fmi3SetInt64");
     if (!instantiate || !free_instance || !enter || !exit_init || !set || !get || !step || !set_string) {
         fprintf(stderr, "missing FMI 3.0 functions in %s\n", library);
         exit(3);
@@ -314,7 +339,7 @@ static int print_outputs3(const char *library, const char *token, int steps, dou
     int ok = enter(c, fmi3False, 0.0, 0.0, fmi3False, 0.0) <= fmi3Warning &&
              (!n_set || set(c, set_vr, n_set, set_v, n_set) <= fmi3Warning) &&
              (!strings.n || set_string(c, strings.vr, strings.n, strings.value, strings.n) <= fmi3Warning) &&
-             exit_init(c) <= fmi3Warning;
+             set_int64s(set_int64, c) && exit_init(c) <= fmi3Warning;
     for (int k = 0; ok && k <= steps; k++) {
         fmi3Boolean event, terminate, early;
         fmi3Float64 last;

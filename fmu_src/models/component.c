@@ -40,10 +40,10 @@ static const StringValue *read_strings(const Component *k, Block *b) { return (c
 static void *config(const Component *k, Block *b) { return (char *)b + config_at(k); }
 static void *state(const Component *k, Block *b) { return k->state_size ? (char *)b + state_at(k) : NULL; }
 
-/* The position of String variable `vr` among the table's Strings. */
+/* The position of String (or Enumeration, kept by name) variable `vr` among the table's Strings. */
 static unsigned slot(const Component *k, unsigned vr) {
     unsigned n = 0;
-    for (unsigned i = 0; i < vr; i++) n += k->variables[i].type == STRING;
+    for (unsigned i = 0; i < vr; i++) n += k->variables[i].type != REAL;
     return n;
 }
 
@@ -55,7 +55,7 @@ ModelStatus component_instantiate(const ModelType *type, void *m, const Instanti
     b->model_exchange = at->model_exchange && k->continuous;
     for (unsigned i = 0; i < k->n_variables; i++) {
         b->values[i] = k->variables[i].start;
-        if (k->variables[i].type == STRING) snprintf(strings(k, b)[slot(k, i)], STRING_SIZE, "%s", k->variables[i].text);
+        if (k->variables[i].type != REAL) snprintf(strings(k, b)[slot(k, i)], STRING_SIZE, "%s", k->variables[i].text);
     }
     return MODEL_OK;
 }
@@ -110,8 +110,9 @@ ModelStatus component_get_reals(const ModelType *type, void *m, const unsigned v
         }
         if (vr[i] >= k->n_variables) return no_variable(type->identifier, vr[i], r);
         const VariableRow *row = &k->variables[vr[i]];
-        if (row->type == STRING)
-            return report(r, MODEL_ERROR, "%s of %s is a String, not a Real", row->name, type->identifier);
+        if (row->type != REAL)
+            return report(r, MODEL_ERROR, "%s of %s is a%s, not a Real", row->name, type->identifier,
+                          row->type == STRING ? " String" : "n Enumeration");
         if (row->causality == OUTPUT && !have_outputs) {
             ModelStatus status = compute_outputs(k, b, r);
             if (status != MODEL_OK) return status;
@@ -127,7 +128,9 @@ ModelStatus store_reals(const char *model, const VariableRow table[], unsigned n
     for (size_t i = 0; i < n; i++) {
         if (vr[i] >= n_variables) return no_variable(model, vr[i], r);
         const VariableRow *v = &table[vr[i]];
-        if (v->type == STRING) return report(r, MODEL_ERROR, "%s of %s is a String, not a Real", v->name, model);
+        if (v->type != REAL)
+            return report(r, MODEL_ERROR, "%s of %s is a%s, not a Real", v->name, model,
+                          v->type == STRING ? " String" : "n Enumeration");
         if (v->causality == OUTPUT)
             return report(r, MODEL_ERROR, "%s is an output of %s; only parameters and inputs can be set", v->name,
                           model);
@@ -148,13 +151,18 @@ ModelStatus component_set_reals(const ModelType *type, void *m, const unsigned v
                        r);
 }
 
-/* The String variable `vr`, or NULL after reporting why not. */
-static const VariableRow *string_row(const ModelType *type, unsigned vr, const Reporter *r) {
+/* The variable `vr` of type `wanted`, or NULL after reporting why not. */
+static const VariableRow *typed_row(const ModelType *type, unsigned vr, VariableType wanted, const Reporter *r) {
+    static const char *const NAMES[] = {"a Real", "a String", "an Enumeration"};
     const Component *k = type->kind;
     if (vr >= k->n_variables) return no_variable(type->identifier, vr, r), NULL;
-    if (k->variables[vr].type != STRING)
-        return report(r, MODEL_ERROR, "%s of %s is a Real, not a String", k->variables[vr].name, type->identifier), NULL;
+    if (k->variables[vr].type != wanted)
+        return report(r, MODEL_ERROR, "%s of %s is %s, not %s", k->variables[vr].name, type->identifier,
+                      NAMES[k->variables[vr].type], NAMES[wanted]), NULL;
     return &k->variables[vr];
+}
+static const VariableRow *string_row(const ModelType *type, unsigned vr, const Reporter *r) {
+    return typed_row(type, vr, STRING, r);
 }
 
 ModelStatus component_get_strings(const ModelType *type, void *m, const unsigned vr[], size_t n, const char *v[],
@@ -298,6 +306,44 @@ ModelStatus component_directional(const ModelType *type, void *m, const unsigned
         else
             return report(r, MODEL_ERROR, "value reference %u is neither a derivative nor an output of %s",
                           unknowns[j], type->identifier);
+    }
+    return MODEL_OK;
+}
+
+/* Enumerations: the item kept by name (an unknown name, never stored, would read as 0). */
+ModelStatus component_get_integers(const ModelType *type, void *m, const unsigned vr[], size_t n, long long v[],
+                                   const Reporter *r) {
+    for (size_t i = 0; i < n; i++) {
+        const VariableRow *row = typed_row(type, vr[i], ENUMERATION, r);
+        if (!row) return MODEL_ERROR;
+        const char *name = strings(type->kind, m)[slot(type->kind, vr[i])];
+        v[i] = 0;
+        for (unsigned j = 0; j < row->n_items; j++)
+            if (strcmp(name, row->items[j]) == 0) v[i] = j + 1;
+    }
+    return MODEL_OK;
+}
+
+ModelStatus component_set_integers(const ModelType *type, void *m, const unsigned vr[], size_t n,
+                                   const long long v[], int fixed_allowed, const Reporter *r) {
+    for (size_t i = 0; i < n; i++) {
+        const VariableRow *row = typed_row(type, vr[i], ENUMERATION, r);
+        if (!row) return MODEL_ERROR;
+        if (v[i] < 1 || v[i] > (long long)row->n_items) {
+            char allowed[512] = "";
+            for (unsigned j = 0; j < row->n_items; j++) {
+                size_t used = strlen(allowed);
+                snprintf(allowed + used, sizeof allowed - used, "%s%u (%s)", j ? ", " : "", j + 1, row->items[j]);
+            }
+            return report(r, MODEL_ERROR, "%s must be one of %s, got %lld", row->name, allowed, v[i]);
+        }
+        if (!fixed_allowed)
+            return report(r, MODEL_ERROR, "%s is a fixed parameter of %s: it can be set only before initialisation ends",
+                          row->name, type->identifier);
+    }
+    for (size_t i = 0; i < n; i++) {
+        const VariableRow *row = &((const Component *)type->kind)->variables[vr[i]];
+        snprintf(strings(type->kind, m)[slot(type->kind, vr[i])], STRING_SIZE, "%s", row->items[v[i] - 1]);
     }
     return MODEL_OK;
 }

@@ -28,13 +28,17 @@
 
 /* The rows of a generated variable table. */
 typedef enum { PARAMETER, INPUT, OUTPUT } Causality;
-typedef enum { REAL, STRING } VariableType;
+/* An ENUMERATION parameter is kept like a String, by its item's name (what configure() and the rules read), and
+   exchanged with a host as the item's value: its position in `items` plus one. */
+typedef enum { REAL, STRING, ENUMERATION } VariableType;
 typedef struct {
     const char *name;
     Causality causality;
     VariableType type;
     double start;     /* a Real's */
-    const char *text; /* a String's start value */
+    const char *text; /* a String's or an Enumeration's start value */
+    const char *const *items; /* an Enumeration's item names, in the order of their values 1, 2, ... */
+    unsigned n_items;
 } VariableRow;
 
 #define STRING_SIZE 256 /* the longest String value kept, with its terminating zero */
@@ -84,6 +88,10 @@ ModelStatus component_get_strings(const ModelType *type, void *m, const unsigned
                                   const Reporter *r);
 ModelStatus component_set_strings(const ModelType *type, void *m, const unsigned vr[], size_t n,
                                   const char *const v[], int fixed_allowed, const Reporter *r);
+ModelStatus component_get_integers(const ModelType *type, void *m, const unsigned vr[], size_t n, long long v[],
+                                   const Reporter *r);
+ModelStatus component_set_integers(const ModelType *type, void *m, const unsigned vr[], size_t n,
+                                   const long long v[], int fixed_allowed, const Reporter *r);
 ModelStatus component_do_step(const ModelType *type, void *m, double time, double step, const Reporter *r);
 /* The Model Exchange functions (model.h's ContinuousModel) of a component with a ContinuousComponent. */
 ModelStatus component_get_states(const ModelType *type, void *m, double x[], const Reporter *r);
@@ -126,6 +134,8 @@ ModelStatus store_reals(const char *model, const VariableRow table[], unsigned n
                                   .set_reals = component_set_reals,                                          \
                                   .get_strings = N_STRINGS ? component_get_strings : NULL,                   \
                                   .set_strings = N_STRINGS ? component_set_strings : NULL,                   \
+                                  .get_integers = N_ENUMERATIONS ? component_get_integers : NULL,            \
+                                  .set_integers = N_ENUMERATIONS ? component_set_integers : NULL,            \
                                   .do_step = component_do_step,                                              \
                                   .continuous = continuous_model}
 

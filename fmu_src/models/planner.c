@@ -160,8 +160,8 @@ static ModelStatus configure(const double values[], const StringValue strings[],
 /* planner.reference(): x_ref, dx_ref, ddx_ref and the induced swing at time t, the same arithmetic in its order. */
 static void reference(const Config *c, double t, double out[N_OUTPUTS]) {
     double x = c->x0, v = 0.0, a = 0.0, eta[2] = {0.0, 0.0}, deta[2] = {0.0, 0.0};
-    int moving = t < c->end;
     double rounding = 1e-9 * (t > 1.0 ? t : t < -1.0 ? -t : 1.0); /* TIME_ROUNDING * max(1.0, abs(t)) */
+    int moving = t < c->end - rounding; /* a summed time just short of the end is at it, at rest */
     for (int i = 0; i < c->n_steps; i++) {
         double dt = t - c->steps[i].t, jump = c->steps[i].value;
         if (dt <= rounding) break;

@@ -29,12 +29,13 @@
 
 /* The slave's methods this model calls. */
 enum { SETUP, ENTER, EXIT, TERMINATE, DO_STEP, GET_STATE, SET_STATE, TO_BYTES, FROM_BYTES, GET_STR, SET_STR, READER,
-       WRITER, N_METHODS };
+       WRITER, GET_ENUM, SET_ENUM, N_METHODS };
 static const char *const METHODS[N_METHODS] = {
     [SETUP] = "setup_experiment", [ENTER] = "enter_initialization_mode", [EXIT] = "exit_initialization_mode",
     [TERMINATE] = "terminate", [DO_STEP] = "do_step", [GET_STATE] = "_get_fmu_state",
     [SET_STATE] = "_set_fmu_state", [TO_BYTES] = "_fmu_state_to_bytes", [FROM_BYTES] = "_fmu_state_from_bytes",
-    [GET_STR] = "get_string", [SET_STR] = "set_string", [READER] = "real_reader", [WRITER] = "real_writer"};
+    [GET_STR] = "get_string", [SET_STR] = "set_string", [READER] = "real_reader", [WRITER] = "real_writer",
+    [GET_ENUM] = "get_enumerations", [SET_ENUM] = "set_enumerations"};
 
 #define VR_CACHE 8
 typedef struct {
@@ -479,6 +480,43 @@ static ModelStatus python_deserialize(const ModelType *type, void *m, const unsi
 static const StateFunctions PYTHON_STATES = {python_save, python_restore, python_discard, python_serialize,
                                              python_deserialize};
 
+/* Enumerations by their items' values (runtime.SlaveCalls.get_enumerations, set_enumerations). */
+static ModelStatus python_get_integers(const ModelType *type, void *m, const unsigned vr[], size_t n, long long v[],
+                                       const Reporter *r) {
+    PythonModel *p = m;
+    PyGILState_STATE gil = PyGILState_Ensure();
+    VrArgs *e = vr_entry(p, vr, n);
+    PyObject *values = sized(e ? call_method(p, GET_ENUM, e->args) : NULL, n, METHODS[GET_ENUM]);
+    for (size_t i = 0; values && i < n; i++) {
+        v[i] = PyLong_AsLongLong(item(values, i));
+        if (PyErr_Occurred()) Py_CLEAR(values);
+    }
+    ModelStatus status = finish(p, values != NULL, r);
+    Py_XDECREF(values);
+    PyGILState_Release(gil);
+    return status;
+}
+
+static ModelStatus python_set_integers(const ModelType *type, void *m, const unsigned vr[], size_t n,
+                                       const long long v[], int fixed_allowed, const Reporter *r) {
+    if (!fixed_allowed)
+        return report(r, MODEL_ERROR, "an Enumeration is a fixed parameter: it can be set only before initialisation "
+                                      "ends");
+    PythonModel *p = m;
+    PyGILState_STATE gil = PyGILState_Ensure();
+    PyObject *values = PyList_New((Py_ssize_t)n);
+    for (size_t i = 0; values && i < n; i++) {
+        PyObject *x = PyLong_FromLongLong(v[i]);
+        if (!x || PyList_SetItem(values, (Py_ssize_t)i, x) < 0) Py_CLEAR(values);
+    }
+    VrArgs *e = values ? vr_entry(p, vr, n) : NULL;
+    PyObject *args = e ? PyTuple_Pack(2, PyTuple_GetItem(e->args, 0), values) : NULL;
+    ModelStatus status = args ? call(p, SET_ENUM, args, r) : finish(p, 0, r);
+    Py_XDECREF(values);
+    PyGILState_Release(gil);
+    return status;
+}
+
 static const ModelType PYTHON_MODEL = {.identifier = "the Python slave", /* the FMU's is its slave class's */
                                        .size = python_size,
                                        .instantiate = python_instantiate,
@@ -491,6 +529,8 @@ static const ModelType PYTHON_MODEL = {.identifier = "the Python slave", /* the 
                                        .set_reals = python_set_reals,
                                        .get_strings = python_get_strings,
                                        .set_strings = python_set_strings,
+                                       .get_integers = python_get_integers,
+                                       .set_integers = python_set_integers,
                                        .do_step = python_do_step,
                                        .states = &PYTHON_STATES};
 

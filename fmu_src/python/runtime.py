@@ -11,6 +11,7 @@ import operator
 from math import isfinite
 
 from crane_fmu.model.component import Discard, Step
+from crane_fmu.model.tables import enumeration_name, enumeration_value
 
 AUTHOR = "crane anti-sway co-simulation toolkit"
 # A communication step this short is a host's rounding, not a step: hosts that add up their steps (OMSimulator,
@@ -122,10 +123,12 @@ class Runtime:
             self.initialise(saved["state"])
 
 
-def register(slave, runtime, real, string, causality, variability, initial, units=False):
+def register(slave, runtime, real, string, causality, variability, initial, units=False, integer=None):
     """Register every variable of the runtime's component on a pythonfmu or pythonfmu3 ``slave``.
 
-    ``real`` and ``string`` are the FMI version's variable classes, ``causality``,
+    ``real``, ``string`` and ``integer`` are the FMI version's variable classes (``integer``, Integer or Int64,
+    for an Enumeration: the build's post-processing declares its type; the runtime keeps the item's name,
+    the host gets and sets its value), ``causality``,
     ``variability`` and ``initial`` its enums; ``units`` declares each variable's
     unit (FMI 3.0). Values live in ``runtime``. Outputs are ``initial=calculated``
     (listed as InitialUnknowns by the build's post-processing); inputs are Real
@@ -148,6 +151,11 @@ def register(slave, runtime, real, string, causality, variability, initial, unit
             i = inputs.index(v.name)
             slave.register_variable(kind(v.name, start=v.start, getter=lambda i=i: runtime.inputs[i],
                                          setter=lambda value, i=i: runtime.set_inputs((i,), (value,)), **common))
+        elif v.type == "Enumeration":
+            slave.register_variable(integer(
+                v.name, start=enumeration_value(v, v.start),
+                getter=lambda v=v: enumeration_value(v, runtime.values[v.name]),
+                setter=lambda value, v=v: runtime.set_parameter(v.name, enumeration_name(v, int(value))), **common))
         else:
             slave.register_variable(kind(v.name, start=v.start, getter=lambda n=v.name: runtime.values[n],
                                          setter=lambda value, n=v.name: runtime.set_parameter(n, value), **common))
@@ -225,6 +233,36 @@ class SlaveCalls:
             raise ValueError(f"{row.name} of {component.model_identifier} is a String, not a Real")
         raise ValueError(f"{row.name} is an {row.causality} of {component.model_identifier}; only parameters and "
                          "inputs can be set")
+
+    def get_enumerations(self, vrs):
+        """The values of the Enumeration variables ``vrs`` (our binaries' fmi2GetInteger, fmi3GetInt64)."""
+        return [int(get()) for get in self._lookup_typed(vrs, "Enumeration", "getter")]
+
+    def set_enumerations(self, vrs, values):
+        """Set the Enumeration variables ``vrs`` to the item values ``values``, all checked first."""
+        setters = self._lookup_typed(vrs, "Enumeration", "setter")
+        rows = {v.name: v for v in self.runtime.component.variables}
+        for vr, value in zip(vrs, values):
+            enumeration_name(rows[self.vars[vr].name], value)
+        for set_, value in zip(setters, values):
+            set_(value)
+
+    def _lookup_typed(self, vrs, kind, role):
+        """The getters or setters (``role``) of ``vrs``, each a variable of type ``kind``; ValueError naming the first
+        that is not."""
+        component = self.runtime.component
+        rows = {v.name: v for v in component.variables}
+        found = []
+        for vr in vrs:
+            variable = self.vars.get(vr)
+            if variable is None:
+                raise ValueError(f"{component.model_identifier} has no variable with value reference {vr}")
+            row = rows.get(variable.name)
+            if row is None or row.type != kind:
+                have = "the independent variable time" if row is None else f"a {row.type}"
+                raise ValueError(f"{variable.name} of {component.model_identifier} is {have}, not an {kind}")
+            found.append(getattr(variable, role))
+        return found
 
     def get_reals(self, vrs):
         """pythonfmu's batched get, for its own binaries (ours use :meth:`real_reader`)."""

@@ -4,7 +4,7 @@
 ``class <ModelIdentifier>(Fmi2Slave)`` with ``Fmi2Slave = slave_base(COMPONENT)``.
 """
 
-from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Slave, Fmi2Variability, Real, String
+from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Slave, Fmi2Variability, Integer, Real, String
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
@@ -24,7 +24,8 @@ def slave_base(component):
         def __init__(self, **kwargs):
             super().__init__(**kwargs)
             self.runtime = Runtime(component)
-            register(self, self.runtime, Real, String, Fmi2Causality, Fmi2Variability, Fmi2Initial)
+            register(self, self.runtime, Real, String, Fmi2Causality, Fmi2Variability, Fmi2Initial,
+                     integer=Integer)
             self._index_reals(Real)
 
         get_real, set_real = SlaveCalls.get_reals, SlaveCalls.set_reals

@@ -4,7 +4,7 @@
 ``class <ModelIdentifier>(Fmi3Slave)`` with ``Fmi3Slave = slave_base(COMPONENT)``.
 """
 
-from pythonfmu3 import Float64, Fmi3Causality, Fmi3Initial, Fmi3Slave, Fmi3Status, Fmi3Variability, String
+from pythonfmu3 import Float64, Fmi3Causality, Fmi3Initial, Fmi3Slave, Fmi3Status, Fmi3Variability, Int64, String
 from pythonfmu3.default_experiment import DefaultExperiment
 from pythonfmu3.unit import Unit
 
@@ -19,7 +19,7 @@ def register_with_time(slave, runtime):
                                     getter=lambda: runtime.time))
     table = runtime.component.variables
     slave.register_units([Unit(name, **BASE_UNITS[name]) for name in sorted({v.unit for v in table if v.unit})])
-    register(slave, runtime, Float64, String, Fmi3Causality, Fmi3Variability, Fmi3Initial, units=True)
+    register(slave, runtime, Float64, String, Fmi3Causality, Fmi3Variability, Fmi3Initial, units=True, integer=Int64)
 
 
 def slave_base(component):

@@ -62,6 +62,9 @@ static ModelStatus apply_system_values(Model *m, unsigned i, const Reporter *r) 
     if (row->n_strings && row->type->set_strings(row->type, block(m, i), row->string_vrs, row->n_strings,
                                                  row->strings, 1, ir) > MODEL_WARNING)
         return MODEL_ERROR;
+    if (row->n_integers && row->type->set_integers(row->type, block(m, i), row->integer_vrs, row->n_integers,
+                                                   row->integers, 1, ir) > MODEL_WARNING)
+        return MODEL_ERROR;
     return MODEL_OK;
 }
 

@@ -22,6 +22,9 @@ typedef struct {
     unsigned n_strings;
     const unsigned *string_vrs;
     const char *const *strings;
+    unsigned n_integers; /* Enumerations, by their items' values */
+    const unsigned *integer_vrs;
+    const long long *integers;
 } InstanceRow;
 
 /* The exchange in Gauss-Seidel order (crane_fmu.cosim.master.Wiring.propagation): read an instance's outputs
