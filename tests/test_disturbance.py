@@ -158,3 +158,27 @@ def test_the_offset_free_target_is_the_plain_law_about_the_forces_rest():
     assert (dt1, dt2) == pytest.approx((lean[0] * 1e6, lean[1] * 1e6), rel=1e-9)
     assert dx == pytest.approx(-(P.l1 * dt1 + P.l2 * dt2), rel=1e-15)
 
+
+def test_the_board_gives_an_offset_free_lqr_the_estimator_of_the_forces(native, monkeypatch):
+    """With OFFSET_FREE on, S10's case gives the LQR a StateEstimator with the forces, measuring the plant: its
+    F2_hat and F1_hat follow the wind's mean drag on load and hook; a controller without those inputs gets none;
+    off (the board), the system is the one of before."""
+    from crane_fmu.analysis import planar_scenarios
+    from crane_fmu.compare import contenders
+    from crane_fmu.cosim import ArrayRecorder, run
+
+    chosen = {c.name: c for c in contenders(["LqrController", "EnergyController"], native[2], only=True)}
+    lqr_c, energy = chosen["LqrController"], chosen["EnergyController"]
+    assert "force" not in planar_scenarios._runs("S10")(lqr_c, cases=1)[0].system.instances
+    monkeypatch.setitem(planar_scenarios.OFFSET_FREE, "S10", 1.0)
+    system = planar_scenarios._runs("S10")(lqr_c, cases=1)[0].system
+    assert system.instances["force"] == "StateEstimator" and system.parameters["controller"]["offset_free"] == 1.0
+    assert "force" not in planar_scenarios._runs("S10")(energy, cases=1)[0].system.instances
+    columns = run(system, native[2], recorder=ArrayRecorder(), stop_time=8.0).columns()
+    late = columns["time"] >= 6.0  # the trolley at rest at the target, the wind blowing
+    estimates = [float(np.mean(columns[name][late])) for name in ("force.F2_hat", "force.F1_hat")]
+    forces = [float(np.mean(columns[name][late])) for name in ("wind.F2", "wind.F1")]
+    assert min(forces) > 0.1 and estimates == pytest.approx(forces, rel=0.25)  # the case's plant is not the model
+    # what the LQR's target is made of: the lean those estimates hold on its model is the plant's own mean lean
+    lean = [float(np.mean(columns[name][late])) for name in ("plant.theta1", "plant.theta2")]
+    assert lqr.force_target(P, *estimates)[1:] == pytest.approx(lean, rel=0.1)
