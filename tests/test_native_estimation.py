@@ -84,7 +84,8 @@ def _estimator_parameters(rng, i):
             "l2": rng.uniform(0.1, 3), "g": rng.uniform(1, 25), "h": 10 ** rng.uniform(-4, -1.5),
             "sigma_x": 10 ** rng.uniform(-4, -1), "sigma_theta": 10 ** rng.uniform(-4, -1),
             "sigma_u": 10 ** rng.uniform(-2, 1), "sigma_swing": 10 ** rng.uniform(-1, 1.5),
-            "camera": float(i % 2), "delay": float((0, 1, 3)[i % 3])}
+            "camera": float(i % 2), "delay": float((0, 1, 3)[i % 3]),
+            "sigma_force": (0.0, 10 ** rng.uniform(-1, 2.5))[(i // 2) % 2]}  # the force's state off and on
 
 
 def _random_inputs(rng, n):

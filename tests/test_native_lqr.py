@@ -115,6 +115,7 @@ def _random_parameters(rng, i):
     p["x_d"] = rng.uniform(-5, 5)
     p["u_max"] = (INF, rng.uniform(0.05, 3))[(i // 2) % 2]
     p["v_max"] = (INF, rng.uniform(0.05, 2))[(i // 4) % 2]
+    p["offset_free"] = float(i % 3) if p["m2"] > 0 else 0.0  # the force's target: off, the load, the trolley
     return p
 
 
@@ -126,6 +127,8 @@ def _random_inputs(rng, parameters):
     inputs["ddx_ref"] = rng.choice([0.0, rng.uniform(-2, 2)])
     low, high = parameters.get("l1_low", 0.2), parameters.get("l1_high", 5.0)
     inputs["l1_now"] = rng.choice([0.0, rng.uniform(low, high), rng.uniform(0.5 * low, 2 * high), -1.0])
+    inputs["F2_hat"] = rng.choice([0.0, rng.uniform(-30, 30)])
+    inputs["F1_hat"] = rng.choice([0.0, rng.uniform(-30, 30)])
     return inputs
 
 

@@ -14,7 +14,7 @@ from . import limits, linalg
 from .component import Component
 from .parameters import PLANT_RULES, plant_parameters
 from .plant import linearisation
-from .rules import check, finite, non_negative, positive, rule
+from .rules import check, finite, non_negative, one_of, positive, rule
 from .tables import CRANE_MODEL, MEASURED_STATE, STATE, controller_model, input_, output, parameter, positions
 
 WEIGHTS = tuple("q_" + name for name in STATE)
@@ -62,9 +62,26 @@ def design_of(a, b, weights, r, h):
 
 SCHEDULE_POINTS = 21
 
-Config = namedtuple("Config", "gains x_d u_max v_max h schedule")
-Config.__doc__ = ("The gains for l1, the limits, and the gain schedule: ``(l1 values, gains)`` of designs over "
-                  "[l1_low, l1_high], or None.")
+Config = namedtuple("Config", "gains x_d u_max v_max h schedule offset_free plant", defaults=(0.0, None))
+Config.__doc__ = ("The gains for l1, the limits, the gain schedule: ``(l1 values, gains)`` of designs over "
+                  "[l1_low, l1_high], or None; the offset-free target's choice and the crane model it is computed "
+                  "on (:func:`force_target`).")
+
+OFFSET_FREE = {0.0: "the forces ignored", 1.0: "the load at x_d", 2.0: "the trolley at x_d"}
+
+
+def force_target(p, f2, f1=0.0):
+    """``(dx, theta1, theta2)``: the rest that constant horizontal forces ``f2`` on the payload and ``f1`` on the hook
+    hold, the target the offset-free LQR regulates to (``dx``: the trolley's shift for the load held at the target).
+
+    At rest (``u = 0``, no rates) eqs (8)-(9) linearised are ``(m1 + m2) g theta1 = F1 + F2`` and
+    ``g theta2 = F2 / m2`` (:func:`crane_fmu.model.estimator.force_columns`' statics; the wind's static deflection
+    of ``analysis/wind_equilibrium.py`` with ``tan q = q``): the cables lean downwind by these angles, which no
+    trolley motion takes away, and the load sits ``l1 theta1 + l2 theta2`` downwind of the trolley; the trolley's
+    target moves upwind by as much.
+    """
+    theta1, theta2 = (f1 + f2) / ((p.m1 + p.m2) * p.g), f2 / (p.m2 * p.g)
+    return -(p.l1 * theta1 + p.l2 * theta2), theta1, theta2
 
 
 # A gain schedule over [l1_low, l1_high], or none (both 0): the LQR's and the MPC's.
@@ -87,7 +104,8 @@ def configure(values):
         schedule = (lengths, [design(dataclasses.replace(p, l1=length), weights, values["r"], values["h"])
                               for length in lengths])
     gains = design(p, weights, values["r"], values["h"])
-    return Config(gains=gains, x_d=values["x_d"], u_max=u_max, v_max=v_max, h=values["h"], schedule=schedule)
+    return Config(gains=gains, x_d=values["x_d"], u_max=u_max, v_max=v_max, h=values["h"], schedule=schedule,
+                  offset_free=values["offset_free"], plant=p)
 
 
 def scheduled_gains(config, l1):
@@ -101,20 +119,30 @@ def scheduled_gains(config, l1):
     return tuple(a + f * (b - a) for a, b in zip(table[i], table[i + 1]))
 
 
-def control(config, measured, reference=(0.0,) * 6, ddx_ref=0.0, l1=0.0):
+def control(config, measured, reference=(0.0,) * 6, ddx_ref=0.0, l1=0.0, forces=(0.0, 0.0)):
     """``u = ddx_ref - K (s - s_ref)`` within the limits, with ``s_ref = reference + (x_d, 0, ...)``.
 
-    ``l1`` is the measured main cable length; with a schedule, ``K`` follows it.
+    ``l1`` is the measured main cable length; with a schedule, ``K`` follows it. ``forces`` are the estimated
+    horizontal forces on the payload and the hook (``F2_hat``, ``F1_hat``); with ``offset_free`` on, ``s_ref``
+    moves to the rest they hold (:func:`force_target`): the steady error of the load (``offset_free = 1``) or the
+    trolley (2) under constant forces goes to zero, where the plain law leaves the trolley where ``K`` balances the
+    leaning cables. Forces 0 or ``offset_free = 0``: the plain law.
     """
     error = [s - r for s, r in zip(measured, reference)]
     error[0] -= config.x_d
+    if config.offset_free != 0.0 and (forces[0] != 0.0 or forces[1] != 0.0):
+        dx, theta1, theta2 = force_target(config.plant, *forces)
+        if config.offset_free == 1.0:  # the load at x_d: the trolley upwind of it
+            error[0] -= dx
+        error[2] -= theta1
+        error[4] -= theta2
     u = ddx_ref - linalg.dot(scheduled_gains(config, l1), error)
     return limits.limited(u, measured[1], config.u_max, config.v_max, config.h)
 
 
 def _output(config, state, inputs):
     return (control(config, inputs[IN.x:IN.dtheta2 + 1], inputs[IN.x_ref:IN.dtheta2_ref + 1], inputs[IN.ddx_ref],
-                    inputs[IN.l1_now]),)
+                    inputs[IN.l1_now], (inputs[IN.F2_hat], inputs[IN.F1_hat])),)
 
 
 def report(config):
@@ -144,14 +172,21 @@ VARIABLES = controller_model() + tuple(
     parameter("x_d", 0.0, "m", "target trolley position (added to x_ref)"),
     parameter("l1_low", 0.0, "m", "gain schedule: shortest main cable designed for; 0 with l1_high = 0: none"),
     parameter("l1_high", 0.0, "m", "gain schedule: longest main cable designed for"),
+    parameter("offset_free", 0.0, "1", "the estimated forces F2_hat, F1_hat: 0 ignored; 1 the load, 2 the trolley "
+                                       "held at x_d, the cables at the forces' rest (offset-free)"),
     *limits.parameters(),
 ) + MEASURED_STATE + REFERENCE_INPUTS + (
     input_("l1_now", "m", "measured main cable length, for the gain schedule; 0: not measured"),
+    input_("F2_hat", "N", "estimated horizontal force on the payload (a StateEstimator's); unconnected: 0, none"),
+    input_("F1_hat", "N", "estimated horizontal force on the hook (a StateEstimator's); unconnected: 0, none"),
     output("u", "m/s2", "demanded trolley acceleration, ddx_ref - K (s - s_ref), limited"),
 )
 IN = positions(VARIABLES, "input")
 RULES = (*PLANT_RULES, *non_negative(*WEIGHTS), *positive("r", "h"), *finite("x_d"), *limits.RULES,
-         *SCHEDULE_RULES)  # checked in this order (rules.py)
+         *SCHEDULE_RULES, one_of("offset_free", tuple(OFFSET_FREE), "0 (the forces ignored), 1 (the load at x_d) or 2 "
+                                                                     "(the trolley at x_d)"),
+         rule("m2 > 0", "m2 must be > 0 when offset_free != 0 (a force on a payload of no mass), got {m2}",
+              when="offset_free != 0"))  # checked in this order (rules.py)
 
 
 COMPONENT = Component(

@@ -9,7 +9,7 @@
 #ifndef LINALG_H
 #define LINALG_H
 
-#define LA_MAX 9 /* the ZOH's augmented matrix of 6 states and 3 inputs (the estimator's noise model) */
+#define LA_MAX 13 /* the ZOH's augmented matrix of 8 states and 5 inputs (the estimator's noise model with two forces) */
 
 typedef struct {
     int rows, cols;

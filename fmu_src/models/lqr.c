@@ -21,6 +21,8 @@ enum { SCHEDULE_POINTS = 21 }; /* lqr.SCHEDULE_POINTS */
    an FMU state is a plain copy of the model. */
 typedef struct {
     double gains[N_STATE], x_d, u_max, v_max, h;
+    double offset_free;   /* lqr.Config.offset_free, and its crane model (lqr.force_target()) */
+    PlantParameters plant;
     int scheduled;
     double lengths[SCHEDULE_POINTS], table[SCHEDULE_POINTS][N_STATE];
 } Config;
@@ -47,6 +49,9 @@ static ModelStatus configure(const double values[], const StringValue strings[],
     }
     if ((error = design(values, V(l1), c->gains))) return report(r, MODEL_ERROR, "%s", error);
     c->x_d = V(x_d), c->u_max = unlimited(V(u_max)), c->v_max = unlimited(V(v_max)), c->h = V(h);
+    c->offset_free = V(offset_free);
+    PlantParameters p = {V(m1), V(m2), V(l1), V(l2), V(g)};
+    c->plant = p;
     return MODEL_OK;
 }
 
@@ -65,13 +70,22 @@ static const char *scheduled_gains(const Config *c, double l1, double gains[N_ST
     return NULL;
 }
 
-/* lqr.control(): u = ddx_ref - K (s - s_ref), s_ref = (x_ref + x_d, dx_ref, ...), within limits.limited(). */
+/* lqr.control(): u = ddx_ref - K (s - s_ref), s_ref = (x_ref + x_d, dx_ref, ...) moved by F2_hat, F1_hat
+   (offset-free), within limits.limited(). */
 static ModelStatus outputs(const double values[], const Config *c, double out[], const Reporter *r) {
     double gains[N_STATE], error[N_STATE];
     const char *failure = scheduled_gains(c, V(l1_now), gains);
     if (failure) return report(r, MODEL_ERROR, "%s", failure);
     for (int i = 0; i < N_STATE; i++) error[i] = values[VR_x + i] - values[VR_x_ref + i];
     error[0] -= c->x_d;
+    double f2 = V(F2_hat), f1 = V(F1_hat);
+    if (c->offset_free != 0.0 && (f2 != 0.0 || f1 != 0.0)) { /* the offset-free target: lqr.force_target(), the rest
+                                                                 the estimated forces hold (eqs (8)-(9) at rest) */
+        const PlantParameters *p = &c->plant;
+        double theta1 = (f1 + f2) / ((p->m1 + p->m2) * p->g), theta2 = f2 / (p->m2 * p->g);
+        if (c->offset_free == 1.0) error[0] -= -(p->l1 * theta1 + p->l2 * theta2); /* the load at x_d */
+        error[2] -= theta1, error[4] -= theta2;
+    }
     out[0] = limited(V(ddx_ref) - la_dot(gains, error, N_STATE), V(dx), c->u_max, c->v_max, c->h);
     return MODEL_OK;
 }
