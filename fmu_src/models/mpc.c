@@ -27,7 +27,7 @@
 #define LONGEST_PLAN 6.0 /* mpc.LONGEST_PLAN */
 #define REPLAN_GAP 0.25  /* mpc.REPLAN_GAP */
 #define RETRY_GAP 6.0    /* mpc.RETRY_GAP */
-#define LARGEST_SWING (17.5 * (3.141592653589793 / 180.0)) /* mpc.LARGEST_SWING: math.radians(17.5) */
+#define LARGEST_SWING (16.0 * (3.141592653589793 / 180.0)) /* mpc.LARGEST_SWING: math.radians(16.0) */
 #define WELL_POSED 1e-2  /* mpc.WELL_POSED */
 #define MISFIT 1e-5      /* mpc.MISFIT */
 #define PLAUSIBLE 2.0    /* mpc.PLAUSIBLE */
@@ -628,7 +628,9 @@ static const char *solve(Config *c, const double *state, const double measured[N
        deviation run out, the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on the
        target */
     double replans = state[H_REPLANS], bound = state[H_BOUND];
-    if (replan && count != 0 && !found_model && !large && (trolley > c->replan_x || swing > c->replan_angle))
+    /* a plan for a deviation needs a plan to deviate from: the first after the large swing's phase is none */
+    if (replan && count != 0 && !found_model && !large && n_plan > 0 &&
+        (trolley > c->replan_x || swing > c->replan_angle))
         replans += 1.0;
     int over = step >= n_plan, swung = n_plan > 0 && to_rest > bound + SWING_MARGIN; /* past the plan's largest */
     int at_rest = over && to_trolley <= c->replan_x && to_rest <= c->replan_angle;
