@@ -352,6 +352,21 @@ def test_slower_than_larger_names_every_pair_out_of_order():
     assert controller_targets.slower_than_larger({30: None, 35: 5.0}) == [(30, 35)]
 
 
+@pytest.mark.quick
+def test_the_targets_print_the_hard_hits_and_whether_they_are_monotone():
+    """`crane-fmu targets`: the 60 deg run against issue 51's 6.5 s, and every start with the pairs out of order."""
+    def result(angle, seconds):
+        group = "mpc_hard_hit" if angle == controller_targets.HARD_HIT_DEG else "mpc_hard_hits"
+        return (controller_targets.Run(group, f"{angle:g} deg", "mpc", {}, 1e-3, 20.0),
+                {"settling_0.5deg_s": seconds, "error": None})
+
+    lines = []
+    controller_targets.report_mpc([result(50, 7.0), result(55, 6.0), result(60, 6.4)], {}, lines.append)
+    assert "  hard hit: from theta1 = 60 deg to within 0.5 deg: 6.40 s (target <= 6.5 s, ambition 6 s): met" in lines
+    assert lines[-1] == ("  hard hits from 50 to 60 deg, to within 0.5 deg: 50: 7.00 s, 55: 6.00 s, 60: 6.40 s "
+                         "(target: no start slower than a larger one): MISSED at 50 > 55 deg, 50 > 60 deg")
+
+
 def test_no_hard_hit_is_slower_than_one_from_a_larger_angle(hard_hits):
     """Issue 51: from 30 to 70 deg in steps of 5 deg, every start settles (0.5 deg), and none later than a larger
     one (from 50 deg it had got slower than from 60 deg)."""
