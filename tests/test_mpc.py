@@ -309,15 +309,76 @@ def test_the_targets_measure_the_mpcs_residual_over_the_boards_window():
             assert r.residual_from < 0.75 * r.stop_time
 
 
-@pytest.mark.parametrize("degrees, planned", [(10.0, True), (60.0, False)])
-def test_no_move_is_planned_from_a_swing_beyond_the_linear_models_reach(degrees, planned):
-    """S1's 10 deg swing is planned at the first solve; from a hard hit's 60 deg (beyond LARGEST_SWING as a modal
-    amplitude) no plan is made and the tracking QP alone acts, at the drive's limit."""
+@pytest.mark.parametrize("degrees, planned, peak", [(10.0, True, 2.0), (10.8, True, 1.9), (60.0, False, 2.0)])
+def test_no_move_is_planned_from_a_swing_beyond_the_linear_models_reach(degrees, planned, peak):
+    """S1's 10 deg swing is planned at the first solve, and so is 10.8 deg's, above PLAN_BELOW (the hysteresis
+    applies only once no plan is held after the first solve); from a hard hit's 60 deg (beyond LARGEST_SWING as a
+    modal amplitude) no plan is made and the tracking QP alone acts, at the drive's limit (10.8 deg's plan at its
+    margin's, 95 % of it, over the first 0.1 s)."""
     result, _, state = mpc_loop({"theta1_0": math.radians(degrees)}, {}, 0.1, with_state=True)
     d = mpc.configure({**mpc.COMPONENT.defaults(), "h": 1e-3}).designs[0]
-    assert (mpc.deviation(d, result[0, :6], (0.0,) * 6)[1] <= mpc.LARGEST_SWING) == planned
+    amplitude = mpc.deviation(d, result[0, :6], (0.0,) * 6)[1]
+    assert (amplitude <= mpc.LARGEST_SWING) == planned
+    assert (amplitude > mpc.PLAN_BELOW) == (degrees > 10.0)
     assert (state[mpc.HEADER.plan_steps] > 0) == planned
-    assert np.max(np.abs(result[:, 6])) == pytest.approx(2.0)
+    assert np.max(np.abs(result[:, 6])) == pytest.approx(peak)
+
+
+# --- hard hits (issue 51, item 4) ------------------------------------------------------------------
+
+HARD_HIT_STOP = 15.0  # s: every start of HARD_HIT_ANGLES settles well before (and stays settled)
+
+
+@pytest.fixture(scope="module")
+def hard_hits():
+    """``{start angle [deg]: both angles within 0.5 deg from [s]}`` (None: never) of the MPC called directly as the
+    master calls its FMU, from theta1(0) over controller_targets.HARD_HIT_ANGLES (payload in line, at rest, Section
+    V plant, |u| <= 2 m/s2, |v| <= 1 m/s, h = 1 ms); the drive's limits checked at every step."""
+    times = {}
+    for degrees in controller_targets.HARD_HIT_ANGLES:
+        result, _ = mpc_loop({"theta1_0": math.radians(degrees)}, {}, HARD_HIT_STOP)
+        assert np.max(np.abs(result[:, 6])) <= 2.0 + 1e-9 and np.max(np.abs(result[:, 1])) <= 1.0 + 1e-9
+        t = np.arange(len(result)) * 1e-3
+        times[degrees] = metrics.move_metrics(t, result[:, 0], result[:, 1], (result[:, 2], result[:, 4]),
+                                              result[:, 6], 0.0)["settling_0.5deg_s"]
+    return times
+
+
+@pytest.mark.quick
+def test_slower_than_larger_names_every_pair_out_of_order():
+    assert controller_targets.slower_than_larger({30: 4.0, 35: 5.0, 40: 6.0}) == []
+    assert controller_targets.slower_than_larger({30: 4.0, 35: 5.0, 40: 4.5}) == [(35, 40)]
+    assert controller_targets.slower_than_larger({40: None, 30: 4.0, 35: 5.0}) == []
+    assert controller_targets.slower_than_larger({30: None, 35: 5.0}) == [(30, 35)]
+
+
+@pytest.mark.quick
+def test_the_targets_print_the_hard_hits_and_whether_they_are_monotone():
+    """`crane-fmu targets`: the 60 deg run against issue 51's 6.5 s, and every start with the pairs out of order."""
+    def result(angle, seconds):
+        group = "mpc_hard_hit" if angle == controller_targets.HARD_HIT_DEG else "mpc_hard_hits"
+        return (controller_targets.Run(group, f"{angle:g} deg", "mpc", {}, 1e-3, 20.0),
+                {"settling_0.5deg_s": seconds, "error": None})
+
+    lines = []
+    controller_targets.report_mpc([result(50, 7.0), result(55, 6.0), result(60, 6.4)], {}, lines.append)
+    assert "  hard hit: from theta1 = 60 deg to within 0.5 deg: 6.40 s (target <= 6.5 s, ambition 6 s): met" in lines
+    assert lines[-1] == ("  hard hits from 50 to 60 deg, to within 0.5 deg: 50: 7.00 s, 55: 6.00 s, 60: 6.40 s "
+                         "(target: no start slower than a larger one): MISSED at 50 > 55 deg, 50 > 60 deg")
+
+
+def test_no_hard_hit_is_slower_than_one_from_a_larger_angle(hard_hits):
+    """Issue 51: from 30 to 70 deg in steps of 5 deg, every start settles (0.5 deg), and none later than a larger
+    one (from 50 deg it had got slower than from 60 deg)."""
+    assert None not in hard_hits.values(), hard_hits
+    assert controller_targets.slower_than_larger(hard_hits) == [], hard_hits
+
+
+@pytest.mark.xfail(strict=True, reason="issue 51 item 4 not met: 7.77 s from 60 deg against 6.5 s (see "
+                                        "docs/guide/controllers.md)")
+def test_a_hard_hit_from_60_deg_settles_within_the_issues_6_5_s(hard_hits):
+    """Issue 51's requirement: from theta1(0) = 60 deg both angles within 0.5 deg by 6.5 s (ambition 6.0 s)."""
+    assert hard_hits[controller_targets.HARD_HIT_DEG] <= 6.5, hard_hits
 
 
 # --- the safety envelope (issue 51): made-up failures ---------------------------------------------

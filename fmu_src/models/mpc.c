@@ -28,6 +28,7 @@
 #define REPLAN_GAP 0.25  /* mpc.REPLAN_GAP */
 #define RETRY_GAP 6.0    /* mpc.RETRY_GAP */
 #define LARGEST_SWING (17.5 * (3.141592653589793 / 180.0)) /* mpc.LARGEST_SWING: math.radians(17.5) */
+#define PLAN_BELOW (16.0 * (3.141592653589793 / 180.0))     /* mpc.PLAN_BELOW: math.radians(16.0) */
 #define WELL_POSED 1e-2  /* mpc.WELL_POSED */
 #define MISFIT 1e-5      /* mpc.MISFIT */
 #define PLAUSIBLE 2.0    /* mpc.PLAUSIBLE */
@@ -622,13 +623,17 @@ static const char *solve(Config *c, const double *state, const double measured[N
     int replan = count == 0 || found_model || (moved && at >= plan_after);
     double *new_plan_u = next + plan_at, to_trolley, to_rest;
     deviation(d, measured, target, &to_trolley, &to_rest);
-    int large = to_rest > LARGEST_SWING; /* too far from rest for the linear model's plan */
+    /* too far from rest for the linear model's plan; with none held after the first solve (the large swing's
+       phase), planned again only below PLAN_BELOW */
+    int large = to_rest > (count != 0 && n_plan == 0 ? PLAN_BELOW : LARGEST_SWING);
     /* the safety envelope: the LQR takes over, for good, when the plan is over and the identification's data are
        beyond the crane's equations (mid-move the LQR's kick would swing more than the plan's end), the plans for a
        deviation run out, the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on the
        target */
     double replans = state[H_REPLANS], bound = state[H_BOUND];
-    if (replan && count != 0 && !found_model && !large && (trolley > c->replan_x || swing > c->replan_angle))
+    /* a plan for a deviation needs a plan to deviate from: the first after the large swing's phase is none */
+    if (replan && count != 0 && !found_model && !large && n_plan > 0 &&
+        (trolley > c->replan_x || swing > c->replan_angle))
         replans += 1.0;
     int over = step >= n_plan, swung = n_plan > 0 && to_rest > bound + SWING_MARGIN; /* past the plan's largest */
     int at_rest = over && to_trolley <= c->replan_x && to_rest <= c->replan_angle;
