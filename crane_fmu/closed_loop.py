@@ -100,7 +100,8 @@ def axis_planners(crane, kinds, connections):
     """``{axis position: planner instance}``: per axis of the plant's ``crane``, the planner whose output feeds
     that axis's demand (an open loop of a planner per axis: ``planner_y.ddx_ref`` to ``plant.uy``) or the
     controller's position reference of the axis (``planner_y.x_ref`` to ``controller.y_ref``); where none
-    does, the system's first planner plans the first axis (it feeds a controller the references by name).
+    does, the system's first planner that does not plan the cable's length plans the first axis (it feeds a
+    controller the references by name).
 
     ``kinds``: ``{instance: model identifier}`` in the system's order; ``connections``: the written-out ones.
     """
@@ -113,8 +114,10 @@ def axis_planners(crane, kinds, connections):
         source = next((c.source for c in connections if (c.target, c.input) in fed), None)
         if source in planners:
             found[axis.position] = source
-    if not found and planners:
-        found[crane.axes[0].position] = planners[0]
+    hoisting = {c.source for c in connections if (c.target, c.input) == (plant, crane.hoist)}
+    free = [name for name in planners if name not in hoisting]
+    if not found and free:
+        found[crane.axes[0].position] = free[0]
     return found
 
 

@@ -48,6 +48,19 @@ def test_each_axis_move_target_is_its_own_planners():
     assert [systems.move_target(systems.get(name)) for name in planar] == [{"x": 2.0}] * 3 + [{"x": 0.0}]
 
 
+@pytest.mark.quick
+def test_a_planner_of_the_cable_plans_no_axis():
+    """S7's MPC plans its own move while a planner hoists (hoist.ddx_ref to plant.hoist): the move's target is the
+    controller's x_d (2 m), not the hoist's (1 m), which made `crane-fmu targets` print S7's arrival as never."""
+    from crane_fmu.analysis import scenarios
+
+    mpc = components.get("MpcController")
+    contender = scenarios.Contender("MpcController", "MpcController", list(mpc.names("input")),
+                                    list(mpc.names("parameter")))
+    (_, system, *_), = scenarios.systems_for(contender, "S7", 1)
+    assert "hoist" in systems.kinds(system) and systems.move_target(system) == {"x": 2.0}
+
+
 @pytest.mark.parametrize("kind", ["python", "native"])
 def test_a_sweep_of_the_spatial_crane_gives_its_swing_angles_figures(fmu_dir, native, dask_scheduler, tmp_path,
                                                                      kind):
