@@ -17,7 +17,7 @@ from collections import namedtuple
 from . import mpc, path
 from .component import Component, Step
 from .plant3d import _SWING_ROWS, SWING_STATE
-from .rules import check, finite, non_negative, rule
+from .rules import check, finite, non_negative
 from .tables import CRANE_MODEL, input_, output, parameter, positions
 
 AXES = ("x", "y")
@@ -122,7 +122,7 @@ VARIABLES = tuple(v._replace(start=Q_X) if v.name == "q_x" else v for v in mpc.V
 IN = positions(VARIABLES, "input")
 _MEASURED = tuple(tuple(getattr(IN, n) for n in axis_states(a)) for a in AXES)
 RULES = (*(r for r in mpc.RULES if set(r.names) <= PLANAR), *finite("x0", "y0", "x_d", "y_d", "x_via", "y_via"),
-         *non_negative("corridor"), rule("finite(corridor)", "corridor must be finite, got {corridor}"))
+         *non_negative("corridor"))  # >= 0 and finite
 
 COMPONENT = Component(
     "MpcController3D", "controller",

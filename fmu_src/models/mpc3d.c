@@ -105,6 +105,7 @@ static int within(const double points[N_POINTS][N_AXES], int leg, const int movi
         else if (has[k]) trial[k] = planned[k];
         if (in[k]) last = py_max(last, trial[k].end);
     }
+    if (last == -INFINITY) last = start; /* nothing moved yet: the reference at the start */
     for (double t = start; t <= last + SAMPLE; t += SAMPLE) {
         double where[N_AXES];
         for (int k = 0; k < N_AXES; k++) where[k] = in[k] ? position(&trial[k], t) : points[0][k];
