@@ -13,7 +13,9 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from native_fmus import messages, python_folder
+from fmpy import read_model_description
+from fmpy.validation import validate_fmu
+from native_fmus import close, messages, open_native, python_folder, steps_after_restore
 
 from crane_fmu import components, systems
 from crane_fmu.analysis import scenarios
@@ -22,6 +24,17 @@ from crane_fmu.cosim import run
 
 MPC3D = components.get("MpcController3D")
 LINUX = sys.platform.startswith("linux")  # glibc's libm in both models: the same bits
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_native_model_description_has_the_python_fmus_variables(fmu_dir, native, version):
+    def variables(path):
+        return [(v.name, v.valueReference, v.causality, v.variability, v.initial, v.start, v.unit, v.description)
+                for v in read_model_description(str(path)).modelVariables]
+
+    path = native[version] / "MpcController3D.fmu"
+    assert variables(path) == variables(python_folder(fmu_dir, version) / "MpcController3D.fmu")
+    assert validate_fmu(str(path)) == []
 
 
 def _python_run_equal_to_native(system, fmu_dir, native, version):
@@ -91,3 +104,32 @@ def test_every_parameter_refusal_has_the_python_fmus_message(fmu_dir, native, se
     theirs = messages(fmu_dir / "MpcController3D.fmu", settings)
     assert ours == theirs
     assert ours[0][-2] == "exit: 3" and ours[1][-1].startswith("fmi2ExitInitializationMode: ")
+
+
+PATH = {"x_d": 3.0, "y_d": 2.0, "x_via": 3.0, "y_via": 0.0, "corridor": 0.3}  # mpc3d-path's: y starts at 2.864 s
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_a_restored_fmu_state_repeats_the_steps_after_it(native, version):
+    """Saved on the path before the y axis' move starts (both axes' plans and solutions, the time in the state),
+    restored, restored from its serialised copy: the steps after it, across the y axis' start, repeat."""
+    fmu, vr, set_, get = open_native(native[version] / "MpcController3D.fmu", version, PATH)
+    fmu.exitInitializationMode()
+    inputs, outputs = [vr[n] for n in MPC3D.names("input")], [vr[n] for n in MPC3D.names("output")]
+
+    def steps(k0, n):
+        rows = []
+        for k in range(k0, k0 + n):
+            set_(inputs, [0.02 * math.sin(k * 0.01 + i) for i in range(len(inputs))])
+            fmu.doStep(k * 1e-2, 1e-2)
+            rows.append(get(outputs))
+        return rows
+
+    steps(0, 250)
+    first, again, third = steps_after_restore(fmu, version, steps, 250, 80)
+    close(fmu)
+    assert first == again == third
+    # the y axis' MPC started afresh at its move's start (the step ending at 2.87 s, after 2.864 s): its new plan's
+    # first input, the limit its plans use (u_max (1 - margin) = 1.9 m/s2), after the held one's
+    k = 286 - 250
+    assert (first[k - 1][1], first[k][1]) == (2.0, 1.9)
