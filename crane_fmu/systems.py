@@ -455,15 +455,15 @@ register(System("lqr3d-path", {"plant": "CranePlant3D", "planner": "TrajectoryPl
 register(System("mpc3d", {"plant": "CranePlant3D", "controller": "MpcController3D"},
                 parameters={"plant": {**DRIVE3D, **ELLIPTIC}},
                 description="the crane in three dimensions regulated from the elliptic swing of lqr3d by the "
-                            "constrained MPC of each axis (Python), |u| <= 2 m/s2, |v| <= 1 m/s per axis",
-                stop_time=10.0))
+                            "constrained MPC of each axis, |u| <= 2 m/s2, |v| <= 1 m/s per axis",
+                stop_time=10.0, tags=("one-fmu",)))
 register(System("mpc3d-move", {"plant": "CranePlant3D", "controller": "MpcController3D"},
                 parameters={"plant": {**REST3D, **DRIVE3D}, "controller": {"x_d": DIAGONAL["x"], "y_d": DIAGONAL["y"]}},
-                description="lqr3d-move's diagonal move by the constrained MPC of each axis (Python): its own "
-                            "shortest move per axis within the drive's limits", stop_time=10.0))
+                description="lqr3d-move's diagonal move by the constrained MPC of each axis: its own "
+                            "shortest move per axis within the drive's limits", stop_time=10.0, tags=("one-fmu",)))
 register(System("mpc3d-path", {"plant": "CranePlant3D", "controller": "MpcController3D"},
                 parameters={"plant": {**REST3D, **DRIVE3D}, "controller": {
                     "x_d": L_PATH[-1][0], "y_d": L_PATH[-1][1], "x_via": L_PATH[1][0], "y_via": L_PATH[1][1],
                     "corridor": CORRIDOR}},
-                description="lqr3d-path's L path by the constrained MPC of each axis (Python), the y leg started "
-                            "as early as the corridor lets a time-optimal move", stop_time=15.0))
+                description="lqr3d-path's L path by the constrained MPC of each axis, the y leg started "
+                            "as early as the corridor lets a time-optimal move", stop_time=15.0, tags=("one-fmu",)))

@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from crane_fmu import native_batch, systems
+from crane_fmu import components, native_batch, systems
 from crane_fmu.analysis import fast_metrics, metrics, scenarios
 from crane_fmu.compare import contenders, plan, run_score_case
 from crane_fmu.cosim import FmiError, simulate
@@ -110,7 +110,8 @@ def test_the_boards_cases_give_the_per_case_rows_bit_for_bit(native):
     assert {c["scenario"] for c in cases} == set(scenarios.scenarios())
     items = native_batch.items(cases, lambda c: native_batch.batchable([(d, blobs[d]) for d in c["fmus"].values()],
                                                                         c["master"]))
-    python_only = {"MpcController3D"}  # no native model yet: its cases run one by one
+    python_only = {c.model_identifier for c in components.registered("controller") if not c.native}  # one by one
+    assert "MpcController3D" not in python_only  # native since mpc3d.c: its cases batched too
     assert all((kind == "batch") == all(c["controller"] not in python_only for c in group) for kind, group in items)
     assert any(kind == "batch" for kind, _ in items)
     batch = [row for item in items for row in native_batch.score_chunk(item, blobs)]

@@ -68,11 +68,13 @@ def test_native_model_description_has_the_python_fmus_variables(fmu_dir, native,
 
 @pytest.mark.parametrize("own_math", [False, True], ids=["libm", "portable"])
 def test_the_model_files_compile_without_warnings_under_strict_flags(tmp_path, own_math):
-    """ISO C99, -Wall -Wextra -Werror (less unused parameters), with the C library's math and the portable one."""
+    """ISO C99, -Wall -Wextra -Werror (less unused parameters), with the C library's math and the portable one: the
+    MPC of one axis (mpc_axis.c) and the two components over it (mpc.c, mpc3d.c)."""
     flags = ["-c", "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Wno-unused-parameter", "-Werror"]
     flags += ["-DCRANE_OWN_MATH"] if own_math else []
     (tmp_path / "MpcController_variables.h").write_text(variables_header(MPC))
-    for name in ("mpc.c", "qp.c"):
+    (tmp_path / "MpcController3D_variables.h").write_text(variables_header(components.get("MpcController3D")))
+    for name in ("mpc.c", "mpc_axis.c", "mpc3d.c", "qp.c"):
         subprocess.run([compiler(), *flags, f"-I{tmp_path}", *(f"-I{folder}" for folder in FOLDERS),
                         str(source_path(name)), "-o", str(tmp_path / "m.o")], check=True)
 

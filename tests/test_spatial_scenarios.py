@@ -108,6 +108,14 @@ def test_with_a_margin_the_reference_keeps_within_it_and_starts_the_next_leg_soo
 
 
 @pytest.mark.quick
+def test_a_path_whose_first_legs_move_nothing_starts_each_leg_at_once():
+    """Waypoints that repeat the start (the MpcController3D's default waypoint with a corridor): no axis moves in the
+    first legs, each leg starts at 0 (no `max()` of no moves), and the move of the last leg is planned."""
+    assert path.plan([(0, 0), (0, 0), (0, 0)], 0.15) == {a: {"x0": 0.0, "x_d": 0.0, "t0": 0.0} for a in "xy"}
+    assert path.plan([(0, 0), (0, 0), (2, 0)], 0.15)["x"] == {"x0": 0.0, "x_d": 2.0, "t0": 0.0}
+
+
+@pytest.mark.quick
 def test_a_path_that_moves_an_axis_twice_is_refused_in_one_line():
     with pytest.raises(ValueError, match="waypoints: the x axis moves in two legs \\(leg 3\\)"):
         path.plan([(0, 0), (1, 0), (1, 1), (2, 1)])

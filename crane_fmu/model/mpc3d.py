@@ -9,7 +9,7 @@ A path: with ``corridor > 0`` the load goes from ``(x0, y0)`` through the waypoi
 ``(x_d, y_d)``; each axis makes its one move of the path (an L path: x, then y), the later leg started as early as
 a time-optimal move of the limits the plans use (``1 - margin`` of them) keeps within half the corridor of the
 path's centre line (:func:`.path.plan`, unshaped). Before its start an axis holds its start position.
-Python only (no C twin yet).
+Its C twin is fmu_src/models/mpc3d.c (over mpc_axis.c, the planar MPC's C), bit-equal.
 """
 
 from collections import namedtuple
@@ -17,7 +17,7 @@ from collections import namedtuple
 from . import mpc, path
 from .component import Component, Step
 from .plant3d import _SWING_ROWS, SWING_STATE
-from .rules import check, finite, non_negative, rule
+from .rules import check, finite, non_negative
 from .tables import CRANE_MODEL, input_, output, parameter, positions
 
 AXES = ("x", "y")
@@ -122,7 +122,7 @@ VARIABLES = tuple(v._replace(start=Q_X) if v.name == "q_x" else v for v in mpc.V
 IN = positions(VARIABLES, "input")
 _MEASURED = tuple(tuple(getattr(IN, n) for n in axis_states(a)) for a in AXES)
 RULES = (*(r for r in mpc.RULES if set(r.names) <= PLANAR), *finite("x0", "y0", "x_d", "y_d", "x_via", "y_via"),
-         *non_negative("corridor"), rule("finite(corridor)", "corridor must be finite, got {corridor}"))
+         *non_negative("corridor"))  # >= 0 and finite
 
 COMPONENT = Component(
     "MpcController3D", "controller",
@@ -131,4 +131,4 @@ COMPONENT = Component(
     "accelerations ux, uy",
     VARIABLES, configure, _output, feedthrough=True, initial_state=initial_state, update=update, report=report,
     depends_on={f"u{a}": axis_states(a) for a in AXES},  # each axis' demand reads its own states alone
-    crane_model=CRANE_MODEL, rules=RULES)
+    crane_model=CRANE_MODEL, native="mpc3d.c", rules=RULES)

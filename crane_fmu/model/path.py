@@ -66,7 +66,7 @@ def plan(waypoints, margin=0.0, values=None, axes=("x", "y")):
 
         def within(t0, a=a, b=b, moving=moving, start=start):  # called in this leg only
             trial = {**configs, **{axes[k]: _config(values, a[k], b[k], t0) for k in moving}}
-            t, last = start, max(c.end for c in trial.values())
+            t, last = start, max((c.end for c in trial.values()), default=start)  # nothing moved yet: at the start
             while t <= last + SAMPLE:
                 where = [planner.reference(trial[name], t)[0] if name in trial else points[0][k]
                          for k, name in enumerate(axes)]
