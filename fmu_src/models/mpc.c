@@ -70,12 +70,13 @@ typedef struct {
     double weights[N_STATE], r, x_d, u_max, v_max, margin, h, every, interval, replan_x, replan_angle;
     int steps, max_iterations, samples;
     double lqr_gains[N_STATE], lqr_table[SCHEDULE_POINTS][N_STATE]; /* mpc.Config.lqr: the LQR it hands over to */
+    double offset_free; /* mpc.Config.lqr.offset_free: the forces' rest off the QP's error and the LQR's target */
     int first[MAX_ROWS], length[MAX_ROWS], offset[MAX_ROWS]; /* mpc.constraint_rows() */
     double values[1 + MAX_STEPS];
     double work[QP_WORK(MAX_STEPS, MAX_ROWS)], scratch[3 * MAX_STEPS * MAX_STEPS + 7 * MAX_STEPS * N_STATE];
     int iwork[QP_IWORK(MAX_ROWS)], hint_rows[MAX_ROWS], hint_sides[MAX_ROWS], active[MAX_ROWS], sides[MAX_ROWS];
     int memo_valid, memo_warns; /* the last solve: its state and inputs, the new state, whether it warns */
-    double memo_inputs[N_STATE + 1];
+    double memo_inputs[N_STATE + 3]; /* x .. dtheta2, l1_now, F2_hat, F1_hat */
     State memo_state, memo_next;
 } Config;
 
@@ -189,7 +190,7 @@ static ModelStatus configure(const double values[], const StringValue strings[],
     memcpy(c->weights, &values[VR_q_x], sizeof c->weights);
     c->r = V(r), c->x_d = V(x_d), c->u_max = u_max, c->v_max = v_max, c->margin = V(margin), c->h = h;
     c->every = every, c->interval = interval, c->steps = (int)steps, c->max_iterations = (int)cap;
-    c->replan_x = V(replan_x), c->replan_angle = V(replan_angle);
+    c->replan_x = V(replan_x), c->replan_angle = V(replan_angle), c->offset_free = V(offset_free);
     double low = V(l1_low), high = V(l1_high);
     c->n_designs = 1;
     if (!(low == 0.0 && high == 0.0)) c->n_designs = SCHEDULE_POINTS;
@@ -554,9 +555,22 @@ static size_t used(const Config *c, const double *s) {
 /* The steps per interval as a whole number (beyond any count a run reaches: as good as infinite). */
 static long long whole(double every) { return every < 1e15 ? (long long)every : (long long)1e15; }
 
+/* mpc.force_shift(): the rest the estimated forces f2 (payload), f1 (hook) hold, lqr.force_target() on the configured
+   model (eqs (8)-(9) at rest), the trolley's shift for the load at x_d (offset_free 1) or none (2); 0 when
+   offset_free is 0 or there is no force. */
+static int force_shift(const Config *c, double f2, double f1, double shift[N_STATE]) {
+    if (c->offset_free == 0.0 || (f2 == 0.0 && f1 == 0.0)) return 0;
+    const PlantParameters *p = &c->plant;
+    double theta1 = (f1 + f2) / ((p->m1 + p->m2) * p->g), theta2 = f2 / (p->m2 * p->g);
+    double dx = -(p->l1 * theta1 + p->l2 * theta2);
+    for (int i = 0; i < N_STATE; i++) shift[i] = 0.0;
+    shift[0] = c->offset_free == 1.0 ? dx : 0.0, shift[2] = theta1, shift[4] = theta2;
+    return 1;
+}
+
 /* lqr.scheduled_gains() over the MPC's own LQR designs (the schedule's lengths, or none) and lqr.control() for the
-   target x_d: the LQR the MPC hands over to. */
-static double lqr_input(const Config *c, const double measured[N_STATE], double l1) {
+   target x_d moved by the forces (offset-free): the LQR the MPC hands over to. */
+static double lqr_input(const Config *c, const double measured[N_STATE], double l1, double f2, double f1) {
     double gains[N_STATE], error[N_STATE];
     memcpy(gains, c->lqr_gains, sizeof gains);
     if (c->n_designs > 1 && l1 > 0) {
@@ -569,14 +583,19 @@ static double lqr_input(const Config *c, const double measured[N_STATE], double 
     }
     for (int i = 0; i < N_STATE; i++) error[i] = measured[i] - 0.0;
     error[0] -= c->x_d;
+    double shift[N_STATE];
+    if (force_shift(c, f2, f1, shift)) { /* lqr.control()'s order: x, then theta1, theta2 */
+        if (c->offset_free == 1.0) error[0] -= shift[0];
+        error[2] -= shift[2], error[4] -= shift[4];
+    }
     return limited(0.0 - la_dot(gains, error, N_STATE), measured[1], c->u_max, c->v_max, c->h);
 }
 
 /* mpc.handover(): the solve that hands over to the LQR: its input, the state kept but marked. */
 static const char *handover(const Config *c, const double *state, const double measured[N_STATE], double l1_now,
-                            double replans, double *next) {
+                            const double forces[2], double replans, double *next) {
     memcpy(next, state, used(c, state) * sizeof(double));
-    next[H_U] = lqr_input(c, measured, l1_now), next[H_ITERATIONS] = 0.0;
+    next[H_U] = lqr_input(c, measured, l1_now, forces[0], forces[1]), next[H_ITERATIONS] = 0.0;
     next[H_HANDED] = 1.0, next[H_REPLANS] = replans;
     return NULL;
 }
@@ -584,7 +603,7 @@ static const char *handover(const Config *c, const double *state, const double m
 /* mpc.solve(): one solve, from the state and the measured state, into `next` (the new state with the count as it
    was); *warns when its message is due. */
 static const char *solve(Config *c, const double *state, const double measured[N_STATE], double l1_now,
-                         double *next, int *warns) {
+                         const double forces[2], double *next, int *warns) {
     int n = c->steps;
     double count = state[H_COUNT];
     long long at = (long long)count / whole(c->every); /* this interval's number (count // every) */
@@ -633,7 +652,7 @@ static const char *solve(Config *c, const double *state, const double measured[N
     int over = step >= n_plan, swung = n_plan > 0 && to_rest > bound + SWING_MARGIN; /* past the plan's largest */
     int at_rest = over && to_trolley <= c->replan_x && to_rest <= c->replan_angle;
     if (count != 0 && ((unexplained && over) || replans > MOST_REPLANS || swung || at_rest))
-        return handover(c, state, measured, l1_now, replans, next);
+        return handover(c, state, measured, l1_now, forces, replans, next);
     if (replan && large) { /* none made: the tracking QP takes the swing down alone, a plan tried next interval */
         replan = n_plan > 0 || found_model; /* the last solve's warm start holds unless a plan or model changed */
         n_plan = 0, n_states = 0, plan_u = plan_s = new_plan_u;
@@ -661,6 +680,9 @@ static const char *solve(Config *c, const double *state, const double measured[N
     ref_s = step < n_states ? plan_s + step * N_STATE : target;
     double e0[N_STATE];
     for (int i = 0; i < N_STATE; i++) e0[i] = measured[i] - ref_s[i];
+    double shift[N_STATE]; /* offset-free: the error from the forces' rest (the disturbance in the prediction) */
+    if (force_shift(c, forces[0], forces[1], shift))
+        for (int i = 0; i < N_STATE; i++) e0[i] = e0[i] - shift[i];
     if (large && n_plan == 0) e0[0] = 0.0; /* the trolley left free while the swing is taken down */
     for (int k = 0; k < n; k++) f[k] = la_dot(d->gain[k], e0, N_STATE);
     double v0 = measured[1], planned = v0;
@@ -712,12 +734,13 @@ static void initial_state(const double values[], const Config *c, State *s) { me
 static const char *solved(const Config *config, const State *s, const double values[], const double **next,
                           int *warns) {
     Config *c = (Config *)config; /* the memo, as mpc.Config.memo: not the configuration */
-    const double *inputs = &values[VR_x]; /* x .. dtheta2, l1_now */
+    const double *inputs = &values[VR_x]; /* x .. dtheta2, l1_now, F2_hat, F1_hat */
+    const double forces[2] = {V(F2_hat), V(F1_hat)};
     size_t n = used(c, s->v);
     if (!(c->memo_valid && memcmp(c->memo_inputs, inputs, sizeof c->memo_inputs) == 0 &&
           used(c, c->memo_state.v) == n && memcmp(c->memo_state.v, s->v, n * sizeof(double)) == 0)) {
         c->memo_valid = 0;
-        const char *error = solve(c, s->v, inputs, V(l1_now), c->memo_next.v, &c->memo_warns);
+        const char *error = solve(c, s->v, inputs, V(l1_now), forces, c->memo_next.v, &c->memo_warns);
         if (error) return error;
         memcpy(c->memo_inputs, inputs, sizeof c->memo_inputs);
         memcpy(c->memo_state.v, s->v, n * sizeof(double));
@@ -733,7 +756,7 @@ static int due(const Config *c, const double *s) { return (long long)s[H_COUNT] 
 static ModelStatus outputs(const double values[], const Config *c, const State *s, double out[], const Reporter *r) {
     const double *state = s->v;
     if (state[H_HANDED] != 0.0) { /* the LQR's, every step */
-        out[0] = lqr_input(c, &values[VR_x], V(l1_now)), out[1] = 0.0;
+        out[0] = lqr_input(c, &values[VR_x], V(l1_now), V(F2_hat), V(F1_hat)), out[1] = 0.0;
         out[2] = state[H_PLAN_STEPS] != 0 ? (state[H_PLAN_START] + state[H_PLAN_STEPS]) * c->interval : 0.0;
         return MODEL_OK;
     }
