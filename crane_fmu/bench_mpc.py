@@ -38,11 +38,12 @@ def solve_times(system_name="mpc-transport", step=1e-3):
     pc = plant.check({**system.parameters.get(roles["plant"], {})})
     cc = mpc.check({**system.parameters.get(roles["controller"], {}), "h": step})
     ps, cs = plant.initial_state(pc), mpc.initial_state(cc)
-    inputs_at = [plant.names("output").index(name) for name in mpc.names("input")]
+    inputs_at = [plant.names("output").index(name) for name in mpc.names("input")
+                 if name in plant.names("output")]  # by name: the force estimates (F2_hat, F1_hat) unconnected, 0
     times = []
     for k in range(round(system.stop_time / step) + 1):
         out = plant.output(pc, ps, (0.0,) * 4)
-        inputs = tuple(out[i] for i in inputs_at)
+        inputs = tuple(out[i] for i in inputs_at) + (0.0, 0.0)  # F2_hat, F1_hat
         start = time.perf_counter()
         u = mpc.output(cc, cs, inputs)[0]
         if k % cc.every == 0:
@@ -77,8 +78,9 @@ def native_solve_times(fmu, system_name="mpc-transport", step=1e-3):
     slave.setReal([vr[name] for name in settings], list(settings.values()))
     slave.exitInitializationMode()
     every = mpc.check(settings).every
-    inputs_at = [plant.names("output").index(name) for name in mpc.names("input")]
-    inputs, output = [vr[name] for name in mpc.names("input")], [vr["u"]]
+    inputs_at = [plant.names("output").index(name) for name in mpc.names("input")
+                 if name in plant.names("output")]  # by name: the force estimates (F2_hat, F1_hat) unconnected, 0
+    inputs, output = [vr[name] for name in mpc.names("input") if name in plant.names("output")], [vr["u"]]
     solves, between = [], []
     try:
         for k in range(round(system.stop_time / step) + 1):

@@ -211,7 +211,7 @@ def mpc_loop(plant_values, controller_values, stop_time, h=1e-3, with_state=Fals
     rows, messages = [], []
     for k in range(round(stop_time / h) + 1):
         out = plant.COMPONENT.output(pc, ps, (0.0,) * 4)
-        inputs = tuple(out[:6]) + (out[11],)
+        inputs = tuple(out[:6]) + (out[11], 0.0, 0.0)  # l1_now; F2_hat, F1_hat unconnected
         u = mpc.COMPONENT.output(cc, cs, inputs)[0]
         rows.append(tuple(out[:6]) + (u, out[-1]))
         ps = plant.update(pc, ps, (u, 0.0, 0.0, 0.0), k * h, h)

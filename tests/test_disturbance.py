@@ -1,4 +1,4 @@
-"""Disturbance rejection (issue 51, item 3): the StateEstimator's force state and the offset-free LQR.
+"""Disturbance rejection (issue 51, item 3): the StateEstimator's force state, the offset-free LQR and MPC.
 
 The estimator with ``sigma_force > 0`` carries a seventh state, a horizontal force ``F2`` on the payload (a random
 walk in the plant's linearised model, :func:`estimator.force_columns`), with a camera an eighth, ``F1`` on the hook;
@@ -8,7 +8,9 @@ on the nonlinear plant (:func:`plant_equations.rk4_step`, the CranePlant's equat
 - the force estimate converges to a constant force on a plant held still within the time the filter's own error
   dynamics give (``Ad (I - M C)``, computed from the design, not from the run);
 - a constant force leaves the plain LQR's load off the target by what the statics and the gains predict, and the
-  offset-free LQR's load (or trolley, ``offset_free = 2``) on it.
+  offset-free LQR's load (or trolley, ``offset_free = 2``) on it;
+- the MPC likewise (its tracking QP's error taken from the forces' rest, its LQR's target moved), and its QP's
+  linear term is the plain one's about that rest (known answer).
 """
 
 import math
@@ -17,7 +19,7 @@ import numpy as np
 import pytest
 
 from crane_fmu.analysis.wind_equilibrium import static_deflection
-from crane_fmu.model import estimator, lqr
+from crane_fmu.model import estimator, lqr, mpc
 from crane_fmu.model.parameters import PlantParameters
 from crane_fmu.model.plant_equations import rk4_step
 
@@ -182,3 +184,99 @@ def test_the_board_gives_an_offset_free_lqr_the_estimator_of_the_forces(native, 
     # what the LQR's target is made of: the lean those estimates hold on its model is the plant's own mean lean
     lean = [float(np.mean(columns[name][late])) for name in ("plant.theta1", "plant.theta2")]
     assert lqr.force_target(P, *estimates)[1:] == pytest.approx(lean, rel=0.1)
+
+
+# ---- the MPC: the constant force in its prediction, its LQR's target moved -----------------------------------------
+
+def _mpc_closed_loop(offset_free, sigma_force, seconds=15.0, x_d=1.0, force=FORCE, hook=0.0):
+    """The MpcController moving to ``x_d`` from rest (its plan, its tracking QP, then its LQR: the safety envelope's
+    handover at rest), a constant force on the payload from t = 0, the estimator measuring the plant as in
+    :func:`_closed_loop`: ``(trolley, load, whether it handed over)`` at the end."""
+    controller = mpc.COMPONENT.check({"offset_free": offset_free, "u_max": 2.0, "v_max": 1.0, "x_d": x_d})
+    config = estimator.COMPONENT.check({"sigma_force": sigma_force, "camera": 1.0, "delay": 0.0})
+    state, plant, f_hat = estimator.initial_state(config), (0.0,) * 6, (0.0, 0.0)
+    cs = mpc.initial_state(controller)
+    for k in range(int(round(seconds / H))):
+        inputs = tuple(plant) + (0.0,) + tuple(f_hat)  # l1_now not measured
+        u = mpc.COMPONENT.output(controller, cs, inputs)[0]
+        handed = cs[mpc.HEADER.handed]
+        cs = mpc.update(controller, cs, inputs, k * H, H)
+        cs = getattr(cs, "state", cs)
+        if cs[mpc.HEADER.handed] and not handed:  # the handover's solve: the LQR's input, told the forces
+            assert u == lqr.control(controller.lqr, plant, forces=f_hat)
+        state, out = _estimate(config, state, (plant[0], plant[2], plant[4]), u)
+        plant = rk4_step(plant, u, H, P, forces=(hook, force, 0.0, 0.0))
+        f_hat = out[6:]
+    x, theta1, theta2 = plant[0] - x_d, plant[2], plant[4]
+    return x, x + P.l1 * math.sin(theta1) + P.l2 * math.sin(theta2), cs[mpc.HEADER.handed]
+
+
+def test_a_constant_force_leaves_the_plain_mpc_off_target_and_the_offset_free_mpc_on_it():
+    """A 1 m move under a constant 2 N push on the payload. The plain MPC ends (its LQR's, handed over at rest) with
+    the trolley where its LQR's K balances the leaning cables and the load beyond, as the statics predict (as for
+    the LQR above); the offset-free one (its QP's error and its LQR's target about the forces' rest) takes the
+    load's error (or with offset_free = 2 the trolley's) to within 1 % of that."""
+    gains = mpc.COMPONENT.check({}).lqr.gains
+    _, theta1, theta2 = lqr.force_target(P, FORCE)
+    trolley = -(gains[2] * theta1 + gains[4] * theta2) / gains[0]
+    load = trolley + P.l1 * theta1 + P.l2 * theta2
+    assert abs(load) > 0.01
+    plain = _mpc_closed_loop(0.0, SIGMA_FORCE)
+    assert plain[2] == 1.0  # handed over
+    assert plain[0] == pytest.approx(trolley, rel=0.02) and plain[1] == pytest.approx(load, rel=0.02)
+    assert _mpc_closed_loop(1.0, 0.0) == plain  # offset-free, the estimator without the force: F2_hat = 0
+    free = _mpc_closed_loop(1.0, SIGMA_FORCE)
+    assert free[2] == 1.0 and abs(free[1]) <= 0.01 * abs(load)
+    trolley_free = _mpc_closed_loop(2.0, SIGMA_FORCE)
+    assert abs(trolley_free[0]) <= 0.01 * abs(trolley)
+
+
+def _recorded_solves(values, forces, monkeypatch, drive=None, seconds=2.0):
+    """The MPC (identification off: its data hold the input it gave) on the plant pushed by a 2 N force on the
+    payload, told ``forces``, the plant driven by the MPC's ``u`` (or by the inputs ``drive``): each solve's QP
+    linear term ``f`` (the tracking QP's) and every step's ``(u, state)``."""
+    from crane_fmu.model import plant as plant_model
+
+    solves, real = [], mpc.qp.solve
+
+    def recording(prepared, f, *args, **kwargs):
+        solves.append((prepared, list(f)))
+        return real(prepared, f, *args, **kwargs)
+
+    monkeypatch.setattr(mpc.qp, "solve", recording)
+    pc = plant_model.configure({**plant_model.COMPONENT.defaults(), "u_max": 2.0, "v_max": 1.0, "theta1_0": 0.0})
+    cc = mpc.COMPONENT.check({"u_max": 2.0, "v_max": 1.0, "x_d": 1.0, "identify": 0.0, **values})
+    ps, cs, steps = pc.state0, mpc.initial_state(cc), []
+    for k in range(round(seconds / H)):
+        out = plant_model.COMPONENT.output(pc, ps, (0.0, 0.0, 0.0, FORCE))
+        inputs = tuple(out[:6]) + (0.0,) + forces
+        u = mpc.COMPONENT.output(cc, cs, inputs)[0]
+        cs = mpc.update(cc, cs, inputs, k * H, H)
+        cs = getattr(cs, "state", cs)
+        steps.append((u, cs))
+        ps = plant_model.update(pc, ps, (u if drive is None else drive[k], 0.0, 0.0, FORCE), k * H, H)
+    monkeypatch.setattr(mpc.qp, "solve", real)
+    return cc, [f for prepared, f in solves if prepared is cc.designs[0].qp], steps  # the tracking QP's (no plan's)
+
+
+@pytest.mark.parametrize("mode", [1.0, 2.0], ids=["load", "trolley"])
+def test_the_mpcs_tracking_qp_sees_the_error_from_the_forces_rest(monkeypatch, mode):
+    """Known answer: the same measured states (a run of the plain MPC's), told forces F, the offset-free MPC's QP has
+    the linear term ``f = G (e0 - s_F)`` where the plain one has ``G e0`` (``G``: the design's gain, ``s_F``: the
+    rest F holds, lqr.force_target, the trolley's shift only for the load's mode): the constant force in the
+    prediction. With offset_free = 0 the forces change nothing, bit for bit."""
+    forces = (FORCE, 0.5)
+    _, plain, steps = _recorded_solves({}, (0.0, 0.0), monkeypatch)
+    assert _recorded_solves({}, forces, monkeypatch)[1:] == (plain, steps)  # offset_free = 0: today's law
+    drive = [u for u, _ in steps]  # the plain run's states, fed to the offset-free MPC
+    cc, solves, _ = _recorded_solves({"offset_free": mode}, forces, monkeypatch, drive=drive)
+    dx, theta1, theta2 = lqr.force_target(P, *forces)
+    shift = (dx if mode == 1.0 else 0.0, 0.0, theta1, 0.0, theta2, 0.0)
+    assert mpc.force_shift(cc, forces) == shift and mpc.force_shift(cc, (0.0, 0.0)) is None
+    gain = np.array(mpc.nearest_design(cc, 0.0).gain)
+    assert len(solves) == len(plain) >= 10
+    assert np.allclose(solves, np.array(plain) - gain @ np.array(shift), rtol=1e-12, atol=1e-12)
+    assert not np.allclose(solves, plain, rtol=1e-3)  # the shift is there
+    s = (1.02, 0.01, 0.03, -0.02, 0.05, 0.01)  # the handover's solve: its LQR's input about the forces' rest
+    u = mpc.handover(cc, mpc.initial_state(cc), s, 0.0, 3.0, forces)[0]
+    assert u == lqr.control(cc.lqr, s, forces=forces) != lqr.control(cc.lqr, s)

@@ -402,7 +402,7 @@ def _envelope_loop(controller_values, stop_time, kick=None, plant_values=None, n
         if kick and k == round(kick[0] / h):
             ps = ps[:2] + (ps[2] + kick[1],) + ps[3:]
         out = plant.COMPONENT.output(pc, ps, (0.0,) * 4)
-        inputs = tuple(out[:6]) + (out[11],)
+        inputs = tuple(out[:6]) + (out[11], 0.0, 0.0)
         if noise:  # on the angles and their rates (rad, rad/s)
             inputs = inputs[:2] + tuple(v + noise * rng.normal() for v in inputs[2:6]) + inputs[6:]
         u = mpc.COMPONENT.output(cc, cs, inputs)[0]

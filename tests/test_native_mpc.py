@@ -265,8 +265,9 @@ def test_the_native_mpc_identifies_a_known_crane_within_1_percent(native, true):
     control, cvr, cset, cget = open_native(native[2] / "MpcController.fmu", 2, {"x_d": 2.0})
     plant.exitInitializationMode()
     control.exitInitializationMode()
-    measured = [pvr[n] for n in MPC.names("input")]
-    inputs = [cvr[n] for n in MPC.names("input")]
+    names = [n for n in MPC.names("input") if n in pvr]  # the plant's outputs by name (F2_hat, F1_hat: none)
+    measured = [pvr[n] for n in names]
+    inputs = [cvr[n] for n in names]
     steps = 1000
     for k in range(steps):
         cset(inputs, pget(measured))
@@ -303,7 +304,8 @@ REFUSED = [{"m2": -1.0}, {"q_theta1": NAN}, {"r": 0.0}, {"interval": INF}, {"hor
            {"margin": 1.0}, {"max_iterations": 2.5}, {"max_iterations": 0.0}, {"max_iterations": INF},
            {"identify": INF}, {"x_d": NAN},
            {"u_max": 0.0}, {"v_max": INF}, {"horizon": 20.0}, {"interval": 0.004, "horizon": 0.4},
-           {"l1_low": -1.0, "l1_high": 2.0}, {"l1_low": 1.0, "l1_high": 0.5}]
+           {"l1_low": -1.0, "l1_high": 2.0}, {"l1_low": 1.0, "l1_high": 0.5}, {"offset_free": 3.0},
+           {"offset_free": 0.5}, {"offset_free": 1.0, "m2": 0.0}]
 
 
 @pytest.mark.parametrize("settings", REFUSED, ids=lambda c: ",".join(f"{k}={v!r}" for k, v in c.items()))
@@ -324,7 +326,7 @@ def test_a_restored_fmu_state_repeats_the_steps_after_it(native, version):
     def steps(k0, n):
         rows = []
         for k in range(k0, k0 + n):
-            set_(inputs, [0.3 * math.sin(k * 0.01 + i) for i in range(len(inputs) - 1)] + [0.0])
+            set_(inputs, [0.3 * math.sin(k * 0.01 + i) for i in range(len(inputs) - 3)] + [0.0] * 3)  # l1_now, forces 0
             fmu.doStep(k * 1e-3, 1e-3)
             rows.append(get(outputs))
         return rows
@@ -382,7 +384,7 @@ def _handover_step(name, stop_time, step, force):
     ps, cs = pc.state0, mpc.initial_state(cc)
     for k in range(round(stop_time / step) + 1):
         out = plant.COMPONENT.output(pc, ps, (0.0, 0.0, force, 0.0))
-        inputs = tuple(out[:6]) + (out[11],)
+        inputs = tuple(out[:6]) + (out[11], 0.0, 0.0)
         u = mpc.COMPONENT.output(cc, cs, inputs)[0]
         cs = mpc.update(cc, cs, inputs, k * step, step)
         cs = cs.state if isinstance(cs, Step) else cs
@@ -390,3 +392,42 @@ def _handover_step(name, stop_time, step, force):
             return k
         ps = plant.update(pc, ps, (u, 0.0, force, 0.0), k * step, step)
     return None
+
+
+# ---- the estimated forces (offset-free, issue 51 item 3) ------------------------------------------------------------
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("offset_free", [0.0, 1.0, 2.0], ids=["off", "load", "trolley"])
+def test_told_the_forces_the_native_mpc_gives_the_python_mpcs_bits(native, offset_free, version):
+    """The native MpcController FMU and the Python model, fed the same inputs step by step (a host's loop): the
+    Python plant pushed by 2 N on the payload and 0.5 N on the hook, driven by the Python MPC, its state and
+    F2_hat, F1_hat (the true forces after 0.3 s, a step as an estimate's) given to both. Each step's outputs bit
+    for bit on Linux: the QP's error about the forces' rest, the handover to the LQR (which the pushed move makes,
+    the safety envelope) and the LQR's target told the forces."""
+    from crane_fmu.model import plant as plant_model
+
+    values = {"x_d": 1.0, "offset_free": offset_free}
+    fmu, vr, set_, get = open_native(native[version] / "MpcController.fmu", version, values)
+    fmu.exitInitializationMode()
+    names, outputs = MPC.names("input"), [vr[n] for n in MPC.names("output")]
+    pc = plant_model.configure({**plant_model.COMPONENT.defaults(), "u_max": 2.0, "v_max": 1.0, "theta1_0": 0.0})
+    cc = MPC.check({**values, "h": 1e-3})
+    ps, cs, ours, theirs, handed = pc.state0, mpc.initial_state(cc), [], [], None
+    pushes = (0.0, 0.0, 0.5, 2.0)  # u, F_hoist, F1 (hook), F2 (payload)
+    for k in range(2500):
+        out = plant_model.COMPONENT.output(pc, ps, pushes)
+        forces = (2.0, 0.5) if k >= 300 else (0.0, 0.0)
+        inputs = tuple(out[:6]) + (0.0,) + forces
+        assert tuple(names[-3:]) == ("l1_now", "F2_hat", "F1_hat")
+        set_([vr[n] for n in names], list(inputs))
+        ours.append(get(outputs))
+        theirs.append(MPC.output(cc, cs, inputs))
+        fmu.doStep(k * 1e-3, 1e-3)
+        cs = mpc.update(cc, cs, inputs, k * 1e-3, 1e-3)
+        cs = getattr(cs, "state", cs)
+        if handed is None and cs[mpc.HEADER.handed]:
+            handed = k
+        ps = plant_model.update(pc, ps, (theirs[-1][0], 0.0, 0.5, 2.0), k * 1e-3, 1e-3)
+    close(fmu)
+    compare_to_python(ours, theirs)
+    assert handed is not None and 300 < handed < 2400  # the QP told the forces, then the LQR told them

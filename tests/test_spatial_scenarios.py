@@ -139,10 +139,10 @@ def test_the_mpc_of_the_x_axis_is_the_planar_mpc():
         for name, value in zip(("x", "dx", "theta1x", "dtheta1x", "theta2x", "dtheta2x"), x_states):
             inputs[names.index(name)] = value
         ux, uy = ours.output(config, state, tuple(inputs))
-        (u, *_) = mpc.COMPONENT.output(planar, theirs, x_states + (0.0,))
+        (u, *_) = mpc.COMPONENT.output(planar, theirs, x_states + (0.0, 0.0, 0.0))
         assert (ux, uy) == (u, 0.0), k
         state = ours.update(config, state, tuple(inputs), k * 1e-3, 1e-3)
-        theirs = mpc.COMPONENT.update(planar, theirs, x_states + (0.0,), k * 1e-3, 1e-3)
+        theirs = mpc.COMPONENT.update(planar, theirs, x_states + (0.0, 0.0, 0.0), k * 1e-3, 1e-3)
         state, theirs = getattr(state, "state", state), getattr(theirs, "state", theirs)
 
 

@@ -206,7 +206,7 @@ SPECS = {
 
 MEASURING = ("S8", "S9")  # the scenarios with a sensor and a StateEstimator in front of the controller
 # Disturbance rejection (issue 51, item 3) in the scenarios of a force on the load (S4's gust, S10's wind): a
-# controller that takes F2_hat and has the parameter offset_free (the LQR) gets the force's estimate from a
+# controller that takes F2_hat and has the parameter offset_free (the LQR, the MPC) gets the force's estimate from a
 # StateEstimator with the force state (crane_fmu/model/estimator.py) measuring the plant (x, theta1, theta2: as the
 # controller there takes the true state, no noise and no delay) and regulates offset-free (OFFSET_FREE: 1 the load,
 # 2 the trolley at the target; 0: neither, no estimator, the board as before issue 51's item 3).

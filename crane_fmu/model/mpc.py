@@ -33,6 +33,10 @@ The move is planned again too when the measured state leaves the plan by ``repla
 No move is planned from a swing larger than :data:`LARGEST_SWING` (a hard hit), where the linear model's plan
 would be far off: the tracking QP alone takes the swing down, its trolley error left out (the trolley free), and
 the move is planned once the swing is below :data:`PLAN_BELOW`.
+With ``offset_free`` (1: the load, 2: the trolley at ``x_d``) the estimated horizontal forces ``F2_hat``, ``F1_hat``
+(a StateEstimator's) enter the tracking QP as a constant disturbance in its prediction, its initial error taken
+from the rest they hold (:func:`force_shift`), and the LQR it hands over to regulates to that rest; the plan and
+the deviations are measured without them.
 
 What is claimed is measured, not proven: ``crane-fmu targets`` and the scoreboard
 give its figures; the plan is only as good as the linear model (a few tenths of a
@@ -48,7 +52,7 @@ from . import limits, linalg, lqr, planner, qp
 from .component import Component, Step
 from .lqr import DEFAULT_WEIGHTS, SCHEDULE_RULES, WEIGHTS, continuous_model
 from .parameters import PLANT_RULES, plant_parameters
-from .rules import check, finite, in_range, non_negative, positive, rule, whole
+from .rules import check, finite, in_range, non_negative, one_of, positive, rule, whole
 from .tables import CRANE_MODEL, MEASURED_STATE, controller_model, input_, output, parameter, positions
 
 RHO = 1e6  # the plan's weight on missing the target state
@@ -290,7 +294,8 @@ def configure(values):
     gains = lqr.design(p, weights, values["r"], h)  # the LQR it hands over to: the LqrController's law (lqr.control)
     schedule = None if len(lengths) == 1 else \
         (lengths, [lqr.design(dataclasses.replace(p, l1=length), weights, values["r"], h) for length in lengths])
-    own_lqr = lqr.Config(gains=gains, x_d=values["x_d"], u_max=u_max, v_max=v_max, h=h, schedule=schedule)
+    own_lqr = lqr.Config(gains=gains, x_d=values["x_d"], u_max=u_max, v_max=v_max, h=h, schedule=schedule,
+                         offset_free=values["offset_free"], plant=p)
     return Config(designs=designs, x_d=values["x_d"], u_max=u_max, v_max=v_max, margin=margin, h=h, every=every,
                   interval=interval, steps=steps, max_iterations=int(cap), plant=p, weights=weights, r=values["r"],
                   samples=samples, replan_x=values["replan_x"], replan_angle=values["replan_angle"], lqr=own_lqr,
@@ -462,8 +467,25 @@ def deviation(d, measured, ref):
     return trolley, swing
 
 
-def solve(config, state, measured, l1_now):
-    """One solve: ``(u, new state without the count, messages)`` from the measured state."""
+def force_shift(config, forces):
+    """What the estimated forces ``(F2_hat, F1_hat)`` take off the tracking QP's initial error: the rest they hold
+    (:func:`.lqr.force_target` on the configured model, as the LQR's target moves), or nothing (``offset_free`` 0 or
+    no force).
+
+    A constant force ``F`` adds ``E F`` to the linear model's ``s' = A s + B u``; its rest ``s_F`` (``u = 0``) has
+    ``A s_F + E F = 0`` (and any trolley position), so ``e - s_F`` obeys the model without the force: the initial
+    error shifted by ``s_F`` is the prediction with the constant disturbance in it.
+    """
+    mode = config.lqr.offset_free
+    if mode == 0.0 or (forces[0] == 0.0 and forces[1] == 0.0):
+        return None
+    dx, theta1, theta2 = lqr.force_target(config.plant, *forces)
+    return (dx if mode == 1.0 else 0.0, 0.0, theta1, 0.0, theta2, 0.0)
+
+
+def solve(config, state, measured, l1_now, forces=(0.0, 0.0)):
+    """One solve: ``(u, new state without the count, messages)`` from the measured state and the estimated forces
+    (``F2_hat``, ``F1_hat``: :func:`force_shift`; the LQR handed over to gets them too)."""
     c, n = config, config.steps
     count = int(state[HEADER.count])
     at = count // c.every  # this interval's number
@@ -500,7 +522,7 @@ def solve(config, state, measured, l1_now):
     at_rest = over and to_trolley <= c.replan_x and to_rest <= c.replan_angle
     swung = bool(plan_u) and to_rest > state[HEADER.bound] + SWING_MARGIN  # past the plan's largest (a plan made)
     if count and ((unexplained and over) or replans > MOST_REPLANS or swung or at_rest):
-        return handover(c, state, measured, l1_now, replans)
+        return handover(c, state, measured, l1_now, replans, forces)
     bound = state[HEADER.bound]
     if replan and large:  # none made: the tracking QP takes the swing down alone, a plan is tried at the next interval
         replan = bool(plan_u) or model is not None  # the last solve's warm start holds unless a plan or model changed
@@ -522,6 +544,9 @@ def solve(config, state, measured, l1_now):
     ref_u = [plan_u[step + k] if step + k < len(plan_u) else 0.0 for k in range(n)]
     ref_s = plan_s[step] if step < len(plan_s) else target
     e0 = [a - b for a, b in zip(measured, ref_s)]
+    shift = force_shift(c, forces)
+    if shift is not None:  # offset-free: the error from the rest the forces hold (the disturbance in the prediction)
+        e0 = [e - s for e, s in zip(e0, shift)]
     if large and not plan_u:  # the trolley left free while the swing is taken down
         e0[0] = 0.0
     f = [linalg.dot(row, e0) for row in d.gain]
@@ -564,9 +589,10 @@ def solve(config, state, measured, l1_now):
     return u, header + tuple(solution.x) + tuple(new_codes) + plan_part, messages
 
 
-def handover(config, state, measured, l1_now, replans):
-    """The solve that hands over to the LQR: its input (:func:`.lqr.control`), the state kept but marked."""
-    u = lqr.control(config.lqr, measured, l1=l1_now)
+def handover(config, state, measured, l1_now, replans, forces=(0.0, 0.0)):
+    """The solve that hands over to the LQR: its input (:func:`.lqr.control`, the forces given), the state kept but
+    marked."""
+    u = lqr.control(config.lqr, measured, l1=l1_now, forces=forces)
     header = list(state[1:len(HEADER)])
     header[HEADER.u - 1], header[HEADER.iterations - 1] = u, 0.0
     header[HEADER.handed - 1], header[HEADER.replans - 1] = 1.0, replans
@@ -578,7 +604,8 @@ def _solved(config, state, inputs):
     memo = config.memo
     if memo.get("state") is not state or memo.get("inputs") != inputs:
         memo["state"], memo["inputs"] = state, inputs
-        memo["value"] = solve(config, state, inputs[IN.x:IN.dtheta2 + 1], inputs[IN.l1_now])
+        memo["value"] = solve(config, state, inputs[IN.x:IN.dtheta2 + 1], inputs[IN.l1_now],
+                              (inputs[IN.F2_hat], inputs[IN.F1_hat]))
     return memo["value"]
 
 
@@ -593,7 +620,8 @@ def _plan_end(config, state):
 
 def _output(config, state, inputs):
     if state[HEADER.handed]:  # the LQR's, every step
-        u = lqr.control(config.lqr, inputs[IN.x:IN.dtheta2 + 1], l1=inputs[IN.l1_now])
+        u = lqr.control(config.lqr, inputs[IN.x:IN.dtheta2 + 1], l1=inputs[IN.l1_now],
+                        forces=(inputs[IN.F2_hat], inputs[IN.F1_hat]))
         return u, 0.0, _plan_end(config, state)
     if _due(config, state):
         _, rest, _ = _solved(config, state, inputs)
@@ -642,10 +670,15 @@ VARIABLES = controller_model() + tuple(
     parameter("l1_low", 0.0, "m", "designs for cable lengths from l1_low to l1_high (nearest to l1_now used); "
                                   "0 with l1_high = 0: one design for l1"),
     parameter("l1_high", 0.0, "m", "longest main cable designed for"),
+    parameter("offset_free", 0.0, "1", "the estimated forces F2_hat, F1_hat: 0 ignored; 1 the load, 2 the trolley "
+                                       "held at x_d: the tracking QP's error from the rest they hold (the constant "
+                                       "force in its prediction), and its LQR's target (offset-free)"),
     *(v._replace(description=v.description.split(";")[0] + "; a constraint of its QPs: finite")
       for v in limits.parameters()),
 ) + MEASURED_STATE + (
     input_("l1_now", "m", "measured main cable length, for the designs' schedule; 0: not measured"),
+    input_("F2_hat", "N", "estimated horizontal force on the payload (a StateEstimator's); unconnected: 0, none"),
+    input_("F1_hat", "N", "estimated horizontal force on the hook (a StateEstimator's); unconnected: 0, none"),
     output("u", "m/s2", "demanded trolley acceleration: the plan's plus the tracking QP's first input, held "
                         "over the interval"),
     output("iterations", "1", "QP iterations of the last solve"),
@@ -658,7 +691,10 @@ RULES = (*PLANT_RULES, *non_negative(*WEIGHTS), *positive("r", "h", "interval", 
          *non_negative("identify"), *finite("x_d"), *limits.RULES,
          rule("finite(unlimited(u_max)) and finite(unlimited(v_max))",
               "u_max and v_max must be finite (the MPC's constraints), got {unlimited(u_max)}, {unlimited(v_max)}"),
-         *SCHEDULE_RULES)  # checked in this order (rules.py), then configure()'s own
+         *SCHEDULE_RULES, one_of("offset_free", tuple(lqr.OFFSET_FREE), "0 (the forces ignored), 1 (the load at x_d) "
+                                                                        "or 2 (the trolley at x_d)"),
+         rule("m2 > 0", "m2 must be > 0 when offset_free != 0 (a force on a payload of no mass), got {m2}",
+              when="offset_free != 0"))  # checked in this order (rules.py), then configure()'s own
 
 COMPONENT = Component(
     "MpcController", "controller",

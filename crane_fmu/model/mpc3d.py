@@ -22,7 +22,8 @@ from .tables import CRANE_MODEL, input_, output, parameter, positions
 
 AXES = ("x", "y")
 Q_X = 600.0  # the trolley's weight: a path's corner is met on time (the planar MPC's 50 keeps the move's end soft)
-PLANAR = {v.name for v in mpc.VARIABLES if v.causality == "parameter"} - {"x_d", "l1_low", "l1_high"}
+OWN = ("x_d", "l1_low", "l1_high", "offset_free")  # the planar MPC's parameters each axis sets (no force estimate)
+PLANAR = {v.name for v in mpc.VARIABLES if v.causality == "parameter"} - set(OWN)
 
 
 def axis_states(axis):
@@ -50,9 +51,9 @@ def configure(values):
             "v_max": values["v_max"] * shrink})
     axes = []
     for a in AXES:
-        after = mpc.configure({**planar, "x_d": moves[a]["x_d"], "l1_low": 0.0, "l1_high": 0.0})
-        before = after if moves[a]["t0"] <= 0 else mpc.configure({**planar, "x_d": moves[a]["x0"], "l1_low": 0.0,
-                                                                  "l1_high": 0.0})
+        fixed = {"l1_low": 0.0, "l1_high": 0.0, "offset_free": 0.0}
+        after = mpc.configure({**planar, "x_d": moves[a]["x_d"], **fixed})
+        before = after if moves[a]["t0"] <= 0 else mpc.configure({**planar, "x_d": moves[a]["x0"], **fixed})
         axes.append(Axis(before, after, moves[a]["t0"]))
     return Config(tuple(axes), {})
 
@@ -76,7 +77,7 @@ def _split(config, state):
 
 
 def _axis_inputs(inputs, k):
-    return tuple(inputs[i] for i in _MEASURED[k]) + (0.0,)  # the planar MPC's l1_now: not measured
+    return tuple(inputs[i] for i in _MEASURED[k]) + (0.0, 0.0, 0.0)  # the planar MPC's l1_now, F2_hat, F1_hat: none
 
 
 def _output(config, state, inputs):
@@ -106,7 +107,7 @@ def report(config):
 
 
 VARIABLES = tuple(v._replace(start=Q_X) if v.name == "q_x" else v for v in mpc.VARIABLES
-                  if v.causality == "parameter" and v.name not in ("x_d", "l1_low", "l1_high")) + (
+                  if v.causality == "parameter" and v.name not in OWN) + (
     parameter("x0", 0.0, "m", "where the trolley starts along x (a path's first point)"),
     parameter("y0", 0.0, "m", "where the trolley starts along y"),
     parameter("x_d", 0.0, "m", "target trolley position along x: the plan's end"),

@@ -172,7 +172,7 @@ static ModelStatus configure(const double values[], const StringValue strings[],
     }
     MpcSettings s = {V(m1), V(m2), V(l1), V(l2), V(g), {0}, V(r), 0.0, V(u_max), V(v_max), V(margin), V(h),
                      V(interval), V(horizon), V(max_iterations), V(replan_x), V(replan_angle), 0.0, 0.0,
-                     V(identify)};
+                     V(identify), 0.0};
     for (int i = 0; i < N_STATE; i++) s.q[i] = values[VR_q_x + i];
     for (int k = 0; k < N_AXES; k++) {
         s.x_d = x_d[k];
@@ -192,10 +192,10 @@ static const MpcConfig *axis_config(const Config *config, int k, double time) {
     return c;
 }
 
-/* mpc3d._axis_inputs(): the axis' states, then l1_now (not measured: 0). */
-static void axis_inputs(const double values[], int k, double out[N_STATE + 1]) {
+/* mpc3d._axis_inputs(): the axis' states, then l1_now and the forces (not measured: 0). */
+static void axis_inputs(const double values[], int k, double out[N_INPUTS]) {
     for (int i = 0; i < N_STATE; i++) out[i] = values[MEASURED[k][i]];
-    out[N_STATE] = 0.0;
+    out[N_STATE] = out[N_STATE + 1] = out[N_STATE + 2] = 0.0;
 }
 
 static void initial_state(const double values[], const Config *c, State *s) {
@@ -206,7 +206,7 @@ static void initial_state(const double values[], const Config *c, State *s) {
 /* mpc3d._output(): each axis' planar MPC's u. */
 static ModelStatus outputs(const double values[], const Config *c, const State *s, double out[], const Reporter *r) {
     for (int k = 0; k < N_AXES; k++) {
-        double inputs[N_STATE + 1], axis_out[3];
+        double inputs[N_INPUTS], axis_out[3];
         axis_inputs(values, k, inputs);
         ModelStatus status = mpc_axis_outputs(axis_config(c, k, s->time), &s->axes[k], inputs, axis_out, r);
         if (status != MODEL_OK) return status;
@@ -219,7 +219,7 @@ static ModelStatus outputs(const double values[], const Config *c, const State *
 static ModelStatus update(const double values[], const Config *c, State *s, double time, double step,
                           const Reporter *r) {
     for (int k = 0; k < N_AXES; k++) {
-        double inputs[N_STATE + 1];
+        double inputs[N_INPUTS];
         axis_inputs(values, k, inputs);
         ModelStatus status = mpc_axis_update(axis_config(c, k, s->time), &s->axes[k], inputs, PREFIX[k], r);
         if (status != MODEL_OK) return status;

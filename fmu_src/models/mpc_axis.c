@@ -123,7 +123,7 @@ ModelStatus mpc_axis_configure(const MpcSettings *v, Config *c, const Reporter *
     memcpy(c->weights, v->q, sizeof c->weights);
     c->r = v->r, c->x_d = v->x_d, c->u_max = u_max, c->v_max = v_max, c->margin = v->margin, c->h = h;
     c->every = every, c->interval = interval, c->steps = (int)steps, c->max_iterations = (int)cap;
-    c->replan_x = v->replan_x, c->replan_angle = v->replan_angle;
+    c->replan_x = v->replan_x, c->replan_angle = v->replan_angle, c->offset_free = v->offset_free;
     double low = v->l1_low, high = v->l1_high;
     c->n_designs = 1;
     if (!(low == 0.0 && high == 0.0)) c->n_designs = SCHEDULE_POINTS;
@@ -488,9 +488,22 @@ static size_t used(const Config *c, const double *s) {
 /* The steps per interval as a whole number (beyond any count a run reaches: as good as infinite). */
 static long long whole(double every) { return every < 1e15 ? (long long)every : (long long)1e15; }
 
+/* mpc.force_shift(): the rest the estimated forces f2 (payload), f1 (hook) hold, lqr.force_target() on the configured
+   model (eqs (8)-(9) at rest), the trolley's shift for the load at x_d (offset_free 1) or none (2); 0 when
+   offset_free is 0 or there is no force. */
+static int force_shift(const Config *c, double f2, double f1, double shift[N_STATE]) {
+    if (c->offset_free == 0.0 || (f2 == 0.0 && f1 == 0.0)) return 0;
+    const PlantParameters *p = &c->plant;
+    double theta1 = (f1 + f2) / ((p->m1 + p->m2) * p->g), theta2 = f2 / (p->m2 * p->g);
+    double dx = -(p->l1 * theta1 + p->l2 * theta2);
+    for (int i = 0; i < N_STATE; i++) shift[i] = 0.0;
+    shift[0] = c->offset_free == 1.0 ? dx : 0.0, shift[2] = theta1, shift[4] = theta2;
+    return 1;
+}
+
 /* lqr.scheduled_gains() over the MPC's own LQR designs (the schedule's lengths, or none) and lqr.control() for the
-   target x_d: the LQR the MPC hands over to. */
-static double lqr_input(const Config *c, const double measured[N_STATE], double l1) {
+   target x_d moved by the forces (offset-free): the LQR the MPC hands over to. */
+static double lqr_input(const Config *c, const double measured[N_STATE], double l1, double f2, double f1) {
     double gains[N_STATE], error[N_STATE];
     memcpy(gains, c->lqr_gains, sizeof gains);
     if (c->n_designs > 1 && l1 > 0) {
@@ -503,14 +516,19 @@ static double lqr_input(const Config *c, const double measured[N_STATE], double 
     }
     for (int i = 0; i < N_STATE; i++) error[i] = measured[i] - 0.0;
     error[0] -= c->x_d;
+    double shift[N_STATE];
+    if (force_shift(c, f2, f1, shift)) { /* lqr.control()'s order: x, then theta1, theta2 */
+        if (c->offset_free == 1.0) error[0] -= shift[0];
+        error[2] -= shift[2], error[4] -= shift[4];
+    }
     return limited(0.0 - la_dot(gains, error, N_STATE), measured[1], c->u_max, c->v_max, c->h);
 }
 
 /* mpc.handover(): the solve that hands over to the LQR: its input, the state kept but marked. */
 static const char *handover(const Config *c, const double *state, const double measured[N_STATE], double l1_now,
-                            double replans, double *next) {
+                            const double forces[2], double replans, double *next) {
     memcpy(next, state, used(c, state) * sizeof(double));
-    next[H_U] = lqr_input(c, measured, l1_now), next[H_ITERATIONS] = 0.0;
+    next[H_U] = lqr_input(c, measured, l1_now, forces[0], forces[1]), next[H_ITERATIONS] = 0.0;
     next[H_HANDED] = 1.0, next[H_REPLANS] = replans;
     return NULL;
 }
@@ -518,7 +536,7 @@ static const char *handover(const Config *c, const double *state, const double m
 /* mpc.solve(): one solve, from the state and the measured state, into `next` (the new state with the count as it
    was); *warns when its message is due. */
 static const char *solve(Config *c, const double *state, const double measured[N_STATE], double l1_now,
-                         double *next, int *warns) {
+                         const double forces[2], double *next, int *warns) {
     int n = c->steps;
     double count = state[H_COUNT];
     long long at = (long long)count / whole(c->every); /* this interval's number (count // every) */
@@ -571,7 +589,7 @@ static const char *solve(Config *c, const double *state, const double measured[N
     int over = step >= n_plan, swung = n_plan > 0 && to_rest > bound + SWING_MARGIN; /* past the plan's largest */
     int at_rest = over && to_trolley <= c->replan_x && to_rest <= c->replan_angle;
     if (count != 0 && ((unexplained && over) || replans > MOST_REPLANS || swung || at_rest))
-        return handover(c, state, measured, l1_now, replans, next);
+        return handover(c, state, measured, l1_now, forces, replans, next);
     if (replan && large) { /* none made: the tracking QP takes the swing down alone, a plan tried next interval */
         replan = n_plan > 0 || found_model; /* the last solve's warm start holds unless a plan or model changed */
         n_plan = 0, n_states = 0, plan_u = plan_s = new_plan_u;
@@ -599,6 +617,9 @@ static const char *solve(Config *c, const double *state, const double measured[N
     ref_s = step < n_states ? plan_s + step * N_STATE : target;
     double e0[N_STATE];
     for (int i = 0; i < N_STATE; i++) e0[i] = measured[i] - ref_s[i];
+    double shift[N_STATE]; /* offset-free: the error from the forces' rest (the disturbance in the prediction) */
+    if (force_shift(c, forces[0], forces[1], shift))
+        for (int i = 0; i < N_STATE; i++) e0[i] = e0[i] - shift[i];
     if (large && n_plan == 0) e0[0] = 0.0; /* the trolley left free while the swing is taken down */
     for (int k = 0; k < n; k++) f[k] = la_dot(d->gain[k], e0, N_STATE);
     double v0 = measured[1], planned = v0;
@@ -654,7 +675,8 @@ static const char *solved(const Config *config, const State *s, const double inp
     if (!(c->memo_valid && memcmp(c->memo_inputs, inputs, sizeof c->memo_inputs) == 0 &&
           used(c, c->memo_state.v) == n && memcmp(c->memo_state.v, s->v, n * sizeof(double)) == 0)) {
         c->memo_valid = 0;
-        const char *error = solve(c, s->v, inputs, inputs[N_STATE], c->memo_next.v, &c->memo_warns);
+        const char *error = solve(c, s->v, inputs, inputs[N_STATE], inputs + N_STATE + 1, c->memo_next.v,
+                                  &c->memo_warns);
         if (error) return error;
         memcpy(c->memo_inputs, inputs, sizeof c->memo_inputs);
         memcpy(c->memo_state.v, s->v, n * sizeof(double));
@@ -667,11 +689,11 @@ static const char *solved(const Config *config, const State *s, const double inp
 static int due(const Config *c, const double *s) { return (long long)s[H_COUNT] % whole(c->every) == 0; }
 
 /* mpc._output(): the held input, the QP's iterations and the plan's end; at a solve, the solve's. */
-ModelStatus mpc_axis_outputs(const Config *c, const State *s, const double inputs[N_STATE + 1], double out[3],
+ModelStatus mpc_axis_outputs(const Config *c, const State *s, const double inputs[N_INPUTS], double out[3],
                              const Reporter *r) {
     const double *state = s->v;
     if (state[H_HANDED] != 0.0) { /* the LQR's, every step */
-        out[0] = lqr_input(c, inputs, inputs[N_STATE]), out[1] = 0.0;
+        out[0] = lqr_input(c, inputs, inputs[N_STATE], inputs[N_STATE + 1], inputs[N_STATE + 2]), out[1] = 0.0;
         out[2] = state[H_PLAN_STEPS] != 0 ? (state[H_PLAN_START] + state[H_PLAN_STEPS]) * c->interval : 0.0;
         return MODEL_OK;
     }
@@ -687,7 +709,7 @@ ModelStatus mpc_axis_outputs(const Config *c, const State *s, const double input
 
 /* mpc.update(): count the step and add it to the identification's integrals; at a solve keep the solve's state
    (its input held until the next, its solution, the plan, the identification's sums); warn once at the cap. */
-ModelStatus mpc_axis_update(const Config *c, State *s, const double inputs[N_STATE + 1], const char *prefix,
+ModelStatus mpc_axis_update(const Config *c, State *s, const double inputs[N_INPUTS], const char *prefix,
                             const Reporter *r) {
     double *state = s->v, count = state[H_COUNT];
     if (!due(c, state) || state[H_HANDED] != 0.0) {

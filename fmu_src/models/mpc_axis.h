@@ -35,6 +35,8 @@
 #define TOLERANCE 0.01   /* mpc.TOLERANCE */
 /* SCHEDULE_POINTS, MAX_STEPS (the horizon's rule), MAX_PLAN (mpc.MAX_PLAN: the interval's rule) */
 enum { SCHEDULE_POINTS = 11, MAX_STEPS = 200, MAX_ROWS = 2 * MAX_STEPS, MAX_PLAN = 1200 };
+/* the measured inputs of one axis: x .. dtheta2, l1_now, then the estimated forces F2_hat, F1_hat */
+enum { N_INPUTS = N_STATE + 3 };
 
 /* mpc.HEADER */
 enum {
@@ -66,19 +68,20 @@ typedef struct {
     double weights[N_STATE], r, x_d, u_max, v_max, margin, h, every, interval, replan_x, replan_angle;
     int steps, max_iterations, samples;
     double lqr_gains[N_STATE], lqr_table[SCHEDULE_POINTS][N_STATE]; /* mpc.Config.lqr: the LQR it hands over to */
+    double offset_free; /* mpc.Config.lqr.offset_free: the forces' rest off the QP's error and the LQR's target */
     int first[MAX_ROWS], length[MAX_ROWS], offset[MAX_ROWS]; /* mpc.constraint_rows() */
     double values[1 + MAX_STEPS];
     double work[QP_WORK(MAX_STEPS, MAX_ROWS)], scratch[3 * MAX_STEPS * MAX_STEPS + 7 * MAX_STEPS * N_STATE];
     int iwork[QP_IWORK(MAX_ROWS)], hint_rows[MAX_ROWS], hint_sides[MAX_ROWS], active[MAX_ROWS], sides[MAX_ROWS];
     int memo_valid, memo_warns; /* the last solve: its state and inputs, the new state, whether it warns */
-    double memo_inputs[N_STATE + 1];
+    double memo_inputs[N_INPUTS]; /* x .. dtheta2, l1_now, F2_hat, F1_hat */
     MpcState memo_state, memo_next;
 } MpcConfig;
 
 /* mpc.configure()'s parameters (mpc.VARIABLES' parameters, by name). */
 typedef struct {
     double m1, m2, l1, l2, g, q[N_STATE], r, x_d, u_max, v_max, margin, h, interval, horizon, max_iterations;
-    double replan_x, replan_angle, l1_low, l1_high, identify;
+    double replan_x, replan_angle, l1_low, l1_high, identify, offset_free;
 } MpcSettings;
 
 /* mpc.configure(), after its declared RULES: the rules that need the interval and the horizon counted in steps,
@@ -88,12 +91,12 @@ ModelStatus mpc_axis_configure(const MpcSettings *v, MpcConfig *c, const Reporte
 /* mpc.initial_state(): zeros. */
 void mpc_axis_initial_state(MpcState *s);
 
-/* mpc._output(): u, the QP's iterations and the plan's end, from the measured inputs (x .. dtheta2, l1_now). */
-ModelStatus mpc_axis_outputs(const MpcConfig *c, const MpcState *s, const double inputs[N_STATE + 1], double out[3],
+/* mpc._output(): u, the QP's iterations and the plan's end, from the inputs (x .. dtheta2, l1_now, F2_hat, F1_hat). */
+ModelStatus mpc_axis_outputs(const MpcConfig *c, const MpcState *s, const double inputs[N_INPUTS], double out[3],
                              const Reporter *r);
 
 /* mpc.update(): one step; the iteration cap's warning (once) begins with `prefix`. */
-ModelStatus mpc_axis_update(const MpcConfig *c, MpcState *s, const double inputs[N_STATE + 1], const char *prefix,
+ModelStatus mpc_axis_update(const MpcConfig *c, MpcState *s, const double inputs[N_INPUTS], const char *prefix,
                             const Reporter *r);
 
 #endif
