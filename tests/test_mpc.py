@@ -205,6 +205,17 @@ def test_the_plan_is_as_short_as_the_floor_on_its_grid():
         assert np.abs(np.array(states[-1]) - target).max() <= mpc.REACHED
 
 
+@pytest.mark.quick
+def test_a_tiny_deviation_is_planned_in_at_least_one_interval():
+    """The trolley at rest on its target, the hook's swing rate just past REACHED: the bisection's low end reaches 0
+    intervals, whose (absent) end state once counted as reaching the target: the plan was empty, and the native
+    MPC stopped with an error there."""
+    c = mpc.configure(mpc.COMPONENT.defaults())
+    start, target = (0, 0, 0, 0.0011, 0, 0), (0.0,) * 6
+    inputs, states = mpc.plan_move(c.designs[0], start, target, 1.9, 0.95, c.interval, 120)
+    assert len(inputs) >= 1 and np.abs(np.array(states[-1]) - target).max() <= mpc.REACHED
+
+
 def test_the_mpc_keeps_the_drive_within_its_limits_and_warns_once_at_its_cap():
     """From a 40 deg swing (the limits bind at once) with one QP iteration allowed: u is still within
     |u| <= 2 and keeps |v| <= 1 (the drive never has to limit it), and the host hears of the cap once."""

@@ -217,6 +217,8 @@ def plan_move(d, s0, target, u_max, v_max, interval, max_intervals):
 
     def attempt(n):
         nonlocal previous
+        if n < 1:  # no move of no interval (the bisection's low end may reach 0: all() of no state is no answer)
+            return False, []
         b = predict_rows(d.ad, d.bd, n)
         free = list(s0)
         for _ in range(n):

@@ -318,7 +318,7 @@ static const char *plan_move(const Design *d, const double s0[N_STATE], const do
     double far = 0.0;
     for (int i = 0; i < N_STATE; i++) far = py_max(far, fabs(s0[i] - target[i]));
     if (far <= REACHED) return NULL;
-    if (max_intervals < 1) return "ValueError: max() arg is an empty sequence";
+    if (max_intervals < 1) return NULL; /* attempt(0) is not ok, and none longer may be tried */
     int at_rest = fabs(s0[1]) <= REACHED;
     double shortest = at_rest ? rigid_move_time(target[0] - s0[0], u_max, v_max) : 0.0;
     int low = at_rest ? (int)(shortest / interval) - 1 : 0; /* too few (rounding aside) */
@@ -326,11 +326,9 @@ static const char *plan_move(const Design *d, const double s0[N_STATE], const do
     if (plan_memory(&pm, max_intervals)) return "MemoryError: the plan's QP";
     int high = (int)py_min(py_max(8, low + 1 + (int)(0.15 * low) + 4), max_intervals), ok;
     const char *error = NULL;
-#define ATTEMPT(n) if ((n) < 1) { /* qp.solve's max() of no step */                    \
-        error = "ValueError: max() arg is an empty sequence";                                \
-        goto done;                                                                          \
-    }                                                                                       \
-    if ((ok = attempt(d, s0, target, u_max, v_max, interval, n, &pm)) < 0) { \
+#define ATTEMPT(n) if ((n) < 1) { /* no move of no interval */                            \
+        ok = 0;                                                                             \
+    } else if ((ok = attempt(d, s0, target, u_max, v_max, interval, n, &pm)) < 0) {       \
         error = NOT_POSITIVE_DEFINITE;                                                      \
         goto done;                                                                          \
     }
