@@ -67,14 +67,22 @@ class Judge:
     """One FMI 2.0 instance of the FMU at ``path``, loaded once and logging into ``log`` (:func:`logger`):
     :meth:`verdict` of parameter values."""
 
-    def __init__(self, path, log, callbacks):
+    def __init__(self, path, log, callbacks, items):
         md = read_model_description(str(path))
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
-        self.log = log
+        self.log, self.items = log, items  # items: an Enumeration's names, by parameter
         self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=fmpy.extract(str(path)),
                              modelIdentifier=md.coSimulation.modelIdentifier, instanceName="rules")
         self.fmu.instantiate(callbacks=callbacks)
         self.used = False
+
+    def _refused_set(self, name):
+        """An Enumeration's name no item has cannot be carried by FMI: the number no item has (0) is refused as it is
+        set; ``("set", message)`` (the next verdict resets the instance)."""
+        with pytest.raises(FMICallException):
+            self.fmu.setInteger([self.vr[name]], [0])
+        assert len(self.log) == 1, self.log
+        return "set", self.log[0]
 
     def verdict(self, values):
         """None where initialisation ends with ``values`` set, else what the FMU logged (without the FMI
@@ -87,7 +95,11 @@ class Judge:
         reals = {k: v for k, v in values.items() if not isinstance(v, str)}
         self.fmu.setReal([self.vr[k] for k in reals], list(reals.values()))
         for name, value in values.items():
-            if isinstance(value, str):
+            if isinstance(value, str) and name in self.items:  # an Enumeration: its item's number (from 1)
+                if value not in self.items[name]:
+                    return self._refused_set(name)
+                self.fmu.setInteger([self.vr[name]], [self.items[name].index(value) + 1])
+            elif isinstance(value, str):
                 self.fmu.setString([self.vr[name]], [value])
         try:
             self.fmu.exitInitializationMode()
@@ -118,10 +130,10 @@ def draws(component):
     parameters = [v for v in component.variables if v.causality == "parameter"]
     starts = sorted({v.start for v in parameters if v.type == "Real"})
     near = sorted({*EDGES, *starts, *(-v for v in starts), *(2 * v for v in starts)}, key=repr)
-    texts = sorted({*TEXTS, *(v.start for v in parameters if v.type == "String"),
+    texts = sorted({*TEXTS, *(v.start for v in parameters if v.type in ("String", "Enumeration")),
                     *(c for r in component.rules for c in _strings_in(r))})
     real = st.one_of(st.sampled_from(near), st.floats(allow_nan=True, allow_infinity=True))
-    value = {v.name: st.sampled_from(texts) if v.type == "String" else real for v in parameters}
+    value = {v.name: st.sampled_from(texts) if v.type in ("String", "Enumeration") else real for v in parameters}
     changed = st.lists(st.sampled_from(list(value)), min_size=1, max_size=3, unique=True)
 
     @st.composite
@@ -169,7 +181,8 @@ def folders(fmu_dir):
 def test_the_python_model_the_python_fmu_and_the_native_fmu_give_the_same_verdict_and_message(folders, name):
     component = components.get(name)
     log, callbacks = logger()
-    python, native = (Judge(folders[kind] / f"{name}.fmu", log, callbacks) for kind in ("python", "native"))
+    items = {v.name: v.items for v in component.variables if v.type == "Enumeration"}
+    python, native = (Judge(folders[kind] / f"{name}.fmu", log, callbacks, items) for kind in ("python", "native"))
     seen = {"refused": set(), "accepted": 0}
 
     @settings(max_examples=EXAMPLES, derandomize=True, deadline=None, database=None,
@@ -177,8 +190,11 @@ def test_the_python_model_the_python_fmu_and_the_native_fmu_give_the_same_verdic
     @given(draws(component))
     def same(values):
         expected = python_verdict(component, values)
-        assert python.verdict(values) == expected
-        assert native.verdict(values) == expected
+        verdicts = python.verdict(values), native.verdict(values)
+        if isinstance(verdicts[0], tuple):  # a name no item of an Enumeration has: refused before any rule runs
+            assert expected is not None and verdicts[0] == verdicts[1]
+        else:
+            assert verdicts == (expected, expected)
         if expected is None:
             seen["accepted"] += 1
         else:
