@@ -938,8 +938,9 @@ def test_a_fuzz_of_both_protocols_never_ends_the_server_nor_leaves_a_value_out_o
     with a drive limit of 3 m/s2 and rail ends at +-0.3 m (so that steps are refused too): random node ids,
     registers, values (in and out of range, non-finite, of other types), functions, Step arguments and orders.
     After every request the server is running; every 50, and at the end, u as both protocols read it lies within
-    +-3 and time has not gone back. Ctrl-C then ends it with status 0, and every recorded value is finite, u within
-    its range, each time once."""
+    +-3 and time has not gone back; then u = 3 held drives the trolley into a rail end (a refused step whatever
+    the draws did). Ctrl-C then ends it with status 0, and every recorded value is finite, u within its range, each
+    time once."""
     import random
 
     rng = random.Random(FUZZ_SEED)
@@ -967,6 +968,14 @@ def test_a_fuzz_of_both_protocols_never_ends_the_server_nor_leaves_a_value_out_o
                     held = modbus.read_holding_registers(address, count=2, device_id=1).registers
                     checks.append((u, words_float32(*held), t, last_time))
                     last_time = t
+            # whatever the draws did: the drive's limit held into a rail end, so that a step is refused for certain
+            await node("controller.u").write_value(ua.Variant(3.0, ua.VariantType.Double))
+            step = node("Step")
+            for _ in range(3):
+                try:
+                    await (await step.get_parent()).call_method(step, ua.Variant(1000, ua.VariantType.UInt32))
+                except (ua.UaError, ua.UaStatusCodeError):
+                    pass
         return checks
 
     try:
