@@ -193,9 +193,9 @@ def timed_process(command, sample=0.1, env=None):
 def run_batch_bench(native_dir="build/native", n_cases=240, stop_time=20.0, step=1e-3, repeat=3, study_cases=10_000,
                     board_cases=None, out=print):
     """Run the batch path's benchmark on the native FMUs of ``native_dir``; print its figures and return them."""
-    from distributed import Client, LocalCluster  # optional: the dask extra
+    from distributed import Client  # optional: the dask extra
 
-    from crane_fmu.batch import _chunks_on_dask
+    from crane_fmu.batch import _chunks_on_dask, local_cluster
 
     native_dir = Path(native_dir)
     if not all((native_dir / f"{name}.fmu").is_file() for name in ("CranePlant", "LqrController",
@@ -221,8 +221,7 @@ def run_batch_bench(native_dir="build/native", n_cases=240, stop_time=20.0, step
                                                               text=True).stdout.split())))
         parameter_sets = [case_parameters(c, system.parameters) for c in cases]
         limits, cpus, host_cpus = {1: [], 2: []}, [], []
-        clusters = [LocalCluster(n_workers=w, threads_per_worker=1, dashboard_address=":0", silence_logs=50)
-                    for w in (1, 2)]
+        clusters = [local_cluster(w) for w in (1, 2)]  # as a sweep's and a board's: from the fork server
         try:
             clients = {w: Client(c) for w, c in zip((1, 2), clusters)}
             chunks = native_batch.items(cases, lambda _: True)
