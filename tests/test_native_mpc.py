@@ -12,7 +12,6 @@ import ctypes
 import math
 import shutil
 import subprocess
-import sys
 from dataclasses import replace
 
 import numpy as np
@@ -37,17 +36,16 @@ from native_fmus import (
     messages,
     open_native,
     python_folder,
+    python_run_equal_to_native,
     steps_after_restore,
 )
 
 from crane_fmu import components, systems
 from crane_fmu.build_scripts.native import FOLDERS, source_path, variables_header
 from crane_fmu.build_scripts.one_fmu import one_fmu_name
-from crane_fmu.cosim import run
 from crane_fmu.model import mpc, qp
 
 MPC = components.get("MpcController")
-LINUX = sys.platform.startswith("linux")  # glibc's libm in both models: the same bits
 INF, NAN = float("inf"), float("nan")
 MISMATCH = {"l1": 1.1, "l2": 0.4, "m2": 3.5}  # a plant the controller's model (l1 2 m, l2 0.5 m, m2 5 kg) is not
 
@@ -197,19 +195,6 @@ RUNS = {  # system, plant parameters over the system's, stop time: the limits bi
 }
 
 
-def _python_run_equal_to_native(system, fmu_dir, native, version):
-    """The Python FMUs' columns of ``system``, checked: the native FMUs give every column within 1e-9 (bit for bit
-    on Linux)."""
-    theirs = run(system, python_folder(fmu_dir, version)).columns()
-    ours = run(system, native[version]).columns()
-    assert list(ours) == list(theirs) and len(theirs["time"]) == round(system.stop_time / system.step) + 1
-    worst = max(float(np.max(np.abs(ours[k] - theirs[k]))) for k in theirs)
-    assert worst <= 1e-9
-    if LINUX:
-        assert worst == 0.0
-    return theirs
-
-
 @pytest.mark.parametrize("version", [2, 3])
 @pytest.mark.parametrize("case", RUNS)
 def test_the_native_mpc_equals_the_python_mpc_through_our_master(fmu_dir, native, case, version):
@@ -218,7 +203,7 @@ def test_the_native_mpc_equals_the_python_mpc_through_our_master(fmu_dir, native
     system = systems.get(name)
     system = replace(system, parameters={**system.parameters, "plant": {**system.parameters["plant"], **plant}},
                      stop_time=stop_time)
-    theirs = _python_run_equal_to_native(system, fmu_dir, native, version)
+    theirs = python_run_equal_to_native(system, fmu_dir, native, version)
     assert np.max(np.abs(theirs["controller.u"])) > 1.9  # at the drive's limit
 
 
@@ -234,7 +219,7 @@ def test_while_hoisting_the_native_mpc_equals_the_python_mpc_through_our_master(
     system = replace(scenarios.systems_for(contenders(["MpcController"], fmu_dir, only=True)[0], "S7")[0].system,
                      stop_time=4.0)
     assert system.instances["hoist"] == "TrajectoryPlanner"
-    theirs = _python_run_equal_to_native(system, fmu_dir, native, version)
+    theirs = python_run_equal_to_native(system, fmu_dir, native, version)
     assert theirs["plant.l1_now"][-1] == pytest.approx(planar.HOIST["to"], abs=1e-3)  # hoisted within the run
 
 

@@ -8,22 +8,19 @@ the axis that holds its start position until then.
 """
 
 import math
-import sys
 from dataclasses import replace
 
 import numpy as np
 import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
-from native_fmus import close, messages, open_native, python_folder, steps_after_restore
+from native_fmus import close, messages, open_native, python_folder, python_run_equal_to_native, steps_after_restore
 
 from crane_fmu import components, systems
 from crane_fmu.analysis import scenarios
 from crane_fmu.compare import contenders
-from crane_fmu.cosim import run
 
 MPC3D = components.get("MpcController3D")
-LINUX = sys.platform.startswith("linux")  # glibc's libm in both models: the same bits
 
 
 @pytest.mark.parametrize("version", [2, 3])
@@ -37,19 +34,6 @@ def test_native_model_description_has_the_python_fmus_variables(fmu_dir, native,
     assert validate_fmu(str(path)) == []
 
 
-def _python_run_equal_to_native(system, fmu_dir, native, version):
-    """The Python FMUs' columns of ``system``, checked: the native FMUs give every column within 1e-9 (bit for bit
-    on Linux)."""
-    theirs = run(system, python_folder(fmu_dir, version)).columns()
-    ours = run(system, native[version]).columns()
-    assert list(ours) == list(theirs) and len(theirs["time"]) == round(system.stop_time / system.step) + 1
-    worst = max(float(np.max(np.abs(ours[k] - theirs[k]))) for k in theirs)
-    assert worst <= 1e-9
-    if LINUX:
-        assert worst == 0.0
-    return theirs
-
-
 # scenario, stop time [s]: each through what makes it (S13: the y axis' move starts at 2.864 s, within the run)
 BOARD = {"S11": 3.0, "S12": 2.0, "S13": 3.5, "S14": 2.0}
 
@@ -61,7 +45,7 @@ def test_on_the_boards_spatial_scenarios_the_native_mpc3d_is_the_python_one(fmu_
     crosswind's y axis the least: 0.07 m/s2)."""
     contender = contenders(["MpcController3D"], fmu_dir, only=True)[0]
     system = replace(scenarios.systems_for(contender, scenario)[0].system, stop_time=BOARD[scenario])
-    theirs = _python_run_equal_to_native(system, fmu_dir, native, 2)
+    theirs = python_run_equal_to_native(system, fmu_dir, native, 2)
     assert np.max(np.abs(theirs["controller.ux"])) > 0.5 and np.max(np.abs(theirs["controller.uy"])) > 0.01
 
 
@@ -70,7 +54,7 @@ def test_on_the_path_the_y_axis_holds_until_its_move_starts_then_moves(fmu_dir, 
     in Python): before it the y axis' MPC holds y = 0 (its demand within the swing's small corrections), after it
     it drives at its limit."""
     system = replace(systems.get("mpc3d-path"), stop_time=4.0)
-    theirs = _python_run_equal_to_native(system, fmu_dir, native, 3)
+    theirs = python_run_equal_to_native(system, fmu_dir, native, 3)
     t0 = MPC3D.report(MPC3D.check(system.parameters["controller"]))["t0_y_s"]
     assert 2.0 < t0 < 3.5
     before, after = theirs["time"] < t0, theirs["time"] > t0 + 0.1
@@ -80,7 +64,7 @@ def test_on_the_path_the_y_axis_holds_until_its_move_starts_then_moves(fmu_dir, 
 
 @pytest.mark.parametrize("name", ["mpc3d", "mpc3d-move"])
 def test_the_mpc3d_systems_run_the_python_bits(fmu_dir, native, name):
-    _python_run_equal_to_native(replace(systems.get(name), stop_time=2.0), fmu_dir, native, 3)
+    python_run_equal_to_native(replace(systems.get(name), stop_time=2.0), fmu_dir, native, 3)
 
 
 def test_at_its_cap_the_native_mpc3d_warns_once_per_axis_as_the_python_fmu_does(fmu_dir, native):
