@@ -157,8 +157,7 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
         if workers == 1:
             return kept_rows((r for item in items for r in (task(item, *extra, **kwargs) if chunked else
                                                             [task(item, *extra, **kwargs)])), known)
-        with ProcessPoolExecutor(max_workers=workers, mp_context=worker_context(), initializer=start_worker,
-                                 initargs=(dict(os.environ),)) as pool:
+        with worker_pool(workers) as pool:
             futures = [pool.submit(_listed, task, item, *extra, **kwargs) if chunked else
                        pool.submit(task, item, *extra, **kwargs) for item in items]
             try:
@@ -233,6 +232,13 @@ def start_worker(environment):
     os.environ.update(environment)
     tempfile.tempdir = None  # the temporary folder as TMPDIR now says
     ignore_interrupts()
+
+
+def worker_pool(workers):
+    """A pool of ``workers`` processes started as :func:`worker_context` starts them, each with this environment
+    and ignoring Ctrl-C (:func:`start_worker`)."""
+    return ProcessPoolExecutor(max_workers=workers, mp_context=worker_context(), initializer=start_worker,
+                               initargs=(dict(os.environ),))
 
 
 def local_cluster(workers):

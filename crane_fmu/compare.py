@@ -25,7 +25,6 @@ import os
 import platform
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -39,7 +38,7 @@ from crane_fmu.analysis import scenarios as scenario_registry
 from crane_fmu.analysis.board_drawing import BoardDrawer, first_scenarios
 from crane_fmu.analysis.floor import stored_scenario_floors
 from crane_fmu.analysis.scenarios import Contender
-from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch, start_worker, worker_context
+from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch, worker_pool
 from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
 from crane_fmu.cosim.suggest import did_you_mean
 from crane_fmu.cosim.system import read_fmu, unfed_inputs
@@ -436,8 +435,7 @@ def _items(cases, blobs):
 
 def _drawing(workers=None):
     """A pool of (at most) two processes for the board's pictures."""
-    return ProcessPoolExecutor(max_workers=max(1, min(2, workers or os.cpu_count() or 1)), mp_context=worker_context(),
-                               initializer=start_worker, initargs=(dict(os.environ),))
+    return worker_pool(max(1, min(2, workers or os.cpu_count() or 1)))
 
 
 def _write(path, text):
