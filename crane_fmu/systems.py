@@ -423,11 +423,12 @@ def planned(crane, planners, controller="controller"):
 
 
 def _path_plan():
-    """Each axis' planner parameters along S13's L path, the reference kept within half the corridor (the other
-    half is the load's swing): :func:`crane_fmu.model.path.plan`."""
+    """Each axis' planner parameters along S13's L path, the load's planned position (the trolley's reference and
+    the swing the planner's linear model gives the load) kept within half the corridor (the other half is what the
+    crane does beyond its plan: the tracking error, the nonlinear coupling): :func:`crane_fmu.model.path.plan`."""
     from crane_fmu.model import path
 
-    return path.plan(L_PATH, CORRIDOR / 2)
+    return path.plan(L_PATH, CORRIDOR / 2, load=True)
 
 
 PATH_PLAN = _path_plan()
@@ -449,7 +450,7 @@ register(System("lqr3d-path", {"plant": "CranePlant3D", "planner": "TrajectoryPl
                                 "planner_y": "TrajectoryPlanner", "controller": "LqrController3D"},
                 connections=planned(CRANE3D, _PLANNERS), parameters={"plant": {**REST3D, **DRIVE3D}, **_PATH3D},
                 description="an L path from rest (3 m along x, then 2 m along y): ZV-shaped references per axis, the "
-                            "y leg started once the x leg's reference is within 0.15 m of the corner "
+                            "y leg started as early as keeps the load's planned position within 0.15 m of the path "
                             "(crane_fmu.model.path), tracked by the LQR of each axis", stop_time=15.0,
                 tags=("one-fmu",)))
 register(System("mpc3d", {"plant": "CranePlant3D", "controller": "MpcController3D"},

@@ -107,6 +107,41 @@ def test_with_a_margin_the_reference_keeps_within_it_and_starts_the_next_leg_soo
     assert plan["y"]["t0"] < path.plan(waypoints)["y"]["t0"] - 0.5
 
 
+def _planned_load(plan, t):
+    """The load's planned position ``x_ref + l1 theta1_ref + l2 theta2_ref`` per axis (the planner's model: l1 = 1,
+    l2 = 0.5 m), and the trolley's reference, at the times ``t``."""
+    defaults = planner.COMPONENT.defaults()
+    configs = {a: planner.configure({**defaults, **plan[a]}) for a in "xy"}
+    refs = {a: np.array([planner.reference(configs[a], v) for v in t]) for a in "xy"}
+    load = [refs[a][:, 0] + defaults["l1"] * refs[a][:, 3] + defaults["l2"] * refs[a][:, 5] for a in "xy"]
+    return load, [refs[a][:, 0] for a in "xy"]
+
+
+@pytest.mark.quick
+def test_a_plan_for_the_load_keeps_the_loads_planned_position_within_the_margin():
+    """``load=True``: the load's planned position (not the trolley's reference) is at the margin where the plan
+    checks it (every path.SAMPLE s), within 1 ms's motion of the start; the trolley's reference cuts the corner
+    further, and the y leg starts sooner than the trolley's plan's."""
+    waypoints, margin = [(0, 0), (3, 0), (3, 2)], 0.15
+    plan = path.plan(waypoints, margin, load=True)
+    t = np.arange(0, 800) * path.SAMPLE
+    load, trolley = _planned_load(plan, t)
+    assert margin - 2e-3 < path_deviation(*load, waypoints) <= margin + 1e-9
+    assert path_deviation(*trolley, waypoints) > margin + 0.05
+    assert plan["y"]["t0"] < path.plan(waypoints, margin)["y"]["t0"] - 0.5
+
+
+@pytest.mark.quick
+def test_s13s_plan_keeps_the_load_in_half_the_corridor_and_ends_before_the_legs_one_after_the_other():
+    """The lqr3d-path system's and S13's plan (systems.PATH_PLAN): the load's planned position within half the
+    corridor, and the planned move over before 6.97 s (the legs at their floors one after the other, S13's arrival
+    target), so that a controller tracking it can arrive in time (the trolley's reference within half the corridor
+    ended at 7.22 s)."""
+    load, _ = _planned_load(systems.PATH_PLAN, np.arange(0, 800) * path.SAMPLE)
+    assert path_deviation(*load, systems.L_PATH) <= systems.CORRIDOR / 2 + 1e-9
+    assert spatial_scenarios.plan_end(systems.PATH_PLAN) < spatial_scenarios.S13_SEQUENTIAL_S
+
+
 @pytest.mark.quick
 def test_a_path_whose_first_legs_move_nothing_starts_each_leg_at_once():
     """Waypoints that repeat the start (the MpcController3D's default waypoint with a corridor): no axis moves in the

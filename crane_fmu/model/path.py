@@ -4,8 +4,11 @@ The path is a polyline of waypoints ``(x, y)`` through which the trolley takes t
 is moved by its own :mod:`.planner` (a shaped rest-to-rest move); a leg's axes start together. A leg may start
 before the one before it has ended, as long as the reference stays within ``margin`` of the path's centre line
 at every instant (it then cuts the corner by at most ``margin``); ``margin = 0``: each leg starts when the last
-has ended. The start is the earliest such time, found by bisection to :data:`RESOLUTION` over the reference
-sampled every :data:`SAMPLE` s.
+has ended. What is kept within ``margin`` is the trolley's reference, or (``load=True``) the load's planned position:
+the trolley's reference plus the swing the planner's linear model gives it, ``x_ref + l1 theta1_ref + l2 theta2_ref``
+per axis (the planner's references, its model's ``l1`` and ``l2``), which a corridor between racks constrains.
+The start is the earliest such time, found by bisection to :data:`RESOLUTION` over the reference sampled every
+:data:`SAMPLE` s.
 
 An axis moves once along the path (a TrajectoryPlanner makes one move): an L path, a diagonal, not a zigzag.
 """
@@ -33,7 +36,13 @@ def _config(values, x0, x_d, t0):
     return planner.configure({**planner.COMPONENT.defaults(), **values, "x0": x0, "x_d": x_d, "t0": t0})
 
 
-def plan(waypoints, margin=0.0, values=None, axes=("x", "y")):
+def planned_point(config, t, load=False, lengths=(0.0, 0.0)):
+    """Where one axis' plan has the trolley (``load=False``) or the load (``lengths``: ``l1``, ``l2``) at ``t``."""
+    x, _, _, theta1, _, theta2, _ = planner.reference(config, t)
+    return x + lengths[0] * theta1 + lengths[1] * theta2 if load else x
+
+
+def plan(waypoints, margin=0.0, values=None, axes=("x", "y"), load=False):
     """``{axis: {"x0", "x_d", "t0"}}``: each axis' planner parameters along the path.
 
     Parameters
@@ -44,6 +53,8 @@ def plan(waypoints, margin=0.0, values=None, axes=("x", "y")):
         How far [m] the reference may leave the path's centre line (>= 0).
     values : dict, optional
         The planners' other parameters (their model of the crane, ``u_max``, ``v_max``, ``shaper``).
+    load : bool
+        Keep the load's planned position within ``margin`` (its linear model's), not the trolley's reference.
 
     Raises
     ------
@@ -56,6 +67,8 @@ def plan(waypoints, margin=0.0, values=None, axes=("x", "y")):
     if not (margin >= 0 and math.isfinite(margin)):
         raise ValueError(f"margin must be >= 0 and finite, got {margin!r}")
     values = values or {}
+    model = {**planner.COMPONENT.defaults(), **values}
+    lengths = (model["l1"], model["l2"])
     moves, configs, start, end = {}, {}, 0.0, 0.0
     for leg, (a, b) in enumerate(zip(points, points[1:])):
         moving = [k for k in range(len(axes)) if a[k] != b[k]]
@@ -68,7 +81,7 @@ def plan(waypoints, margin=0.0, values=None, axes=("x", "y")):
             trial = {**configs, **{axes[k]: _config(values, a[k], b[k], t0) for k in moving}}
             t, last = start, max((c.end for c in trial.values()), default=start)  # nothing moved yet: at the start
             while t <= last + SAMPLE:
-                where = [planner.reference(trial[name], t)[0] if name in trial else points[0][k]
+                where = [planned_point(trial[name], t, load, lengths) if name in trial else points[0][k]
                          for k, name in enumerate(axes)]
                 if distance_to_path(where, points) > margin + 1e-12:
                     return False
