@@ -224,3 +224,48 @@ def test_the_angle_between_two_cables_is_the_hand_computed_one():
     assert cable_angle(0.0, 0.2, 0.0, 0.05) == pytest.approx(0.15, rel=1e-14)  # in the y-z plane
     # (a, b) = (pi/2, 0) is along +x; (0, pi/2) along +y: a right angle
     assert cable_angle(np.array([math.pi / 2]), np.array([0.0]), 0.0, math.pi / 2)[0] == pytest.approx(math.pi / 2)
+
+
+# ---- crane-fmu targets ---------------------------------------------------------------------------------------------
+
+@pytest.mark.quick
+def test_the_targets_run_each_controller_of_two_axes_on_the_boards_cases_of_s11_to_s14():
+    """`crane-fmu targets` plans the board's own cases of S11-S14 for LqrController3D and MpcController3D: the same
+    systems, targets and residual windows as the board's (so its figures are the board's)."""
+    from crane_fmu.analysis import controller_targets
+
+    runs = controller_targets.spatial_runs()
+    assert {(r.scenario, r.label) for r in runs} == {(s, c) for s in ("S11", "S12", "S13", "S14")
+                                                      for c in ("LqrController3D", "MpcController3D")}
+    assert runs in (controller_targets.plan(quick=True)[-len(runs):],)
+    for r in runs:
+        (board,) = scenarios.systems_for(LQR3D if r.label == "LqrController3D" else MPC3D, r.scenario)
+        assert (r.system, r.x_d, r.residual_from, r.stop_time) == (board.system, board.x_d, board.residual_from,
+                                                                   board.stop_time)
+
+
+@pytest.mark.quick
+def test_the_targets_report_prints_s11_to_s14_against_the_scenarios_targets_and_the_issues_ambitions():
+    """Made-up figures: each of S11-S14's registered targets is printed with its verdict; S11's ambition is 1.03
+    times its floor (2.78 s), S12's 2.5 s, S13's 6.0 s (issue 52's table); never is MISSED."""
+    from crane_fmu.analysis import controller_targets as targets
+
+    figures = {"S11": {"arrival_s": 2.75, "residual_deg": 0.05}, "S12": {"settling_0.1deg_s": 3.004},
+               "S13": {"path_deviation_m": 0.31, "arrival_s": 6.5, "residual_deg": 0.002},
+               "S14": {"arrival_eq_s": None, "residual_eq_deg": 0.0999}}
+    results = [(targets.Run(f"spatial_{sid}", "LqrController3D", None, {}, 1e-3, 10.0, 0.0, sid, [0.0, 0.0]),
+                {**m, "error": None}) for sid, m in figures.items()]
+    lines = []
+    targets.report_spatial(results, floor.spatial_scenario_floors(), lines.append)
+    text = "\n".join(lines)
+    assert "S11 within 5 mm (in the plane) and both cables within 0.5 deg from 2.97 s: 2.75 s (1.02x floor) " \
+           "(target <= 2.97 s, ambition 2.78 s): met, and the ambition" in text
+    assert "S11 residual swing <= 0.1 deg: 0.050 deg (target <= 0.1 deg): met" in text
+    assert "S12 both cables within 0.1 deg of the vertical by 3.0 s: 3.004 s (1.49x floor) (target <= 3 s, " \
+           "ambition 2.5 s): MISSED" in text
+    assert "S13 the load within 0.3 m of the path's centre line at every step: 0.310 m (target <= 0.3 m): MISSED" \
+           in text
+    assert "S13 within 5 mm and 0.5 deg from 6.97 s: 6.50 s (target <= 6.97 s, ambition 6 s): met" in text
+    assert "of the wind's equilibrium from 6.4 s: never (target <= 6.4 s): MISSED" in text
+    assert "S14 residual swing about the equilibrium <= 0.1 deg: 0.0999 deg (target <= 0.1 deg): met" in text
+    assert "MpcController3D" not in text  # no figures, no heading

@@ -18,10 +18,12 @@ from . import metrics, scenarios
 from . import planar_scenarios as planar
 from .board_tables import figure_text, floor_ratio
 
-Run = namedtuple("Run", "group label system parameters step stop_time residual_from", defaults=(None,))
+Run = namedtuple("Run", "group label system parameters step stop_time residual_from scenario x_d",
+                 defaults=(None, None, None))
 Run.__doc__ = ("One co-simulation: its group and label, a system (a registered name or a System), its settings, "
-               "and the start of its residual swing's window [s] (None: :func:`.planar_scenarios.residual_from` of the "
-               "run's planner).")
+               "the start of its residual swing's window [s] (None: :func:`.planar_scenarios.residual_from` of the "
+               "run's planner), and for a board's case its scenario and target (measured as the board does: "
+               ":func:`crane_fmu.compare.case_metrics`, the scenario's own figures too).")
 SHAPERS = ("zv", "zvd", "ei", "none")
 ROA_ANGLES = tuple(range(5, 65, 5))
 MISMATCH, DISTANCE = planar.MISMATCH, planar.DISTANCE  # a grid of plants unknown to the controller, S2's move
@@ -46,6 +48,27 @@ MPC_TARGETS = (
     MpcTarget("mpc_hard_hit", "settling_0.5deg_s", True, 6.5, 6.0,
               f"hard hit: from theta1 = {HARD_HIT_DEG:g} deg to within 0.5 deg"),
 )
+
+
+# The crane in three dimensions (issue 52): each controller of two axes on the board's S11-S14, against the
+# scenarios' registered targets (crane_fmu/analysis/spatial_scenarios.py) and the issue's ambitions
+SPATIAL_CONTROLLERS = ("LqrController3D", "MpcController3D")
+SPATIAL_SCENARIOS = ("S11", "S12", "S13", "S14")
+SPATIAL_AMBITIONS = {("S11", "arrival_s"): 1.03, ("S12", "settling_0.1deg_s"): 2.5, ("S13", "arrival_s"): 6.0}
+# (S11's: 1.03 times its floor; the others in seconds, the issue's table)
+
+
+def spatial_runs():
+    """Each controller of :data:`SPATIAL_CONTROLLERS` on the board's cases of S11-S14 (one case each)."""
+    runs = []
+    for name in SPATIAL_CONTROLLERS:
+        component = components.get(name)
+        contender = scenarios.Contender(name, name, list(component.names("input")),
+                                         list(component.names("parameter")))
+        for sid in SPATIAL_SCENARIOS:
+            for _case, system, step, stop_time, x_d, window in scenarios.systems_for(contender, sid):
+                runs.append(Run(f"spatial_{sid}", name, system, {}, step, stop_time, window, sid, x_d))
+    return runs
 
 
 def mpc_runs(quick=False):
@@ -93,7 +116,7 @@ def plan(quick=False):
     for h in (1e-2, 5e-2):
         runs += [Run(f"step_{h:g}", name, name, {}, h, 40.0) for name in systems.tagged("regulation")]
         runs.append(Run(f"step_{h:g}", "transport", "transport", {}, h, 10.0))
-    return runs + mpc_runs(quick)
+    return runs + mpc_runs(quick) + spatial_runs()
 
 
 def measure(r, fmu_dir):
@@ -105,6 +128,14 @@ def measure(r, fmu_dir):
         run(system, fmu_dir, recorder=recorder)
     except FmiError as exc:
         error = str(exc)
+    if r.scenario is not None:  # a board's case, measured as the board measures it
+        from crane_fmu import compare
+
+        case = {"scenario": r.scenario, "x_d": r.x_d, "residual_from": r.residual_from,
+                "bounds": scenarios.get(r.scenario).bounds}
+        result = compare.case_metrics(recorder.columns(), case, error is None)
+        result.update(error=error, end_s=float(recorder.columns()["time"][-1]))
+        return r, result
     x_d = list(systems.move_target(system).values())
     roles = components.by_role(systems.kinds(system))
     plant = dict(system.parameters.get(roles["plant"], {}))
@@ -231,6 +262,45 @@ def report_mpc(results, floors, out=print):
             + ("met" if not slower else "MISSED at " + ", ".join(f"{a:g} > {b:g} deg" for a, b in slower)))
 
 
+def spatial_targets(floors):
+    """``[(scenario, Target, ambition or None)]``: S11-S14's registered targets, with the issue's ambitions (S11's
+    from its floor, of ``floors``: ``{scenario: Floor}``)."""
+    rows = []
+    for sid in SPATIAL_SCENARIOS:
+        for t in scenarios.get(sid).targets:
+            ambition = SPATIAL_AMBITIONS.get((sid, t.metric))
+            if ambition is not None and sid == "S11":
+                ambition = round(ambition * floors[sid].seconds, 2)
+            rows.append((sid, t, ambition))
+    return rows
+
+
+def report_spatial(results, floors, out=print):
+    """Each controller of two axes against S11-S14's targets (the board's figures of its cases); ``floors``:
+    ``{scenario: Floor}`` (:func:`.floor.scenario_floors`), S11's at least."""
+    by = {(r.scenario, r.label): m for r, m in results}
+    out("The crane in three dimensions (issue 52): each controller of two axes on the board's S11-S14 (Section V "
+        "masses and lengths, h = 1 ms, |u| <= 2 m/s2 and |v| <= 1 m/s on each axis)")
+    for name in [n for n in SPATIAL_CONTROLLERS if any(label == n for _, label in by)]:
+        out(f"  {name}")
+        for sid, t, ambition in spatial_targets(floors):
+            m = by.get((sid, name))
+            if m is None:
+                continue
+            value = m.get(t.metric)
+            unit = " m" if t.metric.endswith("_m") else " deg" if t.metric.endswith("deg") else " s"
+            digits = 3 if unit != " s" else 2
+            shown = "never" if value is None else figure_text(value, digits, unit, (t.limit,) + (
+                () if ambition is None else (ambition,)))
+            ratio = floor_ratio(value, floors.get(sid)) if unit == " s" and sid in floors else ""
+            verdict = "failed: " + m["error"] if m["error"] else (
+                "met" if value is not None and value <= t.limit else "MISSED")
+            if verdict == "met" and ambition is not None and value <= ambition:
+                verdict = "met, and the ambition"
+            wanted = f"target <= {t.limit:g}{unit}" + (f", ambition {ambition:g}{unit}" if ambition else "")
+            out(f"    {sid} {t.text}: {shown}{ratio} ({wanted}): {verdict}")
+
+
 def run_targets(fmu_dir, quick=False, workers=None, out=print):
     """Measure every run of :func:`plan` on ``workers`` processes and print the report; return the results."""
     runs = plan(quick)
@@ -242,8 +312,9 @@ def run_targets(fmu_dir, quick=False, workers=None, out=print):
 
     floors = scenario_floors()
     report_floors(floors, out)
-    report([(r, m) for r, m in results if not r.group.startswith("mpc_")], out)
+    report([(r, m) for r, m in results if not r.group.startswith(("mpc_", "spatial_"))], out)
     report_mpc([(r, m) for r, m in results if r.group.startswith("mpc_")], floors, out)
+    report_spatial([(r, m) for r, m in results if r.group.startswith("spatial_")], floors, out)
     out("The MPC's solve time and its whole process against transport's: crane-fmu bench --mpc")
     return results
 

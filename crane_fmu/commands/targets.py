@@ -5,7 +5,8 @@ from crane_fmu import DEFAULT_FMU_DIR
 from .common import UsageError, check_workers
 
 NAME = "targets"
-HELP = "measure every controller against its targets (regulation, transport, robustness, reach, coarse steps)"
+HELP = ("measure every controller against its targets (regulation, transport, robustness, reach, coarse steps; the "
+        "crane in three dimensions' S11-S14)")
 EXAMPLES = (
     "examples:\n"
     "  crane-fmu targets\n"
@@ -34,7 +35,8 @@ def run(args):
         return 0
     check_workers(args)
     try:
-        for name in ("lqr", "energy", "paper", "transport", "hoist-transport", "mpc", "mpc-transport"):
+        for name in ("lqr", "energy", "paper", "transport", "hoist-transport", "mpc", "mpc-transport", "lqr3d",
+                     "mpc3d"):
             systems.resolve(systems.get(name), args.fmu_dir)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
