@@ -217,6 +217,55 @@ def test_the_spatial_plant_settles_at_the_static_deflection():
 
 
 @pytest.mark.quick
+def test_s14s_targets_are_s10s_rule_on_its_crane_by_hand():
+    """S10's rule on S14's one crane (Section V: 3 kg, 7 kg, 1 m, 0.5 m): the residual's limit its smaller cable's
+    deflection cut to 0.01 deg; the load's 5 mm plus its static offset downwind, from the statics by hand."""
+    from crane_fmu.analysis import scenarios, spatial_scenarios
+
+    f1, f2 = 0.5 * 1.225 * 1.05 * 0.005 * 10.0 ** 2, 0.5 * 1.225 * 1.05 * 0.01 * 10.0 ** 2  # 0.5 rho Cd A U^2
+    theta1, theta2 = math.atan((f1 + f2) / (10.0 * 9.8)), math.atan(f2 / (7.0 * 9.8))
+    limits = {t.metric: t.limit for t in scenarios.get("S14").targets}
+    assert limits["residual_eq_deg"] == math.floor(math.degrees(min(theta1, theta2)) * 100) / 100 == 0.53
+    assert limits["load_error_m"] == pytest.approx(0.005 + math.sin(theta1) + 0.5 * math.sin(theta2), abs=5e-5)
+    assert limits["arrival_eq_s"] == spatial_scenarios.WIND_S == 6.4
+
+
+def test_a_stopped_3d_crane_in_the_mean_wind_misses_s14s_residual_and_shows_its_static_offset():
+    """The anchor: the Python CranePlant3D, its trolley held at S14's target, undamped, the load hanging from the
+    vertical when the mean wind sets in across the move: it swings about the equilibrium by more than S14's limit, and
+    its load stays about the static offset downwind (the band's reason), measured as the board does."""
+    from crane_fmu.analysis import spatial_scenarios
+    from crane_fmu.analysis.wind_equilibrium import mean_drag
+
+    plant = components.get("CranePlant3D")
+    config = plant.check({"theta1x_0": 0.0, "x0": 2.0})
+    names_in, names_out = plant.names("input"), plant.names("output")
+    inputs = [0.0] * len(names_in)
+    for name, value in zip(("F1y", "F2y"), mean_drag()):
+        inputs[names_in.index(name)] = value
+    state, rows = plant.initial_state(config), []
+    for k in range(1001):
+        rows.append(plant.output(config, state, tuple(inputs)))
+        state = plant.update(config, state, tuple(inputs), k * 0.01, 0.01)
+    columns = {name: np.array(column) for name, column in zip(names_out, zip(*rows))}
+    crane = plant.crane
+    signals = {**columns, "time": np.arange(1001) * 0.01, "crane": crane,
+               "position": [columns[a.position] for a in crane.axes],
+               "velocity": [columns[a.velocity] for a in crane.axes], "demand": [np.zeros(1001)] * 2}
+    figures = spatial_scenarios._about_equilibrium(signals, {"x_d": [2.0, 0.0], "residual_from": 5.0})
+    limits = {t.metric: t.limit for t in scenarios_get("S14").targets}
+    assert figures["residual_eq_deg"] > limits["residual_eq_deg"]
+    offset = math.sin(spatial_scenarios.EQUILIBRIUM[0]) + 0.5 * math.sin(spatial_scenarios.EQUILIBRIUM[1])
+    assert offset < figures["load_error_m"] < 2 * offset + 0.005  # about it, swinging past it
+
+
+def scenarios_get(sid):
+    from crane_fmu.analysis import scenarios
+
+    return scenarios.get(sid)
+
+
+@pytest.mark.quick
 def test_the_angle_between_two_cables_is_the_hand_computed_one():
     from crane_fmu.analysis.spatial_scenarios import cable_angle
 
@@ -252,7 +301,7 @@ def test_the_targets_report_prints_s11_to_s14_against_the_scenarios_targets_and_
 
     figures = {"S11": {"arrival_s": 2.75, "residual_deg": 0.05}, "S12": {"settling_0.1deg_s": 3.004},
                "S13": {"path_deviation_m": 0.31, "arrival_s": 6.5, "residual_deg": 0.002},
-               "S14": {"arrival_eq_s": None, "residual_eq_deg": 0.0999}}
+               "S14": {"arrival_eq_s": None, "residual_eq_deg": 0.25, "load_error_m": 0.0196}}
     results = [(targets.Run(f"spatial_{sid}", "LqrController3D", None, {}, 1e-3, 10.0, 0.0, sid, [0.0, 0.0]),
                 {**m, "error": None}) for sid, m in figures.items()]
     lines = []
@@ -267,5 +316,7 @@ def test_the_targets_report_prints_s11_to_s14_against_the_scenarios_targets_and_
            in text
     assert "S13 within 5 mm and 0.5 deg from 6.97 s: 6.50 s (target <= 6.97 s, ambition 6 s): met" in text
     assert "of the wind's equilibrium from 6.4 s: never (target <= 6.4 s): MISSED" in text
-    assert "S14 residual swing about the equilibrium <= 0.1 deg: 0.0999 deg (target <= 0.1 deg): met" in text
+    assert "S14 residual swing about the equilibrium <= 0.53 deg: 0.250 deg (target <= 0.53 deg): met" in text
+    assert "S14 the load within 19.5 mm of the target in the residual window: 0.020 m (target <= 0.0195 m): " \
+           "MISSED" in text
     assert "MpcController3D" not in text  # no figures, no heading
