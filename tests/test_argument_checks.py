@@ -229,3 +229,110 @@ def test_every_bad_instantiation_is_refused_and_the_good_one_made(fmu_kinds, kin
         results = _instantiations(md, unzipped, version)
         assert results == {check: (True, True) for check in results}, path.name
         assert sum("not this FMU's" in m for m in _MESSAGES) == len([c for c in results if "another build" in c])
+
+
+# ---- calling order: each function called in a mode the standard forbids it in --------------------------------------
+
+# The stages an instance is brought to before the call, in the standard's state machine (FMI 2.0 section 4.2.4,
+# FMI 3.0 section 4.2): after instantiation, in initialisation mode, stepping (initialisation ended), terminated.
+STAGES = ("instantiated", "initialisation", "stepping", "terminated")
+
+
+def _staged(folder, version, stage):
+    """A fresh CranePlant instance brought to ``stage`` through fmpy: ``(fmu, dll, instance, vr)``."""
+    md = read_model_description(str(folder / "CranePlant.fmu"))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    import fmpy
+
+    unzipped = fmpy.extract(str(folder / "CranePlant.fmu"))
+    if version == 2:
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
+                        instanceName="c")
+        fmu.instantiate()
+        if stage != "instantiated":
+            fmu.setupExperiment(startTime=0.0)
+            fmu.enterInitializationMode()
+    else:
+        fmu = FMU3Slave(guid=md.instantiationToken, unzipDirectory=unzipped,
+                        modelIdentifier=md.coSimulation.modelIdentifier, instanceName="c")
+        fmu.instantiate()
+        if stage != "instantiated":
+            fmu.enterInitializationMode(startTime=0.0)
+    if stage in ("stepping", "terminated"):
+        fmu.exitInitializationMode()
+    if stage == "terminated":
+        fmu.terminate()
+    return fmu, fmu.dll, c_void_p(fmu.component), vr
+
+
+def _ordered_calls(version):
+    """``{check: (call, stage it is allowed in, stage the standard forbids it in)}``; ``call(dll, instance, vr)``."""
+    v = "fmi2" if version == 2 else "fmi3"
+    get, set_ = (f"{v}GetReal", f"{v}SetReal") if version == 2 else (f"{v}GetFloat64", f"{v}SetFloat64")
+
+    def values(function, name, value=None):
+        def call(dll, instance, vr):
+            args = [instance, (c_uint * 1)(vr[name]), c_size_t(1), (c_double * 1)(0.0 if value is None else value)]
+            if version == 3:
+                args.append(c_size_t(1))
+            return _raw(dll, function)(*args)
+        return call
+
+    def do_step(dll, instance, vr):
+        if version == 2:
+            return _raw(dll, "fmi2DoStep")(instance, c_double(0.0), c_double(1e-3), c_int(1))
+        flags = [ctypes.c_bool() for _ in range(3)]
+        return _raw(dll, "fmi3DoStep")(instance, c_double(0.0), c_double(1e-3), ctypes.c_bool(True),
+                                       *map(byref, flags), byref(c_double()))
+
+    def enter(dll, instance, vr):
+        if version == 2:
+            return _raw(dll, "fmi2EnterInitializationMode")(instance)
+        return _raw(dll, "fmi3EnterInitializationMode")(instance, ctypes.c_bool(False), c_double(0.0),
+                                                        c_double(0.0), ctypes.c_bool(False), c_double(0.0))
+
+    def plain(name):
+        return lambda dll, instance, vr: _raw(dll, f"{v}{name}")(instance)
+
+    checks = {
+        # m1: causality parameter, variability fixed: settable until initialisation ends, never after
+        "a fixed parameter set once initialisation has ended": (values(set_, "m1", 1.5), "initialisation",
+                                                                "stepping"),
+        "an input set once terminated": (values(set_, "u", 0.5), "stepping", "terminated"),
+        "a value got before initialisation": (values(get, "x"), "initialisation", "instantiated"),
+        "a step before initialisation has ended": (do_step, "stepping", "initialisation"),
+        "a step once terminated": (do_step, "stepping", "terminated"),
+        "initialisation entered twice": (enter, "instantiated", "initialisation"),
+        "initialisation entered once stepping": (enter, "instantiated", "stepping"),
+        "initialisation ended twice": (plain("ExitInitializationMode"), "initialisation", "stepping"),
+        "terminate during initialisation": (plain("Terminate"), "stepping", "initialisation"),
+        "terminate twice": (plain("Terminate"), "stepping", "terminated"),
+    }
+    if version == 2:
+        checks["setupExperiment in initialisation mode"] = (
+            lambda dll, instance, vr: _raw(dll, "fmi2SetupExperiment")(instance, c_int(0), c_double(0.0),
+                                                                       c_double(0.0), c_int(0), c_double(0.0)),
+            "instantiated", "initialisation")
+    return checks
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("kind", list(FMU_KINDS))
+def test_every_call_in_a_mode_the_standard_forbids_is_refused_and_in_its_own_mode_taken(fmu_kinds, kind, version):
+    """The calling order, a class of check apart from the arguments above: a fixed parameter set after
+    initialisation, an input set or a step taken once terminated, a value got before initialisation, a step before
+    it ends, initialisation entered or ended twice, terminate in initialisation or twice (FMI 2.0: setupExperiment
+    in initialisation mode). Each call is made on a fresh instance in a mode the standard allows it in (OK: the
+    control), then on another fresh instance in a mode it forbids it in: fmi*Error (3), and the process goes on."""
+    folder = fmu_kinds[kind][version]
+    results = {}
+    for check, (call, allowed, forbidden) in _ordered_calls(version).items():
+        statuses = []
+        for stage in (allowed, forbidden):
+            fmu, dll, instance, vr = _staged(folder, version, stage)
+            try:
+                statuses.append(call(dll, instance, vr))
+            finally:
+                fmu.freeInstance()
+        results[check] = tuple(statuses)
+    assert results == {check: (OK, ERROR) for check in results}
