@@ -1061,28 +1061,30 @@ def test_real_time_a_trolley_driven_at_a_rail_end_is_braked_and_the_run_reaches_
     assert set(np.unique(served["controller.u"])) >= {3.0, -3.0}
 
 
-def test_lock_step_a_client_that_brakes_after_a_refusal_at_a_rail_end_steps_on(fmu_dir, tmp_path):
-    """Lock-step: u = 3 towards x_max = 0.3 m in requests of 10 steps until one is refused (BadOutOfRange); the
-    client then brakes (u = -3) and every request is taken again until the trolley is back at rest. Without the
-    guard the refusal came at the rail end itself, where braking cannot stop the trolley: every later request was
-    refused too."""
-    server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--lock-step", "--set",
-                    "plant.u_max=3", "--set", "plant.x_max=0.3", "--opcua", "127.0.0.1:0")
+@pytest.mark.parametrize("system, demand, position", [("lqr", "u", "x"), ("lqr3d", "ux", "x"), ("lqr3d", "uy", "y")])
+def test_lock_step_a_client_that_brakes_after_a_refusal_at_a_rail_end_steps_on(fmu_dir, tmp_path, system, demand,
+                                                                               position):
+    """Lock-step: the demand at its limit (3 m/s2) towards the rail end at 0.3 m, in requests of 10 steps until one
+    is refused (BadOutOfRange); the client then brakes (-3) and every request is taken again until the trolley moves
+    back. Without the guard the refusal came at the rail end itself, where braking cannot stop the trolley: every
+    later request was refused too. The planar crane, and each axis of the crane in three dimensions."""
+    server = Server(fmu_dir, tmp_path, "--system", system, "--external", "controller", "--lock-step", "--set",
+                    f"plant.{demand}_max=3", "--set", f"plant.{position}_max=0.3", "--opcua", "127.0.0.1:0")
 
     async def drive(url):
         async with Client(url) as opc:
             ns, node = await _nodes(opc)
-            await node("controller.u").write_value(ua.Variant(3.0, ua.VariantType.Double))
+            await node(f"controller.{demand}").write_value(ua.Variant(3.0, ua.VariantType.Double))
             codes = []
             while len(codes) < 100 and (not codes or codes[-1] == "Good"):
                 codes.append(await _step_status(opc, 10))
-            await node("controller.u").write_value(ua.Variant(-3.0, ua.VariantType.Double))
+            await node(f"controller.{demand}").write_value(ua.Variant(-3.0, ua.VariantType.Double))
             braking = []
             for _ in range(100):
                 braking.append(await _step_status(opc, 10))
-                if (await node("plant.dx").read_value()) <= 0:
+                if (await node(f"plant.d{position}").read_value()) <= 0:
                     break
-            return codes, braking, await opc.read_values([node("plant.x"), node("plant.dx")])
+            return codes, braking, await opc.read_values([node(f"plant.{position}"), node(f"plant.d{position}")])
 
     try:
         codes, braking, (x, dx) = _run(drive(server.opcua))
@@ -1090,7 +1092,7 @@ def test_lock_step_a_client_that_brakes_after_a_refusal_at_a_rail_end_steps_on(f
         status, out, err = server.stop()
     assert codes[-1] == "BadOutOfRange" and set(codes[:-1]) == {"Good"} and len(codes) > 10, codes
     assert set(braking) == {"Good"} and dx <= 0 < x <= 0.3, (braking, x, dx)
-    assert status == 0 and "could not stop before the rail end x_max" in err, err[-2000:]
+    assert status == 0 and f"could not stop before the rail end {position}_max" in err, err[-2000:]
 
 
 def test_the_guards_braking_distance_is_the_held_brakings_and_the_least_one_plus_half_a_cycle():
