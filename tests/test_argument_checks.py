@@ -336,3 +336,76 @@ def test_every_call_in_a_mode_the_standard_forbids_is_refused_and_in_its_own_mod
                 fmu.freeInstance()
         results[check] = tuple(statuses)
     assert results == {check: (OK, ERROR) for check in results}
+
+
+# ---- Model Exchange: the arrays and pointers of its own functions ---------------------------------------------------
+
+
+def _model_exchange(folder, version, continuous_time, model_exchange=True):
+    """A fresh native CranePlant instance after initialisation (Model Exchange: in event mode, or in continuous-time
+    mode): ``(fmu, dll, instance, numbers of states and of event indicators)``."""
+    path = folder / "CranePlant.fmu"
+    md = read_model_description(str(path))
+    fmu = open_native(path, version, model_exchange=model_exchange)[0]
+    fmu.exitInitializationMode()
+    if model_exchange and continuous_time:
+        fmu.enterContinuousTimeMode()
+    return fmu, fmu.dll, c_void_p(fmu.component), len(md.derivatives), md.numberOfEventIndicators
+
+
+def _model_exchange_calls(version):
+    """``{check: (good call, bad call, continuous-time mode, bad on a co-simulation instance)}``, each call
+    ``call(dll, instance, n_states, n_indicators)``."""
+    v = "fmi2" if version == 2 else "fmi3"
+    names = {"derivatives": f"{v}GetDerivatives" if version == 2 else "fmi3GetContinuousStateDerivatives",
+             "indicators": f"{v}GetEventIndicators", "states": f"{v}GetContinuousStates",
+             "completed": f"{v}CompletedIntegratorStep"}
+    flag = c_int if version == 2 else ctypes.c_bool
+
+    def array(name, length=lambda nx, ni: nx, null=False, short=0):
+        def call(dll, instance, nx, ni):
+            n = length(nx, ni) + short
+            return _raw(dll, names[name])(instance, None if null else (c_double * max(n, 1))(), c_size_t(n))
+        return call
+
+    def completed(null):
+        def call(dll, instance, nx, ni):
+            event, terminate = flag(), flag()
+            return _raw(dll, names["completed"])(instance, flag(1), None if null else byref(event),
+                                                 None if null else byref(terminate))
+        return call
+
+    def indicators(nx, ni):
+        return ni
+
+    return {
+        "derivatives: an array one shorter than the states": (array("derivatives"), array("derivatives", short=-1),
+                                                              False, False),
+        "derivatives: an array one longer than the states": (array("derivatives"), array("derivatives", short=1),
+                                                             False, False),
+        "event indicators: an array one shorter": (array("indicators", indicators),
+                                                   array("indicators", indicators, short=-1), False, False),
+        "continuous states: a NULL array": (array("states"), array("states", null=True), False, False),
+        "completed integrator step: NULL output pointers": (completed(False), completed(True), True, False),
+        "derivatives of a co-simulation instance": (array("derivatives"), array("derivatives"), False, True),
+    }
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_every_bad_model_exchange_array_or_pointer_is_refused_and_the_good_one_taken(fmu_kinds, version):
+    """The Model Exchange functions' own checks, a third class (the native FMUs: the Python ones have no Model
+    Exchange): an array of states or event indicators shorter or longer than the model's, a NULL array, NULL output
+    pointers of CompletedIntegratorStep, a Model Exchange function called on a co-simulation instance. Each is first
+    made with good arguments on a fresh Model Exchange instance (OK), then with the bad one on another: fmi*Error."""
+    folder = fmu_kinds["native"][version]
+    results = {}
+    for check, (good, bad, continuous_time, on_co_simulation) in _model_exchange_calls(version).items():
+        statuses = []
+        for call, model_exchange in ((good, True), (bad, not on_co_simulation)):
+            fmu, dll, instance, nx, ni = _model_exchange(folder, version, continuous_time, model_exchange)
+            try:
+                statuses.append(call(dll, instance, nx, ni))
+            finally:
+                fmu.freeInstance()
+        results[check] = tuple(statuses)
+    assert results == {check: (OK, ERROR) for check in results}
