@@ -409,3 +409,78 @@ def test_every_bad_model_exchange_array_or_pointer_is_refused_and_the_good_one_t
                 fmu.freeInstance()
         results[check] = tuple(statuses)
     assert results == {check: (OK, ERROR) for check in results}
+
+
+# ---- the String and Integer (Enumeration) functions -----------------------------------------------------------------
+
+# (FMU, its variable of the type, a good value) per type
+TYPED = {"String": ("BacksteppingController.fmu", "b3_form", b"printed"),
+         "Integer": ("TrajectoryPlanner.fmu", "shaper", 2)}
+
+
+def _typed_calls(version, kind):
+    """``{check: (good call, bad call, initialised)}`` of the ``kind`` functions (String; Integer: FMI 2.0's
+    fmi2*Integer, FMI 3.0's fmi3*Int64, which set an Enumeration), each ``call(dll, instance, vr, real)``: ``vr`` the
+    variable's reference, ``real`` a Real's."""
+    v = "fmi2" if version == 2 else "fmi3"
+    suffix = kind if (kind == "String" or version == 2) else "Int64"
+    get, set_ = f"{v}Get{suffix}", f"{v}Set{suffix}"
+    item = ctypes.c_char_p if kind == "String" else (c_int if version == 2 else ctypes.c_int64)
+    good = TYPED[kind][2]
+
+    def call(function, instance=True, refs=True, values=True, setting=False, n_values=None):
+        def made(dll, c, vr, real):
+            array = (item * 1)(good) if setting else (item * 1)()
+            args = [c if instance else None, (c_uint * 1)(vr if refs is True else refs) if refs else None,
+                    c_size_t(1), array if values else None]
+            if version == 3:
+                args.append(c_size_t(1 if n_values is None else n_values))
+            return _raw(dll, function)(*args)
+        return made
+
+    checks = {
+        "NULL instance (get)": (call(get), call(get, instance=False), True),
+        "NULL value references (get)": (call(get), call(get, refs=None), True),
+        "NULL values (get)": (call(get), call(get, values=False), True),
+        "NULL values (set)": (call(set_, setting=True), call(set_, values=False, setting=True), False),
+        "unknown value reference (get)": (call(get), call(get, refs=99999), True),
+        "unknown value reference (set)": (call(set_, setting=True), call(set_, refs=99999, setting=True), False),
+        "a Real's value reference (get)": (call(get), lambda dll, c, vr, real: call(get, refs=real)(dll, c, vr, real),
+                                           True),
+        # the calling order: a fixed parameter set once initialisation has ended (in initialisation mode: taken)
+        "a fixed parameter set once initialisation has ended": (call(set_, setting=True), call(set_, setting=True),
+                                                                (False, True)),
+    }
+    if version == 3:
+        checks["nValues != nValueReferences"] = (call(get), call(get, n_values=2), True)
+    return checks
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("kind", list(FMU_KINDS))
+@pytest.mark.parametrize("typed", list(TYPED))
+def test_every_bad_string_or_integer_argument_is_refused_and_the_good_one_taken(fmu_kinds, kind, version, typed):
+    """The first test's argument checks for the String and Integer (Enumeration: FMI 3.0's Int64) get and set
+    functions, on the FMUs that have such a variable (BacksteppingController's b3_form, TrajectoryPlanner's
+    shaper): NULL instance, references or values, a reference the FMU does not have or of a Real, FMI 3.0's
+    nValues; and the fixed parameter set once initialisation has ended. Each bad call against the good one on a
+    fresh instance; a set in initialisation mode, a get after it. On main fmi2GetInteger took NULL values (status
+    OK) and the Python FMUs took a String set after initialisation."""
+    folder = fmu_kinds[kind][version]
+    name, variable, _ = TYPED[typed]
+    md = read_model_description(str(folder / name))
+    refs = {v.name: v.valueReference for v in md.modelVariables}
+    real = next(v.valueReference for v in md.modelVariables if v.type in ("Real", "Float64"))
+    results = {}
+    for check, (good, bad, initialised) in _typed_calls(version, typed).items():
+        statuses = []
+        for call, ended in zip((good, bad), initialised if isinstance(initialised, tuple) else (initialised,) * 2):
+            fmu = open_native(folder / name, version)[0]
+            if ended:
+                fmu.exitInitializationMode()
+            try:
+                statuses.append(call(fmu.dll, c_void_p(fmu.component), refs[variable], real))
+            finally:
+                fmu.freeInstance()
+        results[check] = tuple(statuses)
+    assert results == {check: (OK, ERROR) for check in results}

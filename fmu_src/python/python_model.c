@@ -400,6 +400,8 @@ static ModelStatus python_get_strings(const ModelType *type, void *m, const unsi
 
 static ModelStatus python_set_strings(const ModelType *type, void *m, const unsigned vr[], size_t n,
                                       const char *const v[], int fixed_allowed, const Reporter *r) {
+    if (!fixed_allowed) /* a String is a parameter (runtime.py: inputs are Real), and every parameter is fixed */
+        return report(r, MODEL_ERROR, "a String is a fixed parameter: it can be set only before initialisation ends");
     PythonModel *p = m;
     PyGILState_STATE gil = PyGILState_Ensure();
     PyObject *values = PyList_New((Py_ssize_t)n);
