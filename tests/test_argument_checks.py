@@ -229,3 +229,258 @@ def test_every_bad_instantiation_is_refused_and_the_good_one_made(fmu_kinds, kin
         results = _instantiations(md, unzipped, version)
         assert results == {check: (True, True) for check in results}, path.name
         assert sum("not this FMU's" in m for m in _MESSAGES) == len([c for c in results if "another build" in c])
+
+
+# ---- calling order: each function called in a mode the standard forbids it in --------------------------------------
+
+# The stages an instance is brought to before the call, in the standard's state machine (FMI 2.0 section 4.2.4,
+# FMI 3.0 section 4.2): after instantiation, in initialisation mode, stepping (initialisation ended), terminated.
+STAGES = ("instantiated", "initialisation", "stepping", "terminated")
+
+
+def _staged(folder, version, stage):
+    """A fresh CranePlant instance brought to ``stage`` through fmpy: ``(fmu, dll, instance, vr)``."""
+    md = read_model_description(str(folder / "CranePlant.fmu"))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    import fmpy
+
+    unzipped = fmpy.extract(str(folder / "CranePlant.fmu"))
+    if version == 2:
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
+                        instanceName="c")
+        fmu.instantiate()
+        if stage != "instantiated":
+            fmu.setupExperiment(startTime=0.0)
+            fmu.enterInitializationMode()
+    else:
+        fmu = FMU3Slave(guid=md.instantiationToken, unzipDirectory=unzipped,
+                        modelIdentifier=md.coSimulation.modelIdentifier, instanceName="c")
+        fmu.instantiate()
+        if stage != "instantiated":
+            fmu.enterInitializationMode(startTime=0.0)
+    if stage in ("stepping", "terminated"):
+        fmu.exitInitializationMode()
+    if stage == "terminated":
+        fmu.terminate()
+    return fmu, fmu.dll, c_void_p(fmu.component), vr
+
+
+def _ordered_calls(version):
+    """``{check: (call, stage it is allowed in, stage the standard forbids it in)}``; ``call(dll, instance, vr)``."""
+    v = "fmi2" if version == 2 else "fmi3"
+    get, set_ = (f"{v}GetReal", f"{v}SetReal") if version == 2 else (f"{v}GetFloat64", f"{v}SetFloat64")
+
+    def values(function, name, value=None):
+        def call(dll, instance, vr):
+            args = [instance, (c_uint * 1)(vr[name]), c_size_t(1), (c_double * 1)(0.0 if value is None else value)]
+            if version == 3:
+                args.append(c_size_t(1))
+            return _raw(dll, function)(*args)
+        return call
+
+    def do_step(dll, instance, vr):
+        if version == 2:
+            return _raw(dll, "fmi2DoStep")(instance, c_double(0.0), c_double(1e-3), c_int(1))
+        flags = [ctypes.c_bool() for _ in range(3)]
+        return _raw(dll, "fmi3DoStep")(instance, c_double(0.0), c_double(1e-3), ctypes.c_bool(True),
+                                       *map(byref, flags), byref(c_double()))
+
+    def enter(dll, instance, vr):
+        if version == 2:
+            return _raw(dll, "fmi2EnterInitializationMode")(instance)
+        return _raw(dll, "fmi3EnterInitializationMode")(instance, ctypes.c_bool(False), c_double(0.0),
+                                                        c_double(0.0), ctypes.c_bool(False), c_double(0.0))
+
+    def plain(name):
+        return lambda dll, instance, vr: _raw(dll, f"{v}{name}")(instance)
+
+    checks = {
+        # m1: causality parameter, variability fixed: settable until initialisation ends, never after
+        "a fixed parameter set once initialisation has ended": (values(set_, "m1", 1.5), "initialisation",
+                                                                "stepping"),
+        "an input set once terminated": (values(set_, "u", 0.5), "stepping", "terminated"),
+        "a value got before initialisation": (values(get, "x"), "initialisation", "instantiated"),
+        "a step before initialisation has ended": (do_step, "stepping", "initialisation"),
+        "a step once terminated": (do_step, "stepping", "terminated"),
+        "initialisation entered twice": (enter, "instantiated", "initialisation"),
+        "initialisation entered once stepping": (enter, "instantiated", "stepping"),
+        "initialisation ended twice": (plain("ExitInitializationMode"), "initialisation", "stepping"),
+        "terminate during initialisation": (plain("Terminate"), "stepping", "initialisation"),
+        "terminate twice": (plain("Terminate"), "stepping", "terminated"),
+    }
+    if version == 2:
+        checks["setupExperiment in initialisation mode"] = (
+            lambda dll, instance, vr: _raw(dll, "fmi2SetupExperiment")(instance, c_int(0), c_double(0.0),
+                                                                       c_double(0.0), c_int(0), c_double(0.0)),
+            "instantiated", "initialisation")
+    return checks
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("kind", list(FMU_KINDS))
+def test_every_call_in_a_mode_the_standard_forbids_is_refused_and_in_its_own_mode_taken(fmu_kinds, kind, version):
+    """The calling order, a class of check apart from the arguments above: a fixed parameter set after
+    initialisation, an input set or a step taken once terminated, a value got before initialisation, a step before
+    it ends, initialisation entered or ended twice, terminate in initialisation or twice (FMI 2.0: setupExperiment
+    in initialisation mode). Each call is made on a fresh instance in a mode the standard allows it in (OK: the
+    control), then on another fresh instance in a mode it forbids it in: fmi*Error (3), and the process goes on."""
+    folder = fmu_kinds[kind][version]
+    results = {}
+    for check, (call, allowed, forbidden) in _ordered_calls(version).items():
+        statuses = []
+        for stage in (allowed, forbidden):
+            fmu, dll, instance, vr = _staged(folder, version, stage)
+            try:
+                statuses.append(call(dll, instance, vr))
+            finally:
+                fmu.freeInstance()
+        results[check] = tuple(statuses)
+    assert results == {check: (OK, ERROR) for check in results}
+
+
+# ---- Model Exchange: the arrays and pointers of its own functions ---------------------------------------------------
+
+
+def _model_exchange(folder, version, continuous_time, model_exchange=True):
+    """A fresh native CranePlant instance after initialisation (Model Exchange: in event mode, or in continuous-time
+    mode): ``(fmu, dll, instance, numbers of states and of event indicators)``."""
+    path = folder / "CranePlant.fmu"
+    md = read_model_description(str(path))
+    fmu = open_native(path, version, model_exchange=model_exchange)[0]
+    fmu.exitInitializationMode()
+    if model_exchange and continuous_time:
+        fmu.enterContinuousTimeMode()
+    return fmu, fmu.dll, c_void_p(fmu.component), len(md.derivatives), md.numberOfEventIndicators
+
+
+def _model_exchange_calls(version):
+    """``{check: (good call, bad call, continuous-time mode, bad on a co-simulation instance)}``, each call
+    ``call(dll, instance, n_states, n_indicators)``."""
+    v = "fmi2" if version == 2 else "fmi3"
+    names = {"derivatives": f"{v}GetDerivatives" if version == 2 else "fmi3GetContinuousStateDerivatives",
+             "indicators": f"{v}GetEventIndicators", "states": f"{v}GetContinuousStates",
+             "completed": f"{v}CompletedIntegratorStep"}
+    flag = c_int if version == 2 else ctypes.c_bool
+
+    def array(name, length=lambda nx, ni: nx, null=False, short=0):
+        def call(dll, instance, nx, ni):
+            n = length(nx, ni) + short
+            return _raw(dll, names[name])(instance, None if null else (c_double * max(n, 1))(), c_size_t(n))
+        return call
+
+    def completed(null):
+        def call(dll, instance, nx, ni):
+            event, terminate = flag(), flag()
+            return _raw(dll, names["completed"])(instance, flag(1), None if null else byref(event),
+                                                 None if null else byref(terminate))
+        return call
+
+    def indicators(nx, ni):
+        return ni
+
+    return {
+        "derivatives: an array one shorter than the states": (array("derivatives"), array("derivatives", short=-1),
+                                                              False, False),
+        "derivatives: an array one longer than the states": (array("derivatives"), array("derivatives", short=1),
+                                                             False, False),
+        "event indicators: an array one shorter": (array("indicators", indicators),
+                                                   array("indicators", indicators, short=-1), False, False),
+        "continuous states: a NULL array": (array("states"), array("states", null=True), False, False),
+        "completed integrator step: NULL output pointers": (completed(False), completed(True), True, False),
+        "derivatives of a co-simulation instance": (array("derivatives"), array("derivatives"), False, True),
+    }
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_every_bad_model_exchange_array_or_pointer_is_refused_and_the_good_one_taken(fmu_kinds, version):
+    """The Model Exchange functions' own checks, a third class (the native FMUs: the Python ones have no Model
+    Exchange): an array of states or event indicators shorter or longer than the model's, a NULL array, NULL output
+    pointers of CompletedIntegratorStep, a Model Exchange function called on a co-simulation instance. Each is first
+    made with good arguments on a fresh Model Exchange instance (OK), then with the bad one on another: fmi*Error."""
+    folder = fmu_kinds["native"][version]
+    results = {}
+    for check, (good, bad, continuous_time, on_co_simulation) in _model_exchange_calls(version).items():
+        statuses = []
+        for call, model_exchange in ((good, True), (bad, not on_co_simulation)):
+            fmu, dll, instance, nx, ni = _model_exchange(folder, version, continuous_time, model_exchange)
+            try:
+                statuses.append(call(dll, instance, nx, ni))
+            finally:
+                fmu.freeInstance()
+        results[check] = tuple(statuses)
+    assert results == {check: (OK, ERROR) for check in results}
+
+
+# ---- the String and Integer (Enumeration) functions -----------------------------------------------------------------
+
+# (FMU, its variable of the type, a good value) per type
+TYPED = {"String": ("BacksteppingController.fmu", "b3_form", b"printed"),
+         "Integer": ("TrajectoryPlanner.fmu", "shaper", 2)}
+
+
+def _typed_calls(version, kind):
+    """``{check: (good call, bad call, initialised)}`` of the ``kind`` functions (String; Integer: FMI 2.0's
+    fmi2*Integer, FMI 3.0's fmi3*Int64, which set an Enumeration), each ``call(dll, instance, vr, real)``: ``vr`` the
+    variable's reference, ``real`` a Real's."""
+    v = "fmi2" if version == 2 else "fmi3"
+    suffix = kind if (kind == "String" or version == 2) else "Int64"
+    get, set_ = f"{v}Get{suffix}", f"{v}Set{suffix}"
+    item = ctypes.c_char_p if kind == "String" else (c_int if version == 2 else ctypes.c_int64)
+    good = TYPED[kind][2]
+
+    def call(function, instance=True, refs=True, values=True, setting=False, n_values=None):
+        def made(dll, c, vr, real):
+            array = (item * 1)(good) if setting else (item * 1)()
+            args = [c if instance else None, (c_uint * 1)(vr if refs is True else refs) if refs else None,
+                    c_size_t(1), array if values else None]
+            if version == 3:
+                args.append(c_size_t(1 if n_values is None else n_values))
+            return _raw(dll, function)(*args)
+        return made
+
+    checks = {
+        "NULL instance (get)": (call(get), call(get, instance=False), True),
+        "NULL value references (get)": (call(get), call(get, refs=None), True),
+        "NULL values (get)": (call(get), call(get, values=False), True),
+        "NULL values (set)": (call(set_, setting=True), call(set_, values=False, setting=True), False),
+        "unknown value reference (get)": (call(get), call(get, refs=99999), True),
+        "unknown value reference (set)": (call(set_, setting=True), call(set_, refs=99999, setting=True), False),
+        "a Real's value reference (get)": (call(get), lambda dll, c, vr, real: call(get, refs=real)(dll, c, vr, real),
+                                           True),
+        # the calling order: a fixed parameter set once initialisation has ended (in initialisation mode: taken)
+        "a fixed parameter set once initialisation has ended": (call(set_, setting=True), call(set_, setting=True),
+                                                                (False, True)),
+    }
+    if version == 3:
+        checks["nValues != nValueReferences"] = (call(get), call(get, n_values=2), True)
+    return checks
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("kind", list(FMU_KINDS))
+@pytest.mark.parametrize("typed", list(TYPED))
+def test_every_bad_string_or_integer_argument_is_refused_and_the_good_one_taken(fmu_kinds, kind, version, typed):
+    """The first test's argument checks for the String and Integer (Enumeration: FMI 3.0's Int64) get and set
+    functions, on the FMUs that have such a variable (BacksteppingController's b3_form, TrajectoryPlanner's
+    shaper): NULL instance, references or values, a reference the FMU does not have or of a Real, FMI 3.0's
+    nValues; and the fixed parameter set once initialisation has ended. Each bad call against the good one on a
+    fresh instance; a set in initialisation mode, a get after it. On main fmi2GetInteger took NULL values (status
+    OK) and the Python FMUs took a String set after initialisation."""
+    folder = fmu_kinds[kind][version]
+    name, variable, _ = TYPED[typed]
+    md = read_model_description(str(folder / name))
+    refs = {v.name: v.valueReference for v in md.modelVariables}
+    real = next(v.valueReference for v in md.modelVariables if v.type in ("Real", "Float64"))
+    results = {}
+    for check, (good, bad, initialised) in _typed_calls(version, typed).items():
+        statuses = []
+        for call, ended in zip((good, bad), initialised if isinstance(initialised, tuple) else (initialised,) * 2):
+            fmu = open_native(folder / name, version)[0]
+            if ended:
+                fmu.exitInitializationMode()
+            try:
+                statuses.append(call(fmu.dll, c_void_p(fmu.component), refs[variable], real))
+            finally:
+                fmu.freeInstance()
+        results[check] = tuple(statuses)
+    assert results == {check: (OK, ERROR) for check in results}

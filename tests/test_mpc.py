@@ -498,3 +498,29 @@ def test_data_beyond_the_cranes_equations_are_told_from_a_crane(noise_deg, unexp
         plan_end = (rows[k][3][mpc.HEADER.plan_start] + rows[k][3][mpc.HEADER.plan_steps]) * config.interval
         handed = next(t for t, _, _, state in rows if state[mpc.HEADER.handed])
         assert plan_end < handed
+
+
+def test_the_plans_length_is_the_least_number_of_intervals_by_an_independent_computation():
+    """The MPC's plan (its QP's bisection) for S2's 2 m move and from a hook swing of 10 deg, at 95 % of the limits
+    on its 50 ms grid: as many intervals as the least that reach the target without the planner's or the floor's
+    code (the crane linearised by sympy, scipy's zero-order hold, feasibility by daqp): the target is reachable in
+    the plan's number of intervals and not in one fewer."""
+    c = mpc.configure({**mpc.COMPONENT.defaults(), "x_d": 2.0})
+    a, b = _linear_crane_from_sympy(PlantParameters())
+    for start, target in (((0.0,) * 6, (2.0, 0, 0, 0, 0, 0)), ((0, 0, TEN_DEG, 0, 0, 0), (0.0,) * 6)):
+        inputs, _ = mpc.plan_move(c.designs[0], start, target, 1.9, 0.95, c.interval, 120)
+        assert _reaches(a, b, c.interval, len(inputs), start, target, 1.9, 0.95), start
+        assert not _reaches(a, b, c.interval, len(inputs) - 1, start, target, 1.9, 0.95), start
+
+
+@pytest.mark.parametrize("distance", [1.5, 2.0, 3.0])
+def test_the_spatial_scenarios_axis_floors_are_reachable_and_one_grid_step_less_is_not(distance):
+    """The floors the spatial scenarios take per axis (S11: 2 m and 1.5 m, S13's legs 3 m and 2 m; 2.44 s, 2.70 s
+    and 4.27 s in the issue), from the floor's code, checked as the board's: sympy, scipy's hold and daqp."""
+    drive = planar.DRIVE
+    seconds = floor.crane_floor(target=(distance, 0, 0, 0, 0, 0), **drive)
+    a, b = _linear_crane_from_sympy(PlantParameters())
+    steps = round(seconds / floor.GRID)
+    assert abs(steps * floor.GRID - seconds) < 1e-9
+    assert _reaches(a, b, floor.GRID, steps, (0,) * 6, (distance, 0, 0, 0, 0, 0), **drive)
+    assert not _reaches(a, b, floor.GRID, steps - 1, (0,) * 6, (distance, 0, 0, 0, 0, 0), **drive)

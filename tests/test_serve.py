@@ -1030,3 +1030,89 @@ def test_real_time_a_refused_step_holds_the_client_at_zero_and_the_run_goes_on(f
     served = read_csv(server.out)
     assert all(np.all(np.isfinite(column)) for column in served.values()) and served["time"][-1] == 1.0
     assert np.all(np.abs(served["controller.u"]) < 1e20) and served["controller.u"][-1] == 0.0
+
+
+def test_real_time_a_trolley_driven_at_a_rail_end_is_braked_and_the_run_reaches_its_stop_time(fmu_dir, tmp_path):
+    """A client writes u = 3 (the drive's limit) towards the rail end x_max = 0.3 m and then nothing more. Without a
+    guard the trolley reached a point before the rail end from where no demand within the limit stops it (v^2 / 2U
+    = 0.29 m at 1.32 m/s): every cycle was refused and the run held until Ctrl-C. Now the cycle that would end
+    where the trolley can no longer stop is refused (one line naming the rail end), u is held at -3 and then at
+    what brings the trolley to rest, and the run goes on to its stop time by itself: status 0, the trolley never past
+    x_max, at rest at the end, every recorded value finite."""
+    server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--period", "0.01",
+                    "--watchdog", "30", "--stop-time", "1.5", "--set", "plant.u_max=3", "--set", "plant.x_max=0.3",
+                    "--opcua", "127.0.0.1:0")
+
+    async def push(url):
+        async with Client(url) as opc:
+            ns, node = await _nodes(opc)
+            await node("controller.u").write_value(ua.Variant(3.0, ua.VariantType.Double))
+
+    try:
+        _run(push(server.opcua))
+    finally:
+        status, out, err = server.wait(40)
+    assert status == 0 and "finished at t = 1.5 s" in out, err[-2000:]
+    assert "could not stop before the rail end x_max = 0.3 m" in err and "held at u = -3" in err, err
+    served = read_csv(server.out)
+    assert all(np.all(np.isfinite(column)) for column in served.values()) and served["time"][-1] == 1.5
+    assert np.max(served["plant.x"]) <= 0.3 and served["plant.x"][-1] > 0.2  # braked before the end, not back
+    assert abs(served["plant.dx"][-1]) < 1e-9 and served["controller.u"][-1] == 0.0  # at rest, u held at zero
+    assert set(np.unique(served["controller.u"])) >= {3.0, -3.0}
+
+
+@pytest.mark.parametrize("system, demand, position", [("lqr", "u", "x"), ("lqr3d", "ux", "x"), ("lqr3d", "uy", "y")])
+def test_lock_step_a_client_that_brakes_after_a_refusal_at_a_rail_end_steps_on(fmu_dir, tmp_path, system, demand,
+                                                                               position):
+    """Lock-step: the demand at its limit (3 m/s2) towards the rail end at 0.3 m, in requests of 10 steps until one
+    is refused (BadOutOfRange); the client then brakes (-3) and every request is taken again until the trolley moves
+    back. Without the guard the refusal came at the rail end itself, where braking cannot stop the trolley: every
+    later request was refused too. The planar crane, and each axis of the crane in three dimensions."""
+    server = Server(fmu_dir, tmp_path, "--system", system, "--external", "controller", "--lock-step", "--set",
+                    f"plant.{demand}_max=3", "--set", f"plant.{position}_max=0.3", "--opcua", "127.0.0.1:0")
+
+    async def drive(url):
+        async with Client(url) as opc:
+            ns, node = await _nodes(opc)
+            await node(f"controller.{demand}").write_value(ua.Variant(3.0, ua.VariantType.Double))
+            codes = []
+            while len(codes) < 100 and (not codes or codes[-1] == "Good"):
+                codes.append(await _step_status(opc, 10))
+            await node(f"controller.{demand}").write_value(ua.Variant(-3.0, ua.VariantType.Double))
+            braking = []
+            for _ in range(100):
+                braking.append(await _step_status(opc, 10))
+                if (await node(f"plant.d{position}").read_value()) <= 0:
+                    break
+            return codes, braking, await opc.read_values([node(f"plant.{position}"), node(f"plant.d{position}")])
+
+    try:
+        codes, braking, (x, dx) = _run(drive(server.opcua))
+    finally:
+        status, out, err = server.stop()
+    assert codes[-1] == "BadOutOfRange" and set(codes[:-1]) == {"Good"} and len(codes) > 10, codes
+    assert set(braking) == {"Good"} and dx <= 0 < x <= 0.3, (braking, x, dx)
+    assert status == 0 and f"could not stop before the rail end {position}_max" in err, err[-2000:]
+
+
+def test_the_guards_braking_distance_is_the_held_brakings_and_the_least_one_plus_half_a_cycle():
+    """The guard's braking distance against the braking it holds, cycle by cycle with the trolley's exact
+    kinematics (x += v T + u T^2 / 2, v += u T, u = -sign(v) min(U, |v| / T)): equal, at rest after it; and within
+    the closed-form bounds v^2 / 2U (braking at U throughout) and v^2 / 2U + |v| T / 2."""
+    import random
+
+    from crane_fmu.serve.rail_ends import braking_distance
+
+    rng = random.Random(50)
+    for _ in range(200):
+        v, limit, cycle = rng.uniform(-5, 5), rng.choice((0.5, 3.0, 50.0)), rng.choice((1e-3, 0.01, 0.1))
+        x, speed = 0.0, v
+        for _ in range(100_000):
+            if speed == 0.0:
+                break
+            u = -math.copysign(min(limit, abs(speed) / cycle), speed)
+            x, speed = x + speed * cycle + u * cycle * cycle / 2, speed + u * cycle
+            speed = 0.0 if abs(speed) < 1e-12 else speed
+        d = braking_distance(v, limit, cycle)
+        assert speed == 0.0 and d == pytest.approx(abs(x), rel=1e-9, abs=1e-12), (v, limit, cycle)
+        assert v * v / (2 * limit) - 1e-12 <= d <= v * v / (2 * limit) + abs(v) * cycle / 2 + 1e-12

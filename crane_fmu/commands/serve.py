@@ -147,7 +147,7 @@ def _serve(args, system):
         master = Master(instances, connections, args.algorithm)
         runner = Runner(master, system.start_time, step, stop_time, system.parameters, lock_step=args.lock_step,
                         period_steps=period_steps, watchdog=watchdog, writable=args.writable, log=_say,
-                        name=system.name)
+                        name=system.name, guard=_rail_guard(args, system, connections))
         if args.print_map:
             from crane_fmu.serve.modbus import markdown, register_map
 
@@ -159,6 +159,20 @@ def _serve(args, system):
     finally:
         for inst in instances.values():
             inst.free()
+
+
+def _rail_guard(args, system, connections):
+    """The guard that keeps the trolley able to stop before its rail ends when a client drives it (an external
+    instance that writes the plant's demand), else None."""
+    from crane_fmu import components, systems
+    from crane_fmu.serve.rail_ends import RailGuard
+
+    plant = components.by_role(systems.kinds(system)).get("plant")
+    crane = systems.plant_of(system)
+    if args.external is None or plant is None or crane is None or crane.crane is None:
+        return None
+    guard = RailGuard(plant, crane.crane.axes, args.external, connections)
+    return guard if guard.axes else None
 
 
 def _run(args, system, runner, endpoints):
@@ -191,6 +205,8 @@ def _serve_until_stopped(args, system, runner, recorder, endpoints):
         values = ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
                            for k, v in runner.external.parameters.items())
         _say(f"note: {args.external} is external: the system's values for it ({values}) are the client's to apply")
+    for line in getattr(runner.guard, "notes", ()):
+        _say(f"note: {line}")
     if args.writable and not any(v.writable and v.role == "parameter" for v in runner.variables):
         _say("note: --writable: no FMU of this system declares a tunable parameter, so none is writable")
     live = _LiveLine(runner) if sys.stderr.isatty() else None

@@ -26,6 +26,12 @@ can save its state, the steps are taken in blocks of at most :data:`BLOCK`, each
 that an FMU refuses (a state that would become non-finite, a rail end passed) is rolled back to it and
 :class:`StepRefused` raised, the run going on from there. :meth:`Runner.stop` (a signal) ends a request of
 many steps at the next block boundary. One request takes at most :data:`MAX_STEPS` steps.
+
+A ``guard`` (see :class:`Runner`) knows what the FMUs do not say: a block that ends in a state from which no
+value the program may write keeps the run going (a state the next steps must leave through a refusal) is refused
+like an FMU's refusal, and in real time the external instance's outputs are held, after a refusal and until the
+program writes again, at the values the guard gives for the state reached, cycle by cycle, so that the run leaves
+the refused state by itself. Without a guard they are held at zero.
 """
 
 import math
@@ -53,6 +59,10 @@ Snapshot.__doc__ = ("What is served at one moment: the simulated ``time``, the `
 STATUS_CODES = {"waiting": 1, "running": 2, "holding": 3, "finished": 4, "failed": 5, "stopped": 6}
 MAX_STEPS = 65535  # the most communication steps one request takes (as Modbus' 16-bit step register holds)
 BLOCK = 1000  # steps between two saved states and two looks for a stop
+
+
+class Refusal(Exception):
+    """A block the runner's guard refused (its line)."""
 
 
 class StepRefused(ValueError):
@@ -94,6 +104,12 @@ class Runner:
     name : str
         The system's name, served with :attr:`run_id` and :attr:`started` so that a client can tell which run
         it drives.
+    guard : object or None
+        Where states can be saved: ``guard.start(master, cycle, ranges)`` once initialised (``cycle`` [s]: the
+        real-time period, or the step in lock-step; ``ranges``: :attr:`ranges`), then ``guard.refuses(before,
+        after)``, the master's values before and after each block: None, or the one line that refuses it (rolled
+        back as an FMU's refusal); ``guard.hold(values)``: ``{external output: value}`` to hold while the run is
+        held after a refusal (real time), re-asked every cycle until the program writes.
 
     Attributes
     ----------
@@ -104,7 +120,8 @@ class Runner:
     """
 
     def __init__(self, master, start_time, step, stop_time=None, parameters=None, observers=(), lock_step=False,
-                 period_steps=1, watchdog=None, writable=False, clock=time.monotonic, sleep=None, log=None, name=""):
+                 period_steps=1, watchdog=None, writable=False, clock=time.monotonic, sleep=None, log=None, name="",
+                 guard=None):
         if not isinstance(period_steps, int) or period_steps < 1:
             raise ValueError(f"steps per period must be a whole number >= 1, got {period_steps!r}")
         self.master, self.start_time, self.step, self.stop_time = master, start_time, step, stop_time
@@ -133,6 +150,8 @@ class Runner:
         self.ranges = {}  # {name: (low, high)} of the writable variables, known once initialised
         self.guarded = all(isinstance(inst, ExternalInstance) or inst.md.coSimulation.canGetAndSetFMUstate
                            for inst in master.instances.values())
+        self.guard = guard if self.guarded else None
+        self._holding = False  # real time: the external outputs held after a refusal, until the program writes
 
     def _served(self, writable):
         served = []
@@ -175,6 +194,7 @@ class Runner:
         if outputs:
             self.external.set_outputs(outputs)
             self._last_write = self.clock()
+            self._holding = False
         with self._pending_lock:
             self._pending.update({n: v for n, v in checked.items() if writable[n].role == "parameter"})
         self._publish(written=checked)  # one table for every protocol: what was written is what is read
@@ -247,6 +267,8 @@ class Runner:
         self.started = time.time()
         self.master.initialize(self.start_time, self.stop_time, self.parameters)
         self.ranges = write_ranges(self.master, self.variables, self.external)
+        if self.guard is not None:
+            self.guard.start(self.master, self.step if self.lock_step else self.period_steps * self.step, self.ranges)
         self._parameter_values = {}
         for v in self.variables:
             if v.role == "parameter":
@@ -315,6 +337,8 @@ class Runner:
     def _cycle(self, n):
         if self.watchdog and self.external:
             self._watch()
+        if self._holding and self.guard is not None:
+            self._hold_outputs()
         try:
             self.advance(n)
         except StepRefused as exc:
@@ -326,18 +350,31 @@ class Runner:
             self._set_status("running in real time", "running")
 
     def _hold_refused(self, exc):
-        """Real time: a cycle an FMU refused was rolled back; the run waits at its time (the cycles go on, time
-        does not) until the values written let it step. The first refusal in a row holds the external instance's
-        outputs at zero and says so; without an external instance no write can change it: the run fails."""
+        """Real time: a cycle an FMU (or the guard) refused was rolled back; the run waits at its time (the cycles
+        go on, time does not) until the values held or written let it step. The first refusal in a row holds the
+        external instance's outputs (at zero, or at the guard's values, cycle by cycle until the program writes)
+        and says so; without an external instance no write can change it: the run fails."""
         if self.external is None:
             raise exc.error from None
         if self._refused is None:
-            self.external.set_outputs(dict.fromkeys(self.external.outputs, 0.0))
-            self.log(f"{exc}; {self.external.name}'s outputs held at zero until a write lets the run step")
-            self._publish(written={f"{self.external.name}.{name}": 0.0 for name in self.external.outputs
-                                   if f"{self.external.name}.{name}" in self._index})
+            held = self._hold_outputs()
+            what = "zero" if not any(held.values()) else ", ".join(f"{k} = {v:.6g}" for k, v in held.items())
+            until = "a write lets the run step" if self.guard is None else "the next write"
+            self.log(f"{exc}; {self.external.name}'s outputs held at {what} until {until}")
+            self._holding = True
         self._refused = exc
         self._set_status(f"holding: {exc}", "holding")
+
+    def _hold_outputs(self):
+        """Hold the external instance's outputs at zero, or at the guard's values for the state now; served as
+        written. Returns them."""
+        held = dict.fromkeys(self.external.outputs, 0.0)
+        if self.guard is not None:
+            held.update(self.guard.hold(self.master.values))
+        self.external.set_outputs(held)
+        self._publish(written={f"{self.external.name}.{name}": value for name, value in held.items()
+                               if f"{self.external.name}.{name}" in self._index})
+        return held
 
     def _watch(self):
         now = self.clock()
@@ -382,9 +419,16 @@ class Runner:
         saved = {name: inst.get_state() for name, inst in self.master.instances.items()}
         held = ArrayRecorder()  # the block's rows, for the observers once it is taken
         held.start(self.master.output_names)
+        before = tuple(self.master.values)
         try:
             self.master.advance(self.start_time, self.step, k, k + n, [held])
-        except FmiError as exc:
+            reason = None
+            if self.guard is not None:  # the values at the block's end: its last step's outputs
+                self.master.algorithm.exchange(self.start_time + (k + n) * self.step)
+                reason = self.guard.refuses(before, self.master.values)
+            if reason is not None:
+                raise Refusal(reason)
+        except (FmiError, Refusal) as exc:
             for name, inst in self.master.instances.items():
                 inst.set_state(saved[name])
                 inst.time = self.time()

@@ -93,7 +93,7 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Integer v[]) {
     long long small[16], *wide = n <= 16 ? small : malloc(n * sizeof *wide);
     if (!wide) return c ? refuse(c, "fmi2GetInteger", "out of memory") : fmi2Error;
-    fmi2Status status = get_integers(c, "fmi2GetInteger", vr, n, wide);
+    fmi2Status status = get_integers(c, "fmi2GetInteger", vr, n, v ? wide : NULL); /* NULL values: refused */
     if (status <= fmi2Warning && v)
         for (size_t i = 0; i < n; i++) v[i] = (fmi2Integer)wide[i];
     if (wide != small) free(wide);

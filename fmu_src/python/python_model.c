@@ -44,6 +44,7 @@ typedef struct {
     PyObject *args;   /* (tuple of the slave's value references,) */
     PyObject *reader; /* slave.real_reader(refs), once asked for */
     PyObject *writer; /* slave.real_writer(refs), once asked for */
+    PyObject *fixed;  /* writer.fixed once asked for: the line refusing the fixed parameter among refs, or None */
 } VrArgs;
 
 /* One instance's model: the slave and what is cached of it. Holds Python objects: FMU states are the slave's. */
@@ -158,8 +159,9 @@ static VrArgs *vr_entry(PythonModel *p, const unsigned int vr[], size_t n) {
     Py_XDECREF(e->args);
     Py_XDECREF(e->reader);
     Py_XDECREF(e->writer);
+    Py_XDECREF(e->fixed);
     free(e->vr);
-    *e = (VrArgs){n, copy, args, NULL, NULL};
+    *e = (VrArgs){n, copy, args, NULL, NULL, NULL};
     return e;
 }
 
@@ -190,6 +192,7 @@ static void forget_methods(PythonModel *p) {
     for (int i = 0; i < VR_CACHE; i++) {
         Py_CLEAR(p->vrs[i].reader);
         Py_CLEAR(p->vrs[i].writer);
+        Py_CLEAR(p->vrs[i].fixed);
     }
 }
 
@@ -345,6 +348,18 @@ static ModelStatus python_set_reals(const ModelType *type, void *m, const unsign
     }
     VrArgs *e = values ? vr_entry(p, vr, n) : NULL;
     PyObject *writer = e ? prepared(p, &e->writer, WRITER, e->args) : NULL;
+    if (writer && !e->fixed) { /* runtime.real_writer names a parameter among refs: component.c's store_reals */
+        e->fixed = PyObject_GetAttrString(writer, "fixed");
+        if (!e->fixed) PyErr_Clear(), e->fixed = Py_NewRef(Py_None);
+    }
+    if (writer && !fixed_allowed && e->fixed != Py_None) {
+        PyObject *bytes = PyUnicode_AsUTF8String(e->fixed);
+        ModelStatus status = bytes ? report(r, MODEL_ERROR, "%s", PyBytes_AsString(bytes)) : finish(p, 0, r);
+        Py_XDECREF(bytes);
+        Py_DECREF(values);
+        PyGILState_Release(gil);
+        return status;
+    }
     PyObject *result = writer ? PyObject_CallFunctionObjArgs(writer, values, NULL) : NULL;
     ModelStatus status = finish(p, result != NULL, r);
     Py_XDECREF(values);
@@ -385,6 +400,8 @@ static ModelStatus python_get_strings(const ModelType *type, void *m, const unsi
 
 static ModelStatus python_set_strings(const ModelType *type, void *m, const unsigned vr[], size_t n,
                                       const char *const v[], int fixed_allowed, const Reporter *r) {
+    if (!fixed_allowed) /* a String is a parameter (runtime.py: inputs are Real), and every parameter is fixed */
+        return report(r, MODEL_ERROR, "a String is a fixed parameter: it can be set only before initialisation ends");
     PythonModel *p = m;
     PyGILState_STATE gil = PyGILState_Ensure();
     PyObject *values = PyList_New((Py_ssize_t)n);

@@ -211,6 +211,10 @@ class SlaveCalls:
             def write(values):
                 for set_, value in zip(setters, values):
                     set_(value)
+            parameter = next(self.vars[vr].name for vr in vrs if vr not in self._input_index)
+            # the binary refuses the write once initialisation has ended with this line (component.c's store_reals)
+            write.fixed = (f"{parameter} is a fixed parameter of {self.runtime.component.model_identifier}: it can be "
+                           "set only before initialisation ends")
             return write
         positions = [self._input_index[vr] for vr in vrs]
         return functools.partial(self.runtime.set_inputs,

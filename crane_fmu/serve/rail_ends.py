@@ -1,0 +1,98 @@
+"""A served crane's trolley kept where its drive can still stop it before a rail end (``serve``'s guard).
+
+The plant refuses a step in which the trolley would pass a rail end (``plant_limits.past_rail_end``). A client
+writes the drive's demand within its limit ``<demand>_max``; that alone does not keep a run going: a trolley
+driven towards a rail end until it is closer than its braking distance reaches it whatever is written next, and
+every step after that is refused: the run holds for ever. This guard, given to the runner
+(:class:`~crane_fmu.cosim.realtime.Runner`'s ``guard``), refuses the block of steps that ends where the trolley
+could no longer stop before a rail end (rolled back as the plant's refusals are), and while the run is held after
+a refusal it brakes the trolley to rest at its drive limit, cycle by cycle, until the client writes again.
+
+Per guarded axis (a crane role :class:`~crane_fmu.model.component.Axis` whose demand the external instance
+writes, with a finite rail end and no drive lag ``tau``): the demand's limit ``U`` is the smaller of the plant's
+``<demand>_max`` and the written range (:mod:`crane_fmu.cosim.write_ranges`); the trolley's acceleration is the
+demand held over each cycle of length ``T``, so that braking at ``-U`` until the speed is within ``U*T`` and then
+at ``-v/T`` (rest at the cycle's end) travels :func:`braking_distance`. A block is refused when it ends with that
+distance reaching past ``rail end -+ MARGIN`` and farther than it began (a run started within its braking
+distance may still brake).
+"""
+
+import math
+
+MARGIN = 1e-6  # m: the rest point kept this far inside the rail end (the plant refuses x > x_max by any amount)
+SLACK = 1e-9  # m: a block ends "farther" than it began by more than this (the braking hold's own rounding)
+
+
+def braking_distance(speed, limit, cycle):
+    """The distance [m] a trolley at ``speed`` [m/s] travels braked as :meth:`RailGuard.hold` brakes it: ``-U``
+    (``limit``, m/s2) for each whole cycle of ``cycle`` [s] while ``|v| > U*T``, then ``-v/T`` for one cycle.
+
+    With ``n`` whole cycles and ``r = |v| - n U T`` left, it is ``n |v| T - U T^2 n^2 / 2 + r T / 2`` (each cycle
+    ``v_i T - U T^2 / 2`` from ``v_i = |v| - i U T``, the last ``r T / 2``)."""
+    v, step = abs(speed), limit * cycle
+    n = max(0, math.ceil(v / step) - 1) if step > 0 else 0
+    r = v - n * step
+    return n * v * cycle - limit * cycle * cycle * n * n / 2 + r * cycle / 2
+
+
+class RailGuard:
+    """The runner's guard for the trolley's axes of ``plant`` (instance name) whose demand the external instance
+    ``external`` (name) writes; ``axes`` are the plant's crane role axes, ``connections`` the system's."""
+
+    def __init__(self, plant, axes, external, connections):
+        self.plant, self.external = plant, external
+        fed = {c.input: c.output for c in connections if c.source == external and c.target == plant}
+        self.axes = [(a, fed[a.demand]) for a in axes if a.demand in fed]
+        self.guarded, self.notes = [], []
+
+    def start(self, master, cycle, ranges):
+        """Read the limits in effect once initialised; ``cycle`` [s] is the length over which a demand is held."""
+        plant = master.instances[self.plant]
+        names = list(master.output_names)
+        self.cycle = cycle
+        for axis, output in self.axes:
+            low, high = (float(plant.get(f"{axis.position}_{end}")) for end in ("min", "max"))
+            lag = next((f"tau{suffix}" for suffix in ("", f"_{axis.position}") if f"tau{suffix}" in plant.variables),
+                       None)
+            written = ranges.get(f"{self.external}.{output}", (-math.inf, math.inf))
+            limit = min(abs(float(plant.get(f"{axis.demand}_max"))), -written[0], written[1])
+            if lag is not None and float(plant.get(lag)) > 0:
+                self.notes.append(f"{self.plant}.{lag} > 0: the rail ends along {axis.position} are not guarded "
+                                  "(the braking distance of a lagging drive depends on a state that is not served)")
+                continue
+            if not (abs(low) < 1e60 or abs(high) < 1e60) or not 0 < limit < math.inf:
+                continue
+            self.guarded.append((axis, output, names.index(f"{self.plant}.{axis.position}"),
+                                 names.index(f"{self.plant}.{axis.velocity}"), low, high, limit))
+
+    def _margins(self, values):
+        """Per guarded axis: ``(room, name of the rail end, its position)``: how far inside ``end -+ MARGIN`` the
+        trolley comes to rest when braked now (negative: past it)."""
+        found = []
+        for axis, _, at, speed, low, high, limit in self.guarded:
+            x, v = values[at], values[speed]
+            d = braking_distance(v, limit, self.cycle)
+            if v >= 0:
+                found.append((high - MARGIN - (x + d), f"{axis.position}_max", high))
+            else:
+                found.append((x - d - (low + MARGIN), f"{axis.position}_min", low))
+        return found
+
+    def refuses(self, before, after):
+        """The line refusing a block that ends where the trolley cannot stop before a rail end (and farther than
+        it began), else None."""
+        for (room, end, at), (room_before, _, _), (axis, _, i, j, _, _, limit) in zip(
+                self._margins(after), self._margins(before), self.guarded):
+            if room < 0 and room < room_before - SLACK:
+                return (f"the trolley at {axis.position} = {after[i]!r} m moving at {after[j]!r} m/s could not stop "
+                        f"before the rail end {end} = {at!r} m with its drive's {limit:g} m/s2 "
+                        f"({-room:.3g} m past it)")
+        return None
+
+    def hold(self, values):
+        """``{external output: demand}`` braking each guarded axis to rest (see :func:`braking_distance`)."""
+        held = {}
+        for _, output, _, speed, _, _, limit in self.guarded:
+            v = values[speed]
+            held[output] = -math.copysign(min(limit, abs(v) / self.cycle), v) if v else 0.0
+        return held
