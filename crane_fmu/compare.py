@@ -38,7 +38,7 @@ from crane_fmu.analysis import scenarios as scenario_registry
 from crane_fmu.analysis.board_drawing import BoardDrawer, first_scenarios
 from crane_fmu.analysis.floor import stored_scenario_floors
 from crane_fmu.analysis.scenarios import Contender
-from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch, worker_pool
+from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch, worker_context, worker_pool
 from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
 from crane_fmu.cosim.suggest import did_you_mean
 from crane_fmu.cosim.system import read_fmu, unfed_inputs
@@ -336,6 +336,9 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     if isinstance(cases, bool) or not isinstance(cases, int) or cases < 1:
         raise ValueError(f"--cases must be a whole number >= 1, got {cases!r}")
     out_dir = Path(out_dir) / "quick" if quick else Path(out_dir)
+    # the fork server of the drawing pool and the local cluster's workers imports their modules (about 2 s) now,
+    # while this process plans the board
+    worker_context()
     named = {str(c) for c in chosen}
     chosen = contenders(chosen, fmu_dir, only)
     # a built-in controller nobody named is left out where no chosen scenario applies to it (S10: the 3-D ones)

@@ -185,13 +185,19 @@ def score_chunk(item, blobs):
     if kind == "case":
         yield from (run_score_case(case, blobs) for case in cases)
         return
-    figures = measure()
+    figures, last, kept = measure(), (None, None), {}
     for case in cases:
         start = time.perf_counter()
-        runs = runner(local_fmus({name: (digest, blobs[digest]) for name, digest in case["fmus"].items()}),
-                      case["connections"], case["master"])
-        kept = kept_outputs(runs.output_names, case["keep_signals"], measured_outputs(case["scenario"]))
-        columns, error = run(runs, case["stop_time"], case["step"], case["parameters"], kept)
+        # the runner of a case of the system of the case before (a chunk of items holds one system) is that case's,
+        # not looked up again; the outputs kept of each system's scenario are looked up once a chunk
+        system = repr([case[k] for k in ("fmus", "connections", "master")])
+        if system != last[0]:
+            last = system, runner(local_fmus({name: (digest, blobs[digest]) for name, digest in
+                                              case["fmus"].items()}), case["connections"], case["master"])
+        runs, which = last[1], (system, case["keep_signals"], case["scenario"])
+        if which not in kept:
+            kept[which] = kept_outputs(runs.output_names, case["keep_signals"], measured_outputs(case["scenario"]))
+        columns, error = run(runs, case["stop_time"], case["step"], case["parameters"], kept[which])
         row = score_row(case, columns, error, figures)
         row["duration_s"] = time.perf_counter() - start
         yield row
