@@ -489,7 +489,7 @@ def test_data_beyond_the_cranes_equations_are_told_from_a_crane(noise_deg, unexp
     unexplained (and give the model); with 0.1 deg (deg/s) of noise on the angles and rates the data leave more
     than 1e-3 of their squares unexplained (the envelope's sign that the states are not the crane's), no model is
     taken, and the MPC does not hand over before its plan is over."""
-    config, rows = _envelope_loop({"x_d": 2.0}, 3.0, noise=math.radians(noise_deg))
+    config, rows = _envelope_loop({"x_d": 2.0}, 5.0, noise=math.radians(noise_deg))  # the cautious plan ends at 3.6 s
     k = next(k for k, (_, _, _, state) in enumerate(rows)
              if state[mpc.HEADER.samples] == config.samples - 1 and k % config.every == 0)
     _, model, found = mpc.identify(config, rows[k][3], rows[k][1][:6])
@@ -498,3 +498,27 @@ def test_data_beyond_the_cranes_equations_are_told_from_a_crane(noise_deg, unexp
         plan_end = (rows[k][3][mpc.HEADER.plan_start] + rows[k][3][mpc.HEADER.plan_steps]) * config.interval
         handed = next(t for t, _, _, state in rows if state[mpc.HEADER.handed])
         assert plan_end < handed
+
+
+@pytest.mark.parametrize("noise_deg", [0.0, 0.1])
+def test_unexplained_data_make_every_plan_cautious_from_the_third_interval(noise_deg):
+    """Behind noisy states (0.1 deg, deg/s on the angles and rates: the data beyond the crane's equations, as an
+    estimator's of another crane are) the MPC turns cautious at the solve of its SUSPECT_AFTER-th interval (0.15 s)
+    and plans at once again: the least-effort move of ceil(CAUTIOUS_STRETCH n) intervals, ``n`` the shortest move's
+    from the same state, no plan for a deviation counted. The plant's own states leave it as it was: never cautious,
+    the shortest move (55 intervals) kept."""
+    config, rows = _envelope_loop({"x_d": 2.0}, 1.0, noise=math.radians(noise_deg))
+    cautious = [k for k, (_, _, _, state) in enumerate(rows) if state[mpc.HEADER.cautious]]
+    if not noise_deg:
+        assert not cautious and all(state[mpc.HEADER.plan_steps] == 55.0 for _, _, _, state in rows[1:])
+        return
+    k = cautious[0]  # the state after the solve at k - 1: that solve turned it, before the model's window was full
+    at = round(rows[k - 1][0] / config.interval)
+    assert mpc.SUSPECT_AFTER <= at < config.samples and rows[k - 1][0] == pytest.approx(at * config.interval)
+    before, after = rows[k - 1][3], rows[k][3]
+    assert before[mpc.HEADER.plan_steps] == 55.0 and after[mpc.HEADER.plan_start] == at
+    assert after[mpc.HEADER.replans] == 0.0
+    shrink = 1.0 - config.margin
+    shortest, _ = mpc.plan_move(config.designs[0], rows[k - 1][1][:6], (2.0, 0, 0, 0, 0, 0), config.u_max * shrink,
+                                config.v_max * shrink, config.interval, int(mpc.LONGEST_PLAN / config.interval))
+    assert after[mpc.HEADER.plan_steps] == math.ceil(len(shortest) * mpc.CAUTIOUS_STRETCH) > len(shortest)
