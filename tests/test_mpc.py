@@ -476,6 +476,19 @@ def test_a_swing_past_the_plans_largest_hands_over_to_the_lqr():
     assert math.degrees(rows[999][3][mpc.HEADER.bound]) == pytest.approx(15.8, abs=0.1)
 
 
+@pytest.mark.parametrize("kick_deg", [-3.0, -5.0])
+def test_a_swing_past_the_largest_swing_mid_move_is_planned_for_not_dropped(kick_deg):
+    """The hook knocked by 3 or 5 deg at 1.0 s, mid-move, the way it swings: the swing passes LARGEST_SWING
+    (17.5 deg) but not the plan's largest by SWING_MARGIN. The held plan is not dropped (the tracking QP alone with
+    the trolley free had swung S10's case #57 to 26 deg): a plan for the deviation is made at once, and a plan is
+    held to the end of the run, no handover."""
+    config, rows = _envelope_loop({"x_d": 2.0}, 3.0, kick=(1.0, math.radians(kick_deg)))
+    after = [state for t, _, _, state in rows if t > 1.0]
+    assert math.degrees(after[0][mpc.HEADER.bound]) > math.degrees(mpc.LARGEST_SWING)  # planned from past it
+    assert after[0][mpc.HEADER.plan_start] == 20 and after[0][mpc.HEADER.replans] == 1.0
+    assert all(state[mpc.HEADER.plan_steps] > 0 and not state[mpc.HEADER.handed] for state in after)
+
+
 def test_a_plan_without_surprises_is_kept_to_its_end():
     """Without a knock the same move keeps its plan to the end: no handover mid-move (the envelope's bounds are not
     under the nominal move)."""

@@ -65,9 +65,8 @@ RETRY_GAP = 6.0  # s: ... after no move within LONGEST_PLAN was found (each atte
 LARGEST_SWING = math.radians(17.5)  # rad: no move is planned from a larger swing (as a modal amplitude, deviation)
 PLAN_BELOW = math.radians(16.0)  # rad: ... and, once none is held after the first solve, none until below this
 # 16 deg: above S1's 10 deg start (15.6 deg), and the hard hits' times monotone in the start angle (issue 51,
-# 30-70 deg; not at 17.5 deg): chosen by simulating that grid. A hysteresis: plans are dropped above
-# LARGEST_SWING as before (S9's runs behind the estimator are those of 17.5 deg; at 16 deg alone one more case
-# of S9 is worse than the LQR's)
+# 30-70 deg; not at 17.5 deg): chosen by simulating that grid. A hysteresis: no plan is made above LARGEST_SWING
+# (a plan held mid-move is no longer dropped there: see solve)
 WELL_POSED = 1e-2  # ... and gives a model when no pivot of its normal equations falls below this share
 MISFIT = 1e-5  # ... that explains the data to this share of their squares (0.3 % RMS): clean measurements
 PLAUSIBLE = 2.0  # ... within this factor of the configured cable lengths
@@ -107,11 +106,12 @@ Config.__doc__ = ("The designs (one, or one per scheduled cable length), the tar
 # (_sample), the integrals since the last solve (integrate), the normal equations (n11 n12 n13 n22 n23 n33, z,
 # the data's squares yy) and the intervals in them; the safety envelope's (see solve): whether the LQR has taken
 # over (1: for good), the plans made for a deviation, the plan's largest swing (rad, as an amplitude), and whether the
-# plans are cautious (1: the data were once unexplained, CAUTIOUS_STRETCH).
+# plans are cautious (1: the data were once unexplained, CAUTIOUS_STRETCH), and whether a swing too large to plan from
+# was met with no plan held (1: a hard hit's, its plans dropped past LARGEST_SWING as before).
 HEADER = namedtuple("Header", "count u iterations warned plan_steps plan_start plan_after plan_l1 l1 l2 "
                               "m2 w1 w2 cos_d sin_d cos1 sin1 cos2 sin2 d1 d2 a1 a2 c1 c2 s1 s2 "
                               "n11 n12 n13 n22 n23 n33 z1 z2 z3 yy samples handed replans bound "
-                              "cautious")(*range(42))
+                              "cautious hit")(*range(43))
 
 
 def predict_rows(ad, bd, steps):
@@ -532,9 +532,16 @@ def solve(config, state, measured, l1_now, forces=(0.0, 0.0)):
     if warned_now:
         cautious, replan = 1.0, True
     to_trolley, to_rest = deviation(d, measured, target)
+    over = step >= len(plan_u)
     # too far from rest for the linear model's plan; with none held after the first solve (the large swing's
-    # phase), planned again only below PLAN_BELOW
-    large = to_rest > (PLAN_BELOW if count and not plan_u else LARGEST_SWING)
+    # phase), planned again only below PLAN_BELOW. A plan held mid-move is not dropped for it: its own swing comes
+    # near LARGEST_SWING (S2's 15.8 deg), a gust or a wrong model's few degrees more are a deviation to plan again
+    # for, and beyond its largest by SWING_MARGIN the LQR takes over (dropped, the tracking QP alone with the
+    # trolley free swung S10's case #57 to 26 deg). After a hard hit's large swing (hit) its plans are dropped there
+    # as before: the hard hits' times stay monotone in the start angle
+    hit = state[HEADER.hit]
+    large = not (count and plan_u and not over and not hit) and \
+        to_rest > (PLAN_BELOW if count and not plan_u else LARGEST_SWING)
     # the safety envelope: the LQR takes over, for good, when the plan is over and the identification's data are
     # beyond the crane's equations (mid-move the LQR's kick would swing more than the plan's end), the plans for a
     # deviation run out, the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on the target
@@ -543,7 +550,6 @@ def solve(config, state, measured, l1_now, forces=(0.0, 0.0)):
     if replan and count and model is None and not warned_now and not large and plan_u and \
             (trolley > c.replan_x or swing > c.replan_angle):
         replans += 1.0
-    over = step >= len(plan_u)
     at_rest = over and to_trolley <= c.replan_x and to_rest <= c.replan_angle
     swung = bool(plan_u) and to_rest > state[HEADER.bound] + SWING_MARGIN  # past the plan's largest (a plan made)
     if count and ((unexplained and over) or replans > MOST_REPLANS or swung or at_rest):
@@ -553,7 +559,7 @@ def solve(config, state, measured, l1_now, forces=(0.0, 0.0)):
         replan = bool(plan_u) or model is not None  # the last solve's warm start holds unless a plan or model changed
         plan_u, plan_s = (), ()
         plan_start, step, plan_after = at, 0, at
-        bound = to_rest
+        bound, hit = to_rest, 1.0
     elif replan:
         shrink = 1.0 - c.margin
         plan_u, plan_s = plan_move(d, measured, target, c.u_max * shrink, c.v_max * shrink, c.interval,
@@ -610,7 +616,7 @@ def solve(config, state, measured, l1_now, forces=(0.0, 0.0)):
         state[len(HEADER) + 3 * n:]
     header = (u, float(solution.iterations), warned, float(len(plan_u)), float(plan_start), float(plan_after),
               d.l1 if replan else state[HEADER.plan_l1], *known, *_sample(measured), *(0.0,) * 8, *sums, 0.0,
-              replans, bound, cautious)
+              replans, bound, cautious, hit)
     return u, header + tuple(solution.x) + tuple(new_codes) + plan_part, messages
 
 

@@ -588,9 +588,12 @@ static const char *solve(Config *c, const double *state, const double measured[N
     if (warned_now) cautious = 1.0, replan = 1;
     double *new_plan_u = next + plan_at, to_trolley, to_rest;
     deviation(d, measured, target, &to_trolley, &to_rest);
+    int over = step >= n_plan;
     /* too far from rest for the linear model's plan; with none held after the first solve (the large swing's
-       phase), planned again only below PLAN_BELOW */
-    int large = to_rest > (count != 0 && n_plan == 0 ? PLAN_BELOW : LARGEST_SWING);
+       phase), planned again only below PLAN_BELOW; a plan held mid-move is not dropped for it (mpc.solve) */
+    double hit = state[H_HIT]; /* after a hard hit's large swing, plans dropped past LARGEST_SWING as before */
+    int large = !(count != 0 && n_plan > 0 && !over && hit == 0.0) &&
+                to_rest > (count != 0 && n_plan == 0 ? PLAN_BELOW : LARGEST_SWING);
     /* the safety envelope: the LQR takes over, for good, when the plan is over and the identification's data are
        beyond the crane's equations (mid-move the LQR's kick would swing more than the plan's end), the plans for a
        deviation run out, the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on the
@@ -600,7 +603,7 @@ static const char *solve(Config *c, const double *state, const double measured[N
     if (replan && count != 0 && !found_model && !warned_now && !large && n_plan > 0 &&
         (trolley > c->replan_x || swing > c->replan_angle))
         replans += 1.0;
-    int over = step >= n_plan, swung = n_plan > 0 && to_rest > bound + SWING_MARGIN; /* past the plan's largest */
+    int swung = n_plan > 0 && to_rest > bound + SWING_MARGIN; /* past the plan's largest */
     int at_rest = over && to_trolley <= c->replan_x && to_rest <= c->replan_angle;
     if (count != 0 && ((unexplained && over) || replans > MOST_REPLANS || swung || at_rest))
         return handover(c, state, measured, l1_now, forces, replans, cautious, next);
@@ -608,7 +611,7 @@ static const char *solve(Config *c, const double *state, const double measured[N
         replan = n_plan > 0 || found_model; /* the last solve's warm start holds unless a plan or model changed */
         n_plan = 0, n_states = 0, plan_u = plan_s = new_plan_u;
         plan_start = at, step = 0, plan_after = at;
-        bound = to_rest;
+        bound = to_rest, hit = 1.0;
     } else if (replan) {
         double shrink = 1.0 - c->margin, far = 0.0;
         error = plan_move(d, measured, target, c->u_max * shrink, c->v_max * shrink, c->interval,
@@ -675,6 +678,7 @@ static const char *solve(Config *c, const double *state, const double measured[N
     sample(measured, header + H_W1);
     memcpy(header + H_N11, sums, sizeof sums);
     header[H_HANDED] = 0.0, header[H_REPLANS] = replans, header[H_BOUND] = bound, header[H_CAUTIOUS] = cautious;
+    header[H_HIT] = hit;
     memcpy(next, header, sizeof header);
     return NULL;
 }
