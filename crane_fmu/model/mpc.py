@@ -620,14 +620,15 @@ def solve(config, state, measured, l1_now, forces=(0.0, 0.0)):
     return u, header + tuple(solution.x) + tuple(new_codes) + plan_part, messages
 
 
-def handover(config, state, measured, l1_now, replans, forces, cautious):
+def handover(config, state, measured, l1_now, replans, forces=(0.0, 0.0), cautious=None):
     """The solve that hands over to the LQR: its input (:func:`.lqr.control`, the forces given), the state kept but
-    marked (and whether it had turned cautious)."""
+    marked (and whether it had turned cautious; None: as the state holds)."""
     u = lqr.control(config.lqr, measured, l1=l1_now, forces=forces)
     header = list(state[1:len(HEADER)])
     header[HEADER.u - 1], header[HEADER.iterations - 1] = u, 0.0
     header[HEADER.handed - 1], header[HEADER.replans - 1] = 1.0, replans
-    header[HEADER.cautious - 1] = cautious
+    if cautious is not None:
+        header[HEADER.cautious - 1] = cautious
     return u, tuple(header) + state[len(HEADER):], ()
 
 
