@@ -476,6 +476,19 @@ def test_a_swing_past_the_plans_largest_hands_over_to_the_lqr():
     assert math.degrees(rows[999][3][mpc.HEADER.bound]) == pytest.approx(15.8, abs=0.1)
 
 
+@pytest.mark.parametrize("kick_deg", [-3.0, -5.0])
+def test_a_swing_past_the_largest_swing_mid_move_is_planned_for_not_dropped(kick_deg):
+    """The hook knocked by 3 or 5 deg at 1.0 s, mid-move, the way it swings: the swing passes LARGEST_SWING
+    (17.5 deg) but not the plan's largest by SWING_MARGIN. The held plan is not dropped (the tracking QP alone with
+    the trolley free had swung S10's case #57 to 26 deg): a plan for the deviation is made at once, and a plan is
+    held to the end of the run, no handover."""
+    config, rows = _envelope_loop({"x_d": 2.0}, 3.0, kick=(1.0, math.radians(kick_deg)))
+    after = [state for t, _, _, state in rows if t > 1.0]
+    assert math.degrees(after[0][mpc.HEADER.bound]) > math.degrees(mpc.LARGEST_SWING)  # planned from past it
+    assert after[0][mpc.HEADER.plan_start] == 20 and after[0][mpc.HEADER.replans] == 1.0
+    assert all(state[mpc.HEADER.plan_steps] > 0 and not state[mpc.HEADER.handed] for state in after)
+
+
 def test_a_plan_without_surprises_is_kept_to_its_end():
     """Without a knock the same move keeps its plan to the end: no handover mid-move (the envelope's bounds are not
     under the nominal move)."""
@@ -489,7 +502,7 @@ def test_data_beyond_the_cranes_equations_are_told_from_a_crane(noise_deg, unexp
     unexplained (and give the model); with 0.1 deg (deg/s) of noise on the angles and rates the data leave more
     than 1e-3 of their squares unexplained (the envelope's sign that the states are not the crane's), no model is
     taken, and the MPC does not hand over before its plan is over."""
-    config, rows = _envelope_loop({"x_d": 2.0}, 3.0, noise=math.radians(noise_deg))
+    config, rows = _envelope_loop({"x_d": 2.0}, 5.0, noise=math.radians(noise_deg))  # the cautious plan ends at 3.6 s
     k = next(k for k, (_, _, _, state) in enumerate(rows)
              if state[mpc.HEADER.samples] == config.samples - 1 and k % config.every == 0)
     _, model, found = mpc.identify(config, rows[k][3], rows[k][1][:6])
@@ -524,3 +537,27 @@ def test_the_spatial_scenarios_axis_floors_are_reachable_and_one_grid_step_less_
     assert abs(steps * floor.GRID - seconds) < 1e-9
     assert _reaches(a, b, floor.GRID, steps, (0,) * 6, (distance, 0, 0, 0, 0, 0), **drive)
     assert not _reaches(a, b, floor.GRID, steps - 1, (0,) * 6, (distance, 0, 0, 0, 0, 0), **drive)
+
+
+@pytest.mark.parametrize("noise_deg", [0.0, 0.1])
+def test_unexplained_data_make_every_plan_cautious_from_the_third_interval(noise_deg):
+    """Behind noisy states (0.1 deg, deg/s on the angles and rates: the data beyond the crane's equations, as an
+    estimator's of another crane are) the MPC turns cautious at the solve of its SUSPECT_AFTER-th interval (0.15 s)
+    and plans at once again: the least-effort move of ceil(CAUTIOUS_STRETCH n) intervals, ``n`` the shortest move's
+    from the same state, no plan for a deviation counted. The plant's own states leave it as it was: never cautious,
+    the shortest move (55 intervals) kept."""
+    config, rows = _envelope_loop({"x_d": 2.0}, 1.0, noise=math.radians(noise_deg))
+    cautious = [k for k, (_, _, _, state) in enumerate(rows) if state[mpc.HEADER.cautious]]
+    if not noise_deg:
+        assert not cautious and all(state[mpc.HEADER.plan_steps] == 55.0 for _, _, _, state in rows[1:])
+        return
+    k = cautious[0]  # the state after the solve at k - 1: that solve turned it, before the model's window was full
+    at = round(rows[k - 1][0] / config.interval)
+    assert mpc.SUSPECT_AFTER <= at < config.samples and rows[k - 1][0] == pytest.approx(at * config.interval)
+    before, after = rows[k - 1][3], rows[k][3]
+    assert before[mpc.HEADER.plan_steps] == 55.0 and after[mpc.HEADER.plan_start] == at
+    assert after[mpc.HEADER.replans] == 0.0
+    shrink = 1.0 - config.margin
+    shortest, _ = mpc.plan_move(config.designs[0], rows[k - 1][1][:6], (2.0, 0, 0, 0, 0, 0), config.u_max * shrink,
+                                config.v_max * shrink, config.interval, int(mpc.LONGEST_PLAN / config.interval))
+    assert after[mpc.HEADER.plan_steps] == math.ceil(len(shortest) * mpc.CAUTIOUS_STRETCH) > len(shortest)

@@ -399,7 +399,7 @@ def test_told_the_forces_the_native_mpc_gives_the_python_mpcs_bits(native, offse
     cc = MPC.check({**values, "h": 1e-3})
     ps, cs, ours, theirs, handed = pc.state0, mpc.initial_state(cc), [], [], None
     pushes = (0.0, 0.0, 0.5, 2.0)  # u, F_hoist, F1 (hook), F2 (payload)
-    for k in range(2500):
+    for k in range(3000):  # the forces leave the data unexplained: cautious plans, handed over at 2.8 s (off)
         out = plant_model.COMPONENT.output(pc, ps, pushes)
         forces = (2.0, 0.5) if k >= 300 else (0.0, 0.0)
         inputs = tuple(out[:6]) + (0.0,) + forces
@@ -415,4 +415,47 @@ def test_told_the_forces_the_native_mpc_gives_the_python_mpcs_bits(native, offse
         ps = plant_model.update(pc, ps, (theirs[-1][0], 0.0, 0.5, 2.0), k * 1e-3, 1e-3)
     close(fmu)
     compare_to_python(ours, theirs)
-    assert handed is not None and 300 < handed < 2400  # the QP told the forces, then the LQR told them
+    assert handed is not None and 300 < handed < 2900  # the QP told the forces, then the LQR told them
+
+
+def _s9_case_residual(native, controller, law=None, case="#54"):
+    """The residual swing [deg] of one of S9's cases (only x and theta1 measured, a StateEstimator of the configured
+    crane in front of the controller, the plant another) run on the native FMUs, the controller's FMU or ``law``."""
+    from crane_fmu.analysis import metrics, scenarios
+    from crane_fmu.compare import contenders
+    from crane_fmu.cosim import ArrayRecorder, simulate
+
+    run = next(r for r in scenarios.systems_for(contenders([controller], native[2], only=True)[0], "S9")
+               if r.label.startswith(case + " "))
+    fmus, connections = systems.resolve(run.system, native[2])
+    if law:
+        fmus["controller"] = law
+    recorder = ArrayRecorder()
+    simulate(fmus, connections, run.stop_time, run.step, "gauss-seidel",
+             parameters=systems.prepare(run.system, run.step, run.stop_time, check=False).parameters,
+             recorder=recorder)
+    s = metrics.crane_signals(recorder.columns())
+    return metrics.move_metrics(s["time"], s["position"], s["velocity"], list(s["swing"].values()), s["demand"],
+                                run.x_d, run.residual_from)["residual_deg"]
+
+
+@pytest.mark.parametrize("form", ["native", "python"])
+def test_behind_an_estimator_of_another_crane_the_mpc_leaves_no_more_swing_than_the_lqr(native, tmp_path, form,
+                                                                                        monkeypatch):
+    """S9's case #54 (plant l1 = 0.905 m, l2 = 0.548 m, m1 = 3.56 kg, m2 = 3.79 kg; the estimator and the MPC told
+    the configured crane): the MPC's shortest move left the payload swinging 2.04 deg against the LQR's 0.82 deg
+    (the board before the cautious plan). The estimate's misfit turns the MPC cautious within 0.3 s: its residual is
+    within the envelope's 0.05 deg of the LQR's (issue 51, item 2). ``python``: the Python MPC in this process, and
+    without the cautious plan (CAUTIOUS_STRETCH 1) the case fails the envelope: the rule is what acts."""
+    from crane_fmu.analysis.envelope import RESIDUAL_MARGIN
+
+    law = None
+    if form == "python":
+        law = tmp_path / "mpc_law.py"
+        law.write_text("from crane_fmu.model.mpc import COMPONENT  # noqa: F401\n")
+        law = f"{law}:COMPONENT"
+    lqr = _s9_case_residual(native, "LqrController")
+    assert _s9_case_residual(native, "MpcController", law) <= lqr + RESIDUAL_MARGIN
+    if form == "python":
+        monkeypatch.setattr(mpc, "CAUTIOUS_STRETCH", 1.0)
+        assert _s9_case_residual(native, "MpcController", law) > lqr + RESIDUAL_MARGIN

@@ -65,9 +65,8 @@ RETRY_GAP = 6.0  # s: ... after no move within LONGEST_PLAN was found (each atte
 LARGEST_SWING = math.radians(17.5)  # rad: no move is planned from a larger swing (as a modal amplitude, deviation)
 PLAN_BELOW = math.radians(16.0)  # rad: ... and, once none is held after the first solve, none until below this
 # 16 deg: above S1's 10 deg start (15.6 deg), and the hard hits' times monotone in the start angle (issue 51,
-# 30-70 deg; not at 17.5 deg): chosen by simulating that grid. A hysteresis: plans are dropped above
-# LARGEST_SWING as before (S9's runs behind the estimator are those of 17.5 deg; at 16 deg alone one more case
-# of S9 is worse than the LQR's)
+# 30-70 deg; not at 17.5 deg): chosen by simulating that grid. A hysteresis: no plan is made above LARGEST_SWING
+# (a plan held mid-move is no longer dropped there: see solve)
 WELL_POSED = 1e-2  # ... and gives a model when no pivot of its normal equations falls below this share
 MISFIT = 1e-5  # ... that explains the data to this share of their squares (0.3 % RMS): clean measurements
 PLAUSIBLE = 2.0  # ... within this factor of the configured cable lengths
@@ -78,6 +77,11 @@ UNEXPLAINED = 1e-3  # the envelope hands over to the LQR when the data leave thi
 MOST_REPLANS = 2  # the safety envelope: the MPC hands over to its LQR instead of a plan for a deviation past these
 SWING_MARGIN = math.radians(10.0)  # ... or when the swing exceeds the plan's largest by this (as an amplitude)
 TOLERANCE = 0.01  # ... and the controller plans again with it when a swing mode's frequency differs by more
+SUSPECT_AFTER = 3  # intervals: the data are judged beyond the crane's equations (UNEXPLAINED) from this many on,
+# before a model may be accepted (Config.samples): behind an estimator of another crane (S9) the misfit shows after
+# 0.15 s, while a clean crane's data (S1-S3) are explained to 1e-13
+CAUTIOUS_STRETCH = 1.3  # once the data are unexplained, every plan is this much longer than the shortest move: the
+# least-effort move of that length, no longer bang-bang, excites little of the swing a wrong model leaves behind
 
 Design = namedtuple("Design", "l1 ad bd gain qp omegas shapes")
 Design.__doc__ = ("The tracking QP for one model: its cable length, ``(Ad, Bd)`` over the interval, ``F`` (N x 6) "
@@ -101,10 +105,13 @@ Config.__doc__ = ("The designs (one, or one per scheduled cable length), the tar
 # (l1, l2, m2; 0: the configured one), and the identification's data (see identify): the last step's sample
 # (_sample), the integrals since the last solve (integrate), the normal equations (n11 n12 n13 n22 n23 n33, z,
 # the data's squares yy) and the intervals in them; the safety envelope's (see solve): whether the LQR has taken
-# over (1: for good), the plans made for a deviation, and the plan's largest swing (rad, as an amplitude).
+# over (1: for good), the plans made for a deviation, the plan's largest swing (rad, as an amplitude), and whether the
+# plans are cautious (1: the data were once unexplained, CAUTIOUS_STRETCH), and whether a swing too large to plan from
+# was met with no plan held (1: a hard hit's, its plans dropped past LARGEST_SWING as before).
 HEADER = namedtuple("Header", "count u iterations warned plan_steps plan_start plan_after plan_l1 l1 l2 "
                               "m2 w1 w2 cos_d sin_d cos1 sin1 cos2 sin2 d1 d2 a1 a2 c1 c2 s1 s2 "
-                              "n11 n12 n13 n22 n23 n33 z1 z2 z3 yy samples handed replans bound")(*range(41))
+                              "n11 n12 n13 n22 n23 n33 z1 z2 z3 yy samples handed replans bound "
+                              "cautious hit")(*range(43))
 
 
 def predict_rows(ad, bd, steps):
@@ -199,8 +206,10 @@ def _resampled(solution, n):
     return [inputs[pick] for pick in picks], hint
 
 
-def plan_move(d, s0, target, u_max, v_max, interval, max_intervals):
-    """The shortest move ``(u*, s*)`` from ``s0`` to rest at ``target`` within the limits, or ``((), ())``.
+def plan_move(d, s0, target, u_max, v_max, interval, max_intervals, stretch=1.0):
+    """The shortest move ``(u*, s*)`` from ``s0`` to rest at ``target`` within the limits, or ``((), ())``; with
+    ``stretch`` > 1 the move of ``ceil(stretch n)`` intervals (at most ``max_intervals``) instead, when it reaches
+    the target (the cautious plan of the safety envelope, :data:`CAUTIOUS_STRETCH`).
 
     Bisection on the number of intervals ``n``, from a first guess above the trolley's own
     shortest move (:func:`rigid_move_time`): a move of ``n`` intervals is possible when
@@ -258,6 +267,12 @@ def plan_move(d, s0, target, u_max, v_max, interval, max_intervals):
             high, inputs = mid, found
         else:
             low = mid
+    if stretch > 1.0:  # the cautious plan: the least-effort move of more intervals (its |U|^2, no longer bang-bang)
+        longer = min(int(math.ceil(high * stretch)), max_intervals)
+        if longer > high:
+            ok, found = attempt(longer)
+            if ok:
+                inputs = found
     states, s = [tuple(s0)], list(s0)
     for value in inputs:
         s = [linalg.dot(row, s) + bk[0] * value for row, bk in zip(d.ad, d.bd)]
@@ -383,7 +398,8 @@ def identify(config, state, measured):
 
         (D1, 0, A2) (l1, l2, k)' = -u C1 - g S1,     (A1, D2, 0) (l1, l2, k)' = -u C2 - g S2
 
-    The model is the least-squares solution of the intervals so far, given once
+    Whether the data are unexplained is judged from :data:`SUSPECT_AFTER` intervals on (or
+    :attr:`Config.samples`, when fewer). The model is the least-squares solution of the intervals so far, given once
     :attr:`Config.samples` intervals are in and no pivot of the normal equations' Cholesky
     factor falls below :data:`WELL_POSED` of its diagonal, when consistent (the safety envelope): each
     length within a factor :data:`PLAUSIBLE` of the configured one, ``0 < k < l2``, the payload within
@@ -412,7 +428,7 @@ def identify(config, state, measured):
         sums[9] += y1 * y1 + y2 * y2
         sums[10] += 1.0
     model, unexplained = None, False
-    if sums[10] >= c.samples:
+    if sums[10] >= min(c.samples, SUSPECT_AFTER):
         n11, n12, n13, n22, n23, n33, z1, z2, z3, yy, _ = sums
         normal = [[n11, n12, n13], [n12, n22, n23], [n13, n23, n33]]
         try:
@@ -425,7 +441,7 @@ def identify(config, state, measured):
             unexplained = misfit > UNEXPLAINED
             p = c.plant
             plausible = all(b / PLAUSIBLE <= a <= b * PLAUSIBLE for a, b in ((l1, p.l1), (l2, p.l2)))
-            if misfit <= MISFIT and plausible and 0.0 < k < l2:
+            if sums[10] >= c.samples and misfit <= MISFIT and plausible and 0.0 < k < l2:
                 m2 = (p.m1 + p.m2) * k / l2
                 residual = yy - (l1 * z1 + l2 * z2 + k * z3)
                 if p.m2 / PLAUSIBLE_PAYLOAD <= m2 <= p.m2 * PLAUSIBLE_PAYLOAD and \
@@ -509,32 +525,45 @@ def solve(config, state, measured, l1_now, forces=(0.0, 0.0)):
     rescheduled = len(c.designs) > 1 and d.l1 != state[HEADER.plan_l1]  # the schedule's design changed
     moved = trolley > c.replan_x or swing > c.replan_angle or rescheduled
     replan = count == 0 or model is not None or (moved and at >= plan_after)
+    # the safety envelope: data the crane's equations do not explain (an estimator of another crane, noise) make
+    # every plan from now on cautious, the first at once (it is no plan for a deviation)
+    cautious = state[HEADER.cautious]
+    warned_now = unexplained and not cautious
+    if warned_now:
+        cautious, replan = 1.0, True
     to_trolley, to_rest = deviation(d, measured, target)
+    over = step >= len(plan_u)
     # too far from rest for the linear model's plan; with none held after the first solve (the large swing's
-    # phase), planned again only below PLAN_BELOW
-    large = to_rest > (PLAN_BELOW if count and not plan_u else LARGEST_SWING)
+    # phase), planned again only below PLAN_BELOW. A plan held mid-move is not dropped for it: its own swing comes
+    # near LARGEST_SWING (S2's 15.8 deg), a gust or a wrong model's few degrees more are a deviation to plan again
+    # for, and beyond its largest by SWING_MARGIN the LQR takes over (dropped, the tracking QP alone with the
+    # trolley free swung S10's case #57 to 26 deg). After a hard hit's large swing (hit) its plans are dropped there
+    # as before: the hard hits' times stay monotone in the start angle
+    hit = state[HEADER.hit]
+    large = not (count and plan_u and not over and not hit) and \
+        to_rest > (PLAN_BELOW if count and not plan_u else LARGEST_SWING)
     # the safety envelope: the LQR takes over, for good, when the plan is over and the identification's data are
     # beyond the crane's equations (mid-move the LQR's kick would swing more than the plan's end), the plans for a
     # deviation run out, the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on the target
     replans = state[HEADER.replans]
     # a plan for a deviation needs a plan to deviate from: the first after the large swing's phase is none
-    if replan and count and model is None and not large and plan_u and (trolley > c.replan_x or swing > c.replan_angle):
+    if replan and count and model is None and not warned_now and not large and plan_u and \
+            (trolley > c.replan_x or swing > c.replan_angle):
         replans += 1.0
-    over = step >= len(plan_u)
     at_rest = over and to_trolley <= c.replan_x and to_rest <= c.replan_angle
     swung = bool(plan_u) and to_rest > state[HEADER.bound] + SWING_MARGIN  # past the plan's largest (a plan made)
     if count and ((unexplained and over) or replans > MOST_REPLANS or swung or at_rest):
-        return handover(c, state, measured, l1_now, replans, forces)
+        return handover(c, state, measured, l1_now, replans, forces, cautious)
     bound = state[HEADER.bound]
     if replan and large:  # none made: the tracking QP takes the swing down alone, a plan is tried at the next interval
         replan = bool(plan_u) or model is not None  # the last solve's warm start holds unless a plan or model changed
         plan_u, plan_s = (), ()
         plan_start, step, plan_after = at, 0, at
-        bound = to_rest
+        bound, hit = to_rest, 1.0
     elif replan:
         shrink = 1.0 - c.margin
         plan_u, plan_s = plan_move(d, measured, target, c.u_max * shrink, c.v_max * shrink, c.interval,
-                                   int(LONGEST_PLAN / c.interval))
+                                   int(LONGEST_PLAN / c.interval), CAUTIOUS_STRETCH if cautious else 1.0)
         plan_start, step = at, 0
         bound = to_rest
         for planned in plan_s:  # the plan's largest swing
@@ -587,17 +616,19 @@ def solve(config, state, measured, l1_now, forces=(0.0, 0.0)):
         state[len(HEADER) + 3 * n:]
     header = (u, float(solution.iterations), warned, float(len(plan_u)), float(plan_start), float(plan_after),
               d.l1 if replan else state[HEADER.plan_l1], *known, *_sample(measured), *(0.0,) * 8, *sums, 0.0,
-              replans, bound)
+              replans, bound, cautious, hit)
     return u, header + tuple(solution.x) + tuple(new_codes) + plan_part, messages
 
 
-def handover(config, state, measured, l1_now, replans, forces=(0.0, 0.0)):
+def handover(config, state, measured, l1_now, replans, forces=(0.0, 0.0), cautious=None):
     """The solve that hands over to the LQR: its input (:func:`.lqr.control`, the forces given), the state kept but
-    marked."""
+    marked (and whether it had turned cautious; None: as the state holds)."""
     u = lqr.control(config.lqr, measured, l1=l1_now, forces=forces)
     header = list(state[1:len(HEADER)])
     header[HEADER.u - 1], header[HEADER.iterations - 1] = u, 0.0
     header[HEADER.handed - 1], header[HEADER.replans - 1] = 1.0, replans
+    if cautious is not None:
+        header[HEADER.cautious - 1] = cautious
     return u, tuple(header) + state[len(HEADER):], ()
 
 

@@ -310,10 +310,11 @@ static int attempt(const Design *d, const double s0[N_STATE], const double targe
 }
 
 /* mpc.plan_move(): the shortest move (u*, s*) from s0 to rest at target within the limits, by bisection on its
-   number of intervals; *n_plan = 0 when none is needed or found within max_intervals. */
+   number of intervals; *n_plan = 0 when none is needed or found within max_intervals. With stretch > 1 the move of
+   ceil(stretch n) intervals (at most max_intervals) instead, when it reaches the target (the cautious plan). */
 static const char *plan_move(const Design *d, const double s0[N_STATE], const double target[N_STATE], double u_max,
-                             double v_max, double interval, int max_intervals, double *plan_u, double *plan_s,
-                             int *n_plan) {
+                             double v_max, double interval, int max_intervals, double stretch, double *plan_u,
+                             double *plan_s, int *n_plan) {
     *n_plan = 0;
     double far = 0.0;
     for (int i = 0; i < N_STATE; i++) far = py_max(far, fabs(s0[i] - target[i]));
@@ -348,6 +349,16 @@ static const char *plan_move(const Design *d, const double s0[N_STATE], const do
             memcpy(pm.found, pm.x, (size_t)mid * sizeof *pm.x);
         } else {
             low = mid;
+        }
+    }
+    if (stretch > 1.0) { /* the cautious plan: the least-effort move of more intervals (no longer bang-bang) */
+        int longer = (int)py_min(ceil(high * stretch), max_intervals);
+        if (longer > high) {
+            ATTEMPT(longer)
+            if (ok) {
+                high = longer;
+                memcpy(pm.found, pm.x, (size_t)longer * sizeof *pm.x);
+            }
         }
     }
 #undef ATTEMPT
@@ -428,7 +439,7 @@ static const char *identify(const Config *c, const double *s, const double measu
         sums[9] += y1 * y1 + y2 * y2;
         sums[10] += 1.0;
     }
-    if (!(sums[10] >= c->samples)) return NULL;
+    if (!(sums[10] >= py_min(c->samples, SUSPECT_AFTER))) return NULL; /* the misfit judged from SUSPECT_AFTER */
     double normal[9] = {sums[0], sums[1], sums[2], sums[1], sums[3], sums[4], sums[2], sums[4], sums[5]};
     double factor[9], packed[6], lam[3], scratch[3];
     if (qp_cholesky(normal, 3, factor)) return NULL;
@@ -445,7 +456,7 @@ static const char *identify(const Config *c, const double *s, const double measu
     const PlantParameters *p = &c->plant;
     int plausible = p->l1 / PLAUSIBLE <= l1 && l1 <= p->l1 * PLAUSIBLE && p->l2 / PLAUSIBLE <= l2 &&
                     l2 <= p->l2 * PLAUSIBLE;
-    if (misfit <= MISFIT && plausible && 0.0 < k && k < l2) {
+    if (sums[10] >= c->samples && misfit <= MISFIT && plausible && 0.0 < k && k < l2) {
         double m2 = (p->m1 + p->m2) * k / l2, residual = yy - (l1 * sums[6] + l2 * sums[7] + k * sums[8]);
         if (p->m2 / PLAUSIBLE_PAYLOAD <= m2 && m2 <= p->m2 * PLAUSIBLE_PAYLOAD &&
             precise(packed, lam, residual, 2.0 * sums[10])) {
@@ -524,10 +535,10 @@ static double lqr_input(const Config *c, const double measured[N_STATE], double 
 
 /* mpc.handover(): the solve that hands over to the LQR: its input, the state kept but marked. */
 static const char *handover(const Config *c, const double *state, const double measured[N_STATE], double l1_now,
-                            const double forces[2], double replans, double *next) {
+                            const double forces[2], double replans, double cautious, double *next) {
     memcpy(next, state, used(c, state) * sizeof(double));
     next[H_U] = lqr_input(c, measured, l1_now, forces[0], forces[1]), next[H_ITERATIONS] = 0.0;
-    next[H_HANDED] = 1.0, next[H_REPLANS] = replans;
+    next[H_HANDED] = 1.0, next[H_REPLANS] = replans, next[H_CAUTIOUS] = cautious;
     return NULL;
 }
 
@@ -570,33 +581,42 @@ static const char *solve(Config *c, const double *state, const double measured[N
     int rescheduled = c->n_designs > 1 && d->l1 != state[H_PLAN_L1]; /* the schedule's design changed */
     int moved = trolley > c->replan_x || swing > c->replan_angle || rescheduled;
     int replan = count == 0 || found_model || (moved && at >= plan_after);
+    /* the safety envelope: data the crane's equations do not explain make every plan from now on cautious, the first
+       at once (it is no plan for a deviation) */
+    double cautious = state[H_CAUTIOUS];
+    int warned_now = unexplained && !cautious;
+    if (warned_now) cautious = 1.0, replan = 1;
     double *new_plan_u = next + plan_at, to_trolley, to_rest;
     deviation(d, measured, target, &to_trolley, &to_rest);
+    int over = step >= n_plan;
     /* too far from rest for the linear model's plan; with none held after the first solve (the large swing's
-       phase), planned again only below PLAN_BELOW */
-    int large = to_rest > (count != 0 && n_plan == 0 ? PLAN_BELOW : LARGEST_SWING);
+       phase), planned again only below PLAN_BELOW; a plan held mid-move is not dropped for it (mpc.solve) */
+    double hit = state[H_HIT]; /* after a hard hit's large swing, plans dropped past LARGEST_SWING as before */
+    int large = !(count != 0 && n_plan > 0 && !over && hit == 0.0) &&
+                to_rest > (count != 0 && n_plan == 0 ? PLAN_BELOW : LARGEST_SWING);
     /* the safety envelope: the LQR takes over, for good, when the plan is over and the identification's data are
        beyond the crane's equations (mid-move the LQR's kick would swing more than the plan's end), the plans for a
        deviation run out, the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on the
        target */
     double replans = state[H_REPLANS], bound = state[H_BOUND];
     /* a plan for a deviation needs a plan to deviate from: the first after the large swing's phase is none */
-    if (replan && count != 0 && !found_model && !large && n_plan > 0 &&
+    if (replan && count != 0 && !found_model && !warned_now && !large && n_plan > 0 &&
         (trolley > c->replan_x || swing > c->replan_angle))
         replans += 1.0;
-    int over = step >= n_plan, swung = n_plan > 0 && to_rest > bound + SWING_MARGIN; /* past the plan's largest */
+    int swung = n_plan > 0 && to_rest > bound + SWING_MARGIN; /* past the plan's largest */
     int at_rest = over && to_trolley <= c->replan_x && to_rest <= c->replan_angle;
     if (count != 0 && ((unexplained && over) || replans > MOST_REPLANS || swung || at_rest))
-        return handover(c, state, measured, l1_now, forces, replans, next);
+        return handover(c, state, measured, l1_now, forces, replans, cautious, next);
     if (replan && large) { /* none made: the tracking QP takes the swing down alone, a plan tried next interval */
         replan = n_plan > 0 || found_model; /* the last solve's warm start holds unless a plan or model changed */
         n_plan = 0, n_states = 0, plan_u = plan_s = new_plan_u;
         plan_start = at, step = 0, plan_after = at;
-        bound = to_rest;
+        bound = to_rest, hit = 1.0;
     } else if (replan) {
         double shrink = 1.0 - c->margin, far = 0.0;
         error = plan_move(d, measured, target, c->u_max * shrink, c->v_max * shrink, c->interval,
-                          (int)(LONGEST_PLAN / c->interval), new_plan_u, new_plan_u + MAX_PLAN, &n_plan);
+                          (int)(LONGEST_PLAN / c->interval), cautious != 0.0 ? CAUTIOUS_STRETCH : 1.0, new_plan_u,
+                          new_plan_u + MAX_PLAN, &n_plan);
         if (error) return error;
         memmove(new_plan_u + n_plan, new_plan_u + MAX_PLAN, (n_plan ? n_plan + 1 : 0) * N_STATE * sizeof(double));
         plan_u = new_plan_u, plan_s = new_plan_u + n_plan, n_states = n_plan ? n_plan + 1 : 0;
@@ -657,7 +677,8 @@ static const char *solve(Config *c, const double *state, const double measured[N
                                known[0], known[1], known[2]};
     sample(measured, header + H_W1);
     memcpy(header + H_N11, sums, sizeof sums);
-    header[H_HANDED] = 0.0, header[H_REPLANS] = replans, header[H_BOUND] = bound;
+    header[H_HANDED] = 0.0, header[H_REPLANS] = replans, header[H_BOUND] = bound, header[H_CAUTIOUS] = cautious;
+    header[H_HIT] = hit;
     memcpy(next, header, sizeof header);
     return NULL;
 }
