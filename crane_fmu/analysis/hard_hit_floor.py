@@ -98,7 +98,7 @@ def _rk4_jacobian(s, u, dt, p, substeps=SUBSTEPS):
 
 def least_time(start, band=BAND, p=None, u_max=2.0, v_max=1.0, guess=7.0, intervals=INTERVALS,
                hold=HOLD, hold_intervals=HOLD_INTERVALS, segment=SEGMENT, max_iterations=500, progress=None,
-               initial=None):
+               initial=None, times=(0.5, 30.0)):
     """The least time [s] (a local optimum, :data:`METHOD`) from ``start`` until both angles stay within ``band``.
 
     Parameters
@@ -109,6 +109,8 @@ def least_time(start, band=BAND, p=None, u_max=2.0, v_max=1.0, guess=7.0, interv
         The first ``T`` [s]; the shooting nodes start on the uncontrolled swing.
     initial : (float, sequence of float), optional
         Instead: a plan to start from, ``(T, inputs)`` with ``intervals + hold_intervals`` inputs.
+    times : (float, float)
+        The bounds of ``T`` [s]; equal bounds ask whether that ``T`` is feasible (``Plan.success``).
     segment : int
         Intervals per shooting segment: the states at the segments' starts are variables.
 
@@ -196,8 +198,8 @@ def least_time(start, band=BAND, p=None, u_max=2.0, v_max=1.0, guess=7.0, interv
         da = jac[banded][:, [2, 4], :].reshape(-1, len(z))
         return np.vstack([-dv, dv, -da, da])
 
-    lower = [0.5] + [-u_max] * nodes + [-math.inf] * (6 * count)
-    upper = [30.0] + [u_max] * nodes + [math.inf] * (6 * count)
+    lower = [times[0]] + [-u_max] * nodes + [-math.inf] * (6 * count)
+    upper = [times[1]] + [u_max] * nodes + [math.inf] * (6 * count)
     z0 = np.concatenate([[guess], np.zeros(nodes), np.zeros(6 * count)])
     if initial is not None:
         z0[0], z0[iu:ix] = initial[0], np.clip(initial[1], -u_max, u_max)
