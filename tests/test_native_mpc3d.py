@@ -127,3 +127,49 @@ def _python_rows(parameters, n):
         state = getattr(state, "state", state)
         rows.append(list(MPC3D.output(config, state, inputs)))
     return rows
+
+
+SHORT_PATH = {**PATH, "x_d": 0.4, "x_via": 0.4, "y_d": 1.0}  # an L path whose y leg starts early (0.123 s)
+
+
+def _rows_at(parameters, times, step, native_path=None, version=2):
+    """The outputs after each step of ``step`` from each of ``times``, inputs as above: the Python model's, or the
+    native FMU's at ``native_path``."""
+    inputs = [tuple(0.02 * math.sin(k * 0.01 + i) for i in range(len(MPC3D.names("input")))) for k in range(len(times))]
+    if native_path is None:
+        config = MPC3D.check(parameters)
+        state, rows = MPC3D.initial_state(config), []
+        for t, u in zip(times, inputs):
+            state = MPC3D.update(config, state, u, t, step)
+            state = getattr(state, "state", state)
+            rows.append(list(MPC3D.output(config, state, u)))
+        return rows
+    fmu, vr, set_, get = open_native(native_path, version, parameters)
+    fmu.exitInitializationMode()
+    rows = []
+    for t, u in zip(times, inputs):
+        set_([vr[n] for n in MPC3D.names("input")], list(u))
+        fmu.doStep(t, step)
+        rows.append(get([vr[n] for n in MPC3D.names("output")]))
+    close(fmu)
+    return rows
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("drift", [-2e-13, 2e-13])
+def test_a_hosts_rounding_of_its_time_starts_the_y_axis_move_in_the_same_step(native, version, drift):
+    """A host that adds up its steps (OMSimulator) hands a time up to about 1e-13 s off the grid k h (4.5029999999998385
+    at k = 4503): driven at ``k h + drift`` across the y axis' start t0 (on the 1 ms grid), the Python model's rows and
+    the native FMU's are the Python model's at ``k h``, bit for bit: the move starts in the step that ends at t0 either
+    way (the planner's rounding margin). Without it a time 2e-13 short of t0 started the move one step late:
+    mpc3d-path's last row in OMSimulator differed from our master's by 8.6e-8 (issue 50)."""
+    h = 1e-3
+    t0 = MPC3D.report(MPC3D.check(SHORT_PATH))["t0_y_s"]
+    n = round(t0 / h)
+    assert 50 < n < 500 and abs(n * h - t0) < 1e-12  # a start on the grid, within a short run
+    exact = _rows_at(SHORT_PATH, [k * h for k in range(n + 10)], h)
+    drifted = [k * h + drift for k in range(n + 10)]
+    assert _rows_at(SHORT_PATH, drifted, h) == exact
+    assert _rows_at(SHORT_PATH, drifted, h, native[version] / "MpcController3D.fmu", version) == exact
+    late = _rows_at(SHORT_PATH, [k * h - 1e-6 for k in range(n + 10)], h)  # beyond the margin: a step late
+    assert late[:n - 1] == exact[:n - 1] and late[n - 1:] != exact[n - 1:]

@@ -162,32 +162,25 @@ def test_omsimulator_runs_every_one_fmu_to_its_end_like_our_master(fmu_dir, tmp_
     assert worst_difference(theirs, ours, pairs) <= SAME
 
 
-# Two built-in systems whose native SSP file OMSimulator does not yet end on our master's last row (found when this
-# test was widened to every built-in system; open, issue 50): strict, so that the fix shows.
-_OMS_DIFFERS = {
-    "hoist-transport": "OMSimulator's log warns that the cable hit l1_max = 2 m at 0.4995 m/s at t = 4.503 s; our "
-                       "master's run of the same native FMUs reaches it at rest",
-    "mpc3d-path": "the last row differs by 8.6e-8 of the largest value (x, y of the MpcController3D's run)",
-}
-
-
 @pytest.mark.parametrize("name, folder", [("lqg-transport", "python"), ("lqr", "python")] + [
-    pytest.param(s.name, "native", marks=pytest.mark.xfail(strict=True, reason=_OMS_DIFFERS[s.name]))
-    if s.name in _OMS_DIFFERS else (s.name, "native") for s in systems.registered()])
+    (s.name, "native") for s in systems.registered()])
 def test_omsimulator_over_a_built_in_ssp_files_full_stop_time_ends_on_our_masters_last_row(fmu_dir, native, tmp_path,
                                                                                          name, folder):
     """OMSimulator over an SSP file for its whole stop time ends with a remainder step of about 1e-13 s (its summed
     time's rounding), which every component, Python and native, takes as no step, as the one-FMU systems do: the
     last row equals our master's (SAME). On main the components took it as a step: lqg-transport's last row
     differed by 1.7e-2 (the state estimator's update; issue 50); the tests of 1 s could not see it. Every built-in
-    system on the native FMUs, two on the Python FMUs."""
+    system on the native FMUs, two on the Python FMUs. The native file is the system's as the build and `export`
+    write it, the crane's values included (hoist-transport's crane.l1 = 2 m: without it OMSimulator ran the plant's
+    own l1 = 1 m); mpc3d-path's y axis starts at t0 = 2.864 s, which OMSimulator's summed time reaches just short
+    (the planner's rounding margin: test_native_mpc3d)."""
     system = systems.get(name)
     if folder == "python":
         ssp = systems_dir(fmu_dir) / f"{name}.ssp"
         fmus = fmu_dir
     else:
         fmus = native[2]
-        ssp = write_ssp(system, fmus, tmp_path / f"{name}.ssp")
+        ssp = systems.write_ssp(system, fmus, tmp_path / f"{name}.ssp")  # as `crane-fmu export` and the build write
     out, log = _omsimulator(ssp, system.stop_time, tmp_path)
     assert omsimulator_log_problems(log) == []
     ours = run(systems.bind(system), fmus).columns()

@@ -16,6 +16,7 @@ from collections import namedtuple
 
 from . import mpc, path
 from .component import Component, Step
+from .planner import TIME_ROUNDING
 from .plant3d import _SWING_ROWS, SWING_STATE
 from .rules import check, finite, non_negative
 from .tables import CRANE_MODEL, input_, output, parameter, positions
@@ -58,8 +59,15 @@ def configure(values):
     return Config(tuple(axes), {})
 
 
+def _started(axis, time):
+    """Whether the axis' move has started at ``time``: a time within the planner's rounding margin short of its start
+    ``t0`` is at it, as the planner takes a time within it of a step of its plan (a host that adds up its steps,
+    OMSimulator, reaches mpc3d-path's t0 = 2.864 s as 2.86399999999990..., where the master's ``k h`` is 2.864)."""
+    return time >= axis.t0 - TIME_ROUNDING * max(1.0, abs(time))
+
+
 def _config(axis, time):
-    return axis.after if time >= axis.t0 else axis.before
+    return axis.after if _started(axis, time) else axis.before
 
 
 def initial_state(config):
@@ -94,7 +102,7 @@ def update(config, state, inputs, time, step):
         if isinstance(done, Step):
             messages += [f"{AXES[k]} axis: {m}" for m in done.messages]
             done = done.state
-        if state[0] < a.t0 <= time + step:
+        if not _started(a, state[0]) and _started(a, time + step):
             done = mpc.initial_state(a.after)
         new.append(tuple(done))
     result = (time + step, float(len(new[0]))) + new[0] + new[1]

@@ -183,11 +183,16 @@ static ModelStatus configure(const double values[], const StringValue strings[],
     return MODEL_OK;
 }
 
+/* mpc3d._started(): a time within the planner's rounding margin short of the axis' move's start t0 is at it. */
+static int started(const Config *config, int k, double time) {
+    return time >= config->t0[k] - TIME_ROUNDING * py_max(1.0, fabs(time));
+}
+
 /* mpc3d._config(): the axis' MPC for its move after t0, for holding its start before (only x_d differs: the
    target the plans, the tracking and the LQR it hands over to are for); a change forgets the last solve. */
 static const MpcConfig *axis_config(const Config *config, int k, double time) {
     MpcConfig *c = (MpcConfig *)&config->mpc[k]; /* the target and the memo: as mpc3d.Config's two configs */
-    double x_d = time >= config->t0[k] ? config->after[k] : config->before[k];
+    double x_d = started(config, k, time) ? config->after[k] : config->before[k];
     if (c->x_d != x_d) c->x_d = x_d, c->memo_valid = 0;
     return c;
 }
@@ -223,7 +228,7 @@ static ModelStatus update(const double values[], const Config *c, State *s, doub
         axis_inputs(values, k, inputs);
         ModelStatus status = mpc_axis_update(axis_config(c, k, s->time), &s->axes[k], inputs, PREFIX[k], r);
         if (status != MODEL_OK) return status;
-        if (s->time < c->t0[k] && c->t0[k] <= time + step) mpc_axis_initial_state(&s->axes[k]);
+        if (!started(c, k, s->time) && started(c, k, time + step)) mpc_axis_initial_state(&s->axes[k]);
     }
     s->time = time + step;
     return MODEL_OK;
