@@ -1214,3 +1214,65 @@ def test_real_time_a_lagging_drive_driven_at_a_rail_end_is_braked_and_the_run_re
     assert np.max(served["plant.x"]) <= 0.3 and served["plant.x"][-1] > 0.1
     assert abs(served["plant.dx"][-1]) < 1e-3 and set(np.unique(served["controller.u"])) >= {3.0, -3.0}
 
+
+REAL_TIME_FUZZ_OPERATIONS = 300  # in real time: OPC UA and Modbus interleaved, the same seed as the lock-step fuzz
+
+
+@pytest.mark.parametrize("lag", ["0", "0.1"])
+def test_a_real_time_fuzz_of_both_protocols_never_ends_the_server_nor_holds_it(fmu_dir, tmp_path, lag):
+    """300 random requests (seed 50: the same every run), OPC UA and Modbus interleaved, against a real-time server
+    (10 ms cycles) with a drive limit of 3 m/s2, rail ends at +-0.3 m and the drive lagging by ``lag`` s: random
+    node ids, registers, values (in and out of range, non-finite, of other types), functions, Step calls. After
+    every request the server is running; every 50, and at the end, u as both protocols read it lies within +-3 and
+    the time has not gone back. Then u = 3 is written (into a rail end, whatever the draws did) and nothing more:
+    simulated time must still advance (the guard brakes; nothing holds the run). Ctrl-C ends it with status 0;
+    every recorded value is finite, u within its range, the trolley never past a rail end, each time once."""
+    import random
+
+    rng = random.Random(FUZZ_SEED)
+    server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--period", "0.01",
+                    "--watchdog", "60", "--stop-time", "1000", "--set", "plant.u_max=3", "--set", "plant.x_min=-0.3",
+                    "--set", "plant.x_max=0.3", "--set", f"plant.tau={lag}", "--opcua", "127.0.0.1:0",
+                    "--modbus", "127.0.0.1:0")
+    served = _served_lqr(fmu_dir)
+    names = [v.name for v in served]
+    address = {r.name: r.address for r in register_map(served)}["controller.u"]
+    modbus = ModbusTcpClient(server.modbus[0], port=server.modbus[1], timeout=10)
+
+    async def fuzz(url):
+        checks = []
+        async with Client(url) as opc:
+            ns, node = await _nodes(opc)
+            last_time = 0.0
+            for k in range(REAL_TIME_FUZZ_OPERATIONS):
+                if rng.random() < 0.5:
+                    await _fuzz_opcua(opc, node, names, rng)
+                else:
+                    _fuzz_modbus(modbus, rng)
+                assert server.proc.poll() is None, f"the server ended at request {k}"
+                if k % 50 == 49 or k == REAL_TIME_FUZZ_OPERATIONS - 1:
+                    u, t = await opc.read_values([node("controller.u"), node("Time")])
+                    held = modbus.read_holding_registers(address, count=2, device_id=1).registers
+                    checks.append((u, words_float32(*held), t, last_time))
+                    last_time = t
+            await node("controller.u").write_value(ua.Variant(3.0, ua.VariantType.Double))
+            await asyncio.sleep(1.5)
+            first = await node("Time").read_value()
+            await asyncio.sleep(1.0)
+            return checks, first, await node("Time").read_value()
+
+    try:
+        assert modbus.connect()
+        checks, first, last = _run(fuzz(server.opcua), timeout=600)
+    finally:
+        modbus.close()
+        status, out, err = server.stop()
+    assert len(checks) == REAL_TIME_FUZZ_OPERATIONS // 50
+    for u, u_modbus, t, before in checks:
+        assert -3.0 <= u <= 3.0 and -3.0 <= u_modbus <= 3.0 and t >= before
+    assert last > first + 0.5, (first, last, err[-2000:])  # the run is not held at a rail end
+    assert status == 0, err[-2000:]
+    recorded = read_csv(server.out)
+    assert all(np.all(np.isfinite(column)) for column in recorded.values())
+    assert np.all(np.abs(recorded["controller.u"]) <= 3.0) and np.all(np.diff(recorded["time"]) > 0)
+    assert np.all(np.abs(recorded["plant.x"]) <= 0.3)
