@@ -484,3 +484,141 @@ def test_every_bad_string_or_integer_argument_is_refused_and_the_good_one_taken(
                 fmu.freeInstance()
         results[check] = tuple(statuses)
     assert results == {check: (OK, ERROR) for check in results}
+
+
+# ---- Boolean, FMI 3.0's other integer widths, SetTime, SetContinuousStates, the directional derivative -------------
+
+# FMI 3.0's get/set functions of a type no FMU here has a variable of, with their C item type
+WIDTHS = {"Int8": ctypes.c_int8, "UInt8": ctypes.c_uint8, "Int16": ctypes.c_int16, "UInt16": ctypes.c_uint16,
+          "Int32": ctypes.c_int32, "UInt32": ctypes.c_uint32, "UInt64": ctypes.c_uint64, "Float32": ctypes.c_float}
+
+
+def _untyped_calls(version):
+    """``{check: (good call, bad call)}`` of the get/set functions of a type the plant has no variable of (Boolean;
+    FMI 3.0: every integer width but Int64, and Float32), each ``call(dll, instance, vr)``: the good one asks for
+    no value (nothing to do: OK), the bad one names an unknown reference, a Float64's (``x``), or no instance."""
+    v = "fmi2" if version == 2 else "fmi3"
+    types = {"Boolean": c_int if version == 2 else ctypes.c_bool}
+    if version == 3:
+        types.update(WIDTHS)
+
+    def call(function, item, n=0, refs=None, instance=True):
+        def made(dll, c, vr):
+            array = (item * 1)()
+            args = [c if instance else None, (c_uint * 1)(vr[refs] if isinstance(refs, str) else (refs or 0)),
+                    c_size_t(n), array]
+            if version == 3:
+                args.append(c_size_t(n))
+            return _raw(dll, function)(*args)
+        return made
+
+    checks = {}
+    for type_, item in types.items():
+        for what in ("Get", "Set"):
+            name = f"{v}{what}{type_}"
+            checks[f"{name}: an unknown value reference"] = (call(name, item), call(name, item, 1, 99999))
+            checks[f"{name}: a Float64's value reference"] = (call(name, item), call(name, item, 1, "x"))
+            checks[f"{name}: NULL instance"] = (call(name, item), call(name, item, instance=False))
+    return checks
+
+
+def _derivative_calls(version):
+    """``{check: (good call, bad call)}`` of the directional derivative of the plant's ``x`` by its input ``u``
+    (co-simulation, after initialisation), each ``call(dll, instance, vr)``: the bad one with one array NULL."""
+    name = f"{'fmi2' if version == 2 else 'fmi3'}GetDirectionalDerivative"
+
+    def call(null=None, instance=True):
+        def made(dll, c, vr):
+            arrays = {"unknowns": (c_uint * 1)(vr["x"]), "knowns": (c_uint * 1)(vr["u"]),
+                      "seed": (c_double * 1)(1.0), "sensitivity": (c_double * 1)()}
+            if null:
+                arrays[null] = None
+            one = c_size_t(1)
+            args = [c if instance else None, arrays["unknowns"], one, arrays["knowns"], one, arrays["seed"]]
+            args += [arrays["sensitivity"]] if version == 2 else [one, arrays["sensitivity"], one]
+            return _raw(dll, name)(*args)
+        return made
+
+    checks = {f"{name}: NULL {array}": (call(), call(array)) for array in ("unknowns", "knowns", "seed", "sensitivity")}
+    checks[f"{name}: NULL instance"] = (call(), call(instance=False))
+    return checks
+
+
+def _time_and_state_calls(version):
+    """``{check: (good call, bad call, continuous-time mode, bad on a co-simulation instance)}`` of Model Exchange's
+    SetTime and SetContinuousStates, each ``call(dll, instance, n_states)``; the states set are the instance's own."""
+    v = "fmi2" if version == 2 else "fmi3"
+
+    def set_time(time, instance=True):
+        return lambda dll, c, nx: _raw(dll, f"{v}SetTime")(c if instance else None, c_double(time))
+
+    def set_states(change=0, null=False, poison=False, instance=True):
+        def made(dll, c, nx):
+            own = (c_double * max(nx, 1))()
+            assert _raw(dll, f"{v}GetContinuousStates")(c, own, c_size_t(nx)) == OK
+            array = (c_double * max(nx + change, 1))(*own[:nx + change])
+            if poison:
+                array[0] = float("nan")
+            return _raw(dll, f"{v}SetContinuousStates")(c if instance else None, None if null else array,
+                                                         c_size_t(nx + change))
+        return made
+
+    return {
+        "SetTime: NULL instance": (set_time(0.5), set_time(0.5, instance=False), False, False),
+        "SetTime: a time that is not a number": (set_time(0.5), set_time(float("nan")), False, False),
+        "SetTime: an infinite time": (set_time(0.5), set_time(float("inf")), False, False),
+        "SetTime: on a co-simulation instance": (set_time(0.5), set_time(0.5), False, True),
+        "SetContinuousStates: NULL instance": (set_states(), set_states(instance=False), True, False),
+        "SetContinuousStates: a NULL array": (set_states(), set_states(null=True), True, False),
+        "SetContinuousStates: an array one shorter": (set_states(), set_states(-1), True, False),
+        "SetContinuousStates: an array one longer": (set_states(), set_states(1), True, False),
+        "SetContinuousStates: a state that is not a number": (set_states(), set_states(poison=True), True, False),
+        "SetContinuousStates: in event mode": (set_states(), set_states(), (True, False), False),
+    }
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("kind", list(FMU_KINDS))
+def test_every_bad_boolean_width_or_derivative_argument_is_refused_and_the_good_one_taken(fmu_kinds, kind, version):
+    """The get and set functions of the types no FMU here has (Boolean; FMI 3.0's Int8 to UInt64 but Int64, and
+    Float32) with an unknown reference, a Float64's, or no instance, against the call that asks for no value (OK);
+    the directional derivative (where the FMU has one: the native plant) with each of its arrays NULL, or no
+    instance. Each bad call against the good one on a fresh instance after initialisation. On main FMI 3.0's
+    Int8, UInt8, Int16, UInt16, UInt32 and Float32 functions refused the good call too (every call: fmi3Error)."""
+    folder = fmu_kinds[kind][version]
+    calls = _untyped_calls(version)
+    if kind == "native":  # the Python FMUs have no directional derivative (every call refused, and said so)
+        calls.update(_derivative_calls(version))
+    results = {}
+    for check, (good, bad) in calls.items():
+        statuses = []
+        for call in (good, bad):
+            fmu, dll, instance, vr = _fresh(folder, version)
+            try:
+                statuses.append(call(dll, instance, vr))
+            finally:
+                fmu.freeInstance()
+        results[check] = tuple(statuses)
+    assert results == {check: (OK, ERROR) for check in results}
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_every_bad_set_time_or_continuous_states_argument_is_refused_and_the_good_one_taken(fmu_kinds, version):
+    """Model Exchange's SetTime and SetContinuousStates (the native FMUs: the Python ones have no Model Exchange):
+    no instance, a time or a state that is not a finite number, an array NULL, one shorter or one longer than the
+    states, the states set in event mode, SetTime on a co-simulation instance. Each bad call against the good one
+    on a fresh instance (SetTime in event mode, SetContinuousStates in continuous-time mode). On main a time that
+    is not finite (NaN, inf) was taken (OK)."""
+    folder = fmu_kinds["native"][version]
+    results = {}
+    for check, (good, bad, continuous_time, on_co_simulation) in _time_and_state_calls(version).items():
+        statuses = []
+        modes = continuous_time if isinstance(continuous_time, tuple) else (continuous_time,) * 2
+        for call, model_exchange, mode in ((good, True, modes[0]), (bad, not on_co_simulation, modes[1])):
+            fmu, dll, instance, nx, _ = _model_exchange(folder, version, mode, model_exchange)
+            try:
+                statuses.append(call(dll, instance, nx))
+            finally:
+                fmu.freeInstance()
+        results[check] = tuple(statuses)
+    assert results == {check: (OK, ERROR) for check in results}

@@ -331,7 +331,8 @@ FMI2_MODEL_EXCHANGE = {f: (set(), None) for f in (
 # <CoSimulation>): as the gets (FMI 2.0's table; FMI 3.0 section 2.3: Initialization Mode, Step Mode, Terminated).
 CO_SIMULATION_DERIVATIVES = {2: {"GetDirectionalDerivative": (GETS, None)},
                              3: {"GetDirectionalDerivative": (GETS, None), "GetAdjointDerivative": (GETS, None)}}
-FMI3_TYPES = ("Float64", "Int32", "Int64", "UInt64", "Boolean", "String")
+FMI3_TYPES = ("Float64", "Int32", "Int64", "UInt64", "Boolean", "String", "Float32", "Int8", "UInt8", "Int16",
+              "UInt16", "UInt32")
 FMI3 = {
     "SetDebugLogging": (EVERY, None), "EnterInitializationMode": ({INS}, INI), "ExitInitializationMode": ({INI}, STP),
     "Terminate": ({STP, DSC}, TRM), "Reset": (EVERY, INS),
@@ -339,7 +340,7 @@ FMI3 = {
     **{f.replace("state", "State").replace("DeSerialize", "Deserialize"): (EVERY, None) for f in STATE_FUNCTIONS},
     "DoStep": ({STP}, STP),
     **{f"{verb}{t}": (set(), None) for verb in ("Get", "Set")
-       for t in ("Float32", "Int8", "UInt8", "Int16", "UInt16", "UInt32", "Binary", "Clock")},
+       for t in ("Binary", "Clock")},
     **{f: (set(), None) for f in (
         "EnterEventMode", "GetNumberOfVariableDependencies", "GetVariableDependencies", "GetDirectionalDerivative",
         "GetAdjointDerivative", "EnterConfigurationMode", "ExitConfigurationMode", "GetIntervalDecimal",

@@ -1116,3 +1116,163 @@ def test_the_guards_braking_distance_is_the_held_brakings_and_the_least_one_plus
         d = braking_distance(v, limit, cycle)
         assert speed == 0.0 and d == pytest.approx(abs(x), rel=1e-9, abs=1e-12), (v, limit, cycle)
         assert v * v / (2 * limit) - 1e-12 <= d <= v * v / (2 * limit) + abs(v) * cycle / 2 + 1e-12
+
+
+def test_the_lagging_drives_reach_holds_against_the_plant_braked_from_the_worst_states():
+    """A drive with a lag tau: the guard's bound (rail_ends.lagged_reach) against the Python plant's own
+    general_update braked as the hold brakes it (u = -sign(s) min(U, |s| / T), s = v + a tau, a the plant's drive
+    state), from 60 random states (seed 50) with the drive's acceleration at either limit (the worst: +-U) or
+    between: the plant, given rail ends 1e-9 m beyond the bound on both sides, never refuses a step (it refuses any
+    sub-step past them), and it comes to rest."""
+    import random
+
+    from crane_fmu.model import plant
+    from crane_fmu.model.component import Discard
+    from crane_fmu.serve.rail_ends import lagged_reach
+
+    rng = random.Random(50)
+    defaults = {v.name: v.start for v in plant.VARIABLES if v.causality == "parameter"}
+    for case in range(60):
+        tau, limit, cycle = rng.choice((0.05, 0.1, 0.4)), rng.choice((0.5, 3.0)), rng.choice((0.01, 0.05))
+        v = rng.uniform(-3, 3)
+        a = rng.choice((-limit, limit, rng.uniform(-limit, limit)))
+        farthest, least = lagged_reach(0.0, v, a, tau, limit, cycle)
+        config = plant.configure({**defaults, "tau": tau, "u_max": limit, "x_min": least - 1e-9,
+                                  "x_max": farthest + 1e-9, "dx0": v})
+        state = config.state0[:plant.DRIVE] + (a, a)
+        for k in range(int(20 * (tau + abs(v) / limit + cycle) / cycle)):
+            s = state[plant.DX] + state[plant.DRIVE] * tau
+            u = -math.copysign(min(limit, abs(s) / cycle), s) if s else 0.0
+            try:
+                state = plant.general_update(config, state, (u, 0.0, 0.0, 0.0), k * cycle, cycle)
+            except Discard as exc:
+                raise AssertionError((case, tau, limit, cycle, v, a, str(exc))) from None
+            state = getattr(state, "state", state)
+        assert abs(state[plant.DX]) < 1e-6 and abs(state[plant.DRIVE]) < 1e-3 * limit, (case, state)
+
+
+@pytest.mark.parametrize("system, demand, position, lag", [("lqr", "u", "x", "tau"), ("lqr3d", "ux", "x", "tau_x"),
+                                                           ("lqr3d", "uy", "y", "tau_y")])
+def test_lock_step_a_lagging_drive_braked_after_a_refusal_at_a_rail_end_steps_on(fmu_dir, tmp_path, system, demand,
+                                                                                 position, lag):
+    """As the lock-step test above with the drive lagging by 0.1 s: the demand at its limit towards the rail end at
+    0.3 m until a request is refused; the client then brakes and every request is taken until the trolley moves
+    back, never past the rail end. On main a lagging drive was not guarded: the trolley ran into the rail end and
+    every braking request was refused."""
+    server = Server(fmu_dir, tmp_path, "--system", system, "--external", "controller", "--lock-step", "--set",
+                    f"plant.{demand}_max=3", "--set", f"plant.{position}_max=0.3", "--set", f"plant.{lag}=0.1",
+                    "--opcua", "127.0.0.1:0")
+
+    async def drive(url):
+        async with Client(url) as opc:
+            ns, node = await _nodes(opc)
+            await node(f"controller.{demand}").write_value(ua.Variant(3.0, ua.VariantType.Double))
+            codes = []
+            while len(codes) < 100 and (not codes or codes[-1] == "Good"):
+                codes.append(await _step_status(opc, 10))
+            await node(f"controller.{demand}").write_value(ua.Variant(-3.0, ua.VariantType.Double))
+            braking, most = [], 0.0
+            for _ in range(100):
+                braking.append(await _step_status(opc, 10))
+                most = max(most, await node(f"plant.{position}").read_value())
+                if (await node(f"plant.d{position}").read_value()) <= 0:
+                    break
+            return codes, braking, most, await node(f"plant.d{position}").read_value()
+
+    try:
+        codes, braking, most, dx = _run(drive(server.opcua))
+    finally:
+        status, out, err = server.stop()
+    assert codes[-1] == "BadOutOfRange" and set(codes[:-1]) == {"Good"} and len(codes) > 10, codes
+    assert set(braking) == {"Good"} and dx <= 0 < most <= 0.3, (braking, most, dx)
+    assert status == 0 and f"could not stop before the rail end {position}_max" in err, err[-2000:]
+
+
+def test_real_time_a_lagging_drive_driven_at_a_rail_end_is_braked_and_the_run_reaches_its_stop_time(fmu_dir,
+                                                                                                  tmp_path):
+    """The real-time rail-end test with the drive lagging by tau = 0.1 s: u = 3 written once towards x_max = 0.3 m,
+    then nothing. The guard follows the drive's acceleration from the demands, refuses the cycle after which the
+    trolley could no longer stop, and holds u braking it; the run ends by itself at its stop time, status 0, the
+    trolley never past x_max and nearly at rest at the end. On main the run held at the rail end until Ctrl-C."""
+    server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--period", "0.01",
+                    "--watchdog", "30", "--stop-time", "2", "--set", "plant.u_max=3", "--set", "plant.x_max=0.3",
+                    "--set", "plant.tau=0.1", "--opcua", "127.0.0.1:0")
+
+    async def push(url):
+        async with Client(url) as opc:
+            ns, node = await _nodes(opc)
+            await node("controller.u").write_value(ua.Variant(3.0, ua.VariantType.Double))
+
+    try:
+        _run(push(server.opcua))
+    finally:
+        status, out, err = server.wait(40)
+    assert status == 0 and "finished at t = 2 s" in out, err[-2000:]
+    assert "could not stop before the rail end x_max = 0.3 m" in err, err
+    served = read_csv(server.out)
+    assert all(np.all(np.isfinite(column)) for column in served.values()) and served["time"][-1] == 2
+    assert np.max(served["plant.x"]) <= 0.3 and served["plant.x"][-1] > 0.1
+    assert abs(served["plant.dx"][-1]) < 1e-3 and set(np.unique(served["controller.u"])) >= {3.0, -3.0}
+
+
+REAL_TIME_FUZZ_OPERATIONS = 300  # in real time: OPC UA and Modbus interleaved, the same seed as the lock-step fuzz
+
+
+@pytest.mark.parametrize("lag", ["0", "0.1"])
+def test_a_real_time_fuzz_of_both_protocols_never_ends_the_server_nor_holds_it(fmu_dir, tmp_path, lag):
+    """300 random requests (seed 50: the same every run), OPC UA and Modbus interleaved, against a real-time server
+    (10 ms cycles) with a drive limit of 3 m/s2, rail ends at +-0.3 m and the drive lagging by ``lag`` s: random
+    node ids, registers, values (in and out of range, non-finite, of other types), functions, Step calls. After
+    every request the server is running; every 50, and at the end, u as both protocols read it lies within +-3 and
+    the time has not gone back. Then u = 3 is written (into a rail end, whatever the draws did) and nothing more:
+    simulated time must still advance (the guard brakes; nothing holds the run). Ctrl-C ends it with status 0;
+    every recorded value is finite, u within its range, the trolley never past a rail end, each time once."""
+    import random
+
+    rng = random.Random(FUZZ_SEED)
+    server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--period", "0.01",
+                    "--watchdog", "60", "--stop-time", "1000", "--set", "plant.u_max=3", "--set", "plant.x_min=-0.3",
+                    "--set", "plant.x_max=0.3", "--set", f"plant.tau={lag}", "--opcua", "127.0.0.1:0",
+                    "--modbus", "127.0.0.1:0")
+    served = _served_lqr(fmu_dir)
+    names = [v.name for v in served]
+    address = {r.name: r.address for r in register_map(served)}["controller.u"]
+    modbus = ModbusTcpClient(server.modbus[0], port=server.modbus[1], timeout=10)
+
+    async def fuzz(url):
+        checks = []
+        async with Client(url) as opc:
+            ns, node = await _nodes(opc)
+            last_time = 0.0
+            for k in range(REAL_TIME_FUZZ_OPERATIONS):
+                if rng.random() < 0.5:
+                    await _fuzz_opcua(opc, node, names, rng)
+                else:
+                    _fuzz_modbus(modbus, rng)
+                assert server.proc.poll() is None, f"the server ended at request {k}"
+                if k % 50 == 49 or k == REAL_TIME_FUZZ_OPERATIONS - 1:
+                    u, t = await opc.read_values([node("controller.u"), node("Time")])
+                    held = modbus.read_holding_registers(address, count=2, device_id=1).registers
+                    checks.append((u, words_float32(*held), t, last_time))
+                    last_time = t
+            await node("controller.u").write_value(ua.Variant(3.0, ua.VariantType.Double))
+            await asyncio.sleep(1.5)
+            first = await node("Time").read_value()
+            await asyncio.sleep(1.0)
+            return checks, first, await node("Time").read_value()
+
+    try:
+        assert modbus.connect()
+        checks, first, last = _run(fuzz(server.opcua), timeout=600)
+    finally:
+        modbus.close()
+        status, out, err = server.stop()
+    assert len(checks) == REAL_TIME_FUZZ_OPERATIONS // 50
+    for u, u_modbus, t, before in checks:
+        assert -3.0 <= u <= 3.0 and -3.0 <= u_modbus <= 3.0 and t >= before
+    assert last > first + 0.5, (first, last, err[-2000:])  # the run is not held at a rail end
+    assert status == 0, err[-2000:]
+    recorded = read_csv(server.out)
+    assert all(np.all(np.isfinite(column)) for column in recorded.values())
+    assert np.all(np.abs(recorded["controller.u"]) <= 3.0) and np.all(np.diff(recorded["time"]) > 0)
+    assert np.all(np.abs(recorded["plant.x"]) <= 0.3)

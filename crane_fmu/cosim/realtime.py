@@ -107,9 +107,9 @@ class Runner:
     guard : object or None
         Where states can be saved: ``guard.start(master, cycle, ranges)`` once initialised (``cycle`` [s]: the
         real-time period, or the step in lock-step; ``ranges``: :attr:`ranges`), then ``guard.refuses(before,
-        after)``, the master's values before and after each block: None, or the one line that refuses it (rolled
-        back as an FMU's refusal); ``guard.hold(values)``: ``{external output: value}`` to hold while the run is
-        held after a refusal (real time), re-asked every cycle until the program writes.
+        after, seconds)``, the master's values before and after each block of ``seconds``: None, or the one line
+        that refuses it (rolled back as an FMU's refusal); ``guard.hold(values)``: ``{external output: value}`` to
+        hold while the run is held after a refusal (real time), re-asked every cycle until the program writes.
 
     Attributes
     ----------
@@ -425,7 +425,7 @@ class Runner:
             reason = None
             if self.guard is not None:  # the values at the block's end: its last step's outputs
                 self.master.algorithm.exchange(self.start_time + (k + n) * self.step)
-                reason = self.guard.refuses(before, self.master.values)
+                reason = self.guard.refuses(before, self.master.values, n * self.step)
             if reason is not None:
                 raise Refusal(reason)
         except (FmiError, Refusal) as exc:

@@ -9,12 +9,24 @@ could no longer stop before a rail end (rolled back as the plant's refusals are)
 a refusal it brakes the trolley to rest at its drive limit, cycle by cycle, until the client writes again.
 
 Per guarded axis (a crane role :class:`~crane_fmu.model.component.Axis` whose demand the external instance
-writes, with a finite rail end and no drive lag ``tau``): the demand's limit ``U`` is the smaller of the plant's
+writes, with a finite rail end): the demand's limit ``U`` is the smaller of the plant's
 ``<demand>_max`` and the written range (:mod:`crane_fmu.cosim.write_ranges`); the trolley's acceleration is the
 demand held over each cycle of length ``T``, so that braking at ``-U`` until the speed is within ``U*T`` and then
 at ``-v/T`` (rest at the cycle's end) travels :func:`braking_distance`. A block is refused when it ends with that
 distance reaching past ``rail end -+ MARGIN`` and farther than it began (a run started within its braking
 distance may still brake).
+
+A drive with a lag ``tau > 0`` (the acceleration ``a`` follows the demand ``d`` by ``a' = (d - a) / tau``) is
+guarded too. The plant does not serve ``a``; the guard follows it from the demands (the plant's start: ``a = 0``),
+exactly: over a block of ``h`` seconds at ``d``, ``a <- d + (a - d) exp(-h / tau)``. With ``s = v + a tau`` (the
+speed the trolley tends to with ``d = 0``), ``s' = a + tau a' = d``: ``s`` moves as an unlagged trolley's speed,
+so the hold brakes ``s`` as it brakes ``v`` without a lag, and since ``x' = v = s - a tau``,
+``x(t) = x + tau v + integral of s - tau s(t) + tau^2 a(t)``. Braked so, ``s`` keeps its sign and goes to rest:
+the trolley never passes ``x + tau v + U tau^2 + braking_distance(s)`` (``s >= 0``) or ``x - tau^2 (a - U)``
+(``s < 0``), with ``|a| <= U`` (:func:`lagged_reach`); the mirror bound holds towards ``<position>_min``. Both
+ends are checked. Braked by the hold the bound does not move from one cycle to the next (the integral of ``s``
+it has travelled is what ``braking_distance`` lost); the plant's sub-steps, which take the mean acceleration of
+each, move it by at most ``|a - d| dt^3 / (12 tau)`` per sub-step ``dt``, allowed for in the slack.
 """
 
 import math
@@ -35,6 +47,15 @@ def braking_distance(speed, limit, cycle):
     return n * v * cycle - limit * cycle * cycle * n * n / 2 + r * cycle / 2
 
 
+def lagged_reach(x, v, a, tau, limit, cycle):
+    """``(farthest, least)`` position [m] a trolley at ``x`` moving at ``v`` with its lagging drive's acceleration
+    ``a`` (lag ``tau`` [s], ``|a| <= limit``) reaches when :meth:`RailGuard.hold` brakes it (module docstring)."""
+    s, slack = v + a * tau, limit * tau * tau
+    ahead = braking_distance(s, limit, cycle) if s >= 0 else -tau * s
+    behind = braking_distance(s, limit, cycle) if s <= 0 else tau * s
+    return x + tau * v + slack + ahead, x + tau * v - slack - behind
+
+
 class RailGuard:
     """The runner's guard for the trolley's axes of ``plant`` (instance name) whose demand the external instance
     ``external`` (name) writes; ``axes`` are the plant's crane role axes, ``connections`` the system's."""
@@ -43,7 +64,7 @@ class RailGuard:
         self.plant, self.external = plant, external
         fed = {c.input: c.output for c in connections if c.source == external and c.target == plant}
         self.axes = [(a, fed[a.demand]) for a in axes if a.demand in fed]
-        self.guarded, self.notes = [], []
+        self.guarded, self.notes, self.lags = [], [], {}
 
     def start(self, master, cycle, ranges):
         """Read the limits in effect once initialised; ``cycle`` [s] is the length over which a demand is held."""
@@ -56,21 +77,28 @@ class RailGuard:
                        None)
             written = ranges.get(f"{self.external}.{output}", (-math.inf, math.inf))
             limit = min(abs(float(plant.get(f"{axis.demand}_max"))), -written[0], written[1])
-            if lag is not None and float(plant.get(lag)) > 0:
-                self.notes.append(f"{self.plant}.{lag} > 0: the rail ends along {axis.position} are not guarded "
-                                  "(the braking distance of a lagging drive depends on a state that is not served)")
-                continue
             if not (abs(low) < 1e60 or abs(high) < 1e60) or not 0 < limit < math.inf:
                 continue
+            tau = float(plant.get(lag)) if lag is not None else 0.0
+            if tau > 0:  # followed from the demands: (tau, plant's limit, its sub-step, index of the demand, a)
+                self.lags[len(self.guarded)] = [tau, abs(float(plant.get(f"{axis.demand}_max"))),
+                                                float(plant.get("max_substep")),
+                                                names.index(f"{self.external}.{output}"), 0.0]
             self.guarded.append((axis, output, names.index(f"{self.plant}.{axis.position}"),
                                  names.index(f"{self.plant}.{axis.velocity}"), low, high, limit))
 
-    def _margins(self, values):
+    def _margins(self, values, drives=None):
         """Per guarded axis: ``(room, name of the rail end, its position)``: how far inside ``end -+ MARGIN`` the
-        trolley comes to rest when braked now (negative: past it)."""
+        trolley comes to rest when braked now (negative: past it); ``drives``: a lagging axis' acceleration."""
         found = []
-        for axis, _, at, speed, low, high, limit in self.guarded:
+        for k, (axis, _, at, speed, low, high, limit) in enumerate(self.guarded):
             x, v = values[at], values[speed]
+            if k in self.lags:
+                farthest, least = lagged_reach(x, v, (drives or {}).get(k, self.lags[k][4]), self.lags[k][0], limit,
+                                               self.cycle)
+                found.append(min((high - MARGIN - farthest, f"{axis.position}_max", high),
+                                 (least - (low + MARGIN), f"{axis.position}_min", low)))
+                continue
             d = braking_distance(v, limit, self.cycle)
             if v >= 0:
                 found.append((high - MARGIN - (x + d), f"{axis.position}_max", high))
@@ -78,21 +106,29 @@ class RailGuard:
                 found.append((x - d - (low + MARGIN), f"{axis.position}_min", low))
         return found
 
-    def refuses(self, before, after):
-        """The line refusing a block that ends where the trolley cannot stop before a rail end (and farther than
-        it began), else None."""
-        for (room, end, at), (room_before, _, _), (axis, _, i, j, _, _, limit) in zip(
-                self._margins(after), self._margins(before), self.guarded):
-            if room < 0 and room < room_before - SLACK:
+    def refuses(self, before, after, seconds=None):
+        """The line refusing a block (of ``seconds``, one cycle if None) that ends where the trolley cannot stop
+        before a rail end (and farther than it began), else None."""
+        seconds = self.cycle if seconds is None else seconds
+        drives, slack = {}, {}
+        for k, (tau, most, substep, demand, a) in self.lags.items():
+            d = min(max(after[demand], -most), most)  # the demand held over the block, as the plant limits it
+            drives[k] = d + (a - d) * math.exp(-seconds / tau)
+            slack[k] = 2 * most * substep * substep * seconds / (12 * tau)  # the plant's sub-steps (<= max_substep)
+        for k, ((room, end, at), (room_before, _, _), (axis, _, i, j, _, _, limit)) in enumerate(zip(
+                self._margins(after, drives), self._margins(before), self.guarded)):
+            if room < 0 and room < room_before - SLACK - slack.get(k, 0.0):
                 return (f"the trolley at {axis.position} = {after[i]!r} m moving at {after[j]!r} m/s could not stop "
                         f"before the rail end {end} = {at!r} m with its drive's {limit:g} m/s2 "
                         f"({-room:.3g} m past it)")
+        for k, a in drives.items():  # the block is taken
+            self.lags[k][4] = a
         return None
 
     def hold(self, values):
         """``{external output: demand}`` braking each guarded axis to rest (see :func:`braking_distance`)."""
         held = {}
-        for _, output, _, speed, _, _, limit in self.guarded:
-            v = values[speed]
+        for k, (_, output, _, speed, _, _, limit) in enumerate(self.guarded):
+            v = values[speed] + (self.lags[k][4] * self.lags[k][0] if k in self.lags else 0.0)  # s = v + a tau
             held[output] = -math.copysign(min(limit, abs(v) / self.cycle), v) if v else 0.0
         return held

@@ -5,7 +5,10 @@
  */
 #include "continuous.h"
 
+#include <math.h>
 #include <stdlib.h>
+
+#include "py_repr.h"
 
 #define AFTER_INITIALIZATION (EVENT_MODE | CONTINUOUS_TIME | TERMINATED | FAILED)
 
@@ -32,6 +35,10 @@ size_t number_of_indicators(const Instance *c) {
 
 int set_time(Instance *c, const char *function, double time) {
     if (!checked(c, function, EVENT_MODE | CONTINUOUS_TIME)) return MODEL_ERROR;
+    if (!isfinite(time)) { /* a bad argument: refused, the instance stays where it is */
+        Reporter r = instance_reporter(c, function);
+        return report(&r, MODEL_ERROR, "time must be finite, got %s", py_repr(time, (char[REPR_SIZE]){0}));
+    }
     c->time = time;
     return MODEL_OK;
 }

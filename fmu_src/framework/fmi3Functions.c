@@ -174,8 +174,11 @@ fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t 
         (void)vr, (void)nvr, (void)v;                                                                        \
         return no_such_values(c, "fmi3Set" #Type, SETTABLE, n);                                              \
     }
-NO_GET(Int32) NO_GET(UInt64) NO_GET(Boolean)
-NO_SET(Int32) NO_SET(UInt64) NO_SET(Boolean)
+/* The types no model here has a variable of: asking for no value is taken (nothing to do), any value refused. */
+NO_GET(Int32) NO_GET(UInt64) NO_GET(Boolean) NO_GET(Float32) NO_GET(Int8) NO_GET(UInt8) NO_GET(Int16) NO_GET(UInt16)
+NO_GET(UInt32)
+NO_SET(Int32) NO_SET(UInt64) NO_SET(Boolean) NO_SET(Float32) NO_SET(Int8) NO_SET(UInt8) NO_SET(Int16) NO_SET(UInt16)
+NO_SET(UInt32)
 
 /* Enumerations (FMI 3.0 gets and sets them as Int64). */
 static const char *const TIME_NOT_INT64 = "value reference 0 is time, a Float64";

@@ -19,7 +19,9 @@
     X(fmi3Status, fmi3Terminate, (fmi3Instance c), (c))                                                      \
     X(fmi3Status, fmi3Reset, (fmi3Instance c), (c))                                                          \
     GET_(X, Float64) GET_(X, Int32) GET_(X, Int64) GET_(X, UInt64) GET_(X, Boolean) GET_(X, String)                            \
+    GET_(X, Float32) GET_(X, Int8) GET_(X, UInt8) GET_(X, Int16) GET_(X, UInt16) GET_(X, UInt32)                               \
     SET_(X, Float64) SET_(X, Int32) SET_(X, Int64) SET_(X, UInt64) SET_(X, Boolean) SET_(X, String)                            \
+    SET_(X, Float32) SET_(X, Int8) SET_(X, UInt8) SET_(X, Int16) SET_(X, UInt16) SET_(X, UInt32)                               \
     X(fmi3Status, fmi3GetFMUState, (fmi3Instance c, fmi3FMUState *s), (c, s))                                \
     X(fmi3Status, fmi3SetFMUState, (fmi3Instance c, fmi3FMUState s), (c, s))                                 \
     X(fmi3Status, fmi3FreeFMUState, (fmi3Instance c, fmi3FMUState *s), (c, s))                               \
@@ -59,8 +61,6 @@
     X(fmi3Status, fmi3GetNumberOfContinuousStates, (fmi3Instance c, size_t *n), (c, n))
 
 #define FMI3_OTHERS(X)                                                                                       \
-    GET_(X, Float32) GET_(X, Int8) GET_(X, UInt8) GET_(X, Int16) GET_(X, UInt16) GET_(X, UInt32)                               \
-    SET_(X, Float32) SET_(X, Int8) SET_(X, UInt8) SET_(X, Int16) SET_(X, UInt16) SET_(X, UInt32)                               \
     X(fmi3Status, fmi3GetBinary, (VRS_, size_t sizes[], fmi3Binary v[], size_t n), (c, vr, nvr, sizes, v, n)) \
     X(fmi3Status, fmi3SetBinary, (VRS_, const size_t sizes[], const fmi3Binary v[], size_t n),                \
       (c, vr, nvr, sizes, v, n))                                                                             \
