@@ -163,6 +163,24 @@ def test_an_instance_reset_gives_a_fresh_instances_bits_for_every_native_model(n
         assert np.array_equal(expected, np.column_stack([columns[n] for n in ["time", *reused.output_names]]))
 
 
+def test_the_operations_of_a_runs_setup_are_made_once_and_given_each_runs_values(native):
+    """Runs A, B, A again of the same parameters' names on one runner: the operations that set them up are made once
+    for the fresh instances and once for the reset ones (not once a run), and each run sets its own values (B's rows
+    differ from A's; A's again are A's bits)."""
+    system = systems.prepare(systems.get("lqr"), 1e-3, 2.0)
+    fmus, connections = system.resolve(native[2])
+    a = {**system.parameters, "plant": {**system.parameters.get("plant", {}), "theta1_0": 0.05, "m2": 9.0}}
+    b = {**a, "plant": {**a["plant"], "theta1_0": 0.1, "m2": 4.0}}
+    with ReusedRunner(fmus, connections) as reused:
+        reused.master.initialize = None  # each run set up through run_calls, never the master's way
+        first = reused.run(0.0, 2.0, 1e-3, a)[0].copy()
+        other = reused.run(0.0, 2.0, 1e-3, b)[0].copy()
+        again = reused.run(0.0, 2.0, 1e-3, a)[0].copy()
+        assert len(reused._plans) == 2 and reused.fresh == 1
+    assert not np.array_equal(first, other)
+    assert np.array_equal(first, again)
+
+
 def test_an_instance_that_cannot_reset_is_made_again(native, monkeypatch):
     """An FMU that cannot reset (its fmi2Reset answering fmi2Error: here the controller's, replaced by a C-callable
     function that does just that) is freed and instantiated again for the next case, with the same bits."""

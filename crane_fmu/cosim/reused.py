@@ -73,6 +73,7 @@ class ReusedRunner:
         for name, path in self.fmus.items():
             self.instances[name] = open_instance(path, name)
         self.fresh += 1
+        self._plans = {}  # the operations of run_calls by the parameters' names (of these instances)
         self.master = Master(self.instances, self.connections, self.algorithm)
         if self.master.compiled is None:
             self.close()
@@ -105,8 +106,32 @@ class ReusedRunner:
         """``(init, exits, ends)``: the operations of run_calls that reset (unless the instances are new), set up,
         set ``parameters`` and enter initialisation; exit it; terminate; each ``(Operation array, [(instance,
         function)] of each, what they point to)``. None where a parameter is neither a Real nor a String nor an
-        Enumeration (the master's way sets it)."""
+        Enumeration (the master's way sets it). Made once for the instances and the parameters' names (the
+        :meth:`_plan`), then only the values written in place."""
+        parameters = parameters or {}
+        key = (self._used, tuple((name, tuple(values)) for name, values in parameters.items()))
+        if key not in self._plans:
+            if len(self._plans) >= 64:  # a bound: runs with ever other names of parameters
+                self._plans.clear()
+            self._plans[key] = self._plan(parameters)
+        plan = self._plans[key]
+        if plan is None:
+            return None
+        operations, fills = plan
+        for values, i, kind, inst, name, variable in fills:
+            value = parameters[name][variable]
+            if kind == "Enumeration":  # by name or value, as the master's set
+                values[i] = inst.enumeration_value(variable, value)
+            else:
+                values[i] = str(value).encode() if kind == "String" else float(value)
+        return operations
+
+    def _plan(self, parameters):
+        """``(operations, fills)`` of :meth:`_operations` for the names of ``parameters``: the operations (their values
+        still to write), and ``(values, index, kind, instance, name, variable)`` where each value goes; None where a
+        parameter is of another kind."""
         init, exits, ends = ([], [], []), ([], [], []), ([], [], [])
+        fills = []
 
         def add(ops, inst, kind, function, vr=None, values=None):
             address = ctypes.cast(inst._library[function], ctypes.c_void_p).value
@@ -116,35 +141,37 @@ class ReusedRunner:
             ops[1].append((inst, function))
             ops[2].extend((vr, values))
 
+        def filled(values, inst, name, kinds):
+            fills.extend((values, i, kind, inst, name, variable) for i, (variable, kind) in enumerate(kinds))
+            return values
+
         if self._used:
             for inst in self.instances.values():
                 add(init, inst, CALL, f"fmi{inst.md.fmiVersion[0]}Reset")
         for name, inst in self.instances.items():
             fmi3 = inst.md.fmiVersion.startswith("3")
             reals, texts, items = [], [], []
-            for variable, value in (parameters or {}).get(name, {}).items():
+            for variable in parameters.get(name, {}):
                 kind = inst._variable(variable).type
                 if kind not in ("Real", "Float64", "String", "Enumeration"):
                     return None
                 vr = inst.variables[variable].valueReference
-                if kind == "Enumeration":  # by name or value, as the master's set
-                    items.append((vr, inst.enumeration_value(variable, value)))
-                else:
-                    (texts if kind == "String" else reals).append((vr, value))
+                (items if kind == "Enumeration" else texts if kind == "String" else reals).append((vr, variable, kind))
             if not fmi3:
                 add(init, inst, SETUP_2, "fmi2SetupExperiment")
             if reals:
                 add(init, inst, GET_SET_3 if fmi3 else GET_SET_2, "fmi3SetFloat64" if fmi3 else "fmi2SetReal",
-                    (ctypes.c_uint * len(reals))(*(vr for vr, _ in reals)),
-                    (ctypes.c_double * len(reals))(*(float(value) for _, value in reals)))
+                    (ctypes.c_uint * len(reals))(*(vr for vr, _, _ in reals)),
+                    filled((ctypes.c_double * len(reals))(), inst, name, [(v, k) for _, v, k in reals]))
             if texts:
                 add(init, inst, SET_STRINGS_3 if fmi3 else SET_STRINGS_2, "fmi3SetString" if fmi3 else "fmi2SetString",
-                    (ctypes.c_uint * len(texts))(*(vr for vr, _ in texts)),
-                    (ctypes.c_char_p * len(texts))(*(str(value).encode() for _, value in texts)))
+                    (ctypes.c_uint * len(texts))(*(vr for vr, _, _ in texts)),
+                    filled((ctypes.c_char_p * len(texts))(), inst, name, [(v, k) for _, v, k in texts]))
             if items:
                 add(init, inst, SET_INT64S_3 if fmi3 else SET_INTEGERS_2, "fmi3SetInt64" if fmi3 else "fmi2SetInteger",
-                    (ctypes.c_uint * len(items))(*(vr for vr, _ in items)),
-                    ((ctypes.c_longlong if fmi3 else ctypes.c_int) * len(items))(*(value for _, value in items)))
+                    (ctypes.c_uint * len(items))(*(vr for vr, _, _ in items)),
+                    filled(((ctypes.c_longlong if fmi3 else ctypes.c_int) * len(items))(), inst, name,
+                           [(v, k) for _, v, k in items]))
             if fmi3:
                 add(init, inst, ENTER_3, "fmi3EnterInitializationMode")
             else:
@@ -152,7 +179,7 @@ class ReusedRunner:
             add(exits, inst, CALL, f"fmi{inst.md.fmiVersion[0]}ExitInitializationMode")
             add(ends, inst, CALL, f"fmi{inst.md.fmiVersion[0]}Terminate")
         return [((Operation * len(ops)).from_buffer_copy(b"".join(bytes(o) for o in ops)) if ops else
-                 (Operation * 0)(), owners, alive) for ops, owners, alive in (init, exits, ends)]
+                 (Operation * 0)(), owners, alive) for ops, owners, alive in (init, exits, ends)], fills
 
     def _calls(self, operations, time, stop):
         """Make ``operations`` (run_calls, at ``time`` with the experiment's ``stop``); ``(instance, function, status)``
