@@ -33,6 +33,7 @@ import math
 
 MARGIN = 1e-6  # m: the rest point kept this far inside the rail end (the plant refuses x > x_max by any amount)
 SLACK = 1e-9  # m: a block ends "farther" than it began by more than this (the braking hold's own rounding)
+AT_REST = 1e-12  # m/s: a speed within rounding of rest is held at zero (-v/T of a denormal speed is not)
 
 
 def braking_distance(speed, limit, cycle):
@@ -130,5 +131,5 @@ class RailGuard:
         held = {}
         for k, (_, output, _, speed, _, _, limit) in enumerate(self.guarded):
             v = values[speed] + (self.lags[k][4] * self.lags[k][0] if k in self.lags else 0.0)  # s = v + a tau
-            held[output] = -math.copysign(min(limit, abs(v) / self.cycle), v) if v else 0.0
+            held[output] = -math.copysign(min(limit, abs(v) / self.cycle), v) if abs(v) > AT_REST else 0.0
         return held
