@@ -252,7 +252,9 @@ def run_sweep_bench(n_cases=16, stop_time=10.0, step=1e-3, repeat=3, out=print):
     overhead is the wall time per case with one worker minus the mean time the
     case itself took inside the worker.
     """
-    from distributed import Client, LocalCluster  # optional: the dask extra
+    from distributed import Client  # optional: the dask extra
+
+    from crane_fmu.batch import local_cluster
 
 
     study = spec.parse({"stop_time": stop_time, "step": step, "metrics": ["outcome", "max_theta1_deg"]})
@@ -266,8 +268,7 @@ def run_sweep_bench(n_cases=16, stop_time=10.0, step=1e-3, repeat=3, out=print):
         system = shippable(paper, Path(tmp) / "fmus")
         clients = {}
         for workers in (1, 2):
-            cluster = stack.enter_context(LocalCluster(n_workers=workers, threads_per_worker=1,
-                                                       dashboard_address=":0", silence_logs=50))  # any free port
+            cluster = stack.enter_context(local_cluster(workers))  # as a sweep's: on the loopback, logs silenced
             client = stack.enter_context(Client(cluster))
             shipped = client.scatter([system], broadcast=True)[0]
             clients[workers] = (client, shipped)
