@@ -933,6 +933,24 @@ def _fuzz_modbus(client, rng):
     return reply
 
 
+async def _fuzz_requests(server, opc, node, modbus, names, address, rng, operations):
+    """``operations`` random requests, OPC UA or Modbus by a coin; the server running after each; every 50 and at the
+    end ``(u over OPC UA, u over Modbus, time, the time read before)``."""
+    checks, last_time = [], 0.0
+    for k in range(operations):
+        if rng.random() < 0.5:
+            await _fuzz_opcua(opc, node, names, rng)
+        else:
+            _fuzz_modbus(modbus, rng)
+        assert server.proc.poll() is None, f"the server ended at request {k}"
+        if k % 50 == 49 or k == operations - 1:
+            u, t = await opc.read_values([node("controller.u"), node("Time")])
+            held = modbus.read_holding_registers(address, count=2, device_id=1).registers
+            checks.append((u, words_float32(*held), t, last_time))
+            last_time = t
+    return checks
+
+
 def test_a_fuzz_of_both_protocols_never_ends_the_server_nor_leaves_a_value_out_of_range(fmu_dir, tmp_path):
     """600 random requests (seed 50: the same every run), OPC UA and Modbus interleaved, against a lock-step server
     with a drive limit of 3 m/s2 and rail ends at +-0.3 m (so that steps are refused too): random node ids,
@@ -953,21 +971,9 @@ def test_a_fuzz_of_both_protocols_never_ends_the_server_nor_leaves_a_value_out_o
     modbus = ModbusTcpClient(server.modbus[0], port=server.modbus[1], timeout=10)
 
     async def fuzz(url):
-        checks = []
         async with Client(url) as opc:
             ns, node = await _nodes(opc)
-            last_time = 0.0
-            for k in range(FUZZ_OPERATIONS):
-                if rng.random() < 0.5:
-                    await _fuzz_opcua(opc, node, names, rng)
-                else:
-                    _fuzz_modbus(modbus, rng)
-                assert server.proc.poll() is None, f"the server ended at request {k}"
-                if k % 50 == 49 or k == FUZZ_OPERATIONS - 1:
-                    u, t = await opc.read_values([node("controller.u"), node("Time")])
-                    held = modbus.read_holding_registers(address, count=2, device_id=1).registers
-                    checks.append((u, words_float32(*held), t, last_time))
-                    last_time = t
+            checks = await _fuzz_requests(server, opc, node, modbus, names, address, rng, FUZZ_OPERATIONS)
             # whatever the draws did: the drive's limit held into a rail end, so that a step is refused for certain
             await node("controller.u").write_value(ua.Variant(3.0, ua.VariantType.Double))
             step = node("Step")
@@ -1240,21 +1246,9 @@ def test_a_real_time_fuzz_of_both_protocols_never_ends_the_server_nor_holds_it(f
     modbus = ModbusTcpClient(server.modbus[0], port=server.modbus[1], timeout=10)
 
     async def fuzz(url):
-        checks = []
         async with Client(url) as opc:
             ns, node = await _nodes(opc)
-            last_time = 0.0
-            for k in range(REAL_TIME_FUZZ_OPERATIONS):
-                if rng.random() < 0.5:
-                    await _fuzz_opcua(opc, node, names, rng)
-                else:
-                    _fuzz_modbus(modbus, rng)
-                assert server.proc.poll() is None, f"the server ended at request {k}"
-                if k % 50 == 49 or k == REAL_TIME_FUZZ_OPERATIONS - 1:
-                    u, t = await opc.read_values([node("controller.u"), node("Time")])
-                    held = modbus.read_holding_registers(address, count=2, device_id=1).registers
-                    checks.append((u, words_float32(*held), t, last_time))
-                    last_time = t
+            checks = await _fuzz_requests(server, opc, node, modbus, names, address, rng, REAL_TIME_FUZZ_OPERATIONS)
             await node("controller.u").write_value(ua.Variant(3.0, ua.VariantType.Double))
             await asyncio.sleep(1.5)
             first = await node("Time").read_value()
