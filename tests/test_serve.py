@@ -933,6 +933,26 @@ def _fuzz_modbus(client, rng):
     return reply
 
 
+def _fuzz_clients(fmu_dir, server):
+    """``(served names, controller.u's Modbus address, a Modbus client of the server)`` for a fuzz of the lqr run."""
+    served = _served_lqr(fmu_dir)
+    address = {r.name: r.address for r in register_map(served)}["controller.u"]
+    return [v.name for v in served], address, ModbusTcpClient(server.modbus[0], port=server.modbus[1], timeout=10)
+
+
+def _fuzzed_run_held(checks, operations, server, status, err):
+    """A fuzzed run's requirements: u within +-3 over both protocols and time never back at every check, status 0,
+    every recorded value finite, u within its range, each time once. Returns the recorded columns."""
+    assert len(checks) == operations // 50
+    for u, u_modbus, t, before in checks:
+        assert -3.0 <= u <= 3.0 and -3.0 <= u_modbus <= 3.0 and t >= before
+    assert status == 0, err[-2000:]
+    recorded = read_csv(server.out)
+    assert all(np.all(np.isfinite(column)) for column in recorded.values())
+    assert np.all(np.abs(recorded["controller.u"]) <= 3.0) and np.all(np.diff(recorded["time"]) > 0)
+    return recorded
+
+
 async def _fuzz_requests(server, opc, node, modbus, names, address, rng, operations):
     """``operations`` random requests, OPC UA or Modbus by a coin; the server running after each; every 50 and at the
     end ``(u over OPC UA, u over Modbus, time, the time read before)``."""
@@ -965,10 +985,7 @@ def test_a_fuzz_of_both_protocols_never_ends_the_server_nor_leaves_a_value_out_o
     server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--lock-step", "--set",
                     "plant.u_max=3", "--set", "plant.x_min=-0.3", "--set", "plant.x_max=0.3", "--opcua", "127.0.0.1:0",
                     "--modbus", "127.0.0.1:0")
-    served = _served_lqr(fmu_dir)
-    names = [v.name for v in served]
-    address = {r.name: r.address for r in register_map(served)}["controller.u"]
-    modbus = ModbusTcpClient(server.modbus[0], port=server.modbus[1], timeout=10)
+    names, address, modbus = _fuzz_clients(fmu_dir, server)
 
     async def fuzz(url):
         async with Client(url) as opc:
@@ -990,13 +1007,7 @@ def test_a_fuzz_of_both_protocols_never_ends_the_server_nor_leaves_a_value_out_o
     finally:
         modbus.close()
         status, out, err = server.stop()
-    assert len(checks) == FUZZ_OPERATIONS // 50
-    for u, u_modbus, t, before in checks:
-        assert -3.0 <= u <= 3.0 and -3.0 <= u_modbus <= 3.0 and t >= before
-    assert status == 0, err[-2000:]
-    recorded = read_csv(server.out)
-    assert all(np.all(np.isfinite(column)) for column in recorded.values())
-    assert np.all(np.abs(recorded["controller.u"]) <= 3.0) and np.all(np.diff(recorded["time"]) > 0)
+    _fuzzed_run_held(checks, FUZZ_OPERATIONS, server, status, err)
     assert checks[-1][2] > 0 and "rolled back" in err  # steps were taken, and refused (rail ends)
 
 
@@ -1240,10 +1251,7 @@ def test_a_real_time_fuzz_of_both_protocols_never_ends_the_server_nor_holds_it(f
                     "--watchdog", "60", "--stop-time", "1000", "--set", "plant.u_max=3", "--set", "plant.x_min=-0.3",
                     "--set", "plant.x_max=0.3", "--set", f"plant.tau={lag}", "--opcua", "127.0.0.1:0",
                     "--modbus", "127.0.0.1:0")
-    served = _served_lqr(fmu_dir)
-    names = [v.name for v in served]
-    address = {r.name: r.address for r in register_map(served)}["controller.u"]
-    modbus = ModbusTcpClient(server.modbus[0], port=server.modbus[1], timeout=10)
+    names, address, modbus = _fuzz_clients(fmu_dir, server)
 
     async def fuzz(url):
         async with Client(url) as opc:
@@ -1261,12 +1269,6 @@ def test_a_real_time_fuzz_of_both_protocols_never_ends_the_server_nor_holds_it(f
     finally:
         modbus.close()
         status, out, err = server.stop()
-    assert len(checks) == REAL_TIME_FUZZ_OPERATIONS // 50
-    for u, u_modbus, t, before in checks:
-        assert -3.0 <= u <= 3.0 and -3.0 <= u_modbus <= 3.0 and t >= before
     assert last > first + 0.5, (first, last, err[-2000:])  # the run is not held at a rail end
-    assert status == 0, err[-2000:]
-    recorded = read_csv(server.out)
-    assert all(np.all(np.isfinite(column)) for column in recorded.values())
-    assert np.all(np.abs(recorded["controller.u"]) <= 3.0) and np.all(np.diff(recorded["time"]) > 0)
+    recorded = _fuzzed_run_held(checks, REAL_TIME_FUZZ_OPERATIONS, server, status, err)
     assert np.all(np.abs(recorded["plant.x"]) <= 0.3)
