@@ -51,6 +51,7 @@ import pythonfmu  # noqa: F401 (see below)
 import pythonfmu3  # noqa: F401
 from fmu_kinds import FMU_KINDS
 from helpers import BOARD_CASES, BOARD_CONTROLLERS
+from native_fmus import remove_extracted
 from once import made_in, made_once
 
 from crane_fmu import systems
@@ -308,8 +309,9 @@ def windows_host(wine_env, tmp_path_factory):
 
 
 def pytest_sessionfinish(session):
-    """When the whole run ends (in the controller under xdist, after every worker): the run fails if a test
-    wrote into the shared build; the Wine prefix goes."""
+    """When a process's tests end, the FMUs it extracted go; when the whole run ends (in the controller under xdist,
+    after every worker): the run fails if a test wrote into the shared build; the Wine prefix goes."""
+    remove_extracted()
     if os.environ.get("PYTEST_XDIST_WORKER") or not hasattr(session.config, "_tmp_path_factory"):
         return
     build = session.config._tmp_path_factory.getbasetemp() / "build"

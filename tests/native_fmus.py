@@ -8,7 +8,9 @@ the native FMUs' folders).
 """
 
 import ctypes
+import shutil
 import sys
+import tempfile
 
 import fmpy
 import numpy as np
@@ -27,6 +29,22 @@ from fmpy.fmi3 import FMU3Model, FMU3Slave
 from fmpy.logging import addLoggerProxy
 
 from crane_fmu.build_scripts.build_fmus import fmi3_dir
+
+_UNZIPPED = []  # this test process's folder of extracted FMUs, made at the first, removed at the session's end
+
+
+def extracted(path):
+    """``fmpy.extract`` into a folder :func:`remove_extracted` removes (fmpy's own one in /tmp is never removed)."""
+    if not _UNZIPPED:
+        _UNZIPPED.append(tempfile.mkdtemp(prefix="crane-test-unzipped-"))
+    return fmpy.extract(str(path), unzipdir=tempfile.mkdtemp(dir=_UNZIPPED[0]))
+
+
+def remove_extracted():
+    """Remove what :func:`extracted` made (conftest's ``pytest_sessionfinish``: xdist's workers skip ``atexit``)."""
+    while _UNZIPPED:
+        shutil.rmtree(_UNZIPPED.pop(), ignore_errors=True)
+
 
 _LIBC = ctypes.CDLL(None)
 _LIBC.calloc.restype, _LIBC.calloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t, ctypes.c_size_t]
@@ -60,7 +78,7 @@ def open_native(path, version, parameters=None, instance_name="c", model_exchang
     md = read_model_description(str(path))
     vr = {v.name: v.valueReference for v in md.modelVariables}
     interface = md.modelExchange if model_exchange else md.coSimulation
-    name, unzipped = interface.modelIdentifier, fmpy.extract(str(path))
+    name, unzipped = interface.modelIdentifier, extracted(path)
     if version == 2:
         fmu = (FMU2Model if model_exchange else FMU2Slave)(guid=md.guid, unzipDirectory=unzipped,
                                                           modelIdentifier=name, instanceName=instance_name)
@@ -109,7 +127,7 @@ def messages(path, settings, steps=(), read=(), read_at_end=(), instance_name="c
     callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_LIBC.calloc)
     callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_LIBC.free)
     addLoggerProxy(ctypes.byref(callbacks))
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=fmpy.extract(str(path)),
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=extracted(path),
                     modelIdentifier=md.coSimulation.modelIdentifier, instanceName=instance_name)
     fmu.instantiate(callbacks=callbacks, loggingOn=logging_on)
 

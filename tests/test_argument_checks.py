@@ -24,7 +24,7 @@ from fmpy.fmi2 import (
 from fmpy.fmi3 import FMU3Slave, fmi3IntermediateUpdateCallback, fmi3LogMessageCallback
 from fmpy.logging import addLoggerProxy
 from fmu_kinds import FMU_KINDS
-from native_fmus import LOG, LOGGER, close, open_native
+from native_fmus import LOG, LOGGER, close, extracted, open_native
 
 OK, ERROR = 0, 3
 VR = POINTER(c_uint)
@@ -242,9 +242,7 @@ def _staged(folder, version, stage):
     """A fresh CranePlant instance brought to ``stage`` through fmpy: ``(fmu, dll, instance, vr)``."""
     md = read_model_description(str(folder / "CranePlant.fmu"))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    import fmpy
-
-    unzipped = fmpy.extract(str(folder / "CranePlant.fmu"))
+    unzipped = extracted(folder / "CranePlant.fmu")
     if version == 2:
         fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
                         instanceName="c")

@@ -23,6 +23,7 @@ import pytest
 from fmpy.fmi2 import FMU2Model, FMU2Slave
 from fmpy.fmi3 import FMU3Model, FMU3Slave
 from fmpy.validation import validate_fmu
+from native_fmus import extracted
 from third_party_hosts import CLEAN_ENV, FMUCHECK, OMSIMULATOR, SAME, fmusim_me, read_oms_mat, run_tool, tool
 
 from crane_fmu.analysis.linearize import linearize
@@ -259,7 +260,7 @@ class _Instance:
         self.outputs = [u.variable.valueReference for u in md.outputs]
         kind = FMU3Model if self.fmi3 else FMU2Model
         token = md.instantiationToken if self.fmi3 else md.guid
-        self.fmu = kind(guid=token, unzipDirectory=fmpy.extract(str(path)),
+        self.fmu = kind(guid=token, unzipDirectory=extracted(path),
                         modelIdentifier=md.modelExchange.modelIdentifier, instanceName="me")
         self.fmu.instantiate()
         set_ = self.fmu.setFloat64 if self.fmi3 else self.fmu.setReal
@@ -360,7 +361,7 @@ def _stepped_co_simulation(path):
     fmi3 = md.fmiVersion.startswith("3")
     vr = {v.name: v.valueReference for v in md.modelVariables}
     kind = FMU3Slave if fmi3 else FMU2Slave
-    fmu = kind(guid=md.instantiationToken if fmi3 else md.guid, unzipDirectory=fmpy.extract(str(path)),
+    fmu = kind(guid=md.instantiationToken if fmi3 else md.guid, unzipDirectory=extracted(path),
                modelIdentifier=md.coSimulation.modelIdentifier, instanceName="cs")
     fmu.instantiate()
     set_ = fmu.setFloat64 if fmi3 else fmu.setReal

@@ -18,7 +18,6 @@ import re
 import struct
 import subprocess
 
-import fmpy
 import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
@@ -31,7 +30,7 @@ from fmpy.fmi2 import (
 from fmpy.logging import addLoggerProxy
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from native_fmus import LOG, LOGGER, compiler
+from native_fmus import LOG, LOGGER, compiler, extracted
 
 from crane_fmu import components
 from crane_fmu.build_scripts.native import FOLDERS, native_dir
@@ -71,7 +70,7 @@ class Judge:
         md = read_model_description(str(path))
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
         self.log, self.items = log, items  # items: an Enumeration's names, by parameter
-        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=fmpy.extract(str(path)),
+        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=extracted(path),
                              modelIdentifier=md.coSimulation.modelIdentifier, instanceName="rules")
         self.fmu.instantiate(callbacks=callbacks)
         self.used = False

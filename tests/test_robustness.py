@@ -121,7 +121,7 @@ def test_same_run_twice_gives_bit_identical_csv(fmu_dir, tmp_path, capsys):
 
 
 FUZZ = textwrap.dedent("""
-    import ctypes, math, sys
+    import atexit, ctypes, math, shutil, sys
     from hypothesis import given, settings, strategies as st, HealthCheck
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
@@ -131,6 +131,7 @@ FUZZ = textwrap.dedent("""
     path, examples = sys.argv[1], int(sys.argv[2])
     md = read_model_description(path)
     unzip = str(extract(path))
+    atexit.register(shutil.rmtree, unzip, True)  # fmpy's folder in /tmp, removed when this process ends
     plant = md.coSimulation.modelIdentifier == "CranePlant"
     reals = [v for v in md.modelVariables if v.type == "Real"]
     strings = [v for v in md.modelVariables if v.type == "String"]
