@@ -14,7 +14,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from crane_fmu.analysis import hard_hit_floor as hhf
-from crane_fmu.model import plant_equations
+from crane_fmu.model import hard_hit, plant_equations
 from crane_fmu.model.parameters import PlantParameters
 
 P = PlantParameters()
@@ -88,6 +88,20 @@ def test_a_plan_that_stops_short_of_the_stored_one_misses_the_band(certificate):
     plan, start, _, _ = certificate
     cut = plan._replace(hold_u=np.zeros_like(plan.hold_u))
     assert hhf.settling(cut, start)[1] > math.radians(0.5)
+
+
+def test_the_plan_raises_the_swing_energy_before_it_takes_it_out(certificate):
+    """Why a law that only takes the swing energy out (issue 51's energy-based outer loop: eqs (E1)-(E2) give
+    E' = -u xi', so u = u_max sat(k xi') drains it fastest) cannot follow the floor's plan: along the stored plan
+    (DOP853) the swing energy of eq (E1) is above its start value through the plan's first 40 % (the drive throws
+    the payload up, as far as 92 deg), and all but 1 % of it is taken out in the rest of the plan."""
+    plan, start, _, _ = certificate
+    times, states = hhf.simulate_plan(plan, start)
+    c = hard_hit.COMPONENT.check({})  # the Section V crane, as the plan's
+    energy = np.array([hard_hit.swing_energy(c, s) for s in states])
+    first = (times > 0.0) & (times <= 0.4 * plan.seconds)
+    assert np.min(energy[first]) > energy[0], (energy[0], np.min(energy[first]))
+    assert energy[np.argmin(np.abs(times - plan.seconds))] < 0.01 * energy[0]
 
 
 SMALL = dict(intervals=20, hold=1.2, hold_intervals=24, segment=8, max_iterations=300)  # a coarse grid: seconds
