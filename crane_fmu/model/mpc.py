@@ -45,6 +45,7 @@ does not know), which the tracking QP then removes.
 """
 
 import dataclasses
+import itertools
 import math
 from collections import namedtuple
 
@@ -80,6 +81,12 @@ TOLERANCE = 0.01  # ... and the controller plans again with it when a swing mode
 SUSPECT_AFTER = 3  # intervals: the data are judged beyond the crane's equations (UNEXPLAINED) from this many on,
 # before a model may be accepted (Config.samples): behind an estimator of another crane (S9) the misfit shows after
 # 0.15 s, while a clean crane's data (S1-S3) are explained to 1e-13
+# the cautious plan's weights on the fast swing mode left at the end on each crane of SPREAD, tried in turn: the first
+# whose plan still reaches the target (its weight RHO) is taken
+ROBUST_WEIGHTS = (1e6, 3e5, 1e5, 3e4, 1e4)
+SPREAD = (0.1, 0.2, 0.2, 0.5)  # l1, l2, m1, m2: the shares by which the crane may differ from the model (the corners
+# a cautious plan is robust to, as a ZVD shaper is to a frequency error): the rigging's uncertainty of the paired
+# design (planar_scenarios.FACTORS)
 CAUTIOUS_STRETCH = 1.3  # once the data are unexplained, every plan is this much longer than the shortest move: the
 # least-effort move of that length, no longer bang-bang, excites little of the swing a wrong model leaves behind
 
@@ -188,6 +195,17 @@ def feasible_start(guess, v0, lower_u, upper_u, v_max, u_max, interval):
     return u
 
 
+def fast_mode_rows(d):
+    """The rows that take a state to the fast swing mode's amplitude ``(eta, eta' / w)`` on the angle it moves most
+    (as :func:`deviation`): what a plan robust to another crane must leave at rest."""
+    (s11, s21), (s12, s22) = d.shapes
+    det = s11 * s22 - s12 * s21
+    a, b = -s21 / det, s11 / det
+    scale = max(abs(s) for s in d.shapes[1])
+    w = d.omegas[1]
+    return ([0.0, 0.0, a * scale, 0.0, b * scale, 0.0], [0.0, 0.0, 0.0, a * scale / w, 0.0, b * scale / w])
+
+
 def rigid_move_time(distance, u_max, v_max):
     """The shortest rest-to-rest move [s] of the trolley alone: no crane move is shorter."""
     distance = abs(distance)
@@ -206,10 +224,14 @@ def _resampled(solution, n):
     return [inputs[pick] for pick in picks], hint
 
 
-def plan_move(d, s0, target, u_max, v_max, interval, max_intervals, stretch=1.0):
+def plan_move(d, s0, target, u_max, v_max, interval, max_intervals, stretch=1.0, others=()):
     """The shortest move ``(u*, s*)`` from ``s0`` to rest at ``target`` within the limits, or ``((), ())``; with
     ``stretch`` > 1 the move of ``ceil(stretch n)`` intervals (at most ``max_intervals``) instead, when it reaches
-    the target (the cautious plan of the safety envelope, :data:`CAUTIOUS_STRETCH`).
+    the target (the cautious plan of the safety envelope, :data:`CAUTIOUS_STRETCH`). With ``others``
+    (:func:`robust_ends`: other cranes' ``(Ad, Bd, rows)``) that longer move is first made robust to them: it minimises
+    ``RHO |s_n - target|^2 + w sum_m |R_m (s_n^m - target)|^2 + |U|^2``, each other crane's fast swing mode left at
+    rest at the end as well (as a ZVD shaper is robust to a frequency error), with the first weight ``w`` of
+    :data:`ROBUST_WEIGHTS` whose move still reaches the target; none: the move without them.
 
     Bisection on the number of intervals ``n``, from a first guess above the trolley's own
     shortest move (:func:`rigid_move_time`): a move of ``n`` intervals is possible when
@@ -224,19 +246,31 @@ def plan_move(d, s0, target, u_max, v_max, interval, max_intervals, stretch=1.0)
     low = int(shortest / interval) - 1 if at_rest else 0  # too few (rounding aside)
     previous = None
 
-    def attempt(n):
+    def ends(ad, bd, n):
+        """Each input's effect on the end state and what the inputs must add to reach the target."""
+        b = predict_rows(ad, bd, n)
+        free = list(s0)
+        for _ in range(n):
+            free = [linalg.dot(row, free) for row in ad]
+        return [b[n - 1 - j] for j in range(n)], [t - f for t, f in zip(target, free)]
+
+    def attempt(n, robust=(), weight=0.0):
         nonlocal previous
         if n < 1:  # no move of no interval (the bisection's low end may reach 0: all() of no state is no answer)
             return False, []
-        b = predict_rows(d.ad, d.bd, n)
-        free = list(s0)
-        for _ in range(n):
-            free = [linalg.dot(row, free) for row in d.ad]
-        miss = [t - f for t, f in zip(target, free)]  # what the inputs must add
-        columns = [b[n - 1 - j] for j in range(n)]  # input j's effect on the end state
+        columns, miss = ends(d.ad, d.bd, n)
         hessian = [[RHO * linalg.dot(columns[i], columns[j]) + (1.0 if i == j else 0.0) for j in range(n)]
                    for i in range(n)]
         f = [-RHO * linalg.dot(columns[i], miss) for i in range(n)]
+        for ad, bd, rows in robust:  # another crane's end: its rows (a swing mode's amplitude) near the target's
+            other, other_miss = ends(ad, bd, n)
+            other = [[linalg.dot(row, c) for row in rows] for c in other]
+            other_miss = [linalg.dot(row, other_miss) for row in rows]
+            for i in range(n):
+                row = hessian[i]
+                for j in range(n):
+                    row[j] += weight * linalg.dot(other[i], other[j])
+                f[i] -= weight * linalg.dot(other[i], other_miss)
         prepared = qp.prepare(hessian, constraint_rows(n, interval))
         lower, upper = [-u_max] * n, [u_max] * n
         for k in range(n):
@@ -270,9 +304,13 @@ def plan_move(d, s0, target, u_max, v_max, interval, max_intervals, stretch=1.0)
     if stretch > 1.0:  # the cautious plan: the least-effort move of more intervals (its |U|^2, no longer bang-bang)
         longer = min(int(math.ceil(high * stretch)), max_intervals)
         if longer > high:
-            ok, found = attempt(longer)
-            if ok:
-                inputs = found
+            # robust to the other cranes with the largest weight that still reaches the target, else not robust
+            tries = [(others, weight) for weight in ROBUST_WEIGHTS] if others else []
+            for robust, weight in tries + [((), 0.0)]:
+                ok, found = attempt(longer, robust, weight)
+                if ok:
+                    inputs = found
+                    break
     states, s = [tuple(s0)], list(s0)
     for value in inputs:
         s = [linalg.dot(row, s) + bk[0] * value for row, bk in zip(d.ad, d.bd)]
@@ -335,6 +373,26 @@ def identified_design(config, model):
         p = dataclasses.replace(config.plant, l1=model[0], l2=model[1], m2=model[2], m1=mu - model[2])
         cache[model] = design(p, config.weights, config.r, config.interval, config.steps)
     return cache[model]
+
+
+def robust_ends(config, known):
+    """``[(Ad, Bd, rows)]`` of the cranes at the corners of :data:`SPREAD` about the model ``known`` (``(l1, l2, m2)``,
+    the configured ``m1 + m2`` kept; zeros: the configured crane), each with its :func:`fast_mode_rows`: the ends a
+    cautious plan leaves at rest besides its own (made once)."""
+    cache = config.memo.setdefault("corners", {})
+    if known not in cache:
+        p = config.plant
+        if known[0] > 0.0:
+            mu = p.m1 + p.m2
+            p = dataclasses.replace(p, l1=known[0], l2=known[1], m2=known[2], m1=mu - known[2])
+        ends = []
+        for a, b, c, e in itertools.product(*((1.0 - share, 1.0 + share) for share in SPREAD)):
+            corner = dataclasses.replace(p, l1=p.l1 * a, l2=p.l2 * b, m1=p.m1 * c, m2=p.m2 * e)
+            ad, bd = linalg.zoh(*continuous_model(corner), config.interval)
+            omegas, shapes = planner.modes(corner)[:2]
+            ends.append((ad, bd, fast_mode_rows(Design(corner.l1, ad, bd, None, None, omegas, shapes))))
+        cache[known] = ends
+    return cache[known]
 
 
 def initial_state(config):
@@ -563,7 +621,8 @@ def solve(config, state, measured, l1_now, forces=(0.0, 0.0)):
     elif replan:
         shrink = 1.0 - c.margin
         plan_u, plan_s = plan_move(d, measured, target, c.u_max * shrink, c.v_max * shrink, c.interval,
-                                   int(LONGEST_PLAN / c.interval), CAUTIOUS_STRETCH if cautious else 1.0)
+                                   int(LONGEST_PLAN / c.interval), CAUTIOUS_STRETCH if cautious else 1.0,
+                                   robust_ends(c, known) if cautious else ())
         plan_start, step = at, 0
         bound = to_rest
         for planned in plan_s:  # the plan's largest swing

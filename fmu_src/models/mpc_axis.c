@@ -17,6 +17,8 @@
 #define R(value) py_repr(value, (char[REPR_SIZE]){0})
 #define NOT_POSITIVE_DEFINITE "ArithmeticError: the matrix is not positive definite"
 
+static const double ROBUST_WEIGHTS[N_ROBUST_WEIGHTS] = {1e6, 3e5, 1e5, 3e4, 1e4}; /* mpc.ROBUST_WEIGHTS */
+
 /* mpc.constraint_rows(): one row per input (1.0 at k) and per speed (interval over the inputs up to k). */
 static void constraint_rows(int steps, double interval, int first[], int length[], int offset[], double values[]) {
     values[0] = 1.0;
@@ -33,14 +35,18 @@ static QpPrepared prepared(const Config *c, Design *d) {
 }
 
 /* mpc.predict_rows(): b_k = Ad^k Bd for k < steps. */
-static void predict_rows(const Design *d, int steps, double *b) {
-    memcpy(b, d->bd, N_STATE * sizeof *b);
+static void predict_rows_of(const double ad[N_STATE][N_STATE], const double bd[N_STATE], int steps, double *b) {
+    memcpy(b, bd, N_STATE * sizeof *b);
     for (int k = 1; k < steps; k++)
-        for (int i = 0; i < N_STATE; i++) b[k * N_STATE + i] = la_dot(d->ad[i], &b[(k - 1) * N_STATE], N_STATE);
+        for (int i = 0; i < N_STATE; i++) b[k * N_STATE + i] = la_dot(ad[i], &b[(k - 1) * N_STATE], N_STATE);
+}
+
+static void predict_rows(const Design *d, int steps, double *b) {
+    predict_rows_of(d->ad, d->bd, steps, b);
 }
 
 /* planner.modes(): the swing modes' angular frequencies and shapes of q'' = -W q - w u (as planner.c's). */
-static const char *modes(const PlantParameters *p, Design *d) {
+static const char *modes_of(const PlantParameters *p, double omegas[2], double shapes[2][2]) {
     double m12 = p->m1 + p->m2, g = p->g;
     double na = m12 * p->l1, nb = p->m2 * p->l2, nc = p->l1, nd = p->l2; /* N of linearisation() */
     double ndet = na * nd - nb * nc;
@@ -51,13 +57,17 @@ static const char *modes(const PlantParameters *p, Design *d) {
     if (discriminant < 0) return "ValueError: math domain error";
     double root = sqrt(discriminant), lambdas[2] = {half_trace - root, half_trace + root};
     for (int k = 0; k < 2; k++) { /* (W - lam I) v = 0 */
-        if (b != 0) d->shapes[k][0] = b, d->shapes[k][1] = lambdas[k] - a;
-        else d->shapes[k][0] = lambdas[k] - dd, d->shapes[k][1] = cc;
+        if (b != 0) shapes[k][0] = b, shapes[k][1] = lambdas[k] - a;
+        else shapes[k][0] = lambdas[k] - dd, shapes[k][1] = cc;
     }
-    if (d->shapes[0][0] * d->shapes[1][1] - d->shapes[1][0] * d->shapes[0][1] == 0) return DIVISION_BY_ZERO;
+    if (shapes[0][0] * shapes[1][1] - shapes[1][0] * shapes[0][1] == 0) return DIVISION_BY_ZERO;
     if (lambdas[0] < 0 || lambdas[1] < 0) return "ValueError: math domain error";
-    d->omegas[0] = sqrt(lambdas[0]), d->omegas[1] = sqrt(lambdas[1]);
+    omegas[0] = sqrt(lambdas[0]), omegas[1] = sqrt(lambdas[1]);
     return NULL;
+}
+
+static const char *modes(const PlantParameters *p, Design *d) {
+    return modes_of(p, d->omegas, d->shapes);
 }
 
 /* mpc.design(): the tracking QP for the crane p: H_ij = r delta_ij + sum_{k>=max(i,j)} b_{k-i}' Q_k b_{k-j},
@@ -143,7 +153,7 @@ ModelStatus mpc_axis_configure(const MpcSettings *v, Config *c, const Reporter *
         error = lqr_design(&p, c->weights, c->r, h, c->lqr_table[i]);
     }
     if (error) return report(r, MODEL_ERROR, "%s", error);
-    c->have_identified = c->memo_valid = 0;
+    c->have_identified = c->memo_valid = c->have_corners = 0;
     return MODEL_OK;
 }
 
@@ -171,6 +181,52 @@ static const char *identified_design(Config *c, const double model[3], Design **
         c->have_identified = 1;
     }
     *out = d;
+    return NULL;
+}
+
+/* mpc.fast_mode_rows(): the rows that take a state to the fast swing mode's amplitude (eta, eta' / w) on the angle
+   it moves most. */
+static void fast_mode_rows(const double omegas[2], double shapes[2][2], double rows[2][N_STATE]) {
+    double s11 = shapes[0][0], s21 = shapes[0][1], s12 = shapes[1][0], s22 = shapes[1][1];
+    double det = s11 * s22 - s12 * s21, a = -s21 / det, b = s11 / det;
+    double scale = py_max(fabs(shapes[1][0]), fabs(shapes[1][1])), w = omegas[1];
+    memset(rows, 0, 2 * N_STATE * sizeof(double));
+    rows[0][2] = a * scale, rows[0][4] = b * scale;
+    rows[1][3] = a * scale / w, rows[1][5] = b * scale / w;
+}
+
+/* mpc.robust_ends(): the corners of SPREAD about the model `known` (l1, l2, m2; zeros: the configured crane),
+   m1 + m2 kept, each with its Ad, Bd and fast_mode_rows(); made once. */
+static const char *robust_ends(Config *c, const double known[3]) {
+    if (c->have_corners && c->corners_for[0] == known[0] && c->corners_for[1] == known[1] &&
+        c->corners_for[2] == known[2])
+        return NULL;
+    c->have_corners = 0;
+    PlantParameters p = c->plant;
+    if (known[0] > 0.0) {
+        double mu = p.m1 + p.m2;
+        p = (PlantParameters){mu - known[2], known[2], known[0], known[1], p.g};
+    }
+    const double spread[4] = {SPREAD_L1, SPREAD_L2, SPREAD_M1, SPREAD_M2};
+    double factors[4][2];
+    for (int i = 0; i < 4; i++) factors[i][0] = 1.0 - spread[i], factors[i][1] = 1.0 + spread[i];
+    for (int k = 0; k < N_CORNERS; k++) { /* itertools.product's order: l1 outermost, m2 innermost */
+        PlantParameters corner = p;
+        corner.l1 = p.l1 * factors[0][(k >> 3) & 1], corner.l2 = p.l2 * factors[1][(k >> 2) & 1];
+        corner.m1 = p.m1 * factors[2][(k >> 1) & 1], corner.m2 = p.m2 * factors[3][k & 1];
+        Matrix a, b, ad, bd;
+        double omegas[2], shapes[2][2];
+        const char *error = continuous_model(&corner, &a, &b);
+        if (error || (error = la_zoh(a, b, c->interval, &ad, &bd)) || (error = modes_of(&corner, omegas, shapes)))
+            return error;
+        for (int i = 0; i < N_STATE; i++) {
+            memcpy(c->corner_ad[k][i], ad.v[i], sizeof c->corner_ad[k][i]);
+            c->corner_bd[k][i] = bd.v[i][0];
+        }
+        fast_mode_rows(omegas, shapes, c->corner_rows[k]);
+    }
+    memcpy(c->corners_for, known, sizeof c->corners_for);
+    c->have_corners = 1;
     return NULL;
 }
 
@@ -205,7 +261,7 @@ static double rigid_move_time(double distance, double u_max, double v_max) {
 typedef struct {
     int most, has_previous, previous_n;
     double *hinv, *g, *norms, *hessian, *scratch, *work, *columns, *f, *lower, *upper, *guess, *start, *x;
-    double *previous, *previous_codes, *values, *found;
+    double *previous, *previous_codes, *values, *found, *other, *projected;
     int *first, *length, *offset, *chain_end, *iwork, *hint_rows, *hint_sides, *active, *sides;
     void *block;
 } PlanMemory;
@@ -213,7 +269,7 @@ typedef struct {
 static int plan_memory(PlanMemory *pm, int most) {
     size_t n = (size_t)most, m = 2 * n;
     size_t doubles = n * n + m * n + m + n * n + 2 * n * n + QP_WORK(n, m) + n * N_STATE + n + 2 * m + 5 * n + m +
-                     (n + 1) + n;
+                     (n + 1) + n + n * N_STATE + 2 * n;
     size_t ints = 4 * m + QP_IWORK(m) + 2 * m + 2 * m;
     pm->block = malloc(doubles * sizeof(double) + ints * sizeof(int));
     if (!pm->block) return -1;
@@ -237,6 +293,8 @@ static int plan_memory(PlanMemory *pm, int most) {
     pm->previous_codes = d, d += m;
     pm->values = d, d += n + 1;
     d += n;
+    pm->other = d, d += n * N_STATE;
+    pm->projected = d, d += 2 * n;
     int *i = (int *)d;
     pm->first = i, i += m;
     pm->length = i, i += m;
@@ -250,26 +308,47 @@ static int plan_memory(PlanMemory *pm, int most) {
     return 0;
 }
 
-/* plan_move()'s attempt(n): the solution of min RHO |s_n - target|^2 + |U|^2 within the limits from the last
-   attempt's (resampled, mpc._resampled), into pm->x; 1 when it reaches the target, -1 when H is not definite. */
-static int attempt(const Design *d, const double s0[N_STATE], const double target[N_STATE], double u_max,
-                   double v_max, double interval, int n, PlanMemory *pm) {
-    int m = 2 * n;
-    double *b = pm->columns; /* b_k; input j's effect on the end state is b_{n-1-j} */
-    predict_rows(d, n, b);
-    double free_[N_STATE], miss[N_STATE];
+/* plan_move()'s ends(): b_k of (ad, bd) into b (input j's effect on the end state is b_{n-1-j}) and what the
+   inputs must add to reach the target from s0 into miss. */
+static void ends(const double ad[N_STATE][N_STATE], const double bd[N_STATE], const double s0[N_STATE],
+                 const double target[N_STATE], int n, double *b, double miss[N_STATE]) {
+    predict_rows_of(ad, bd, n, b);
+    double free_[N_STATE];
     memcpy(free_, s0, sizeof free_);
     for (int k = 0; k < n; k++) {
         double next[N_STATE];
-        for (int i = 0; i < N_STATE; i++) next[i] = la_dot(d->ad[i], free_, N_STATE);
+        for (int i = 0; i < N_STATE; i++) next[i] = la_dot(ad[i], free_, N_STATE);
         memcpy(free_, next, sizeof next);
     }
-    for (int i = 0; i < N_STATE; i++) miss[i] = target[i] - free_[i]; /* what the inputs must add */
+    for (int i = 0; i < N_STATE; i++) miss[i] = target[i] - free_[i];
+}
+
+/* plan_move()'s attempt(n): the solution of min RHO |s_n - target|^2 + |U|^2 (+ weight times each corner's fast
+   mode at the end, with `robust`: the Config's corners, mpc.robust_ends) within the limits from the last
+   attempt's (resampled, mpc._resampled), into pm->x; 1 when it reaches the target, -1 when H is not definite. */
+static int attempt(const Design *d, const double s0[N_STATE], const double target[N_STATE], double u_max,
+                   double v_max, double interval, int n, const Config *robust, double weight, PlanMemory *pm) {
+    int m = 2 * n;
+    double *b = pm->columns; /* b_k; input j's effect on the end state is b_{n-1-j} */
+    double miss[N_STATE];
+    ends(d->ad, d->bd, s0, target, n, b, miss); /* what the inputs must add */
     for (int i = 0; i < n; i++) {
         const double *ci = b + (n - 1 - i) * N_STATE;
         for (int j = 0; j < n; j++)
             pm->hessian[i * n + j] = RHO * la_dot(ci, b + (n - 1 - j) * N_STATE, N_STATE) + (i == j ? 1.0 : 0.0);
         pm->f[i] = -RHO * la_dot(ci, miss, N_STATE);
+    }
+    for (int k = 0; robust && k < N_CORNERS; k++) { /* another crane's end: its fast mode's amplitude at the target */
+        double other_miss[N_STATE], projected_miss[2], *o = pm->projected;
+        ends(robust->corner_ad[k], robust->corner_bd[k], s0, target, n, pm->other, other_miss);
+        for (int i = 0; i < n; i++)
+            for (int r = 0; r < 2; r++)
+                o[2 * i + r] = la_dot(robust->corner_rows[k][r], pm->other + (n - 1 - i) * N_STATE, N_STATE);
+        for (int r = 0; r < 2; r++) projected_miss[r] = la_dot(robust->corner_rows[k][r], other_miss, N_STATE);
+        for (int i = 0; i < n; i++) {
+            for (int j = 0; j < n; j++) pm->hessian[i * n + j] += weight * la_dot(o + 2 * i, o + 2 * j, 2);
+            pm->f[i] -= weight * la_dot(o + 2 * i, projected_miss, 2);
+        }
     }
     constraint_rows(n, interval, pm->first, pm->length, pm->offset, pm->values);
     QpPrepared qp = {n, m, pm->first, pm->length, pm->offset, pm->values, pm->hinv, pm->g, pm->norms, pm->chain_end};
@@ -313,8 +392,8 @@ static int attempt(const Design *d, const double s0[N_STATE], const double targe
    number of intervals; *n_plan = 0 when none is needed or found within max_intervals. With stretch > 1 the move of
    ceil(stretch n) intervals (at most max_intervals) instead, when it reaches the target (the cautious plan). */
 static const char *plan_move(const Design *d, const double s0[N_STATE], const double target[N_STATE], double u_max,
-                             double v_max, double interval, int max_intervals, double stretch, double *plan_u,
-                             double *plan_s, int *n_plan) {
+                             double v_max, double interval, int max_intervals, double stretch, const Config *robust,
+                             double *plan_u, double *plan_s, int *n_plan) {
     *n_plan = 0;
     double far = 0.0;
     for (int i = 0; i < N_STATE; i++) far = py_max(far, fabs(s0[i] - target[i]));
@@ -327,12 +406,13 @@ static const char *plan_move(const Design *d, const double s0[N_STATE], const do
     if (plan_memory(&pm, max_intervals)) return "MemoryError: the plan's QP";
     int high = (int)py_min(py_max(8, low + 1 + (int)(0.15 * low) + 4), max_intervals), ok;
     const char *error = NULL;
-#define ATTEMPT(n) if ((n) < 1) { /* no move of no interval */                            \
+#define ATTEMPT_WITH(n, corners, weight) if ((n) < 1) { /* no move of no interval */       \
         ok = 0;                                                                             \
-    } else if ((ok = attempt(d, s0, target, u_max, v_max, interval, n, &pm)) < 0) {       \
+    } else if ((ok = attempt(d, s0, target, u_max, v_max, interval, n, corners, weight, &pm)) < 0) { \
         error = NOT_POSITIVE_DEFINITE;                                                      \
         goto done;                                                                          \
     }
+#define ATTEMPT(n) ATTEMPT_WITH(n, NULL, 0.0)
     ATTEMPT(high)
     memcpy(pm.found, pm.x, (size_t)high * sizeof *pm.x);
     while (!ok) {
@@ -353,8 +433,14 @@ static const char *plan_move(const Design *d, const double s0[N_STATE], const do
     }
     if (stretch > 1.0) { /* the cautious plan: the least-effort move of more intervals (no longer bang-bang) */
         int longer = (int)py_min(ceil(high * stretch), max_intervals);
-        if (longer > high) {
-            ATTEMPT(longer)
+        if (longer > high) { /* robust to the corners with the first weight that reaches the target, else not */
+            ok = 0;
+            for (int w = 0; robust && !ok && w < N_ROBUST_WEIGHTS; w++) {
+                ATTEMPT_WITH(longer, robust, ROBUST_WEIGHTS[w])
+            }
+            if (!ok) {
+                ATTEMPT(longer)
+            }
             if (ok) {
                 high = longer;
                 memcpy(pm.found, pm.x, (size_t)longer * sizeof *pm.x);
@@ -362,6 +448,7 @@ static const char *plan_move(const Design *d, const double s0[N_STATE], const do
         }
     }
 #undef ATTEMPT
+#undef ATTEMPT_WITH
     *n_plan = high;
     memcpy(plan_u, pm.found, (size_t)high * sizeof *plan_u);
     double s[N_STATE];
@@ -614,9 +701,10 @@ static const char *solve(Config *c, const double *state, const double measured[N
         bound = to_rest, hit = 1.0;
     } else if (replan) {
         double shrink = 1.0 - c->margin, far = 0.0;
+        if (cautious != 0.0 && (error = robust_ends(c, known))) return error;
         error = plan_move(d, measured, target, c->u_max * shrink, c->v_max * shrink, c->interval,
-                          (int)(LONGEST_PLAN / c->interval), cautious != 0.0 ? CAUTIOUS_STRETCH : 1.0, new_plan_u,
-                          new_plan_u + MAX_PLAN, &n_plan);
+                          (int)(LONGEST_PLAN / c->interval), cautious != 0.0 ? CAUTIOUS_STRETCH : 1.0,
+                          cautious != 0.0 ? c : NULL, new_plan_u, new_plan_u + MAX_PLAN, &n_plan);
         if (error) return error;
         memmove(new_plan_u + n_plan, new_plan_u + MAX_PLAN, (n_plan ? n_plan + 1 : 0) * N_STATE * sizeof(double));
         plan_u = new_plan_u, plan_s = new_plan_u + n_plan, n_states = n_plan ? n_plan + 1 : 0;

@@ -35,8 +35,14 @@
 #define TOLERANCE 0.01   /* mpc.TOLERANCE */
 #define SUSPECT_AFTER 3.0 /* mpc.SUSPECT_AFTER */
 #define CAUTIOUS_STRETCH 1.3 /* mpc.CAUTIOUS_STRETCH */
+#define SPREAD_L1 0.1        /* mpc.SPREAD: l1, l2, m1, m2 */
+#define SPREAD_L2 0.2
+#define SPREAD_M1 0.2
+#define SPREAD_M2 0.5
 /* SCHEDULE_POINTS, MAX_STEPS (the horizon's rule), MAX_PLAN (mpc.MAX_PLAN: the interval's rule) */
 enum { SCHEDULE_POINTS = 11, MAX_STEPS = 200, MAX_ROWS = 2 * MAX_STEPS, MAX_PLAN = 1200 };
+enum { N_CORNERS = 16 }; /* mpc.robust_ends(): the corners of mpc.SPREAD */
+#define N_ROBUST_WEIGHTS 5 /* mpc.ROBUST_WEIGHTS: their values in mpc_axis.c */
 /* the measured inputs of one axis: x .. dtheta2, l1_now, then the estimated forces F2_hat, F1_hat */
 enum { N_INPUTS = N_STATE + 3 };
 
@@ -66,6 +72,10 @@ typedef struct {
     Design designs[SCHEDULE_POINTS + 1]; /* the schedule's (or the one), then the identified model's */
     int n_designs, have_identified;
     double identified[3]; /* the identified model (l1, l2, m2) its design is for */
+    /* mpc.robust_ends() (memo "corners"): the corners' (Ad, Bd, fast_mode_rows) about the model corners_for */
+    int have_corners;
+    double corners_for[3], corner_ad[N_CORNERS][N_STATE][N_STATE], corner_bd[N_CORNERS][N_STATE];
+    double corner_rows[N_CORNERS][2][N_STATE];
     PlantParameters plant;
     double weights[N_STATE], r, x_d, u_max, v_max, margin, h, every, interval, replan_x, replan_angle;
     int steps, max_iterations, samples;
