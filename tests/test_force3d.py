@@ -299,3 +299,15 @@ def test_with_no_force_connected_offset_free_changes_no_bit_of_a_move(native, na
     assert list(free) == list(plain) and np.max(np.abs(plain["controller.uy"])) > 0.5
     for column in plain:
         assert np.array_equal(free[column], plain[column]), column
+
+
+@pytest.mark.parametrize("name", ["LqrController3D", "MpcController3D"])
+@pytest.mark.parametrize("settings", [{"offset_free": 3.0}, {"offset_free": 1.0, "m2": 0.0}, {"offset_free": math.nan}],
+                         ids=lambda c: ",".join(f"{k}={v!r}" for k, v in c.items()) if isinstance(c, dict) else c)
+def test_a_bad_offset_free_is_refused_by_the_native_fmu_in_the_python_fmus_one_line(fmu_dir, native, name, settings):
+    from native_fmus import messages
+
+    ours = messages(native[2] / f"{name}.fmu", settings)
+    theirs = messages(fmu_dir / f"{name}.fmu", settings)
+    assert ours == theirs
+    assert ours[0][-2] == "exit: 3" and "offset_free" in ours[1][-1]
