@@ -85,13 +85,15 @@ def _native_outputs(path, version, parameters, rows):
 
 @pytest.mark.parametrize("version", [2, 3])
 def test_native_equals_the_python_model_bit_for_bit(native, version):
-    """12 random designs (limits on and off) at 20 random inputs each: the same bits on Linux (1e-12 elsewhere)."""
+    """12 random designs (limits on and off, offset_free 0, 1, 2) at 20 random inputs each (the estimated forces
+    too): the same bits on Linux (1e-12 elsewhere)."""
     rng = random.Random(2052 + version)
     ours, theirs = [], []
-    for _ in range(12):
+    for n in range(12):
         parameters = {**_random_design(rng), "x_d": rng.uniform(-3, 3), "y_d": rng.uniform(-3, 3),
                       "u_max": rng.choice([math.inf, rng.uniform(0.1, 5)]),
                       "v_max": rng.choice([math.inf, rng.uniform(0.1, 2)])}
+        parameters["offset_free"] = float(n % 3) if parameters["m2"] > 0 else 0.0
         config = CONTROLLER.check(parameters)
         rows = [[rng.uniform(-2, 2) for _ in CONTROLLER.names("input")] for _ in range(20)]
         ours += _native_outputs(native[version] / "LqrController3D.fmu", version, parameters, rows)

@@ -9,6 +9,11 @@ A path: with ``corridor > 0`` the load goes from ``(x0, y0)`` through the waypoi
 ``(x_d, y_d)``; each axis makes its one move of the path (an L path: x, then y), the later leg started as early as
 a time-optimal move of the limits the plans use (``1 - margin`` of them) keeps within half the corridor of the
 path's centre line (:func:`.path.plan`, unshaped). Before its start an axis holds its start position.
+
+The wind's force: each axis' planar MPC takes that axis' estimated forces (``F2x_hat``, ``F1x_hat``; ``F2y_hat``,
+``F1y_hat``: a planar ``StateEstimator`` with the force states on the axis' signals) and, with ``offset_free``
+(1: the load, 2: the trolley at the axis' target), tracks and hands over to the rest they hold
+(:func:`.mpc.force_shift`).
 Its C twin is fmu_src/models/mpc3d.c (over mpc_axis.c, the planar MPC's C), bit-equal.
 """
 
@@ -23,13 +28,18 @@ from .tables import CRANE_MODEL, input_, output, parameter, positions
 
 AXES = ("x", "y")
 Q_X = 600.0  # the trolley's weight: a path's corner is met on time (the planar MPC's 50 keeps the move's end soft)
-OWN = ("x_d", "l1_low", "l1_high", "offset_free")  # the planar MPC's parameters each axis sets (no force estimate)
+OWN = ("x_d", "l1_low", "l1_high")  # the planar MPC's parameters each axis sets (no gain schedule: no hoist)
 PLANAR = {v.name for v in mpc.VARIABLES if v.causality == "parameter"} - set(OWN)
 
 
 def axis_states(axis):
     """The states of one axis, in the planar order: ``(x, dx, theta1x, dtheta1x, theta2x, dtheta2x)``."""
     return (axis, "d" + axis, "theta1" + axis, "dtheta1" + axis, "theta2" + axis, "dtheta2" + axis)
+
+
+def axis_forces(axis):
+    """The estimated forces one axis takes, in the planar MPC's order: on the load, then on the hook."""
+    return ("F2" + axis + "_hat", "F1" + axis + "_hat")
 
 
 Axis = namedtuple("Axis", "before after t0")
@@ -52,7 +62,7 @@ def configure(values):
             "v_max": values["v_max"] * shrink})
     axes = []
     for a in AXES:
-        fixed = {"l1_low": 0.0, "l1_high": 0.0, "offset_free": 0.0}
+        fixed = {"l1_low": 0.0, "l1_high": 0.0}
         after = mpc.configure({**planar, "x_d": moves[a]["x_d"], **fixed})
         before = after if moves[a]["t0"] <= 0 else mpc.configure({**planar, "x_d": moves[a]["x0"], **fixed})
         axes.append(Axis(before, after, moves[a]["t0"]))
@@ -85,7 +95,8 @@ def _split(config, state):
 
 
 def _axis_inputs(inputs, k):
-    return tuple(inputs[i] for i in _MEASURED[k]) + (0.0, 0.0, 0.0)  # the planar MPC's l1_now, F2_hat, F1_hat: none
+    # the planar MPC's inputs: the axis' states, l1_now (none), the axis' F2_hat, F1_hat
+    return tuple(inputs[i] for i in _MEASURED[k]) + (0.0,) + tuple(inputs[i] for i in _FORCES[k])
 
 
 def _output(config, state, inputs):
@@ -114,8 +125,17 @@ def report(config):
     return {**{f"t0_{a}_s": axis.t0 for a, axis in zip(AXES, config.axes)}, **mpc.report(config.axes[0].after)}
 
 
-VARIABLES = tuple(v._replace(start=Q_X) if v.name == "q_x" else v for v in mpc.VARIABLES
-                  if v.causality == "parameter" and v.name not in OWN) + (
+def _own(v):
+    if v.name == "q_x":
+        return v._replace(start=Q_X)
+    if v.name == "offset_free":
+        return v._replace(description="each axis' estimated forces (F2x_hat, F1x_hat; F2y_hat, F1y_hat): 0 ignored; "
+                                      "1 the load, 2 the trolley held at the axis' target, the cables at the forces' "
+                                      "rest (offset-free)")
+    return v
+
+
+VARIABLES = tuple(_own(v) for v in mpc.VARIABLES if v.causality == "parameter" and v.name not in OWN) + (
     parameter("x0", 0.0, "m", "where the trolley starts along x (a path's first point)"),
     parameter("y0", 0.0, "m", "where the trolley starts along y"),
     parameter("x_d", 0.0, "m", "target trolley position along x: the plan's end"),
@@ -125,11 +145,15 @@ VARIABLES = tuple(v._replace(start=Q_X) if v.name == "q_x" else v for v in mpc.V
     parameter("corridor", 0.0, "m", "a path through (x_via, y_via): the width kept about its centre line; 0: a "
                                     "straight move to (x_d, y_d)"),
 ) + tuple(input_(name, _SWING_ROWS[name][0], "measured " + _SWING_ROWS[name][1]) for name in SWING_STATE) + (
+    *(input_(name, "N", f"estimated horizontal force on the {'payload' if name[1] == '2' else 'hook'} along "
+             f"{axis} (a StateEstimator's on that axis); unconnected: 0, none")
+      for axis in AXES for name in axis_forces(axis)),
     output("ux", "m/s2", "demanded trolley acceleration along x: the x axis' MPC's, held over its interval"),
     output("uy", "m/s2", "demanded trolley acceleration along y: the y axis' MPC's, held over its interval"),
 )
 IN = positions(VARIABLES, "input")
 _MEASURED = tuple(tuple(getattr(IN, n) for n in axis_states(a)) for a in AXES)
+_FORCES = tuple(tuple(getattr(IN, n) for n in axis_forces(a)) for a in AXES)
 RULES = (*(r for r in mpc.RULES if set(r.names) <= PLANAR), *finite("x0", "y0", "x_d", "y_d", "x_via", "y_via"),
          *non_negative("corridor"))  # >= 0 and finite
 
@@ -139,5 +163,5 @@ COMPONENT = Component(
     "drive's limits as constraints), straight to (x_d, y_d) or along a path through a waypoint; outputs: trolley "
     "accelerations ux, uy",
     VARIABLES, configure, _output, feedthrough=True, initial_state=initial_state, update=update, report=report,
-    depends_on={f"u{a}": axis_states(a) for a in AXES},  # each axis' demand reads its own states alone
+    depends_on={f"u{a}": axis_states(a) + axis_forces(a) for a in AXES},  # each axis' demand reads its own inputs
     crane_model=CRANE_MODEL, native="mpc3d.c", rules=RULES)

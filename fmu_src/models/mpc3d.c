@@ -8,7 +8,8 @@
  * A path (corridor > 0): path.plan() with the planner's unshaped move (planner.configure() and reference() with
  * shaper "none": one impulse, the bang-coast-bang base at the shrunk limits) gives each axis its move and the
  * later leg's start t0, found by bisection as path.py does; before t0 an axis' MPC holds its start position (the
- * same configuration with x_d the start: mpc3d.configure()'s `before`), and at t0 it starts afresh.
+ * same configuration with x_d the start: mpc3d.configure()'s `before`), and at t0 it starts afresh. Each axis
+ * takes its estimated forces (F2x_hat, F1x_hat; F2y_hat, F1y_hat) and offset_free, as the planar MPC's.
  */
 #include <math.h>
 #include <stdio.h>
@@ -44,6 +45,8 @@ typedef struct {
 static const unsigned MEASURED[N_AXES][N_STATE] = {
     {VR_x, VR_dx, VR_theta1x, VR_dtheta1x, VR_theta2x, VR_dtheta2x},
     {VR_y, VR_dy, VR_theta1y, VR_dtheta1y, VR_theta2y, VR_dtheta2y}};
+/* Each axis' estimated forces (mpc3d.axis_forces()): on the load, then on the hook. */
+static const unsigned FORCES[N_AXES][2] = {{VR_F2x_hat, VR_F1x_hat}, {VR_F2y_hat, VR_F1y_hat}};
 static const char *const PREFIX[N_AXES] = {"x axis: ", "y axis: "};
 
 /* planner.configure() with shaper "none" (one impulse (0, 1): the bisection's acceleration is u_max) and the
@@ -172,7 +175,7 @@ static ModelStatus configure(const double values[], const StringValue strings[],
     }
     MpcSettings s = {V(m1), V(m2), V(l1), V(l2), V(g), {0}, V(r), 0.0, V(u_max), V(v_max), V(margin), V(h),
                      V(interval), V(horizon), V(max_iterations), V(replan_x), V(replan_angle), 0.0, 0.0,
-                     V(identify), 0.0};
+                     V(identify), V(offset_free)};
     for (int i = 0; i < N_STATE; i++) s.q[i] = values[VR_q_x + i];
     for (int k = 0; k < N_AXES; k++) {
         s.x_d = x_d[k];
@@ -197,10 +200,10 @@ static const MpcConfig *axis_config(const Config *config, int k, double time) {
     return c;
 }
 
-/* mpc3d._axis_inputs(): the axis' states, then l1_now and the forces (not measured: 0). */
+/* mpc3d._axis_inputs(): the axis' states, then l1_now (not measured: 0) and the axis' estimated forces. */
 static void axis_inputs(const double values[], int k, double out[N_INPUTS]) {
     for (int i = 0; i < N_STATE; i++) out[i] = values[MEASURED[k][i]];
-    out[N_STATE] = out[N_STATE + 1] = out[N_STATE + 2] = 0.0;
+    out[N_STATE] = 0.0, out[N_STATE + 1] = values[FORCES[k][0]], out[N_STATE + 2] = values[FORCES[k][1]];
 }
 
 static void initial_state(const double values[], const Config *c, State *s) {
