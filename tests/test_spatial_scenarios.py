@@ -86,6 +86,40 @@ def test_a_tracking_controller_gets_a_planner_per_axis_and_the_mpc_its_targets()
     assert scenarios.applicable(LQR3D, "S2") == "n/a (no controller of CranePlant)"
 
 
+@pytest.mark.quick
+def test_the_shortest_move_is_at_the_floor_within_the_limits_and_ends_at_rest_on_the_linear_crane():
+    """The planner's ``shortest`` reference for S11's 2 m and 1.5 m: each lasts its planar floor (issue 52: 2.70 s,
+    2.44 s) rounded up to the plan's 50 ms, stays within |u| <= 2 m/s2 and |v| <= 1 m/s, and its linear model is at
+    rest at the target when the plan ends (no jump where the reference switches to rest)."""
+    for distance, floor_s in ((2.0, 2.70), (1.5, 2.44)):
+        c = planner.configure({**planner.COMPONENT.defaults(), "x_d": distance, "shaper": "shortest"})
+        assert floor_s <= c.end < floor_s + planner.PLAN_INTERVAL
+        rows = np.array([planner.reference(c, t) for t in np.arange(0.0, c.end, 1e-3)])
+        assert np.max(np.abs(rows[:, 2])) <= 2.0 + 1e-9 and np.max(np.abs(rows[:, 1])) <= 1.0 + 1e-9
+        assert np.max(np.abs(rows[:, 3])) > math.radians(10.0)  # a swing planned, not avoided
+        last = np.array(planner.reference(c, c.end - 1e-9))
+        assert abs(last[0] - distance) < 1e-3 and np.max(np.abs(last[[1, 3, 4, 5, 6]])) < 1e-2
+        assert planner.reference(c, c.end) == (distance, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+@pytest.mark.quick
+def test_a_stretched_shortest_move_is_longer_by_its_factor_and_s11s_plan_ends_before_the_target():
+    """``stretch``: the least-effort move of ceil(stretch n) intervals; S11's reference for a tracking controller is
+    the shortest kind, stretched, and ends before S11's target (2.97 s), the ZV-shaped one (3.64 s) after it."""
+    shortest = planner.configure({**planner.COMPONENT.defaults(), "x_d": 2.0, "shaper": "shortest"})
+    n = round(shortest.end / planner.PLAN_INTERVAL)
+    stretched = planner.configure({**planner.COMPONENT.defaults(), "x_d": 2.0, "shaper": "shortest", "stretch": 1.06})
+    assert round(stretched.end / planner.PLAN_INTERVAL) == math.ceil(1.06 * n)
+    (lqr,) = scenarios.systems_for(LQR3D, "S11")
+    plans = {a: lqr.system.parameters[p] for a, p in spatial_scenarios.PLANNERS.items()}
+    assert all(p["shaper"] == "shortest" for p in plans.values())
+    target = spatial_scenarios.SPECS["S11"][3][0].limit
+    assert spatial_scenarios.plan_end(plans) < target < spatial_scenarios.plan_end(
+        {a: {"x_d": p["x_d"]} for a, p in plans.items()})
+    with pytest.raises(ValueError, match=r"^stretch must be >= 1"):
+        planner.COMPONENT.check({"x_d": 2.0, "shaper": "shortest", "stretch": 0.5})
+
+
 # ---- the path's plan -----------------------------------------------------------------------------------------------
 
 @pytest.mark.quick
