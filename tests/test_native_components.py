@@ -132,7 +132,8 @@ def test_planner_outputs_equal_the_python_model_at_random_parameters_and_times(n
 @pytest.mark.parametrize("version", [2, 3])
 def test_the_shortest_moves_outputs_equal_the_python_model_at_random_parameters_and_times(native, version):
     """The shaper ``shortest`` (the MPC's plan, mpc_axis.c's in C): 10 parameter sets (moves of up to 3 m, a random
-    stretch for every other one, one with no move) x 40 steps of random length."""
+    stretch for every other one, a swing to start from for every third, one regulation and one with no move) x 40
+    steps of random length."""
     rng = random.Random(2052)
     outputs = PLANNER.names("output")
     ours, theirs = [], []
@@ -140,7 +141,10 @@ def test_the_shortest_moves_outputs_equal_the_python_model_at_random_parameters_
         parameters = {**_planner_parameters(rng, i), "shaper": "shortest", "x0": rng.uniform(-1.5, 1.5),
                       "x_d": rng.uniform(-1.5, 1.5), "u_max": rng.uniform(1.0, 3.0), "v_max": rng.uniform(0.5, 2.0),
                       "stretch": 1.0 if i % 2 else rng.uniform(1.0, 1.3)}
-        if i == 9:
+        if i % 3 == 0:  # from a swing (a regulation when x_d = x0)
+            parameters.update(theta1_0=rng.uniform(-0.2, 0.2), dtheta1_0=rng.uniform(-0.3, 0.3),
+                              theta2_0=rng.uniform(-0.2, 0.2), dtheta2_0=rng.uniform(-0.3, 0.3))
+        if i in (6, 9):
             parameters["x_d"] = parameters["x0"]
         fmu, vr, _, get = open_native(native[version] / "TrajectoryPlanner.fmu", version, parameters)
         config = PLANNER.check(parameters)

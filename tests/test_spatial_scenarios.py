@@ -14,6 +14,7 @@ from crane_fmu import compare, components, native_batch, systems
 from crane_fmu.analysis import floor, scenarios, spatial_scenarios
 from crane_fmu.analysis.spatial_scenarios import path_deviation
 from crane_fmu.model import mpc, path, planner
+from crane_fmu.model.parameters import plant_parameters
 
 LQR3D = scenarios.Contender("LqrController3D", "LqrController3D",
                             list(components.get("LqrController3D").names("input")),
@@ -118,6 +119,46 @@ def test_a_stretched_shortest_move_is_longer_by_its_factor_and_s11s_plan_ends_be
         {a: {"x_d": p["x_d"]} for a, p in plans.items()})
     with pytest.raises(ValueError, match=r"^stretch must be >= 1"):
         planner.COMPONENT.check({"x_d": 2.0, "shaper": "shortest", "stretch": 0.5})
+
+
+@pytest.mark.quick
+@pytest.mark.parametrize("axis", ["x", "y"])
+def test_a_shortest_move_from_s12s_swing_is_the_linear_crane_under_its_held_inputs_and_ends_at_rest(axis):
+    """From S12's swing (x: the hook at 10 deg; y: at rest with the rate of 5 deg a quarter of the slow period
+    later), the shortest move's reference is the linear crane's own motion (:func:`floor.crane_model`, stepped by the
+    matrix exponential over each held input, an independent computation) to 1e-9, starts at the swing, lasts at least
+    the axis' floor (:func:`floor.crane_floor`, 10 ms holds) and ends at rest where it started."""
+    values = {**planner.COMPONENT.defaults(), **spatial_scenarios.ELLIPTIC_PLAN[axis]}
+    c = planner.configure(values)
+    start = np.array([0.0, 0.0, values["theta1_0"], values["dtheta1_0"], values["theta2_0"], values["dtheta2_0"]])
+    assert np.any(start) and c.free is not None
+    assert floor.crane_floor(start=tuple(start)) <= c.end
+    a, b, _ = floor.crane_model(plant_parameters(values))
+    ad, bd, _ = floor.hold(a, b, 0.01)
+    state = start
+    for k in range(round(c.end / 0.01)):  # 10 ms steps: the plan's 50 ms holds switch on them
+        held = sum(jump for tau, jump in c.steps if tau <= k * 0.01 + 1e-9)
+        state = ad @ state + bd * held
+        ours = planner.reference(c, (k + 1) * 0.01)
+        if (k + 1) * 0.01 < c.end - 1e-9:
+            assert np.allclose([ours[0], ours[1], *ours[3:]], state, rtol=0, atol=1e-9), k
+    assert planner.reference(c, 0.0)[3:] == pytest.approx(tuple(start[2:]), abs=1e-15)
+    assert np.max(np.abs(state)) < 1e-3 and planner.reference(c, c.end) == (0.0,) * 7
+
+
+@pytest.mark.quick
+def test_s12_gives_a_tracking_controller_the_shortest_move_from_the_swing_and_the_mpc_none():
+    (lqr,) = scenarios.systems_for(LQR3D, "S12")
+    for name in spatial_scenarios.PLANNERS.values():
+        assert lqr.system.instances[name] == "TrajectoryPlanner"
+        assert lqr.system.parameters[name]["shaper"] == "shortest"
+    assert lqr.system.parameters["planner"]["theta1_0"] == lqr.system.parameters["plant"]["theta1x_0"]
+    assert lqr.system.parameters["planner_y"]["dtheta1_0"] == lqr.system.parameters["plant"]["dtheta1y_0"]
+    assert {(c.source, c.output, c.target, c.input) for c in lqr.system.connections} >= {
+        ("planner", "x_ref", "controller", "x_ref"), ("planner_y", "x_ref", "controller", "y_ref"),
+        ("planner_y", "theta1_ref", "controller", "theta1y_ref")}
+    (ours,) = scenarios.systems_for(MPC3D, "S12")
+    assert set(ours.system.instances) == {"plant", "controller"} and not ours.system.connections
 
 
 # ---- the path's plan -----------------------------------------------------------------------------------------------

@@ -25,7 +25,10 @@ floor's kind of move (the analysis' floor.py): the MPC's plan (:func:`crane_fmu.
 acceleration held over :data:`PLAN_INTERVAL`, ``|u| <= u_max`` and ``|v| <= v_max``, the fewest intervals that end at
 rest), or with ``stretch`` > 1 its least-effort move of ``ceil(stretch n)`` intervals (no longer bang-bang: a smaller
 swing, which a tracking controller follows more closely on the nonlinear crane). Its held steps are the jumps of the
-same closed form, so its reference and induced swing are exact on the planner's linear model.
+same closed form, so its reference and induced swing are exact on the planner's linear model. It may start from a
+swing (``theta1_0`` ... ``dtheta2_0``, the linear model's at ``t0``): the plan then takes that swing to rest too
+(regulation: ``x_d = x0``), and the reference adds the swing's own motion, each mode ``eta_k'' = -w_k^2 eta_k`` from
+its start, to the closed form.
 """
 
 import math
@@ -47,6 +50,7 @@ SHAPERS = ("zv", "zvd", "ei", "none", "shortest")
 # The Enumeration type Shaper's items in the order of their values 1 to 5 (modelDescription.xml's TypeDefinitions)
 SHAPER_ITEMS = ("none", "zv", "zvd", "ei", "shortest")
 PLAN_INTERVAL = 0.05  # s: the shortest move's hold, the MpcController's default interval
+START = ("theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0")  # the swing the shortest move starts from
 
 
 def shaper(kind, period):
@@ -111,17 +115,18 @@ class _Model(namedtuple("_Model", "ad bd")):
     """The discrete model a plan is made on (:func:`crane_fmu.model.mpc.plan_move` reads ``ad`` and ``bd``)."""
 
 
-def shortest_steps(p, distance, u_max, v_max, stretch):
-    """``(steps, duration)`` of the shortest move by ``distance`` from rest to rest (``shortest``): the held
+def shortest_steps(p, distance, u_max, v_max, stretch, start=(0.0,) * 4):
+    """``(steps, duration)`` of the shortest move by ``distance`` to rest from the swing ``start`` (``theta1, dtheta1,
+    theta2, dtheta2``; default: rest) (``shortest``): the held
     accelerations of :func:`crane_fmu.model.mpc.plan_move` on the zero-order hold of :func:`.lqr.continuous_model`
     over :data:`PLAN_INTERVAL`, as jumps ``[(time from the start, jump)]`` (none where the input holds its value);
     ``([], 0.0)`` for no move."""
     from . import lqr, mpc  # they import this module
 
     ad, bd = linalg.zoh(*lqr.continuous_model(p), PLAN_INTERVAL)
-    inputs, _ = mpc.plan_move(_Model(ad, bd), (0.0,) * 6, (distance, 0.0, 0.0, 0.0, 0.0, 0.0), u_max, v_max,
+    inputs, _ = mpc.plan_move(_Model(ad, bd), (0.0, 0.0, *start), (distance, 0.0, 0.0, 0.0, 0.0, 0.0), u_max, v_max,
                               PLAN_INTERVAL, mpc.MAX_PLAN, stretch)
-    if distance != 0 and not inputs:
+    if not inputs and max(abs(distance), *map(abs, start)) > mpc.REACHED:
         raise ValueError(f"shaper shortest: no move of x_d - x0 = {distance!r} m to rest within "
                          f"{mpc.MAX_PLAN * PLAN_INTERVAL:g} s")
     steps, level = [], 0.0
@@ -132,7 +137,9 @@ def shortest_steps(p, distance, u_max, v_max, stretch):
     return steps, len(inputs) * PLAN_INTERVAL
 
 
-Config = namedtuple("Config", "x0 distance t0 steps end omegas shapes gains u_max v_max impulses")
+Config = namedtuple("Config", "x0 distance t0 steps end omegas shapes gains u_max v_max impulses free",
+                    defaults=(None,))
+Config.__doc__ = "The plan; ``free``: the modal swing ``(eta, deta)`` at ``t0`` a shortest move starts from, or None."
 
 
 def configure(values):
@@ -146,11 +153,18 @@ def configure(values):
     sign, distance_abs = (1.0 if distance >= 0 else -1.0), abs(distance)
     accel, steps, t_a, t_c = u_max, [], 0.0, 0.0
     if values["shaper"] == "shortest":
-        steps, duration = shortest_steps(p, distance, u_max, v_max, values["stretch"])
+        start = tuple(values[name] for name in START)
+        steps, duration = shortest_steps(p, distance, u_max, v_max, values["stretch"], start)
         steps = [(values["t0"] + t, jump) for t, jump in steps]
+        free = None
+        if any(start):  # q = S eta: eta = S^-1 q, for the angles and their rates
+            (s11, s21), (s12, s22) = shapes
+            det = s11 * s22 - s12 * s21
+            free = tuple(((s22 * q1 - s12 * q2) / det, (s11 * q2 - s21 * q1) / det)
+                         for q1, q2 in ((start[0], start[2]), (start[1], start[3])))
         return Config(x0=values["x0"], distance=distance, t0=values["t0"], steps=steps,
                       end=values["t0"] + duration if steps else values["t0"], omegas=omegas, shapes=shapes,
-                      gains=gains, u_max=u_max, v_max=v_max, impulses=impulses)
+                      gains=gains, u_max=u_max, v_max=v_max, impulses=impulses, free=free)
     if distance_abs > 0:
         # the largest base acceleration whose shaped acceleration stays within u_max (bisection)
         low, high = u_max, u_max / min(a for _, a in impulses)
@@ -182,6 +196,12 @@ def reference(c, t):
     deta = [0.0, 0.0]
     rounding = TIME_ROUNDING * max(1.0, abs(t))
     moving = t < c.end - rounding  # a summed time just short of the end is at it, at rest (OMSimulator's 3000 ms)
+    if moving and c.free is not None:  # the swing the move starts from, left to itself: eta_k'' = -w_k^2 eta_k
+        since = t - c.t0
+        for k in range(2):
+            w, e0, d0 = c.omegas[k], c.free[0][k], c.free[1][k]
+            eta[k] = e0 * math.cos(w * since) + d0 * math.sin(w * since) / w
+            deta[k] = -e0 * w * math.sin(w * since) + d0 * math.cos(w * since)
     for tau, jump in c.steps:
         dt = t - tau
         if dt <= rounding:
@@ -215,6 +235,9 @@ VARIABLES = tuple(v._replace(description="planner's model: " + v.description) fo
                 "or shortest (5): the least-time move of the linear crane, no shaper"),
     parameter("stretch", 1.0, "1", "shortest only: the least-effort move of this many times the shortest move's "
               "intervals (1: the shortest)"),
+    *(parameter(name, 0.0, unit, f"shortest only: the {what} the move starts from at t0 (the linear model's)")
+      for name, unit, what in (("theta1_0", "rad", "hook swing"), ("dtheta1_0", "rad/s", "hook swing rate"),
+                               ("theta2_0", "rad", "payload swing"), ("dtheta2_0", "rad/s", "payload swing rate"))),
     *limits.parameters(what="ddx_ref"),
     output("x_ref", "m", "reference trolley position"),
     output("dx_ref", "m/s", "reference trolley velocity"),
@@ -224,7 +247,8 @@ VARIABLES = tuple(v._replace(description="planner's model: " + v.description) fo
     output("theta2_ref", "rad", "payload swing the reference induces in the linear model, during the move"),
     output("dtheta2_ref", "rad/s", "payload swing rate the reference induces, during the move"),
 )
-RULES = (*PLANT_RULES, *limits.RULES, one_of("shaper", SHAPERS), *finite("x0", "x_d", "t0"), in_range("stretch", 1.0),
+RULES = (*PLANT_RULES, *limits.RULES, one_of("shaper", SHAPERS), *finite("x0", "x_d", "t0", *START),
+         in_range("stretch", 1.0),
          rule("finite(unlimited(u_max)) and finite(unlimited(v_max))",
               "u_max and v_max must be finite for a planned move, got {unlimited(u_max)}, {unlimited(v_max)}"))
 

@@ -31,6 +31,8 @@ typedef struct {
 /* planner.Config */
 typedef struct {
     double x0, distance, t0, end, omegas[2], shapes[2][2], gains[2];
+    int free;           /* a shortest move from a swing: */
+    double free_[2][2]; /* its modal swing (eta, deta) at t0, planner.Config.free */
     Pair steps[MAX_PLAN + 1], impulses[MAX_IMPULSES]; /* the shortest move's: a jump per interval */
     int n_steps, n_impulses;
 } Config;
@@ -140,9 +142,12 @@ static ModelStatus shortest_steps(const double values[], double distance, double
         bd_[i] = bd.v[i][0];
     }
     int n = 0;
-    error = mpc_axis_plan_rest_to_rest(ad_, bd_, distance, u_max, v_max, PLAN_INTERVAL, V(stretch), inputs, &n);
+    double start[4] = {V(theta1_0), V(dtheta1_0), V(theta2_0), V(dtheta2_0)};
+    error = mpc_axis_plan_rest_to_rest(ad_, bd_, distance, start, u_max, v_max, PLAN_INTERVAL, V(stretch), inputs, &n);
     if (error) return report(r, MODEL_ERROR, "%s", error);
-    if (distance != 0 && n == 0) {
+    double far = fabs(distance);
+    for (int i = 0; i < 4; i++) far = py_max(far, fabs(start[i]));
+    if (n == 0 && far > REACHED) {
         char text[REPR_SIZE];
         return report(r, MODEL_ERROR, "shaper shortest: no move of x_d - x0 = %s m to rest within %g s",
                       py_repr(distance, text), MAX_PLAN * PLAN_INTERVAL);
@@ -153,6 +158,15 @@ static ModelStatus shortest_steps(const double values[], double distance, double
         if (u != level) c->steps[c->n_steps++] = (Pair){V(t0) + k * PLAN_INTERVAL, u - level}, level = u;
     }
     c->end = c->n_steps ? V(t0) + n * PLAN_INTERVAL : V(t0);
+    if (start[0] != 0 || start[1] != 0 || start[2] != 0 || start[3] != 0) { /* q = S eta: eta = S^-1 q */
+        double s11 = c->shapes[0][0], s21 = c->shapes[0][1], s12 = c->shapes[1][0], s22 = c->shapes[1][1];
+        double det = s11 * s22 - s12 * s21;
+        c->free = 1;
+        for (int i = 0; i < 2; i++) { /* the angles (theta1_0, theta2_0), then their rates */
+            double q1 = start[i], q2 = start[2 + i];
+            c->free_[i][0] = (s22 * q1 - s12 * q2) / det, c->free_[i][1] = (s11 * q2 - s21 * q1) / det;
+        }
+    }
     return MODEL_OK;
 }
 
@@ -198,6 +212,14 @@ static void reference(const Config *c, double t, double out[N_OUTPUTS]) {
     double x = c->x0, v = 0.0, a = 0.0, eta[2] = {0.0, 0.0}, deta[2] = {0.0, 0.0};
     double rounding = 1e-9 * (t > 1.0 ? t : t < -1.0 ? -t : 1.0); /* TIME_ROUNDING * max(1.0, abs(t)) */
     int moving = t < c->end - rounding; /* a summed time just short of the end is at it, at rest */
+    if (moving && c->free) { /* the swing the move starts from, left to itself: eta_k'' = -w_k^2 eta_k */
+        double since = t - c->t0;
+        for (int k = 0; k < 2; k++) {
+            double w = c->omegas[k], e0 = c->free_[0][k], d0 = c->free_[1][k];
+            eta[k] = e0 * COS(w * since) + d0 * SIN(w * since) / w;
+            deta[k] = -e0 * w * SIN(w * since) + d0 * COS(w * since);
+        }
+    }
     for (int i = 0; i < c->n_steps; i++) {
         double dt = t - c->steps[i].t, jump = c->steps[i].value;
         if (dt <= rounding) break;
