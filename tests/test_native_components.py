@@ -43,7 +43,7 @@ from crane_fmu.cosim import System, run
 PLANNER, ENERGY = components.get("TrajectoryPlanner"), components.get("EnergyController")
 GUST, SENSOR = components.get("Gust"), components.get("Sensor")
 NAMES = ("TrajectoryPlanner", "EnergyController", "Gust", "Sensor")
-SHAPERS = ("zv", "zvd", "ei", "none")
+SHAPERS = ("zv", "zvd", "ei", "none", "shortest")
 LINUX = sys.platform.startswith("linux")  # glibc's libm in both models: the same bits
 INF, NAN = float("inf"), float("nan")
 CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # no venv, no pyenv: nothing of Python
@@ -130,9 +130,44 @@ def test_planner_outputs_equal_the_python_model_at_random_parameters_and_times(n
 
 
 @pytest.mark.parametrize("version", [2, 3])
+def test_the_shortest_moves_outputs_equal_the_python_model_at_random_parameters_and_times(native, version):
+    """The shaper ``shortest`` (the MPC's plan, mpc_axis.c's in C): 10 parameter sets (moves of up to 3 m, a random
+    stretch for every other one, a swing to start from for every third, one regulation and one with no move) x 40
+    steps of random length."""
+    rng = random.Random(2052)
+    outputs = PLANNER.names("output")
+    ours, theirs = [], []
+    for i in range(10):
+        parameters = {**_planner_parameters(rng, i), "shaper": "shortest", "x0": rng.uniform(-1.5, 1.5),
+                      "x_d": rng.uniform(-1.5, 1.5), "u_max": rng.uniform(1.0, 3.0), "v_max": rng.uniform(0.5, 2.0),
+                      "stretch": 1.0 if i % 2 else rng.uniform(1.0, 1.3)}
+        if i % 3 == 0:  # from a swing (a regulation when x_d = x0)
+            parameters.update(theta1_0=rng.uniform(-0.2, 0.2), dtheta1_0=rng.uniform(-0.3, 0.3),
+                              theta2_0=rng.uniform(-0.2, 0.2), dtheta2_0=rng.uniform(-0.3, 0.3))
+        if i in (6, 9):
+            parameters["x_d"] = parameters["x0"]
+        fmu, vr, _, get = open_native(native[version] / "TrajectoryPlanner.fmu", version, parameters)
+        config = PLANNER.check(parameters)
+        ours.append(get([vr[n] for n in outputs]))
+        theirs.append(PLANNER.output(config, (0.0,), ()))
+        fmu.exitInitializationMode()
+        t = 0.0
+        for _ in range(40):
+            h = rng.choice([1e-3, rng.uniform(1e-3, 0.3)])
+            fmu.doStep(t, h)
+            ours.append(get([vr[n] for n in outputs]))
+            theirs.append(PLANNER.output(config, (t + h,), ()))
+            t += h
+        close(fmu)
+    compare_to_python(ours, theirs)
+    theirs = np.array(theirs)
+    assert np.count_nonzero(theirs[:, 3]) > 200 and len(set(theirs[:, 2])) > 50  # moves, swing, many held inputs
+
+
+@pytest.mark.parametrize("version", [2, 3])
 def test_the_shaper_enumeration_is_read_back_and_changes_the_plan(native, version):
-    """The shaper is an Enumeration (none 1, zv 2, zvd 3, ei 4): got and set as an Integer (FMI 3.0: Int64), not a
-    String."""
+    """The shaper is an Enumeration (none 1, zv 2, zvd 3, ei 4, shortest 5): got and set as an Integer (FMI 3.0:
+    Int64), not a String."""
     fmu, vr, set_, get = open_native(native[version] / "TrajectoryPlanner.fmu", version, {"x_d": 2.0})
     ref = vr["shaper"]
     get_int, set_int = (fmu.getInteger, fmu.setInteger) if version == 2 else (fmu.getInt64, fmu.setInt64)
@@ -152,14 +187,15 @@ def test_the_shaper_enumeration_is_read_back_and_changes_the_plan(native, versio
     fmu.freeInstance()
 
 
-@pytest.mark.parametrize("value", [0, 5, -1, 2 ** 31 - 1])
+@pytest.mark.parametrize("value", [0, 6, -1, 2 ** 31 - 1])
 def test_a_shaper_value_no_item_has_is_refused_when_set_like_the_python_fmu(fmu_dir, native, value):
     """One line naming the value and every item's value and name, from both FMUs, at the fmi2SetInteger."""
     ours = messages(native[2] / "TrajectoryPlanner.fmu", {"x_d": 2.0, "shaper": value})
     theirs = messages(fmu_dir / "TrajectoryPlanner.fmu", {"x_d": 2.0, "shaper": value})
     assert ours == theirs
     assert ours[0][-2] == "set shaper: 3"
-    assert ours[1][-1] == f"fmi2SetInteger: shaper must be one of 1 (none), 2 (zv), 3 (zvd), 4 (ei), got {value}"
+    assert ours[1][-1] == ("fmi2SetInteger: shaper must be one of 1 (none), 2 (zv), 3 (zvd), 4 (ei), 5 (shortest), "
+                           f"got {value}")
 
 
 # ---- EnergyController: outputs at random inputs and parameters ---------------------------------------------------

@@ -19,11 +19,12 @@ SHAPER = next(v for v in planner.VARIABLES if v.name == "shaper")
 @pytest.mark.quick
 def test_the_shaper_is_an_enumeration_of_every_shaper_the_planner_knows():
     assert SHAPER.type == "Enumeration" and set(SHAPER.items) == set(planner.SHAPERS)
-    assert [enumeration_value(SHAPER, name) for name in SHAPER.items] == [1, 2, 3, 4]
-    assert [enumeration_name(SHAPER, value) for value in (1, 2, 3, 4)] == list(SHAPER.items)
-    with pytest.raises(ValueError, match=r"^shaper must be one of 1 \(none\), 2 \(zv\), 3 \(zvd\), 4 \(ei\), got 5$"):
-        enumeration_name(SHAPER, 5)
-    with pytest.raises(ValueError, match=r"^shaper must be one of none, zv, zvd, ei, got 'ZVD'$"):
+    assert [enumeration_value(SHAPER, name) for name in SHAPER.items] == [1, 2, 3, 4, 5]
+    assert [enumeration_name(SHAPER, value) for value in (1, 2, 3, 4, 5)] == list(SHAPER.items)
+    with pytest.raises(ValueError, match=r"^shaper must be one of 1 \(none\), 2 \(zv\), 3 \(zvd\), 4 \(ei\), "
+                                         r"5 \(shortest\), got 6$"):
+        enumeration_name(SHAPER, 6)
+    with pytest.raises(ValueError, match=r"^shaper must be one of none, zv, zvd, ei, shortest, got 'ZVD'$"):
         enumeration_value(SHAPER, "ZVD")
 
 
@@ -36,7 +37,7 @@ def test_a_systems_shaper_given_by_value_is_run_by_its_name(given, named):
 
 
 @pytest.mark.quick
-@pytest.mark.parametrize("given", [5, 0, 2.5, True, "ZVD", "3"])
+@pytest.mark.parametrize("given", [6, 0, 2.5, True, "ZVD", "3"])
 def test_a_shaper_no_item_has_is_refused_in_one_line(given):
     system = systems.get("transport").with_parameters({"planner": {"shaper": given}})
     with pytest.raises(ValueError) as refused:
@@ -57,7 +58,7 @@ def test_the_cli_takes_a_shapers_name_and_refuses_another_in_one_line(fmu_dir, t
     assert main(["simulate", "--fmu-dir", str(fmu_dir), "--system", "transport", "--set", "planner.shaper=ZVD",
                  "--out", str(tmp_path / "bad.csv")]) == 2
     err = capsys.readouterr().err
-    assert err == "crane-fmu: error: planner: shaper must be one of zv, zvd, ei, none, got 'ZVD'\n"
+    assert err == "crane-fmu: error: planner: shaper must be one of zv, zvd, ei, none, shortest, got 'ZVD'\n"
 
 
 def test_the_built_ssp_file_carries_the_shapers_values_and_runs_as_the_registered_system(fmu_dir, tmp_path):

@@ -19,16 +19,26 @@ mode of period ``T``:
 - ``ei``: (1+V)/4, (1-V)/2, (1+V)/4 at 0, T/2, T with V = 5 % (extra insensitive:
   at most 5 % residual over a wider frequency band);
 - ``none``: the unshaped time-optimal bang-coast-bang move.
+
+Besides the shapers, ``shortest``: no shaper but the least-time rest-to-rest move of the linear crane itself, the
+floor's kind of move (the analysis' floor.py): the MPC's plan (:func:`crane_fmu.model.mpc.plan_move`, the
+acceleration held over :data:`PLAN_INTERVAL`, ``|u| <= u_max`` and ``|v| <= v_max``, the fewest intervals that end at
+rest), or with ``stretch`` > 1 its least-effort move of ``ceil(stretch n)`` intervals (no longer bang-bang: a smaller
+swing, which a tracking controller follows more closely on the nonlinear crane). Its held steps are the jumps of the
+same closed form, so its reference and induced swing are exact on the planner's linear model. It may start from a
+swing (``theta1_0`` ... ``dtheta2_0``, the linear model's at ``t0``): the plan then takes that swing to rest too
+(regulation: ``x_d = x0``), and the reference adds the swing's own motion, each mode ``eta_k'' = -w_k^2 eta_k`` from
+its start, to the closed form.
 """
 
 import math
 from collections import namedtuple
 
-from . import limits
+from . import limits, linalg
 from .component import Component
 from .parameters import PLANT_RULES, plant_parameters
 from .plant import linearisation
-from .rules import check, finite, one_of, rule
+from .rules import check, finite, in_range, one_of, rule
 from .tables import CRANE_MODEL, PLANT_MODEL, enumeration, output, parameter
 
 EI_TOLERANCE = 0.05
@@ -36,9 +46,11 @@ EI_TOLERANCE = 0.05
 # rounding of a host that adds up its steps (OMSimulator) then switches where an exact time k h does (the 2 m move's
 # first switch is at 0.125 s, which 125 steps of 1 ms add up to 0.12500000000000008).
 TIME_ROUNDING = 1e-9
-SHAPERS = ("zv", "zvd", "ei", "none")
-# The Enumeration type Shaper's items in the order of their values 1, 2, 3, 4 (modelDescription.xml's TypeDefinitions)
-SHAPER_ITEMS = ("none", "zv", "zvd", "ei")
+SHAPERS = ("zv", "zvd", "ei", "none", "shortest")
+# The Enumeration type Shaper's items in the order of their values 1 to 5 (modelDescription.xml's TypeDefinitions)
+SHAPER_ITEMS = ("none", "zv", "zvd", "ei", "shortest")
+PLAN_INTERVAL = 0.05  # s: the shortest move's hold, the MpcController's default interval
+START = ("theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0")  # the swing the shortest move starts from
 
 
 def shaper(kind, period):
@@ -99,7 +111,35 @@ def _peak(steps):
     return peak
 
 
-Config = namedtuple("Config", "x0 distance t0 steps end omegas shapes gains u_max v_max impulses")
+class _Model(namedtuple("_Model", "ad bd")):
+    """The discrete model a plan is made on (:func:`crane_fmu.model.mpc.plan_move` reads ``ad`` and ``bd``)."""
+
+
+def shortest_steps(p, distance, u_max, v_max, stretch, start=(0.0,) * 4):
+    """``(steps, duration)`` of the shortest move by ``distance`` to rest from the swing ``start`` (``theta1, dtheta1,
+    theta2, dtheta2``; default: rest) (``shortest``): the held
+    accelerations of :func:`crane_fmu.model.mpc.plan_move` on the zero-order hold of :func:`.lqr.continuous_model`
+    over :data:`PLAN_INTERVAL`, as jumps ``[(time from the start, jump)]`` (none where the input holds its value);
+    ``([], 0.0)`` for no move."""
+    from . import lqr, mpc  # they import this module
+
+    ad, bd = linalg.zoh(*lqr.continuous_model(p), PLAN_INTERVAL)
+    inputs, _ = mpc.plan_move(_Model(ad, bd), (0.0, 0.0, *start), (distance, 0.0, 0.0, 0.0, 0.0, 0.0), u_max, v_max,
+                              PLAN_INTERVAL, mpc.MAX_PLAN, stretch)
+    if not inputs and max(abs(distance), *map(abs, start)) > mpc.REACHED:
+        raise ValueError(f"shaper shortest: no move of x_d - x0 = {distance!r} m to rest within "
+                         f"{mpc.MAX_PLAN * PLAN_INTERVAL:g} s")
+    steps, level = [], 0.0
+    for k, u in enumerate((*inputs, 0.0)):
+        if u != level:
+            steps.append((k * PLAN_INTERVAL, u - level))
+            level = u
+    return steps, len(inputs) * PLAN_INTERVAL
+
+
+Config = namedtuple("Config", "x0 distance t0 steps end omegas shapes gains u_max v_max impulses free",
+                    defaults=(None,))
+Config.__doc__ = "The plan; ``free``: the modal swing ``(eta, deta)`` at ``t0`` a shortest move starts from, or None."
 
 
 def configure(values):
@@ -112,6 +152,19 @@ def configure(values):
     distance = values["x_d"] - values["x0"]
     sign, distance_abs = (1.0 if distance >= 0 else -1.0), abs(distance)
     accel, steps, t_a, t_c = u_max, [], 0.0, 0.0
+    if values["shaper"] == "shortest":
+        start = tuple(values[name] for name in START)
+        steps, duration = shortest_steps(p, distance, u_max, v_max, values["stretch"], start)
+        steps = [(values["t0"] + t, jump) for t, jump in steps]
+        free = None
+        if any(start):  # q = S eta: eta = S^-1 q, for the angles and their rates
+            (s11, s21), (s12, s22) = shapes
+            det = s11 * s22 - s12 * s21
+            free = tuple(((s22 * q1 - s12 * q2) / det, (s11 * q2 - s21 * q1) / det)
+                         for q1, q2 in ((start[0], start[2]), (start[1], start[3])))
+        return Config(x0=values["x0"], distance=distance, t0=values["t0"], steps=steps,
+                      end=values["t0"] + duration if steps else values["t0"], omegas=omegas, shapes=shapes,
+                      gains=gains, u_max=u_max, v_max=v_max, impulses=impulses, free=free)
     if distance_abs > 0:
         # the largest base acceleration whose shaped acceleration stays within u_max (bisection)
         low, high = u_max, u_max / min(a for _, a in impulses)
@@ -143,6 +196,12 @@ def reference(c, t):
     deta = [0.0, 0.0]
     rounding = TIME_ROUNDING * max(1.0, abs(t))
     moving = t < c.end - rounding  # a summed time just short of the end is at it, at rest (OMSimulator's 3000 ms)
+    if moving and c.free is not None:  # the swing the move starts from, left to itself: eta_k'' = -w_k^2 eta_k
+        since = t - c.t0
+        for k in range(2):
+            w, e0, d0 = c.omegas[k], c.free[0][k], c.free[1][k]
+            eta[k] = e0 * math.cos(w * since) + d0 * math.sin(w * since) / w
+            deta[k] = -e0 * w * math.sin(w * since) + d0 * math.cos(w * since)
     for tau, jump in c.steps:
         dt = t - tau
         if dt <= rounding:
@@ -172,7 +231,13 @@ VARIABLES = tuple(v._replace(description="planner's model: " + v.description) fo
     parameter("x0", 0.0, "m", "start position of the move"),
     parameter("x_d", 0.0, "m", "target position of the move"),
     parameter("t0", 0.0, "s", "start time of the move"),
-    enumeration("shaper", "zv", SHAPER_ITEMS, "input shaper for both swing modes: none (1), zv (2), zvd (3) or ei (4)"),
+    enumeration("shaper", "zv", SHAPER_ITEMS, "input shaper for both swing modes: none (1), zv (2), zvd (3) or ei (4); "
+                "or shortest (5): the least-time move of the linear crane, no shaper"),
+    parameter("stretch", 1.0, "1", "shortest only: the least-effort move of this many times the shortest move's "
+              "intervals (1: the shortest)"),
+    *(parameter(name, 0.0, unit, f"shortest only: the {what} the move starts from at t0 (the linear model's)")
+      for name, unit, what in (("theta1_0", "rad", "hook swing"), ("dtheta1_0", "rad/s", "hook swing rate"),
+                               ("theta2_0", "rad", "payload swing"), ("dtheta2_0", "rad/s", "payload swing rate"))),
     *limits.parameters(what="ddx_ref"),
     output("x_ref", "m", "reference trolley position"),
     output("dx_ref", "m/s", "reference trolley velocity"),
@@ -182,7 +247,8 @@ VARIABLES = tuple(v._replace(description="planner's model: " + v.description) fo
     output("theta2_ref", "rad", "payload swing the reference induces in the linear model, during the move"),
     output("dtheta2_ref", "rad/s", "payload swing rate the reference induces, during the move"),
 )
-RULES = (*PLANT_RULES, *limits.RULES, one_of("shaper", SHAPERS), *finite("x0", "x_d", "t0"),
+RULES = (*PLANT_RULES, *limits.RULES, one_of("shaper", SHAPERS), *finite("x0", "x_d", "t0", *START),
+         in_range("stretch", 1.0),
          rule("finite(unlimited(u_max)) and finite(unlimited(v_max))",
               "u_max and v_max must be finite for a planned move, got {unlimited(u_max)}, {unlimited(v_max)}"))
 

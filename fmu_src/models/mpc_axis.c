@@ -465,6 +465,28 @@ done:
     return error;
 }
 
+
+/* planner.shortest_steps()'s plan: mpc.plan_move on the discrete model (ad, bd), from the swing start (theta1, dtheta1,
+   theta2, dtheta2) at 0 to rest at distance, at most MAX_PLAN intervals; its inputs into plan_u (MAX_PLAN of room), their number into
+   *n_plan (0: none needed or found). */
+const char *mpc_axis_plan_rest_to_rest(const double ad[N_STATE][N_STATE], const double bd[N_STATE], double distance,
+                                       const double start[4], double u_max, double v_max, double interval,
+                                       double stretch, double *plan_u, int *n_plan) {
+    Design *d = malloc(sizeof *d);
+    double *plan_s = malloc((size_t)(MAX_PLAN + 1) * N_STATE * sizeof *plan_s);
+    const char *error = "MemoryError: the shortest move's plan";
+    *n_plan = 0;
+    if (d && plan_s) {
+        double s0[N_STATE] = {0.0, 0.0, start[0], start[1], start[2], start[3]}, target[N_STATE] = {distance, 0.0, 0.0, 0.0, 0.0, 0.0};
+        memcpy(d->ad, ad, sizeof d->ad);
+        memcpy(d->bd, bd, sizeof d->bd);
+        error = plan_move(d, s0, target, u_max, v_max, interval, MAX_PLAN, stretch, plan_u, plan_s, n_plan);
+    }
+    free(d);
+    free(plan_s);
+    return error;
+}
+
 /* mpc._sample(): what the identification keeps of a measured state. */
 static void sample(const double measured[N_STATE], double out[8]) {
     double theta1 = measured[2], theta2 = measured[4], d = theta1 - theta2;

@@ -98,6 +98,11 @@ typedef struct {
 
 /* mpc.configure(), after its declared RULES: the rules that need the interval and the horizon counted in steps,
    then the designs. */
+/* planner.shortest_steps()'s plan (the TrajectoryPlanner's shaper "shortest"): mpc.plan_move on (ad, bd) from the swing
+   start (theta1, dtheta1, theta2, dtheta2) at 0 to rest at distance; its inputs into plan_u (MAX_PLAN of room), their number into *n_plan. */
+const char *mpc_axis_plan_rest_to_rest(const double ad[N_STATE][N_STATE], const double bd[N_STATE], double distance,
+                                       const double start[4], double u_max, double v_max, double interval,
+                                       double stretch, double *plan_u, int *n_plan);
 ModelStatus mpc_axis_configure(const MpcSettings *v, MpcConfig *c, const Reporter *r);
 
 /* mpc.initial_state(): zeros. */

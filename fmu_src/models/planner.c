@@ -1,6 +1,7 @@
 /*
  * The TrajectoryPlanner component in C: the native twin of crane_fmu/model/planner.py (its variables, configure(),
- * the shapers, modes() on plant_equations.linearisation(), the bang-coast-bang base and reference()), registered
+ * the shapers, modes() on plant_equations.linearisation(), the bang-coast-bang base, the shortest move of
+ * shortest_steps() by mpc_axis.c's plan and reference()), registered
  * as a component (component.h). Its variables and parameter rules come from TrajectoryPlanner_variables.h,
  * generated from planner.VARIABLES. Its state is the time of its outputs: 0 at first, then the end of the last
  * step (time + step, the component's update()).
@@ -10,6 +11,9 @@
 #include <string.h>
 
 #include "TrajectoryPlanner_variables.h"
+#include "linalg.h"
+#include "lqr_design.h"
+#include "mpc_axis.h"
 #include "plant_math.h"
 #include "py_repr.h"
 #include "rules.h"
@@ -17,7 +21,8 @@
 #define EI_TOLERANCE 0.05
 #define PI 3.141592653589793 /* math.pi */
 #define MAX_IMPULSES 9               /* a shaper of at most 3 impulses per mode, convolved */
-#define MAX_STEPS (4 * MAX_IMPULSES) /* four jumps of the base acceleration per impulse */
+#define MAX_SHAPED (4 * MAX_IMPULSES) /* four jumps of the base acceleration per impulse */
+#define PLAN_INTERVAL 0.05           /* planner.PLAN_INTERVAL */
 
 typedef struct {
     double t, value; /* an impulse (time, amplitude) or a jump of the acceleration (time, jump) */
@@ -26,7 +31,9 @@ typedef struct {
 /* planner.Config */
 typedef struct {
     double x0, distance, t0, end, omegas[2], shapes[2][2], gains[2];
-    Pair steps[MAX_STEPS], impulses[MAX_IMPULSES];
+    int free;           /* a shortest move from a swing: */
+    double free_[2][2]; /* its modal swing (eta, deta) at t0, planner.Config.free */
+    Pair steps[MAX_PLAN + 1], impulses[MAX_IMPULSES]; /* the shortest move's: a jump per interval */
     int n_steps, n_impulses;
 } Config;
 
@@ -103,7 +110,7 @@ static void base(double distance, double accel, double speed, double *t_a, doubl
 }
 
 /* planner._accel_steps(): the shaped acceleration as sorted jumps; returns their number. */
-static int accel_steps(const Config *c, double accel, double t_a, double t_c, Pair steps[MAX_STEPS]) {
+static int accel_steps(const Config *c, double accel, double t_a, double t_c, Pair steps[MAX_SHAPED]) {
     int n = 0;
     for (int i = 0; i < c->n_impulses; i++) {
         double t = c->impulses[i].t, amp = c->impulses[i].value;
@@ -121,6 +128,48 @@ static double peak(const Pair steps[], int n) {
     return top;
 }
 
+/* planner.shortest_steps(), in configure(): the jumps of the shortest move's held inputs (mpc.plan_move on the
+   zero-order hold of lqr.continuous_model over PLAN_INTERVAL), from t0, and its end. */
+static ModelStatus shortest_steps(const double values[], double distance, double u_max, double v_max, Config *c,
+                                  const Reporter *r) {
+    PlantParameters p = {V(m1), V(m2), V(l1), V(l2), V(g)};
+    Matrix a, b, ad, bd;
+    const char *error = continuous_model(&p, &a, &b);
+    if (error || (error = la_zoh(a, b, PLAN_INTERVAL, &ad, &bd))) return report(r, MODEL_ERROR, "%s", error);
+    double ad_[N_STATE][N_STATE], bd_[N_STATE], inputs[MAX_PLAN];
+    for (int i = 0; i < N_STATE; i++) {
+        for (int j = 0; j < N_STATE; j++) ad_[i][j] = ad.v[i][j];
+        bd_[i] = bd.v[i][0];
+    }
+    int n = 0;
+    double start[4] = {V(theta1_0), V(dtheta1_0), V(theta2_0), V(dtheta2_0)};
+    error = mpc_axis_plan_rest_to_rest(ad_, bd_, distance, start, u_max, v_max, PLAN_INTERVAL, V(stretch), inputs, &n);
+    if (error) return report(r, MODEL_ERROR, "%s", error);
+    double far = fabs(distance);
+    for (int i = 0; i < 4; i++) far = py_max(far, fabs(start[i]));
+    if (n == 0 && far > REACHED) {
+        char text[REPR_SIZE];
+        return report(r, MODEL_ERROR, "shaper shortest: no move of x_d - x0 = %s m to rest within %g s",
+                      py_repr(distance, text), MAX_PLAN * PLAN_INTERVAL);
+    }
+    double level = 0.0;
+    for (int k = 0; k <= n; k++) {
+        double u = k < n ? inputs[k] : 0.0;
+        if (u != level) c->steps[c->n_steps++] = (Pair){V(t0) + k * PLAN_INTERVAL, u - level}, level = u;
+    }
+    c->end = c->n_steps ? V(t0) + n * PLAN_INTERVAL : V(t0);
+    if (start[0] != 0 || start[1] != 0 || start[2] != 0 || start[3] != 0) { /* q = S eta: eta = S^-1 q */
+        double s11 = c->shapes[0][0], s21 = c->shapes[0][1], s12 = c->shapes[1][0], s22 = c->shapes[1][1];
+        double det = s11 * s22 - s12 * s21;
+        c->free = 1;
+        for (int i = 0; i < 2; i++) { /* the angles (theta1_0, theta2_0), then their rates */
+            double q1 = start[i], q2 = start[2 + i];
+            c->free_[i][0] = (s22 * q1 - s12 * q2) / det, c->free_[i][1] = (s11 * q2 - s21 * q1) / det;
+        }
+    }
+    return MODEL_OK;
+}
+
 /* planner.configure(), after its RULES (the generated parameter_rules()): its plan. */
 static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
     const char *kind = strings[STRING_shaper];
@@ -136,7 +185,9 @@ static ModelStatus configure(const double values[], const StringValue strings[],
     double distance = V(x_d) - V(x0);
     double sign = distance >= 0 ? 1.0 : -1.0, distance_abs = fabs(distance);
     double t_a = 0.0, t_c = 0.0;
-    Pair steps[MAX_STEPS];
+    Pair steps[MAX_SHAPED];
+    c->x0 = V(x0), c->distance = distance, c->t0 = V(t0);
+    if (strcmp(kind, "shortest") == 0) return shortest_steps(values, distance, u_max, v_max, c, r);
     if (distance_abs > 0) {
         /* the largest base acceleration whose shaped acceleration stays within u_max (bisection) */
         double smallest = c->impulses[0].value;
@@ -153,7 +204,6 @@ static ModelStatus configure(const double values[], const StringValue strings[],
         for (int i = 0; i < c->n_steps; i++) c->steps[i].t = V(t0) + c->steps[i].t, c->steps[i].value *= sign;
     }
     c->end = c->n_steps ? V(t0) + c->impulses[c->n_impulses - 1].t + 2 * t_a + t_c : V(t0);
-    c->x0 = V(x0), c->distance = distance, c->t0 = V(t0);
     return MODEL_OK;
 }
 
@@ -162,6 +212,14 @@ static void reference(const Config *c, double t, double out[N_OUTPUTS]) {
     double x = c->x0, v = 0.0, a = 0.0, eta[2] = {0.0, 0.0}, deta[2] = {0.0, 0.0};
     double rounding = 1e-9 * (t > 1.0 ? t : t < -1.0 ? -t : 1.0); /* TIME_ROUNDING * max(1.0, abs(t)) */
     int moving = t < c->end - rounding; /* a summed time just short of the end is at it, at rest */
+    if (moving && c->free) { /* the swing the move starts from, left to itself: eta_k'' = -w_k^2 eta_k */
+        double since = t - c->t0;
+        for (int k = 0; k < 2; k++) {
+            double w = c->omegas[k], e0 = c->free_[0][k], d0 = c->free_[1][k];
+            eta[k] = e0 * COS(w * since) + d0 * SIN(w * since) / w;
+            deta[k] = -e0 * w * SIN(w * since) + d0 * COS(w * since);
+        }
+    }
     for (int i = 0; i < c->n_steps; i++) {
         double dt = t - c->steps[i].t, jump = c->steps[i].value;
         if (dt <= rounding) break;
