@@ -188,6 +188,27 @@ def rigid_floor(distance, u_max, v_max, dt=GRID):
     return round(steps * dt, 9)
 
 
+def planar_tasks():
+    """``{scenario: (task, crane_floor's arguments, grid)}``: the planar floors' tasks (:func:`scenario_floors`)."""
+    from .planar_scenarios import DISTANCE, DRIVE, GUST, HOIST, STEPS
+
+    swing = (0.0, 0.0, math.radians(10.0), 0.0, 0.0, 0.0)
+    moved = (DISTANCE, 0.0, 0.0, 0.0, 0.0, 0.0)
+    hoist = {"x0": HOIST["from"], "x_d": HOIST["to"], "shaper": "none", "u_max": HOIST["u_max"],
+             "v_max": HOIST["v_max"]}
+    coarse = max(STEPS)
+    limits = {"u_max": DRIVE["u_max"], "v_max": DRIVE["v_max"]}
+    return {
+        "S1": ("theta1 = 10 deg to rest, trolley back at x_d", dict(start=swing, **limits), GRID),
+        "S2": (f"{DISTANCE:g} m from rest to rest", dict(target=moved, **limits), GRID),
+        "S4": (f"{DISTANCE:g} m from rest to rest, the gust known in advance", dict(target=moved, gust=GUST, **limits),
+               GRID),
+        "S6": (f"S1's task, the input held over {coarse * 1e3:g} ms", dict(start=swing, dt=coarse, **limits), coarse),
+        "S7": (f"{DISTANCE:g} m from rest to rest while hoisting, the hoist's motion known in advance",
+               dict(target=moved, hoist=hoist, p=PlantParameters(l1=HOIST["from"]), **limits), GRID),
+    }
+
+
 @functools.cache
 def scenario_floors():
     """``{scenario: Floor}`` for the scoreboard's scenarios on the nominal plant (S1, S2, S4, S6, S7; S11, S12 of
@@ -198,42 +219,32 @@ def scenario_floors():
     longest step, 50 ms); S2, S4 and S7 end at rest at the target, S4 with the gust and
     S7 with the hoist's motion known in advance.
     """
-    from .planar_scenarios import DISTANCE, DRIVE, GUST, HOIST, STEPS
-
-    swing = (0.0, 0.0, math.radians(10.0), 0.0, 0.0, 0.0)
-    moved = (DISTANCE, 0.0, 0.0, 0.0, 0.0, 0.0)
-    hoist = {"x0": HOIST["from"], "x_d": HOIST["to"], "shaper": "none", "u_max": HOIST["u_max"],
-             "v_max": HOIST["v_max"]}
-    coarse = max(STEPS)
-    tasks = {
-        "S1": ("theta1 = 10 deg to rest, trolley back at x_d", dict(start=swing), GRID),
-        "S2": (f"{DISTANCE:g} m from rest to rest", dict(target=moved), GRID),
-        "S4": (f"{DISTANCE:g} m from rest to rest, the gust known in advance", dict(target=moved, gust=GUST), GRID),
-        "S6": (f"S1's task, the input held over {coarse * 1e3:g} ms", dict(start=swing, dt=coarse), coarse),
-        "S7": (f"{DISTANCE:g} m from rest to rest while hoisting, the hoist's motion known in advance",
-               dict(target=moved, hoist=hoist, p=PlantParameters(l1=HOIST["from"])), GRID),
-    }
-    floors = {sid: Floor(sid, crane_floor(u_max=DRIVE["u_max"], v_max=DRIVE["v_max"], **kwargs), task, grid, METHOD)
-              for sid, (task, kwargs, grid) in tasks.items()}
+    floors = {sid: Floor(sid, crane_floor(**kwargs), task, grid, METHOD)
+              for sid, (task, kwargs, grid) in planar_tasks().items()}
     return {**floors, **spatial_scenario_floors()}
 
 
-def spatial_scenario_floors():
-    """``{scenario: Floor}`` of the crane in three dimensions (S11, S12): each the larger of its axes' planar
-    floors (:func:`spatial_floor`) under the drive limits of each axis."""
+def spatial_tasks():
+    """``{scenario: (task, [crane_floor's arguments of each axis])}`` of the spatial scenarios' floors
+    (:func:`spatial_scenario_floors`)."""
     from crane_fmu.systems import DIAGONAL, ELLIPTIC
 
     from .spatial_scenarios import DRIVE
 
     limits = {"u_max": DRIVE["u_max"], "v_max": DRIVE["v_max"]}
-    diagonal = [dict(target=(DIAGONAL[a], 0.0, 0.0, 0.0, 0.0, 0.0)) for a in "xy"]
+    diagonal = [dict(target=(DIAGONAL[a], 0.0, 0.0, 0.0, 0.0, 0.0), **limits) for a in "xy"]
     elliptic = [dict(start=(0.0, 0.0, ELLIPTIC.get(f"theta1{a}_0", 0.0), ELLIPTIC.get(f"dtheta1{a}_0", 0.0), 0.0,
-                            0.0)) for a in "xy"]
-    tasks = {"S11": (f"({DIAGONAL['x']:g} m, {DIAGONAL['y']:g} m) from rest to rest, each axis' planar floor",
-                     diagonal),
-             "S12": ("the elliptic swing (10 deg along x, 5 deg along y a quarter period later) to rest, trolley back "
-                     "where it started: each axis' planar floor", elliptic)}
-    return {sid: Floor(sid, spatial_floor(axes, **limits), task, GRID, METHOD) for sid, (task, axes) in tasks.items()}
+                            0.0), **limits) for a in "xy"]
+    return {"S11": (f"({DIAGONAL['x']:g} m, {DIAGONAL['y']:g} m) from rest to rest, each axis' planar floor",
+                    diagonal),
+            "S12": ("the elliptic swing (10 deg along x, 5 deg along y a quarter period later) to rest, trolley back "
+                    "where it started: each axis' planar floor", elliptic)}
+
+
+def spatial_scenario_floors():
+    """``{scenario: Floor}`` of the crane in three dimensions (S11, S12): each the larger of its axes' planar
+    floors (:func:`spatial_floor`) under the drive limits of each axis."""
+    return {sid: Floor(sid, spatial_floor(axes), task, GRID, METHOD) for sid, (task, axes) in spatial_tasks().items()}
 
 
 def code_key():
@@ -245,9 +256,49 @@ def code_key():
     return digest.hexdigest()[:20]
 
 
-def stored_scenario_floors(folder=None):
-    """:func:`scenario_floors`, kept on disk (``folder``, default the temporary folder's ``crane_fmu_floors``)
-    under :func:`code_key`: the linear programs run once per machine and version of the code, not on every board."""
+SHIPPED = Path(__file__).with_name("floors.json")  # the floors as the package ships them, under their inputs_key()
+
+
+def inputs_key():
+    """A hash of everything the floors are made of: the tasks (:func:`planar_tasks`, :func:`spatial_tasks`, by
+    value), the grid and the method, this module's and the crane model's sources (``crane_fmu/model``), numpy's and
+    scipy's versions. Narrower than :func:`code_key`: an edit elsewhere in the package leaves it unchanged."""
+    digest = hashlib.sha256(f"numpy {np.__version__} scipy {scipy.__version__}".encode())
+    here = Path(__file__).resolve()
+    for path in [here, *sorted((here.parents[1] / "model").glob("*.py"))]:
+        digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    digest.update(repr((planar_tasks(), spatial_tasks(), GRID, METHOD)).encode())
+    return digest.hexdigest()[:20]
+
+
+def shipped_floors(path=SHIPPED):
+    """The floors the package ships (``path``) when they were computed from what :func:`inputs_key` hashes now; else
+    None (none shipped, torn, or made of other tasks or code: then they are computed)."""
+    try:
+        stored = json.loads(Path(path).read_text())
+        if stored["key"] == inputs_key():
+            return {sid: Floor(*row) for sid, row in stored["floors"].items()}
+    except (OSError, ValueError, TypeError, KeyError):
+        pass
+    return None
+
+
+def write_shipped(path=SHIPPED):
+    """Compute the floors and write them as the package ships them (``python -m crane_fmu.analysis.floor``)."""
+    text = json.dumps({"key": inputs_key(), "floors": {sid: list(f) for sid, f in scenario_floors().items()}},
+                      indent=1)
+    Path(path).write_text(text + "\n")
+    return path
+
+
+def stored_scenario_floors(folder=None, shipped=SHIPPED):
+    """:func:`scenario_floors`: those the package ships (``shipped``: :func:`shipped_floors`) when they are of the
+    code and tasks of now, else kept on disk (``folder``, default the temporary folder's ``crane_fmu_floors``)
+    under :func:`code_key`: the linear programs (about 7 CPU-s) run once per machine and version of the code, not on
+    every board."""
+    floors = shipped_floors(shipped) if shipped else None
+    if floors is not None:
+        return floors
     path = Path(folder or Path(tempfile.gettempdir()) / "crane_fmu_floors") / f"{code_key()}.json"
     try:
         return {sid: Floor(*row) for sid, row in json.loads(path.read_text()).items()}
@@ -259,3 +310,7 @@ def stored_scenario_floors(folder=None):
     partial.write_text(json.dumps({sid: list(floor) for sid, floor in floors.items()}))
     os.replace(partial, path)
     return floors
+
+
+if __name__ == "__main__":
+    print(f"wrote {write_shipped()}")

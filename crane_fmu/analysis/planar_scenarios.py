@@ -12,8 +12,13 @@ of the drive (:data:`MOVE_S`) and the periods of the two swing modes
 Seering's zero-vibration shapers) achieve. None is set from a controller's result.
 """
 
+import functools
+import hashlib
+import inspect
+import json
 import math
 from collections import namedtuple
+from pathlib import Path
 
 import numpy as np
 
@@ -21,7 +26,18 @@ from crane_fmu import components
 from crane_fmu.cosim import Connection, System
 from crane_fmu.systems import measuring
 
-from .scenarios import CASES, STOPPED_DEG, Scenario, ScenarioRun, Target, planned_end, register, register_notes, told_in
+from .scenarios import (
+    CASES,
+    QUICK_CASES,
+    STOPPED_DEG,
+    Scenario,
+    ScenarioRun,
+    Target,
+    planned_end,
+    register,
+    register_notes,
+    told_in,
+)
 from .wind_equilibrium import wind_deflection
 
 PLANT = "CranePlant"
@@ -221,18 +237,59 @@ def design(n):
 
     A Latin hypercube (scipy.stats.qmc, :data:`DESIGN_SEED`) over :data:`FACTORS` (values rounded to
     0.1 mm and 0.1 g) and a fifth coordinate that gives each case its seed of the noise or the wind (a
-    whole number below 2^31).
+    whole number below 2^31). The designs of a board's and a quick board's size are read from :data:`DESIGNS`
+    while they were drawn by what :func:`design_key` hashes now (scipy.stats takes about 0.5 CPU-s to import, in the
+    process that plans a board, before any case runs); any other is drawn (:func:`drawn_design`).
     """
-    from scipy.stats import qmc
-
     if not (isinstance(n, int) and n >= 1):
         raise ValueError(f"cases must be a whole number >= 1, got {n!r}")
+    stored = _stored_designs().get(str(n))
+    return [dict(case) for case in stored] if stored is not None else drawn_design(n)
+
+
+def drawn_design(n):
+    """:func:`design` drawn now (scipy.stats.qmc)."""
+    from scipy.stats import qmc
+
     cases = []
     for point in qmc.LatinHypercube(d=len(FACTORS) + 1, seed=DESIGN_SEED).random(n):
         case = {f.name: round(float(f.low + u * (f.high - f.low)), 4) for f, u in zip(FACTORS, point)}
         case["seed"] = float(int(point[-1] * 2 ** 31))
         cases.append(case)
     return cases
+
+
+DESIGNS = Path(__file__).with_name("designs.json")  # design(n) of the boards' sizes, under design_key()
+
+
+def design_key():
+    """A hash of what draws the design: :func:`drawn_design`'s source, :data:`FACTORS`, :data:`DESIGN_SEED`, numpy's
+    and scipy's versions."""
+    import scipy
+
+    made_of = (inspect.getsource(drawn_design), FACTORS, DESIGN_SEED, np.__version__, scipy.__version__)
+    return hashlib.sha256(repr(made_of).encode()).hexdigest()[:20]
+
+
+@functools.cache
+def _stored_designs(path=DESIGNS):
+    """``{str(n): cases}`` of :data:`DESIGNS` when drawn by what :func:`design_key` hashes now, else empty (none, torn
+    or of other code: drawn)."""
+    try:
+        stored = json.loads(Path(path).read_text())
+        if stored["key"] == design_key():
+            return stored["designs"]
+    except (OSError, ValueError, TypeError, KeyError):
+        pass
+    return {}
+
+
+def write_designs(path=DESIGNS, sizes=(CASES, QUICK_CASES)):
+    """Draw the designs of ``sizes`` and store them (``python -c "from crane_fmu.analysis.planar_scenarios import
+    write_designs; write_designs()"``)."""
+    designs = {str(n): drawn_design(n) for n in sizes}
+    Path(path).write_text(json.dumps({"key": design_key(), "designs": designs}, indent=1) + "\n")
+    return path
 
 
 def residual_from(stop_time, plan=None, plant=None):
@@ -383,3 +440,4 @@ def _notes(cases):
 
 
 register_notes(PLANT, _notes)
+
