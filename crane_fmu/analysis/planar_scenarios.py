@@ -28,6 +28,7 @@ from crane_fmu.systems import measuring
 
 from .scenarios import (
     CASES,
+    FORCE_ESTIMATOR,
     QUICK_CASES,
     STOPPED_DEG,
     Scenario,
@@ -227,7 +228,6 @@ MEASURING = ("S8", "S9")  # the scenarios with a sensor and a StateEstimator in 
 # controller there takes the true state, no noise and no delay) and regulates offset-free (OFFSET_FREE: 1 the load,
 # 2 the trolley at the target; 0: neither, no estimator, the board as before issue 51's item 3).
 OFFSET_FREE = {"S4": 0.0, "S10": 0.0}
-FORCE_ESTIMATOR = {"sigma_force": 50.0, "camera": 1.0, "delay": 0.0}  # 50 N/s: F2 within 2.5 % in 1.23 s (tests)
 PLAN = {"x_d": DISTANCE, "shaper": "zv"}  # the planned move of the transport scenarios
 HOIST_PLAN = {**PLAN, "shaper": "zvd", "l1": 1.5}  # S7's: robust to the cable's length between 2 m and 1 m
 
@@ -262,22 +262,27 @@ def drawn_design(n):
 DESIGNS = Path(__file__).with_name("designs.json")  # design(n) of the boards' sizes, under design_key()
 
 
-def design_key():
-    """A hash of what draws the design: :func:`drawn_design`'s source, :data:`FACTORS`, :data:`DESIGN_SEED`, numpy's
-    and scipy's versions."""
-    import scipy
+def library_versions():
+    """numpy's and scipy's versions: the designs and floors the package ships are used only with the same ones."""
+    import scipy  # its own version only: scipy's subpackages load when used
 
-    made_of = (inspect.getsource(drawn_design), FACTORS, DESIGN_SEED, np.__version__, scipy.__version__)
+    return f"numpy {np.__version__} scipy {scipy.__version__}"
+
+
+def design_key():
+    """A hash of the code that draws the design: :func:`drawn_design`'s source, :data:`FACTORS`, :data:`DESIGN_SEED`
+    (the libraries' versions are kept beside it: :func:`library_versions`)."""
+    made_of = (inspect.getsource(drawn_design), FACTORS, DESIGN_SEED)
     return hashlib.sha256(repr(made_of).encode()).hexdigest()[:20]
 
 
 @functools.cache
 def _stored_designs(path=DESIGNS):
-    """``{str(n): cases}`` of :data:`DESIGNS` when drawn by what :func:`design_key` hashes now, else empty (none, torn
-    or of other code: drawn)."""
+    """``{str(n): cases}`` of :data:`DESIGNS` when drawn by what :func:`design_key` hashes now with the libraries of
+    now, else empty (none, torn, of other code or other libraries: drawn)."""
     try:
         stored = json.loads(Path(path).read_text())
-        if stored["key"] == design_key():
+        if stored["key"] == design_key() and stored["versions"] == library_versions():
             return stored["designs"]
     except (OSError, ValueError, TypeError, KeyError):
         pass
@@ -288,7 +293,8 @@ def write_designs(path=DESIGNS, sizes=(CASES, QUICK_CASES)):
     """Draw the designs of ``sizes`` and store them (``python -c "from crane_fmu.analysis.planar_scenarios import
     write_designs; write_designs()"``)."""
     designs = {str(n): drawn_design(n) for n in sizes}
-    Path(path).write_text(json.dumps({"key": design_key(), "designs": designs}, indent=1) + "\n")
+    stored = {"key": design_key(), "versions": library_versions(), "designs": designs}
+    Path(path).write_text(json.dumps(stored, indent=1) + "\n")
     return path
 
 

@@ -19,8 +19,18 @@ from crane_fmu.model.parameters import plant_parameters
 from crane_fmu.model.planner import modes
 from crane_fmu.systems import CORRIDOR, DIAGONAL, DRIVE3D, ELLIPTIC, L_PATH, PATH_PLAN, REST3D, planned
 
-from .planar_scenarios import FORCE_ESTIMATOR
-from .scenarios import CASES, STOPPED_DEG, Scenario, ScenarioRun, Target, planned_end, register, register_notes, told_in
+from .scenarios import (
+    CASES,
+    FORCE_ESTIMATOR,
+    STOPPED_DEG,
+    Scenario,
+    ScenarioRun,
+    Target,
+    planned_end,
+    register,
+    register_notes,
+    told_in,
+)
 from .spatial_plots import distance_to_path
 from .wind_equilibrium import wind_deflection
 
@@ -42,11 +52,6 @@ LOAD_BAND_M = round(0.005 + L1 * math.sin(EQUILIBRIUM[0]) + L2 * math.sin(EQUILI
 # nonlinear crane closely enough to arrive before the shortest plan ends (2.82 s; the shortest itself: 4.5 s, its
 # error after the plan on the band's edge); the ZV-shaped move ends at 3.64 s, past the target (2.97 s)
 DIAGONAL_PLAN = {"shaper": "shortest", "stretch": 1.06}
-# S12's for a tracking controller: per axis the shortest move from the elliptic swing (the plant's start, known as
-# S1's is to its floor) to rest where the trolley started, the MPC's own kind of plan; none for a controller without
-# references (the MPC plans its own)
-ELLIPTIC_PLAN = {a: {"shaper": "shortest", **{name: ELLIPTIC.get(f"{name[:-2]}{a}_0", 0.0) for name in
-                                              ("theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0")}} for a in "xy"}
 RAIL = 1.0  # m of track beyond either end of a move: checked, not enforced (as the planar scenarios')
 
 # the floors (crane_fmu.analysis.floor.scenario_floors), rounded as the planar ones are; the issue's figures
@@ -149,13 +154,10 @@ def _runs(sid):
     def runs(c, cases=CASES):
         instances = {"plant": PLANT, "controller": c.source}
         if sid == "S12":
-            parameters, connections = {"plant": {**DRIVE3D, **ELLIPTIC}}, ()
-            if all(r in c.inputs for a in CRANE.axes for r in a.references):  # a tracking controller: the plan
-                for axis, planner in PLANNERS.items():
-                    instances[planner], parameters[planner] = "TrajectoryPlanner", dict(ELLIPTIC_PLAN[axis])
-                connections = planned(CRANE, PLANNERS)
-            system = System(f"{c.name}-elliptic", instances, connections, parameters=parameters, stop_time=10.0)
-            # regulation: the residual swing over the last quarter, as S1's
+            # regulation, as S1's: no plan told the swing (a planner's theta1_0 ... would know it beforehand); the
+            # residual swing over the last quarter
+            system = System(f"{c.name}-elliptic", instances, parameters={"plant": {**DRIVE3D, **ELLIPTIC}},
+                            stop_time=10.0)
             return [ScenarioRun("nominal", system, 1e-3, system.stop_time, [0.0, 0.0], 0.75 * system.stop_time)]
         extra = {}
         if sid == "S13":
