@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from crane_fmu.analysis import floor
+from crane_fmu.analysis import floor, planar_scenarios
 from crane_fmu.analysis.floor import METHOD, Floor
 
 FLOORS = {"S1": Floor("S1", 2.31, "theta1 = 10 deg to rest", 0.01, METHOD),
@@ -46,8 +46,22 @@ def test_shipped_floors_are_used_only_while_they_are_of_the_tasks_and_code_of_no
 
 def test_the_floors_the_package_ships_are_of_the_code_of_now_and_equal_those_computed_now():
     """The linear programs run (about 7 CPU-s). When this fails after an edit of the floors' tasks, of floor.py or
-    of crane_fmu/model: `python -m crane_fmu.analysis.floor` writes them again (a board computes them meanwhile)."""
-    shipped = floor.shipped_floors()
-    assert shipped is not None, ("crane_fmu/analysis/floors.json is not of the floors' tasks and code of now: run "
-                                 "`python -m crane_fmu.analysis.floor`")
-    assert shipped == floor.scenario_floors()
+    of crane_fmu/model: `python -m crane_fmu.analysis.floor` writes them again (a board computes them meanwhile).
+    With other numpy or scipy versions than they were computed with, they are not used: the board computes them."""
+    stored = json.loads(floor.SHIPPED.read_text())
+    assert stored["key"] == floor.inputs_key(), ("crane_fmu/analysis/floors.json is not of the floors' tasks and code "
+                                                 "of now: run `python -m crane_fmu.analysis.floor`")
+    computed = floor.scenario_floors()
+    if stored["versions"] == planar_scenarios.library_versions():
+        assert floor.shipped_floors() == computed
+    else:
+        assert floor.shipped_floors() is None and floor.stored_scenario_floors() == computed
+
+
+@pytest.mark.quick
+def test_shipped_floors_of_other_libraries_are_not_used(tmp_path, monkeypatch):
+    monkeypatch.setattr(floor, "scenario_floors", lambda: FLOORS)
+    shipped = floor.write_shipped(tmp_path / "floors.json")
+    assert floor.shipped_floors(shipped) == FLOORS
+    monkeypatch.setattr(planar_scenarios, "library_versions", lambda: "numpy 0.0 scipy 0.0")
+    assert floor.shipped_floors(shipped) is None

@@ -260,10 +260,11 @@ SHIPPED = Path(__file__).with_name("floors.json")  # the floors as the package s
 
 
 def inputs_key():
-    """A hash of everything the floors are made of: the tasks (:func:`planar_tasks`, :func:`spatial_tasks`, by
-    value), the grid and the method, this module's and the crane model's sources (``crane_fmu/model``), numpy's and
-    scipy's versions. Narrower than :func:`code_key`: an edit elsewhere in the package leaves it unchanged."""
-    digest = hashlib.sha256(f"numpy {np.__version__} scipy {scipy.__version__}".encode())
+    """A hash of the code the floors are made of: the tasks (:func:`planar_tasks`, :func:`spatial_tasks`, by
+    value), the grid and the method, this module's and the crane model's sources (``crane_fmu/model``). Narrower than
+    :func:`code_key`: an edit elsewhere in the package leaves it unchanged. The libraries' versions are kept beside
+    it (:func:`.planar_scenarios.library_versions`): a test tells stale floors from another machine's libraries."""
+    digest = hashlib.sha256()
     here = Path(__file__).resolve()
     for path in [here, *sorted((here.parents[1] / "model").glob("*.py"))]:
         digest.update(path.name.encode() + b"\0" + path.read_bytes())
@@ -272,11 +273,13 @@ def inputs_key():
 
 
 def shipped_floors(path=SHIPPED):
-    """The floors the package ships (``path``) when they were computed from what :func:`inputs_key` hashes now; else
-    None (none shipped, torn, or made of other tasks or code: then they are computed)."""
+    """The floors the package ships (``path``) when they were computed from what :func:`inputs_key` hashes now, with
+    the libraries of now; else None (none shipped, torn, or made of other tasks or code: then they are computed)."""
     try:
         stored = json.loads(Path(path).read_text())
-        if stored["key"] == inputs_key():
+        from .planar_scenarios import library_versions
+
+        if stored["key"] == inputs_key() and stored["versions"] == library_versions():
             return {sid: Floor(*row) for sid, row in stored["floors"].items()}
     except (OSError, ValueError, TypeError, KeyError):
         pass
@@ -285,8 +288,10 @@ def shipped_floors(path=SHIPPED):
 
 def write_shipped(path=SHIPPED):
     """Compute the floors and write them as the package ships them (``python -m crane_fmu.analysis.floor``)."""
-    text = json.dumps({"key": inputs_key(), "floors": {sid: list(f) for sid, f in scenario_floors().items()}},
-                      indent=1)
+    from .planar_scenarios import library_versions
+
+    floors = {sid: list(f) for sid, f in scenario_floors().items()}
+    text = json.dumps({"key": inputs_key(), "versions": library_versions(), "floors": floors}, indent=1)
     Path(path).write_text(text + "\n")
     return path
 
