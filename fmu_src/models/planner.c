@@ -143,7 +143,8 @@ static ModelStatus shortest_steps(const double values[], double distance, double
     }
     int n = 0;
     double start[4] = {V(theta1_0), V(dtheta1_0), V(theta2_0), V(dtheta2_0)};
-    error = mpc_axis_plan_rest_to_rest(ad_, bd_, distance, start, u_max, v_max, PLAN_INTERVAL, V(stretch), inputs, &n);
+    error = mpc_axis_plan_rest_to_rest((const double (*)[N_STATE])ad_, bd_, distance, start, u_max, v_max,
+                                       PLAN_INTERVAL, V(stretch), inputs, &n); /* the cast: C99 takes no implicit const */
     if (error) return report(r, MODEL_ERROR, "%s", error);
     double far = fabs(distance);
     for (int i = 0; i < 4; i++) far = py_max(far, fabs(start[i]));
