@@ -480,7 +480,8 @@ const char *mpc_axis_plan_rest_to_rest(const double ad[N_STATE][N_STATE], const 
         double s0[N_STATE] = {0.0, 0.0, start[0], start[1], start[2], start[3]}, target[N_STATE] = {distance, 0.0, 0.0, 0.0, 0.0, 0.0};
         memcpy(d->ad, ad, sizeof d->ad);
         memcpy(d->bd, bd, sizeof d->bd);
-        error = plan_move(d, s0, target, u_max, v_max, interval, MAX_PLAN, stretch, plan_u, plan_s, n_plan);
+        error = plan_move(d, s0, target, u_max, v_max, interval, MAX_PLAN, stretch, NULL, plan_u, plan_s,
+                          n_plan); /* others=(): no corners */
     }
     free(d);
     free(plan_s);
