@@ -15,6 +15,7 @@ from crane_fmu.analysis import floor, scenarios, spatial_scenarios
 from crane_fmu.analysis.spatial_scenarios import path_deviation
 from crane_fmu.model import mpc, path, planner
 from crane_fmu.model.parameters import plant_parameters
+from crane_fmu.systems import ELLIPTIC
 
 LQR3D = scenarios.Contender("LqrController3D", "LqrController3D",
                             list(components.get("LqrController3D").names("input")),
@@ -128,7 +129,9 @@ def test_a_shortest_move_from_s12s_swing_is_the_linear_crane_under_its_held_inpu
     later), the shortest move's reference is the linear crane's own motion (:func:`floor.crane_model`, stepped by the
     matrix exponential over each held input, an independent computation) to 1e-9, starts at the swing, lasts at least
     the axis' floor (:func:`floor.crane_floor`, 10 ms holds) and ends at rest where it started."""
-    values = {**planner.COMPONENT.defaults(), **spatial_scenarios.ELLIPTIC_PLAN[axis]}
+    swing = {name: ELLIPTIC.get(f"{name[:-2]}{axis}_0", 0.0) for name in planner.START}  # theta1x_0 as theta1_0
+    values = {**planner.COMPONENT.defaults(), **spatial_scenarios.ELLIPTIC_PLAN[axis], "plan_from": "parameters",
+              **swing}
     c = planner.configure(values)
     start = np.array([0.0, 0.0, values["theta1_0"], values["dtheta1_0"], values["theta2_0"], values["dtheta2_0"]])
     assert np.any(start) and c.free is not None
@@ -147,16 +150,21 @@ def test_a_shortest_move_from_s12s_swing_is_the_linear_crane_under_its_held_inpu
 
 
 @pytest.mark.quick
-def test_s12_gives_a_tracking_controller_the_shortest_move_from_the_swing_and_the_mpc_none():
+def test_s12_gives_a_tracking_controller_the_shortest_move_from_the_measured_swing_and_the_mpc_none():
+    """S12's planners are not told the swing (no theta*_0 set; a regulation controller must not know the disturbance
+    in advance): they measure it, each axis' swing state connected from the plant's outputs by role."""
     (lqr,) = scenarios.systems_for(LQR3D, "S12")
     for name in spatial_scenarios.PLANNERS.values():
         assert lqr.system.instances[name] == "TrajectoryPlanner"
-        assert lqr.system.parameters[name]["shaper"] == "shortest"
-    assert lqr.system.parameters["planner"]["theta1_0"] == lqr.system.parameters["plant"]["theta1x_0"]
-    assert lqr.system.parameters["planner_y"]["dtheta1_0"] == lqr.system.parameters["plant"]["dtheta1y_0"]
-    assert {(c.source, c.output, c.target, c.input) for c in lqr.system.connections} >= {
+        assert lqr.system.parameters[name] == {"shaper": "shortest", "plan_from": "measured"}
+        assert not set(lqr.system.parameters[name]) & set(planner.START)
+    connections = {(c.source, c.output, c.target, c.input) for c in lqr.system.connections}
+    assert connections >= {
         ("planner", "x_ref", "controller", "x_ref"), ("planner_y", "x_ref", "controller", "y_ref"),
         ("planner_y", "theta1_ref", "controller", "theta1y_ref")}
+    for axis, name in spatial_scenarios.PLANNERS.items():
+        fed = {c[3]: c[:2] for c in connections if c[2] == name}
+        assert fed == {m: ("plant", f"{m[:-4]}{axis}") for m in planner.MEASURED}, (axis, fed)
     (ours,) = scenarios.systems_for(MPC3D, "S12")
     assert set(ours.system.instances) == {"plant", "controller"} and not ours.system.connections
 
