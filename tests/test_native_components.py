@@ -102,29 +102,35 @@ def _planner_parameters(rng, i):
             "u_max": rng.uniform(0.1, 3), "v_max": rng.uniform(0.1, 2), "shaper": SHAPERS[i % 4]}
 
 
+def _run_planner(path, version, parameters, rng, longest, ours, theirs):
+    """The native planner's outputs (``ours``) and the Python model's (``theirs``) before initialisation ends (at time
+    0) and after each of 40 steps of random length (1 ms or up to ``longest``)."""
+    outputs = PLANNER.names("output")
+    fmu, vr, _, get = open_native(path, version, parameters)
+    config = PLANNER.check(parameters)
+    ours.append(get([vr[n] for n in outputs]))
+    theirs.append(PLANNER.output(config, (0.0,), ()))
+    fmu.exitInitializationMode()
+    t = 0.0
+    for _ in range(40):
+        h = rng.choice([1e-3, rng.uniform(1e-3, longest)])
+        fmu.doStep(t, h)
+        ours.append(get([vr[n] for n in outputs]))
+        theirs.append(PLANNER.output(config, (t + h,), ()))
+        t += h
+    close(fmu)
+
+
 @pytest.mark.parametrize("version", [2, 3])
 def test_planner_outputs_equal_the_python_model_at_random_parameters_and_times(native, version):
     """80 parameter sets (every shaper, m2 = 0, no move) x 40 steps of random length: 22400 outputs."""
     rng = random.Random(2027)
-    outputs = PLANNER.names("output")
     ours, theirs = [], []
     for i in range(80):
         parameters = _planner_parameters(rng, i)
         if i % 10 == 9:
             parameters["x_d"] = parameters["x0"]  # no move: x_ref stays at x0
-        fmu, vr, _, get = open_native(native[version] / "TrajectoryPlanner.fmu", version, parameters)
-        config = PLANNER.check(parameters)
-        ours.append(get([vr[n] for n in outputs]))  # before initialisation ends: the outputs at time 0
-        theirs.append(PLANNER.output(config, (0.0,), ()))
-        fmu.exitInitializationMode()
-        t = 0.0
-        for _ in range(40):
-            h = rng.choice([1e-3, rng.uniform(1e-3, 0.6)])
-            fmu.doStep(t, h)
-            ours.append(get([vr[n] for n in outputs]))
-            theirs.append(PLANNER.output(config, (t + h,), ()))
-            t += h
-        close(fmu)
+        _run_planner(native[version] / "TrajectoryPlanner.fmu", version, parameters, rng, 0.6, ours, theirs)
     compare_to_python(ours, theirs)
     theirs = np.array(theirs)
     assert np.count_nonzero(theirs[:, 3]) > 1000 and np.count_nonzero(theirs[:, 2]) > 500  # moves and swing
@@ -136,7 +142,6 @@ def test_the_shortest_moves_outputs_equal_the_python_model_at_random_parameters_
     stretch for every other one, a swing to start from for every third, one regulation and one with no move) x 40
     steps of random length."""
     rng = random.Random(2052)
-    outputs = PLANNER.names("output")
     ours, theirs = [], []
     for i in range(10):
         parameters = {**_planner_parameters(rng, i), "shaper": "shortest", "x0": rng.uniform(-1.5, 1.5),
@@ -147,19 +152,7 @@ def test_the_shortest_moves_outputs_equal_the_python_model_at_random_parameters_
                               theta2_0=rng.uniform(-0.2, 0.2), dtheta2_0=rng.uniform(-0.3, 0.3))
         if i in (6, 9):
             parameters["x_d"] = parameters["x0"]
-        fmu, vr, _, get = open_native(native[version] / "TrajectoryPlanner.fmu", version, parameters)
-        config = PLANNER.check(parameters)
-        ours.append(get([vr[n] for n in outputs]))
-        theirs.append(PLANNER.output(config, (0.0,), ()))
-        fmu.exitInitializationMode()
-        t = 0.0
-        for _ in range(40):
-            h = rng.choice([1e-3, rng.uniform(1e-3, 0.3)])
-            fmu.doStep(t, h)
-            ours.append(get([vr[n] for n in outputs]))
-            theirs.append(PLANNER.output(config, (t + h,), ()))
-            t += h
-        close(fmu)
+        _run_planner(native[version] / "TrajectoryPlanner.fmu", version, parameters, rng, 0.3, ours, theirs)
     compare_to_python(ours, theirs)
     theirs = np.array(theirs)
     assert np.count_nonzero(theirs[:, 3]) > 200 and len(set(theirs[:, 2])) > 50  # moves, swing, many held inputs
@@ -167,7 +160,7 @@ def test_the_shortest_moves_outputs_equal_the_python_model_at_random_parameters_
 
 @pytest.mark.parametrize("version", [2, 3])
 def test_a_plan_from_the_measured_swing_equals_the_plan_from_the_same_swing_as_parameters(native, version):
-    """``plan_from = measured``: the swing read from the inputs ``theta1`` ... at the first step (before it, the
+    """``plan_from = measured``: the swing read from the inputs ``theta1_now`` ... at the first step (before it, the
     outputs at time 0 from the inputs then) gives, in C and in Python, bit for bit the outputs the same swing gives as
     the parameters ``theta1_0`` ...; the inputs changed after the first step change nothing (the plan is made once).
     6 parameter sets (moves, regulations, stretches) x 40 steps of random length."""
