@@ -192,7 +192,13 @@ def _dask_client(workers, scheduler):
         except (OSError, TimeoutError) as exc:
             raise ValueError(f"scheduler {scheduler}: cannot connect ({str(exc).splitlines()[0]})") from None
     else:
-        cluster = _local(workers)
+        # The workers ignore Ctrl-C (the disposition is inherited by the processes they start): only this
+        # process stops, closes the cluster and says so in one line, no traceback from every worker.
+        handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            cluster = local_cluster(workers or os.cpu_count() or 1)
+        finally:
+            signal.signal(signal.SIGINT, handler)
         client = Client(cluster)
     try:
         yield client
@@ -200,29 +206,6 @@ def _dask_client(workers, scheduler):
         client.close()
         if cluster is not None:
             cluster.close()
-
-
-def _local(workers):
-    """:func:`local_cluster` of ``workers`` processes (one per core by default), started with Ctrl-C ignored."""
-    # The workers ignore Ctrl-C (the disposition is inherited by the processes they start): only this
-    # process stops, closes the cluster and says so in one line, no traceback from every worker.
-    handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        return local_cluster(workers or os.cpu_count() or 1)
-    finally:
-        signal.signal(signal.SIGINT, handler)
-
-
-@contextmanager
-def started_cluster(workers=None):
-    """A local cluster of ``workers`` processes, as :func:`run_batch` starts one, started now (in the main thread:
-    Ctrl-C is ignored while it starts); yields its scheduler's address, for ``run_batch(scheduler=...)``; closed
-    after."""
-    cluster = _local(workers)
-    try:
-        yield cluster.scheduler_address
-    finally:
-        cluster.close()
 
 
 # What a worker process runs (a sweep's, a board's case or picture), imported once by the fork server

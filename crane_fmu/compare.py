@@ -17,7 +17,6 @@ as fresh Python processes (Windows), import the script again, as
 ``multiprocessing`` does.
 """
 
-import contextlib
 import functools
 import hashlib
 import importlib.metadata
@@ -26,7 +25,6 @@ import os
 import platform
 import sys
 import time
-from concurrent.futures import ThreadPoolExecutor
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -40,7 +38,7 @@ from crane_fmu.analysis import scenarios as scenario_registry
 from crane_fmu.analysis.board_drawing import BoardDrawer, first_scenarios
 from crane_fmu.analysis.floor import stored_scenario_floors
 from crane_fmu.analysis.scenarios import Contender
-from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch, started_cluster, worker_context, worker_pool
+from crane_fmu.batch import JOURNAL, Progress, read_journal, run_batch, worker_context, worker_pool
 from crane_fmu.cosim import ArrayRecorder, Connection, FmiError, simulate
 from crane_fmu.cosim.suggest import did_you_mean
 from crane_fmu.cosim.system import read_fmu, unfed_inputs
@@ -352,68 +350,60 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
             runs = [s for s in known if not scenario_registry.applicable(contender, s)]
             raise ValueError(f"{contender.name}: no scenario of {', '.join(scenarios)} applies to it: "
                              f"{reasons.pop()}; it can run {', '.join(runs)}")
-    # A fresh board (no journal: every case runs) starts its local cluster in this thread while another plans it
-    with contextlib.ExitStack() as early:
-        with ThreadPoolExecutor(1) as planner:
-            planning = planner.submit(lambda: (plan(chosen, fmu_dir, scenarios, cases),
-                                               unfed(chosen, fmu_dir, scenarios)))
-            if scheduler is None and not (out_dir / JOURNAL).exists():
-                scheduler = early.enter_context(started_cluster(workers))
-        (planned, blobs, refused), lines = planning.result()
-        if strict and lines:
-            raise ValueError(f"--strict: {'; '.join(lines)}")
-        for line in lines:
-            (warn or (lambda text: print(f"crane-fmu: warning: {text}", file=sys.stderr)))(line)
-        out_dir.mkdir(parents=True, exist_ok=True)  # only now: a refused board leaves no folder behind
-        done = read_journal(out_dir)
-        why = stale(done, planned)
-        if why:
-            kept = out_dir / f"{JOURNAL}.{_now().replace(':', '-')}.old"
-            (out_dir / JOURNAL).replace(kept)
-            log(f"{out_dir / JOURNAL} is not resumed: {why}; kept as {kept.name}, the board starts again")
-            done = {}
-        pending = [c for c in planned if c["case_id"] not in done]
-        failed_before = sum(done[c["case_id"]]["status"] != "ok" for c in planned if c["case_id"] in done)
-        bar = Progress(len(planned), len(planned) - len(pending), failed=failed_before) if progress else None
-        users = {c.name for c in chosen if c.user}
+    planned, blobs, refused = plan(chosen, fmu_dir, scenarios, cases)
+    lines = unfed(chosen, fmu_dir, scenarios)
+    if strict and lines:
+        raise ValueError(f"--strict: {'; '.join(lines)}")
+    for line in lines:
+        (warn or (lambda text: print(f"crane-fmu: warning: {text}", file=sys.stderr)))(line)
+    out_dir.mkdir(parents=True, exist_ok=True)  # only now: a refused board leaves no folder behind
+    done = read_journal(out_dir)
+    why = stale(done, planned)
+    if why:
+        kept = out_dir / f"{JOURNAL}.{_now().replace(':', '-')}.old"
+        (out_dir / JOURNAL).replace(kept)
+        log(f"{out_dir / JOURNAL} is not resumed: {why}; kept as {kept.name}, the board starts again")
+        done = {}
+    pending = [c for c in planned if c["case_id"] not in done]
+    failed_before = sum(done[c["case_id"]]["status"] != "ok" for c in planned if c["case_id"] in done)
+    bar = Progress(len(planned), len(planned) - len(pending), failed=failed_before) if progress else None
+    users = {c.name for c in chosen if c.user}
 
-        def finished(row):  # a row as the board keeps it
-            scope = scenario_registry.get(row["scenario"]).scope(cases)
-            row.update(quick=quick, **{f"scenario_{k}": v for k, v in scope.items()})
-            return row
+    def finished(row):  # a row as the board keeps it
+        scope = scenario_registry.get(row["scenario"]).scope(cases)
+        row.update(quick=quick, **{f"scenario_{k}": v for k, v in scope.items()})
+        return row
 
-        # The statistics and the pictures in two other processes (and this one), each scenario's begun as soon as its
-        # rows are in, while the cases of the others run (the scenarios drawn longest run first).
-        with _drawing(workers) as pool:
-            floors = pool.submit(stored_scenario_floors)
-            drawer = BoardDrawer(pool, [(c["case_id"], c["scenario"]) for c in planned]
-                                 + [(None, r["scenario"]) for r in refused], out_dir, users, animate)
-            for row in [done[c["case_id"]] for c in planned if c["case_id"] in done] + refused:
-                drawer.add(finished(row))
-            first = {sid: i for i, sid in enumerate(dict.fromkeys(first_scenarios(animate)))}
-            pending.sort(key=lambda c: first.get(c["scenario"], len(first)))  # a stable sort: the board's order within
-            ran = run_batch(native_batch.score_chunk, _items(pending, blobs), blobs, on="dask", workers=workers,
-                            scheduler=scheduler, journal=out_dir / JOURNAL, progress=bar, chunked=True,
-                            on_row=lambda row: drawer.add(finished(row)))
-            early.close()  # its cluster closed, as run_batch closes its own
-            done.update({r["case_id"]: r for r in ran})
-            rows = [done[c["case_id"]] for c in planned] + refused
-            write_table(_same_columns(rows), out_dir / "scores.parquet")
-            manifest = {"contenders": [{"name": c.name, "source": c.source, "user": c.user} for c in chosen],
-                        "scenarios": scenarios, "cases": cases, "quick": quick, "fmu_dir": str(Path(fmu_dir).resolve()),
-                        "fmus": dict(sorted({f: d for c in planned for f, d in json.loads(provenance(c)["fmus_sha256"])
-                                             .items()}.items())),
-                        "versions": versions(), "master": MASTER, "metrics_version": metrics.VERSION, "design_seed":
-                        _design_seeds(planned), "date": _now()}
-            _write(out_dir / MANIFEST, json.dumps(manifest, indent=1))
-            board_md = out_dir / "scoreboard.md"
-            stats = drawer.statistics()
-            summary = pool.submit(score_plots.plot_board_summary, rows, out_dir, users, stats)
-            floors = floors.result()
-            _write(board_md, board_tables.render(rows, chosen, quick, cases, _provenance_lines(manifest), stats,
-                                                 floors))
-            new = drawer.animations_drawn()
-            paths, drawn = drawer.pictures_drawn() + [summary.result()] + new, len(new)
+    # The statistics and the pictures in two other processes (and this one), each scenario's begun as soon as its
+    # rows are in, while the cases of the others run (the scenarios drawn longest run first).
+    with _drawing(workers) as pool:
+        floors = pool.submit(stored_scenario_floors)
+        drawer = BoardDrawer(pool, [(c["case_id"], c["scenario"]) for c in planned]
+                             + [(None, r["scenario"]) for r in refused], out_dir, users, animate)
+        for row in [done[c["case_id"]] for c in planned if c["case_id"] in done] + refused:
+            drawer.add(finished(row))
+        first = {sid: i for i, sid in enumerate(dict.fromkeys(first_scenarios(animate)))}
+        pending.sort(key=lambda c: first.get(c["scenario"], len(first)))  # a stable sort: the board's order within
+        ran = run_batch(native_batch.score_chunk, _items(pending, blobs), blobs, on="dask", workers=workers,
+                        scheduler=scheduler, journal=out_dir / JOURNAL, progress=bar, chunked=True,
+                        on_row=lambda row: drawer.add(finished(row)))
+        done.update({r["case_id"]: r for r in ran})
+        rows = [done[c["case_id"]] for c in planned] + refused
+        write_table(_same_columns(rows), out_dir / "scores.parquet")
+        manifest = {"contenders": [{"name": c.name, "source": c.source, "user": c.user} for c in chosen],
+                    "scenarios": scenarios, "cases": cases, "quick": quick, "fmu_dir": str(Path(fmu_dir).resolve()),
+                    "fmus": dict(sorted({f: d for c in planned for f, d in json.loads(provenance(c)["fmus_sha256"])
+                                         .items()}.items())),
+                    "versions": versions(), "master": MASTER, "metrics_version": metrics.VERSION, "design_seed":
+                    _design_seeds(planned), "date": _now()}
+        _write(out_dir / MANIFEST, json.dumps(manifest, indent=1))
+        board_md = out_dir / "scoreboard.md"
+        stats = drawer.statistics()
+        summary = pool.submit(score_plots.plot_board_summary, rows, out_dir, users, stats)
+        floors = floors.result()
+        _write(board_md, board_tables.render(rows, chosen, quick, cases, _provenance_lines(manifest), stats, floors))
+        new = drawer.animations_drawn()
+        paths, drawn = drawer.pictures_drawn() + [summary.result()] + new, len(new)
     removed = score_plots.prune(rows, out_dir, animate)  # an earlier board's pictures, never shown as this one's
     page = board_page.write_page(out_dir)
     log(board_tables.render_terminal(rows, {c.name for c in chosen if c.user}, quick, cases, stats, floors))

@@ -15,7 +15,7 @@ from crane_fmu.analysis import planar_scenarios as planar
 from crane_fmu.cli import main
 from crane_fmu.compare import check, compare, contenders
 from crane_fmu.cosim import ArrayRecorder, read_csv, run
-from crane_fmu.sweep.runner import JOURNAL, write_table
+from crane_fmu.sweep.runner import JOURNAL
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -305,45 +305,6 @@ def test_a_scenario_of_one_crane_scores_the_controllers_of_that_crane(native, tm
     spatial = {"LqrController3D", "MpcController3D"}  # the controllers of ux and uy
     builtin = {c.model_identifier for c in components.registered("controller")}
     assert {r["controller"] for r in rows} == builtin - spatial
-
-
-def test_a_fresh_board_starts_its_local_cluster_while_it_is_planned_and_a_resumed_one_only_if_cases_run(
-        native, tmp_path, monkeypatch):
-    """A board with no journal starts its cluster while another thread plans it (the plan waits here until the
-    cluster is up: run one after the other, it would wait in vain), and closes it once every case has run, before
-    the board is written; a resumed board starts none early (run_batch starts one only for cases still to run)."""
-    import contextlib
-    import threading
-
-    from crane_fmu import compare as board
-
-    events, up = [], threading.Event()
-    real_cluster, real_plan = board.started_cluster, board.plan
-
-    @contextlib.contextmanager
-    def cluster(workers):
-        with real_cluster(workers) as address:
-            events.append("cluster up")
-            up.set()
-            yield address
-        events.append("cluster closed")
-
-    def plan(*args):
-        events.append(f"planning, cluster up: {up.wait(60)}")
-        return real_plan(*args)
-
-    monkeypatch.setattr(board, "started_cluster", cluster)
-    monkeypatch.setattr(board, "plan", plan)
-    monkeypatch.setattr(board, "write_table", lambda *args: events.append("board written") or write_table(*args))
-    first = compare(tmp_path, ["LqrController"], native[2], scenarios=["S1"], only=True, progress=False, animate=(),
-                    workers=1, log=lambda _: None)
-    assert events == ["cluster up", "planning, cluster up: True", "cluster closed", "board written"]
-    events.clear()
-    up.set()  # the plan of the resumed board does not wait
-    again = compare(tmp_path, ["LqrController"], native[2], scenarios=["S1"], only=True, progress=False, animate=(),
-                    workers=1, log=lambda _: None)
-    assert events == ["planning, cluster up: True", "board written"]
-    assert [r["case_id"] for r in again] == [r["case_id"] for r in first] and len(first) == 1
 
 
 def test_animate_a_simulate_result(fmu_dir, tmp_path, capsys):
