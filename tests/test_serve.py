@@ -1049,6 +1049,20 @@ def test_real_time_a_refused_step_holds_the_client_at_zero_and_the_run_goes_on(f
     assert np.all(np.abs(served["controller.u"]) < 1e20) and served["controller.u"][-1] == 0.0
 
 
+def _driven_at_u_max(server):
+    """A real-time run whose client writes u = 3 once and leaves it: ``(status, stdout, stderr)`` at its end."""
+    async def push(url):
+        async with Client(url) as opc:
+            ns, node = await _nodes(opc)
+            await node("controller.u").write_value(ua.Variant(3.0, ua.VariantType.Double))
+
+    try:
+        _run(push(server.opcua))
+    finally:
+        ended = server.wait(40)
+    return ended
+
+
 def test_real_time_a_trolley_driven_at_a_rail_end_is_braked_and_the_run_reaches_its_stop_time(fmu_dir, tmp_path):
     """A client writes u = 3 (the drive's limit) towards the rail end x_max = 0.3 m and then nothing more. Without a
     guard the trolley reached a point before the rail end from where no demand within the limit stops it (v^2 / 2U
@@ -1059,16 +1073,7 @@ def test_real_time_a_trolley_driven_at_a_rail_end_is_braked_and_the_run_reaches_
     server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--period", "0.01",
                     "--watchdog", "30", "--stop-time", "1.5", "--set", "plant.u_max=3", "--set", "plant.x_max=0.3",
                     "--opcua", "127.0.0.1:0")
-
-    async def push(url):
-        async with Client(url) as opc:
-            ns, node = await _nodes(opc)
-            await node("controller.u").write_value(ua.Variant(3.0, ua.VariantType.Double))
-
-    try:
-        _run(push(server.opcua))
-    finally:
-        status, out, err = server.wait(40)
+    status, out, err = _driven_at_u_max(server)
     assert status == 0 and "finished at t = 1.5 s" in out, err[-2000:]
     assert "could not stop before the rail end x_max = 0.3 m" in err and "held at u = -3" in err, err
     served = read_csv(server.out)
@@ -1214,16 +1219,7 @@ def test_real_time_a_lagging_drive_driven_at_a_rail_end_is_braked_and_the_run_re
     server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--period", "0.01",
                     "--watchdog", "30", "--stop-time", "2", "--set", "plant.u_max=3", "--set", "plant.x_max=0.3",
                     "--set", "plant.tau=0.1", "--opcua", "127.0.0.1:0")
-
-    async def push(url):
-        async with Client(url) as opc:
-            ns, node = await _nodes(opc)
-            await node("controller.u").write_value(ua.Variant(3.0, ua.VariantType.Double))
-
-    try:
-        _run(push(server.opcua))
-    finally:
-        status, out, err = server.wait(40)
+    status, out, err = _driven_at_u_max(server)
     assert status == 0 and "finished at t = 2 s" in out, err[-2000:]
     assert "could not stop before the rail end x_max = 0.3 m" in err, err
     served = read_csv(server.out)
