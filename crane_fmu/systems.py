@@ -422,6 +422,22 @@ def planned(crane, planners, controller="controller"):
     return tuple(connections)
 
 
+def measured_swing(crane, planners, plant="plant"):
+    """Connections from the plant's swing state of each axis (its roles ``crane.state``: ``theta1y``, ``dtheta1y``,
+    ``theta2y``, ``dtheta2y`` for ``y``) to that axis' TrajectoryPlanner (``{axis position: instance}``), its inputs
+    ``theta1_now`` ... that a plan from the measured swing (``plan_from = measured``) starts from."""
+    from crane_fmu.model.planner import MEASURED
+
+    connections = []
+    for axis in crane.axes:
+        ours = tuple(f"{name[:-4]}{axis.position}" for name in MEASURED)  # theta1_now: the plant's theta1x
+        missing = [name for name in ours if name not in crane.state]
+        if missing:
+            raise ValueError(f"measured_swing: the crane's state has no {', '.join(missing)} (axis {axis.position})")
+        connections += [Connection(plant, out, planners[axis.position], into) for out, into in zip(ours, MEASURED)]
+    return tuple(connections)
+
+
 def _path_plan():
     """Each axis' planner parameters along S13's L path, the load's planned position (the trolley's reference and
     the swing the planner's linear model gives the load) kept within half the corridor (the other half is what the

@@ -27,13 +27,17 @@ from crane_fmu.build_scripts.one_fmu import not_native, one_fmu_name
 
 # Parameters under which every declared dependency acts: the LQR and the MPC read l1_now only with a schedule
 # (the MPC takes its nearest design: designs 1 mm apart, so that the test's change of l1_now picks another); the
-# LQR and the MPC (planar and of two axes) read the estimated forces only offset-free.
+# LQR and the MPC (planar and of two axes) read the estimated forces only offset-free; the planner reads the measured
+# swing only with plan_from measured.
 ACTING = {"LqrController": {"l1_low": 0.5, "l1_high": 2.0, "offset_free": 1.0},
           "MpcController": {"l1_low": 0.995, "l1_high": 1.005, "offset_free": 1.0},
-          "LqrController3D": {"offset_free": 1.0}, "MpcController3D": {"offset_free": 1.0}}
+          "LqrController3D": {"offset_free": 1.0}, "MpcController3D": {"offset_free": 1.0},
+          "TrajectoryPlanner": {"shaper": "shortest", "plan_from": "measured"}}
 # Outputs that are whole counts or grid times of a solve at the inputs: they read the inputs, but a small change
-# need not move them, so for these the test asks only that what moved is listed.
-STEPWISE = {"MpcController": {"iterations", "plan_end"}}
+# need not move them, so for these the test asks only that what moved is listed. The planner's swing references
+# start at the measured swing only when it is more than a swing at rest (the plan of no interval: none).
+STEPWISE = {"MpcController": {"iterations", "plan_end"},
+            "TrajectoryPlanner": {"theta1_ref", "dtheta1_ref", "theta2_ref", "dtheta2_ref"}}
 
 
 def _paths(request, fmu_dir, kind, version):

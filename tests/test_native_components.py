@@ -39,6 +39,7 @@ from crane_fmu.analysis.scenarios import Contender, systems_for
 from crane_fmu.build_scripts.native import FOLDERS, HOST, source_path, variables_header
 from crane_fmu.build_scripts.wrapper import fmi_headers
 from crane_fmu.cosim import System, run
+from crane_fmu.model import planner
 
 PLANNER, ENERGY = components.get("TrajectoryPlanner"), components.get("EnergyController")
 GUST, SENSOR = components.get("Gust"), components.get("Sensor")
@@ -155,6 +156,50 @@ def test_the_shortest_moves_outputs_equal_the_python_model_at_random_parameters_
     compare_to_python(ours, theirs)
     theirs = np.array(theirs)
     assert np.count_nonzero(theirs[:, 3]) > 200 and len(set(theirs[:, 2])) > 50  # moves, swing, many held inputs
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_a_plan_from_the_measured_swing_equals_the_plan_from_the_same_swing_as_parameters(native, version):
+    """``plan_from = measured``: the swing read from the inputs ``theta1_now`` ... at the first step (before it, the
+    outputs at time 0 from the inputs then) gives, in C and in Python, bit for bit the outputs the same swing gives as
+    the parameters ``theta1_0`` ...; the inputs changed after the first step change nothing (the plan is made once).
+    6 parameter sets (moves, regulations, stretches) x 40 steps of random length."""
+    rng = random.Random(2063)
+    outputs, measured = PLANNER.names("output"), planner.MEASURED
+    ours, python, told = [], [], []
+    for i in range(6):
+        swing = (rng.uniform(-0.2, 0.2), rng.uniform(-0.3, 0.3), rng.uniform(-0.2, 0.2), rng.uniform(-0.3, 0.3))
+        parameters = {**_planner_parameters(rng, i), "shaper": "shortest", "x0": rng.uniform(-1.5, 1.5),
+                      "x_d": rng.uniform(-1.5, 1.5), "u_max": rng.uniform(1.0, 3.0), "v_max": rng.uniform(0.5, 2.0),
+                      "stretch": 1.0 if i % 2 else rng.uniform(1.0, 1.3), "plan_from": "measured"}
+        if i % 3 == 0:
+            parameters["x_d"] = parameters["x0"]  # a regulation
+        as_parameters = {**parameters, "plan_from": "parameters", **dict(zip(planner.START, swing))}
+        fmu, vr, set_, get = open_native(native[version] / "TrajectoryPlanner.fmu", version, parameters)
+        config, reference = PLANNER.check(parameters), PLANNER.check(as_parameters)
+        assert config.measured is not None and reference.measured is None and reference.free is not None
+        set_([vr[n] for n in measured], list(swing))
+        state = PLANNER.initial_state(config)
+        ours.append(get([vr[n] for n in outputs]))
+        python.append(PLANNER.output(config, state, swing))
+        told.append(PLANNER.output(reference, (0.0,), ()))
+        fmu.exitInitializationMode()
+        t, inputs = 0.0, swing
+        for _ in range(40):
+            h = rng.choice([1e-3, rng.uniform(1e-3, 0.3)])
+            fmu.doStep(t, h)
+            state = PLANNER.update(config, state, inputs, t, h)
+            inputs = tuple(rng.uniform(-0.5, 0.5) for _ in measured)  # what the plant measures later: not read
+            set_([vr[n] for n in measured], list(inputs))
+            t += h
+            ours.append(get([vr[n] for n in outputs]))
+            python.append(PLANNER.output(config, state, inputs))
+            told.append(PLANNER.output(reference, (t,), ()))
+        close(fmu)
+    assert python == told  # bit for bit
+    compare_to_python(ours, told)
+    told = np.array(told)
+    assert np.count_nonzero(told[:, 3]) > 100 and len(set(told[:, 2])) > 30  # swing, many held inputs
 
 
 @pytest.mark.parametrize("version", [2, 3])

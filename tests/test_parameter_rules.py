@@ -150,9 +150,9 @@ def _strings_in(rule):
 def edge_cases(component):
     """For each rule, in order, the first values of its parameters from EDGES (TEXTS for a String) that make it the
     first rule the defaults so changed fail: every rule's refusal, found by search rather than luck."""
-    found = []
-    for target in component.rules:
-        choices = [TEXTS if name in target.strings else EDGES for name in target.names]
+    found, named = [], tuple(dict.fromkeys(c for r in component.rules for c in _strings_in(r)))
+    for target in component.rules:  # a String's edges: TEXTS, then the strings the rules name ('measured' ...)
+        choices = [TEXTS + named if name in target.strings else EDGES for name in target.names]
         for combination in itertools.product(*choices):
             values = dict(zip(target.names, combination))
             if _first_failing(component, values) is target:

@@ -15,6 +15,7 @@ from crane_fmu.analysis import floor, scenarios, spatial_scenarios
 from crane_fmu.analysis.spatial_scenarios import path_deviation
 from crane_fmu.model import mpc, path, planner
 from crane_fmu.model.parameters import plant_parameters
+from crane_fmu.systems import ELLIPTIC
 
 LQR3D = scenarios.Contender("LqrController3D", "LqrController3D",
                             list(components.get("LqrController3D").names("input")),
@@ -128,9 +129,9 @@ def test_a_shortest_move_from_s12s_swing_is_the_linear_crane_under_its_held_inpu
     later), the shortest move's reference is the linear crane's own motion (:func:`floor.crane_model`, stepped by the
     matrix exponential over each held input, an independent computation) to 1e-9, starts at the swing, lasts at least
     the axis' floor (:func:`floor.crane_floor`, 10 ms holds) and ends at rest where it started."""
-    swing = {name: spatial_scenarios.ELLIPTIC.get(f"{name[:-2]}{axis}_0", 0.0)
-             for name in ("theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0")}
-    values = {**planner.COMPONENT.defaults(), "shaper": "shortest", **swing}
+    swing = {name: ELLIPTIC.get(f"{name[:-2]}{axis}_0", 0.0) for name in planner.START}  # theta1x_0 as theta1_0
+    values = {**planner.COMPONENT.defaults(), **spatial_scenarios.ELLIPTIC_PLAN[axis], "plan_from": "parameters",
+              **swing}
     c = planner.configure(values)
     start = np.array([0.0, 0.0, values["theta1_0"], values["dtheta1_0"], values["theta2_0"], values["dtheta2_0"]])
     assert np.any(start) and c.free is not None
@@ -146,6 +147,26 @@ def test_a_shortest_move_from_s12s_swing_is_the_linear_crane_under_its_held_inpu
             assert np.allclose([ours[0], ours[1], *ours[3:]], state, rtol=0, atol=1e-9), k
     assert planner.reference(c, 0.0)[3:] == pytest.approx(tuple(start[2:]), abs=1e-15)
     assert np.max(np.abs(state)) < 1e-3 and planner.reference(c, c.end) == (0.0,) * 7
+
+
+@pytest.mark.quick
+def test_s12_gives_a_tracking_controller_the_shortest_move_from_the_measured_swing_and_the_mpc_none():
+    """S12's planners are not told the swing (no theta*_0 set; a regulation controller must not know the disturbance
+    in advance): they measure it, each axis' swing state connected from the plant's outputs by role."""
+    (lqr,) = scenarios.systems_for(LQR3D, "S12")
+    for name in spatial_scenarios.PLANNERS.values():
+        assert lqr.system.instances[name] == "TrajectoryPlanner"
+        assert lqr.system.parameters[name] == {"shaper": "shortest", "plan_from": "measured"}
+        assert not set(lqr.system.parameters[name]) & set(planner.START)
+    connections = {(c.source, c.output, c.target, c.input) for c in lqr.system.connections}
+    assert connections >= {
+        ("planner", "x_ref", "controller", "x_ref"), ("planner_y", "x_ref", "controller", "y_ref"),
+        ("planner_y", "theta1_ref", "controller", "theta1y_ref")}
+    for axis, name in spatial_scenarios.PLANNERS.items():
+        fed = {c[3]: c[:2] for c in connections if c[2] == name}
+        assert fed == {m: ("plant", f"{m[:-4]}{axis}") for m in planner.MEASURED}, (axis, fed)
+    (ours,) = scenarios.systems_for(MPC3D, "S12")
+    assert set(ours.system.instances) == {"plant", "controller"} and not ours.system.connections
 
 
 # ---- the path's plan -----------------------------------------------------------------------------------------------
@@ -384,15 +405,16 @@ def test_the_targets_report_prints_s11_to_s14_against_the_scenarios_targets_and_
     assert "MpcController3D" not in text  # no figures, no heading
 
 
-def test_lqr3d_meets_s11s_arrival_on_the_boards_case_through_the_native_fmus(native):
-    """The board's own S11 case of LqrController3D (`crane-fmu targets`' run), co-simulated on the native FMUs,
-    against the scenario's registered targets: it arrives (5 mm, 0.5 deg) by 1.10 times its floor with the residual
-    swing within 0.1 deg (issue 52)."""
+def test_lqr3d_meets_s11s_arrival_and_s12s_settling_on_the_boards_cases_through_the_native_fmus(native):
+    """The board's own S11 and S12 cases of LqrController3D (`crane-fmu targets`' runs), co-simulated on the native
+    FMUs, against the scenarios' registered targets: S11 arrives (5 mm, 0.5 deg) by 1.10 times its floor with the
+    residual swing within 0.1 deg; S12's cables are within 0.1 deg by 3.0 s, its plan made from the measured swing
+    (issue 52)."""
     from crane_fmu.analysis import controller_targets
 
     runs = {r.scenario: r for r in controller_targets.spatial_runs()
-            if r.label == "LqrController3D" and r.scenario == "S11"}
-    assert list(runs) == ["S11"]
+            if r.label == "LqrController3D" and r.scenario in ("S11", "S12")}
+    assert sorted(runs) == ["S11", "S12"]
     for sid, r in runs.items():
         _, figures = controller_targets.measure(r, native[2])
         assert figures["error"] is None

@@ -17,7 +17,7 @@ from crane_fmu import components
 from crane_fmu.cosim import Connection, System
 from crane_fmu.model.parameters import plant_parameters
 from crane_fmu.model.planner import modes
-from crane_fmu.systems import CORRIDOR, DIAGONAL, DRIVE3D, ELLIPTIC, L_PATH, PATH_PLAN, REST3D, planned
+from crane_fmu.systems import CORRIDOR, DIAGONAL, DRIVE3D, ELLIPTIC, L_PATH, PATH_PLAN, REST3D, measured_swing, planned
 
 from .scenarios import (
     CASES,
@@ -52,6 +52,11 @@ LOAD_BAND_M = round(0.005 + L1 * math.sin(EQUILIBRIUM[0]) + L2 * math.sin(EQUILI
 # nonlinear crane closely enough to arrive before the shortest plan ends (2.82 s; the shortest itself: 4.5 s, its
 # error after the plan on the band's edge); the ZV-shaped move ends at 3.64 s, past the target (2.97 s)
 DIAGONAL_PLAN = {"shaper": "shortest", "stretch": 1.06}
+# S12's for a tracking controller: per axis the shortest move to rest where the trolley started from the swing the
+# planner measures at its first step (the plant's outputs, connected by role: measured_swing), as the MPC plans from
+# the measured state at its first solve; the swing is not told (no theta*_0 of the planners); none for a controller
+# without references (the MPC plans its own)
+ELLIPTIC_PLAN = {a: {"shaper": "shortest", "plan_from": "measured"} for a in "xy"}
 RAIL = 1.0  # m of track beyond either end of a move: checked, not enforced (as the planar scenarios')
 
 # the floors (crane_fmu.analysis.floor.scenario_floors), rounded as the planar ones are; the issue's figures
@@ -154,10 +159,13 @@ def _runs(sid):
     def runs(c, cases=CASES):
         instances = {"plant": PLANT, "controller": c.source}
         if sid == "S12":
-            # regulation, as S1's: no plan told the swing (a planner's theta1_0 ... would know it beforehand); the
-            # residual swing over the last quarter
-            system = System(f"{c.name}-elliptic", instances, parameters={"plant": {**DRIVE3D, **ELLIPTIC}},
-                            stop_time=10.0)
+            parameters, connections = {"plant": {**DRIVE3D, **ELLIPTIC}}, ()
+            if all(r in c.inputs for a in CRANE.axes for r in a.references):  # a tracking controller: the plan
+                for axis, planner in PLANNERS.items():
+                    instances[planner], parameters[planner] = "TrajectoryPlanner", dict(ELLIPTIC_PLAN[axis])
+                connections = planned(CRANE, PLANNERS) + measured_swing(CRANE, PLANNERS)
+            system = System(f"{c.name}-elliptic", instances, connections, parameters=parameters, stop_time=10.0)
+            # regulation: the residual swing over the last quarter, as S1's
             return [ScenarioRun("nominal", system, 1e-3, system.stop_time, [0.0, 0.0], 0.75 * system.stop_time)]
         extra = {}
         if sid == "S13":

@@ -28,7 +28,10 @@ swing, which a tracking controller follows more closely on the nonlinear crane).
 same closed form, so its reference and induced swing are exact on the planner's linear model. It may start from a
 swing (``theta1_0`` ... ``dtheta2_0``, the linear model's at ``t0``): the plan then takes that swing to rest too
 (regulation: ``x_d = x0``), and the reference adds the swing's own motion, each mode ``eta_k'' = -w_k^2 eta_k`` from
-its start, to the closed form.
+its start, to the closed form. With ``plan_from = measured`` that swing is not told but measured: the inputs
+``theta1_now`` ... ``dtheta2_now`` (the axis' measured swing, connected from the plant) read at the first
+communication step (before it, at ``t0``'s outputs, the inputs then: the output reads them), as the MPC plans from
+the measured state at its first solve; the plan is then the one the parameters ``theta1_0`` ... would give, bit for bit.
 """
 
 import math
@@ -39,7 +42,7 @@ from .component import Component
 from .parameters import PLANT_RULES, plant_parameters
 from .plant import linearisation
 from .rules import check, finite, in_range, one_of, rule
-from .tables import CRANE_MODEL, PLANT_MODEL, enumeration, output, parameter
+from .tables import CRANE_MODEL, PLANT_MODEL, enumeration, input_, output, parameter, state_variables
 
 EI_TOLERANCE = 0.05
 # A time at most this much (relative, of at least 1 s) past a step of the plan counts as at it, before it: the
@@ -51,6 +54,10 @@ SHAPERS = ("zv", "zvd", "ei", "none", "shortest")
 SHAPER_ITEMS = ("none", "zv", "zvd", "ei", "shortest")
 PLAN_INTERVAL = 0.05  # s: the shortest move's hold, the MpcController's default interval
 START = ("theta1_0", "dtheta1_0", "theta2_0", "dtheta2_0")  # the swing the shortest move starts from
+PLAN_FROM = ("parameters", "measured")  # where that swing comes from: the parameters START, or the inputs MEASURED
+# the inputs of the measured swing, in START's order: named as the controllers' l1_now (measured now), not as the
+# plant's outputs, which would connect them by name in every system with a planner (connections are written out)
+MEASURED = ("theta1_now", "dtheta1_now", "theta2_now", "dtheta2_now")
 
 
 def shaper(kind, period):
@@ -137,13 +144,34 @@ def shortest_steps(p, distance, u_max, v_max, stretch, start=(0.0,) * 4):
     return steps, len(inputs) * PLAN_INTERVAL
 
 
-Config = namedtuple("Config", "x0 distance t0 steps end omegas shapes gains u_max v_max impulses free",
-                    defaults=(None,))
-Config.__doc__ = "The plan; ``free``: the modal swing ``(eta, deta)`` at ``t0`` a shortest move starts from, or None."
+Config = namedtuple("Config", "x0 distance t0 steps end omegas shapes gains u_max v_max impulses free measured",
+                    defaults=(None, None))
+Config.__doc__ = ("The plan; ``free``: the modal swing ``(eta, deta)`` at ``t0`` a shortest move starts from, or None; "
+                  "``measured``: with ``plan_from = measured``, the :class:`Measured` plans from the measured swing.")
+
+
+class Measured:
+    """The plans of ``plan_from = measured``: ``plan(start)`` is :func:`configure`'s from the parameters with the swing
+    ``start`` (``theta1, dtheta1, theta2, dtheta2``) as ``theta1_0`` ... (a swing that is not finite refused, naming
+    the value), made once per swing."""
+
+    def __init__(self, values):
+        self.values, self.plans = dict(values), {}
+
+    def plan(self, start):
+        start = tuple(start)
+        for name, value in zip(MEASURED, start):
+            if not math.isfinite(value):
+                raise ValueError(f"{name} must be finite (the measured swing the plan starts from), got {value!r}")
+        if start not in self.plans:
+            self.plans[start] = configure({**self.values, **dict(zip(START, start)), "plan_from": "parameters"})
+        return self.plans[start]
 
 
 def configure(values):
     check(RULES, values)
+    if values["plan_from"] == "measured":  # planned from the inputs at the first step (:func:`plan`)
+        return configure({**values, "plan_from": "parameters"})._replace(measured=Measured(values))
     p = plant_parameters(values)
     u_max, v_max = limits.of(values)
     omegas, shapes, gains = modes(p)
@@ -221,6 +249,32 @@ def reference(c, t):
             s21 * eta[0] + s22 * eta[1], s21 * deta[0] + s22 * deta[1])
 
 
+def initial_state(c):
+    """``(time, planned, theta1, dtheta1, theta2, dtheta2)``: the time of the outputs, then with ``plan_from =
+    measured`` whether the swing has been read (1.0) and the swing read, at the first step."""
+    return (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+def plan(c, state, inputs):
+    """The plan the outputs follow: ``c`` itself (``plan_from = parameters``), or the plan from the measured swing:
+    the one read at the first step, or before it the inputs now."""
+    if c.measured is None:
+        return c
+    return c.measured.plan(state[2:] if state[1] else inputs)
+
+
+def update(c, state, inputs, time, step):
+    """The time of the outputs after the step; with ``plan_from = measured`` the swing read at the first step."""
+    if c.measured is not None and not state[1]:
+        c.measured.plan(inputs)  # refused here, at the step, when the swing is no start
+        return (time + step, 1.0, *inputs)
+    return (time + step, *state[1:])
+
+
+def _output(c, state, inputs):
+    return reference(plan(c, state, inputs), state[0])
+
+
 def report(c):
     """Move time, mode frequencies and the shaper's impulses, for ``crane-fmu info``."""
     return {"move_end_s": c.end, "mode_frequencies_hz": [round(w / (2 * math.pi), 6) for w in c.omegas],
@@ -238,7 +292,13 @@ VARIABLES = tuple(v._replace(description="planner's model: " + v.description) fo
     *(parameter(name, 0.0, unit, f"shortest only: the {what} the move starts from at t0 (the linear model's)")
       for name, unit, what in (("theta1_0", "rad", "hook swing"), ("dtheta1_0", "rad/s", "hook swing rate"),
                                ("theta2_0", "rad", "payload swing"), ("dtheta2_0", "rad/s", "payload swing rate"))),
+    enumeration("plan_from", "parameters", PLAN_FROM, "shortest only: the swing the move starts from: the parameters "
+                "theta1_0 ... (1), or measured (2): the inputs theta1_now ... read at the first step (the parameters "
+                "then 0)"),
     *limits.parameters(what="ddx_ref"),
+    *(v._replace(name=v.name + "_now", description=v.description + ", read at the first step (plan_from measured "
+                 "only); unconnected: 0, a move from rest")
+      for v in state_variables(input_, "measured ", tuple(name[:-4] for name in MEASURED))),
     output("x_ref", "m", "reference trolley position"),
     output("dx_ref", "m/s", "reference trolley velocity"),
     output("ddx_ref", "m/s2", "reference trolley acceleration"),
@@ -248,15 +308,24 @@ VARIABLES = tuple(v._replace(description="planner's model: " + v.description) fo
     output("dtheta2_ref", "rad/s", "payload swing rate the reference induces, during the move"),
 )
 RULES = (*PLANT_RULES, *limits.RULES, one_of("shaper", SHAPERS), *finite("x0", "x_d", "t0", *START),
-         in_range("stretch", 1.0),
+         in_range("stretch", 1.0), one_of("plan_from", PLAN_FROM),
+         *(rule(f"{name} == 0",
+                f"{name} must be 0 when plan_from is measured (the swing is the inputs'), got {{{name}}}",
+                when="plan_from == 'measured'") for name in START),
+         rule("shaper == 'shortest'", "shaper must be shortest when plan_from is measured, got {shaper}",
+              when="plan_from == 'measured'"),
          rule("finite(unlimited(u_max)) and finite(unlimited(v_max))",
               "u_max and v_max must be finite for a planned move, got {unlimited(u_max)}, {unlimited(v_max)}"))
+
+# What the outputs read at the same instant (plan_from measured, before the first step): the swing references start
+# at the measured swing, or at rest when all of it is a swing at rest (no plan); the trolley's reference starts at
+# rest (the plan's first step acts just after t0)
+DEPENDS_ON = {f"{name[:-4]}_ref": MEASURED for name in MEASURED}
 
 COMPONENT = Component(
     "TrajectoryPlanner", "planner",
     "Input-shaped rest-to-rest trolley moves (ZV, ZVD, EI on both swing modes) within u_max and v_max; "
     "outputs: the reference x_ref, dx_ref, ddx_ref and the swing it induces",
-    VARIABLES, configure, lambda config, state, inputs: reference(config, *state),
-    initial_state=lambda config: (0.0,), update=lambda config, state, inputs, time, step: (time + step,),
+    VARIABLES, configure, _output, feedthrough=True, depends_on=DEPENDS_ON, initial_state=initial_state, update=update,
     report=report, default_experiment=(0.0, 10.0, 1e-3),
     crane_model=CRANE_MODEL, native="planner.c", rules=RULES)  # the transport system's move

@@ -4,10 +4,12 @@
  * shortest_steps() by mpc_axis.c's plan and reference()), registered
  * as a component (component.h). Its variables and parameter rules come from TrajectoryPlanner_variables.h,
  * generated from planner.VARIABLES. Its state is the time of its outputs: 0 at first, then the end of the last
- * step (time + step, the component's update()).
+ * step (time + step, the component's update()), and with plan_from measured the swing read at the first step and the
+ * plan from it (planner.initial_state(), update(), plan()).
  */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "TrajectoryPlanner_variables.h"
@@ -31,13 +33,21 @@ typedef struct {
 /* planner.Config */
 typedef struct {
     double x0, distance, t0, end, omegas[2], shapes[2][2], gains[2];
+    int measured;       /* plan_from measured: the plan from the inputs read at the first step (planner.Measured) */
     int free;           /* a shortest move from a swing: */
     double free_[2][2]; /* its modal swing (eta, deta) at t0, planner.Config.free */
     Pair steps[MAX_PLAN + 1], impulses[MAX_IMPULSES]; /* the shortest move's: a jump per interval */
     int n_steps, n_impulses;
 } Config;
 
-STATE_IS_TIME
+/* planner.initial_state(): the time of the outputs; with plan_from measured whether the swing has been read at the
+   first step, the swing read and the plan from it */
+typedef struct {
+    double time;
+    int planned;
+    double start[4];
+    Config plan;
+} State;
 
 #define V(name) (values[VR_##name])
 
@@ -130,8 +140,8 @@ static double peak(const Pair steps[], int n) {
 
 /* planner.shortest_steps(), in configure(): the jumps of the shortest move's held inputs (mpc.plan_move on the
    zero-order hold of lqr.continuous_model over PLAN_INTERVAL), from t0, and its end. */
-static ModelStatus shortest_steps(const double values[], double distance, double u_max, double v_max, Config *c,
-                                  const Reporter *r) {
+static ModelStatus shortest_steps(const double values[], const double start[4], double distance, double u_max,
+                                  double v_max, Config *c, const Reporter *r) {
     PlantParameters p = {V(m1), V(m2), V(l1), V(l2), V(g)};
     Matrix a, b, ad, bd;
     const char *error = continuous_model(&p, &a, &b);
@@ -142,7 +152,6 @@ static ModelStatus shortest_steps(const double values[], double distance, double
         bd_[i] = bd.v[i][0];
     }
     int n = 0;
-    double start[4] = {V(theta1_0), V(dtheta1_0), V(theta2_0), V(dtheta2_0)};
     error = mpc_axis_plan_rest_to_rest((const double (*)[N_STATE])ad_, bd_, distance, start, u_max, v_max,
                                        PLAN_INTERVAL, V(stretch), inputs, &n); /* the cast: C99 takes no implicit const */
     if (error) return report(r, MODEL_ERROR, "%s", error);
@@ -188,7 +197,11 @@ static ModelStatus configure(const double values[], const StringValue strings[],
     double t_a = 0.0, t_c = 0.0;
     Pair steps[MAX_SHAPED];
     c->x0 = V(x0), c->distance = distance, c->t0 = V(t0);
-    if (strcmp(kind, "shortest") == 0) return shortest_steps(values, distance, u_max, v_max, c, r);
+    c->measured = strcmp(strings[STRING_plan_from], "measured") == 0;
+    if (strcmp(kind, "shortest") == 0) {
+        double start[4] = {V(theta1_0), V(dtheta1_0), V(theta2_0), V(dtheta2_0)};
+        return shortest_steps(values, start, distance, u_max, v_max, c, r);
+    }
     if (distance_abs > 0) {
         /* the largest base acceleration whose shaped acceleration stays within u_max (bisection) */
         double smallest = c->impulses[0].value;
@@ -241,9 +254,59 @@ static void reference(const Config *c, double t, double out[N_OUTPUTS]) {
     memcpy(out, result, sizeof result);
 }
 
-static ModelStatus outputs(const double values[], const Config *c, const State *s, double out[], const Reporter *r) {
-    reference(c, s->time, out);
+/* planner.Measured.plan(): the plan of the parameters with the swing start as theta1_0 ... (plan_from measured). */
+static ModelStatus measured_plan(const double values[], const Config *c, const double start[4], Config *plan,
+                                 const Reporter *r) {
+    static const char *const names[4] = {"theta1_now", "dtheta1_now", "theta2_now", "dtheta2_now"};
+    for (int i = 0; i < 4; i++)
+        if (!isfinite(start[i])) {
+            char text[REPR_SIZE];
+            return report(r, MODEL_ERROR, "%s must be finite (the measured swing the plan starts from), got %s",
+                          names[i], py_repr(start[i], text));
+        }
+    *plan = *c; /* the parameters' modes and impulses; the shortest move anew */
+    plan->n_steps = 0, plan->free = 0, plan->measured = 0;
+    memset(plan->free_, 0, sizeof plan->free_);
+    return shortest_steps(values, start, c->distance, unlimited(V(u_max)), unlimited(V(v_max)), plan, r);
+}
+
+static void initial_state(const double values[], const Config *c, State *s) {
+    s->time = 0.0, s->planned = 0;
+    memset(s->start, 0, sizeof s->start);
+}
+
+/* planner.update(): the time after the step; with plan_from measured the swing read at the first step, planned. */
+static ModelStatus update(const double values[], const Config *c, State *s, double time, double step,
+                          const Reporter *r) {
+    if (c->measured && !s->planned) {
+        double start[4] = {V(theta1_now), V(dtheta1_now), V(theta2_now), V(dtheta2_now)};
+        ModelStatus status = measured_plan(values, c, start, &s->plan, r);
+        if (status != MODEL_OK) return status;
+        memcpy(s->start, start, sizeof start);
+        s->planned = 1;
+    }
+    s->time = time + step;
     return MODEL_OK;
+}
+
+/* planner._output() on planner.plan(): the parameters' plan, the one from the swing read at the first step, or before
+   it from the inputs now. */
+static ModelStatus outputs(const double values[], const Config *c, const State *s, double out[], const Reporter *r) {
+    if (!c->measured) {
+        reference(c, s->time, out);
+        return MODEL_OK;
+    }
+    if (s->planned) {
+        reference(&s->plan, s->time, out);
+        return MODEL_OK;
+    }
+    Config *plan = malloc(sizeof *plan);
+    if (!plan) return report(r, MODEL_ERROR, "MemoryError: the planner's plan");
+    double start[4] = {V(theta1_now), V(dtheta1_now), V(theta2_now), V(dtheta2_now)};
+    ModelStatus status = measured_plan(values, c, start, plan, r);
+    if (status == MODEL_OK) reference(plan, s->time, out);
+    free(plan);
+    return status;
 }
 
 STATEFUL_COMPONENT;
