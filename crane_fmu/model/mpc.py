@@ -75,7 +75,8 @@ PLAUSIBLE_PAYLOAD = 3.0  # ... and of the configured payload
 STANDARD_ERROR = 0.01  # ... each parameter's standard error at most this share of its value
 UNEXPLAINED = 1e-3  # the envelope hands over to the LQR when the data leave this share of their squares (3 % RMS)
 # unexplained: the states the MPC is given are not the crane's (an estimator's, noisy, late, a force it does not know)
-MOST_REPLANS = 2  # the safety envelope: the MPC hands over to its LQR instead of a plan for a deviation past these
+MOST_REPLANS = 2  # the safety envelope: past these plans for a deviation none more is made, the held plan is
+# tracked to its end and the LQR takes over there
 SWING_MARGIN = math.radians(10.0)  # ... or when the swing exceeds the plan's largest by this (as an amplitude)
 TOLERANCE = 0.01  # ... and the controller plans again with it when a swing mode's frequency differs by more
 SUSPECT_AFTER = 3  # intervals: the data are judged beyond the crane's equations (UNEXPLAINED) from this many on,
@@ -601,8 +602,9 @@ def solve(config, state, measured, l1_now, forces=(0.0, 0.0)):
     large = not (count and plan_u and not over and not hit) and \
         to_rest > (PLAN_BELOW if count and not plan_u else LARGEST_SWING)
     # the safety envelope: the LQR takes over, for good, when the plan is over and the identification's data are
-    # beyond the crane's equations (mid-move the LQR's kick would swing more than the plan's end), the plans for a
-    # deviation run out, the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on the target
+    # beyond the crane's equations or the plans for a deviation have run out (mid-move the LQR's kick would swing
+    # more than the plan's end), the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on
+    # the target
     replans = state[HEADER.replans]
     # a plan for a deviation needs a plan to deviate from: the first after the large swing's phase is none
     if replan and count and model is None and not warned_now and not large and plan_u and \
@@ -610,7 +612,12 @@ def solve(config, state, measured, l1_now, forces=(0.0, 0.0)):
         replans += 1.0
     at_rest = over and to_trolley <= c.replan_x and to_rest <= c.replan_angle
     swung = bool(plan_u) and to_rest > state[HEADER.bound] + SWING_MARGIN  # past the plan's largest (a plan made)
-    if count and ((unexplained and over) or replans > MOST_REPLANS or swung or at_rest):
+    spent = replans > MOST_REPLANS
+    if spent and not over and not swung:  # the plans for a deviation run out mid-move: the held plan is tracked to
+        # its end, no other made (an identified model's aside); the LQR's kick at speed had left S10's cases #24 and
+        # #54 swinging more than the LQR alone, 5 s later
+        replan, replans = model is not None, float(MOST_REPLANS + 1)
+    elif count and ((unexplained and over) or spent or swung or at_rest):
         return handover(c, state, measured, l1_now, replans, forces, cautious)
     bound = state[HEADER.bound]
     if replan and large:  # none made: the tracking QP takes the swing down alone, a plan is tried at the next interval

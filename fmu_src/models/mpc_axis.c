@@ -704,9 +704,9 @@ static const char *solve(Config *c, const double *state, const double measured[N
     int large = !(count != 0 && n_plan > 0 && !over && hit == 0.0) &&
                 to_rest > (count != 0 && n_plan == 0 ? PLAN_BELOW : LARGEST_SWING);
     /* the safety envelope: the LQR takes over, for good, when the plan is over and the identification's data are
-       beyond the crane's equations (mid-move the LQR's kick would swing more than the plan's end), the plans for a
-       deviation run out, the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on the
-       target */
+       beyond the crane's equations or the plans for a deviation have run out (mid-move the LQR's kick would swing
+       more than the plan's end), the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on
+       the target */
     double replans = state[H_REPLANS], bound = state[H_BOUND];
     /* a plan for a deviation needs a plan to deviate from: the first after the large swing's phase is none */
     if (replan && count != 0 && !found_model && !warned_now && !large && n_plan > 0 &&
@@ -714,7 +714,10 @@ static const char *solve(Config *c, const double *state, const double measured[N
         replans += 1.0;
     int swung = n_plan > 0 && to_rest > bound + SWING_MARGIN; /* past the plan's largest */
     int at_rest = over && to_trolley <= c->replan_x && to_rest <= c->replan_angle;
-    if (count != 0 && ((unexplained && over) || replans > MOST_REPLANS || swung || at_rest))
+    int spent = replans > MOST_REPLANS;
+    if (spent && !over && !swung) /* the plans for a deviation run out mid-move: the held plan tracked to its end */
+        replan = found_model, replans = MOST_REPLANS + 1.0;
+    else if (count != 0 && ((unexplained && over) || spent || swung || at_rest))
         return handover(c, state, measured, l1_now, forces, replans, cautious, next);
     if (replan && large) { /* none made: the tracking QP takes the swing down alone, a plan tried next interval */
         replan = n_plan > 0 || found_model; /* the last solve's warm start holds unless a plan or model changed */
