@@ -418,19 +418,20 @@ def test_told_the_forces_the_native_mpc_gives_the_python_mpcs_bits(native, offse
     assert handed is not None and 300 < handed < 2900  # the QP told the forces, then the LQR told them
 
 
-def _s9_case_residual(native, controller, law=None, case="#54"):
+def _s9_case_residual(native, controller, law=None, case="#54", scenario="S9"):
     """The residual swing [deg] of one of S9's cases (only x and theta1 measured, a StateEstimator of the configured
-    crane in front of the controller, the plant another) run on the native FMUs, the controller's FMU or ``law``."""
-    return _s9_case_run(native, controller, law, case)[0]
+    crane in front of the controller, the plant another; or another ``scenario``'s) run on the native FMUs, the
+    controller's FMU or ``law``."""
+    return _s9_case_run(native, controller, law, case, scenario)[0]
 
 
-def _s9_case_run(native, controller, law=None, case="#54"):
-    """``(residual [deg], the run's columns)`` of :func:`_s9_case_residual`."""
+def _s9_case_run(native, controller, law=None, case="#54", scenario="S9"):
+    """``(residual [deg], the run's columns)`` of :func:`_s9_case_residual` (or of another ``scenario``'s case)."""
     from crane_fmu.analysis import metrics, scenarios
     from crane_fmu.compare import contenders
     from crane_fmu.cosim import ArrayRecorder, simulate
 
-    run = next(r for r in scenarios.systems_for(contenders([controller], native[2], only=True)[0], "S9")
+    run = next(r for r in scenarios.systems_for(contenders([controller], native[2], only=True)[0], scenario)
                if r.label.startswith(case + " "))
     fmus, connections = systems.resolve(run.system, native[2])
     if law:
@@ -489,3 +490,23 @@ def test_behind_an_estimator_the_cautious_plan_leaves_no_fast_swing_on_another_c
         compare_to_python(ours["controller.u"], theirs["controller.u"])
         monkeypatch.setattr(mpc, "ROBUST_WEIGHTS", ())
         assert _s9_case_residual(native, "MpcController", law, case="#48") > STOPPED_DEG
+
+
+@pytest.mark.parametrize("case", ["#24", "#54"])
+def test_in_the_wind_the_mpc_whose_plans_for_a_deviation_run_out_leaves_no_more_swing_than_the_lqr(native, tmp_path,
+                                                                                                  case):
+    """S10's cases #24 and #54 (turbulent wind, plants unknown to the controller): the wind makes the MPC plan again
+    for a deviation until its plans run out (mpc.MOST_REPLANS), mid-move at 1.95 s and 1.1 s. Handed over to its
+    LQR there, at speed, the MPC left 1.341 and 0.657 deg of residual swing against the LQR's 1.288 and 0.584 deg
+    (0.074 and 0.053 deg more: beyond the envelope's 0.05 deg). Tracking the held plan to its end first, it is
+    within the envelope (issue 51, item 2); the Python MPC gives the native MPC's input bit for bit (on Linux)."""
+    from crane_fmu.analysis.envelope import RESIDUAL_MARGIN
+
+    lqr = _s9_case_residual(native, "LqrController", case=case, scenario="S10")
+    residual, ours = _s9_case_run(native, "MpcController", case=case, scenario="S10")
+    assert residual <= lqr + RESIDUAL_MARGIN
+    law = tmp_path / "mpc_law.py"
+    law.write_text("from crane_fmu.model.mpc import COMPONENT  # noqa: F401\n")
+    python_residual, theirs = _s9_case_run(native, "MpcController", f"{law}:COMPONENT", case=case, scenario="S10")
+    assert python_residual == residual
+    compare_to_python(ours["controller.u"], theirs["controller.u"])
