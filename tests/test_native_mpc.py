@@ -399,7 +399,8 @@ def test_told_the_forces_the_native_mpc_gives_the_python_mpcs_bits(native, offse
     cc = MPC.check({**values, "h": 1e-3})
     ps, cs, ours, theirs, handed = pc.state0, mpc.initial_state(cc), [], [], None
     pushes = (0.0, 0.0, 0.5, 2.0)  # u, F_hoist, F1 (hook), F2 (payload)
-    for k in range(3000):  # the forces leave the data unexplained: cautious plans, handed over at 2.8 s (off)
+    for k in range(5000):  # the forces leave the data unexplained: cautious plans, their plans for a deviation run
+        # out, the held one tracked to its end: handed over at 3.9 s (off), 2.9 s (load), 2.8 s (trolley)
         out = plant_model.COMPONENT.output(pc, ps, pushes)
         forces = (2.0, 0.5) if k >= 300 else (0.0, 0.0)
         inputs = tuple(out[:6]) + (0.0,) + forces
@@ -415,7 +416,7 @@ def test_told_the_forces_the_native_mpc_gives_the_python_mpcs_bits(native, offse
         ps = plant_model.update(pc, ps, (theirs[-1][0], 0.0, 0.5, 2.0), k * 1e-3, 1e-3)
     close(fmu)
     compare_to_python(ours, theirs)
-    assert handed is not None and 300 < handed < 2900  # the QP told the forces, then the LQR told them
+    assert handed is not None and 300 < handed < 4900  # the QP told the forces, then the LQR told them
 
 
 def _s9_case_residual(native, controller, law=None, case="#54", scenario="S9"):
