@@ -399,7 +399,8 @@ def test_told_the_forces_the_native_mpc_gives_the_python_mpcs_bits(native, offse
     cc = MPC.check({**values, "h": 1e-3})
     ps, cs, ours, theirs, handed = pc.state0, mpc.initial_state(cc), [], [], None
     pushes = (0.0, 0.0, 0.5, 2.0)  # u, F_hoist, F1 (hook), F2 (payload)
-    for k in range(3000):  # the forces leave the data unexplained: cautious plans, handed over at 2.8 s (off)
+    for k in range(5000):  # the forces leave the data unexplained: cautious plans, their plans for a deviation run
+        # out, the held one tracked to its end: handed over at 3.9 s (off), 2.9 s (load), 2.8 s (trolley)
         out = plant_model.COMPONENT.output(pc, ps, pushes)
         forces = (2.0, 0.5) if k >= 300 else (0.0, 0.0)
         inputs = tuple(out[:6]) + (0.0,) + forces
@@ -415,23 +416,25 @@ def test_told_the_forces_the_native_mpc_gives_the_python_mpcs_bits(native, offse
         ps = plant_model.update(pc, ps, (theirs[-1][0], 0.0, 0.5, 2.0), k * 1e-3, 1e-3)
     close(fmu)
     compare_to_python(ours, theirs)
-    assert handed is not None and 300 < handed < 2900  # the QP told the forces, then the LQR told them
+    assert handed is not None and 300 < handed < 4900  # the QP told the forces, then the LQR told them
 
 
-def _s9_case_residual(native, controller, law=None, case="#54"):
+def _s9_case_residual(native, controller, law=None, case="#54", scenario="S9"):
     """The residual swing [deg] of one of S9's cases (only x and theta1 measured, a StateEstimator of the configured
-    crane in front of the controller, the plant another) run on the native FMUs, the controller's FMU or ``law``."""
-    return _s9_case_run(native, controller, law, case)[0]
+    crane in front of the controller, the plant another; or another ``scenario``'s) run on the native FMUs, the
+    controller's FMU or ``law``."""
+    return _s9_case_run(native, controller, law, case, scenario)[0]
 
 
-def _s9_case_run(native, controller, law=None, case="#54"):
-    """``(residual [deg], the run's columns)`` of :func:`_s9_case_residual`."""
+def _s9_case_run(native, controller, law=None, case="#54", scenario="S9", figure="residual_deg"):
+    """``(residual [deg], the run's columns)`` of :func:`_s9_case_residual` (or of another ``scenario``'s case, or
+    another of :func:`.metrics.move_metrics`' ``figure``)."""
     from crane_fmu.analysis import metrics, scenarios
     from crane_fmu.compare import contenders
     from crane_fmu.cosim import ArrayRecorder, simulate
 
-    run = next(r for r in scenarios.systems_for(contenders([controller], native[2], only=True)[0], "S9")
-               if r.label.startswith(case + " "))
+    run = next(r for r in scenarios.systems_for(contenders([controller], native[2], only=True)[0], scenario)
+               if r.label == case or r.label.startswith(case + " "))
     fmus, connections = systems.resolve(run.system, native[2])
     if law:
         fmus["controller"] = law
@@ -442,7 +445,7 @@ def _s9_case_run(native, controller, law=None, case="#54"):
     columns = recorder.columns()
     s = metrics.crane_signals(columns)
     return metrics.move_metrics(s["time"], s["position"], s["velocity"], list(s["swing"].values()), s["demand"],
-                                run.x_d, run.residual_from)["residual_deg"], columns
+                                run.x_d, run.residual_from)[figure], columns
 
 
 @pytest.mark.parametrize("form", ["native", "python"])
@@ -489,3 +492,47 @@ def test_behind_an_estimator_the_cautious_plan_leaves_no_fast_swing_on_another_c
         compare_to_python(ours["controller.u"], theirs["controller.u"])
         monkeypatch.setattr(mpc, "ROBUST_WEIGHTS", ())
         assert _s9_case_residual(native, "MpcController", law, case="#48") > STOPPED_DEG
+
+
+@pytest.mark.parametrize("case", ["#24", "#54"])
+def test_in_the_wind_the_mpc_whose_plans_for_a_deviation_run_out_leaves_no_more_swing_than_the_lqr(native, tmp_path,
+                                                                                                  case):
+    """S10's cases #24 and #54 (turbulent wind, plants unknown to the controller): the wind makes the MPC plan again
+    for a deviation until its plans run out (mpc.MOST_REPLANS), mid-move at 1.95 s and 1.1 s. Handed over to its
+    LQR there, at speed, the MPC left 1.341 and 0.657 deg of residual swing against the LQR's 1.288 and 0.584 deg
+    (0.074 and 0.053 deg more: beyond the envelope's 0.05 deg). Tracking the held plan to its end first, it is
+    within the envelope (issue 51, item 2); the Python MPC gives the native MPC's input bit for bit (on Linux)."""
+    from crane_fmu.analysis.envelope import RESIDUAL_MARGIN
+
+    lqr = _s9_case_residual(native, "LqrController", case=case, scenario="S10")
+    residual, ours = _s9_case_run(native, "MpcController", case=case, scenario="S10")
+    assert residual <= lqr + RESIDUAL_MARGIN
+    law = tmp_path / "mpc_law.py"
+    law.write_text("from crane_fmu.model.mpc import COMPONENT  # noqa: F401\n")
+    python_residual, theirs = _s9_case_run(native, "MpcController", f"{law}:COMPONENT", case=case, scenario="S10")
+    assert python_residual == residual
+    compare_to_python(ours["controller.u"], theirs["controller.u"])
+
+
+@pytest.mark.parametrize("case", ["#04", "#43"])
+def test_on_a_crane_that_swings_more_the_mpcs_later_plans_stay_within_its_first_plans_swing(native, tmp_path, case,
+                                                                                            monkeypatch):
+    """S3's cases #04 (l2 = 0.433 m) and #43 (l1 = 1.071 m, l2 = 0.494 m), plants unknown to the MPC: the shortest
+    move planned again with the identified crane at 0.3 s swung to 17.85 and 17.98 deg, past the envelope's bound
+    (the MPC's own S2 peak plus 2 deg, 17.85 deg; issue 51, item 2). A plan after the first swings at most
+    mpc.PEAK_ALLOWANCE more than the first (a longer move): within the bound, the Python MPC bit for bit with the
+    native one (on Linux); without the allowance (infinite) the Python MPC's peak is past the bound again."""
+    from crane_fmu.analysis.envelope import PEAK_MARGIN
+
+    nominal, _ = _s9_case_run(native, "MpcController", case="nominal", scenario="S2", figure="peak_swing_deg")
+    peak, ours = _s9_case_run(native, "MpcController", case=case, scenario="S3", figure="peak_swing_deg")
+    assert peak <= nominal + PEAK_MARGIN
+    law = tmp_path / "mpc_law.py"
+    law.write_text("from crane_fmu.model.mpc import COMPONENT  # noqa: F401\n")
+    law = f"{law}:COMPONENT"
+    python_peak, theirs = _s9_case_run(native, "MpcController", law, case=case, scenario="S3", figure="peak_swing_deg")
+    assert python_peak == peak
+    compare_to_python(ours["controller.u"], theirs["controller.u"])
+    monkeypatch.setattr(mpc, "PEAK_ALLOWANCE", math.inf)
+    assert _s9_case_run(native, "MpcController", law, case=case, scenario="S3",
+                        figure="peak_swing_deg")[0] > nominal + PEAK_MARGIN

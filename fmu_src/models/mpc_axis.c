@@ -18,6 +18,7 @@
 #define NOT_POSITIVE_DEFINITE "ArithmeticError: the matrix is not positive definite"
 
 static const double ROBUST_WEIGHTS[N_ROBUST_WEIGHTS] = {1e6, 3e5, 1e5, 3e4, 1e4}; /* mpc.ROBUST_WEIGHTS */
+static const double PEAK_STRETCHES[N_PEAK_STRETCHES] = {1.1, 1.2, 1.3, 1.5, 1.7, 2.0}; /* mpc.PEAK_STRETCHES */
 
 /* mpc.constraint_rows(): one row per input (1.0 at k) and per speed (interval over the inputs up to k). */
 static void constraint_rows(int steps, double interval, int first[], int length[], int offset[], double values[]) {
@@ -642,6 +643,14 @@ static double lqr_input(const Config *c, const double measured[N_STATE], double 
     return limited(0.0 - la_dot(gains, error, N_STATE), measured[1], c->u_max, c->v_max, c->h);
 }
 
+/* mpc._largest(): a plan's largest swing [rad], the largest of its angles over its n_plan + 1 states (0: none). */
+static double largest(const double *states, int n_plan) {
+    double out = 0.0;
+    for (int k = 0; n_plan > 0 && k <= n_plan; k++)
+        out = py_max(out, py_max(fabs(states[k * N_STATE + 2]), fabs(states[k * N_STATE + 4])));
+    return out;
+}
+
 /* mpc.handover(): the solve that hands over to the LQR: its input, the state kept but marked. */
 static const char *handover(const Config *c, const double *state, const double measured[N_STATE], double l1_now,
                             const double forces[2], double replans, double cautious, double *next) {
@@ -704,17 +713,20 @@ static const char *solve(Config *c, const double *state, const double measured[N
     int large = !(count != 0 && n_plan > 0 && !over && hit == 0.0) &&
                 to_rest > (count != 0 && n_plan == 0 ? PLAN_BELOW : LARGEST_SWING);
     /* the safety envelope: the LQR takes over, for good, when the plan is over and the identification's data are
-       beyond the crane's equations (mid-move the LQR's kick would swing more than the plan's end), the plans for a
-       deviation run out, the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on the
-       target */
-    double replans = state[H_REPLANS], bound = state[H_BOUND];
+       beyond the crane's equations or the plans for a deviation have run out (mid-move the LQR's kick would swing
+       more than the plan's end), the swing grows past the plan's largest by SWING_MARGIN, or the crane is at rest on
+       the target */
+    double replans = state[H_REPLANS], bound = state[H_BOUND], first = state[H_FIRST];
     /* a plan for a deviation needs a plan to deviate from: the first after the large swing's phase is none */
     if (replan && count != 0 && !found_model && !warned_now && !large && n_plan > 0 &&
         (trolley > c->replan_x || swing > c->replan_angle))
         replans += 1.0;
     int swung = n_plan > 0 && to_rest > bound + SWING_MARGIN; /* past the plan's largest */
     int at_rest = over && to_trolley <= c->replan_x && to_rest <= c->replan_angle;
-    if (count != 0 && ((unexplained && over) || replans > MOST_REPLANS || swung || at_rest))
+    int spent = replans > MOST_REPLANS;
+    if (spent && !over && !swung) /* the plans for a deviation run out mid-move: the held plan tracked to its end */
+        replan = found_model, replans = MOST_REPLANS + 1.0;
+    else if (count != 0 && ((unexplained && over) || spent || swung || at_rest))
         return handover(c, state, measured, l1_now, forces, replans, cautious, next);
     if (replan && large) { /* none made: the tracking QP takes the swing down alone, a plan tried next interval */
         replan = n_plan > 0 || found_model; /* the last solve's warm start holds unless a plan or model changed */
@@ -722,12 +734,27 @@ static const char *solve(Config *c, const double *state, const double measured[N
         plan_start = at, step = 0, plan_after = at;
         bound = to_rest, hit = 1.0;
     } else if (replan) {
-        double shrink = 1.0 - c->margin, far = 0.0;
+        double shrink = 1.0 - c->margin, far = 0.0, stretch = cautious != 0.0 ? CAUTIOUS_STRETCH : 1.0;
+        const Config *corners = cautious != 0.0 ? c : NULL;
+        int most = (int)(LONGEST_PLAN / c->interval);
         if (cautious != 0.0 && (error = robust_ends(c, known))) return error;
-        error = plan_move(d, measured, target, c->u_max * shrink, c->v_max * shrink, c->interval,
-                          (int)(LONGEST_PLAN / c->interval), cautious != 0.0 ? CAUTIOUS_STRETCH : 1.0,
-                          cautious != 0.0 ? c : NULL, new_plan_u, new_plan_u + MAX_PLAN, &n_plan);
+        error = plan_move(d, measured, target, c->u_max * shrink, c->v_max * shrink, c->interval, most, stretch,
+                          corners, new_plan_u, new_plan_u + MAX_PLAN, &n_plan);
         if (error) return error;
+        if (count == 0) { /* the first plan's largest swing: what the move asked for swings on the configured crane */
+            first = largest(new_plan_u + MAX_PLAN, n_plan);
+        } else if (first > 0.0 && largest(new_plan_u + MAX_PLAN, n_plan) > first + PEAK_ALLOWANCE) {
+            int fits = 0; /* the first longer move within the first plan's swing, else the shortest move again */
+            for (int j = 0; j < N_PEAK_STRETCHES && !fits; j++) {
+                error = plan_move(d, measured, target, c->u_max * shrink, c->v_max * shrink, c->interval, most,
+                                  stretch * PEAK_STRETCHES[j], corners, new_plan_u, new_plan_u + MAX_PLAN, &n_plan);
+                if (error) return error;
+                fits = n_plan > 0 && largest(new_plan_u + MAX_PLAN, n_plan) <= first + PEAK_ALLOWANCE;
+            }
+            if (!fits && (error = plan_move(d, measured, target, c->u_max * shrink, c->v_max * shrink, c->interval,
+                                            most, stretch, corners, new_plan_u, new_plan_u + MAX_PLAN, &n_plan)))
+                return error;
+        }
         memmove(new_plan_u + n_plan, new_plan_u + MAX_PLAN, (n_plan ? n_plan + 1 : 0) * N_STATE * sizeof(double));
         plan_u = new_plan_u, plan_s = new_plan_u + n_plan, n_states = n_plan ? n_plan + 1 : 0;
         plan_start = at, step = 0;
@@ -788,7 +815,7 @@ static const char *solve(Config *c, const double *state, const double measured[N
     sample(measured, header + H_W1);
     memcpy(header + H_N11, sums, sizeof sums);
     header[H_HANDED] = 0.0, header[H_REPLANS] = replans, header[H_BOUND] = bound, header[H_CAUTIOUS] = cautious;
-    header[H_HIT] = hit;
+    header[H_HIT] = hit, header[H_FIRST] = first;
     memcpy(next, header, sizeof header);
     return NULL;
 }

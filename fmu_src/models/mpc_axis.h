@@ -35,6 +35,8 @@
 #define TOLERANCE 0.01   /* mpc.TOLERANCE */
 #define SUSPECT_AFTER 3.0 /* mpc.SUSPECT_AFTER */
 #define CAUTIOUS_STRETCH 1.3 /* mpc.CAUTIOUS_STRETCH */
+#define PEAK_ALLOWANCE (1.0 * (3.141592653589793 / 180.0)) /* mpc.PEAK_ALLOWANCE: math.radians(1.0) */
+#define N_PEAK_STRETCHES 6 /* mpc.PEAK_STRETCHES: their values in mpc_axis.c */
 #define SPREAD_L1 0.1        /* mpc.SPREAD: l1, l2, m1, m2 */
 #define SPREAD_L2 0.2
 #define SPREAD_M1 0.2
@@ -51,7 +53,7 @@ enum {
     H_COUNT, H_U, H_ITERATIONS, H_WARNED, H_PLAN_STEPS, H_PLAN_START, H_PLAN_AFTER, H_PLAN_L1, H_L1, H_L2, H_M2,
     H_W1, H_W2, H_COS_D, H_SIN_D, H_COS1, H_SIN1, H_COS2, H_SIN2, H_D1, H_D2, H_A1, H_A2, H_C1, H_C2, H_S1, H_S2,
     H_N11, H_N12, H_N13, H_N22, H_N23, H_N33, H_Z1, H_Z2, H_Z3, H_YY, H_SAMPLES, H_HANDED, H_REPLANS, H_BOUND,
-    H_CAUTIOUS, H_HIT, H_N_HEADER
+    H_CAUTIOUS, H_HIT, H_FIRST, H_N_HEADER
 };
 enum { STATE_SIZE = H_N_HEADER + 3 * MAX_STEPS + MAX_PLAN + N_STATE * (MAX_PLAN + 1) };
 
