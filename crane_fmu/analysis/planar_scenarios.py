@@ -320,6 +320,8 @@ def _runs(sid):
             for name, (kind, values) in (extra or {}).items():
                 instances[name] = kind
                 parameters[name] = values
+            if "estimator" in instances and "estimated" in c.parameters:  # the controller told its state is estimated
+                parameters["controller"] = {"estimated": 1.0}
             return System(f"{c.name}-regulation", instances, connections, parameters=parameters, stop_time=10.0,
                           step=step)
 
@@ -354,6 +356,8 @@ def _runs(sid):
             for name, (kind, values) in (extra or {}).items():
                 instances[name] = kind
                 parameters[name] = values
+            if "estimator" in instances and "estimated" in c.parameters:  # the controller told its state is estimated
+                parameters["controller"]["estimated"] = 1.0
             return System(f"{c.name}-transport", instances, connections, parameters=parameters,
                           stop_time=12.0 if hoist else 10.0)
 

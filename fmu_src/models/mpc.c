@@ -15,7 +15,7 @@ typedef MpcState State;
 static ModelStatus configure(const double values[], const StringValue strings[], Config *c, const Reporter *r) {
     MpcSettings s = {V(m1), V(m2), V(l1), V(l2), V(g), {0}, V(r), V(x_d), V(u_max), V(v_max), V(margin), V(h),
                      V(interval), V(horizon), V(max_iterations), V(replan_x), V(replan_angle), V(l1_low),
-                     V(l1_high), V(identify), V(offset_free)};
+                     V(l1_high), V(identify), V(offset_free), V(estimated)};
     for (int i = 0; i < N_STATE; i++) s.q[i] = values[VR_q_x + i];
     return mpc_axis_configure(&s, c, r);
 }

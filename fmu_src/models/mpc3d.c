@@ -175,7 +175,7 @@ static ModelStatus configure(const double values[], const StringValue strings[],
     }
     MpcSettings s = {V(m1), V(m2), V(l1), V(l2), V(g), {0}, V(r), 0.0, V(u_max), V(v_max), V(margin), V(h),
                      V(interval), V(horizon), V(max_iterations), V(replan_x), V(replan_angle), 0.0, 0.0,
-                     V(identify), V(offset_free)};
+                     V(identify), V(offset_free), V(estimated)};
     for (int i = 0; i < N_STATE; i++) s.q[i] = values[VR_q_x + i];
     for (int k = 0; k < N_AXES; k++) {
         s.x_d = x_d[k];

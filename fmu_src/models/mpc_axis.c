@@ -135,6 +135,7 @@ ModelStatus mpc_axis_configure(const MpcSettings *v, Config *c, const Reporter *
     c->r = v->r, c->x_d = v->x_d, c->u_max = u_max, c->v_max = v_max, c->margin = v->margin, c->h = h;
     c->every = every, c->interval = interval, c->steps = (int)steps, c->max_iterations = (int)cap;
     c->replan_x = v->replan_x, c->replan_angle = v->replan_angle, c->offset_free = v->offset_free;
+    c->estimated = v->estimated;
     double low = v->l1_low, high = v->l1_high;
     c->n_designs = 1;
     if (!(low == 0.0 && high == 0.0)) c->n_designs = SCHEDULE_POINTS;
@@ -562,7 +563,7 @@ static const char *identify(const Config *c, const double *s, const double measu
     double l1 = lam[0], l2 = lam[1], k = lam[2], yy = sums[9];
     if (yy == 0.0) return DIVISION_BY_ZERO;
     double misfit = (yy - (l1 * sums[6] + l2 * sums[7] + k * sums[8])) / yy; /* the residual's share */
-    *unexplained = misfit > UNEXPLAINED;
+    *unexplained = misfit > (c->estimated != 0.0 ? MISFIT : UNEXPLAINED); /* with estimated: no model's data */
     const PlantParameters *p = &c->plant;
     int plausible = p->l1 / PLAUSIBLE <= l1 && l1 <= p->l1 * PLAUSIBLE && p->l2 / PLAUSIBLE <= l2 &&
                     l2 <= p->l2 * PLAUSIBLE;

@@ -83,6 +83,7 @@ typedef struct {
     int steps, max_iterations, samples;
     double lqr_gains[N_STATE], lqr_table[SCHEDULE_POINTS][N_STATE]; /* mpc.Config.lqr: the LQR it hands over to */
     double offset_free; /* mpc.Config.lqr.offset_free: the forces' rest off the QP's error and the LQR's target */
+    double estimated;   /* mpc.Config.estimated: the data unexplained beyond MISFIT (else UNEXPLAINED) */
     int first[MAX_ROWS], length[MAX_ROWS], offset[MAX_ROWS]; /* mpc.constraint_rows() */
     double values[1 + MAX_STEPS];
     double work[QP_WORK(MAX_STEPS, MAX_ROWS)], scratch[3 * MAX_STEPS * MAX_STEPS + 7 * MAX_STEPS * N_STATE];
@@ -95,7 +96,7 @@ typedef struct {
 /* mpc.configure()'s parameters (mpc.VARIABLES' parameters, by name). */
 typedef struct {
     double m1, m2, l1, l2, g, q[N_STATE], r, x_d, u_max, v_max, margin, h, interval, horizon, max_iterations;
-    double replan_x, replan_angle, l1_low, l1_high, identify, offset_free;
+    double replan_x, replan_angle, l1_low, l1_high, identify, offset_free, estimated;
 } MpcSettings;
 
 /* mpc.configure(), after its declared RULES: the rules that need the interval and the horizon counted in steps,
