@@ -448,6 +448,24 @@ def _s9_case_run(native, controller, law=None, case="#54", scenario="S9", figure
                                 run.x_d, run.residual_from)[figure], columns
 
 
+def _python_mpc_law(tmp_path):
+    """The Python MPC of this process as a law (``FILE.py:COMPONENT``) for :func:`_s9_case_run`."""
+    law = tmp_path / "mpc_law.py"
+    law.write_text("from crane_fmu.model.mpc import COMPONENT  # noqa: F401\n")
+    return f"{law}:COMPONENT"
+
+
+def _native_and_python_bit_for_bit(native, tmp_path, case, scenario="S9", figure="residual_deg"):
+    """``(figure, Python law)`` of one case of the native MPC, after checking that the Python MPC (the law) gives the
+    same figure and the native MPC's input bit for bit (on Linux)."""
+    value, ours = _s9_case_run(native, "MpcController", case=case, scenario=scenario, figure=figure)
+    law = _python_mpc_law(tmp_path)
+    python_value, theirs = _s9_case_run(native, "MpcController", law, case=case, scenario=scenario, figure=figure)
+    assert python_value == value
+    compare_to_python(ours["controller.u"], theirs["controller.u"])
+    return value, law
+
+
 @pytest.mark.parametrize("form", ["native", "python"])
 def test_behind_an_estimator_of_another_crane_the_mpc_leaves_no_more_swing_than_the_lqr(native, tmp_path, form,
                                                                                         monkeypatch):
@@ -458,11 +476,7 @@ def test_behind_an_estimator_of_another_crane_the_mpc_leaves_no_more_swing_than_
     without the cautious plan (CAUTIOUS_STRETCH 1) the case fails the envelope: the rule is what acts."""
     from crane_fmu.analysis.envelope import RESIDUAL_MARGIN
 
-    law = None
-    if form == "python":
-        law = tmp_path / "mpc_law.py"
-        law.write_text("from crane_fmu.model.mpc import COMPONENT  # noqa: F401\n")
-        law = f"{law}:COMPONENT"
+    law = _python_mpc_law(tmp_path) if form == "python" else None
     lqr = _s9_case_residual(native, "LqrController")
     assert _s9_case_residual(native, "MpcController", law) <= lqr + RESIDUAL_MARGIN
     if form == "python":
@@ -481,15 +495,11 @@ def test_behind_an_estimator_the_cautious_plan_leaves_no_fast_swing_on_another_c
     without the corners (no ROBUST_WEIGHTS) the case misses the target: the robust plan is what acts."""
     from crane_fmu.analysis.scenarios import STOPPED_DEG
 
-    residual, ours = _s9_case_run(native, "MpcController", case="#48")
-    assert residual <= STOPPED_DEG
-    if form == "python":
-        law = tmp_path / "mpc_law.py"
-        law.write_text("from crane_fmu.model.mpc import COMPONENT  # noqa: F401\n")
-        law = f"{law}:COMPONENT"
-        python_residual, theirs = _s9_case_run(native, "MpcController", law, case="#48")
-        assert python_residual == residual
-        compare_to_python(ours["controller.u"], theirs["controller.u"])
+    if form == "native":
+        assert _s9_case_residual(native, "MpcController", case="#48") <= STOPPED_DEG
+    else:
+        residual, law = _native_and_python_bit_for_bit(native, tmp_path, "#48")
+        assert residual <= STOPPED_DEG
         monkeypatch.setattr(mpc, "ROBUST_WEIGHTS", ())
         assert _s9_case_residual(native, "MpcController", law, case="#48") > STOPPED_DEG
 
@@ -505,15 +515,11 @@ def test_told_its_state_is_an_estimators_the_mpc_turns_cautious_in_time_for_the_
     Linux), and judging its data as without an estimator (estimated 0) it misses the target: the rule is what acts."""
     from crane_fmu.analysis.scenarios import STOPPED_DEG
 
-    residual, ours = _s9_case_run(native, "MpcController", case="#61")
-    assert residual <= STOPPED_DEG
-    if form == "python":
-        law = tmp_path / "mpc_law.py"
-        law.write_text("from crane_fmu.model.mpc import COMPONENT  # noqa: F401\n")
-        law = f"{law}:COMPONENT"
-        python_residual, theirs = _s9_case_run(native, "MpcController", law, case="#61")
-        assert python_residual == residual
-        compare_to_python(ours["controller.u"], theirs["controller.u"])
+    if form == "native":
+        assert _s9_case_residual(native, "MpcController", case="#61") <= STOPPED_DEG
+    else:
+        residual, law = _native_and_python_bit_for_bit(native, tmp_path, "#61")
+        assert residual <= STOPPED_DEG
         identify = mpc.identify
         monkeypatch.setattr(mpc, "identify", lambda c, *rest: identify(c._replace(estimated=0.0), *rest))
         assert _s9_case_residual(native, "MpcController", law, case="#61") > STOPPED_DEG
@@ -530,13 +536,8 @@ def test_in_the_wind_the_mpc_whose_plans_for_a_deviation_run_out_leaves_no_more_
     from crane_fmu.analysis.envelope import RESIDUAL_MARGIN
 
     lqr = _s9_case_residual(native, "LqrController", case=case, scenario="S10")
-    residual, ours = _s9_case_run(native, "MpcController", case=case, scenario="S10")
+    residual, _ = _native_and_python_bit_for_bit(native, tmp_path, case, scenario="S10")
     assert residual <= lqr + RESIDUAL_MARGIN
-    law = tmp_path / "mpc_law.py"
-    law.write_text("from crane_fmu.model.mpc import COMPONENT  # noqa: F401\n")
-    python_residual, theirs = _s9_case_run(native, "MpcController", f"{law}:COMPONENT", case=case, scenario="S10")
-    assert python_residual == residual
-    compare_to_python(ours["controller.u"], theirs["controller.u"])
 
 
 @pytest.mark.parametrize("case", ["#04", "#43"])
@@ -550,14 +551,8 @@ def test_on_a_crane_that_swings_more_the_mpcs_later_plans_stay_within_its_first_
     from crane_fmu.analysis.envelope import PEAK_MARGIN
 
     nominal, _ = _s9_case_run(native, "MpcController", case="nominal", scenario="S2", figure="peak_swing_deg")
-    peak, ours = _s9_case_run(native, "MpcController", case=case, scenario="S3", figure="peak_swing_deg")
+    peak, law = _native_and_python_bit_for_bit(native, tmp_path, case, scenario="S3", figure="peak_swing_deg")
     assert peak <= nominal + PEAK_MARGIN
-    law = tmp_path / "mpc_law.py"
-    law.write_text("from crane_fmu.model.mpc import COMPONENT  # noqa: F401\n")
-    law = f"{law}:COMPONENT"
-    python_peak, theirs = _s9_case_run(native, "MpcController", law, case=case, scenario="S3", figure="peak_swing_deg")
-    assert python_peak == peak
-    compare_to_python(ours["controller.u"], theirs["controller.u"])
     monkeypatch.setattr(mpc, "PEAK_ALLOWANCE", math.inf)
     assert _s9_case_run(native, "MpcController", law, case=case, scenario="S3",
                         figure="peak_swing_deg")[0] > nominal + PEAK_MARGIN
