@@ -821,8 +821,8 @@ RULES = (*PLANT_RULES, *non_negative(*WEIGHTS), *positive("r", "h", "interval", 
          rule("finite(unlimited(u_max)) and finite(unlimited(v_max))",
               "u_max and v_max must be finite (the MPC's constraints), got {unlimited(u_max)}, {unlimited(v_max)}"),
          *SCHEDULE_RULES, one_of("estimated", (0.0, 1.0), "0 (a measured state) or 1 (a StateEstimator's)"),
-         one_of("offset_free", tuple(lqr.OFFSET_FREE), "0 (the forces ignored), 1 (the load at x_d) "
-                                                                        "or 2 (the trolley at x_d)"),
+         one_of("offset_free", tuple(lqr.OFFSET_FREE),
+                "0 (the forces ignored), 1 (the load at x_d) or 2 (the trolley at x_d)"),
          rule("m2 > 0", "m2 must be > 0 when offset_free != 0 (a force on a payload of no mass), got {m2}",
               when="offset_free != 0"))  # checked in this order (rules.py), then configure()'s own
 
