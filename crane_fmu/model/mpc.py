@@ -46,6 +46,7 @@ does not know), which the tracking QP then removes.
 """
 
 import dataclasses
+import functools
 import itertools
 import math
 from collections import namedtuple
@@ -641,21 +642,19 @@ def solve(config, state, measured, l1_now, forces=(0.0, 0.0)):
     elif replan:
         shrink = 1.0 - c.margin
         stretch, corners = (CAUTIOUS_STRETCH, robust_ends(c, known)) if cautious else (1.0, ())
-        plan_u, plan_s = plan_move(d, measured, target, c.u_max * shrink, c.v_max * shrink, c.interval,
-                                   int(LONGEST_PLAN / c.interval), stretch, corners)
+        plan = functools.partial(plan_move, d, measured, target, c.u_max * shrink, c.v_max * shrink, c.interval,
+                                 int(LONGEST_PLAN / c.interval), others=corners)
+        plan_u, plan_s = plan(stretch)
         if not count:  # the first plan's largest swing: what the move asked for swings on the configured crane
             first = _largest(plan_s)
         elif first > 0.0 and _largest(plan_s) > first + PEAK_ALLOWANCE:
             for longer in PEAK_STRETCHES:  # the first longer move within the first plan's swing
-                found = plan_move(d, measured, target, c.u_max * shrink, c.v_max * shrink, c.interval,
-                                  int(LONGEST_PLAN / c.interval), stretch * longer, corners)
+                found = plan(stretch * longer)
                 if found[0] and _largest(found[1]) <= first + PEAK_ALLOWANCE:
                     plan_u, plan_s = found
                     break
         plan_start, step = at, 0
-        bound = to_rest
-        for planned in plan_s:  # the plan's largest swing
-            bound = max(bound, abs(planned[2]), abs(planned[4]))
+        bound = max(to_rest, _largest(plan_s))
         if plan_u:  # a move: the next one (for a deviation) waits REPLAN_GAP
             plan_after = at + round(REPLAN_GAP / c.interval)
         elif max(abs(a - b) for a, b in zip(measured, target)) > REACHED:  # none within LONGEST_PLAN:

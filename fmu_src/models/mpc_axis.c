@@ -762,9 +762,7 @@ static const char *solve(Config *c, const double *state, const double measured[N
         for (int i = 0; i < N_STATE; i++) far = py_max(far, fabs(measured[i] - target[i]));
         if (n_plan) plan_after = at + (long long)rint(REPLAN_GAP / c->interval); /* the next waits REPLAN_GAP */
         else if (far > REACHED) plan_after = at + (long long)rint(RETRY_GAP / c->interval); /* the QP alone */
-        bound = to_rest;
-        for (int k = 0; k < n_states; k++) /* the plan's largest swing */
-            bound = py_max(py_max(bound, fabs(plan_s[k * N_STATE + 2])), fabs(plan_s[k * N_STATE + 4]));
+        bound = py_max(to_rest, largest(plan_s, n_plan));
     }
     double *ref_u = c->scratch, *f = ref_u + n, *lower = f + n, *upper = lower + 2 * n, *guess = upper + 2 * n;
     double *absolute = guess + n, *start = absolute + n, *lower_u = start + n, *upper_u = lower_u + n;

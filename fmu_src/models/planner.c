@@ -41,11 +41,10 @@ typedef struct {
 } Config;
 
 /* planner.initial_state(): the time of the outputs; with plan_from measured whether the swing has been read at the
-   first step, the swing read and the plan from it */
+   first step, and the plan from it (Python keeps the swing read, its plan looked up by it) */
 typedef struct {
     double time;
     int planned;
-    double start[4];
     Config plan;
 } State;
 
@@ -272,7 +271,6 @@ static ModelStatus measured_plan(const double values[], const Config *c, const d
 
 static void initial_state(const double values[], const Config *c, State *s) {
     s->time = 0.0, s->planned = 0;
-    memset(s->start, 0, sizeof s->start);
 }
 
 /* planner.update(): the time after the step; with plan_from measured the swing read at the first step, planned. */
@@ -282,7 +280,6 @@ static ModelStatus update(const double values[], const Config *c, State *s, doub
         double start[4] = {V(theta1_now), V(dtheta1_now), V(theta2_now), V(dtheta2_now)};
         ModelStatus status = measured_plan(values, c, start, &s->plan, r);
         if (status != MODEL_OK) return status;
-        memcpy(s->start, start, sizeof start);
         s->planned = 1;
     }
     s->time = time + step;
