@@ -216,7 +216,7 @@ def _take_folder(path):
             return key, folder, fmu
     from fmpy import extract  # start-up: fmpy takes about 0.4 s to import
 
-    folder = extract(str(path))
+    folder = extract(str(path), include=_run_needs)
     _EXTRACTED[folder] = os.getpid()
     if _CLEANUP_FOR[0] != os.getpid():
         _CLEANUP_FOR[0] = os.getpid()
@@ -224,6 +224,17 @@ def _take_folder(path):
         # multiprocessing (a forked Dask worker), which leaves by os._exit without atexit's handlers.
         multiprocessing.util.Finalize(None, remove_extracted, exitpriority=10)
     return key, folder, None
+
+
+def _run_needs(member):
+    """Whether an instance needs the FMU's file ``member``: all but its sources, documentation and the binaries of
+    other platforms (a native FMU's are most of its bytes: its sources and a Windows library)."""
+    from fmpy import platform, platform_tuple
+
+    top, _, rest = member.partition("/")
+    if top in ("sources", "documentation"):
+        return False
+    return top != "binaries" or rest.partition("/")[0] in (platform, platform_tuple) or "/" not in rest
 
 
 @atexit.register
