@@ -212,15 +212,16 @@ def _dask_client(workers, scheduler):
 WORKER_PRELOAD = ["distributed", "crane_fmu.compare"]
 
 
-def worker_context():
+def worker_context(preload=()):
     """The multiprocessing context of this package's worker processes: 'forkserver' where the platform has it, each
     worker forked from a server process that has no other thread and has imported :data:`WORKER_PRELOAD` once
     (a fork of this process can hang for ever: another of its threads may hold a lock at that moment, a logging
-    handler's or a queue's, which stays held in the child), else 'spawn' (Windows)."""
+    handler's or a queue's, which stays held in the child), else 'spawn' (Windows). The first call starts the
+    server: ``preload`` names more modules for it to import (one that cannot be imported is left out)."""
     if "forkserver" not in multiprocessing.get_all_start_methods():
         return multiprocessing.get_context("spawn")
     context = multiprocessing.get_context("forkserver")
-    context.set_forkserver_preload(WORKER_PRELOAD)
+    context.set_forkserver_preload(WORKER_PRELOAD + list(preload))
     multiprocessing.forkserver.ensure_running()  # with this package's preload, not the one Dask would set
     return context
 

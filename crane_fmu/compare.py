@@ -337,8 +337,8 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
         raise ValueError(f"--cases must be a whole number >= 1, got {cases!r}")
     out_dir = Path(out_dir) / "quick" if quick else Path(out_dir)
     # the fork server of the drawing pool and the local cluster's workers imports their modules (about 2 s) now,
-    # while this process plans the board
-    worker_context()
+    # while this process plans the board: the drawing's too, once for both drawing processes
+    worker_context(["crane_fmu.analysis.board_preload"])
     named = {str(c) for c in chosen}
     chosen = contenders(chosen, fmu_dir, only)
     # a built-in controller nobody named is left out where no chosen scenario applies to it (S10: the 3-D ones)
