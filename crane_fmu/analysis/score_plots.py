@@ -363,7 +363,7 @@ def show_progress(n, count, progress):
 
 
 def _side_frames(column, crane, t, frames, title, progress):
-    """The frames of a planar crane seen from the side (RGB arrays)."""
+    """The frames of a planar crane seen from the side (RGBA arrays, opaque)."""
     plt = pyplot()
     names = (crane.axes[0].position, crane.hook[0], crane.hook[-1], crane.load[0], crane.load[-1])
     x, x1, y1, x2, y2 = (column(n) for n in names)
@@ -396,7 +396,7 @@ def _side_frames(column, crane, t, frames, title, progress):
         fig.canvas.restore_region(background)
         for artist in (trail, cables, trolley, hook, payload, clock):
             ax.draw_artist(artist)
-        images.append(np.asarray(fig.canvas.buffer_rgba())[..., :3].copy())
+        images.append(np.asarray(fig.canvas.buffer_rgba()).copy())  # RGBA: a plain copy (the alpha goes when written)
         show_progress(n, len(frames), progress)
     plt.close(fig)
     return images
@@ -409,22 +409,22 @@ def frame_delay(fps):
 
 
 def _write_gif(images, path, delay_cs):
-    """A GIF of RGB frames, each shown ``delay_cs`` centiseconds."""
+    """A GIF of RGB (or opaque RGBA) frames, each shown ``delay_cs`` centiseconds."""
     from PIL import Image  # Pillow comes with matplotlib: the plot extra
 
-    sample = np.concatenate([images[0], images[len(images) // 2], images[-1]])  # every colour that moves
-    palette = Image.fromarray(sample).quantize(colors=64, method=Image.Quantize.MEDIANCUT)
-    frames = [Image.fromarray(a).quantize(palette=palette, dither=Image.Dither.NONE) for a in images]
+    sample = np.concatenate([images[0][..., :3], images[len(images) // 2][..., :3], images[-1][..., :3]])
+    palette = Image.fromarray(sample).quantize(colors=64, method=Image.Quantize.MEDIANCUT)  # every colour that moves
+    frames = [Image.fromarray(a).convert("RGB").quantize(palette=palette, dither=Image.Dither.NONE) for a in images]
     frames[0].save(path, format="GIF", save_all=True, append_images=frames[1:], duration=10 * delay_cs, loop=0)
 
 
 def _write_mp4(images, path, fps):
-    """An MP4 (H.264) of RGB frames through ffmpeg."""
+    """An MP4 (H.264) of RGB (or opaque RGBA) frames through ffmpeg."""
     height, width = images[0].shape[:2]
     command = ["ffmpeg", "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s",
                f"{width}x{height}", "-r", f"{fps:.6g}", "-i", "-", "-pix_fmt", "yuv420p", "-vf",
                "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-f", "mp4", str(path)]
-    subprocess.run(command, input=b"".join(a.tobytes() for a in images), check=True)
+    subprocess.run(command, input=b"".join(np.ascontiguousarray(a[..., :3]).tobytes() for a in images), check=True)
 
 
 def animate_all(rows, scenario, out_dir, fps=15, store=None):
