@@ -117,12 +117,13 @@ def _versions():  # read once per process: importlib.metadata takes about 4 ms a
             "scipy": scipy.__version__}
 
 
-def plan(chosen, fmu_dir, scenarios=None, cases=scenario_registry.CASES):
+def plan(chosen, fmu_dir, scenarios=None, cases=scenario_registry.CASES, shapes=None):
     """``(cases, blobs, refused)``: the cases to run, the FMU bytes by hash, and rows of cases that cannot run
     (not applicable to a contender: status ``n/a``; refused by a parameter rule: ``invalid``).
 
     A case's id covers the metric module's version (:data:`crane_fmu.analysis.metrics.VERSION`): rows a journal
-    holds from another version are never mixed into the board.
+    holds from another version are never mixed into the board. ``shapes``, a dict when given, gets what
+    :func:`unfed` reads of the runs of each contender's scenarios, so that it need not make them again.
     """
     planned, blobs, refused, digests, checked = [], {}, [], {}, {}
     for contender in chosen:
@@ -135,6 +136,8 @@ def plan(chosen, fmu_dir, scenarios=None, cases=scenario_registry.CASES):
             runs = scenario_registry.systems_for(contender, sid, cases)
             for label, system, step, stop_time, x_d, residual_from in runs:
                 fmus, connections = systems.resolve(system, fmu_dir)
+                if shapes is not None:
+                    _shape(shapes.setdefault((contender.name, sid), {}), fmus, connections, system.parameters)
                 system = systems.prepare(system, step, stop_time, check=False)
                 hashes = {}
                 suffixes = {}  # a law file's source is its file's digest, then its suffix and name (.py:NAME)
@@ -165,19 +168,34 @@ def plan(chosen, fmu_dir, scenarios=None, cases=scenario_registry.CASES):
     return planned, blobs, refused
 
 
-def unfed(chosen, fmu_dir, scenarios=None):
+def unfed(chosen, fmu_dir, scenarios=None, shapes=None):
     """One line per input that nothing feeds in a contender's scenarios (:func:`crane_fmu.cosim.system.unfed_inputs`,
-    from the first case of each: every case of a scenario has the same connections), naming the scenarios."""
+    from the first case of each: every case of a scenario has the same connections), naming the scenarios.
+    ``shapes``: those :func:`plan` gathered of the same board (the runs of every case, each of its shapes once),
+    else the runs are made here (a design of one case for the paired scenarios)."""
     found = {}
     for contender in chosen:
         for sid in scenario_registry.scenarios() if scenarios is None else scenarios:
             if scenario_registry.applicable(contender, sid):
                 continue
-            for run in scenario_registry.systems_for(contender, sid, 1):
-                fmus, connections = systems.resolve(run.system, fmu_dir)
-                for line in unfed_inputs(fmus, connections, run.system.parameters):
+            if shapes is None:
+                runs = {}
+                for run in scenario_registry.systems_for(contender, sid, 1):
+                    _shape(runs, *systems.resolve(run.system, fmu_dir), run.system.parameters)
+            else:
+                runs = shapes.get((contender.name, sid), {})
+            for fmus, connections, parameters in runs.values():
+                for line in unfed_inputs(fmus, connections, parameters):
                     found.setdefault(f"{contender.name}: {line}", []).append(sid)
     return [f"{line} (in {', '.join(dict.fromkeys(sids))})" for line, sids in found.items()]
+
+
+def _shape(shapes, fmus, connections, parameters):
+    """Keep a run's FMUs, connections and parameters in ``shapes`` under what :func:`unfed_inputs` reads of them (the
+    FMUs, the connections and the parameters' names): the runs of a scenario's cases differ only in values."""
+    key = json.dumps([sorted(map(str, fmus.items())), [list(c) for c in connections],
+                      sorted((i, sorted(v)) for i, v in parameters.items())])
+    shapes.setdefault(key, (fmus, connections, parameters))
 
 
 def provenance(case):
@@ -350,8 +368,9 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
             runs = [s for s in known if not scenario_registry.applicable(contender, s)]
             raise ValueError(f"{contender.name}: no scenario of {', '.join(scenarios)} applies to it: "
                              f"{reasons.pop()}; it can run {', '.join(runs)}")
-    planned, blobs, refused = plan(chosen, fmu_dir, scenarios, cases)
-    lines = unfed(chosen, fmu_dir, scenarios)
+    shapes = {}
+    planned, blobs, refused = plan(chosen, fmu_dir, scenarios, cases, shapes)
+    lines = unfed(chosen, fmu_dir, scenarios, shapes)
     if strict and lines:
         raise ValueError(f"--strict: {'; '.join(lines)}")
     for line in lines:

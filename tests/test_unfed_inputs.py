@@ -81,6 +81,9 @@ def test_compare_and_sweep_refuse_it_under_strict_before_anything_runs(fmu_dir, 
     chosen = compare.contenders([str(typo_fmu)], fmu_dir, only=True)
     assert compare.unfed(chosen, fmu_dir, ["S1"]) == [WARNING.replace("crane-fmu: warning: ", "TypoController: ")
                                                       + " (in S1)"]
+    shapes = {}  # the board's way: from the runs plan() made, the lines of the runs made again, in every scenario
+    compare.plan(chosen, fmu_dir, cases=2, shapes=shapes)
+    assert compare.unfed(chosen, fmu_dir, shapes=shapes) == compare.unfed(chosen, fmu_dir) != []
     ssp = systems.write_ssp(systems.get("paper").with_instances({"controller": str(typo_fmu)}), fmu_dir,
                             tmp_path / "typo.ssp")
     study = tmp_path / "study.toml"
