@@ -104,10 +104,7 @@ def bootstrap_order_statistics(y, ranks, resamples=RESAMPLES, confidence=CONFIDE
 
     y = np.asarray(y, dtype=float)
     n = y.shape[-1]
-    draws = np.random.default_rng(seed).integers(0, n, (resamples, n))
-    small = np.min_scalar_type(n)  # the counts summed along a resample reach n at most
-    counts = np.bincount((np.arange(resamples)[:, None] * n + draws).ravel(), minlength=resamples * n)
-    counts = counts.reshape(resamples, n).astype(small)
+    small, counts = _resample_counts(n, resamples, seed)
     rows = y.reshape(-1, n)
     theta = np.empty((len(ranks), len(rows), resamples))
     for m, row in enumerate(rows):
@@ -119,6 +116,19 @@ def bootstrap_order_statistics(y, ranks, resamples=RESAMPLES, confidence=CONFIDE
     alpha = np.asarray((1 - confidence) / 2, dtype=theta.dtype)
     bounds = stats.quantile(theta, np.stack((alpha, 1 - alpha), axis=-1), axis=-1)
     return bounds[..., 0], bounds[..., 1]
+
+
+@functools.lru_cache(maxsize=4)
+def _resample_counts(n, resamples, seed):
+    """``(dtype, counts)``: how often each of ``resamples`` resamples (scipy's draws: one ``(resamples, n)`` array of
+    indices from the generator of ``seed``) holds each of ``n`` cases, in the smallest type that holds n; drawn once
+    for every statistic of a board (the same draws each time: read-only)."""
+    draws = np.random.default_rng(seed).integers(0, n, (resamples, n))
+    small = np.min_scalar_type(n)  # the counts summed along a resample reach n at most
+    counts = np.bincount((np.arange(resamples)[:, None] * n + draws).ravel(), minlength=resamples * n)
+    counts = counts.reshape(resamples, n).astype(small)
+    counts.flags.writeable = False
+    return small, counts
 
 
 def describe_all(samples):
