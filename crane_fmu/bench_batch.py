@@ -166,9 +166,41 @@ def _tree_rss_mb(pid):
         return 0.0
 
 
+def _adopt_orphans(adopt=True):
+    """Make this process the reaper of its descendants' orphans (Linux; ``adopt`` False: no longer): the processes a
+    command leaves when it ends (its fork server, which has reaped the workers it forked) become this process's
+    children, so that their CPU time is counted with the command's once reaped; elsewhere nothing (their CPU time is
+    then not counted)."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(36, int(adopt), 0, 0, 0)  # PR_SET_CHILD_SUBREAPER
+
+
+def _reap_adopted(before, timeout=60.0):
+    """Wait for this process's children but those of the pids ``before`` (the orphans a command left, adopted), and
+    for those they leave in turn, each at most ``timeout`` seconds: their CPU time is then counted as its children's."""
+    import psutil
+
+    while True:
+        adopted = [p for p in psutil.Process().children() if p.pid not in before]
+        for child in adopted:
+            try:
+                child.wait(timeout)
+            except (psutil.Error, ChildProcessError):  # gone, or still running after the timeout: not counted
+                before.add(child.pid)
+        if not adopted:
+            return
+
+
 def timed_process(command, sample=0.1, env=None):
     """``(wall seconds, peak resident memory of the process tree [MB], CPU seconds of the tree)`` of a command run to
-    its end (in the environment ``env``: default this one's)."""
+    its end (in the environment ``env``: default this one's). The tree's CPU time counts the processes that outlive
+    the command (:func:`_adopt_orphans`), waited for after it ends; the wall time is the command's."""
+    import psutil
+
+    _adopt_orphans()
+    before = {p.pid for p in psutil.Process().children()}
     start, peak, cpu = time.perf_counter(), 0.0, _children_cpu()
     process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=env)
     stop = threading.Event()
@@ -185,6 +217,8 @@ def timed_process(command, sample=0.1, env=None):
     seconds = time.perf_counter() - start
     stop.set()
     watcher.join()
+    _reap_adopted(before | {process.pid})
+    _adopt_orphans(False)
     if process.returncode:
         raise RuntimeError(f"{' '.join(command[-6:])}: status {process.returncode}: {err.strip()[-500:]}")
     return seconds, peak, _children_cpu() - cpu

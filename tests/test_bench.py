@@ -1,5 +1,7 @@
 """What the benchmark compares is comparable: its plain Python loop computes what the master does."""
 
+import sys
+
 import numpy as np
 import pytest
 
@@ -65,3 +67,17 @@ def test_the_spatial_benchmarks_planned_pairs_move_the_trolley_alike(fmu_dir):
     for name in ("x", "dx"):
         assert np.abs(planar[f"plant.{name}"] - spatial[f"plant.{name}"]).max() <= 1e-12, name
     assert planar["plant.x"][-1] > 1.5 and np.abs(spatial["plant.theta1y"]).max() > 0.08
+
+
+def test_a_timed_command_counts_the_cpu_of_the_processes_it_leaves(tmp_path):
+    """A board's fork server outlives the board's process, with its workers' CPU time: it is counted (Linux)."""
+    if not sys.platform.startswith("linux"):
+        pytest.skip("orphans are adopted on Linux only")
+    from crane_fmu.bench_batch import timed_process
+
+    used = tmp_path / "cpu"  # the orphan's own CPU seconds, written as it ends
+    orphan = (f"import time\nwhile time.process_time() < 0.3: pass\n"
+              f"open({str(used)!r}, 'w').write(repr(time.process_time()))")
+    leaving = f"import subprocess, sys; subprocess.Popen([sys.executable, '-c', {orphan!r}])"  # ends at once
+    _, _, cpu = timed_process([sys.executable, "-c", leaving])
+    assert float(used.read_text()) <= cpu
