@@ -16,7 +16,6 @@ import math
 from crane_fmu.model import wind
 from crane_fmu.model.parameters import PlantParameters
 
-
 # the design gust: the Wind's mean and twice its turbulence's standard deviation (98 % of the turbulence's samples
 # below it), 13.8 m/s; the turbulence's slow part (time constant L / U, 6.7 s) leans a load held still for seconds
 _WIND = wind.COMPONENT.defaults()

@@ -15,7 +15,8 @@ controller can do better, so a target this one cannot meet, no controller meets)
 ``F_k`` is the Wind component's drag on a hook and load at rest (the seed's turbulence, the case's
 ``l1``/``l2``), its mean over each grid interval: the drag's dependence on the load's own speed (under 0.1 m/s
 against 10 m/s after the move) is left out. A linear program (scipy HiGHS); ``None`` where its constraints cannot
-all hold. Like :mod:`.floor`'s, a floor of the linearised crane: on the plant a close estimate, not a proof.
+all hold (solved by HiGHS' interior point method: its dual simplex met numerical trouble in some cases). Like
+:mod:`.floor`'s, a floor of the linearised crane: on the plant a close estimate, not a proof.
 
 ``python -m crane_fmu.analysis.wind_floor`` prints every case of the board's design.
 """
@@ -38,12 +39,14 @@ from crane_fmu.model.parameters import PlantParameters
 GRID = floor.GRID  # s: the hold of u and of the drag
 STEP = 1e-3  # s: the board's communication step, the wind's sample
 DEGREE = math.pi / 180.0
+TROLLEY_BAND, ARRIVAL_DEG = 0.005, 0.5  # m, deg: S2's arrival band of the trolley, the arrival's of the angles
 # where the arrival of S10 is measured: the trolley within 5 mm (S2's band), or the load within the board's load
 # band, with every angle within 0.5 deg of the equilibrium from the arrival target's time on
 ARRIVALS = ("load", "trolley", None)
 
 Plan = namedtuple("Plan", "residual_deg u")
-Plan.__doc__ = "The least residual swing [deg] and the trolley's acceleration [m/s2] over each grid interval that leaves it."
+Plan.__doc__ = ("The least residual swing [deg] and the trolley's acceleration [m/s2] over each grid interval that "
+                "leaves it.")
 WindCase = namedtuple("WindCase", "plant wind x_d stop_time residual_from arrival_from")
 WindCase.__doc__ = ("One case of S10: the plant's and the Wind's parameters, the target [m], the run's length, the "
                     "residual window's start and the arrival target's time [s].")
@@ -126,18 +129,17 @@ def plan(case, arrival="load", load_band=None, u_max=2.0, v_max=1.0, grid=GRID):
     load = ((0, 1.0), (2, p.l1), (4, p.l2))  # the load's position, linearised (eqs (4)-(5))
     for k in range(count + 1):
         t = k * grid + 1e-9
+        in_window, arrived = t >= case.residual_from, arrival is not None and t >= case.arrival_from
         within([(s(k, 1), 1.0)], 0.0, v_max)
-        if t >= case.residual_from:
-            for i, angle in ((2, equilibrium[0]), (4, equilibrium[1])):  # in degrees: rows of like size
-                within([(s(k, i), 1.0)], angle, 0.0, scale=1.0 / DEGREE, by_z=True)
+        if in_window or (arrived and arrival == "load"):
             within([(s(k, i), c) for i, c in load], case.x_d, band)
-        if arrival and t >= case.arrival_from:
-            if arrival == "load":
-                within([(s(k, i), c) for i, c in load], case.x_d, band)
-            else:
-                within([(s(k, 0), 1.0)], case.x_d, 0.005)
-            for i, angle in ((2, equilibrium[0]), (4, equilibrium[1])):
-                within([(s(k, i), 1.0)], angle, 0.5, scale=1.0 / DEGREE)
+        if arrived and arrival == "trolley":
+            within([(s(k, 0), 1.0)], case.x_d, TROLLEY_BAND)
+        for i, angle in ((2, equilibrium[0]), (4, equilibrium[1])):  # in degrees: rows of like size
+            if in_window:
+                within([(s(k, i), 1.0)], angle, 0.0, scale=1.0 / DEGREE, by_z=True)
+            if arrived:
+                within([(s(k, i), 1.0)], angle, ARRIVAL_DEG, scale=1.0 / DEGREE)
     a_ub = sp.csr_matrix((values, (rows, cols)), shape=(len(upper), z + 1))
     cost = np.zeros(z + 1)
     cost[z] = 1.0
