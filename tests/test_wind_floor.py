@@ -95,3 +95,11 @@ def test_the_mean_winds_load_band_leaves_more_than_the_residual_target_in_these_
         (1.1, 0.6), wind_deflection({"m1": 2.4, "m2": 3.5}))), 4)
     assert mean_band == 0.0346
     assert wind_floor.least_residual(CASES[number - 1], load_band=mean_band) > planar_scenarios.WIND_CUT_DEG
+
+
+def test_in_a_steady_wind_the_receding_strategy_keeps_the_load_at_rest():
+    """Without turbulence its forecast is the wind itself: from rest at the equilibrium nothing is left about it, and
+    the load stays within its band (where in it, the program is free to choose: only the swing is minimised)."""
+    r = wind_floor.receding(_steady())
+    assert r.residual_deg == pytest.approx(0.0, abs=1e-5) and r.arrived
+    assert r.load_error_m <= planar_scenarios.LOAD_BAND_M
