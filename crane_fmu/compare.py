@@ -121,9 +121,10 @@ def plan(chosen, fmu_dir, scenarios=None, cases=scenario_registry.CASES, shapes=
     """``(cases, blobs, refused)``: the cases to run, the FMU bytes by hash, and rows of cases that cannot run
     (not applicable to a contender: status ``n/a``; refused by a parameter rule: ``invalid``).
 
-    A case's id covers the metric module's version (:data:`crane_fmu.analysis.metrics.VERSION`): rows a journal
-    holds from another version are never mixed into the board. ``shapes``, a dict when given, gets what
-    :func:`unfed` reads of the runs of each contender's scenarios, so that it need not make them again.
+    A case's id covers the metric module's version (:data:`crane_fmu.analysis.metrics.VERSION`) and its scenario's
+    own measures' (:func:`~crane_fmu.analysis.scenarios.measures_version`): rows a journal holds from another
+    version are never mixed into the board. ``shapes``, a dict when given, gets what :func:`unfed` reads of the runs
+    of each contender's scenarios, so that it need not make them again.
     """
     planned, blobs, refused, digests, checked = [], {}, [], {}, {}
     for contender in chosen:
@@ -157,6 +158,7 @@ def plan(chosen, fmu_dir, scenarios=None, cases=scenario_registry.CASES, shapes=
                         "step": step, "stop_time": stop_time, "master": MASTER, "x_d": x_d,
                         "residual_from": residual_from, "bounds": scenario_registry.get(sid).bounds,
                         "format": ROW_FORMAT, "metrics_version": metrics.VERSION,
+                        "measures_version": scenario_registry.measures_version(sid),
                         "keep_signals": sid in ANIMATE and len(runs) == 1}
                 case["case_id"] = hashlib.sha256(json.dumps(case, sort_keys=True).encode()).hexdigest()[:16]
                 try:
@@ -293,7 +295,8 @@ def stale(done, cases):
         if row.get("metrics_version") != case["metrics_version"]:
             return (f"its figures were measured by another version of the metrics ({row.get('metrics_version')}; "
                     f"crane_fmu/analysis/metrics.py is now {case['metrics_version']})")
-        return f"it holds another run of the same case ({where}: other parameters, connections, master or format)"
+        return (f"it holds another run of the same case ({where}: other parameters, connections, master, format or "
+                "its scenario's own measures)")
     return None
 
 

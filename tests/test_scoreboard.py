@@ -536,3 +536,31 @@ def test_the_mpc_targets_report_prints_the_digits_that_show_a_miss():
     targets.report_mpc([(run, {"arrival_s": 5.004, "residual_deg": 0.1, "error": None})], {}, lines.append)
     assert "  S3: worst arrival: 5.004 s (target <= 5 s, ambition 4 s): MISSED" in lines
     assert "  S3 (plants unknown to it): every residual: 0.100 deg (target <= 0.1 deg): met" in lines
+
+
+def _meeting(controller, misses=(), every=EVERY):
+    """Made-up rows of every scenario of ``every``: each target met (the limit itself), but where ``misses`` names
+    the scenario (twice the limit)."""
+    rows = []
+    for sid, s in every.items():
+        metrics = {t.metric: t.limit * (2.0 if sid in misses else 1.0) for t in s.targets}
+        rows.append(_row(controller, sid, **metrics))
+    return rows
+
+
+def test_the_board_names_the_controller_that_meets_every_target_of_a_crane():
+    """Issue 51 asks the board to name one controller that meets every target of S1-S10: it does, per crane whose
+    scenarios are all on the board, or names none and the closest with what they miss."""
+    rows = _meeting("A") + _meeting("B", ("S3",))
+    assert board_tables.every_target(rows) == ["Every target of S1-S10 in every case: met by `A`.",
+                                               "Every target of S11-S14 in every case: met by `A`, `B`."]
+    rows = _meeting("A", ("S10", "S12")) + _meeting("B", ("S3", "S4")) + _meeting("C", ("S10",))
+    assert board_tables.every_target(rows) == [
+        "Every target of S1-S10 in every case: met by no controller; the closest (9 of 10 scenarios): `A` misses S10; "
+        "`C` misses S10.",
+        "Every target of S11-S14 in every case: met by `B`, `C`."]
+    assert board_tables.every_target([r for r in rows if r["scenario"] != "S5"]) == [  # S1-S10 not all on the board
+        "Every target of S11-S14 in every case: met by `B`, `C`."]
+    line = "Every target of S1-S10 in every case: met by no controller; the closest (9 of 10 scenarios): `A` misses"
+    assert f"\n\n{line}" in board_tables.render(rows, [Contender(n, n, (), ()) for n in "ABC"])
+    assert "\n" + line.replace("`", "") in board_tables.render_terminal(rows)

@@ -101,6 +101,36 @@ def _summary_cells(rows, users, stats, floors):
     return lines
 
 
+def every_target(rows, users=()):
+    """Per crane whose every scenario is on the board, a line naming the controllers that meet every target of every
+    scenario in every case (issue 51 asks for one on the planar crane), or, none doing so, those that meet the most
+    scenarios' and what they miss."""
+    out = []
+    for plant in scenario_plants():
+        ids = [sid for sid, s in scenarios().items() if s.plant == plant]
+        if not all(any(r["scenario"] == sid for r in rows) for sid in ids):
+            continue
+        missed = {}  # controller: the scenarios where it misses a target in some case
+        for sid in ids:
+            for line in summarise(rows, sid):
+                missed.setdefault(line["controller"], [])
+                if line["failed"] or not all(line["targets"]):
+                    missed[line["controller"]].append(sid)
+        if not missed:
+            continue
+        span = f"{ids[0]}-{ids[-1]}"
+        fewest = min(len(m) for m in missed.values())
+        best = sorted(name for name, m in missed.items() if len(m) == fewest)
+        names = ", ".join(_name(name, users) for name in best)
+        if fewest == 0:
+            out.append(f"Every target of {span} in every case: met by {names}.")
+        else:
+            misses = "; ".join(f"{_name(name, users)} misses {', '.join(missed[name])}" for name in best)
+            out.append(f"Every target of {span} in every case: met by no controller; the closest ({len(ids) - fewest} "
+                       f"of {len(ids)} scenarios): {misses}.")
+    return out
+
+
 def render_summary(rows, users=(), quick=False, cases=CASES, stats=None, floors=None):
     """One table: per scenario the controllers by rank, with their ranking figure (the worst case, and its ratio to
     the scenario's floor where ``floors`` gives one; on the paired design the median with its 95 % interval), the
@@ -124,7 +154,7 @@ def render_terminal(rows, users=(), quick=False, cases=CASES, stats=None, floors
     for sid, cells in _summary_cells(rows, users, stats, floors or {}):
         out.append(f"{_scenario_label(sid, cases, quick)} ({run_length(rows, sid)}; ranked by {_ranked_by(sid)})")
         out += [f"  {cell.replace('`', '')}" for cell in cells]
-    return "\n".join(out)
+    return "\n".join(out + [text.replace("`", "") for text in every_target(rows, users)])
 
 
 def _p_above(line):
@@ -178,6 +208,7 @@ def render(rows, contenders, quick=False, cases=CASES, provenance=None, stats=No
     plants = {scenarios()[r["scenario"]].plant for r in rows}
     about = [notes(plant, cases) for plant in scenario_plants() if plant in plants]
     out = [title, "", render_summary(rows, users, quick, cases, stats, floors), "",
+           *(line for text in every_target(rows, users) for line in (text, "")),
            "Controllers: " + ", ".join(_name(c.name, users) for c in sorted(contenders, key=lambda c: c.name)), ""]
     if floors:
         method = next(iter(floors.values())).method

@@ -39,7 +39,7 @@ from .scenarios import (
     register_notes,
     told_in,
 )
-from .wind_equilibrium import wind_deflection
+from .wind_equilibrium import DESIGN_GUST, wind_deflection
 
 PLANT = "CranePlant"
 CRANE = components.get(PLANT).crane
@@ -111,12 +111,14 @@ _HEAVIEST = {"m1": FACTORS[2].high, "m2": FACTORS[3].high}  # the design's corne
 _LIGHTEST = {"m1": FACTORS[2].low, "m2": FACTORS[3].low}  # ... and the one with the largest
 _LONGEST = (FACTORS[0].high, FACTORS[1].high)  # l1, l2 [m]
 WIND_CUT_DEG = math.floor(math.degrees(min(wind_deflection(_HEAVIEST))) * 100) / 100  # 0.35 deg: cut, not met
-LOAD_BAND_M = round(0.005 + sum(length * math.sin(angle)
-                                for length, angle in zip(_LONGEST, wind_deflection(_LIGHTEST))), 4)  # 5 + 29.6 mm
+LOAD_BAND_M = round(0.005 + sum(length * math.sin(angle)  # 5 + 56.1 mm
+                                for length, angle in zip(_LONGEST, wind_deflection(_LIGHTEST, DESIGN_GUST))), 4)
 _WIND_FACT = (f"on the Section V crane about {math.degrees(WIND_EQUILIBRIUM[0]):.2f} and "
               f"{math.degrees(WIND_EQUILIBRIUM[1]):.2f} deg, the drag over the weights, each case's computed from its "
               "own masses, crane_fmu/analysis/wind_equilibrium.py; no trolley motion takes it away while the load is "
               "at rest")
+
+_KNOWING = "even one that knows the wind in advance (crane_fmu/analysis/wind_floor.py)"
 
 _Spec = namedtuple("_Spec", "id title rank_by targets")  # what a scenario asks; registered with its runs below
 
@@ -201,24 +203,32 @@ SPECS = {
                     "hook and payload) on plants of the paired design unknown to the controller; the swing measured "
                     "about the mean wind's equilibrium", "residual_eq_deg",
                     (Target("arrival_eq_s", GUST_S,
-                            f"within 5 mm and 0.5 deg of the wind's equilibrium from {GUST_S:.1f} s",
-                            "as in S4: the wind is a disturbance like the gust, and the requirement on the load stays; "
-                            "the angles taken from where the mean wind holds the cables (" + _WIND_FACT + ")"),
+                            f"the load within {LOAD_BAND_M * 1e3:.1f} mm of the target and 0.5 deg of the wind's "
+                            f"equilibrium from {GUST_S:.1f} s",
+                            "as in S4: the wind is a disturbance like the gust, and the requirement on the load "
+                            "stays; the angles taken from where the mean wind holds the cables (" + _WIND_FACT + "); "
+                            "the load's position in the load's band (below), not the trolley's within S2's 5 mm: "
+                            "with the trolley held there, the turbulence leaning the load, no controller meets "
+                            "S10's targets in cases #01, #21, #32, #43, #48, #54 and #61, " + _KNOWING),
                      Target("residual_eq_deg", WIND_CUT_DEG,
                             f"residual swing about the equilibrium <= {WIND_CUT_DEG:.2f} deg",
                             f"the swing a stopped crane keeps: its trolley held at the target, the load hanging "
                             f"still from the vertical when the wind sets in swings about the equilibrium by the "
                             f"deflection itself, undamped; the design's smallest deflection (the heaviest crane, "
                             f"m1 = {FACTORS[2].high:g} kg, m2 = {FACTORS[3].high:g} kg: {WIND_CUT_DEG:.2f} deg) is "
-                            "the anchor every case must cut, what the turbulence leaves within it"),
+                            "the anchor every case must cut, what the turbulence leaves within it (with the other "
+                            "two targets met, a controller that knows the wind in advance leaves less in every "
+                            "case: crane_fmu/analysis/wind_floor.py)"),
                      Target("load_error_m", LOAD_BAND_M, f"the load within {LOAD_BAND_M * 1e3:.1f} mm of the target "
                             "in the residual window",
                             "the 5 mm band of arrival plus the load's static offset downwind of a trolley at the "
-                            "target "
-                            f"(l1 sin theta1 + l2 sin theta2 at the equilibrium) on the design's lightest crane with "
-                            f"the longest cables ({(LOAD_BAND_M - 0.005) * 1e3:.1f} mm): what a crane that holds its "
-                            "trolley at the target and its load still shows; a controller that moves the trolley "
-                            "upwind does better"))),
+                            "target (l1 sin theta1 + l2 sin theta2) on the design's lightest crane with the longest "
+                            "cables in the design gust (the mean wind and twice the turbulence's standard "
+                            f"deviation, {DESIGN_GUST['U_mean']:.1f} m/s: {(LOAD_BAND_M - 0.005) * 1e3:.1f} mm): "
+                            "what a crane that holds its trolley at the target and its load still shows while the "
+                            "turbulence's slow part leans it; with the mean wind's offset alone (a band of 34.6 mm) "
+                            "no controller meets this and the residual target together in cases #43 and #54, "
+                            + _KNOWING))),
 }
 
 MEASURING = ("S8", "S9")  # the scenarios with a sensor and a StateEstimator in front of the controller
@@ -415,16 +425,17 @@ def _runs(sid):
 def _about_equilibrium(signals, case):
     """S10's own figures: :func:`~crane_fmu.analysis.metrics.move_metrics`' arrival and residual swing with the angles
     taken from the case's equilibrium in the mean wind (its plant's masses, its Wind's parameters) instead of the
-    vertical, as S14's; and ``load_error_m``, the load's largest distance from the target in the residual window."""
+    vertical, as S14's, the arrival's position the load's (within :data:`LOAD_BAND_M`); and ``load_error_m``, the
+    load's largest distance from the target in the residual window."""
     from crane_fmu.analysis import metrics
 
     parameters = case["parameters"]
     equilibrium = wind_deflection(parameters.get("plant"), parameters.get("wind"))
     swing = [signals["swing"][name] - angle for name, angle in zip(CRANE.swing, equilibrium)]
-    figures = metrics.move_metrics(signals["time"], signals["position"], signals["velocity"], swing,
-                                   signals["demand"], case["x_d"], case["residual_from"])
-    window = np.asarray(signals["time"]) >= case["residual_from"]
-    load = np.asarray(signals[CRANE.load[0]])[window]
+    load = np.asarray(signals[CRANE.load[0]])
+    figures = metrics.move_metrics(signals["time"], load, signals["velocity"], swing, signals["demand"], case["x_d"],
+                                   case["residual_from"], position_band=LOAD_BAND_M)
+    load = load[np.asarray(signals["time"]) >= case["residual_from"]]
     return {"arrival_eq_s": figures["arrival_s"], "residual_eq_deg": figures["residual_deg"],
             "load_error_m": float(np.max(np.abs(load - case["x_d"]))) if load.size else None}
 

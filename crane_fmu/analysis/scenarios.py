@@ -19,10 +19,13 @@ that two controllers' figures pair up case by case (:mod:`crane_fmu.analysis.sta
 """
 
 import functools
+import hashlib
+import inspect
 import re
 from collections import namedtuple
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 from crane_fmu import components
 from crane_fmu.controller_interface import misses, move_needs, told
@@ -235,6 +238,16 @@ def measured_outputs(scenario):
         return ()
     crane = s.crane
     return (*crane.hook, *crane.load, *crane.state)
+
+
+@functools.cache
+def measures_version(scenario):
+    """The version of a scenario's own ``measures``: a hash of the file that defines them (its constants with them,
+    as :data:`crane_fmu.analysis.metrics.VERSION` is of metrics.py); None when it has none."""
+    s = get(scenario)
+    if s.measures is None:
+        return None
+    return hashlib.sha256(Path(inspect.getsourcefile(s.measures)).read_bytes()).hexdigest()[:16]
 
 
 def measured(case, columns):

@@ -16,6 +16,11 @@ import math
 from crane_fmu.model import wind
 from crane_fmu.model.parameters import PlantParameters
 
+# the design gust: the Wind's mean and twice its turbulence's standard deviation (98 % of the turbulence's samples
+# below it), 13.8 m/s; the turbulence's slow part (time constant L / U, 6.7 s) leans a load held still for seconds
+_WIND = wind.COMPONENT.defaults()
+DESIGN_GUST = {"U_mean": _WIND["U_mean"] + 2.0 * _WIND["sigma"]}
+
 
 def static_deflection(m1, m2, g, f1, f2):
     """``(theta1, theta2)`` [rad]: the cables' angles from the vertical under the steady forces ``f1`` (hook) and

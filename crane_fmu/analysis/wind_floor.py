@@ -1,0 +1,247 @@
+"""What physics allows in S10's turbulent wind: the least residual swing any controller can leave, case by case.
+
+S10 moves the load 2 m in a turbulent wind (:mod:`crane_fmu.model.wind`) whose slow part leans the hanging load
+by tenths of a degree about the mean wind's equilibrium for seconds at a time. Whether a target can be met there
+is a question of the crane's physics, answered here for a controller that knows the whole wind in advance (no
+controller can do better, so a target this one cannot meet, no controller meets):
+
+    minimise   z  (the largest angle from the mean wind's equilibrium in the residual window)
+    subject to s_(k+1) = Ad s_k + Bd u_k + Ed F_k    (the crane linearised about rest, :func:`.floor.crane_model`,
+                                                      u and the drag held over GRID),
+               s_0 = rest, |u_k| <= u_max, |v_k| <= v_max,
+               |theta_i - theta_i,eq| <= z            (in the residual window),
+               and the scenario's other targets as constraints (:data:`ARRIVALS`).
+
+``F_k`` is the Wind component's drag on a hook and load at rest (the seed's turbulence, the case's
+``l1``/``l2``), its mean over each grid interval: the drag's dependence on the load's own speed (under 0.1 m/s
+against 10 m/s after the move) is left out. A linear program (scipy HiGHS); ``None`` where its constraints cannot
+all hold (solved by HiGHS' interior point method: its dual simplex met numerical trouble in some cases). Like
+:mod:`.floor`'s, a floor of the linearised crane: on the plant a close estimate, not a proof.
+
+A controller that does not know the future wind does worse. :func:`receding` plays one that knows all else: the
+case's plant, its state and the turbulence now. Every ``replan`` seconds it solves the same program (its bands soft)
+from the state it is in, the drag forecast by the turbulence's conditional mean (decaying with the Dryden time
+constant ``L / U``), applies the plan until the next solve under the true drag, from rest at the target in the mean
+wind's equilibrium after the move. It is one causal strategy, not the best one: what it meets, a causal controller
+can meet; what it misses, it does not show out of reach.
+
+``python -m crane_fmu.analysis.wind_floor`` prints every case of the board's design (``--causal``: the receding
+strategy's figures).
+"""
+
+import dataclasses
+import math
+import sys
+from collections import namedtuple
+
+import numpy as np
+import scipy.linalg
+import scipy.optimize
+import scipy.sparse as sp
+
+from crane_fmu.analysis import floor, planar_scenarios
+from crane_fmu.analysis.wind_equilibrium import wind_deflection
+from crane_fmu.model import wind
+from crane_fmu.model.parameters import PlantParameters
+
+GRID = floor.GRID  # s: the hold of u and of the drag
+STEP = 1e-3  # s: the board's communication step, the wind's sample
+DEGREE = math.pi / 180.0
+TROLLEY_BAND, ARRIVAL_DEG = 0.005, 0.5  # m, deg: S2's arrival band of the trolley, the arrival's of the angles
+SOFT = 10.0  # deg per band: with soft bands, the cost of exceeding a band by its width (1 % of it: 0.1 deg)
+# where the arrival of S10 is measured: the trolley within 5 mm (S2's band), or the load within the board's load
+# band, with every angle within 0.5 deg of the equilibrium from the arrival target's time on
+ARRIVALS = ("load", "trolley", None)
+
+Plan = namedtuple("Plan", "residual_deg u excess", defaults=(0.0,))
+Plan.__doc__ = ("The least residual swing [deg], the trolley's acceleration [m/s2] over each grid interval that "
+                "leaves it, and with soft bands by how much of their width it exceeds them.")
+Causal = namedtuple("Causal", "residual_deg load_error_m arrived")
+Causal.__doc__ = ("What :func:`receding` left: the largest angle from the equilibrium in the residual window [deg], "
+                  "the load's largest error there [m], and whether the arrival's bands held from their time on.")
+WindCase = namedtuple("WindCase", "plant wind x_d stop_time residual_from arrival_from")
+WindCase.__doc__ = ("One case of S10: the plant's and the Wind's parameters, the target [m], the run's length, the "
+                    "residual window's start and the arrival target's time [s].")
+
+
+def cases(n=planar_scenarios.CASES):
+    """The ``n`` cases of S10's paired design (the board's)."""
+    out = []
+    for case in planar_scenarios.design(n):
+        plant = {k: case[k] for k in ("l1", "l2", "m1", "m2")}
+        out.append(WindCase(plant, {"seed": case["seed"], "l1": case["l1"], "l2": case["l2"]},
+                            planar_scenarios.DISTANCE, 10.0,
+                            planar_scenarios.residual_from(10.0, planar_scenarios.PLAN, plant),
+                            planar_scenarios.GUST_S))
+    return out
+
+
+def still_speed(values, stop_time, step=STEP):
+    """The Wind component's speed [m/s] at each of its samples (every ``step``) over ``stop_time``."""
+    c = wind.COMPONENT.check(values)
+    state, samples = wind._initial_state(c), int(round(stop_time / step))
+    speed = np.empty(samples)
+    for k in range(samples):
+        speed[k] = c.mean + state[1]
+        state = wind._update(c, state, None, k * step, step)
+    return speed
+
+
+def still_drag(values, stop_time, step=STEP, grid=GRID):
+    """``(F1, F2)`` per grid interval [N]: the Wind component's drag on a hook and a load at rest, sampled as the
+    board samples it (every ``step``) and averaged over each ``grid`` interval."""
+    c = wind.COMPONENT.check(values)
+    speed = still_speed(values, stop_time, step)
+    forces = np.stack([wind.drag(c.drag1, speed, 0.0), wind.drag(c.drag2, speed, 0.0)], axis=1)
+    return forces.reshape(int(round(stop_time / grid)), -1, 2).mean(axis=1)
+
+
+def least_residual(case, arrival="load", load_band=None, **limits):
+    """The least residual swing [deg] about the mean wind's equilibrium a controller knowing the wind can leave in
+    ``case`` while meeting S10's other targets (:func:`plan`), or None when they cannot all be met."""
+    found = plan(case, arrival, load_band, **limits)
+    return None if found is None else found.residual_deg
+
+
+def plan(case, arrival="load", load_band=None, u_max=2.0, v_max=1.0, grid=GRID, start=None, forces=None,
+         soft=False):
+    """The :class:`Plan` of the least residual swing about the mean wind's equilibrium in ``case`` with S10's other
+    targets met, or None when they cannot all be met.
+
+    ``arrival``: the arrival target's band from ``case.arrival_from`` on, on the load (within ``load_band``) or the
+    trolley (within 5 mm), every angle within 0.5 deg of the equilibrium; None: no arrival target. The load stays
+    within ``load_band`` (default: the board's, :data:`.planar_scenarios.LOAD_BAND_M`) in the residual window.
+    ``start``: ``(t0, state)`` to plan from (default: rest at 0 s); ``forces``: the drag over each interval from
+    ``t0`` (default the case's, :func:`still_drag`); ``soft``: the bands may be exceeded at a cost (:data:`SOFT`).
+    """
+    if arrival not in ARRIVALS:
+        raise ValueError(f"arrival must be one of {ARRIVALS}, got {arrival!r}")
+    band = planar_scenarios.LOAD_BAND_M if load_band is None else load_band
+    p = dataclasses.replace(PlantParameters(), **case.plant)
+    a, b, e = floor.crane_model(p)
+    t0, state0 = start if start is not None else (0.0, np.zeros(6))
+    n, count = 6, int(round((case.stop_time - t0) / grid))
+    aug = np.zeros((n + 3, n + 3))
+    aug[:n, :n], aug[:n, n], aug[:n, n + 1:] = a, b, e
+    exact = scipy.linalg.expm(aug * grid)
+    ad, bd, ed = exact[:n, :n], exact[:n, n], exact[:n, n + 1:]
+    if forces is None:
+        forces = still_drag(case.wind, case.stop_time, grid=grid)[-count:]
+    # variables: the states s_0..s_N (n each), the inputs u_0..u_(N-1), z [deg], the bands' excess (soft)
+    states, z = n * (count + 1), n * (count + 1) + count
+    excess = z + 1
+    shift = sp.kron(sp.eye(count, count + 1, 1), sp.identity(n)) - sp.kron(sp.eye(count, count + 1), sp.csr_matrix(ad))
+    dynamics = sp.hstack([shift, -sp.kron(sp.identity(count), sp.csr_matrix(bd.reshape(-1, 1))),
+                          sp.csr_matrix((count * n, 2))])
+    initial = sp.csr_matrix((np.ones(n), (np.arange(n), np.arange(n))), shape=(n, z + 2))
+    a_eq = sp.vstack([dynamics, initial]).tocsr()
+    b_eq = np.concatenate([(forces @ ed.T).reshape(-1), state0])
+
+    rows, cols, values, upper = [], [], [], []
+
+    def within(terms, centre, width, scale=1.0, by_z=False, band=False):
+        """|sum(coef * var) - centre| * scale <= width (+ z; + width * excess for a soft band)"""
+        for sign in (1.0, -1.0):
+            for var, coef in terms:
+                rows.append(len(upper)), cols.append(var), values.append(sign * coef * scale)
+            if by_z or (band and soft):
+                rows.append(len(upper)), cols.append(z if by_z else excess), values.append(-1.0 if by_z else -width)
+            upper.append(width + sign * centre * scale)
+
+    def s(k, i):
+        return n * k + i
+
+    equilibrium = wind_deflection(case.plant, case.wind)
+    load = ((0, 1.0), (2, p.l1), (4, p.l2))  # the load's position, linearised (eqs (4)-(5))
+    for k in range(count + 1):
+        t = t0 + k * grid + 1e-9
+        in_window, arrived = t >= case.residual_from, arrival is not None and t >= case.arrival_from
+        within([(s(k, 1), 1.0)], 0.0, v_max)
+        if in_window or (arrived and arrival == "load"):
+            within([(s(k, i), c) for i, c in load], case.x_d, band, band=True)
+        if arrived and arrival == "trolley":
+            within([(s(k, 0), 1.0)], case.x_d, TROLLEY_BAND, band=True)
+        for i, angle in ((2, equilibrium[0]), (4, equilibrium[1])):  # in degrees: rows of like size
+            if in_window:
+                within([(s(k, i), 1.0)], angle, 0.0, scale=1.0 / DEGREE, by_z=True)
+            if arrived:
+                within([(s(k, i), 1.0)], angle, ARRIVAL_DEG, scale=1.0 / DEGREE, band=True)
+    a_ub = sp.csr_matrix((values, (rows, cols)), shape=(len(upper), z + 2))
+    cost = np.zeros(z + 2)
+    cost[z], cost[excess] = 1.0, SOFT
+    bounds = [(None, None)] * states + [(-u_max, u_max)] * count + [(0.0, None), (0.0, None if soft else 0.0)]
+    result = scipy.optimize.linprog(cost, A_ub=a_ub, b_ub=np.array(upper), A_eq=a_eq, b_eq=b_eq, bounds=bounds,
+                                    method="highs-ipm")
+    if result.status == 2:  # infeasible
+        return None
+    if result.status != 0:
+        raise RuntimeError(f"the wind floor's linear program failed: {result.message}")
+    return Plan(float(result.x[z]), result.x[states:z], float(result.x[excess]))
+
+
+def receding(case, replan=0.25, grid=0.05, after=3.6):
+    """The :class:`Causal` figures of the receding strategy (module notes) in ``case``: from rest at the target in
+    the mean wind's equilibrium at ``after`` [s] (the move's end), planning every ``replan`` [s] on ``grid``."""
+    c = wind.COMPONENT.check(case.wind)
+    p = dataclasses.replace(PlantParameters(), **case.plant)
+    a, b, e = floor.crane_model(p)
+    exact = scipy.linalg.expm(np.block([[a, b[:, None], e], [np.zeros((3, 9))]]) * grid)
+    ad, bd, ed = exact[:6, :6], exact[:6, 6], exact[:6, 7:]
+    true = still_drag(case.wind, case.stop_time, grid=grid)
+    turbulence = still_speed(case.wind, case.stop_time) - c.mean  # each 1 ms sample's
+    equilibrium = wind_deflection(case.plant, case.wind)
+    offset = p.l1 * math.sin(equilibrium[0]) + p.l2 * math.sin(equilibrium[1])
+    state = np.array([case.x_d - offset, 0.0, equilibrium[0], 0.0, equilibrium[1], 0.0])
+    k, count, residual, error, arrived = int(round(after / grid)), len(true), 0.0, 0.0, True
+    while k < count:
+        now = turbulence[int(round(k * grid / STEP))]
+        ahead = (np.arange(count - k) + 0.5) * grid
+        forecast = c.mean + now * np.exp(-ahead / c.time_constant)  # the turbulence's conditional mean
+        drag = np.stack([wind.drag(c.drag1, forecast, 0.0), wind.drag(c.drag2, forecast, 0.0)], axis=1)
+        u = plan(case, grid=grid, start=(k * grid, state), forces=drag, soft=True).u
+        for u_k in u[:int(round(replan / grid))]:
+            state = ad @ state + bd * u_k + ed @ true[k]
+            k += 1
+            t = k * grid + 1e-9
+            swing = max(abs(state[2] - equilibrium[0]), abs(state[4] - equilibrium[1]))
+            load = abs(state[0] + p.l1 * state[2] + p.l2 * state[4] - case.x_d)
+            if t >= case.residual_from:
+                residual, error = max(residual, swing), max(error, load)
+            if t >= case.arrival_from and (swing > ARRIVAL_DEG * DEGREE or load > planar_scenarios.LOAD_BAND_M):
+                arrived = False
+    return Causal(math.degrees(residual), error, arrived)
+
+
+def main(n=planar_scenarios.CASES, causal=False, out=print):
+    """Print each case's floor with the arrival on the load and on the trolley, and the worst of each; ``causal``:
+    the receding strategy's figures against S10's targets instead."""
+    if causal:
+        met = []
+        for number, case in enumerate(cases(n), 1):
+            r = receding(case)
+            met.append((r.residual_deg <= planar_scenarios.WIND_CUT_DEG, r.load_error_m <= planar_scenarios.LOAD_BAND_M,
+                        r.arrived))
+            out(f"#{number:02d} receding: residual {r.residual_deg:.3f} deg, load {r.load_error_m * 1e3:.1f} mm, "
+                f"arrival {'met' if r.arrived else 'missed'}")
+        out(f"receding, of {n} cases: residual met in {sum(m[0] for m in met)}, load in {sum(m[1] for m in met)}, "
+            f"arrival in {sum(m[2] for m in met)}, all three in {sum(all(m) for m in met)}")
+        return
+    load, trolley = [], []
+    for number, case in enumerate(cases(n), 1):
+        load.append(least_residual(case, "load"))
+        trolley.append(least_residual(case, "trolley"))
+        out(f"#{number:02d} least residual about the equilibrium: arrival on the load "
+            f"{_deg(load[-1])}, on the trolley {_deg(trolley[-1])}")
+    for name, floors in (("the load", load), ("the trolley", trolley)):
+        met = [f for f in floors if f is not None]
+        out(f"arrival on {name}: feasible in {len(met)} of {n} cases, the largest least residual "
+            f"{max(met):.3f} deg, above {planar_scenarios.WIND_CUT_DEG:.2f} deg in "
+            f"{sum(f > planar_scenarios.WIND_CUT_DEG for f in met)}")
+
+
+def _deg(value):
+    return "infeasible" if value is None else f"{value:.3f} deg"
+
+
+if __name__ == "__main__":
+    main(causal="--causal" in sys.argv[1:])
