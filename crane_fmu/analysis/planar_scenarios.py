@@ -111,7 +111,7 @@ _HEAVIEST = {"m1": FACTORS[2].high, "m2": FACTORS[3].high}  # the design's corne
 _LIGHTEST = {"m1": FACTORS[2].low, "m2": FACTORS[3].low}  # ... and the one with the largest
 _LONGEST = (FACTORS[0].high, FACTORS[1].high)  # l1, l2 [m]
 WIND_CUT_DEG = math.floor(math.degrees(min(wind_deflection(_HEAVIEST))) * 100) / 100  # 0.35 deg: cut, not met
-LOAD_BAND_M = round(0.005 + sum(length * math.sin(angle)  # 5 + 56.1 mm
+LOAD_BAND_M = round(0.005 + sum(length * math.sin(angle)  # 5 + 56.2 mm
                                 for length, angle in zip(_LONGEST, wind_deflection(_LIGHTEST, DESIGN_GUST))), 4)
 _WIND_FACT = (f"on the Section V crane about {math.degrees(WIND_EQUILIBRIUM[0]):.2f} and "
               f"{math.degrees(WIND_EQUILIBRIUM[1]):.2f} deg, the drag over the weights, each case's computed from its "

@@ -47,7 +47,7 @@ EQUILIBRIUM = wind_deflection()  # (theta1, theta2) [rad]: the mean wind's stati
 WIND_CUT_DEG = math.floor(math.degrees(min(EQUILIBRIUM)) * 100) / 100
 L1, L2 = (components.get(PLANT).defaults()[name] for name in ("l1", "l2"))
 GUST = wind_deflection(None, DESIGN_GUST)  # ... in S10's design gust: the load's band's
-LOAD_BAND_M = round(0.005 + L1 * math.sin(GUST[0]) + L2 * math.sin(GUST[1]), 4)  # 5 + 27.5 mm
+LOAD_BAND_M = round(0.005 + L1 * math.sin(GUST[0]) + L2 * math.sin(GUST[1]), 4)  # 5 + 27.6 mm
 # S11's reference for a tracking controller: per axis the least-time move of the linear crane (the floor's kind), the
 # least-effort one 6 % longer (x: 2.90 s for 2.70 s), whose smaller swing (18 deg, not 23) the LQR follows on the
 # nonlinear crane closely enough to arrive before the shortest plan ends (2.82 s; the shortest itself: 4.5 s, its
