@@ -53,7 +53,7 @@ SOFT = 10.0  # deg per band: with soft bands, the cost of exceeding a band by it
 # band, with every angle within 0.5 deg of the equilibrium from the arrival target's time on
 ARRIVALS = ("load", "trolley", None)
 
-Plan = namedtuple("Plan", "residual_deg u excess", defaults=(0.0,))
+Plan = namedtuple("Plan", "residual_deg u excess")
 Plan.__doc__ = ("The least residual swing [deg], the trolley's acceleration [m/s2] over each grid interval that "
                 "leaves it, and with soft bands by how much of their width it exceeds them.")
 Causal = namedtuple("Causal", "residual_deg load_error_m arrived")
