@@ -2,7 +2,9 @@
 by the Python plant, S10's targets recomputed here from the drag formula, and its own figures read from the columns of
 a crane held in the wind (:func:`crane_fmu.analysis.scenarios.measured`, the board's path)."""
 
+import hashlib
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -143,11 +145,9 @@ def test_s10s_arrival_is_the_loads():
 def test_a_change_to_s10s_own_measures_makes_its_cases_new(fmu_dir, monkeypatch):
     """S10's figures are its own measures' (planar_scenarios.py), not only metrics.py's: a case's id covers the
     version of the file that defines them, so a journal measured by other measures is never resumed into a board."""
-    from pathlib import Path
-
     from crane_fmu import compare
 
-    digest = __import__("hashlib").sha256(Path(planar_scenarios.__file__).read_bytes()).hexdigest()[:16]
+    digest = hashlib.sha256(Path(planar_scenarios.__file__).read_bytes()).hexdigest()[:16]
     assert scenarios.measures_version("S10") == digest and scenarios.measures_version("S2") is None
     lqr = compare.contenders(("LqrController",), fmu_dir, only=True)
 

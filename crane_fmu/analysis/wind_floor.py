@@ -87,13 +87,24 @@ def still_speed(values, stop_time, step=STEP):
     return speed
 
 
-def still_drag(values, stop_time, step=STEP, grid=GRID):
+def still_drag(values, stop_time, step=STEP, grid=GRID, speed=None):
     """``(F1, F2)`` per grid interval [N]: the Wind component's drag on a hook and a load at rest, sampled as the
-    board samples it (every ``step``) and averaged over each ``grid`` interval."""
-    c = wind.COMPONENT.check(values)
-    speed = still_speed(values, stop_time, step)
-    forces = np.stack([wind.drag(c.drag1, speed, 0.0), wind.drag(c.drag2, speed, 0.0)], axis=1)
-    return forces.reshape(int(round(stop_time / grid)), -1, 2).mean(axis=1)
+    board samples it (every ``step``; ``speed``: those samples, if already drawn) and averaged over each ``grid``
+    interval."""
+    speed = still_speed(values, stop_time, step) if speed is None else speed
+    return _drag(wind.COMPONENT.check(values), speed).reshape(int(round(stop_time / grid)), -1, 2).mean(axis=1)
+
+
+def _drag(c, speed):
+    """``(F1, F2)`` [N] on a hook and a load at rest in the wind ``speed`` (an array of them: one row each)."""
+    return np.stack([wind.drag(c.drag1, speed, 0.0), wind.drag(c.drag2, speed, 0.0)], axis=1)
+
+
+def _held(p, grid):
+    """``(Ad, Bd, Ed)``: the linearised crane's exact step over ``grid`` with ``u`` and the forces held."""
+    a, b, e = floor.crane_model(p)
+    exact = scipy.linalg.expm(np.block([[a, b[:, None], e], [np.zeros((3, 9))]]) * grid)
+    return exact[:6, :6], exact[:6, 6], exact[:6, 7:]
 
 
 def least_residual(case, arrival="load", load_band=None, **limits):
@@ -118,13 +129,9 @@ def plan(case, arrival="load", load_band=None, u_max=2.0, v_max=1.0, grid=GRID, 
         raise ValueError(f"arrival must be one of {ARRIVALS}, got {arrival!r}")
     band = planar_scenarios.LOAD_BAND_M if load_band is None else load_band
     p = dataclasses.replace(PlantParameters(), **case.plant)
-    a, b, e = floor.crane_model(p)
     t0, state0 = start if start is not None else (0.0, np.zeros(6))
     n, count = 6, int(round((case.stop_time - t0) / grid))
-    aug = np.zeros((n + 3, n + 3))
-    aug[:n, :n], aug[:n, n], aug[:n, n + 1:] = a, b, e
-    exact = scipy.linalg.expm(aug * grid)
-    ad, bd, ed = exact[:n, :n], exact[:n, n], exact[:n, n + 1:]
+    ad, bd, ed = _held(p, grid)
     if forces is None:
         forces = still_drag(case.wind, case.stop_time, grid=grid)[-count:]
     # variables: the states s_0..s_N (n each), the inputs u_0..u_(N-1), z [deg], the bands' excess (soft)
@@ -184,11 +191,9 @@ def receding(case, replan=0.25, grid=0.05, after=3.6):
     the mean wind's equilibrium at ``after`` [s] (the move's end), planning every ``replan`` [s] on ``grid``."""
     c = wind.COMPONENT.check(case.wind)
     p = dataclasses.replace(PlantParameters(), **case.plant)
-    a, b, e = floor.crane_model(p)
-    exact = scipy.linalg.expm(np.block([[a, b[:, None], e], [np.zeros((3, 9))]]) * grid)
-    ad, bd, ed = exact[:6, :6], exact[:6, 6], exact[:6, 7:]
-    true = still_drag(case.wind, case.stop_time, grid=grid)
-    turbulence = still_speed(case.wind, case.stop_time) - c.mean  # each 1 ms sample's
+    ad, bd, ed = _held(p, grid)
+    speed = still_speed(case.wind, case.stop_time)  # each 1 ms sample's
+    true, turbulence = still_drag(case.wind, case.stop_time, grid=grid, speed=speed), speed - c.mean
     equilibrium = wind_deflection(case.plant, case.wind)
     offset = p.l1 * math.sin(equilibrium[0]) + p.l2 * math.sin(equilibrium[1])
     state = np.array([case.x_d - offset, 0.0, equilibrium[0], 0.0, equilibrium[1], 0.0])
@@ -197,8 +202,7 @@ def receding(case, replan=0.25, grid=0.05, after=3.6):
         now = turbulence[int(round(k * grid / STEP))]
         ahead = (np.arange(count - k) + 0.5) * grid
         forecast = c.mean + now * np.exp(-ahead / c.time_constant)  # the turbulence's conditional mean
-        drag = np.stack([wind.drag(c.drag1, forecast, 0.0), wind.drag(c.drag2, forecast, 0.0)], axis=1)
-        u = plan(case, grid=grid, start=(k * grid, state), forces=drag, soft=True).u
+        u = plan(case, grid=grid, start=(k * grid, state), forces=_drag(c, forecast), soft=True).u
         for u_k in u[:int(round(replan / grid))]:
             state = ad @ state + bd * u_k + ed @ true[k]
             k += 1
@@ -209,7 +213,7 @@ def receding(case, replan=0.25, grid=0.05, after=3.6):
                 residual, error = max(residual, swing), max(error, load)
             if t >= case.arrival_from and (swing > ARRIVAL_DEG * DEGREE or load > planar_scenarios.LOAD_BAND_M):
                 arrived = False
-    return Causal(math.degrees(residual), error, arrived)
+    return Causal(math.degrees(residual), float(error), arrived)
 
 
 def main(n=planar_scenarios.CASES, causal=False, out=print):
