@@ -1,6 +1,7 @@
-"""S10 measured about the mean wind's equilibrium (issue 51 item 1): the planar crane's static deflection by hand and
-by the Python plant, S10's targets recomputed here from the drag formula, and its own figures read from the columns of
-a crane held in the wind (:func:`crane_fmu.analysis.scenarios.measured`, the board's path)."""
+"""S10 measured about the wind's equilibrium (issue 51 item 1): the planar crane's static deflection by hand and by the
+Python plant, the load's lean on known answers, S10's targets recomputed here from the drag formula, and its own
+figures read from the columns of a crane held in the wind (:func:`crane_fmu.analysis.scenarios.measured`, the board's
+path)."""
 
 import hashlib
 import math
@@ -14,7 +15,7 @@ from crane_fmu import components
 # board_tables first: through scenarios it registers S1-S10, then S11-S14 (the board's order; planar_scenarios first
 # would register S11-S14 first)
 from crane_fmu.analysis import board_tables, planar_scenarios, ranking, scenarios
-from crane_fmu.analysis.wind_equilibrium import mean_drag, static_deflection, wind_deflection
+from crane_fmu.analysis.wind_equilibrium import lean, mean_drag, static_deflection, wind_deflection
 
 G, RHO, CD, A1, A2, U = 9.8, 1.225, 1.05, 0.005, 0.01, 10.0  # the Section V g, the Wind component's defaults
 
@@ -83,6 +84,28 @@ def test_the_planar_plant_settles_at_the_static_deflection(m1, m2):
     assert figures["residual_eq_deg"] < 1e-6  # vertical: 0.5 deg and more
     offset = 1.0 * math.sin(theta1) + 0.5 * math.sin(theta2)  # Section V's l1, l2
     assert figures["load_error_m"] == pytest.approx(offset, abs=1e-9)
+
+
+@pytest.mark.quick
+def test_the_lean_keeps_what_is_slower_than_a_period_and_takes_a_swing_at_it():
+    """Known answers, 1 ms steps, a period of 2.37 s (2370 steps, made odd: 2371): a swing of 0.3 deg at that period
+    about a lean drifting from 0.5 deg by 0.1 deg/s leaves the lean (to the window's one sample more than the
+    period: at most the swing over the window's samples, 1.3e-4 deg) and the swing about it; half a period at each
+    end the lean is unknown."""
+    t = np.arange(12000) * 1e-3
+    held = 0.5 + 0.1 * t
+    angle = held + 0.3 * np.sin(2 * np.pi * t / 2.37)
+    found = lean(angle, 2370)
+    known = ~np.isnan(found)
+    assert known.sum() == 12000 - 2 * 1185 and known[1185] and not known[1184] and not known[-1185]
+    assert np.abs(found - held)[known].max() <= 0.3 / 2371 + 1e-12
+    assert np.abs(angle - found)[known].max() == pytest.approx(0.3, abs=0.3 / 2371)
+    assert np.isnan(lean(angle[:2000], 2370)).all()  # a run shorter than the window: nowhere known
+
+
+def test_a_lean_over_fewer_than_two_steps_is_refused_in_one_line():
+    with pytest.raises(ValueError, match=r"the lean's window must span at least 2 steps, got samples=1"):
+        lean(np.zeros(10), 1)
 
 
 @pytest.mark.quick

@@ -1,6 +1,7 @@
 """What physics allows in S10's turbulent wind (issue 51 item 1): the least residual swing of a controller that knows
-the wind in advance, on known answers, checked against an independent simulation of its plan, and S10's targets
-within it in every case of the board's design."""
+the wind in advance, on known answers, checked against an independent simulation of its plan; about the mean wind's
+equilibrium (why S10's arrival is the load's) and about the load's lean (S10's measure): its targets within physics
+in every case of the board's design."""
 
 import dataclasses
 import math
@@ -71,12 +72,36 @@ def test_the_plan_simulated_independently_keeps_its_bounds():
 
 
 @pytest.mark.parametrize("chunk", range(4))
-def test_s10s_targets_are_within_physics_in_every_case(chunk):
-    """No empty target: in each of the board's 64 cases a controller that knows the wind in advance meets S10's
-    arrival and load targets and leaves less than the residual target."""
+def test_about_the_mean_equilibrium_the_targets_are_within_physics_in_every_case(chunk):
+    """In each of the board's 64 cases a controller that knows the wind in advance meets S10's arrival and load
+    targets and leaves less than the residual target about the mean wind's equilibrium (S10's measure before the
+    lean: within physics, but not for a controller that does not know the wind, :func:`wind_floor.receding`)."""
     for number in range(16 * chunk, 16 * chunk + 16):
         least = wind_floor.least_residual(CASES[number])
         assert least is not None and least < planar_scenarios.WIND_CUT_DEG, f"#{number + 1:02d}: {least}"
+
+
+@pytest.mark.parametrize("chunk", range(4))
+def test_s10s_targets_as_measured_are_within_physics_in_every_case(chunk):
+    """No empty target: in each of the board's 64 cases the plan of least swing about the load's lean, run on the
+    board's 1 ms step under the 1 ms drag, meets all three of S10's targets as the board measures them."""
+    for number in range(16 * chunk, 16 * chunk + 16):
+        left = wind_floor.lean_witness(CASES[number])
+        assert left is not None, f"#{number + 1:02d}: infeasible"
+        assert left.residual_deg <= planar_scenarios.WIND_CUT_DEG, f"#{number + 1:02d}: {left}"
+        assert left.load_error_m <= planar_scenarios.LOAD_BAND_M and left.arrived, f"#{number + 1:02d}: {left}"
+
+
+def test_in_a_steady_wind_nothing_is_left_about_the_lean():
+    """Known answer: at rest at the equilibrium the lean is the equilibrium; the program finds a plan that leaves no
+    swing about it (to the interior point method's tolerance), with the lean measured on S10's run."""
+    found = wind_floor.plan(_steady(stop_time=planar_scenarios.WIND_RUN_S), grid=0.02, about="lean")
+    assert found.residual_deg == pytest.approx(0.0, abs=1e-5)
+
+
+def test_a_bad_reference_is_refused_in_one_line():
+    with pytest.raises(ValueError, match=r"about must be 'equilibrium' or 'lean', got 'vertical'"):
+        wind_floor.plan(_steady(), about="vertical")
 
 
 @pytest.mark.parametrize("number", [1, 21, 32, 43, 48, 54, 61])

@@ -5,13 +5,20 @@ the load's weight and ``F2``, the upper one both masses' weights and ``F1 + F2``
 
     tan theta2 = F2 / (m2 g),   tan theta1 = (F1 + F2) / ((m1 + m2) g).
 
-The mean drag is the Wind component's at rest, ``0.5 rho Cd A U |U|`` (:func:`crane_fmu.model.wind.drag`). A
-swing measured about this equilibrium is what a controller can take away; the deflection itself no trolley
-motion removes (S10, S14).
+The mean drag is the Wind component's at rest, ``0.5 rho Cd A U |U|`` (:func:`crane_fmu.model.wind.drag`). The
+deflection itself no trolley motion removes while the load is at rest (S14 measures the swing about it).
+
+In turbulence the load also leans with the wind's slow part, for seconds, and a controller that does not know the
+coming gusts cannot take that lean away without leaving the load's band (:mod:`.wind_floor`). S10 therefore measures
+the swing about the :func:`lean`: the angle averaged over one period of the slow swing mode, centred on each instant.
+A swing at that period averages to its centre, a lean held or drifting over longer stays in the average: what is
+left is the swing a controller can take away; the lean shows in the load's distance from the target.
 """
 
 import dataclasses
 import math
+
+import numpy as np
 
 from crane_fmu.model import wind
 from crane_fmu.model.parameters import PlantParameters
@@ -40,3 +47,18 @@ def wind_deflection(plant=None, values=None):
     wind (``values``)."""
     p = dataclasses.replace(PlantParameters(), **{k: v for k, v in (plant or {}).items() if k in ("m1", "m2", "g")})
     return static_deflection(p.m1, p.m2, p.g, *mean_drag(values))
+
+
+def lean(angle, samples):
+    """The :func:`lean` (module notes) of ``angle`` (one value per step): its mean over ``samples`` steps (one period
+    of the slow swing mode, made odd) centred on each step; NaN where that window does not fit in the run (half a
+    period at each end)."""
+    half = int(samples) // 2
+    if half < 1:
+        raise ValueError(f"the lean's window must span at least 2 steps, got samples={samples}")
+    angle = np.asarray(angle, dtype=float)
+    out = np.full(angle.shape, np.nan)
+    if angle.size > 2 * half:
+        total = np.concatenate([[0.0], np.cumsum(angle)])
+        out[half:angle.size - half] = (total[2 * half + 1:] - total[:-2 * half - 1]) / (2 * half + 1)
+    return out
