@@ -162,20 +162,26 @@ def test_the_offset_free_target_is_the_plain_law_about_the_forces_rest():
 
 
 def test_the_board_gives_an_offset_free_lqr_the_estimator_of_the_forces(native, monkeypatch):
-    """With OFFSET_FREE on, S10's case gives the LQR a StateEstimator with the forces, measuring the plant: its
-    F2_hat and F1_hat follow the wind's mean drag on load and hook; a controller without those inputs gets none;
-    off (the board), the system is the one of before."""
+    """On the board (OFFSET_FREE on for S10) S10's case gives the LQR a StateEstimator with the forces at S10's slow
+    random walk (SIGMA_FORCE), measuring the plant: its F2_hat and F1_hat follow the wind's mean drag on load and
+    hook; a controller without those inputs gets none; off, the system is the one of before."""
     from crane_fmu.analysis import planar_scenarios
     from crane_fmu.compare import contenders
     from crane_fmu.cosim import ArrayRecorder, run
 
     chosen = {c.name: c for c in contenders(["LqrController", "EnergyController"], native[2], only=True)}
     lqr_c, energy = chosen["LqrController"], chosen["EnergyController"]
-    assert "force" not in planar_scenarios._runs("S10")(lqr_c, cases=1)[0].system.instances
-    monkeypatch.setitem(planar_scenarios.OFFSET_FREE, "S10", 1.0)
     system = planar_scenarios._runs("S10")(lqr_c, cases=1)[0].system
     assert system.instances["force"] == "StateEstimator" and system.parameters["controller"]["offset_free"] == 1.0
+    assert system.parameters["force"]["sigma_force"] == planar_scenarios.SIGMA_FORCE["S10"] == 5.0
     assert "force" not in planar_scenarios._runs("S10")(energy, cases=1)[0].system.instances
+    monkeypatch.setitem(planar_scenarios.OFFSET_FREE, "S10", 0.0)
+    assert "force" not in planar_scenarios._runs("S10")(lqr_c, cases=1)[0].system.instances
+    monkeypatch.setitem(planar_scenarios.OFFSET_FREE, "S10", 1.0)
+    # the estimates at the default random walk (FORCE_ESTIMATOR's 50 N/s), settled 6 s into the run
+    monkeypatch.setitem(planar_scenarios.SIGMA_FORCE, "S10", 50.0)
+    system = planar_scenarios._runs("S10")(lqr_c, cases=1)[0].system
+    assert "force" in system.instances
     columns = run(system, native[2], recorder=ArrayRecorder(), stop_time=8.0).columns()
     late = columns["time"] >= 6.0  # the trolley at rest at the target, the wind blowing
     estimates = [float(np.mean(columns[name][late])) for name in ("force.F2_hat", "force.F1_hat")]

@@ -528,7 +528,8 @@ def test_told_its_state_is_an_estimators_the_mpc_turns_cautious_in_time_for_the_
 @pytest.mark.parametrize("case", ["#24", "#54"])
 def test_in_the_wind_the_mpc_whose_plans_for_a_deviation_run_out_leaves_no_more_swing_than_the_lqr(native, tmp_path,
                                                                                                   case):
-    """S10's cases #24 and #54 (turbulent wind, plants unknown to the controller): the wind makes the MPC plan again
+    """S10's cases #24 and #54 (turbulent wind, plants unknown to the controller; found on the board before S10 ran
+    the controllers offset-free, and since held there as the board runs them): the wind makes the MPC plan again
     for a deviation until its plans run out (mpc.MOST_REPLANS), mid-move at 1.95 s and 1.1 s. Handed over to its
     LQR there, at speed, the MPC left 1.341 and 0.657 deg of residual swing against the LQR's 1.288 and 0.584 deg
     (0.074 and 0.053 deg more: beyond the envelope's 0.05 deg). Tracking the held plan to its end first, it is
