@@ -22,7 +22,8 @@ A controller that does not know the gust in advance does worse. :func:`receding`
 the reaction on, every interval it takes the gust's mean force over the interval just past (what the prediction's
 error over it shows), assumes it constant until the gust's end (given) and solves the same program from the nonlinear
 plant's state, applying the plan until the next solve under the true gust. One causal strategy, not the best one:
-what it keeps, a causal controller can keep.
+what it keeps, a causal controller can keep. And the MPC itself told the gust's present force (:func:`mpc_run`'s
+``told``: its offset-free mode fed by an estimator with no lag), for comparison.
 """
 
 import dataclasses
@@ -119,21 +120,23 @@ def _plant(p=None):
     return plant.configure(values)
 
 
-def mpc_run(stop, gust=None, x_d=planar_scenarios.DISTANCE):
+def mpc_run(stop, gust=None, x_d=planar_scenarios.DISTANCE, told=0.0):
     """The MPC (Python, configured as on the board) on the nominal plant with S4's gust (``gust``: the Gust's
     parameters; default S4's) for ``stop`` seconds, as the board's master calls them: ``(times, plant states)``
-    (every state's first six entries: x, dx, theta1, dtheta1, theta2, dtheta2)."""
+    (every state's first six entries: x, dx, theta1, dtheta1, theta2, dtheta2). ``told``: the MPC's ``offset_free``
+    (1 or 2) with the gust's present force as its ``F2_hat``, ``F1_hat`` (an estimator with no lag); 0: none."""
     pc, gc = _plant(), disturbances.GUST.check({**disturbances.GUST.defaults(),
                                                 **(planar_scenarios.GUST if gust is None else gust)})
-    cc = mpc.configure({**mpc.COMPONENT.defaults(), "h": STEP, "x_d": x_d})
+    cc = mpc.configure({**mpc.COMPONENT.defaults(), "h": STEP, "x_d": x_d, "offset_free": told})
     ps, cs = pc.state0, mpc.initial_state(cc)
     times, states = [], []
     for k in range(round(stop / STEP) + 1):
         times.append(k * STEP), states.append(ps)
         out = plant.COMPONENT.output(pc, ps, (0.0,) * 4)
-        inputs = tuple(out[:6]) + (out[11], 0.0, 0.0)
+        forces = disturbances.gust(gc, k * STEP)
+        inputs = tuple(out[:6]) + (out[11], *(forces[::-1] if told else (0.0, 0.0)))
         u = mpc.COMPONENT.output(cc, cs, inputs)[0]
-        ps = plant.update(pc, ps, (u, 0.0, *disturbances.gust(gc, k * STEP)), k * STEP, STEP)
+        ps = plant.update(pc, ps, (u, 0.0, *forces), k * STEP, STEP)
         cs = mpc.update(cc, cs, inputs, k * STEP, STEP)
         cs = getattr(cs, "state", cs)
     return np.array(times), np.array([s[:6] for s in states])
@@ -195,6 +198,10 @@ def main(reactions=REACTIONS, out=print):
     for t0 in reactions[:2]:
         out(f"reacting at {t0:.2f} s, the force seen over the last interval assumed to last to the gust's end "
             f"(receding, every 50 ms): peak {receding(t0):.2f} deg on the nonlinear plant")
+    for mode in (1.0, 2.0):
+        states = mpc_run(STOP, told=mode)[1]
+        out(f"the MPC told the gust's present force (offset_free {mode:g}): peak "
+            f"{math.degrees(max(np.max(np.abs(states[:, 2])), np.max(np.abs(states[:, 4])))):.2f} deg")
 
 
 if __name__ == "__main__":
