@@ -221,7 +221,7 @@ WIND_ACROSS = tuple(Connection("plant", ours, "wind", theirs) for ours, theirs i
 # trolley 14.5 mm upwind of it and never arrive. 0: no estimators, the board as before. The filter is S10's with a
 # faster force state: no sensor noise here, so a faster estimate costs nothing in noise, and it lets the cables'
 # target follow the turbulence's drag instead of the trolley chasing its lean; LqrController3D's load error with
-# sigma_force 10, 50 (S10's), 200, 500 N/s: 26.9, 20.2, 17.9, 17.5 mm (docs/guide/controllers.md).
+# sigma_force 10, 50 (FORCE_ESTIMATOR's), 200, 500 N/s: 26.9, 20.2, 17.9, 17.5 mm (docs/guide/controllers.md).
 OFFSET_FREE = 2.0
 FORCE_ESTIMATOR_3D = {**FORCE_ESTIMATOR, "sigma_force": 200.0}
 FORCE_ESTIMATORS = {"x": "force_x", "y": "force_y"}
