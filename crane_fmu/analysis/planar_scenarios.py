@@ -15,6 +15,7 @@ Seering's zero-vibration shapers) achieve. None is set from a controller's resul
 import functools
 import hashlib
 import inspect
+import itertools
 import json
 import math
 from collections import namedtuple
@@ -94,12 +95,13 @@ def move_time(distance, u_max, v_max):
 
 
 T_SLOW, T_FAST = mode_periods()  # 2.37 s and 0.66 s for the Section V crane
+# (slow, fast) periods at the corners of the paired design: they grow towards a corner
+_CORNER_PERIODS = [mode_periods(**dict(zip((f.name for f in FACTORS), corner)))
+                   for corner in itertools.product(*((f.low, f.high) for f in FACTORS))]
 MOVE_S = move_time(DISTANCE, DRIVE["u_max"], DRIVE["v_max"])  # 2.5 s
 # The limits derived from them, rounded to 0.1 s:
 ZV_MOVE_S = round(MOVE_S + (T_SLOW + T_FAST) / 2, 1)  # a ZV shaper on each mode: half its period later (4.0 s)
-ZVD_SLOWEST_S = round(MOVE_S + max(sum(mode_periods(m1, m2, l1, l2))  # the periods grow towards a corner
-                                    for m1 in (2.4, 3.6) for m2 in (3.5, 10.5) for l1 in (0.9, 1.1)
-                                    for l2 in (0.4, 0.6)), 1)
+ZVD_SLOWEST_S = round(MOVE_S + max(map(sum, _CORNER_PERIODS)), 1)
 HOIST_THEN_MOVE_S = round(move_time(HOIST["from"] - HOIST["to"], HOIST["u_max"], HOIST["v_max"]) + MOVE_S
                           + sum(mode_periods(l1=HOIST["to"])) / 2, 1)  # 3 s + 4.0 s
 GUST_S = round(ZV_MOVE_S + T_SLOW, 1)  # one slow period more: 6.4 s
@@ -121,8 +123,7 @@ _WIND_FACT = (f"on the Section V crane about {math.degrees(WIND_EQUILIBRIUM[0]):
 _KNOWING = "even one that knows the wind in advance (crane_fmu/analysis/wind_floor.py)"
 # S10's run: 10 s and the half of the slow period the lean (wind_equilibrium.lean) needs after the last instant it
 # measures, on the design's slowest plant (2.56 s), rounded up: 11.3 s
-WIND_RUN_S = 10.0 + math.ceil(max(mode_periods(m1, m2, l1, l2)[0] for m1 in (2.4, 3.6) for m2 in (3.5, 10.5)
-                                   for l1 in (0.9, 1.1) for l2 in (0.4, 0.6)) / 2 * 10) / 10
+WIND_RUN_S = 10.0 + math.ceil(max(slow for slow, _ in _CORNER_PERIODS) / 2 * 10) / 10
 
 _Spec = namedtuple("_Spec", "id title rank_by targets")  # what a scenario asks; registered with its runs below
 
