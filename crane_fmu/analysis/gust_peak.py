@@ -31,12 +31,11 @@ import math
 from collections import namedtuple
 
 import numpy as np
-import scipy.optimize
 import scipy.sparse as sp
 
 from crane_fmu.analysis import planar_scenarios
 from crane_fmu.analysis.scenarios import STOPPED_DEG
-from crane_fmu.analysis.wind_floor import ARRIVAL_DEG, TROLLEY_BAND, _held
+from crane_fmu.analysis.wind_floor import ARRIVAL_DEG, TROLLEY_BAND, _held, solve
 from crane_fmu.model import disturbances, mpc, plant
 from crane_fmu.model.parameters import PlantParameters
 
@@ -104,13 +103,8 @@ def least_peak(state, t0, forces=None, p=None, u_max=2.0, v_max=1.0, x_d=planar_
     cost = np.zeros(z + 1)
     cost[z] = 1.0
     bounds = [(None, None)] * states + [(-u_max, u_max)] * count + [(0.0, None)]
-    result = scipy.optimize.linprog(cost, A_ub=a_ub, b_ub=np.array(upper), A_eq=a_eq, b_eq=b_eq, bounds=bounds,
-                                    method="highs-ipm")
-    if result.status == 2:  # infeasible
-        return None
-    if result.status != 0:
-        raise RuntimeError(f"the gust's peak linear program failed: {result.message}")
-    return Peak(float(result.x[z]), result.x[states:z])
+    x = solve(cost, a_ub, upper, a_eq, b_eq, bounds, "the gust's peak")
+    return None if x is None else Peak(float(x[z]), x[states:z])
 
 
 def _plant(p=None):

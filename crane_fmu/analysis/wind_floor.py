@@ -192,13 +192,20 @@ def plan(case, arrival="load", load_band=None, u_max=2.0, v_max=1.0, grid=GRID, 
     cost = np.zeros(z + 2)
     cost[z], cost[excess] = 1.0, SOFT
     bounds = [(None, None)] * states + [(-u_max, u_max)] * count + [(0.0, None), (0.0, None if soft else 0.0)]
+    x = solve(cost, a_ub, upper, a_eq, b_eq, bounds, "the wind floor's")
+    return None if x is None else Plan(float(x[z]), x[states:z], float(x[excess]))
+
+
+def solve(cost, a_ub, upper, a_eq, b_eq, bounds, name):
+    """The solution of the linear program (scipy HiGHS' interior point method: its dual simplex met numerical
+    trouble in some cases), None where its constraints cannot all hold; a failure raises, naming the program."""
     result = scipy.optimize.linprog(cost, A_ub=a_ub, b_ub=np.array(upper), A_eq=a_eq, b_eq=b_eq, bounds=bounds,
                                     method="highs-ipm")
     if result.status == 2:  # infeasible
         return None
     if result.status != 0:
-        raise RuntimeError(f"the wind floor's linear program failed: {result.message}")
-    return Plan(float(result.x[z]), result.x[states:z], float(result.x[excess]))
+        raise RuntimeError(f"{name} linear program failed: {result.message}")
+    return result.x
 
 
 def lean_witness(case, grid=0.02):
