@@ -16,6 +16,7 @@ import numpy as np
 
 from crane_fmu import components
 
+from .glyph_text import GlyphText
 from .metrics import find_crane
 from .plots import pyplot
 from .ranking import board_statistics, not_applicable, summarise
@@ -384,6 +385,7 @@ def _side_frames(column, crane, t, frames, title, progress):
     clock = ax.text(0.02, 0.95, "", transform=ax.transAxes, va="top", fontsize=9, animated=True)
     fig.canvas.draw()
     background = fig.canvas.copy_from_bbox(fig.bbox)
+    clock = GlyphText(clock, fig.canvas.get_renderer())  # drawn onto each frame's copy from glyphs rendered once
     images = []
     for n, i in enumerate(frames):
         trolley.set_x(x[i] - 0.15)
@@ -392,11 +394,11 @@ def _side_frames(column, crane, t, frames, title, progress):
         payload.set_data([x2[i]], [y2[i]])
         first = np.searchsorted(t, t[i] - 2.0)  # the payload's path over the last 2 s
         trail.set_data(x2[first:i + 1], y2[first:i + 1])
-        clock.set_text(f"t = {t[i]:5.2f} s   hook {math.degrees(math.atan2(x1[i] - x[i], -y1[i])):+5.1f} deg")
         fig.canvas.restore_region(background)
-        for artist in (trail, cables, trolley, hook, payload, clock):
+        for artist in (trail, cables, trolley, hook, payload):
             ax.draw_artist(artist)
         images.append(np.asarray(fig.canvas.buffer_rgba()).copy())  # RGBA: a plain copy (the alpha goes when written)
+        clock.draw(images[-1], f"t = {t[i]:5.2f} s   hook {math.degrees(math.atan2(x1[i] - x[i], -y1[i])):+5.1f} deg")
         show_progress(n, len(frames), progress)
     plt.close(fig)
     return images
