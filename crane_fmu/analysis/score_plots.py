@@ -70,8 +70,14 @@ def plot_runs(rows, scenario, path, users=()):
     signals = tuple((a.position, f"trolley {a.position} [m]", 1.0) for a in crane.axes) + tuple(
         (name, f"{name} [deg]", 180 / math.pi) for name in swing) + tuple(
         (name, f"demanded {name} [m/s2]", 1.0) for name in crane.demands)
+    width, height = 2.6 * len(runs) + 1.2, 7.5
     fig, axes = plt.subplots(len(signals), len(runs), sharex=True, sharey="row", squeeze=False,
-                             figsize=(2.6 * len(runs) + 1.2, 7.5), layout="constrained")
+                             figsize=(width, height))
+    # a fixed layout, in inches (constrained layout took half of the picture's time to find about the same):
+    # the labels' room left, below and above, the gaps between the panels
+    fig.subplots_adjust(left=0.6 / width, right=1 - 0.05 / width, bottom=0.4 / height, top=1 - 0.46 / height,
+                        wspace=0.13 / ((width - 0.65 - 0.13 * (len(runs) - 1)) / len(runs)),
+                        hspace=0.15 / ((height - 0.86 - 0.15 * (len(signals) - 1)) / len(signals)))
     for j, r in enumerate(runs):
         c, _, marker = style(r["controller"], names)
         mine = r["controller"] in users
@@ -98,7 +104,7 @@ def plot_runs(rows, scenario, path, users=()):
     for row in range(first + len(swing), len(signals)):
         axes[row][0].set_ylim(-3, 3)  # the drive gives at most 2 m/s2; larger demands are clipped in the picture
     quick = " (QUICK board)" if any(r.get("quick") for r in rows) else ""
-    fig.suptitle(f"{scenario}: {scenarios()[scenario].title}{quick}", fontsize=10)
+    fig.suptitle(f"{scenario}: {scenarios()[scenario].title}{quick}", fontsize=10, y=1 - 0.04 / height)
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return path
