@@ -26,7 +26,7 @@ from pathlib import Path
 JOURNAL = "cases.jsonl"
 LOOPBACK = "127.0.0.1"  # a local cluster's scheduler, workers and nannies listen here only
 DEFAULT_DASHBOARD = "127.0.0.1:0"  # its dashboard: this machine only, a port the OS picks
-DASHBOARD = DEFAULT_DASHBOARD  # (--dashboard sets another)
+DASHBOARD = None  # where --dashboard asks it to listen (None: not given, DEFAULT_DASHBOARD)
 
 
 def read_journal(out_dir):
@@ -259,7 +259,7 @@ def local_cluster(workers):
                           "distributed.worker.memory.monitor-interval": "1s",
                           "distributed.admin.system-monitor.interval": "2s"}):
         return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host=LOOPBACK,
-                            dashboard_address=DASHBOARD, silence_logs=50, env=dict(os.environ))
+                            dashboard_address=DASHBOARD or DEFAULT_DASHBOARD, silence_logs=50, env=dict(os.environ))
 
 
 def _shared_column(client, items, extra):

@@ -360,7 +360,7 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     # The cases run in a local process pool, or on Dask: the cluster at ``scheduler``, or a local one where --dashboard
     # asks to watch it. The fork server of the drawing pool and the workers imports their modules (about 2 s) now,
     # while this process plans the board: the drawing's too, once for both drawing processes.
-    on = "dask" if scheduler or batch.DASHBOARD != batch.DEFAULT_DASHBOARD else "processes"
+    on = "dask" if scheduler or batch.DASHBOARD is not None else "processes"
     worker_context(["crane_fmu.analysis.board_preload"], dask=on == "dask")
     named = {str(c) for c in chosen}
     chosen = contenders(chosen, fmu_dir, only)
