@@ -147,8 +147,9 @@ def summary_figure(rows, users=(), stats=None):
     names = sorted({r["controller"] for r in rows})
     columns = min(4, len(shown))
     grid = math.ceil(len(shown) / columns)
-    fig, axes = plt.subplots(grid, columns, figsize=(3.6 * columns, 0.45 * len(names) * grid + 1.6 * grid + 1.2),
-                             squeeze=False, layout="constrained")
+    width, height = 3.6 * columns, 0.45 * len(names) * grid + 1.6 * grid + 1.2
+    fig, axes = plt.subplots(grid, columns, figsize=(width, height), squeeze=False)
+    _summary_layout(fig, [_label(n, users) for n in names], [n in users for n in names], columns, grid)
     for ax in axes.flat[len(shown):]:
         ax.set_visible(False)
     for ax, sid in zip(axes.flat, shown):
@@ -213,9 +214,30 @@ def summary_figure(rows, users=(), stats=None):
                 Line2D([], [], color="k", marker="|", ls="none", label="95 % interval of the median (paired)"),
                 Line2D([], [], color="k", marker="o", ls="none", ms=4, label="90th percentile (paired; marker "
                        "per controller)")]
-    fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 4), fontsize=8, frameon=False)
-    fig.suptitle(summary_title(rows, shown), fontsize=10)
+    fig.legend(handles=handles, loc="lower center", ncol=min(len(handles), 4), fontsize=8, frameon=False,
+               bbox_to_anchor=(0.5, 0.02 / height))
+    fig.suptitle(summary_title(rows, shown), fontsize=10, y=1 - 0.04 / height)
     return fig
+
+
+def _summary_layout(fig, labels, bold, columns, grid):
+    """The summary's panels placed in inches (constrained layout took a third of the picture's time): each column's
+    controller names (measured) left of its panel, its ranks right of it, each row's two-line title above, its tick
+    labels below, the legend (rows of four) at the bottom, the title at the top."""
+    from matplotlib.font_manager import FontProperties
+
+    width, height = fig.get_size_inches()
+    renderer = fig.canvas.get_renderer()
+    names = max(renderer.get_text_width_height_descent(label, FontProperties(size=8, weight="bold" if b else "normal"),
+                                                       ismath=False)[0] for label, b in zip(labels, bold)) / fig.dpi
+    left, right = names + 0.12, 0.35  # the names, the ticks' room; the rank ("  5=")
+    above, below = 0.42, 0.28  # a panel's title of two lines; its tick labels
+    legend = 0.2 * math.ceil((len(labels) + 4) / 4) + 0.1
+    panel_width = width / columns - left - right
+    panel_height = (height - 0.3 - legend - grid * (above + below)) / grid
+    fig.subplots_adjust(left=left / width, right=1 - right / width, top=1 - (0.3 + above) / height,
+                        bottom=(legend + below) / height, wspace=(left + right) / panel_width,
+                        hspace=(above + below) / panel_height)
 
 
 def summary_title(rows, shown):
