@@ -348,6 +348,7 @@ _POOLED = {}  # a pool process's shared data and queue of rows (_chunks_in_pool)
 
 def _start_pooled(environment, extra, reported):
     start_worker(environment)
+    reported.cancel_join_thread()  # a process ends without waiting for rows nobody reads (after Ctrl-C)
     _POOLED.update(extra=extra, reported=reported)
 
 
