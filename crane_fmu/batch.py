@@ -25,7 +25,8 @@ from pathlib import Path
 
 JOURNAL = "cases.jsonl"
 LOOPBACK = "127.0.0.1"  # a local cluster's scheduler, workers and nannies listen here only
-DASHBOARD = "127.0.0.1:0"  # its dashboard: this machine only, a port the OS picks (--dashboard sets another)
+DEFAULT_DASHBOARD = "127.0.0.1:0"  # its dashboard: this machine only, a port the OS picks
+DASHBOARD = None  # where --dashboard asks it to listen (None: not given, DEFAULT_DASHBOARD)
 
 
 def read_journal(out_dir):
@@ -157,6 +158,8 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
         if workers == 1:
             return kept_rows((r for item in items for r in (task(item, *extra, **kwargs) if chunked else
                                                             [task(item, *extra, **kwargs)])), known)
+        if chunked:
+            return kept_rows(_chunks_in_pool(task, items, extra, workers, kwargs), known)
         with worker_pool(workers) as pool:
             futures = [pool.submit(_listed, task, item, *extra, **kwargs) if chunked else
                        pool.submit(task, item, *extra, **kwargs) for item in items]
@@ -212,16 +215,17 @@ def _dask_client(workers, scheduler):
 WORKER_PRELOAD = ["distributed", "crane_fmu.compare"]
 
 
-def worker_context(preload=()):
+def worker_context(preload=(), dask=True):
     """The multiprocessing context of this package's worker processes: 'forkserver' where the platform has it, each
     worker forked from a server process that has no other thread and has imported :data:`WORKER_PRELOAD` once
     (a fork of this process can hang for ever: another of its threads may hold a lock at that moment, a logging
     handler's or a queue's, which stays held in the child), else 'spawn' (Windows). The first call starts the
-    server: ``preload`` names more modules for it to import (one that cannot be imported is left out)."""
+    server: ``preload`` names more modules for it to import (one that cannot be imported is left out), ``dask``
+    False leaves Dask's out (a batch in a local process pool does not use it)."""
     if "forkserver" not in multiprocessing.get_all_start_methods():
         return multiprocessing.get_context("spawn")
     context = multiprocessing.get_context("forkserver")
-    context.set_forkserver_preload(WORKER_PRELOAD + list(preload))
+    context.set_forkserver_preload([m for m in WORKER_PRELOAD if dask or m != "distributed"] + list(preload))
     multiprocessing.forkserver.ensure_running()  # with this package's preload, not the one Dask would set
     return context
 
@@ -255,7 +259,7 @@ def local_cluster(workers):
                           "distributed.worker.memory.monitor-interval": "1s",
                           "distributed.admin.system-monitor.interval": "2s"}):
         return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host=LOOPBACK,
-                            dashboard_address=DASHBOARD, silence_logs=50, env=dict(os.environ))
+                            dashboard_address=DASHBOARD or DEFAULT_DASHBOARD, silence_logs=50, env=dict(os.environ))
 
 
 def _shared_column(client, items, extra):
@@ -303,6 +307,58 @@ def _chunks_on_dask(task, chunks, extra, workers, scheduler, kwargs):
                     send(1)
         finally:
             client.unsubscribe_topic(topic)
+
+
+def _chunks_in_pool(task, chunks, extra, workers, kwargs):
+    """The rows of ``task``'s chunks in a local pool of ``workers`` processes (:func:`worker_pool`'s), each as its
+    process yields it (through a queue); ``extra`` (the shared data) given to each process once. Chunks are taken
+    from the iterable as they are sent: four per process at a time. A process that dies stops the batch (the rows
+    it yielded are kept: a journal resumes after them)."""
+    context = worker_context()
+    reported = context.Queue()
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_start_pooled,
+                               initargs=(dict(os.environ), extra, reported))
+    try:
+        chunks, remaining, promised, received = iter(chunks), set(), 0, 0
+
+        def send(count):
+            for chunk in itertools.islice(chunks, count):
+                remaining.add(pool.submit(_pooled, chunk, task, kwargs))
+
+        send(4 * workers)
+        while remaining or received < promised:  # every row a finished chunk promised is read off the queue
+            try:
+                yield reported.get(timeout=0.05)
+                received += 1
+                continue
+            except queue.Empty:
+                pass
+            for future in [f for f in remaining if f.done()]:
+                remaining.discard(future)
+                promised += future.result()
+                send(1)
+    except BaseException:  # Ctrl-C (the processes ignore it) or a failed chunk: drop what has not begun
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+
+
+_POOLED = {}  # a pool process's shared data and queue of rows (_chunks_in_pool)
+
+
+def _start_pooled(environment, extra, reported):
+    start_worker(environment)
+    reported.cancel_join_thread()  # a process ends without waiting for rows nobody reads (after Ctrl-C)
+    _POOLED.update(extra=extra, reported=reported)
+
+
+def _pooled(chunk, task, kwargs):
+    """Run ``task`` on a chunk in a pool process, putting each row on the queue as it is yielded; their number."""
+    count = 0
+    for row in task(chunk, *_POOLED["extra"], **kwargs):
+        _POOLED["reported"].put(row)
+        count += 1
+    return count
 
 
 def _reporting(chunk, *extra, task, topic, **kwargs):

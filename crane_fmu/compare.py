@@ -1,4 +1,5 @@
-"""``crane-fmu compare``: every controller FMU on the scoreboard's scenarios, in parallel on Dask.
+"""``crane-fmu compare``: every controller FMU on the scoreboard's scenarios, in parallel: in a local process pool, or
+on Dask (the cluster at ``scheduler``, or a local one when ``--dashboard`` asks to watch it; the same bits).
 
 Cases run through the sweep runner (journal, resume, progress bar). Each case
 is a system as data; its FMUs travel to the workers once, by content hash. A
@@ -12,9 +13,8 @@ again, saying why. Every row records its provenance (:func:`provenance`), and
 sample of its cases again and confirm their figures bit for bit.
 
 From a script, call :func:`compare` under ``if __name__ == "__main__":``: the
-local Dask cluster's workers, forked from a fork server (Linux, macOS) or started
-as fresh Python processes (Windows), import the script again, as
-``multiprocessing`` does.
+local workers, forked from a fork server (Linux, macOS) or started as fresh
+Python processes (Windows), import the script again, as ``multiprocessing`` does.
 """
 
 import functools
@@ -32,7 +32,7 @@ import fmpy
 import numpy as np
 import scipy
 
-from crane_fmu import components, laws, native_batch, systems
+from crane_fmu import batch, components, laws, native_batch, systems
 from crane_fmu.analysis import board_page, board_tables, metrics, score_plots
 from crane_fmu.analysis import scenarios as scenario_registry
 from crane_fmu.analysis.board_drawing import BoardDrawer, first_scenarios
@@ -341,7 +341,7 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     """
     start = time.perf_counter()
     if sys._getframe(1).f_globals.get("__name__") == "__mp_main__":  # called by a script a worker imports
-        raise RuntimeError("compare() was called while a Dask worker process imported your script again: call it "
+        raise RuntimeError("compare() was called while a worker process imported your script again: call it "
                            "under `if __name__ == \"__main__\":`")
     unknown = [s for s in animate if s not in ANIMATE]
     if unknown:
@@ -357,9 +357,11 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
     if isinstance(cases, bool) or not isinstance(cases, int) or cases < 1:
         raise ValueError(f"--cases must be a whole number >= 1, got {cases!r}")
     out_dir = Path(out_dir) / "quick" if quick else Path(out_dir)
-    # the fork server of the drawing pool and the local cluster's workers imports their modules (about 2 s) now,
-    # while this process plans the board: the drawing's too, once for both drawing processes
-    worker_context(["crane_fmu.analysis.board_preload"])
+    # The cases run in a local process pool, or on Dask: the cluster at ``scheduler``, or a local one where --dashboard
+    # asks to watch it. The fork server of the drawing pool and the workers imports their modules (about 2 s) now,
+    # while this process plans the board: the drawing's too, once for both drawing processes.
+    on = "dask" if scheduler or batch.DASHBOARD is not None else "processes"
+    worker_context(["crane_fmu.analysis.board_preload"], dask=on == "dask")
     named = {str(c) for c in chosen}
     chosen = contenders(chosen, fmu_dir, only)
     # a built-in controller nobody named is left out where no chosen scenario applies to it (S10: the 3-D ones)
@@ -406,7 +408,7 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
             drawer.add(finished(row))
         first = {sid: i for i, sid in enumerate(dict.fromkeys(first_scenarios(animate)))}
         pending.sort(key=lambda c: first.get(c["scenario"], len(first)))  # a stable sort: the board's order within
-        ran = run_batch(native_batch.score_chunk, _items(pending, blobs), blobs, on="dask", workers=workers,
+        ran = run_batch(native_batch.score_chunk, _items(pending, blobs), blobs, on=on, workers=workers,
                         scheduler=scheduler, journal=out_dir / JOURNAL, progress=bar, chunked=True,
                         on_row=lambda row: drawer.add(finished(row)))
         done.update({r["case_id"]: r for r in ran})

@@ -48,14 +48,15 @@ def _listening(command, settle=3.0, limit=120.0):
 
 @pytest.mark.parametrize("kind", ["sweep", "compare", "serve"])
 def test_every_listening_socket_is_on_loopback(fmu_dir, tmp_path, kind):
-    """On main the Dask dashboard of sweep and compare listened on 0.0.0.0 at a random port."""
+    """On main the Dask dashboard of sweep and compare listened on 0.0.0.0 at a random port. (compare runs on a local
+    Dask cluster when --dashboard is given, else in a process pool that listens nowhere.)"""
     (tmp_path / "s.toml").write_text(STUDY)
     base = [sys.executable, "-m", "crane_fmu"]
     command = {
         "sweep": [*base, "sweep", str(tmp_path / "s.toml"), "--out", str(tmp_path / "o"), "--workers", "2",
                   "--fmu-dir", str(fmu_dir), "--no-progress"],
         "compare": [*base, "compare", "--quick", "--out", str(tmp_path / "board"), "--workers", "2", "--fmu-dir",
-                    str(fmu_dir), "--no-progress"],
+                    str(fmu_dir), "--no-progress", "--dashboard", "127.0.0.1:0"],
         "serve": [*base, "serve", "--system", "lqr", "--external", "controller", "--lock-step", "--opcua",
                   "127.0.0.1:0", "--modbus", "127.0.0.1:0", "--fmu-dir", str(fmu_dir), "--out",
                   str(tmp_path / "serve.csv")],

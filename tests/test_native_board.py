@@ -79,3 +79,20 @@ def test_a_board_drawn_as_its_rows_come_in_is_the_one_drawn_at_the_end(native, d
     assert (board / "scoreboard.md").read_text() == board_tables.render(
         rows, contenders(chosen, native[2], True), True, 2, _provenance_lines(manifest), stats,
         stored_scenario_floors())
+
+
+def test_a_board_in_a_local_process_pool_gives_the_bits_of_one_on_dask(native, dask_scheduler, tmp_path):
+    """Without --scheduler the board's cases run in a local process pool, not on Dask: every row the same bits
+    (but when it was made and how long it took), in the same order. (As JSON: Dask hands the kept signals back as
+    tuples, the pool as lists.)"""
+    import json
+
+    chosen, chosen_scenarios = ["LqrController", "BacksteppingController"], ["S1", "S2", "S3", "S9"]
+    boards = [compare(tmp_path / on, chosen, native[2], quick=True, cases=2, scenarios=chosen_scenarios, animate=(),
+                      only=True, progress=False, log=lambda _: None, **settings)
+              for on, settings in (("dask", {"scheduler": dask_scheduler}), ("pool", {"workers": 2}))]
+    assert len(boards[0]) == len(boards[1]) > 8
+    for ours, theirs in zip(*boards):
+        assert json.dumps({k: v for k, v in ours.items() if k not in ("date", "duration_s")}, sort_keys=True) == (
+            json.dumps({k: v for k, v in theirs.items() if k not in ("date", "duration_s")}, sort_keys=True)), (
+            ours["scenario"], ours["case"])

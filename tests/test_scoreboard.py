@@ -199,6 +199,31 @@ def test_animate_shows_progress_when_asked(tmp_path, capsys):
     assert capsys.readouterr().err == ""
 
 
+@pytest.mark.parametrize(("va", "dpi", "size"), [("top", 80, 9), ("baseline", 100, 11), ("center", 72, 8)])
+def test_an_animation_clock_drawn_from_glyphs_rendered_once_has_the_pixels_of_matplotlib_text(va, dpi, size):
+    from crane_fmu.analysis.glyph_text import GlyphText
+    from crane_fmu.analysis.plots import pyplot
+
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=dpi)
+    text = ax.text(0.03, 0.9, "", transform=ax.transAxes, va=va, fontsize=size, animated=True)
+    fig.canvas.draw()
+    background = fig.canvas.copy_from_bbox(fig.bbox)
+    clock = GlyphText(text, fig.canvas.get_renderer())
+    rng = np.random.default_rng(7)
+    for t, angle in zip(rng.uniform(0.0, 120.0, 40), rng.uniform(-60.0, 60.0, 40)):
+        line = f"t = {t:5.2f} s   hook {angle:+5.1f} deg"
+        fig.canvas.restore_region(background)
+        text.set_text(line)
+        ax.draw_artist(text)
+        drawn = np.asarray(fig.canvas.buffer_rgba()).copy()
+        fig.canvas.restore_region(background)
+        stamped = np.asarray(fig.canvas.buffer_rgba()).copy()
+        clock.draw(stamped, line)
+        assert (stamped != drawn).sum() == 0, line
+    plt.close(fig)
+
+
 def test_an_animation_drawn_before_from_the_same_run_is_copied_and_another_run_is_drawn(tmp_path, monkeypatch):
     """The picture store: the same case id gives the very file drawn before, without drawing; another case id draws
     again."""

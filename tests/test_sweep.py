@@ -5,6 +5,7 @@ import math
 import os
 import threading
 import time
+from pathlib import Path
 
 import pyarrow.parquet as pq
 import pytest
@@ -330,3 +331,31 @@ def test_workers_are_not_forks_of_a_process_whose_locks_are_held(on, tmp_path, m
     with HELD:
         rows = run_batch(_free_in_worker, [0, 1], on=on, workers=2)
     assert sorted((r["free"], r["tmpdir"]) for r in rows) == [(True, str(tmp_path))] * 2
+
+
+def _chunk_waiting_to_be_seen(item, folder):
+    """A chunked task: its chunk's first row, then the others once the batch has had the first (its ``on_row`` marks
+    it in ``folder``; at most 60 s of waiting): they say whether it had."""
+    cases, seen = item, Path(folder) / f"seen-{item[0]}"
+    for case in cases:
+        deadline = time.monotonic() + 60
+        while case != cases[0] and not seen.exists() and time.monotonic() < deadline:
+            time.sleep(0.01)
+        yield {"case_id": f"{case:016x}", "status": "ok", "first_seen": seen.exists()}
+
+
+@pytest.mark.quick
+def test_a_process_pool_batch_keeps_each_row_of_a_chunk_as_it_is_yielded(tmp_path):
+    """In a local process pool a chunk's rows reach the journal and ``on_row`` one by one as they are yielded, not
+    when the chunk ends; each once."""
+    from crane_fmu.batch import run_batch
+
+    def seen(row):
+        (tmp_path / f"seen-{int(row['case_id'], 16)}").touch()
+
+    rows = run_batch(_chunk_waiting_to_be_seen, [[0, 1, 2], [3, 4], [5]], on="processes", workers=2,
+                     journal=tmp_path / JOURNAL, chunked=True, on_row=seen, folder=str(tmp_path))
+    every = [f"{k:016x}" for k in range(6)]
+    assert sorted(r["case_id"] for r in rows) == every
+    assert sorted(json.loads(line)["case_id"] for line in (tmp_path / JOURNAL).read_text().splitlines()) == every
+    assert all(r["first_seen"] for r in rows if r["case_id"] not in (f"{0:016x}", f"{3:016x}", f"{5:016x}"))

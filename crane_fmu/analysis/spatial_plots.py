@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from .glyph_text import GlyphText
 from .metrics import crane_signals, find_crane
 from .plots import pyplot, save
 
@@ -219,6 +220,7 @@ def spatial_frames(column, crane, t, frames, title="", progress=False):
     fig.tight_layout()
     fig.canvas.draw()
     background = fig.canvas.copy_from_bbox(fig.bbox)
+    clock = GlyphText(clock, fig.canvas.get_renderer())  # drawn onto each frame's copy from glyphs rendered once
     images = []
     for n, i in enumerate(frames):
         fig.canvas.restore_region(background)
@@ -233,11 +235,10 @@ def spatial_frames(column, crane, t, frames, title="", progress=False):
         cables_top.set_data([x[i], x1[i], x2[i]], [y[i], y1[i], y2[i]])
         cart_top.set_data([x[i]], [y[i]])
         load_top.set_data([x2[i]], [y2[i]])
-        clock.set_text(f"t = {t[i]:5.2f} s")
         for artist in (path, cables_top, cart_top, load_top):
             top.draw_artist(artist)
-        fig.draw_artist(clock)
         images.append(np.asarray(fig.canvas.buffer_rgba())[..., :3].copy())
+        clock.draw(images[-1], f"t = {t[i]:5.2f} s")
         show_progress(n, len(frames), progress)
     plt.close(fig)
     return images

@@ -37,7 +37,8 @@ def dask_options(p):
     p.add_argument("--scheduler", help="address of an existing Dask scheduler (no local cluster)")
     p.add_argument("--dashboard", metavar="HOST:PORT",
                    help="where the local cluster's Dask dashboard listens (default 127.0.0.1 at a port the OS picks: "
-                        "this machine only; another address lets any machine that reaches it watch the run)")
+                        "this machine only; another address lets any machine that reaches it watch the run); compare "
+                        "runs on a local Dask cluster only when it is given (else in a local process pool)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
