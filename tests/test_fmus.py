@@ -296,6 +296,25 @@ simulate_fmu(sys.argv[2], stop_time=0.01, output_interval=1e-3)
 
 
 @pytest.mark.parametrize("folder", ["fmus", "fmi3"])
+def test_an_fmu_run_again_from_a_new_folder_finds_the_modules_its_first_folder_had(fmu_dir, folder):
+    """Python keeps an FMU's module from its first folder: fmpy ran TrajectoryPlanner with a ZV shaper (and
+    removed that folder), then runs it again, from a new folder, planning the shortest move, whose modules (the
+    MPC's, imported only then) must come from the new folder (a fresh process, as above)."""
+    import subprocess
+    import sys
+
+    script = """
+import sys
+from fmpy import simulate_fmu
+simulate_fmu(sys.argv[1], stop_time=0.01, output_interval=1e-3, start_values={"shaper": 2})
+simulate_fmu(sys.argv[1], stop_time=0.01, output_interval=1e-3, start_values={"shaper": 5})
+"""
+    planner = str(fmu_dir.parent / folder / "TrajectoryPlanner.fmu")
+    done = subprocess.run([sys.executable, "-c", script, planner], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+
+
+@pytest.mark.parametrize("folder", ["fmus", "fmi3"])
 def test_the_python_code_is_one_archive_with_checked_bytecode_for_this_python(fmu_dir, folder):
     """A host unpacks the FMU afresh each time: few files, and .pyc that spare the compile (refused if the
     source changes: hash-based, checked, PEP 552)."""
