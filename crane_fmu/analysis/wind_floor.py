@@ -269,6 +269,10 @@ def main(n=planar_scenarios.CASES, causal=False, lean_measured=False, out=print)
         met = []
         for number, case in enumerate(cases(n), 1):
             r = receding(case) if causal else lean_witness(case)
+            if r is None:  # the witness's program infeasible on its grid
+                met.append((False, False, False))
+                out(f"#{number:02d} lean witness: infeasible")
+                continue
             met.append((r.residual_deg <= planar_scenarios.WIND_CUT_DEG, r.load_error_m <= planar_scenarios.LOAD_BAND_M,
                         r.arrived))
             out(f"#{number:02d} {'receding' if causal else 'lean witness'}: residual {r.residual_deg:.3f} deg, load "
