@@ -4,7 +4,8 @@ Used by ``crane-fmu sweep``, ``compare``, ``reproduce`` and the controllers' tar
 task is a plain function of one item (and, on Dask, of data shared by every item, sent to each
 worker once); its results come back in the order they finish. With a journal, each result (a
 JSON-able row with a ``case_id``) is appended to it at once, so an interrupted batch resumes
-from :func:`read_journal`; a worker that dies has its running items rescheduled by Dask.
+from :func:`read_journal`; a worker that dies has its running items rescheduled (by Dask, or by the
+local pool of chunks).
 """
 
 import itertools
@@ -22,6 +23,8 @@ import uuid
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager, nullcontext
 from pathlib import Path
+
+from crane_fmu.pool import chunks_in_pool
 
 JOURNAL = "cases.jsonl"
 LOOPBACK = "127.0.0.1"  # a local cluster's scheduler, workers and nannies listen here only
@@ -88,7 +91,7 @@ def _duration(seconds):
 
 
 def run_batch(task, items, shared=None, *, on="processes", workers=None, scheduler=None, journal=None, known=(),
-              progress=None, chunked=False, collect=True, on_row=None, **kwargs):
+              progress=None, chunked=False, collect=True, on_row=None, lost=None, **kwargs):
     """Run ``task(item, **kwargs)`` (``task(item, shared, **kwargs)`` with ``shared``) for every item.
 
     Parameters
@@ -103,11 +106,15 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
     progress : Progress, optional
         Told of every row (``known`` ones too).
     chunked : bool
-        Each item is a chunk (a list) of cases and ``task`` yields the row of each case (a dict with a
-        ``case_id``) as it finishes. On Dask each row is reported the moment it is yielded, so a worker
-        that dies in a chunk loses none of the rows it yielded: Dask runs the chunk again elsewhere and
-        the rows already kept are not kept twice. ``items`` may then be any iterable: on Dask a few
-        chunks per worker are sent at a time, the next as one ends (a batch of any size).
+        Each item is a chunk ``(kind, cases)`` and ``task`` yields the row of each case (a dict with a
+        ``case_id``) as it finishes. Each row is reported the moment it is yielded, so a worker that dies in
+        a chunk loses none of the rows it yielded: Dask runs the chunk again elsewhere and the rows already
+        kept are not kept twice; a local pool (:func:`crane_fmu.pool.chunks_in_pool`) runs the case it died
+        in again alone, then the rest of its chunk. ``items`` may then be any iterable: a few chunks per
+        worker are taken at a time, the next as one ends (a batch of any size).
+    lost : callable, optional
+        In a local pool with ``chunked``: ``lost(case, why)`` is the row of a case whose worker died twice
+        running it (None: such a case ends the batch).
     collect : bool
         Return the results; False: only how many there were (the journal has them).
     on_row : callable, optional
@@ -159,7 +166,8 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
             return kept_rows((r for item in items for r in (task(item, *extra, **kwargs) if chunked else
                                                             [task(item, *extra, **kwargs)])), known)
         if chunked:
-            return kept_rows(_chunks_in_pool(task, items, extra, workers, kwargs), known)
+            return kept_rows(chunks_in_pool(task, items, extra, workers, kwargs, worker_context(), start_worker, lost),
+                             known)
         with worker_pool(workers) as pool:
             futures = [pool.submit(_listed, task, item, *extra, **kwargs) if chunked else
                        pool.submit(task, item, *extra, **kwargs) for item in items]
@@ -307,58 +315,6 @@ def _chunks_on_dask(task, chunks, extra, workers, scheduler, kwargs):
                     send(1)
         finally:
             client.unsubscribe_topic(topic)
-
-
-def _chunks_in_pool(task, chunks, extra, workers, kwargs):
-    """The rows of ``task``'s chunks in a local pool of ``workers`` processes (:func:`worker_pool`'s), each as its
-    process yields it (through a queue); ``extra`` (the shared data) given to each process once. Chunks are taken
-    from the iterable as they are sent: four per process at a time. A process that dies stops the batch (the rows
-    it yielded are kept: a journal resumes after them)."""
-    context = worker_context()
-    reported = context.Queue()
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_start_pooled,
-                               initargs=(dict(os.environ), extra, reported))
-    try:
-        chunks, remaining, promised, received = iter(chunks), set(), 0, 0
-
-        def send(count):
-            for chunk in itertools.islice(chunks, count):
-                remaining.add(pool.submit(_pooled, chunk, task, kwargs))
-
-        send(4 * workers)
-        while remaining or received < promised:  # every row a finished chunk promised is read off the queue
-            try:
-                yield reported.get(timeout=0.05)
-                received += 1
-                continue
-            except queue.Empty:
-                pass
-            for future in [f for f in remaining if f.done()]:
-                remaining.discard(future)
-                promised += future.result()
-                send(1)
-    except BaseException:  # Ctrl-C (the processes ignore it) or a failed chunk: drop what has not begun
-        pool.shutdown(wait=True, cancel_futures=True)
-        raise
-    pool.shutdown(wait=True)
-
-
-_POOLED = {}  # a pool process's shared data and queue of rows (_chunks_in_pool)
-
-
-def _start_pooled(environment, extra, reported):
-    start_worker(environment)
-    reported.cancel_join_thread()  # a process ends without waiting for rows nobody reads (after Ctrl-C)
-    _POOLED.update(extra=extra, reported=reported)
-
-
-def _pooled(chunk, task, kwargs):
-    """Run ``task`` on a chunk in a pool process, putting each row on the queue as it is yielded; their number."""
-    count = 0
-    for row in task(chunk, *_POOLED["extra"], **kwargs):
-        _POOLED["reported"].put(row)
-        count += 1
-    return count
 
 
 def _reporting(chunk, *extra, task, topic, **kwargs):

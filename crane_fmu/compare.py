@@ -410,7 +410,7 @@ def compare(out_dir, chosen=(), fmu_dir="build/fmus", workers=None, scheduler=No
         pending.sort(key=lambda c: first.get(c["scenario"], len(first)))  # a stable sort: the board's order within
         ran = run_batch(native_batch.score_chunk, _items(pending, blobs), blobs, on=on, workers=workers,
                         scheduler=scheduler, journal=out_dir / JOURNAL, progress=bar, chunked=True,
-                        on_row=lambda row: drawer.add(finished(row)))
+                        on_row=lambda row: drawer.add(finished(row)), lost=lambda case, why: score_row(case, None, why))
         done.update({r["case_id"]: r for r in ran})
         rows = [done[c["case_id"]] for c in planned] + refused
         write_table(_same_columns(rows), out_dir / "scores.parquet")
