@@ -37,6 +37,12 @@ def _same(a, b):
     return a.keys() == b.keys() and all(equal(a[k], b[k]) for k in a if k not in NOT_FIGURES)
 
 
+def _differing(a, b):
+    """``{key: (a's value, b's value)}`` where two rows differ: what a failure names (a row's repr is cut short)."""
+    return {k: (a.get(k), b.get(k)) for k in a.keys() | b.keys()
+            if k not in NOT_FIGURES and not _same({k: a.get(k)}, {k: b.get(k)})}
+
+
 def test_the_twin_is_of_this_metrics_module():
     """fast_metrics mirrors metrics.py as it is: a change there must be made in the twin too (the batch path
     computes its figures with metrics.py itself until then)."""
@@ -104,7 +110,8 @@ def test_the_builtin_studies_give_the_per_case_rows_bit_for_bit(native, name):
     cases = study.cases()[::7]
     batch = list(native_batch.sweep_chunk(("batch", cases), system, settings, study.metrics))
     for case, row in zip(cases, batch, strict=True):
-        assert _same(row, run_case(case, system, settings, study.metrics)), case
+        alone = run_case(case, system, settings, study.metrics)
+        assert _same(row, alone), (case, _differing(row, alone))
 
 
 def test_the_boards_cases_give_the_per_case_rows_bit_for_bit(native):
@@ -121,7 +128,8 @@ def test_the_boards_cases_give_the_per_case_rows_bit_for_bit(native):
     assert len(batch) == len(cases)
     by_id = {row["case_id"]: row for row in batch}
     for case in cases:
-        assert _same(by_id[case["case_id"]], run_score_case(case, blobs)), (case["controller"], case["scenario"])
+        row, alone = by_id[case["case_id"]], run_score_case(case, blobs)
+        assert _same(row, alone), (case["controller"], case["scenario"], _differing(row, alone))
 
 
 # (system, the case run first, the case checked): each a System built in or of the board, and {instance: values}
