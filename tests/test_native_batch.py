@@ -12,6 +12,9 @@ import math
 
 import numpy as np
 import pytest
+from fmpy.fmi2 import fmi2CallbackFunctions
+from fmpy.logging import addLoggerProxy
+from native_fmus import LOGGER
 
 from crane_fmu import components, native_batch, systems
 from crane_fmu.analysis import fast_metrics, metrics, scenarios
@@ -32,6 +35,12 @@ def _same(a, b):
         return x == y and type(x) is type(y)
 
     return a.keys() == b.keys() and all(equal(a[k], b[k]) for k in a if k not in NOT_FIGURES)
+
+
+def _differing(a, b):
+    """``{key: (a's value, b's value)}`` where two rows differ: what a failure names (a row's repr is cut short)."""
+    return {k: (a.get(k), b.get(k)) for k in a.keys() | b.keys()
+            if k not in NOT_FIGURES and not _same({k: a.get(k)}, {k: b.get(k)})}
 
 
 def test_the_twin_is_of_this_metrics_module():
@@ -101,7 +110,8 @@ def test_the_builtin_studies_give_the_per_case_rows_bit_for_bit(native, name):
     cases = study.cases()[::7]
     batch = list(native_batch.sweep_chunk(("batch", cases), system, settings, study.metrics))
     for case, row in zip(cases, batch, strict=True):
-        assert _same(row, run_case(case, system, settings, study.metrics)), case
+        alone = run_case(case, system, settings, study.metrics)
+        assert _same(row, alone), (case, _differing(row, alone))
 
 
 def test_the_boards_cases_give_the_per_case_rows_bit_for_bit(native):
@@ -118,7 +128,8 @@ def test_the_boards_cases_give_the_per_case_rows_bit_for_bit(native):
     assert len(batch) == len(cases)
     by_id = {row["case_id"]: row for row in batch}
     for case in cases:
-        assert _same(by_id[case["case_id"]], run_score_case(case, blobs)), (case["controller"], case["scenario"])
+        row, alone = by_id[case["case_id"]], run_score_case(case, blobs)
+        assert _same(row, alone), (case["controller"], case["scenario"], _differing(row, alone))
 
 
 # (system, the case run first, the case checked): each a System built in or of the board, and {instance: values}
@@ -207,3 +218,23 @@ def test_an_instance_that_cannot_reset_is_made_again(native, monkeypatch):
         assert reused.fresh == 2 and error is None
         assert reused.instances["controller"] is not instance
         assert np.array_equal(rows, fresh.run(0.0, 2.0, 1e-3, system.parameters)[0])
+
+
+def test_a_case_that_fails_on_kept_instances_says_why_after_another_host_used_fmpys_logger(native):
+    """A runner's instances outlive the call that made them (kept per thread, from one test or chunk to the next);
+    meanwhile another host in the process may point fmpy's logger proxy (one target per process) at its own logger,
+    as tests/native_fmus.py does. A case that fails on them still gives the FMU's reason, as the per-case path does
+    (CI once found region_of_attraction's case at 3 deg, l1 1 m failing without it: its row differed)."""
+    system = systems.prepare(systems.get("paper"), 1e-3, 1.0, check=False)
+    fmus, connections = system.resolve(native[2])
+    parameters = case_parameters({"plant.theta1_0": math.radians(3), "plant.l1": 1.0, "controller.l1": 1.0,
+                                  "controller.b3_form": "printed", "controller.w_theta2": 1.0}, system.parameters)
+    other = fmi2CallbackFunctions()
+    other.logger = LOGGER  # the tests' own, kept for the whole process: the proxy may call it at any time after
+    with ReusedRunner(fmus, connections) as runs:
+        addLoggerProxy(ctypes.byref(other))  # after the instances were made
+        error = runs.run(0.0, 1.0, 1e-3, parameters)[1]
+    with pytest.raises(FmiError) as alone:
+        simulate(fmus, connections, 1.0, 1e-3, parameters=parameters)
+    assert str(error) == str(alone.value)
+    assert ": input u must be finite, got " in str(error)  # the plant's reason, not only its status

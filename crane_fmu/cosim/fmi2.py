@@ -1,9 +1,11 @@
 """The FMI 2.0 co-simulation adapter of :class:`~crane_fmu.cosim.instance.Instance`, on fmpy."""
 
 import ctypes
+import functools
 import itertools
 import shutil
 import weakref
+from pathlib import Path
 
 from fmpy import calloc, free
 from fmpy.fmi2 import (
@@ -15,11 +17,14 @@ from fmpy.fmi2 import (
 )
 from fmpy.logging import addLoggerProxy
 
+from .compiled_loop import compiled
 from .instance import Instance
 
-# fmpy's logger proxy (which formats the FMU's printf-style messages) keeps ONE
-# Python logger for the whole process, so every instance shares this one and
-# its messages are told apart by the componentEnvironment each instance passes.
+# Every instance logs through one C function that formats the FMU's printf-style messages (fmi2_log.c) for
+# _dispatch, which tells them apart by the componentEnvironment each instance passes. Not through fmpy's proxy
+# (fmpy.logging): its one target per process is replaced by any other host in the process that uses it, and the
+# instances made before then lose their messages; it serves only where no C compiler made ours.
+LOG_SOURCE = Path(__file__).with_name("fmi2_log.c")
 _instances = weakref.WeakValueDictionary()
 _keys = itertools.count(1)
 
@@ -32,6 +37,17 @@ def _dispatch(environment, instance_name, status, category, message):
 
 _LOGGER = fmi2CallbackLoggerTYPE(_dispatch)
 _CONVERT = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
+
+
+@functools.cache
+def _formatter():
+    """The logger of fmi2_log.c, whose target is _dispatch; None without a C compiler."""
+    lib = compiled(LOG_SOURCE)
+    if lib is None:
+        return None
+    lib.set_sink.argtypes, lib.set_sink.restype = [fmi2CallbackLoggerTYPE], None
+    lib.set_sink(_LOGGER)
+    return fmi2CallbackLoggerTYPE(ctypes.cast(lib.log_message, ctypes.c_void_p).value)
 
 
 class Fmi2Instance(Instance):
@@ -52,11 +68,12 @@ class Fmi2Instance(Instance):
             key = next(_keys)
             _instances[key] = self
             self._callbacks = fmi2CallbackFunctions()
-            self._callbacks.logger = _LOGGER
+            self._callbacks.logger = _formatter() or _LOGGER
             self._callbacks.componentEnvironment = key
             self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
             self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-            addLoggerProxy(ctypes.byref(self._callbacks))
+            if _formatter() is None:
+                addLoggerProxy(ctypes.byref(self._callbacks))
             self._call("fmi2Instantiate", self._fmu.instantiate, callbacks=self._callbacks, loggingOn=True)
         except BaseException:
             shutil.rmtree(self._unzip, ignore_errors=True)
