@@ -114,8 +114,8 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
         in again alone, then the rest of its chunk. ``items`` may then be any iterable: a few chunks per
         worker are taken at a time, the next as one ends (a batch of any size).
     lost : callable, optional
-        In a local pool with ``chunked``: ``lost(case, why)`` is the row of a case whose worker died twice
-        running it (None: such a case ends the batch).
+        With ``chunked``: ``lost(case, why)`` is the row of a case whose worker died running it, twice in a
+        local pool, on every worker Dask tried (None: such a case ends the batch).
     collect : bool
         Return the results; False: only how many there were (the journal has them).
     on_row : callable, optional
@@ -326,11 +326,11 @@ def _chunks_on_dask(task, chunks, extra, workers, scheduler, kwargs, lost=None):
                     pass
                 for future in [f for f in remaining if f.done()]:
                     serial, (kind, cases) = remaining.pop(future)
+                    done = reached.pop(serial, 0)
                     try:
                         yield from future.result()
-                    except KilledWorker:
-                        done = reached.pop(serial, 0)  # the case after the last row reported killed them, or its
-                        if len(cases) == 1 and not done:  # report was lost with its worker: alone, it tells
+                    except KilledWorker:  # the case after the last row reported killed them (or its report was
+                        if len(cases) == 1 and not done:  # lost with its worker: alone, it tells)
                             if lost is None:
                                 raise
                             yield lost(cases[0], "its worker process died every time Dask ran it (KilledWorker)")
