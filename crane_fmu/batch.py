@@ -8,7 +8,6 @@ from :func:`read_journal`; a worker that dies has its running items rescheduled 
 local pool of chunks).
 """
 
-import collections
 import itertools
 import json
 import math
@@ -114,8 +113,9 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
         in again alone, then the rest of its chunk. ``items`` may then be any iterable: a few chunks per
         worker are taken at a time, the next as one ends (a batch of any size).
     lost : callable, optional
-        With ``chunked``: ``lost(case, why)`` is the row of a case whose worker died running it, twice in a
-        local pool, on every worker Dask tried (None: such a case ends the batch).
+        In a local pool with ``chunked``: ``lost(case, why)`` is the row of a case whose worker died twice
+        running it (None: such a case ends the batch; on Dask, a chunk that kills every worker it is tried on
+        ends it: KilledWorker).
     collect : bool
         Return the results; False: only how many there were (the journal has them).
     on_row : callable, optional
@@ -158,9 +158,8 @@ def run_batch(task, items, shared=None, *, on="processes", workers=None, schedul
         if not items:  # nothing to run: no cluster started
             return kept_rows((), known)
         if on == "dask":
-            if chunked:
-                return kept_rows(_chunks_on_dask(task, items, extra, workers, scheduler, kwargs, lost), known)
-            return kept_rows(_on_dask(task, items, extra, workers, scheduler, kwargs), known)
+            run = _chunks_on_dask if chunked else _on_dask
+            return kept_rows(run(task, items, extra, workers, scheduler, kwargs), known)
         if on != "processes":
             raise ValueError(f"on must be processes or dask, got {on!r}")
         workers = workers or os.cpu_count() or 1
@@ -287,70 +286,45 @@ def _on_dask(task, items, extra, workers, scheduler, kwargs):
             yield future.result()
 
 
-def _chunks_on_dask(task, chunks, extra, workers, scheduler, kwargs, lost=None):
+def _chunks_on_dask(task, chunks, extra, workers, scheduler, kwargs):
     """The rows of ``task``'s chunks on Dask: each as its worker reports it (an event of a topic of this batch),
     then each chunk's rows again when it finishes (those of a chunk whose worker died before it could report
-    them). Chunks are taken from the iterable as they are sent: four per worker thread (16 at least) at a time.
-
-    A chunk that killed every worker Dask tried it on (KilledWorker) is sent again as the case after its last row
-    reported, alone, and the rest; that case alone killing them too is given to ``lost`` (its row; None: the batch
-    ends, as Dask says)."""
-    from distributed.scheduler import KilledWorker
-
+    them). Chunks are taken from the iterable as they are sent: four per worker thread (16 at least) at a time."""
     with _dask_client(workers, scheduler) as client:
         topic = f"crane-fmu-batch-{uuid.uuid4().hex}"
         reported = queue.SimpleQueue()
-        client.subscribe_topic(topic, lambda event: reported.put(event[1]))  # the scheduler adds "worker"
+        client.subscribe_topic(topic, lambda event: reported.put(event[1]["row"]))  # the scheduler adds "worker"
         try:
             shared = [client.scatter([extra[0]], broadcast=True)[0]] if extra else []
-            chunks, remaining, reached, serials = iter(chunks), {}, collections.Counter(), itertools.count()
-
-            def submit(chunk):
-                serial = next(serials)
-                future = client.submit(_reporting, chunk, *shared, pure=False, task=task, topic=topic, serial=serial,
-                                       **kwargs)
-                remaining[future] = serial, chunk
+            chunks, remaining = iter(chunks), set()
 
             def send(count):
                 for chunk in itertools.islice(chunks, count):
-                    submit(chunk)
+                    remaining.add(client.submit(_reporting, chunk, *shared, pure=False, task=task, topic=topic,
+                                                **kwargs))
 
             send(max(16, 4 * sum(client.nthreads().values())))
             while remaining:
                 try:
-                    event = reported.get(timeout=0.05)
-                    reached[event["chunk"]] = max(reached[event["chunk"]], event["at"] + 1)
-                    yield event["row"]
+                    yield reported.get(timeout=0.05)
                     continue
                 except queue.Empty:
                     pass
                 for future in [f for f in remaining if f.done()]:
-                    serial, (kind, cases) = remaining.pop(future)
-                    done = reached.pop(serial, 0)
-                    try:
-                        yield from future.result()
-                    except KilledWorker:  # the case after the last row reported killed them (or its report was
-                        if len(cases) == 1 and not done:  # lost with its worker: alone, it tells)
-                            if lost is None:
-                                raise
-                            yield lost(cases[0], "its worker process died every time Dask ran it (KilledWorker)")
-                        elif done < len(cases):
-                            submit((kind, cases[done:done + 1]))
-                            if cases[done + 1:]:
-                                submit((kind, cases[done + 1:]))
+                    remaining.discard(future)
+                    yield from future.result()
                     send(1)
         finally:
             client.unsubscribe_topic(topic)
 
 
-def _reporting(chunk, *extra, task, topic, serial, **kwargs):
-    """Run ``task`` on a chunk on a Dask worker, reporting each row under ``topic`` as it is yielded (with the
-    chunk's ``serial`` and the row's place in it); return them."""
+def _reporting(chunk, *extra, task, topic, **kwargs):
+    """Run ``task`` on a chunk on a Dask worker, reporting each row under ``topic`` as it is yielded; return them."""
     from distributed import get_worker
 
     worker, rows = get_worker(), []
-    for at, row in enumerate(task(chunk, *extra, **kwargs)):
-        worker.log_event(topic, {"row": row, "chunk": serial, "at": at})
+    for row in task(chunk, *extra, **kwargs):
+        worker.log_event(topic, {"row": row})
         rows.append(row)
     return rows
 

@@ -1,6 +1,5 @@
 """The local pool of a batch's chunks (a local board's): a process killed in a chunk loses none of the cases it
-finished and the batch goes on; a case that kills its process every time is a row that says so, or one line. The
-same case on a real local Dask cluster (a study's)."""
+finished and the batch goes on; a case that kills its process every time is a row that says so, or one line."""
 
 import json
 import os
@@ -135,19 +134,3 @@ def test_a_board_scores_a_controller_whose_case_crashes_its_process_failed_and_i
     assert by["LqrController"]["status"] == "ok"
     assert "CrashingLaw" in (tmp_path / "board" / "scoreboard.md").read_text()
 
-
-def test_on_dask_a_case_that_kills_every_worker_it_runs_on_is_a_row_that_says_so_and_the_batch_goes_on(tmp_path):
-    """A real local cluster that tries a task on two workers (Dask's allowed-failures 1): the chunk [3, 4, 5] kills
-    both, case 4 alone kills both again and is lost; 3 and 5 run; every case is kept once."""
-    import dask
-    from distributed import LocalCluster
-
-    with dask.config.set({"distributed.scheduler.allowed-failures": 1}), \
-            LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0", silence_logs=50) as cluster:
-        rows = run_batch(_crashing_on, CHUNKS, on="dask", scheduler=cluster.scheduler_address,
-                         journal=tmp_path / JOURNAL, chunked=True, crash=4,
-                         lost=lambda case, why: {"case_id": f"{case:016x}", "status": "failed", "error": why})
-    by_case = {r["case_id"]: r for r in _journal(tmp_path / JOURNAL)}
-    assert sorted(by_case) == EVERY == sorted(r["case_id"] for r in rows)
-    assert by_case[EVERY[4]]["error"] == "its worker process died every time Dask ran it (KilledWorker)"
-    assert all(by_case[k]["status"] == "ok" for k in EVERY if k != EVERY[4])

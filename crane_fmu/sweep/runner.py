@@ -184,8 +184,7 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
             ran += run_batch(native_batch.sweep_chunk, native_batch.chunked(cases, native, to_run), shipped, on="dask",
                              workers=workers, scheduler=scheduler, journal=out_dir / JOURNAL,
                              known=invalid.values(), progress=bar, chunked=True, collect=False, settings=settings,
-                             metric_names=metric_names,
-                             lost=lambda case, why: case_row(case, settings, metric_names, None, why)) - len(invalid)
+                             metric_names=metric_names) - len(invalid)
     # the table from the journal, in the study's order, a block at a time
     done = JournalIndex(out_dir / JOURNAL)
     not_ok = write_results(done, lambda: (case_id(c, settings) for c in study.iter_cases()),
