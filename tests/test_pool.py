@@ -10,6 +10,7 @@ from pathlib import Path
 
 import psutil
 import pytest
+from test_native_studies import _chunk_waiting_once  # waits after case 0 the first time
 
 from crane_fmu.batch import JOURNAL, run_batch
 from crane_fmu.pool import STRIKES
@@ -17,18 +18,6 @@ from crane_fmu.pool import STRIKES
 PD_SWAY = Path(__file__).parent.parent / "examples" / "my_controller" / "pd_sway.py"
 CHUNKS = [("batch", [0, 1, 2]), ("batch", [3, 4, 5])]
 EVERY = [f"{k:016x}" for k in range(6)]
-
-
-def _chunk_waiting_once(item, folder):
-    """Each case's row, with the process that made it; the first run of the chunk holding case 0 waits after that
-    row (for its process to be killed)."""
-    _, cases = item
-    first = not Path(folder, f"ran-{cases[0]}").exists()
-    Path(folder, f"ran-{cases[0]}").touch()
-    for case in cases:
-        yield {"case_id": f"{case:016x}", "status": "ok", "pid": os.getpid()}
-        if first and case == 0:
-            time.sleep(120)
 
 
 def _crashing_on(item, crash):

@@ -68,11 +68,12 @@ class Fmi2Instance(Instance):
             key = next(_keys)
             _instances[key] = self
             self._callbacks = fmi2CallbackFunctions()
-            self._callbacks.logger = _formatter() or _LOGGER
+            formatter = _formatter()
+            self._callbacks.logger = formatter or _LOGGER
             self._callbacks.componentEnvironment = key
             self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
             self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-            if _formatter() is None:
+            if formatter is None:
                 addLoggerProxy(ctypes.byref(self._callbacks))
             self._call("fmi2Instantiate", self._fmu.instantiate, callbacks=self._callbacks, loggingOn=True)
         except BaseException:
