@@ -15,6 +15,7 @@ from pathlib import Path
 
 import pyarrow.parquet as pq
 import pytest
+from helpers import chunk_waiting_once
 
 from crane_fmu import batch, systems
 from crane_fmu.analysis import metrics
@@ -81,18 +82,6 @@ def test_a_study_interrupted_and_resumed_loses_and_repeats_no_case(native, dask_
     _same_as_per_case(study, rows, native[2], 23)
 
 
-def _chunk_waiting_once(item, folder):
-    """A chunked task: each case's row, with the process that made it; the first run of the chunk holding case 0
-    waits after that row (for its worker to be killed)."""
-    _, cases = item
-    first = not (Path(folder) / f"ran-{cases[0]}").exists()
-    (Path(folder) / f"ran-{cases[0]}").touch()
-    for case in cases:
-        yield {"case_id": f"{case:016x}", "status": "ok", "pid": os.getpid()}
-        if first and case == 0:
-            time.sleep(120)
-
-
 def test_a_worker_killed_in_a_chunk_loses_none_of_the_cases_it_finished(tmp_path):
     """On a real local cluster, the worker running a chunk is killed after the chunk's first case finished: that
     case's row (made by the killed worker) is kept, Dask runs the chunk again on the other worker, whose rows of the
@@ -118,7 +107,7 @@ def test_a_worker_killed_in_a_chunk_loses_none_of_the_cases_it_finished(tmp_path
 
         killer = threading.Thread(target=kill_the_waiting_worker)
         killer.start()
-        rows = run_batch(_chunk_waiting_once, [("batch", [0, 1, 2]), ("batch", [3, 4, 5])], on="dask",
+        rows = run_batch(chunk_waiting_once, [("batch", [0, 1, 2]), ("batch", [3, 4, 5])], on="dask",
                          scheduler=cluster.scheduler_address, journal=tmp_path / JOURNAL, chunked=True,
                          folder=str(tmp_path))
         killer.join()

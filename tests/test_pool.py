@@ -10,7 +10,7 @@ from pathlib import Path
 
 import psutil
 import pytest
-from test_native_studies import _chunk_waiting_once  # waits after case 0 the first time
+from helpers import chunk_waiting_once
 
 from crane_fmu.batch import JOURNAL, run_batch
 from crane_fmu.pool import STRIKES
@@ -58,7 +58,7 @@ def test_a_process_killed_in_a_chunk_loses_none_of_the_cases_it_finished_and_the
     killer = threading.Thread(target=kill_the_waiting_process)
     killer.start()
     start = time.monotonic()
-    rows = run_batch(_chunk_waiting_once, CHUNKS, workers=2, journal=tmp_path / JOURNAL, chunked=True,
+    rows = run_batch(chunk_waiting_once, CHUNKS, workers=2, journal=tmp_path / JOURNAL, chunked=True,
                      folder=str(tmp_path))
     killer.join()
     assert killed, "the process was not killed"
