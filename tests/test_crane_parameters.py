@@ -140,6 +140,19 @@ def test_info_lists_each_crane_parameter_its_value_unit_and_the_instances_it_set
     assert "  crane.l2  [m] cable length hook to payload" in capsys.readouterr().out.splitlines()
 
 
+@pytest.mark.parametrize("name", ["hoist-transport", "lqg", "mpc-transport", "lqr3d-move"])
+def test_info_reads_an_ssp_file_as_the_system_it_was_written_from(fmu_dir, name, capsys):
+    """`info --system FILE.ssp`: the crane's parameters, the instances they set and what the components derive (the
+    planner's Enumeration, held in the file as its item's value) are the built-in system's."""
+    def lines(system):
+        assert main(["info", "--system", str(system)]) == 0
+        return [line.replace(" (set)", "") for line in capsys.readouterr().out.splitlines()[1:]]  # the file sets all
+
+    ours = lines(systems_dir(fmu_dir) / f"{name}.ssp")
+    assert ours == lines(name)
+    assert any(line.startswith("    crane.l2 = 0.5 m: plant") for line in ours)
+
+
 @pytest.mark.quick
 def test_a_studys_crane_value_sets_the_bound_instances_that_the_case_gives_none_of_their_own():
     binding = {"l2": ["plant", "controller", "estimator"]}

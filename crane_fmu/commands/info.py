@@ -2,7 +2,7 @@
 
 from pathlib import Path
 
-from crane_fmu.model.tables import variable_table
+from crane_fmu.model.tables import enumeration_name, variable_table
 
 from .common import UsageError, parse_sets
 
@@ -23,9 +23,9 @@ def arguments(p):
     from crane_fmu import DEFAULT_FMU_DIR
 
     p.add_argument("--markdown", action="store_true", help="print the variable tables as Markdown")
-    p.add_argument("--system", help="instead: a built-in system's crane parameters (crane.l2: which instances they "
-                                    "set), its instances and what their components derive from the parameters "
-                                    "(gains, shaper impulses)")
+    p.add_argument("--system", help="instead: a built-in system's (or an .ssp file's) crane parameters (crane.l2: "
+                                    "which instances they set), its instances and what their components derive from "
+                                    "the parameters (gains, shaper impulses)")
     p.add_argument("--set", action="append", default=[], metavar="INSTANCE.VARIABLE=VALUE",
                    help="with --system: parameter values to derive from (repeatable)")
     p.add_argument("--use", action="append", default=[], metavar="INSTANCE=FILE.fmu",
@@ -43,11 +43,11 @@ def run(args):
 
     if args.system:
         try:
-            system = systems.get(args.system)
+            with systems.open_system(args.system) as system:
+                system, notes = _told(_use(args.use, system), args.fmu_dir)
+                print("\n".join(_derived(system, args.set) + notes))
         except ValueError as exc:
             raise UsageError(str(exc)) from None
-        system, notes = _told(_use(args.use, system), args.fmu_dir)
-        print("\n".join(_derived(system, args.set) + notes))
         return 0
     if args.use:
         raise UsageError("--use needs --system NAME: the system whose instance your FMU takes the place of")
@@ -71,24 +71,24 @@ def run(args):
 
 
 def _derived(system, sets):
-    """Lines describing a built-in system's crane parameters, each instance and what its component derives from
-    the parameters."""
+    """Lines describing a system's (built-in, or of an SSP file) crane parameters, each instance and what its component
+    derives from the parameters."""
     from crane_fmu import components, crane_parameters, systems
 
-    variables = {}
-    for instance, kind in system.instances.items():
+    variables, kinds = {}, systems.kinds(system)  # an SSP's instances are FMU files: named by their model identifier
+    for instance, kind in kinds.items():
         component = components.find(kind)
         variables[instance] = {v.name: (v.type, v.unit) for v in (component.variables if component else ())
                                if v.causality != "output"}
         if instance in system.replaced:  # your FMU: the variables it has
-            variables[instance] = {v.name: (v.type, v.unit) for v in read_fmu(kind).modelVariables
+            variables[instance] = {v.name: (v.type, v.unit) for v in read_fmu(system.instances[instance]).modelVariables
                                    if v.causality in ("parameter", "input")}
     models = systems.modelled(system)
     variables.update(crane_parameters.settable(models))
     system = crane_parameters.with_values(system, parse_sets(sets, variables))
-    lines = [f"{system.name}: {system.description}", *_crane(system, models)]
+    lines = [f"{system.name}: {system.description}" if system.description else system.name, *_crane(system, models)]
     bound = systems.bind(system)
-    for name, kind in system.instances.items():
+    for name, kind in kinds.items():
         if name in system.replaced:
             lines += _yours(system, name, bound.parameters.get(name, {}))
             continue
@@ -96,12 +96,18 @@ def _derived(system, sets):
         lines.append(f"  {name} = {kind}" + ("" if component else " (not a registered component)"))
         if component and component.report:
             try:
-                derived = component.report(component.check(bound.parameters.get(name, {})))
+                derived = component.report(component.check(_by_name(component, bound.parameters.get(name, {}))))
             except (ValueError, ArithmeticError) as exc:
                 raise UsageError(f"{name}: {exc}") from None
             lines += [f"    {key} = {value:.6g}" if isinstance(value, float) else f"    {key} = {value}"
                       for key, value in derived.items()]
     return lines
+
+
+def _by_name(component, values):
+    """``values`` with each Enumeration's item by name, as the models keep it (an SSP file holds the item's value)."""
+    types = {v.name: v for v in component.variables if v.type == "Enumeration"}
+    return {k: enumeration_name(types[k], v) if k in types and not isinstance(v, str) else v for k, v in values.items()}
 
 
 def _told(system, fmu_dir):
@@ -143,9 +149,13 @@ def read_fmu(source):
 def _crane(system, models):
     """The crane's parameters: each one's value and unit, the instances it sets and those with a value of their own."""
     from crane_fmu import components, crane_parameters
+    from crane_fmu.cosim.system import is_file
 
-    def start(instance, name):
-        return components.get(system.instances[instance]).defaults()[name]
+    def start(instance, name):  # a component's default, or an FMU file's start value (an SSP's instances)
+        source = system.instances[instance]
+        if not is_file(source):
+            return components.get(source).defaults()[name]
+        return next(float(v.start) for v in read_fmu(source).modelVariables if v.name == name)
 
     shared, values = crane_parameters.shared(system, models, start), crane_parameters.values(system)
     lines = ["  crane parameters (crane.NAME=VALUE sets each on the instances listed; a value of an instance's own "
