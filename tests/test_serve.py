@@ -1268,3 +1268,61 @@ def test_a_real_time_fuzz_of_both_protocols_never_ends_the_server_nor_holds_it(f
     assert last > first + 0.5, (first, last, err[-2000:])  # the run is not held at a rail end
     recorded = _fuzzed_run_held(checks, REAL_TIME_FUZZ_OPERATIONS, server, status, err)
     assert np.all(np.abs(recorded["plant.x"]) <= 0.3)
+
+
+def test_lock_step_a_reference_written_past_the_rail_end_is_refused_before_the_trolley_cannot_stop(fmu_dir,
+                                                                                                   tmp_path):
+    """The client is the planner (`--external planner`): it writes a target past the rail end (x_ref = 1e6 m, x_max
+    = 2.5 m) and the built-in LQR drives the trolley there at 1 m/s. The request that would end where the LQR's
+    2 m/s2 can no longer stop it is refused (BadOutOfRange); with x_ref = 0 written every request is taken again
+    and the trolley moves back, never past the rail end. On main the guard watched only a client that writes the
+    demand: the trolley ran into the rail end, and every request after it was refused, whatever was written."""
+    server = Server(fmu_dir, tmp_path, "--system", "transport", "--external", "planner", "--lock-step", "--set",
+                    "plant.x_max=2.5", "--opcua", "127.0.0.1:0")
+
+    async def drive(url):
+        async with Client(url) as opc:
+            ns, node = await _nodes(opc)
+            await node("planner.x_ref").write_value(ua.Variant(1e6, ua.VariantType.Double))
+            codes, most = [], 0.0
+            while len(codes) < 1000 and (not codes or codes[-1] == "Good"):
+                codes.append(await _step_status(opc, 10))
+            await node("planner.x_ref").write_value(ua.Variant(0.0, ua.VariantType.Double))
+            back = []
+            for _ in range(200):
+                back.append(await _step_status(opc, 10))
+                most = max(most, await node("plant.x").read_value())
+                if (await node("plant.dx").read_value()) < 0:
+                    break
+            return codes, back, most, await node("plant.dx").read_value()
+
+    try:
+        codes, back, most, dx = _run(drive(server.opcua))
+    finally:
+        status, out, err = server.stop()
+    assert codes[-1] == "BadOutOfRange" and set(codes[:-1]) == {"Good"} and len(codes) > 100, codes[-3:]
+    assert set(back) == {"Good"} and dx < 0 and 2.4 < most <= 2.5, (back[-3:], most, dx)
+    assert status == 0 and "could not stop before the rail end x_max = 2.5 m with its drive's 2 m/s2" in err, err
+
+
+def test_real_time_a_reference_written_past_the_rail_end_leaves_the_run_going_to_its_stop_time(fmu_dir, tmp_path):
+    """Real time, the client the planner: x_ref = 3 m written once (x_max = 2.5 m), then nothing. The cycle after
+    which the LQR could no longer stop the trolley is refused, the planner's outputs are held at zero (the LQR
+    brakes and takes the trolley back), and the run ends by itself at its stop time: status 0, the trolley never
+    past x_max. On main the trolley reached the rail end and the run held there until Ctrl-C."""
+    server = Server(fmu_dir, tmp_path, "--system", "transport", "--external", "planner", "--period", "0.01",
+                    "--watchdog", "30", "--stop-time", "5", "--set", "plant.x_max=2.5", "--opcua", "127.0.0.1:0")
+
+    async def push(url):
+        async with Client(url) as opc:
+            ns, node = await _nodes(opc)
+            await node("planner.x_ref").write_value(ua.Variant(3.0, ua.VariantType.Double))
+
+    try:
+        _run(push(server.opcua))
+    finally:
+        status, out, err = server.wait(40)
+    assert status == 0 and "finished at t = 5 s" in out, err[-2000:]
+    assert "could not stop before the rail end x_max = 2.5 m" in err and "held at zero" in err, err
+    served = read_csv(server.out)
+    assert 2.4 < np.max(served["plant.x"]) <= 2.5 and served["plant.x"][-1] < 2.4  # braked before the end, back

@@ -163,13 +163,13 @@ def _serve(args, system):
 
 def _rail_guard(args, system, connections):
     """The guard that keeps the trolley able to stop before its rail ends when a client drives it (an external
-    instance that writes the plant's demand), else None."""
+    instance other than the plant: the demand's, or a reference a controller follows), else None."""
     from crane_fmu import components, systems
     from crane_fmu.serve.rail_ends import RailGuard
 
     plant = components.by_role(systems.kinds(system)).get("plant")
     crane = systems.plant_of(system)
-    if args.external is None or plant is None or crane is None or crane.crane is None:
+    if args.external in (None, plant) or plant is None or crane is None or crane.crane is None:
         return None
     guard = RailGuard(plant, crane.crane.axes, args.external, connections)
     return guard if guard.axes else None

@@ -8,9 +8,12 @@ every step after that is refused: the run holds for ever. This guard, given to t
 could no longer stop before a rail end (rolled back as the plant's refusals are), and while the run is held after
 a refusal it brakes the trolley to rest at its drive limit, cycle by cycle, until the client writes again.
 
-Per guarded axis (a crane role :class:`~crane_fmu.model.component.Axis` whose demand the external instance
-writes, with a finite rail end): the demand's limit ``U`` is the smaller of the plant's
-``<demand>_max`` and the written range (:mod:`crane_fmu.cosim.write_ranges`); the trolley's acceleration is the
+Per guarded axis (a crane role :class:`~crane_fmu.model.component.Axis` with a finite rail end, whichever instance
+feeds its demand): the demand's limit ``U`` is the smaller of the plant's ``<demand>_max`` and, where the external
+instance writes the demand, the written range (:mod:`crane_fmu.cosim.write_ranges`), else the feeding instance's own
+limit (its ``<demand>_max`` or ``u_max``, where it has one). Where the client writes a reference (``--external
+planner``) and a controller drives, a refused block holds the client's outputs at zero: the controller, given the
+target 0, brakes at its limit. The trolley's acceleration is the
 demand held over each cycle of length ``T``, so that braking at ``-U`` until the speed is within ``U*T`` and then
 at ``-v/T`` (rest at the cycle's end) travels :func:`braking_distance`. A block is refused when it ends with that
 distance reaching past ``rail end -+ MARGIN`` and farther than it began (a run started within its braking
@@ -58,13 +61,13 @@ def lagged_reach(x, v, a, tau, limit, cycle):
 
 
 class RailGuard:
-    """The runner's guard for the trolley's axes of ``plant`` (instance name) whose demand the external instance
-    ``external`` (name) writes; ``axes`` are the plant's crane role axes, ``connections`` the system's."""
+    """The runner's guard for the trolley's axes of ``plant`` (instance name) while the instance ``external`` (name)
+    is served to a client; ``axes`` are the plant's crane role axes, ``connections`` the system's."""
 
     def __init__(self, plant, axes, external, connections):
         self.plant, self.external = plant, external
-        fed = {c.input: c.output for c in connections if c.source == external and c.target == plant}
-        self.axes = [(a, fed[a.demand]) for a in axes if a.demand in fed]
+        fed = {c.input: (c.source, c.output) for c in connections if c.target == plant}
+        self.axes = [(a, *fed[a.demand]) for a in axes if a.demand in fed]
         self.guarded, self.notes, self.lags = [], [], {}
 
     def start(self, master, cycle, ranges):
@@ -72,20 +75,26 @@ class RailGuard:
         plant = master.instances[self.plant]
         names = list(master.output_names)
         self.cycle = cycle
-        for axis, output in self.axes:
+        for axis, source, output in self.axes:
             low, high = (float(plant.get(f"{axis.position}_{end}")) for end in ("min", "max"))
             lag = next((f"tau{suffix}" for suffix in ("", f"_{axis.position}") if f"tau{suffix}" in plant.variables),
                        None)
-            written = ranges.get(f"{self.external}.{output}", (-math.inf, math.inf))
-            limit = min(abs(float(plant.get(f"{axis.demand}_max"))), -written[0], written[1])
+            limit = abs(float(plant.get(f"{axis.demand}_max")))
+            if source == self.external:
+                written = ranges.get(f"{source}.{output}", (-math.inf, math.inf))
+                limit = min(limit, -written[0], written[1])
+            else:  # a controller drives: it brakes at its own limit at most
+                driver = master.instances[source]
+                own = next((n for n in (f"{axis.demand}_max", "u_max") if n in getattr(driver, "variables", ())), None)
+                limit = min(limit, abs(float(driver.get(own)))) if own else limit
             if not (abs(low) < 1e60 or abs(high) < 1e60) or not 0 < limit < math.inf:
                 continue
             tau = float(plant.get(lag)) if lag is not None else 0.0
             if tau > 0:  # followed from the demands: (tau, plant's limit, its sub-step, index of the demand, a)
                 self.lags[len(self.guarded)] = [tau, abs(float(plant.get(f"{axis.demand}_max"))),
-                                                float(plant.get("max_substep")),
-                                                names.index(f"{self.external}.{output}"), 0.0]
-            self.guarded.append((axis, output, names.index(f"{self.plant}.{axis.position}"),
+                                                float(plant.get("max_substep")), names.index(f"{source}.{output}"), 0.0]
+            self.guarded.append((axis, output if source == self.external else None,
+                                 names.index(f"{self.plant}.{axis.position}"),
                                  names.index(f"{self.plant}.{axis.velocity}"), low, high, limit))
 
     def _margins(self, values, drives=None):
@@ -119,9 +128,10 @@ class RailGuard:
         for k, ((room, end, at), (room_before, _, _), (axis, _, i, j, _, _, limit)) in enumerate(zip(
                 self._margins(after, drives), self._margins(before), self.guarded)):
             if room < 0 and room < room_before - SLACK - slack.get(k, 0.0):
+                rest = at - MARGIN - room if end.endswith("_max") else at + MARGIN + room
                 return (f"the trolley at {axis.position} = {after[i]!r} m moving at {after[j]!r} m/s could not stop "
-                        f"before the rail end {end} = {at!r} m with its drive's {limit:g} m/s2 "
-                        f"({-room:.3g} m past it)")
+                        f"before the rail end {end} = {at!r} m with its drive's {limit:g} m/s2 (braked at once it "
+                        f"comes to rest at {axis.position} = {rest!r} m; the guard keeps {MARGIN:g} m inside)")
         for k, a in drives.items():  # the block is taken
             self.lags[k][4] = a
         return None
@@ -130,6 +140,8 @@ class RailGuard:
         """``{external output: demand}`` braking each guarded axis to rest (see :func:`braking_distance`)."""
         held = {}
         for k, (_, output, _, speed, _, _, limit) in enumerate(self.guarded):
+            if output is None:  # a controller drives this axis: the client's outputs are held at zero
+                continue
             v = values[speed] + (self.lags[k][4] * self.lags[k][0] if k in self.lags else 0.0)  # s = v + a tau
             held[output] = -math.copysign(min(limit, abs(v) / self.cycle), v) if abs(v) > AT_REST else 0.0
         return held
