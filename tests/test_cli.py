@@ -166,6 +166,27 @@ def test_fmu_failure_keeps_results_and_exits_1(fmu_dir, tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["diverged.csv", "diverged.cut-short.csv"]
 
 
+def test_an_input_made_non_finite_during_the_run_is_a_failed_run_naming_its_source(fmu_dir, tmp_path, capsys):
+    """A controller (a law file) that gives u = nan once the trolley moves: the plant refuses the input during the run.
+    That is a run that failed (status 1, the rows so far kept and named, the input's source named), not a mistake in
+    the arguments (status 2, as a refused parameter is; it was before). A law that fails at t = 0 leaves no rows: the
+    line says so (it said "in None")."""
+    law = tmp_path / "nan_law.py"
+    law.write_text("def law(config, state, inputs):\n    return (float('nan') if inputs[0] > 0.01 else 0.5,)\n")
+    csv = tmp_path / "run.csv"
+    code, _, err = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--system", "lqr", "--use",
+                        f"controller={law}:law", "--out", str(csv))
+    cut = tmp_path / "run.cut-short.csv"
+    assert code == 1 and err.count("\n") == 1, err
+    assert "plant: fmi2SetReal returned error at t=" in err and "input u must be finite, got nan" in err, err
+    assert "(plant.u is controller.u) (results up to t=" in err and f"in {cut}; {csv} is not written)" in err, err
+    assert read_csv(cut)["time"][-1] > 0
+    law.write_text("def law(config, state, inputs):\n    return 1 / 0\n")
+    code, _, err = _run(capsys, "simulate", "--fmu-dir", str(fmu_dir), "--system", "lqr", "--use",
+                        f"controller={law}:law", "--out", str(csv))
+    assert code == 1 and "(no results: it failed at t=0 s; " in err and "None" not in err, err
+
+
 def test_ctrl_c_in_simulate_is_one_line_and_keeps_the_rows_so_far(fmu_dir, tmp_path, capsys, monkeypatch):
     """Ctrl-C during a run: one line naming where the rows went, status 130; the earlier result untouched."""
     import crane_fmu.cosim.master

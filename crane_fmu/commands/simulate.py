@@ -2,6 +2,7 @@
 
 import argparse
 import os
+import re
 import signal
 import sys
 from dataclasses import replace
@@ -216,12 +217,14 @@ def _simulate(args, system):
         if "KeyboardInterrupt" in str(exc):  # a second Ctrl-C while an FMU's Python code ran: it returned an error
             _end(progress)
             return _interrupted(recorder)
-        # Bad parameter values are refused when initialisation ends: the user's mistake.
-        if exc.time is None or exc.function.endswith(("ExitInitializationMode", "SetReal", "SetFloat64",
-                                                       "SetString")):
+        # Bad parameter values are refused before the run or when initialisation ends: the user's mistake. A value
+        # set during the run is an input another instance gave: the run failed.
+        if exc.time is None or exc.function.endswith("ExitInitializationMode"):
             raise UsageError(str(exc)) from None
         _end(progress)
-        print(f"crane-fmu: simulation failed: {exc} (results up to t={exc.time:.9g} s in {recorder.written}; "
+        where = (f"results up to t={exc.time:.9g} s in {recorder.written}" if recorder.written else
+                 f"no results: it failed at t={exc.time:.9g} s")
+        print(f"crane-fmu: simulation failed: {exc}{_fed_by(exc, connections)} ({where}; "
               f"{args.out} is {'as it was' if os.path.exists(args.out) else 'not written'})", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
@@ -255,6 +258,13 @@ def open_recorder(out):
         raise UsageError(f"--out {out}: cannot be written ({exc.strerror})") from None
     except ImportError as exc:
         raise UsageError(f"--out {out}: writing it needs {exc.name} (pip install {exc.name})") from None
+
+
+def _fed_by(exc, connections):
+    """``" (plant.u is controller.u)"``: where an input an instance refused during the run came from."""
+    found = re.search(r"\binput (\w+)", str(exc)) if exc.function.endswith(("SetReal", "SetFloat64")) else None
+    source = next((c for c in connections if found and c.target == exc.instance and c.input == found[1]), None)
+    return f" ({exc.instance}.{source.input} is {source.source}.{source.output})" if source else ""
 
 
 def _end(progress):
