@@ -116,8 +116,12 @@ def _component(source):
     return components.find(str(source))
 
 
-def tell_controllers(system, fmu_dir):
+def tell_controllers(system, fmu_dir, values=()):
     """``(system, notes)``: each controller told what :func:`crane_fmu.controller_interface.told` gives it.
+
+    ``values``: what the run sets over the system's own after this (``--parameters``, ``--set``), in order: the
+    targets are read with them applied (a planner's ``x_d`` set), and the told ones are set on ``system`` without them,
+    so that a value the user gives the controller itself still wins.
 
     A system moves the load when its design feeds a controller's references of an axis (``x_ref``, from a
     planner); the move's target is that planner's target parameter (``x_d``). A controller with the planner's
@@ -134,7 +138,14 @@ def tell_controllers(system, fmu_dir):
     if plant is None or plant.crane is None:
         return system, []
     fmus, notes, axes = system.fmus(fmu_dir), [], plant.crane.axes
-    moves = {c.target: c.source for c in system.designed(fmu_dir) if c.input == axes[0].references[0]}
+    given = system
+    for overrides in values:
+        given = crane_parameters.with_values(given, overrides)
+    designed = system.designed(fmu_dir)
+    moves = {c.target for c in designed if c.input == axes[0].references[0]}
+    # each axis's planner, and its parameter that holds the target (a one-axis planner's x_d plans the y axis too)
+    planners = axis_planners(plant.crane, kinds(replace(system, instances={**system.instances, **system.replaced})),
+                             designed)
     for name in system.instances:
         place = _component(system.replaced.get(name, system.instances[name]))
         if place is None or place.role != "controller":
@@ -142,19 +153,24 @@ def tell_controllers(system, fmu_dir):
         variables = read_fmu(fmus[name]).modelVariables
         names = {causality: [v.name for v in variables if v.causality == causality]
                  for causality in ("input", "output", "parameter")}
-        target = None
-        if name in moves:  # the planner's targets (a planner without them: only its references can tell the move)
-            starts = {v.name: v.start for v in read_fmu(fmus[moves[name]]).modelVariables}
-            given = system.parameters.get(moves[name], {})
-            target = {a.position: float(given.get(a.target, starts.get(a.target, math.inf))) for a in axes}
+        target, source = None, {}
+        if name in moves:  # the planners' targets (a planner without them: only its references can tell the move)
+            target = {}
+            for a in axes:
+                planner = planners.get(a.position)
+                starts = {v.name: v.start for v in read_fmu(fmus[planner]).modelVariables} if planner else {}
+                parameter = planner_target(a, starts)
+                source[a.target] = f"{planner}.{parameter}" if planner else "no planner"
+                target[a.position] = float(given.parameters.get(planner, {}).get(parameter,
+                                                                                starts.get(parameter, math.inf)))
         try:
             move = told(f"{name} ({fmus[name]})", names["input"], names["output"], names["parameter"], plant, target)
         except ValueError as exc:
-            where = f" (system {system.name} moves it to {moves[name]}.{axes[0].target})" if name in moves else ""
+            where = f" (system {system.name} moves it to {', '.join(source.values())})" if name in moves else ""
             raise ValueError(f"{exc}{where}") from None
         if move.targets:
             system = system.with_parameters({name: move.targets})
-            told_text = ", ".join(f"{name}.{k} = {v:g} m ({moves[name]}.{k})" for k, v in move.targets.items())
+            told_text = ", ".join(f"{name}.{k} = {v:g} m ({source[k]})" for k, v in move.targets.items())
             notes.append(f"{name} ({Path(fmus[name]).name}) has no inputs {', '.join(tracked(plant.crane))}: it is "
                          f"told the move's target, {told_text}")
     return system, notes

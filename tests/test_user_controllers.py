@@ -118,6 +118,41 @@ def test_simulate_and_compare_give_a_controller_without_references_the_same_move
     np.testing.assert_array_equal(simulated["plant.theta1"], scored["plant.theta1"])
 
 
+@pytest.mark.parametrize("system", ["lqr3d-move", "lqr3d-path"])
+def test_a_3d_controller_without_references_is_told_each_axiss_target(fmu_dir, tmp_path, capsys, system):
+    """The crane in three dimensions as the planar one: a controller with the targets x_d and y_d and no reference
+    inputs (a user's copy of the MPC in 3-D) in a system that moves the load gets x_d from the x axis's planner and
+    y_d from the y axis's (a one-axis planner: its own x_d), and takes the load there. On main it was refused ("cannot
+    be told where the load goes"), the message naming only planner.x_d."""
+    native = fmu_dir.parent / "native"
+    mine = tmp_path / "mine" / "MpcController3D.fmu"
+    mine.parent.mkdir()
+    mine.write_bytes((native / "MpcController3D.fmu").read_bytes())
+    x_d, y_d = 1.5, 0.75
+    code, err = _simulate(capsys, native, tmp_path, system, f"controller={mine}", "--set", f"planner.x_d={x_d}",
+                          "--set", f"planner_y.x_d={y_d}", "--stop-time", "8")
+    assert code == 0, err
+    assert (f"it is told the move's target, controller.x_d = {x_d:g} m (planner.x_d), controller.y_d = {y_d:g} m "
+            "(planner_y.x_d)") in err, err
+    run = read_csv(tmp_path / "run.csv")
+    assert abs(run["plant.x"][-1] - x_d) < 0.01 and abs(run["plant.y"][-1] - y_d) < 0.01
+
+
+def test_a_controller_is_told_the_target_as_set_and_its_own_value_wins(fmu_dir, tmp_path, capsys):
+    """`--set planner.x_d=1.5` moves the load to 1.5 m with a controller told the target (the MPC's copy in
+    `transport`), as it does the LQR that tracks the planner; on main it was told the system's 2 m and took the load
+    there. A value the user gives the controller itself (`--set controller.x_d=1.2`) is the one it runs with."""
+    native = fmu_dir.parent / "native"
+    mine = tmp_path / "mine" / "MpcController.fmu"
+    mine.parent.mkdir()
+    mine.write_bytes((native / "MpcController.fmu").read_bytes())
+    for sets, where in [(["--set", "planner.x_d=1.5"], 1.5),
+                        (["--set", "planner.x_d=1.5", "--set", "controller.x_d=1.2"], 1.2)]:
+        code, err = _simulate(capsys, native, tmp_path, "transport", f"controller={mine}", "--stop-time", "6", *sets)
+        assert code == 0 and "controller.x_d = 1.5 m (planner.x_d)" in err, err
+        assert abs(read_csv(tmp_path / "run.csv")["plant.x"][-1] - where) < 0.01, sets
+
+
 def test_the_built_in_controllers_fit_every_built_in_system(fmu_dir):
     """The rule refuses none of the built-in systems: each controller is told what the system gives it."""
     for system in systems.registered():

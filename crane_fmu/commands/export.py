@@ -59,16 +59,17 @@ def exported(args, system, built=None):
     system = _laws_built(system, built)
     fmus, _ = systems.resolve(system, args.fmu_dir)
     system = _keep_known(system, fmus, list(system.replaced))
-    system, notes = systems.tell_controllers(system, args.fmu_dir)
+    variables = systems.settable(system, fmus)
+    values = [_parameter_file(args.parameters, variables)] if args.parameters else []
+    values.append(parse_sets(args.set, variables))
+    system, notes = systems.tell_controllers(system, args.fmu_dir, values)
     for note in notes:
         print(f"crane-fmu: note: {note}", file=sys.stderr)
     # the connections as checked (a controller's optional inputs left out), written out: the file's own
     fmus, connections = systems.resolve(system, args.fmu_dir)
     system = replace(system, connections=tuple(connections), match_names=False, replaced={},
                      tags=("yours",) if system.replaced else system.tags)
-    variables = systems.settable(system, fmus)
-    values = [_parameter_file(args.parameters, variables)] if args.parameters else []
-    for overrides in values + [parse_sets(args.set, variables)]:
+    for overrides in values:
         system = crane_parameters.with_values(system, overrides)
     systems.check_parameters(systems.bind(system))
     return system

@@ -160,12 +160,13 @@ def prepare(args, system, step):
 
     fmus, connections = systems.resolve(system, args.fmu_dir)
     system = _keep_known(system, fmus, list(system.replaced))
-    system, notes = systems.tell_controllers(system, args.fmu_dir)
-    for note in notes:
-        print(f"crane-fmu: note: {note}", file=sys.stderr)
     variables = systems.settable(system, fmus)
     values = [_parameter_file(args.parameters, variables)] if args.parameters else []
-    system = systems.prepare(system, step, values=values + [parse_sets(args.set, variables)])
+    values.append(parse_sets(args.set, variables))
+    system, notes = systems.tell_controllers(system, args.fmu_dir, values)
+    for note in notes:
+        print(f"crane-fmu: note: {note}", file=sys.stderr)
+    system = systems.prepare(system, step, values=values)
     return system, fmus, connections
 
 
