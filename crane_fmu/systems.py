@@ -116,12 +116,13 @@ def _component(source):
     return components.find(str(source))
 
 
-def tell_controllers(system, fmu_dir, values=()):
+def tell_controllers(system, fmu_dir, values=(), sources=None):
     """``(system, notes)``: each controller told what :func:`crane_fmu.controller_interface.told` gives it.
 
     ``values``: what the run sets over the system's own after this (``--parameters``, ``--set``), in order: the
     targets are read with them applied (a planner's ``x_d`` set), and the told ones are set on ``system`` without them,
-    so that a value the user gives the controller itself still wins.
+    so that a value the user gives the controller itself still wins. ``sources``: a dict that gets where each told
+    value comes from, ``{"controller.x_d": "planner.x_d"}`` (a study's cases that set the planner's set it too).
 
     A system moves the load when its design feeds a controller's references of an axis (``x_ref``, from a
     planner); the move's target is that planner's target parameter (``x_d``). A controller with the planner's
@@ -171,6 +172,8 @@ def tell_controllers(system, fmu_dir, values=()):
         if move.targets:
             system = system.with_parameters({name: move.targets})
             told_text = ", ".join(f"{name}.{k} = {v:g} m ({source[k]})" for k, v in move.targets.items())
+            if sources is not None:
+                sources.update({f"{name}.{k}": source[k] for k in move.targets})
             notes.append(f"{name} ({Path(fmus[name]).name}) has no inputs {', '.join(tracked(plant.crane))}: it is "
                          f"told the move's target, {told_text}")
     return system, notes

@@ -153,6 +153,32 @@ def test_a_controller_is_told_the_target_as_set_and_its_own_value_wins(fmu_dir, 
         assert abs(read_csv(tmp_path / "run.csv")["plant.x"][-1] - where) < 0.01, sets
 
 
+@pytest.mark.parametrize("kind, controller", [("python", "EnergyController"), ("native", "MpcController")])
+def test_a_study_of_the_planners_target_tells_each_case_its_target(fmu_dir, tmp_path, capsys, dask_scheduler, kind,
+                                                                   controller):
+    """A study of `planner.x_d` with a controller told the target (`use`, no reference inputs): each case's controller
+    is told the case's target, and its figures are simulate's with `--set planner.x_d` (the per-case path and the
+    native batch path). On main every case was told the system's 2 m: the same figures for every target."""
+    pytest.importorskip("distributed")
+    import pyarrow.parquet as pq
+
+    folder = fmu_dir if kind == "python" else fmu_dir.parent / "native"
+    mine = tmp_path / "mine" / f"{controller}.fmu"
+    mine.parent.mkdir()
+    mine.write_bytes((folder / f"{controller}.fmu").read_bytes())
+    study = tmp_path / "targets.toml"
+    study.write_text(f'system = "transport"\nstop_time = 3.0\nstep = 0.001\nmetrics = ["trolley_final_m"]\n'
+                     f'[parameters]\n"planner.x_d" = [1.0, 1.5]\n[use]\ncontroller = "{mine}"\n')
+    assert main(["sweep", str(study), "--out", str(tmp_path / "study"), "--fmu-dir", str(folder), "--scheduler",
+                 dask_scheduler, "--no-progress"]) == 0
+    rows = pq.read_table(tmp_path / "study" / "results.parquet").to_pydict()
+    for x_d, final in zip(rows["planner.x_d"], rows["trolley_final_m"]):
+        code, err = _simulate(capsys, folder, tmp_path, "transport", f"controller={mine}", "--stop-time", "3",
+                              "--set", f"planner.x_d={x_d}")
+        assert code == 0 and read_csv(tmp_path / "run.csv")["plant.x"][-1] == final, (x_d, final)
+    assert rows["trolley_final_m"][0] != rows["trolley_final_m"][1]
+
+
 def test_the_built_in_controllers_fit_every_built_in_system(fmu_dir):
     """The rule refuses none of the built-in systems: each controller is told what the system gives it."""
     for system in systems.registered():

@@ -28,9 +28,10 @@ from .results import JournalIndex, write_results
 from .spec import case_id
 
 
-def shippable(system, fmu_dir, binding=None):
+def shippable(system, fmu_dir, binding=None, told=None):
     """What a worker needs to run cases of a prepared ``system``: FMU bytes by instance, connections, parameter
-    values, and ``binding``, the instances each crane parameter binds (:func:`case_parameters`).
+    values, ``binding``, the instances each crane parameter binds, and ``told``, the values a controller was told
+    and their sources (:func:`case_parameters`).
 
     ``blobs`` is ``{instance: (sha256, bytes)}``; workers cache each FMU once by its hash.
     """
@@ -41,7 +42,8 @@ def shippable(system, fmu_dir, binding=None):
         data = Path(laws.law_file(path) if law else path).read_bytes()
         suffix = str(path)[len(str(laws.law_file(path).with_suffix(""))):] if law else ""
         blobs[name] = (hashlib.sha256(data).hexdigest()[:20] + suffix, data)
-    return {"blobs": blobs, "connections": connections, "parameters": system.parameters, "binding": binding or {}}
+    return {"blobs": blobs, "connections": connections, "parameters": system.parameters, "binding": binding or {},
+            "told": told or {}}
 
 
 def local_fmus(blobs):
@@ -60,14 +62,19 @@ def local_fmus(blobs):
     return paths
 
 
-def case_parameters(case, base=None, binding=None):
+def case_parameters(case, base=None, binding=None, told=None):
     """``{"plant.l1": 1.5}`` -> ``{"plant": {"l1": 1.5}}``, over the system's own values ``base``; a crane value
     (``"crane.l2"``) set on the instances ``binding`` names for it (:func:`shippable`) that the case gives no
-    value of their own."""
+    value of their own; a value a controller was told (``told``: ``{"controller.x_d": "planner.x_d"}``) follows the
+    case's value of its source, unless the case gives the controller's own."""
     values = {}
     for key, value in case.items():
         instance, _, variable = key.partition(".")
         values.setdefault(instance, {})[variable] = value
+    for key, source in (told or {}).items():
+        if source in case and key not in case:
+            instance, _, variable = key.partition(".")
+            values.setdefault(instance, {})[variable] = case[source]
     crane = values.pop(crane_parameters.CRANE, {})
     parameters = {name: dict(v) for name, v in (base or {}).items()}
     for instance, own in crane_parameters.bind_values(values, crane, binding or {}).items():
@@ -90,7 +97,8 @@ def run_case(case, system, settings, metric_names):
     recorder, error = ArrayRecorder(), None
     try:
         simulate(local_fmus(system["blobs"]), system["connections"], settings["stop_time"], settings["step"],
-                 settings["algorithm"], case_parameters(case, system["parameters"], system["binding"]), recorder)
+                 settings["algorithm"], case_parameters(case, system["parameters"], system["binding"],
+                                                        system.get("told")), recorder)
     except FmiError as exc:
         error = exc
     row = case_row(case, settings, metric_names, recorder.columns() if recorder.names else None, error)
@@ -144,8 +152,9 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
     total, done = study.case_count(), JournalIndex(out_dir / JOURNAL)
     start = time.perf_counter()
     with systems.open_system(study.system) as system:
+        told = {}
         if study.use:
-            system, settings = _used(system, study.use, fmu_dir, settings)
+            system, settings = _used(system, study.use, fmu_dir, settings, told)
         fmus, connections = systems.resolve(system, fmu_dir)
         units, crane = _check_names(study, system, fmu_dir)
         metric_names = study.metrics_of(crane, f"system {system.name}")
@@ -159,7 +168,7 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
             (warn or (lambda text: print(f"crane-fmu: warning: {text}", file=sys.stderr)))(line)
         out_dir.mkdir(parents=True, exist_ok=True)  # only now: a refused study leaves no folder behind
         binding = crane_parameters.bound(system, systems.modelled(system))  # before prepare binds the crane's
-        shipped = shippable(systems.prepare(system, study.step, study.stop_time, check=False), fmu_dir, binding)
+        shipped = shippable(systems.prepare(system, study.step, study.stop_time, check=False), fmu_dir, binding, told)
         skipped = failed_before = to_run = 0
         invalid, checked = {}, {}
         for case in study.iter_cases():  # the model's parameter rules, before anything is shipped
@@ -170,7 +179,7 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
                 continue
             try:
                 systems.check_parameters(replace(system, parameters=case_parameters(
-                    case, shipped["parameters"], shipped["binding"])), checked)
+                    case, shipped["parameters"], shipped["binding"], shipped["told"])), checked)
                 to_run += 1
             except ValueError as exc:
                 invalid[key] = _invalid_row(case, settings, str(exc), metric_names)
@@ -196,7 +205,7 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
     return {"cases": total, "skipped": skipped, "ran": ran, "not_ok": not_ok, "seconds": time.perf_counter() - start}
 
 
-def _used(system, use, fmu_dir, settings):
+def _used(system, use, fmu_dir, settings, told):
     """``(system, settings)``: the study's system with the FMUs of its ``use`` table in their places, told the
     move as simulate tells them, and the settings (so every case id) naming those files by their sha256."""
     from crane_fmu.commands.common import UsageError
@@ -214,14 +223,14 @@ def _used(system, use, fmu_dir, settings):
     system = system.with_instances(overrides)
     fmus, _ = systems.resolve(system, fmu_dir)
     system = _keep_known(system, fmus, list(system.replaced))
-    system, notes = systems.tell_controllers(system, fmu_dir)
+    system, notes = systems.tell_controllers(system, fmu_dir, sources=told)
     for note in notes:
-        print(f"crane-fmu: note: {note}", file=sys.stderr)
+        print(f"crane-fmu: note: {note}" + (" (each case's where it sets it)" if told else ""), file=sys.stderr)
     _, connections = systems.resolve(system, fmu_dir)  # as checked (a controller's optional inputs left out)
     system = replace(system, connections=tuple(connections), match_names=False, replaced={})
     digests = {name: hashlib.sha256(Path(laws.law_file(p) if laws.is_law(p) else p).read_bytes())
                .hexdigest() for name, p in overrides.items()}
-    return system, {**settings, "use": digests}
+    return system, {**settings, "use": digests, **({"told": told} if told else {})}  # in every case's id
 
 
 def _plotted(path, study):
