@@ -88,6 +88,11 @@ def test_sampling_is_seeded_and_within_bounds(tmp_path, method):
     ("stop_time = 1.0\nstep = 0.01\n[parameters]\n'plant.l1' = [1.0]\n[plot]\nmetric = 'outcome'\nx = 'plant.l2'\n"
      "y = 'plant.l1'", "plot.x must be a varied parameter"),
     ("stop_time = [", "not valid TOML"),
+    ("stop_time = 1.0\nstep = 0.01\nmetrics = 'rms_theta1_deg'", r"^metrics must be a list of metric names, got "
+                                                                   r"'rms_theta1_deg'$"),
+    ("stop_time = 1.0\nstep = 0.01\n[parameters]\n'plant.l1' = [1.0]\n'plant.l1 ' = [2.0]",
+     r"^parameter plant.l1 is varied twice \(parameters.'plant.l1 '\); vary it once$"),
+    ("stop_time = 1.0\nstep = 0.01\n[parameters]\n'plant.l1, plant.l1' = [1.0]", "parameter plant.l1 is varied twice"),
 ])
 @pytest.mark.quick
 def test_study_mistakes_are_one_line_errors(tmp_path, text, message):

@@ -210,6 +210,9 @@ def parse(data, source="study"):
     system = data.get("system", DEFAULT_SYSTEM)
     if not isinstance(system, str) or not system:
         raise ValueError(f"system must be a system's name or an SSP file, got {system!r}")
+    listed = data.get("metrics", [])
+    if not (isinstance(listed, list) and all(isinstance(m, str) for m in listed)):
+        raise ValueError(f"metrics must be a list of metric names, got {data['metrics']!r}")
     metrics = tuple(data.get("metrics", METRICS))
     known = known_metrics()
     for m in metrics:
@@ -220,9 +223,13 @@ def parse(data, source="study"):
     if not band > 0:
         raise ValueError(f"settling_band_deg must be a number > 0, got {band!r}")
 
-    grid, sampled = {}, {}
+    grid, sampled, named = {}, {}, set()
     for key, value in data.get("parameters", {}).items():
         names = _names(key)
+        twice = named.intersection(names) or {n for n in names if names.count(n) > 1}
+        if twice:
+            raise ValueError(f"parameter {sorted(twice)[0]} is varied twice (parameters.{key!r}); vary it once")
+        named.update(names)
         kind, spec = _axis(key, value)
         if kind == "grid":
             grid[key] = (names, spec)
