@@ -1326,3 +1326,18 @@ def test_real_time_a_reference_written_past_the_rail_end_leaves_the_run_going_to
     assert "could not stop before the rail end x_max = 2.5 m" in err and "held at zero" in err, err
     served = read_csv(server.out)
     assert 2.4 < np.max(served["plant.x"]) <= 2.5 and served["plant.x"][-1] < 2.4  # braked before the end, back
+
+
+def test_a_start_from_which_the_trolley_cannot_stop_before_a_rail_end_is_refused_in_one_line(fmu_dir, tmp_path):
+    """x0 = 1.9 m at 3 m/s towards x_max = 2 m with a drive of 2 m/s2: braked from the first instant the trolley comes
+    to rest at 1.9 + 9/4 = 4.15 m. On main the server started and then refused every step for ever; now it does not
+    start: status 2, one line naming the start, the rest point and the rail end, and no result file."""
+    out = tmp_path / "serve.csv"
+    done = subprocess.run([sys.executable, "-m", "crane_fmu", "serve", "--fmu-dir", str(fmu_dir), "--out", str(out),
+                           "--system", "lqr", "--external", "controller", "--lock-step", "--set", "plant.x_max=2",
+                           "--set", "plant.u_max=2", "--set", "plant.x0=1.9", "--set", "plant.dx0=3",
+                           "--opcua", "127.0.0.1:0"], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and done.stderr == (
+        "crane-fmu: error: the trolley starts at x = 1.9 m moving at 3 m/s: braked at its drive's 2 m/s2 from the "
+        "start it comes to rest at 4.15 m, past the rail end x_max = 2 m; no run can step from there\n"), done.stderr
+    assert list(tmp_path.iterdir()) == []

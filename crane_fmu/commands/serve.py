@@ -132,6 +132,7 @@ def _serve(args, system):
     from crane_fmu.cosim.pacing import Watchdog
     from crane_fmu.cosim.realtime import Runner
     from crane_fmu.cosim.recorder import RESULT_SUFFIXES
+    from crane_fmu.serve.rail_ends import CannotStop
 
     step, stop_time, period_steps, endpoints = _check(args, system)
     system, fmus, connections = prepare(args, system, step)
@@ -154,7 +155,7 @@ def _serve(args, system):
             print(markdown(register_map(runner.variables)))
             return 0
         return _run(args, system, runner, endpoints)
-    except FmiError as exc:
+    except (FmiError, CannotStop) as exc:
         raise UsageError(str(exc)) from None  # at initialisation: the values given
     finally:
         for inst in instances.values():
@@ -178,7 +179,11 @@ def _rail_guard(args, system, connections):
 def _run(args, system, runner, endpoints):
     recorder = open_recorder(args.out)
     runner.observers.append(recorder)
-    runner.start()
+    try:
+        runner.start()
+    except BaseException:
+        recorder.close()  # nothing recorded: no file is left behind
+        raise
     previous = _stop_on_signals(runner)  # from here Ctrl-C stops the run cleanly, also while it starts
     try:
         return _serve_until_stopped(args, system, runner, recorder, endpoints)

@@ -39,6 +39,10 @@ SLACK = 1e-9  # m: a block ends "farther" than it began by more than this (the b
 AT_REST = 1e-12  # m/s: a speed within rounding of rest is held at zero (-v/T of a denormal speed is not)
 
 
+class CannotStop(ValueError):
+    """A served run's start from which the trolley cannot stop before a rail end, whatever is written."""
+
+
 def braking_distance(speed, limit, cycle):
     """The distance [m] a trolley at ``speed`` [m/s] travels braked as :meth:`RailGuard.hold` brakes it: ``-U``
     (``limit``, m/s2) for each whole cycle of ``cycle`` [s] while ``|v| > U*T``, then ``-v/T`` for one cycle.
@@ -96,6 +100,14 @@ class RailGuard:
             self.guarded.append((axis, output if source == self.external else None,
                                  names.index(f"{self.plant}.{axis.position}"),
                                  names.index(f"{self.plant}.{axis.velocity}"), low, high, limit))
+            x, v, most = float(plant.get(axis.position)), float(plant.get(axis.velocity)), \
+                abs(float(plant.get(f"{axis.demand}_max")))
+            rest = x + v * abs(v) / (2 * most) if most > 0 else x + math.copysign(math.inf, v) if v else x
+            if not low <= rest <= high:  # braked at the drive's limit from the first instant: past the rail end
+                end = f"{axis.position}_max = {high:g}" if rest > high else f"{axis.position}_min = {low:g}"
+                raise CannotStop(f"the trolley starts at {axis.position} = {x:g} m moving at {v:g} m/s: braked at its "
+                                 f"drive's {most:g} m/s2 from the start it comes to rest at {rest:g} m, past the rail "
+                                 f"end {end} m; no run can step from there")
 
     def _margins(self, values, drives=None):
         """Per guarded axis: ``(room, name of the rail end, its position)``: how far inside ``end -+ MARGIN`` the
