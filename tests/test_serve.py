@@ -537,7 +537,11 @@ def test_real_time_at_10_ms_keeps_its_deadlines_and_the_watchdog_holds_a_silent_
     (["--opcua", "--external", "crane"], "--external crane: system paper has no instance 'crane'"),
     (["--opcua", "--period", "0.0025"], "--period 0.0025: must be a whole number of steps of 0.001 s"),
     (["--opcua", "--lock-step", "--period", "0.01"], "--period paces real time; in lock-step the client"),
-    (["--opcua", "--lock-step", "--external", "controller", "--watchdog", "1"], "--watchdog holds an --external"),
+    (["--opcua", "--lock-step", "--external", "controller", "--watchdog", "1"],
+     "--watchdog is the watchdog's, for real time; in lock-step time waits for the client"),
+    (["--opcua", "--watchdog", "1"], "--watchdog is the watchdog's, which holds an --external instance's outputs"),
+    (["--opcua", "--hold", "last"], "--hold is the watchdog's, which holds an --external instance's outputs"),
+    (["--modbus", "opc.tcp://127.0.0.1:502"], "--modbus 'opc.tcp://127.0.0.1:502': expected HOST:PORT"),
     (["--opcua", "--external", "controller", "--watchdog", "0"], "--watchdog must be > 0 s, got 0"),
     (["--opcua", "--stop-time", "0.0005"], "must divide the interval"),
     (["--opcua", "--lock-step", "--rt-priority", "10"], "--rt-priority is for real time"),
@@ -578,6 +582,7 @@ def test_the_register_map_and_the_float32_words_of_a_value():
     assert words_float32(*float32_words(0.1)) == float(np.float32(0.1))
     assert float32_words(-1e39) == float32_words(-math.inf)
     assert parse_endpoint(":4840", "--opcua") == ("127.0.0.1", 4840)
+    assert parse_endpoint("opc.tcp://10.0.0.2:4840/", "--opcua") == ("10.0.0.2", 4840)  # the first line's URL
 
 
 @pytest.mark.quick

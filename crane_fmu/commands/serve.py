@@ -59,7 +59,7 @@ def arguments(p):
     p.add_argument("--watchdog", type=number, metavar="SECONDS",
                    help="real time with --external: after this long without a client write the external outputs "
                         "are held (default 1 s)")
-    p.add_argument("--hold", choices=("zero", "last"), default="zero",
+    p.add_argument("--hold", choices=("zero", "last"),
                    help="what the watchdog holds the external outputs at: zero (default) or their last values")
     p.add_argument("--rt-priority", type=int, metavar="N",
                    help="real time on Linux: run the stepping thread under SCHED_FIFO at priority N (1-99), ahead "
@@ -117,10 +117,13 @@ def _check(args, system):
             raise UsageError("--rt-priority is for real time; in lock-step the client's requests take the steps")
         if not 1 <= args.rt_priority <= 99:
             raise UsageError(f"--rt-priority must be from 1 to 99, got {args.rt_priority}")
+    for option, value in (("--watchdog", args.watchdog), ("--hold", args.hold)):
+        if value is not None and args.external is None:
+            raise UsageError(f"{option} is the watchdog's, which holds an --external instance's outputs: give "
+                             "--external INSTANCE")
+        if value is not None and args.lock_step:
+            raise UsageError(f"{option} is the watchdog's, for real time; in lock-step time waits for the client")
     if args.watchdog is not None:
-        if args.lock_step or args.external is None:
-            raise UsageError("--watchdog holds an --external instance's outputs in real time; in lock-step time waits "
-                             "for the client")
         if not args.watchdog > 0:
             raise UsageError(f"--watchdog must be > 0 s, got {args.watchdog:g}")
     return step, args.stop_time, period_steps, endpoints
@@ -144,7 +147,7 @@ def _serve(args, system):
             instances[name] = ExternalInstance(path, name) if name == args.external else open_instance(path, name)
         watchdog = None
         if args.external and not args.lock_step:
-            watchdog = Watchdog(1.0 if args.watchdog is None else args.watchdog, args.hold)
+            watchdog = Watchdog(1.0 if args.watchdog is None else args.watchdog, args.hold or "zero")
         master = Master(instances, connections, args.algorithm)
         runner = Runner(master, system.start_time, step, stop_time, system.parameters, lock_step=args.lock_step,
                         period_steps=period_steps, watchdog=watchdog, writable=args.writable, log=_say,

@@ -14,15 +14,19 @@ LOOPBACK = "127.0.0.1"
 
 
 def parse_endpoint(text, option):
-    """``(host, port)`` of ``HOST:PORT``, ``:PORT`` or ``PORT`` (host 127.0.0.1); port 0: the OS picks one.
+    """``(host, port)`` of ``HOST:PORT``, ``:PORT`` or ``PORT`` (host 127.0.0.1); port 0: the OS picks one. For
+    ``--opcua`` also the URL the server's first line prints, ``opc.tcp://HOST:PORT``.
 
     ValueError (one line) naming the option and the rule.
     """
+    scheme, slashes, rest = text.partition("://")
+    if slashes and option == "--opcua" and scheme == "opc.tcp" and "/" not in rest.rstrip("/"):
+        text = rest.rstrip("/")
     host, colon, port = text.rpartition(":")
     if not colon:
         host, port = "", text
     host = host.strip("[]") or LOOPBACK
-    if not port.isdigit() or not 0 <= int(port) <= 65535:
+    if "/" in host or not port.isdigit() or not 0 <= int(port) <= 65535:
         raise ValueError(f"{option} {text!r}: expected HOST:PORT with a port from 0 to 65535 (0: one the OS picks), "
                          f"e.g. 127.0.0.1:4840")
     return host, int(port)
