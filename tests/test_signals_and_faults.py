@@ -35,12 +35,13 @@ def _rows_written(partial, timeout=60):
 
 
 @pytest.mark.parametrize("signum, delay", [(signal.SIGINT, 0.0), (signal.SIGINT, 0.3), (signal.SIGINT, 0.7),
-                                           (signal.SIGTERM, 0.0), (signal.SIGTERM, 0.5)],
-                         ids=["SIGINT-1", "SIGINT-2", "SIGINT-3", "SIGTERM-1", "SIGTERM-2"])
+                                           (signal.SIGTERM, 0.0), (signal.SIGTERM, 0.5), (signal.SIGHUP, 0.3)],
+                         ids=["SIGINT-1", "SIGINT-2", "SIGINT-3", "SIGTERM-1", "SIGTERM-2", "SIGHUP"])
 def test_a_signal_ends_simulate_in_one_line_and_keeps_the_rows(fmu_dir, tmp_path, signum, delay):
-    """Ctrl-C (SIGINT) or SIGTERM in the middle of a long run on the Python FMUs, at several moments: exit 130 or
-    143, one line on stderr naming the signal and the file, the rows so far in run.cut-short.csv with a trailer
-    naming the signal (no FMU blamed), no .partial left, no run.csv (it would claim a whole run)."""
+    """Ctrl-C (SIGINT), SIGTERM or SIGHUP (the terminal closed) in the middle of a long run on the Python FMUs, at
+    several moments: exit 130, 143 or 129, one line on stderr naming the signal and the file, the rows so far in
+    run.cut-short.csv with a trailer naming the signal (no FMU blamed), no .partial left, no run.csv (it would claim a
+    whole run). SIGHUP left the .partial (tens of MB) on main."""
     out = tmp_path / "run.csv"
     proc = _simulate(fmu_dir, out, "--system", "lqr", "--stop-time", "2000")
     try:

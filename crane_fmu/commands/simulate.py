@@ -285,8 +285,8 @@ def _cannot_write(out, recorder, error):
 
 
 def _interrupted(recorder, signum=signal.SIGINT):
-    """Ctrl-C or SIGTERM: one line saying where the rows so far went; exit status 128 + the signal's number (130,
-    143: the shell's)."""
+    """Ctrl-C, SIGTERM or SIGHUP (the terminal closed): one line saying where the rows so far went; exit status 128 +
+    the signal's number (130, 143, 129: the shell's)."""
     name = signal.Signals(signum).name
     recorder.close(reason=f"interrupted ({name})")
     where = f"the rows so far are in {recorder.written}" if recorder.written else "nothing was recorded"

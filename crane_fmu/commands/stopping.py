@@ -19,11 +19,11 @@ class Stopped(BaseException):
 
 
 class StopOnSignal:
-    """An observer of a run that raises :class:`Stopped` at the first observation after SIGINT or SIGTERM;
+    """An observer of a run that raises :class:`Stopped` at the first observation after SIGINT, SIGTERM or SIGHUP;
     as a context manager it installs the handlers (and restores the previous ones). A second SIGINT interrupts
     at once (KeyboardInterrupt)."""
 
-    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+    SIGNALS = (signal.SIGINT, signal.SIGTERM, *filter(None, [getattr(signal, "SIGHUP", None)]))  # HUP: the terminal
 
     def __init__(self):
         self.signum, self._previous = None, {}
