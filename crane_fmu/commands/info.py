@@ -2,7 +2,7 @@
 
 from pathlib import Path
 
-from crane_fmu.model.tables import enumeration_name, variable_table
+from crane_fmu.model.tables import variable_table
 
 from .common import UsageError, parse_sets
 
@@ -87,7 +87,7 @@ def _derived(system, sets):
     variables.update(crane_parameters.settable(models))
     system = crane_parameters.with_values(system, parse_sets(sets, variables))
     lines = [f"{system.name}: {system.description}" if system.description else system.name, *_crane(system, models)]
-    bound = systems.bind(system)
+    bound = systems.named_items(systems.bind(system))  # an SSP file's Enumeration: its item's value, read by name
     for name, kind in kinds.items():
         if name in system.replaced:
             lines += _yours(system, name, bound.parameters.get(name, {}))
@@ -96,18 +96,12 @@ def _derived(system, sets):
         lines.append(f"  {name} = {kind}" + ("" if component else " (not a registered component)"))
         if component and component.report:
             try:
-                derived = component.report(component.check(_by_name(component, bound.parameters.get(name, {}))))
+                derived = component.report(component.check(bound.parameters.get(name, {})))
             except (ValueError, ArithmeticError) as exc:
                 raise UsageError(f"{name}: {exc}") from None
             lines += [f"    {key} = {value:.6g}" if isinstance(value, float) else f"    {key} = {value}"
                       for key, value in derived.items()]
     return lines
-
-
-def _by_name(component, values):
-    """``values`` with each Enumeration's item by name, as the models keep it (an SSP file holds the item's value)."""
-    types = {v.name: v for v in component.variables if v.type == "Enumeration"}
-    return {k: enumeration_name(types[k], v) if k in types and not isinstance(v, str) else v for k, v in values.items()}
 
 
 def _told(system, fmu_dir):
