@@ -196,6 +196,12 @@ def test_cli_runs_the_minimal_study(fmu_dir, tmp_path, capsys):
     assert len(rows) == 12 and (tmp_path / "out" / "results.csv").exists() and (tmp_path / "out" / "plot.png").exists()
     assert len((tmp_path / "out" / JOURNAL).read_text().splitlines()) == 12
     assert all(json.loads(line)["case_id"] for line in (tmp_path / "out" / JOURNAL).read_text().splitlines())
+    # again, without --csv and with one axis: the earlier run's CSV and picture are removed, not left to be read as
+    # this run's (the CSV was kept on main)
+    (tmp_path / "study.toml").write_text(MINIMAL.split("[parameters]")[0] + "[parameters]\n\"plant.l1\" = [1.0]\n")
+    assert main(["sweep", str(tmp_path / "study.toml"), "--out", str(tmp_path / "out"), "--workers", "2",
+                 "--fmu-dir", str(fmu_dir), "--no-progress"]) == 0
+    assert not (tmp_path / "out" / "results.csv").exists() and not (tmp_path / "out" / "plot.png").exists()
 
 
 @pytest.mark.parametrize("study, message", [

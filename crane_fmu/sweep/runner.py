@@ -200,8 +200,12 @@ def run_study(study, out_dir, fmu_dir=DEFAULT_FMU_DIR, workers=None, scheduler=N
                            out_dir / "results.parquet")
     if csv:
         write_results(done, lambda: (case_id(c, settings) for c in study.iter_cases()), out_dir / "results.csv")
+    else:  # an earlier run's table would read as this one's
+        (out_dir / "results.csv").unlink(missing_ok=True)
     if study.plot or len(study.grid) + len(study.sampled) >= 2:
         plot_study(_plotted(out_dir / "results.parquet", study), study, out_dir / "plot.png", units=units)
+    else:
+        (out_dir / "plot.png").unlink(missing_ok=True)
     return {"cases": total, "skipped": skipped, "ran": ran, "not_ok": not_ok, "seconds": time.perf_counter() - start}
 
 
