@@ -236,7 +236,8 @@ def _memory(a):
     r = a.tail.ratio
     kind = ("an integrator" if abs(r - 1) < 1e-9 else
             f"time constant {-a.h / np.log(r):.4g} s" if 0 < r < 1 else "growing" if abs(r) > 1 else "alternating")
-    return (f"memory of {a.memory} step{'s' if a.memory != 1 else ''}, then for ever one mode, x{r:.9g} a step ({kind}), from "
+    steps = f"{a.memory} step" + ("s" if a.memory != 1 else "")
+    return (f"memory of {steps}, then for ever one mode, x{r:.9g} a step ({kind}), from "
             + ", ".join(f"{g:+.6g} {n}" for g, n in zip(a.tail.gain, a.inputs) if g))
 
 
@@ -325,8 +326,8 @@ def of_system(system, fmus, connections, at=None, memory=MEMORY):
     names = [name for name, _ in read]
     steps = max(1, round(memory / system.step))
     if steps * len(names) > LARGEST:
-        raise ValueError(f"--memory {memory:g} s: {steps} steps of {len(names)} inputs of {controller}, more than "
-                         f"the {LARGEST} states the analysis takes (--memory <= "
+        raise ValueError(f"--memory {memory:g} s: {steps} steps x {len(names)} inputs of {controller} make "
+                         f"{steps * len(names)} states, more than the {LARGEST} the analysis takes (--memory <= "
                          f"{LARGEST // len(names) * system.step:g} s at h = {system.step:g} s)")
     values = system.parameters.get(controller, {})
 
