@@ -143,7 +143,7 @@ _PI_LAW = '''
 from crane_fmu.model.component import Component
 from crane_fmu.model.tables import MEASURED_STATE, output, parameter
 
-NAMES = ("k_x", "k_v", "k_t1", "k_dt1", "k_t2", "k_dt2", "k_i", "k_ii", "x_d")
+NAMES = ("k_x", "k_v", "k_t1", "k_dt1", "k_t2", "k_dt2", "k_i", "k_ii", "x_d", "leak")
 
 
 def configure(values):
@@ -155,11 +155,11 @@ def initial_state(config):
 
 
 def update(config, state, inputs, time, step):
-    return (state[0] + (inputs[0] - config[8]) * step, state[1] + state[0] * step)
+    return (state[0] * (1 - config[9] * step) + (inputs[0] - config[8]) * step, state[1] + state[0] * step)
 
 
 def law(config, state, inputs):
-    k_x, k_v, k_t1, k_dt1, k_t2, k_dt2, k_i, k_ii, x_d = config
+    k_x, k_v, k_t1, k_dt1, k_t2, k_dt2, k_i, k_ii, x_d, _ = config
     x, dx, t1, dt1, t2, dt2 = inputs
     return (-(k_x * (x - x_d) + k_v * dx + k_t1 * t1 + k_dt1 * dt1 + k_t2 * t2 + k_dt2 * dt2 + k_i * state[0]
               + k_ii * state[1]),)
@@ -172,7 +172,7 @@ COMPONENT = Component(
      parameter("k_t2", 50.0, "m/s2", "payload angle gain"), parameter("k_dt2", 2.0, "m/s", "payload rate gain"),
      parameter("k_i", 0.0, "1/s2", "integral gain (units loose)"),
      parameter("k_ii", 0.0, "1/s2", "double integral gain (units loose)"),
-     parameter("x_d", 0.0, "m", "target"))
+     parameter("x_d", 0.0, "m", "target"), parameter("leak", 0.0, "1/s", "the integral's leak (a first-order lag)"))
     + MEASURED_STATE + (output("u", "m/s2", "demanded trolley acceleration"),),
     configure, law, feedthrough=True, initial_state=initial_state, update=update)
 '''
@@ -193,26 +193,27 @@ def _pi_loop(fmu_folder, tmp_path, values):
         return a, text, [str(w.message) for w in caught]
 
 
-def _exact_pi_loop(fmu_folder, k_i):
+def _exact_pi_loop(fmu_folder, k_i, leak=0.0):
     """try-designer's independent model: the zero-order-hold plant with the law's integral as a 7th state,
     ``u[k] = -(K y[k] + k_i s[k])``: its closed-loop matrix and its loop broken at u (python-control)."""
     plant = lin.linearize(fmu_folder / "CranePlant.fmu", {"theta1": 0.0})
     A, B = plant.A, plant.B[:, [plant.inputs.index("u")]]
     d = control.c2d(control.ss(A, B, np.eye(6), 0), H, "zoh")
     Ad = np.zeros((7, 7))
-    Ad[:6, :6], Ad[6, 6], Ad[6, 0] = d.A, 1.0, H
+    Ad[:6, :6], Ad[6, 6], Ad[6, 0] = d.A, 1 - leak * H, H
     Bd = np.vstack([d.B, [[0.0]]])
     K = np.concatenate([_PI_GAINS, [k_i]])[None, :]
     return Ad - Bd @ K, control.ss(Ad, Bd, K, 0, dt=H)
 
 
-@pytest.mark.parametrize("k_i", [60.0, 20.0])
-def test_a_law_with_an_integrator_has_the_poles_and_margins_of_its_exact_model(fmu_folder, tmp_path, k_i):
+@pytest.mark.parametrize("k_i, leak", [(60.0, 0.0), (20.0, 0.0), (20.0, 1.0)])
+def test_a_law_with_an_integrator_has_the_poles_and_margins_of_its_exact_model(fmu_folder, tmp_path, k_i, leak):
     """The integral's response never dies out: cut at 0.5 s it was a finite average, and k_i = 60 was called
     stable (|z| = 0.999637) where the loop grows as e^(0.037 t). Continued as the integrator it is, the poles
-    are those of the exact 7-state model (k_i = 60: s = +0.037 +- 1.41j, unstable; k_i = 20: stable)."""
-    ours, text, caught = _pi_loop(fmu_folder, tmp_path, {"k_i": k_i})
-    closed, L = _exact_pi_loop(fmu_folder, k_i)
+    are those of the exact 7-state model (k_i = 60: s = +0.037 +- 1.41j, unstable; k_i = 20: stable). A leaky
+    integral (a first-order lag of time constant 1 s, alive at 0.5 s too) is continued as that mode."""
+    ours, text, caught = _pi_loop(fmu_folder, tmp_path, {"k_i": k_i, "leak": leak})
+    closed, L = _exact_pi_loop(fmu_folder, k_i, leak)
     theirs = np.linalg.eigvals(closed)
     if k_i == 60.0:  # as docs/guide/interoperability.md shows it
         assert np.abs(theirs).max() > 1 and "closed loop: UNSTABLE (largest |z| = 1.00004)" in text, text
@@ -221,7 +222,7 @@ def test_a_law_with_an_integrator_has_the_poles_and_margins_of_its_exact_model(f
         assert np.abs(theirs).max() < 1 and "closed loop: stable" in text, text
     assert np.allclose(np.sort_complex(ours.poles), np.sort_complex(theirs), atol=1e-8), (ours.poles, theirs)
     assert not caught  # no numpy warning reaches the terminal
-    assert ours.tail is not None and ours.tail.ratio == pytest.approx(1.0, abs=1e-9)
+    assert ours.tail is not None and ours.tail.ratio == pytest.approx(1 - leak * H, abs=1e-9)
     if k_i == 20.0:  # a stable loop: its margins are those of the exact loop broken at u
         w = np.logspace(-2, np.log10(np.pi / H), 20000)[:-1]
         gm, pm, _, wg, wp, _ = control.stability_margins(control.frd(L, w))
