@@ -218,6 +218,8 @@ def test_a_law_with_an_integrator_has_the_poles_and_margins_of_its_exact_model(f
     if k_i == 60.0:  # as docs/guide/interoperability.md shows it
         assert np.abs(theirs).max() > 1 and "closed loop: UNSTABLE (largest |z| = 1.00004)" in text, text
         assert "; memory of 1 step, then for ever one mode, x1 a step (an integrator), from -0.06 x\n" in text, text
+        assert text.endswith("(the closed loop is unstable: the margins above are where L crosses, not how far it "
+                             "is from instability)"), text
     else:
         assert np.abs(theirs).max() < 1 and "closed loop: stable" in text, text
     assert np.allclose(np.sort_complex(ours.poles), np.sort_complex(theirs), atol=1e-8), (ours.poles, theirs)

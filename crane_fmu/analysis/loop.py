@@ -227,6 +227,9 @@ def report(a):
                  np.isfinite(m.phase_margin_deg) else "phase margin: infinite (|L| never crosses 1)")
     lines.append(f"sensitivity peak: Ms = {m.sensitivity_peak:.4g} ({_db(m.sensitivity_peak)}) at "
                  f"{m.sensitivity_at:.5g} rad/s")
+    if not stable:
+        lines.append("(the closed loop is unstable: the margins above are where L crosses, not how far it is from "
+                     "instability)")
     return "\n".join(lines)
 
 
