@@ -8,6 +8,7 @@
 - A controller with memory: the loop's poles from its state matrix are where 1 + L(z) = 0.
 """
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -85,7 +86,8 @@ def test_a_controller_with_memory_has_its_poles_where_one_plus_l_vanishes():
                               ["x", "dx"], {"x": 0.0, "dx": 0.0, "u": 0.0}, "test", None)
     gains = np.array([-2.0, -1.5])
     Hs = np.array([gains * 0.6, gains * 0.4])
-    a = loop.analyse(plant, "u", [("x", "x"), ("dx", "dx")], Hs, 0.1, {})
+    measured = np.vstack([Hs, np.zeros((8, 2))])  # its response over a window of 10 steps: it dies out
+    a = loop.analyse(plant, "u", [("x", "x"), ("dx", "dx")], measured, 0.1, {})
     assert a.memory == 2 and len(a.poles) == 4
     Phi, Gamma, C, D = a.G_parts
     for z in a.poles:
@@ -123,8 +125,134 @@ def test_a_moving_systems_loop_is_taken_at_rest_at_the_target(fmu_folder, capsys
     (["--loop", "--system", "lqr", "--at", "foo=1"], "--at 'foo=1': the FMU has no state or input 'foo'"),
     (["--loop", "--system", "free"], "nothing feeds plant.u: no loop to analyse"),
     ([], "give an FMU to linearise, or --loop --system NAME"),
+    (["--loop", "--system", "lqr", "--memory", "0"], "--memory must be > 0 s, got 0.0"),
+    (["--loop", "--system", "lqr", "--memory", "2"],  # the LQR reads 7 inputs: the six states and l1_now
+     "--memory 2 s: 2000 steps x 7 inputs of controller make 14000 states, more than the 6000 the analysis takes "
+     "(--memory <= 0.857 s at h = 0.001 s)"),
+    (["plant.fmu", "--memory", "1"], "--memory is for --loop"),
 ])
 def test_a_loop_that_cannot_be_analysed_is_one_line(fmu_folder, capsys, argv, message):
     code = main(["linearize", *argv, "--fmu-dir", str(fmu_folder)] if "--loop" in argv else ["linearize", *argv])
     err = capsys.readouterr().err
     assert code == 2 and message in err and err.count("\n") == 1, err
+
+
+# A law file of state feedback plus an integral of x - x_d (the state), as a user writes it (try-designer's
+# sway_pi.py): u = -(K y + k_i s), s[k+1] = s[k] + (x[k] - x_d) h. Its impulse response never dies out.
+_PI_LAW = '''
+from crane_fmu.model.component import Component
+from crane_fmu.model.tables import MEASURED_STATE, output, parameter
+
+NAMES = ("k_x", "k_v", "k_t1", "k_dt1", "k_t2", "k_dt2", "k_i", "k_ii", "x_d", "leak")
+
+
+def configure(values):
+    return tuple(values[k] for k in NAMES)
+
+
+def initial_state(config):
+    return (0.0, 0.0)  # the integral of x - x_d, and the integral of that
+
+
+def update(config, state, inputs, time, step):
+    return (state[0] * (1 - config[9] * step) + (inputs[0] - config[8]) * step, state[1] + state[0] * step)
+
+
+def law(config, state, inputs):
+    k_x, k_v, k_t1, k_dt1, k_t2, k_dt2, k_i, k_ii, x_d, _ = config
+    x, dx, t1, dt1, t2, dt2 = inputs
+    return (-(k_x * (x - x_d) + k_v * dx + k_t1 * t1 + k_dt1 * dt1 + k_t2 * t2 + k_dt2 * dt2 + k_i * state[0]
+              + k_ii * state[1]),)
+
+
+COMPONENT = Component(
+    "SwayPiTest", "controller", "state feedback with an integral on the trolley error",
+    (parameter("k_x", 30.0, "1/s2", "position gain"), parameter("k_v", 27.0, "1/s", "velocity gain"),
+     parameter("k_t1", -160.0, "m/s2", "hook angle gain"), parameter("k_dt1", 3.5, "m/s", "hook rate gain"),
+     parameter("k_t2", 50.0, "m/s2", "payload angle gain"), parameter("k_dt2", 2.0, "m/s", "payload rate gain"),
+     parameter("k_i", 0.0, "1/s2", "integral gain (units loose)"),
+     parameter("k_ii", 0.0, "1/s2", "double integral gain (units loose)"),
+     parameter("x_d", 0.0, "m", "target"), parameter("leak", 0.0, "1/s", "the integral's leak (a first-order lag)"))
+    + MEASURED_STATE + (output("u", "m/s2", "demanded trolley acceleration"),),
+    configure, law, feedthrough=True, initial_state=initial_state, update=update)
+'''
+_PI_GAINS = np.array([30.0, 27.0, -160.0, 3.5, 50.0, 2.0])
+
+
+def _pi_loop(fmu_folder, tmp_path, values):
+    law = tmp_path / "sway_pi_test.py"
+    law.write_text(_PI_LAW)
+    with systems.open_system("lqr") as system:
+        system = system.with_instances({"controller": str(law)}).with_parameters({"controller": values})
+        system = systems.prepare(system, H)
+        fmus, connections = systems.resolve(system, fmu_folder)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            a = loop.of_system(system, fmus, connections)
+            text = loop.report(a)
+        return a, text, [str(w.message) for w in caught]
+
+
+def _exact_pi_loop(fmu_folder, k_i, leak=0.0):
+    """try-designer's independent model: the zero-order-hold plant with the law's integral as a 7th state,
+    ``u[k] = -(K y[k] + k_i s[k])``: its closed-loop matrix and its loop broken at u (python-control)."""
+    plant = lin.linearize(fmu_folder / "CranePlant.fmu", {"theta1": 0.0})
+    A, B = plant.A, plant.B[:, [plant.inputs.index("u")]]
+    d = control.c2d(control.ss(A, B, np.eye(6), 0), H, "zoh")
+    Ad = np.zeros((7, 7))
+    Ad[:6, :6], Ad[6, 6], Ad[6, 0] = d.A, 1 - leak * H, H
+    Bd = np.vstack([d.B, [[0.0]]])
+    K = np.concatenate([_PI_GAINS, [k_i]])[None, :]
+    return Ad - Bd @ K, control.ss(Ad, Bd, K, 0, dt=H)
+
+
+@pytest.mark.parametrize("k_i, leak", [(60.0, 0.0), (20.0, 0.0), (20.0, 1.0)])
+def test_a_law_with_an_integrator_has_the_poles_and_margins_of_its_exact_model(fmu_folder, tmp_path, k_i, leak):
+    """The integral's response never dies out: cut at 0.5 s it was a finite average, and k_i = 60 was called
+    stable (|z| = 0.999637) where the loop grows as e^(0.037 t). Continued as the integrator it is, the poles
+    are those of the exact 7-state model (k_i = 60: s = +0.037 +- 1.41j, unstable; k_i = 20: stable). A leaky
+    integral (a first-order lag of time constant 1 s, alive at 0.5 s too) is continued as that mode."""
+    ours, text, caught = _pi_loop(fmu_folder, tmp_path, {"k_i": k_i, "leak": leak})
+    closed, L = _exact_pi_loop(fmu_folder, k_i, leak)
+    theirs = np.linalg.eigvals(closed)
+    if k_i == 60.0:  # as docs/guide/interoperability.md shows it
+        assert np.abs(theirs).max() > 1 and "closed loop: UNSTABLE (largest |z| = 1.00004)" in text, text
+        assert "; memory of 1 step, then for ever one mode, x1 a step (an integrator), from -0.06 x\n" in text, text
+        assert text.endswith("(the closed loop is unstable: the margins above are where L crosses, not how far it "
+                             "is from instability)"), text
+    else:
+        assert np.abs(theirs).max() < 1 and "closed loop: stable" in text, text
+    assert np.allclose(np.sort_complex(ours.poles), np.sort_complex(theirs), atol=1e-8), (ours.poles, theirs)
+    assert not caught  # no numpy warning reaches the terminal
+    assert ours.tail is not None and ours.tail.ratio == pytest.approx(1 - leak * H, abs=1e-9)
+    if k_i == 20.0:  # a stable loop: its margins are those of the exact loop broken at u
+        w = np.logspace(-2, np.log10(np.pi / H), 20000)[:-1]
+        gm, pm, _, wg, wp, _ = control.stability_margins(control.frd(L, w))
+        m = ours.margins
+        assert m.gain_margin == pytest.approx(gm, rel=1e-3) and m.gain_crossover == pytest.approx(wg, rel=1e-3)
+        assert m.phase_margin_deg == pytest.approx(pm, abs=0.05) and m.phase_crossover == pytest.approx(wp, rel=1e-3)
+
+
+def test_a_static_law_file_is_taken_as_before(fmu_folder, tmp_path):
+    """k_i = 0: the same law is static, its margins those of python-control's static loop -K (zI - Phi)^-1 Gamma."""
+    ours, text, caught = _pi_loop(fmu_folder, tmp_path, {})
+    assert ours.memory == 1 and np.allclose(ours.K, -_PI_GAINS, atol=1e-8) and not caught
+    _, L = _exact_pi_loop(fmu_folder, 0.0)
+    w = np.logspace(-2, np.log10(np.pi / H), 20000)[:-1]
+    gm, pm, _, wg, wp, _ = control.stability_margins(control.frd(L, w))
+    m = ours.margins
+    assert m.gain_margin == pytest.approx(gm, rel=1e-3) and m.phase_margin_deg == pytest.approx(pm, abs=0.05)
+    assert "static at this point (no memory)" in text
+
+
+def test_a_response_the_window_cuts_off_is_refused_in_one_line(fmu_folder, tmp_path, capsys):
+    """A double integral's response grows for ever and is no single mode: no verdict, one line naming the
+    controller, the window and --memory."""
+    _pi_loop(fmu_folder, tmp_path, {})  # writes the law file
+    law = tmp_path / "sway_pi_test.py"
+    code = main(["linearize", "--loop", "--system", "lqr", "--fmu-dir", str(fmu_folder), "--use",
+                 f"controller={law}", "--set", "controller.k_i=20", "--set", "controller.k_ii=5"])
+    out, err = capsys.readouterr()
+    assert code == 2 and "closed loop:" not in out, out
+    assert err.count("\n") == 1 and "controller (sway_pi_test.py): its impulse response has not died out within " \
+        "the 0.5 s analysed" in err and "--memory SECONDS" in err, err

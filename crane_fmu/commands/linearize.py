@@ -40,6 +40,9 @@ def arguments(p):
     loop.add_argument("--use", action="append", default=[], metavar="INSTANCE=FILE.fmu",
                       help="with --loop: your FMU or law file (FILE.py) in the instance's place, as simulate's")
     loop.add_argument("--plot", help="with --loop: Bode and Nyquist plots into a PNG")
+    loop.add_argument("--memory", type=number, default=None, metavar="SECONDS",
+                      help="with --loop: the window of the controller's impulse response taken [s] (default 0.5); "
+                           "a response still alive at its end is refused unless it is one mode (an integrator)")
 
 
 def _pairs(items, option, variables):
@@ -68,6 +71,8 @@ def run(args):
         return _loop(args)
     if args.fmu is None:
         raise UsageError("give an FMU to linearise, or --loop --system NAME for a system's closed loop")
+    if args.memory is not None:
+        raise UsageError("--memory is for --loop: the window of a system's controller")
 
     from crane_fmu.analysis import linearize as lin
 
@@ -113,6 +118,9 @@ def _loop(args):
         raise UsageError("--loop and --system go together: crane-fmu linearize --loop --system NAME")
     if args.plot:
         writable_file(args.plot, "--plot", ".png")
+    if args.memory is not None and not args.memory > 0:
+        raise UsageError(f"--memory must be > 0 s, got {args.memory!r}")
+    memory = loop.MEMORY if args.memory is None else args.memory
 
     def analyse(args, system):
         run_args = SimpleNamespace(fmu_dir=args.fmu_dir, parameters=None, set=args.set)
@@ -125,7 +133,7 @@ def _loop(args):
         point = {n: SimpleNamespace(type="Real", unit="rad" if n.startswith("theta") else None)
                  for n in (crane.state if crane else ())}
         at = _pairs(args.at, "--at", point)
-        result = loop.of_system(system, fmus, connections, at)
+        result = loop.of_system(system, fmus, connections, at, memory)
         print(loop.report(result))
         if args.plot:
             used = "".join(f" with {n}={Path(system.instances[n]).name}" for n in system.replaced)
