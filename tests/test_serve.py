@@ -1346,3 +1346,43 @@ def test_a_start_from_which_the_trolley_cannot_stop_before_a_rail_end_is_refused
         "crane-fmu: error: the trolley starts at x = 1.9 m moving at 3 m/s: braked at its drive's 2 m/s2 from the "
         "start it comes to rest at 4.15 m, past the rail end x_max = 2 m; no run can step from there\n"), done.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_refused_writes_are_said_on_the_log_at_most_once_a_second_and_counted(fmu_dir, tmp_path):
+    """The server says on stderr which client write it refused and why, so an operator sees a PLC sending NaN (on
+    main a refused write left no line): NaN, then 200 writes out of range as fast as the client goes, then after a
+    pause one more. Every refusal is said or counted in the next line said ("N more refused since"), and a client
+    that floods is no more than a line a second."""
+    import time
+
+    server = Server(fmu_dir, tmp_path, "--system", "lqr", "--external", "controller", "--lock-step", "--set",
+                    "plant.u_max=3", "--opcua", "127.0.0.1:0")
+
+    async def flood(url):
+        async with Client(url) as opc:
+            ns, node = await _nodes(opc)
+            codes, begun = [], time.monotonic()
+            for value in [math.nan] + [1e9] * 200:
+                try:
+                    await node("controller.u").write_value(ua.Variant(value, ua.VariantType.Double))
+                    codes.append("Good")
+                except ua.UaStatusCodeError as exc:
+                    codes.append(type(exc).__name__)
+            took = time.monotonic() - begun
+            await asyncio.sleep(1.1)
+            try:
+                await node("controller.u").write_value(ua.Variant(math.inf, ua.VariantType.Double))
+            except ua.UaStatusCodeError as exc:
+                codes.append(type(exc).__name__)
+            return codes, took
+
+    try:
+        codes, took = _run(flood(server.opcua))
+    finally:
+        status, out, err = server.stop()
+    assert set(codes) == {"BadOutOfRange"} and len(codes) == 202, codes[:3]
+    said = [line for line in err.splitlines() if "a client's write refused: " in line]
+    assert said[0].endswith("a client's write refused: controller.u must be a finite number, got nan"), err
+    assert "controller.u must be a finite number, got inf" in said[-1], said[-1]
+    counted = sum(int(m) for m in re.findall(r"\((\d+) more refused since the last such line\)", "\n".join(said)))
+    assert len(said) + counted == 202 and len(said) <= took + 3, (said, took)

@@ -128,6 +128,7 @@ class Runner:
         self.parameters, self.observers = parameters or {}, list(observers)
         self.lock_step, self.period_steps, self.watchdog = lock_step, period_steps, watchdog
         self.clock, self.log = clock, log or (lambda line: None)
+        self._refusals = [-math.inf, 0]  # when a refused write was last said, and how many since went unsaid
         self.name, self.run_id, self.started = name, secrets.randbits(64), None
         self._stopping = threading.Event()
         self.sleep = sleep or self._stopping.wait
@@ -187,6 +188,7 @@ class Runner:
         for name, value in values.items():
             if name not in writable:
                 known = any(v.name == name for v in self.variables)
+                self.refused(f"{name} is {'read-only' if known else 'not served'}")
                 raise ValueError(f"{name} is {'read-only' if known else 'not served'}; writable: "
                                  + (", ".join(writable) or "none"))
             checked[name] = self.check(name, value)
@@ -203,12 +205,25 @@ class Runner:
         """``value`` as a float if it may be written to the writable variable ``name``, else ValueError (one
         line naming the value and the rule)."""
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            self.refused(f"{name} must be a finite number, got {value!r}")
             raise ValueError(f"{name} must be a finite number, got {value!r}")
         low, high = self.ranges.get(name, (-math.inf, math.inf))
         if not low <= value <= high:
             unit = next((v.unit for v in self.variables if v.name == name), "")
+            self.refused(f"{name} = {value!r} {unit} lies outside its range [{low:g}, {high:g}]")
             raise ValueError(f"{name} = {value!r} {unit} lies outside its range [{low:g}, {high:g}]")
         return float(value)
+
+    def refused(self, why):
+        """Say on the log that a client's write was refused and why: at most a line a second (a client that sends
+        NaN a thousand times a second is one line a second, counting the others)."""
+        now = self.clock()
+        if now - self._refusals[0] < 1.0:
+            self._refusals[1] += 1
+            return
+        unsaid = f" ({self._refusals[1]} more refused since the last such line)" if self._refusals[1] else ""
+        self._refusals[:] = [now, 0]
+        self.log(f"t = {self.time():.6g} s: a client's write refused: {why}{unsaid}")
 
     def request_steps(self, n):
         """Lock-step: take ``n`` communication steps now, on the calling thread; a done Future of the simulated

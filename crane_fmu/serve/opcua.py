@@ -161,6 +161,7 @@ class OpcUaServer:
         def setter(node, attribute, value):
             number = value.Value.Value if value.Value is not None else None
             if not isinstance(number, float):
+                self.runner.refused(f"{name} takes a Double, got {number!r}")
                 raise ua.uaerrors.BadOutOfRange()
             try:
                 self.runner.check(name, number)
