@@ -6,7 +6,7 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 from crane_fmu import systems
-from crane_fmu.build_scripts.build_fmus import containers_dir
+from crane_fmu.build_scripts.build_fmus import containers_dir, systems_dir
 from crane_fmu.cli import main
 from crane_fmu.container import build_container
 from crane_fmu.cosim import run
@@ -105,3 +105,52 @@ def test_a_system_with_values_the_container_cannot_set_is_refused(fmu_dir, tmp_p
     with pytest.raises(ValueError, match="hoist.x0") as refused:
         build_container(systems.get("hoist-transport"), fmu_dir, tmp_path / "CraneHoistTransport.fmu")
     assert "\n" not in str(refused.value) and not (tmp_path / "CraneHoistTransport.fmu").exists()
+
+
+def test_the_projects_own_ssp_file_packs_as_the_system_it_was_written_from(fmu_dir, tmp_path, capsys):
+    """`build --container build/systems/lqr.ssp`: the file holds every parameter's value, also those equal to the
+    FMUs' own start values, which need no setting. Its container is the lqr system's (`build --container lqr`):
+    the same variables and start values, the same run bit for bit, which is our Jacobi master's without the initial
+    exchange."""
+    assert main(["build", "--container", str(systems_dir(fmu_dir) / "lqr.ssp"), "--out", str(tmp_path / "fmus")]) == 0
+    packed = tmp_path / "containers" / "CraneLqr.fmu"
+    assert capsys.readouterr().out.splitlines() == [str(packed)]
+    built_in = containers_dir(fmu_dir) / "CraneLqr.fmu"
+
+    def interface(path):
+        return [(v.name, v.causality, v.start) for v in read_model_description(str(path)).modelVariables]
+
+    assert interface(packed) == interface(built_in)
+    theirs = simulate_fmu(str(packed), stop_time=3.0, output_interval=1e-3)
+    ours = simulate_fmu(str(built_in), stop_time=3.0, output_interval=1e-3)
+    assert theirs.dtype.names == ours.dtype.names
+    for name in ours.dtype.names:
+        assert np.array_equal(theirs[name], ours[name]), name
+    master = run(systems.get("lqr"), fmu_dir, algorithm="jacobi", initial_exchange=False, stop_time=3.0).columns()
+    for name in ("x", "theta1", "theta2"):
+        assert np.array_equal(theirs[name], master["plant." + name]), name
+
+
+@pytest.mark.parametrize("system, instance, name, value, packs", [
+    ("transport", "planner", "shaper", 2, True),  # the FMU's start item (zv) by its value, as an SSP file holds it
+    ("transport", "planner", "shaper", "zv", True),  # by its name (SSP 1.0's ssv:Enumeration)
+    ("transport", "planner", "shaper", 3, False),  # zvd
+    ("paper", "controller", "b3_form", "derived", True),  # a String at the FMU's start value
+    ("paper", "controller", "b3_form", "printed", False),
+    ("lqr", "controller", "q_x", 50.0, True),  # a Real at it: the SSP file's case
+    ("lqr", "controller", "q_x", 50.000000001, False),
+])
+def test_a_value_the_container_does_not_expose_must_be_the_fmus_start_value(fmu_dir, tmp_path, system, instance,
+                                                                            name, value, packs):
+    """A value equal to the FMU's start value, compared as the FMU's model description gives it (an Enumeration
+    by its item, a String as text, a number exactly), needs no setting; any other is refused in one line naming
+    it, and no container is written."""
+    given = systems.get(system).with_parameters({instance: {name: value}})
+    path = tmp_path / "X.fmu"
+    if packs:
+        assert build_container(given, fmu_dir, path) == path and path.is_file()
+        return
+    with pytest.raises(ValueError, match="exposes, not ") as refused:
+        build_container(given, fmu_dir, path)
+    assert f"not {instance}.{name}; build it" in str(refused.value) and "\n" not in str(refused.value)
+    assert not path.exists()
