@@ -6,7 +6,7 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 from crane_fmu import systems
-from crane_fmu.build_scripts.build_fmus import containers_dir, systems_dir
+from crane_fmu.build_scripts.build_fmus import container_name, containers_dir, systems_dir
 from crane_fmu.cli import main
 from crane_fmu.container import build_container
 from crane_fmu.cosim import run
@@ -107,15 +107,18 @@ def test_a_system_with_values_the_container_cannot_set_is_refused(fmu_dir, tmp_p
     assert "\n" not in str(refused.value) and not (tmp_path / "CraneHoistTransport.fmu").exists()
 
 
-def test_the_projects_own_ssp_file_packs_as_the_system_it_was_written_from(fmu_dir, tmp_path, capsys):
+@pytest.mark.parametrize("name", ["lqr", "paper", "energy", "transport"])  # the systems `crane-fmu build` packs
+def test_the_projects_own_ssp_file_packs_as_the_system_it_was_written_from(fmu_dir, tmp_path, capsys, name):
     """`build --container build/systems/lqr.ssp`: the file holds every parameter's value, also those equal to the
-    FMUs' own start values, which need no setting. Its container is the lqr system's (`build --container lqr`):
-    the same variables and start values, the same run bit for bit, which is our Jacobi master's without the initial
-    exchange."""
-    assert main(["build", "--container", str(systems_dir(fmu_dir) / "lqr.ssp"), "--out", str(tmp_path / "fmus")]) == 0
-    packed = tmp_path / "containers" / "CraneLqr.fmu"
+    FMUs' own start values, which need no setting (transport's LQR keeps its own x_d = 0 beside the planner's
+    references: the container's x_d is the planner's alone). Its container is the system's (`build --container
+    lqr`): the same variables and start values, the same run bit for bit, which is our Jacobi master's without the
+    initial exchange."""
+    assert main(["build", "--container", str(systems_dir(fmu_dir) / f"{name}.ssp"), "--out",
+                 str(tmp_path / "fmus")]) == 0
+    packed = tmp_path / "containers" / f"{container_name(name)}.fmu"
     assert capsys.readouterr().out.splitlines() == [str(packed)]
-    built_in = containers_dir(fmu_dir) / "CraneLqr.fmu"
+    built_in = containers_dir(fmu_dir) / f"{container_name(name)}.fmu"
 
     def interface(path):
         return [(v.name, v.causality, v.start) for v in read_model_description(str(path)).modelVariables]
@@ -124,11 +127,11 @@ def test_the_projects_own_ssp_file_packs_as_the_system_it_was_written_from(fmu_d
     theirs = simulate_fmu(str(packed), stop_time=3.0, output_interval=1e-3)
     ours = simulate_fmu(str(built_in), stop_time=3.0, output_interval=1e-3)
     assert theirs.dtype.names == ours.dtype.names
-    for name in ours.dtype.names:
-        assert np.array_equal(theirs[name], ours[name]), name
-    master = run(systems.get("lqr"), fmu_dir, algorithm="jacobi", initial_exchange=False, stop_time=3.0).columns()
-    for name in ("x", "theta1", "theta2"):
-        assert np.array_equal(theirs[name], master["plant." + name]), name
+    for column in ours.dtype.names:
+        assert np.array_equal(theirs[column], ours[column]), column
+    master = run(systems.get(name), fmu_dir, algorithm="jacobi", initial_exchange=False, stop_time=3.0).columns()
+    for column in ("x", "theta1", "theta2"):
+        assert np.array_equal(theirs[column], master["plant." + column]), column
 
 
 @pytest.mark.parametrize("system, instance, name, value, packs", [
