@@ -84,7 +84,7 @@ def interface(system, kinds, variables, fed):
     for axis in crane.axes:
         if controller and axis.demand in variables[controller]:
             exposed.append(Exposed(axis.demand, "output", [(controller, axis.demand)], None))
-        elif feeds.get(axis.demand, (None,))[0] == planners.get(axis.position):  # an open loop: the planner's
+        elif axis.demand in feeds and feeds[axis.demand][0] == planners.get(axis.position):  # the planner's
             exposed.append(Exposed(axis.demand, "output", [feeds[axis.demand]], None))
     return exposed
 

@@ -157,3 +157,14 @@ def test_a_value_the_container_does_not_expose_must_be_the_fmus_start_value(fmu_
         build_container(given, fmu_dir, path)
     assert f"not {instance}.{name}; build it" in str(refused.value) and "\n" not in str(refused.value)
     assert not path.exists()
+
+
+def test_a_system_without_a_controller_packs_with_the_plants_demand_as_an_input(fmu_dir, tmp_path):
+    """The free swing: nothing inside feeds the plant's u, so the container takes it as an input (a KeyError
+    before); it runs as our Jacobi master."""
+    container = build_container(systems.get("free"), fmu_dir, tmp_path / "CraneFree.fmu")
+    assert {v.name: v.causality for v in read_model_description(str(container)).modelVariables}["u"] == "input"
+    result = simulate_fmu(str(container), stop_time=3.0, output_interval=1e-3)
+    ours = run(systems.get("free"), fmu_dir, algorithm="jacobi", initial_exchange=False, stop_time=3.0).columns()
+    for name in ("x", "theta1", "theta2"):
+        assert np.array_equal(result[name], ours["plant." + name]), name
