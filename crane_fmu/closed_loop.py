@@ -63,9 +63,11 @@ def interface(system, kinds, variables, fed):
         target = planners.get(axis.position, controller)
         held = planner_target(axis, variables[target]) if target in planners.values() else axis.target
         if target is not None and held in variables[target]:
-            # a controller told the move's target (a user's, without the planner's inputs) gets it too
-            told = [controller] if controller not in (None, target) and axis.target in system.parameters.get(
-                controller, {}) else []
+            # a controller told the move's target (a user's, without the planner's inputs: systems.tell_controllers
+            # gives it the planner's) gets it too; one with a value of its own keeps it (an SSP file holds every
+            # value: the LQR's x_d = 0 beside its planner's references)
+            told = [controller] if controller not in (None, target) and _same(
+                system.parameters.get(controller, {}).get(axis.target), start(target, held)) else []
             exposed.append(Exposed(axis.target, "parameter", [(target, held)] + [(c, axis.target) for c in told],
                                    start(target, held)))
     if crane.start_swing:
@@ -82,9 +84,17 @@ def interface(system, kinds, variables, fed):
     for axis in crane.axes:
         if controller and axis.demand in variables[controller]:
             exposed.append(Exposed(axis.demand, "output", [(controller, axis.demand)], None))
-        elif feeds.get(axis.demand, (None,))[0] == planners.get(axis.position):  # an open loop: the planner's
+        elif axis.demand in feeds and feeds[axis.demand][0] == planners.get(axis.position):  # the planner's
             exposed.append(Exposed(axis.demand, "output", [feeds[axis.demand]], None))
     return exposed
+
+
+def _same(value, start):
+    """Whether a system's ``value`` (None: none given) is ``start`` (a number, or an FMU's start value as text)."""
+    try:
+        return value is not None and float(value) == float(start)
+    except (TypeError, ValueError):
+        return False
 
 
 ONE_AXIS_TARGET = "x_d"  # a planner of one axis (TrajectoryPlanner) plans along its own x, whichever axis it drives

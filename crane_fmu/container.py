@@ -12,8 +12,10 @@ What the container exposes is the closed loop's interface (``closed_loop.py``, t
 one-FMU's too): the plant's outputs and the controller's ``u``; the masses and
 cable lengths, ``x_d`` and ``theta1_0`` as parameters; the plant's inputs that
 nothing inside feeds as inputs. fmpy's container sets an inner FMU's variable only
-through what it exposes: a system with values beyond those (hoist-transport's
-planners) is refused; the native one-FMU (``build_scripts/one_fmu.py``) carries them.
+through what it exposes: a system with other values that differ from the FMUs' own
+start values (hoist-transport's planners) is refused; the native one-FMU
+(``build_scripts/one_fmu.py``) carries them. Values equal to them need no setting: an
+SSP file, which holds every parameter's value, packs as the system it was written from.
 """
 
 import shutil
@@ -29,6 +31,7 @@ from fmpy.container_fmu.config import Component, Connection
 from fmpy.model_description import CoSimulation, DefaultExperiment, ModelDescription, ModelVariable, Unknown
 
 from crane_fmu import closed_loop, crane_parameters
+from crane_fmu.cosim.instance import enumeration_value
 
 
 def build_container(system, fmu_dir, path):
@@ -42,8 +45,10 @@ def build_container(system, fmu_dir, path):
                                                     for name, table in variables.items()},
                                     {(c.target, c.input) for c in connections})
     carried = {target for e in exposed if e.causality != "output" for target in e.targets}
-    lost = [f"{i}.{n}" for i, values in system.parameters.items() if i != crane_parameters.CRANE for n in values
-            if (i, n) not in carried]  # the crane's values: its exposed parameters' start values
+    lost = [f"{i}.{n}" for i, values in system.parameters.items() if i != crane_parameters.CRANE
+            for n, value in values.items() if (i, n) not in carried and not _is_start(variables[i].get(n), value)]
+    # the crane's values: its exposed parameters' start values; an FMU's own start value needs no setting (an SSP
+    # file holds every parameter's value)
     if lost:
         raise ValueError(f"system {system.name}: fmpy's container sets only the variables it exposes, not "
                          f"{', '.join(lost)}; build it as one native FMU instead (crane-fmu build --one-fmu)")
@@ -116,6 +121,27 @@ def _declare_dependencies(md, mappings, inner, connections):
         unknown.dependencies = sorted([own[n] for n in read[unknown.variable.name]] + parameters,
                                       key=md.modelVariables.index)
         unknown.dependenciesKind = ["dependent"] * len(unknown.dependencies) or None
+
+
+def _is_start(v, value):
+    """Whether ``value`` (a system's, an SSP file's) is fmpy's variable ``v``'s start value as the FMU parses it: an
+    Enumeration by its item's value (an SSP file holds that) or name, a Boolean as ``true``/``1``, a number exactly."""
+    if v is None or v.start is None:
+        return False
+    if v.type == "Enumeration":
+        try:
+            return enumeration_value(v, value) == enumeration_value(v, v.start)
+        except ValueError:  # not one of its items: refused by name
+            return False
+    if v.type == "String":
+        return value == v.start
+    if v.type == "Boolean":
+        return isinstance(value, bool) and value == (v.start.strip().lower() in ("true", "1"))
+    try:
+        return not isinstance(value, (bool, str)) and value == (float(v.start) if v.type in ("Real", "Float64")
+                                                                else int(v.start))
+    except (TypeError, ValueError):
+        return False
 
 
 def _number(v):

@@ -6,7 +6,7 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 from crane_fmu import systems
-from crane_fmu.build_scripts.build_fmus import containers_dir
+from crane_fmu.build_scripts.build_fmus import container_name, containers_dir, systems_dir
 from crane_fmu.cli import main
 from crane_fmu.container import build_container
 from crane_fmu.cosim import run
@@ -105,3 +105,66 @@ def test_a_system_with_values_the_container_cannot_set_is_refused(fmu_dir, tmp_p
     with pytest.raises(ValueError, match="hoist.x0") as refused:
         build_container(systems.get("hoist-transport"), fmu_dir, tmp_path / "CraneHoistTransport.fmu")
     assert "\n" not in str(refused.value) and not (tmp_path / "CraneHoistTransport.fmu").exists()
+
+
+@pytest.mark.parametrize("name", ["lqr", "paper", "energy", "transport"])  # the systems `crane-fmu build` packs
+def test_the_projects_own_ssp_file_packs_as_the_system_it_was_written_from(fmu_dir, tmp_path, capsys, name):
+    """`build --container build/systems/lqr.ssp`: the file holds every parameter's value, also those equal to the
+    FMUs' own start values, which need no setting (transport's LQR keeps its own x_d = 0 beside the planner's
+    references: the container's x_d is the planner's alone). Its container is the system's (`build --container
+    lqr`): the same variables and start values, the same run bit for bit, which is our Jacobi master's without the
+    initial exchange."""
+    assert main(["build", "--container", str(systems_dir(fmu_dir) / f"{name}.ssp"), "--out",
+                 str(tmp_path / "fmus")]) == 0
+    packed = tmp_path / "containers" / f"{container_name(name)}.fmu"
+    assert capsys.readouterr().out.splitlines() == [str(packed)]
+    built_in = containers_dir(fmu_dir) / f"{container_name(name)}.fmu"
+
+    def interface(path):
+        return [(v.name, v.causality, v.start) for v in read_model_description(str(path)).modelVariables]
+
+    assert interface(packed) == interface(built_in)
+    theirs = simulate_fmu(str(packed), stop_time=3.0, output_interval=1e-3)
+    ours = simulate_fmu(str(built_in), stop_time=3.0, output_interval=1e-3)
+    assert theirs.dtype.names == ours.dtype.names
+    for column in ours.dtype.names:
+        assert np.array_equal(theirs[column], ours[column]), column
+    master = run(systems.get(name), fmu_dir, algorithm="jacobi", initial_exchange=False, stop_time=3.0).columns()
+    for column in ("x", "theta1", "theta2"):
+        assert np.array_equal(theirs[column], master["plant." + column]), column
+
+
+@pytest.mark.parametrize("system, instance, name, value, packs", [
+    ("transport", "planner", "shaper", 2, True),  # the FMU's start item (zv) by its value, as an SSP file holds it
+    ("transport", "planner", "shaper", "zv", True),  # by its name (SSP 1.0's ssv:Enumeration)
+    ("transport", "planner", "shaper", 3, False),  # zvd
+    ("paper", "controller", "b3_form", "derived", True),  # a String at the FMU's start value
+    ("paper", "controller", "b3_form", "printed", False),
+    ("lqr", "controller", "q_x", 50.0, True),  # a Real at it: the SSP file's case
+    ("lqr", "controller", "q_x", 50.000000001, False),
+])
+def test_a_value_the_container_does_not_expose_must_be_the_fmus_start_value(fmu_dir, tmp_path, system, instance,
+                                                                            name, value, packs):
+    """A value equal to the FMU's start value, compared as the FMU's model description gives it (an Enumeration
+    by its item, a String as text, a number exactly), needs no setting; any other is refused in one line naming
+    it, and no container is written."""
+    given = systems.get(system).with_parameters({instance: {name: value}})
+    path = tmp_path / "X.fmu"
+    if packs:
+        assert build_container(given, fmu_dir, path) == path and path.is_file()
+        return
+    with pytest.raises(ValueError, match="exposes, not ") as refused:
+        build_container(given, fmu_dir, path)
+    assert f"not {instance}.{name}; build it" in str(refused.value) and "\n" not in str(refused.value)
+    assert not path.exists()
+
+
+def test_a_system_without_a_controller_packs_with_the_plants_demand_as_an_input(fmu_dir, tmp_path):
+    """The free swing: nothing inside feeds the plant's u, so the container takes it as an input (a KeyError
+    before); it runs as our Jacobi master."""
+    container = build_container(systems.get("free"), fmu_dir, tmp_path / "CraneFree.fmu")
+    assert {v.name: v.causality for v in read_model_description(str(container)).modelVariables}["u"] == "input"
+    result = simulate_fmu(str(container), stop_time=3.0, output_interval=1e-3)
+    ours = run(systems.get("free"), fmu_dir, algorithm="jacobi", initial_exchange=False, stop_time=3.0).columns()
+    for name in ("x", "theta1", "theta2"):
+        assert np.array_equal(result[name], ours["plant." + name]), name

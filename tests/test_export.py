@@ -149,6 +149,41 @@ def test_a_law_files_component_is_built_into_the_exported_ssp_and_runs_as_its_la
     assert ours["plant.x"][-1] > 0.5  # told the move
 
 
+def test_the_ssp_file_of_your_law_file_packs_as_the_container_export_writes(fmus, tmp_path, capsys):
+    """`export --use controller=pd_sway.py --out law.ssp` (no --set: the file holds every value, each the FMU's own
+    start value or one the container sets), then `build --container law.ssp`: the container equals the one that
+    `export --out Law.fmu` writes, bit for bit, and so our Jacobi master without the initial exchange."""
+    law = f"controller={ROOT / 'examples' / 'my_controller' / 'pd_sway.py'}"
+    _main(capsys, "export", "--system", "transport", "--fmu-dir", fmus / "fmus", "--use", law, "--out",
+          tmp_path / "law.ssp")
+    assert _main(capsys, "build", "--container", tmp_path / "law.ssp", "--out", tmp_path / "b" / "fmus").splitlines() \
+        == [str(tmp_path / "b" / "containers" / "CraneLaw.fmu")]
+    _main(capsys, "export", "--system", "transport", "--fmu-dir", fmus / "fmus", "--use", law, "--out",
+          tmp_path / "Law.fmu")
+    theirs, exported = (simulate_fmu(str(path), stop_time=STOP, output_interval=1e-3, step_size=1e-3)
+                        for path in (tmp_path / "b" / "containers" / "CraneLaw.fmu", tmp_path / "Law.fmu"))
+    assert theirs.dtype.names == exported.dtype.names
+    for name in exported.dtype.names:
+        assert np.array_equal(theirs[name], exported[name]), name
+    ours = _simulate(capsys, tmp_path, "jacobi.csv", "--system", "transport", "--fmu-dir", fmus / "fmus", "--use", law,
+                     "--algorithm", "jacobi", "--no-initial-exchange")
+    for name in ("x", "theta1", "theta2"):
+        assert np.array_equal(theirs[name], ours[f"plant.{name}"]), name
+    assert ours["plant.x"][-1] > 0.5  # told the move
+
+
+def test_a_tuned_value_in_an_ssp_file_the_container_cannot_set_is_one_line(fmus, tmp_path, capsys):
+    """`export --set controller.k_x=1.5 --out law.ssp`, then `build --container law.ssp`: k_x differs from the FMU's
+    start value and the container does not expose it; refused naming it alone, and nothing written."""
+    law = f"controller={ROOT / 'examples' / 'my_controller' / 'pd_sway.py'}"
+    _main(capsys, "export", "--system", "transport", "--fmu-dir", fmus / "fmus", "--use", law, "--set",
+          "controller.k_x=1.5", "--out", tmp_path / "law.ssp")
+    assert main(["build", "--container", str(tmp_path / "law.ssp"), "--out", str(tmp_path / "b" / "fmus")]) == 2
+    err = capsys.readouterr().err
+    assert "exposes, not controller.k_x; build it" in err and err.count("\n") == 1, err
+    assert not (tmp_path / "b" / "containers").exists() or not any((tmp_path / "b" / "containers").iterdir())
+
+
 def test_info_shows_your_fmu_in_the_system(fmus, capsys):
     """`info --system transport --use controller=PdController.fmu`: the file in the LQR's place, each parameter with
     the value the system sets (told the move: x_d = 2; --set k_v) or its start value, and the note on the move."""

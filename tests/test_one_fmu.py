@@ -34,6 +34,7 @@ from crane_fmu.build_scripts.one_fmu import not_native, one_fmu_name, plan
 from crane_fmu.cli import main
 from crane_fmu.cosim import ArrayRecorder, FmiError, open_instance, simulate
 from crane_fmu.cosim.master import Master
+from crane_fmu.cosim.ssp import load_system
 
 SYSTEMS = [name for name in systems.tagged("one-fmu") if not not_native(systems.get(name))]
 CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # no venv, no pyenv: no Python to be found
@@ -219,6 +220,16 @@ def test_each_parameter_and_input_reaches_the_instances_the_rule_names(name):
     outputs = {v.name for v in p.variables if v.causality == "output"}
     assert set(systems.plant_of(systems.get(name)).crane.demands) <= outputs
 
+
+
+@pytest.mark.parametrize("name", SYSTEMS)
+def test_an_ssp_files_one_fmu_sets_what_the_built_in_systems_does(fmu_dir, name):
+    """The SSP file holds every value, also a controller's own x_d beside its planner's references (transport's LQR:
+    0): each own parameter and input still reaches the instances it reaches in the built-in system (x_d the planner
+    alone), so that a host that sets every parameter to its start value runs the file's system."""
+    with load_system(fmu_dir.parent / "systems" / f"{name}.ssp") as system:
+        links = plan(system).links
+    assert dict(links) == dict(plan(systems.get(name)).links)
 
 SETTINGS = {"CranePlant": [{"m1": 4.0, "l1": 1.2}, {"theta1_0": 0.1, "x_d": 0.5}, {"F1": 2.0, "F2": -1.0}],
             "CranePlant3D": [{"m1": 4.0, "l1": 1.2}, {"theta1x_0": 0.1, "x_d": 0.5, "y_d": -1.0},
