@@ -112,6 +112,9 @@ def _check(args, system):
         period_steps = round(args.period / step)
         if period_steps < 1 or not math.isclose(period_steps * step, args.period, rel_tol=1e-9):
             raise UsageError(f"--period {args.period:g}: must be a whole number of steps of {step:g} s")
+        if args.stop_time is not None and round((args.stop_time - system.start_time) / step) % period_steps:
+            raise UsageError(f"--period {args.period:g}: must divide the run from t = {system.start_time:g} s to "
+                             f"--stop-time {args.stop_time:g} s into whole cycles")
     if args.rt_priority is not None:
         if args.lock_step:
             raise UsageError("--rt-priority is for real time; in lock-step the client's requests take the steps")
