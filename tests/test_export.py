@@ -194,6 +194,9 @@ def test_info_shows_your_fmu_in_the_system(fmus, capsys):
     assert said[at + 1:at + 4] == ["    k_x = 4.0 (its start value)", "    k_v = 2.5 (set)", "    x_d = 2 (set)"]
     assert any("told the move's target, controller.x_d = 2 m" in line for line in said)
     assert "  planner = TrajectoryPlanner" in said  # the rest of the system as before
+    said = _main(capsys, "info", "--system", "transport", "--fmu-dir", fmus / "fmus", "--use", f"controller={mine}",
+                 "--set", "planner.x_d=1.5").splitlines()  # told the target as set (it said 2 m)
+    assert "    x_d = 1.5 (set)" in said and any("controller.x_d = 1.5 m (planner.x_d)" in line for line in said)
     for argv, message in [(["--use", f"controller={mine}"], "--use needs --system NAME"),
                           (["--system", "transport", "--use", f"controler={mine}"], "did you mean"),
                           (["--system", "transport", "--use", f"controller={mine}", "--set", "controller.k_q=1"],

@@ -44,7 +44,7 @@ def run(args):
     if args.system:
         try:
             with systems.open_system(args.system) as system:
-                system, notes = _told(_use(args.use, system), args.fmu_dir)
+                system, notes = _told(_use(args.use, system), args.fmu_dir, args.set)
                 print("\n".join(_derived(system, args.set) + notes))
         except ValueError as exc:
             raise UsageError(str(exc)) from None
@@ -104,14 +104,16 @@ def _derived(system, sets):
     return lines
 
 
-def _told(system, fmu_dir):
-    """``(system, note lines)``: with ``--use``, each controller told the move as simulate tells it."""
+def _told(system, fmu_dir, sets):
+    """``(system, note lines)``: with ``--use``, each controller told the move as simulate tells it (the target as
+    ``--set`` gives it)."""
     from crane_fmu import systems
 
     if not system.replaced:
         return system, []
     try:
-        system, notes = systems.tell_controllers(system, fmu_dir)
+        values = [parse_sets(sets, systems.settable(system, system.fmus(fmu_dir)))]
+        system, notes = systems.tell_controllers(system, fmu_dir, values)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     return system, [f"  note: {note}" for note in notes]
