@@ -26,6 +26,10 @@ _PLAIN = set()  # the components made of plain law functions
 _SPEC = re.compile(r"(?P<file>.+\.py)(?::(?P<name>[A-Za-z_]\w*))?")
 
 
+class LawBug(ValueError):
+    """What a law file's own function raised other than a ValueError (a bug in it), as one line naming both."""
+
+
 def is_law(source):
     """Whether an instance's source is a law file (``mylaw.py`` or ``mylaw.py:NAME``)."""
     return _SPEC.fullmatch(str(source)) is not None
@@ -52,6 +56,28 @@ def component(source):
                       str(source))
 
 
+def check(source, values):
+    """``configure`` of the law file's component on its defaults overridden by ``values``: the validated configuration.
+
+    Raises
+    ------
+    ValueError
+        Its rules' own line, or one naming the file and the function for anything else ``configure`` raises (a bug
+        in it): ``"bad/cfgbug.py: configure raised KeyError: 'k_xx'"``.
+    """
+    return _configured(component(source), source, values)
+
+
+def _configured(comp, source, values):
+    try:
+        return comp.check(values)
+    except ValueError:
+        raise
+    except Exception as exc:  # the user's code: one line
+        raise LawBug(f"{law_file(source)}: {getattr(comp.configure, '__name__', 'configure')} raised "
+                     f"{type(exc).__name__}: {exc}") from None
+
+
 def is_plain(source):
     """Whether a law file's source names a plain law function (a component made here, no FMU of its own)."""
     return component(source) in _PLAIN
@@ -65,7 +91,7 @@ def _component(path, size, mtime, name, source):
     if name is not None:
         value = getattr(module, name, None)
         if isinstance(value, Component):
-            return value
+            return _usable(value, source)
         if callable(value):
             return _plain(name, value)
         raise ValueError(f"{source}: {Path(path).name} defines no component or function {name!r}")
@@ -76,7 +102,19 @@ def _component(path, size, mtime, name, source):
         names = ", ".join(c.model_identifier for c in found) or "none"
         raise ValueError(f"{source}: expected one Component in {Path(path).name} (found: {names}); name one, or a "
                          f"law function: {Path(path).name}:NAME")
-    return found[0]
+    return _usable(found[0], source)
+
+
+def _usable(comp, source):
+    """``comp``, once its ``configure`` takes its own defaults without a bug (a ValueError of its rules is for the
+    values a run sets)."""
+    try:
+        _configured(comp, source, {})
+    except LawBug:
+        raise
+    except ValueError:
+        pass
+    return comp
 
 
 def _import(path, source):

@@ -119,3 +119,36 @@ def test_compare_scores_the_law_file_as_its_fmu(fmus, tmp_path, dask_scheduler):
         figures = [k for k, v in row.items() if k not in own and isinstance(v, float)]
         assert len(figures) >= 5, sorted(row)
         assert {k: row[k] for k in set(row) - own} == {k: by["PdSway"][case][k] for k in set(row) - own}, case
+
+
+def _law(tmp_path, name, body, identifier="MyLaw"):
+    """A law file ``name`` of the PdSway example, its model identifier ``identifier``, ``body`` appended."""
+    text = PD_SWAY.read_text().replace('"PdSway", "controller"', f'"{identifier}", "controller"')
+    (tmp_path / name).write_text(text + body)
+    return tmp_path / name
+
+
+def _commands(fmus, tmp_path, law):
+    """Each command that takes a law file, with the law in the controller's place, writing under ``tmp_path/out``."""
+    fmu_dir, out = str(fmus / "fmus"), tmp_path / "out"
+    (tmp_path / "study.toml").write_text('system = "lqr"\nstop_time = 1.0\nstep = 0.001\n[parameters]\n'
+                                         '"controller.k_x" = [1.0, 2.0]\n')
+    return {"simulate": ["simulate", "--system", "lqr", "--fmu-dir", fmu_dir, "--use", f"controller={law}",
+                         "--stop-time", "1", "--out", str(out / "x.csv")],
+            "compare": ["compare", "--fmu-dir", fmu_dir, "--controller", str(law), "--only", "--scenario", "S1",
+                        "--out", str(out)],
+            "sweep": ["sweep", str(tmp_path / "study.toml"), "--use", f"controller={law}", "--fmu-dir", fmu_dir,
+                      "--out", str(out), "--workers", "1"],
+            "linearize": ["linearize", "--loop", "--fmu-dir", fmu_dir, "--system", "lqr", "--use",
+                          f"controller={law}"]}
+
+
+@pytest.mark.parametrize("command", ["simulate", "compare", "sweep", "linearize"])
+def test_a_bug_in_configure_is_one_line_naming_the_file_and_function(fmus, tmp_path, capsys, command):
+    """Anything but a ValueError that ``configure`` raises (a bug, not a rule) is refused before the run, no folder."""
+    law = _law(tmp_path, "cfgbug.py", "\nfrom dataclasses import replace\n\n\ndef configure(values):\n"
+               "    return values['k_xx']\n\n\nCOMPONENT = replace(COMPONENT, configure=configure)\n")
+    code = main(_commands(fmus, tmp_path, law)[command])
+    err = capsys.readouterr().err
+    assert code == 2 and f"{law}: configure raised KeyError: 'k_xx'" in err and err.count("\n") == 1, err
+    assert not (tmp_path / "out").exists()
