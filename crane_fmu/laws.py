@@ -106,8 +106,14 @@ def _component(path, size, mtime, name, source):
 
 
 def _usable(comp, source):
-    """``comp``, once its ``configure`` takes its own defaults without a bug (a ValueError of its rules is for the
+    """``comp``, once its model identifier is none of the registered components' (whose FMUs and rules it would be
+    taken for) and its ``configure`` takes its own defaults without a bug (a ValueError of its rules is for the
     values a run sets)."""
+    from crane_fmu import components
+
+    if components.find(comp.model_identifier) not in (None, comp):
+        raise ValueError(f"{source}: {comp.model_identifier} is already a component's name; choose another model "
+                         "identifier")
     try:
         _configured(comp, source, {})
     except LawBug:

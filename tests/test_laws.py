@@ -152,3 +152,18 @@ def test_a_bug_in_configure_is_one_line_naming_the_file_and_function(fmus, tmp_p
     err = capsys.readouterr().err
     assert code == 2 and f"{law}: configure raised KeyError: 'k_xx'" in err and err.count("\n") == 1, err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("command", ["simulate", "compare", "sweep", "linearize", "export", "info"])
+def test_a_law_with_a_built_in_components_name_is_refused_in_one_line(fmus, tmp_path, capsys, command):
+    """A law's model identifier is never a registered component's: the law would be taken for it (its rules, its
+    variables), so every command that loads the file refuses it as ``build --component`` does."""
+    law = _law(tmp_path, "impostor.py", "", identifier="LqrController")
+    commands = _commands(fmus, tmp_path, law)
+    commands["export"] = ["export", "--system", "lqr", "--fmu-dir", str(fmus / "fmus"), "--use", f"controller={law}",
+                          "--out", str(tmp_path / "out" / "x.ssp")]
+    commands["info"] = ["info", "--system", "lqr", "--use", f"controller={law}"]
+    code = main(commands[command])
+    err = capsys.readouterr().err
+    assert code == 2 and "LqrController is already a component's name; choose another model identifier" in err, err
+    assert err.count("\n") == 1 and not (tmp_path / "out").exists(), err
