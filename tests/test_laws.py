@@ -167,3 +167,19 @@ def test_a_law_with_a_built_in_components_name_is_refused_in_one_line(fmus, tmp_
     err = capsys.readouterr().err
     assert code == 2 and "LqrController is already a component's name; choose another model identifier" in err, err
     assert err.count("\n") == 1 and not (tmp_path / "out").exists(), err
+
+
+@pytest.mark.parametrize("returned", ["(0.0, 1.0)", "()", "0.0", "(None,)", "('fast',)"])
+def test_a_law_that_returns_other_than_its_outputs_is_refused_by_the_runtime(fmus, tmp_path, capsys, returned):
+    """The law's value is checked against its outputs where it is computed (the runtime its FMU runs too): the law
+    file and the FMU built from it fail with the same line, where two values for one output used to pass."""
+    law = _law(tmp_path, "wrong.py", f"\nfrom dataclasses import replace\n\n\ndef law(config, state, inputs):\n"
+               f"    return {returned}\n\n\nCOMPONENT = replace(COMPONENT, output=law)\n", identifier="WrongLaw")
+    assert main(["build", "--component", str(law), "--out", str(tmp_path / "built")]) == 0
+    capsys.readouterr()
+    for used in (law, tmp_path / "built" / "WrongLaw.fmu"):
+        code = main(["simulate", "--system", "lqr", "--fmu-dir", str(fmus / "fmus"), "--use", f"controller={used}",
+                     "--stop-time", "0.1", "--out", str(tmp_path / "x.csv")])
+        err = capsys.readouterr().err
+        assert code == 1 and f"law must return a tuple of 1 number (u), got {returned}" in err, (used, err)
+        assert err.count("\n") == 1 and not (tmp_path / "x.csv").exists(), err
