@@ -183,3 +183,17 @@ def test_a_law_that_returns_other_than_its_outputs_is_refused_by_the_runtime(fmu
         err = capsys.readouterr().err
         assert code == 1 and f"law must return a tuple of 1 number (u), got {returned}" in err, (used, err)
         assert err.count("\n") == 1 and not (tmp_path / "x.csv").exists(), err
+
+
+@pytest.mark.quick
+@pytest.mark.parametrize("under", ["", "sub"])
+def test_build_component_out_at_a_file_is_one_line(tmp_path, capsys, under):
+    """``build --component --out`` where a file is (or is on the way) refuses in one line, as the other commands'
+    --out does, and leaves the file as it was."""
+    blocker = tmp_path / "file.txt"
+    blocker.write_text("precious")
+    out = blocker / under if under else blocker
+    code = main(["build", "--component", str(PD_SWAY), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and f"--out {out}: cannot create folder" in err and f"({blocker} is a file)" in err, err
+    assert err.count("\n") == 1 and blocker.read_text() == "precious"

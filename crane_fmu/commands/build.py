@@ -7,7 +7,7 @@ from pathlib import Path
 
 from crane_fmu import DEFAULT_FMU_DIR
 
-from .common import UsageError
+from .common import UsageError, writable_folder
 
 NAME = "build"
 HELP = "build the FMUs of every component and the files of every built-in system"
@@ -50,6 +50,7 @@ def run(args):
     from crane_fmu.build_scripts.build_fmus import build_all, container_name, containers_dir
     from crane_fmu.container import build_container
 
+    writable_folder(args.out, f"--out {args.out}")  # a file there: one line, before anything is built
     if args.one_fmu:
         for path in _build_one_fmus(args.one_fmu, args.out):
             print(path)
