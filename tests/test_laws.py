@@ -197,3 +197,18 @@ def test_build_component_out_at_a_file_is_one_line(tmp_path, capsys, under):
     err = capsys.readouterr().err
     assert code == 2 and f"--out {out}: cannot create folder" in err and f"({blocker} is a file)" in err, err
     assert err.count("\n") == 1 and blocker.read_text() == "precious"
+
+
+@pytest.mark.parametrize("value, written", [("-1", False), ("2", True)])
+def test_export_checks_the_law_files_rules_as_simulate_does(fmus, tmp_path, capsys, value, written):
+    """``export --use controller=mylaw.py --set``: the law file's rules refuse a value before anything is written,
+    in the line simulate gives (the FMU built from the file used to stand in its place unchecked)."""
+    out = tmp_path / "x.ssp"
+    code = main(["export", "--system", "lqr", "--fmu-dir", str(fmus / "fmus"), "--use", f"controller={PD_SWAY}",
+                 "--set", f"controller.k_x={value}", "--out", str(out)])
+    err = capsys.readouterr().err
+    if written:
+        assert code == 0 and out.is_file(), err
+    else:
+        assert code == 2 and err == "crane-fmu: error: controller: k_x must be > 0 and finite, got -1.0\n", err
+        assert not out.exists()

@@ -52,10 +52,11 @@ def exported(args, system, built=None):
     """The system as the file carries it: ``--use``'s FMUs (told the move), then ``--parameters`` and ``--set``,
     every value checked by its component's rules. A law file's Component is built as an FMU into the folder
     ``built`` (a plain law function has none: refused in one line)."""
-    from crane_fmu import crane_parameters, systems
+    from crane_fmu import crane_parameters, laws, systems
 
     from .simulate import _keep_known, _parameter_file, parse_sets
 
+    used = {name: source for name, source in system.instances.items() if laws.is_law(source)}
     system = _laws_built(system, built)
     fmus, _ = systems.resolve(system, args.fmu_dir)
     system = _keep_known(system, fmus, list(system.replaced))
@@ -70,7 +71,8 @@ def exported(args, system, built=None):
     values = [_parameter_file(args.parameters, variables)] if args.parameters else []
     for overrides in values + [parse_sets(args.set, variables)]:
         system = crane_parameters.with_values(system, overrides)
-    systems.check_parameters(systems.bind(system))
+    bound = systems.bind(system)  # a law file's values checked by its own rules, as simulate checks them
+    systems.check_parameters(replace(bound, instances={**bound.instances, **used}))
     return system
 
 
