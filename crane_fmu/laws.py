@@ -1,8 +1,8 @@
 """A component run from its Python file in this process, no FMU built: ``--use controller=mylaw.py``.
 
 A *law file* names a component by its module, ``mylaw.py`` (the module's one component, or its one
-controller) or ``mylaw.py:NAME`` (the component ``NAME``, or a plain function
-``NAME(config, state, inputs) -> (u,)`` of the measured state, made a stateless controller with no
+controller) or ``mylaw.py:NAME`` (the component ``NAME``: its model identifier or its variable's name; or a plain
+function ``NAME(config, state, inputs) -> (u,)`` of the measured state, made a stateless controller with no
 parameters: ``config`` and ``state`` are None). It runs through the runtime its FMU runs once built
 (``crane-fmu build --component``, ``fmu_src/python/runtime.py``): the same Python code on the same
 doubles, so the same bits; its model description is the one the build writes, made in memory.
@@ -88,14 +88,18 @@ def _component(path, size, mtime, name, source):
     from crane_fmu.model.component import Component
 
     module = _import(path, source)
-    if name is not None:
+    found = [v for v in vars(module).values() if isinstance(v, Component) and v.module == module.__name__]
+    if name is not None:  # a variable's name, or a component's model identifier
         value = getattr(module, name, None)
+        if not isinstance(value, Component):
+            value = next((c for c in found if c.model_identifier == name), value)
         if isinstance(value, Component):
             return _usable(value, source)
         if callable(value):
             return _plain(name, value)
-        raise ValueError(f"{source}: {Path(path).name} defines no component or function {name!r}")
-    found = [v for v in vars(module).values() if isinstance(v, Component) and v.module == module.__name__]
+        names = ", ".join(c.model_identifier for c in found)
+        raise ValueError(f"{source}: {Path(path).name} defines no component or function {name!r}"
+                         + (f" (its components: {names})" if names else ""))
     if len(found) > 1:
         found = [c for c in found if c.role == "controller"] or found
     if len(found) != 1:

@@ -212,3 +212,19 @@ def test_export_checks_the_law_files_rules_as_simulate_does(fmus, tmp_path, caps
     else:
         assert code == 2 and err == "crane-fmu: error: controller: k_x must be > 0 and finite, got -1.0\n", err
         assert not out.exists()
+
+
+def test_file_colon_name_takes_a_components_model_identifier_or_its_variable(fmus, tmp_path, capsys):
+    """``mylaw.py:NAME``: NAME is the component's model identifier (as the docs and the choice's message name it)
+    or the Python variable that holds it; both run the same component, and a NAME of neither lists the choices."""
+    law = _law(tmp_path, "two.py", "\nfrom dataclasses import replace\n\n"
+               "SOFT = replace(COMPONENT, model_identifier='PdSoft', variables=(parameter('k_x', 0.5, '1/s2', 'soft'),)"
+               " + COMPONENT.variables[1:])\n")
+    runs = [_run(capsys, fmus, tmp_path, "lqr", f"controller={law}:{name}")[0] for name in ("PdSoft", "SOFT")]
+    _same_bits(*runs)
+    other, _ = _run(capsys, fmus, tmp_path, "lqr", f"controller={law}:MyLaw")
+    assert not np.array_equal(other["plant.x"], runs[0]["plant.x"])  # the other component: k_x 1.0, not 0.5
+    code = main(["simulate", "--system", "lqr", "--fmu-dir", str(fmus / "fmus"), "--use", f"controller={law}:Nope",
+                 "--out", str(tmp_path / "x.csv")])
+    err = capsys.readouterr().err
+    assert code == 2 and "two.py defines no component or function 'Nope' (its components: MyLaw, PdSoft)" in err, err
