@@ -228,3 +228,16 @@ def test_file_colon_name_takes_a_components_model_identifier_or_its_variable(fmu
                  "--out", str(tmp_path / "x.csv")])
     err = capsys.readouterr().err
     assert code == 2 and "two.py defines no component or function 'Nope' (its components: MyLaw, PdSoft)" in err, err
+
+
+def test_export_names_the_law_file_not_the_fmu_it_builds(fmus, tmp_path, capsys):
+    """A law file that does not fit the system's place is named in export's line as simulate names it (its FMU,
+    built into a temporary folder, is made only once everything is checked)."""
+    law = _law(tmp_path, "wrongout.py", "\nfrom dataclasses import replace\n\n"
+               "COMPONENT = replace(COMPONENT, variables=COMPONENT.variables[:-1] + (output('acc', 'm/s2', 'a'),))\n")
+    code = main(["export", "--system", "lqr", "--fmu-dir", str(fmus / "fmus"), "--use", f"controller={law}",
+                 "--out", str(tmp_path / "x.ssp")])
+    err = capsys.readouterr().err
+    assert code == 2 and err == f"crane-fmu: error: controller: {law} has no output u, which the system connects to " \
+                                "plant.u\n", err
+    assert not (tmp_path / "x.ssp").exists()
