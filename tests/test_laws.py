@@ -241,3 +241,20 @@ def test_export_names_the_law_file_not_the_fmu_it_builds(fmus, tmp_path, capsys)
     assert code == 2 and err == f"crane-fmu: error: controller: {law} has no output u, which the system connects to " \
                                 "plant.u\n", err
     assert not (tmp_path / "x.ssp").exists()
+
+
+def test_compare_says_what_to_rename_of_two_laws_of_one_name(tmp_path):
+    """Two law functions both called ``law``: rename one of the functions; two law files of one component name:
+    give one another model identifier (neither has an FMU file to rename)."""
+    from crane_fmu.compare import contenders
+
+    for name in ("a", "b"):
+        (tmp_path / f"{name}.py").write_text(PLAIN)
+        _law(tmp_path, f"pd_{name}.py", "")
+    for chosen, advice in ((["a.py:law", "b.py:law"], "; rename one of the functions"),
+                           (["pd_a.py", "pd_b.py"], "; give one of the components another model identifier")):
+        with pytest.raises(ValueError) as refused:
+            contenders([str(tmp_path / c) for c in chosen], only=True)
+        assert str(refused.value).endswith(advice) and "FMU" not in str(refused.value), refused.value
+    with pytest.raises(ValueError, match=r"or a law file FILE\.py\[:NAME\]\)"):  # the choices name law files too
+        contenders(["NoSuchController"], only=True)
