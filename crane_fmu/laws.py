@@ -94,7 +94,7 @@ def _component(path, size, mtime, name, source):
         if not isinstance(value, Component):
             value = next((c for c in found if c.model_identifier == name), value)
         if isinstance(value, Component):
-            return _usable(value, source)
+            return usable(value, source)
         if callable(value):
             return _plain(name, value)
         names = ", ".join(c.model_identifier for c in found)
@@ -106,13 +106,13 @@ def _component(path, size, mtime, name, source):
         names = ", ".join(c.model_identifier for c in found) or "none"
         raise ValueError(f"{source}: expected one Component in {Path(path).name} (found: {names}); name one, or a "
                          f"law function: {Path(path).name}:NAME")
-    return _usable(found[0], source)
+    return usable(found[0], source)
 
 
-def _usable(comp, source):
-    """``comp``, once its model identifier is none of the registered components' (whose FMUs and rules it would be
-    taken for) and its ``configure`` takes its own defaults without a bug (a ValueError of its rules is for the
-    values a run sets)."""
+def usable(comp, source):
+    """``comp`` of the law file ``source`` (or of a module ``build --component`` builds), once its model identifier
+    is none of the registered components' (whose FMUs and rules it would be taken for) and its ``configure`` takes
+    its own defaults without a bug (a ValueError of its rules is for the values a run sets)."""
     from crane_fmu import components
 
     if components.find(comp.model_identifier) not in (None, comp):

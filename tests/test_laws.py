@@ -140,10 +140,11 @@ def _commands(fmus, tmp_path, law):
             "sweep": ["sweep", str(tmp_path / "study.toml"), "--use", f"controller={law}", "--fmu-dir", fmu_dir,
                       "--out", str(out), "--workers", "1"],
             "linearize": ["linearize", "--loop", "--fmu-dir", fmu_dir, "--system", "lqr", "--use",
-                          f"controller={law}"]}
+                          f"controller={law}"],
+            "build": ["build", "--component", str(law), "--out", str(out)]}
 
 
-@pytest.mark.parametrize("command", ["simulate", "compare", "sweep", "linearize"])
+@pytest.mark.parametrize("command", ["simulate", "compare", "sweep", "linearize", "build"])
 def test_a_bug_in_configure_is_one_line_naming_the_file_and_function(fmus, tmp_path, capsys, command):
     """Anything but a ValueError that ``configure`` raises (a bug, not a rule) is refused before the run, no folder."""
     law = _law(tmp_path, "cfgbug.py", "\nfrom dataclasses import replace\n\n\ndef configure(values):\n"
@@ -154,7 +155,7 @@ def test_a_bug_in_configure_is_one_line_naming_the_file_and_function(fmus, tmp_p
     assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("command", ["simulate", "compare", "sweep", "linearize", "export", "info"])
+@pytest.mark.parametrize("command", ["simulate", "compare", "sweep", "linearize", "export", "info", "build"])
 def test_a_law_with_a_built_in_components_name_is_refused_in_one_line(fmus, tmp_path, capsys, command):
     """A law's model identifier is never a registered component's: the law would be taken for it (its rules, its
     variables), so every command that loads the file refuses it as ``build --component`` does."""
