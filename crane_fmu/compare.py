@@ -49,6 +49,24 @@ ROW_FORMAT = 4  # the version of what a row holds: a journal of another format i
 ANIMATE = ("S1", "S2", "S7", "S11", "S12", "S13", "S14")  # the scenarios whose nominal runs keep their signals
 
 
+def _rename(first, second):
+    """What to rename of two controllers of one name: a law function, a law file's component, an FMU file (a
+    built-in controller keeps its name)."""
+    def kind(source):
+        if laws.is_law(source):
+            return "function" if laws.is_plain(source) else "component"
+        return "FMU file" if str(source).endswith(".fmu") else None
+
+    kinds = [kind(first), kind(second)]
+    if kinds == ["function"] * 2:
+        return "rename one of the functions"
+    if kinds == ["component"] * 2:
+        return "give one of the components another model identifier"
+    advice = {"function": "rename the function", "component": "give the component another model identifier",
+              "FMU file": "rename the FMU file"}
+    return " or ".join(dict.fromkeys(advice[k] for k in kinds if k))
+
+
 def contenders(chosen=(), fmu_dir="build/fmus", only=False):
     """The controllers to score, by name, each checked against every scenario's needs before anything runs.
 
@@ -85,14 +103,14 @@ def contenders(chosen=(), fmu_dir="build/fmus", only=False):
             component = components.find(item)
             if component is None or component.role != "controller":
                 raise ValueError(f"no controller {item!r}; controllers: {', '.join(builtin)} (or a controller .fmu "
-                                 "file)" + did_you_mean(item, builtin))
+                                 "file, or a law file FILE.py[:NAME])" + did_you_mean(item, builtin))
             variables = {v.name: v.causality for v in component.variables}
             name, source, user = item, item, False
         if name in result:
             if result[name].source == source:
                 continue
-            raise ValueError(f"two controllers are named {name}: {result[name].source} and {source}; rename the "
-                             "FMU file" + ("" if only else " or give --only"))
+            raise ValueError(f"two controllers are named {name}: {result[name].source} and {source}; "
+                             f"{_rename(result[name].source, source)}" + ("" if only else " or give --only"))
         inputs = [n for n, c in variables.items() if c == "input"]
         parameters = [n for n, c in variables.items() if c == "parameter"]
         outputs = [n for n, c in variables.items() if c == "output"]

@@ -1,8 +1,8 @@
 """A component run from its Python file in this process, no FMU built: ``--use controller=mylaw.py``.
 
 A *law file* names a component by its module, ``mylaw.py`` (the module's one component, or its one
-controller) or ``mylaw.py:NAME`` (the component ``NAME``, or a plain function
-``NAME(config, state, inputs) -> (u,)`` of the measured state, made a stateless controller with no
+controller) or ``mylaw.py:NAME`` (the component ``NAME``: its model identifier or its variable's name; or a plain
+function ``NAME(config, state, inputs) -> (u,)`` of the measured state, made a stateless controller with no
 parameters: ``config`` and ``state`` are None). It runs through the runtime its FMU runs once built
 (``crane-fmu build --component``, ``fmu_src/python/runtime.py``): the same Python code on the same
 doubles, so the same bits; its model description is the one the build writes, made in memory.
@@ -24,6 +24,10 @@ from crane_fmu.model.tables import enumeration_name
 
 _PLAIN = set()  # the components made of plain law functions
 _SPEC = re.compile(r"(?P<file>.+\.py)(?::(?P<name>[A-Za-z_]\w*))?")
+
+
+class LawBug(ValueError):
+    """What a law file's own function raised other than a ValueError (a bug in it), as one line naming both."""
 
 
 def is_law(source):
@@ -52,6 +56,28 @@ def component(source):
                       str(source))
 
 
+def check(source, values):
+    """``configure`` of the law file's component on its defaults overridden by ``values``: the validated configuration.
+
+    Raises
+    ------
+    ValueError
+        Its rules' own line, or one naming the file and the function for anything else ``configure`` raises (a bug
+        in it): ``"bad/cfgbug.py: configure raised KeyError: 'k_xx'"``.
+    """
+    return _configured(component(source), source, values)
+
+
+def _configured(comp, source, values):
+    try:
+        return comp.check(values)
+    except ValueError:
+        raise
+    except Exception as exc:  # the user's code: one line
+        raise LawBug(f"{law_file(source)}: {getattr(comp.configure, '__name__', 'configure')} raised "
+                     f"{type(exc).__name__}: {exc}") from None
+
+
 def is_plain(source):
     """Whether a law file's source names a plain law function (a component made here, no FMU of its own)."""
     return component(source) in _PLAIN
@@ -62,21 +88,43 @@ def _component(path, size, mtime, name, source):
     from crane_fmu.model.component import Component
 
     module = _import(path, source)
-    if name is not None:
+    found = [v for v in vars(module).values() if isinstance(v, Component) and v.module == module.__name__]
+    if name is not None:  # a variable's name, or a component's model identifier
         value = getattr(module, name, None)
+        if not isinstance(value, Component):
+            value = next((c for c in found if c.model_identifier == name), value)
         if isinstance(value, Component):
-            return value
+            return usable(value, source)
         if callable(value):
             return _plain(name, value)
-        raise ValueError(f"{source}: {Path(path).name} defines no component or function {name!r}")
-    found = [v for v in vars(module).values() if isinstance(v, Component) and v.module == module.__name__]
+        names = ", ".join(c.model_identifier for c in found)
+        raise ValueError(f"{source}: {Path(path).name} defines no component or function {name!r}"
+                         + (f" (its components: {names})" if names else ""))
     if len(found) > 1:
         found = [c for c in found if c.role == "controller"] or found
     if len(found) != 1:
         names = ", ".join(c.model_identifier for c in found) or "none"
         raise ValueError(f"{source}: expected one Component in {Path(path).name} (found: {names}); name one, or a "
                          f"law function: {Path(path).name}:NAME")
-    return found[0]
+    return usable(found[0], source)
+
+
+def usable(comp, source):
+    """``comp`` of the law file ``source`` (or of a module ``build --component`` builds), once its model identifier
+    is none of the registered components' (whose FMUs and rules it would be taken for) and its ``configure`` takes
+    its own defaults without a bug (a ValueError of its rules is for the values a run sets)."""
+    from crane_fmu import components
+
+    if components.find(comp.model_identifier) not in (None, comp):
+        raise ValueError(f"{source}: {comp.model_identifier} is already a component's name; choose another model "
+                         "identifier")
+    try:
+        _configured(comp, source, {})
+    except LawBug:
+        raise
+    except ValueError:
+        pass
+    return comp
 
 
 def _import(path, source):

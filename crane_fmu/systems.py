@@ -306,7 +306,7 @@ def check_parameters(system, checked=None):
             try:
                 source = system.instances[name]
                 if laws.is_law(source):  # a law file's own rules, as its FMU would check them
-                    laws.component(source).check(values)
+                    laws.check(source, values)
                 else:
                     components.check_parameters(identifier, values)
                 checked[key] = None

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from crane_fmu import DEFAULT_FMU_DIR
 
-from .common import UsageError
+from .common import UsageError, writable_folder
 
 NAME = "build"
 HELP = "build the FMUs of every component and the files of every built-in system"
@@ -50,6 +50,7 @@ def run(args):
     from crane_fmu.build_scripts.build_fmus import build_all, container_name, containers_dir
     from crane_fmu.container import build_container
 
+    writable_folder(args.out, f"--out {args.out}")  # a file there: one line, before anything is built
     if args.one_fmu:
         for path in _build_one_fmus(args.one_fmu, args.out):
             print(path)
@@ -142,7 +143,7 @@ def _build_component(module_path, out, force=False, log=print):
 def _build_components(module, module_path, out, force=False, log=print):
     """Register the components a user's module defines, build their FMUs into ``out`` (FMI 3.0: ``out/fmi3``),
     unregister them."""
-    from crane_fmu import components
+    from crane_fmu import components, laws
     from crane_fmu.build_scripts.build_fmus import build_all
     from crane_fmu.model.component import Component
 
@@ -150,11 +151,11 @@ def _build_components(module, module_path, out, force=False, log=print):
     found = [v for v in vars(module).values() if isinstance(v, Component) and v.module == name]
     if not found:
         raise UsageError(f"--component {module_path}: defines no Component (crane_fmu.model.component.Component)")
-    for component in found:
-        known = components.find(component.model_identifier)
-        if known is not None and known is not component:
-            raise UsageError(f"--component {module_path}: {component.model_identifier} is already a component's "
-                             "name; choose another model identifier")
+    for component in found:  # no built-in's name, no bug in configure: as a law file of it is checked
+        try:
+            laws.usable(component, module_path)
+        except ValueError as exc:
+            raise UsageError(f"--component {exc}") from None
     try:
         for component in found:
             components.register(component)

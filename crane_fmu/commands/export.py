@@ -50,14 +50,14 @@ def run(args):
 
 def exported(args, system, built=None):
     """The system as the file carries it: ``--use``'s FMUs (told the move), then ``--parameters`` and ``--set``,
-    every value checked by its component's rules. A law file's Component is built as an FMU into the folder
-    ``built`` (a plain law function has none: refused in one line)."""
+    every value checked by its component's rules. A law file is checked as itself, as simulate checks it, then its
+    Component is built as an FMU into the folder ``built`` (a plain law function has none: refused in one line)."""
     from crane_fmu import crane_parameters, systems
 
     from .simulate import _keep_known, _parameter_file, parse_sets
 
-    system = _laws_built(system, built)
-    fmus, _ = systems.resolve(system, args.fmu_dir)
+    _no_plain_laws(system, built)
+    fmus, _ = systems.resolve(system, args.fmu_dir)  # a law file as itself: its mistakes name it, not its build
     system = _keep_known(system, fmus, list(system.replaced))
     variables = systems.settable(system, fmus)
     values = [_parameter_file(args.parameters, variables)] if args.parameters else []
@@ -71,8 +71,8 @@ def exported(args, system, built=None):
                      tags=("yours",) if system.replaced else system.tags)
     for overrides in values:
         system = crane_parameters.with_values(system, overrides)
-    systems.check_parameters(systems.bind(system))
-    return system
+    systems.check_parameters(systems.bind(system))  # a law file's values by its own rules, as simulate checks them
+    return _laws_built(system, built)
 
 
 def _export(args, system):
@@ -80,9 +80,19 @@ def _export(args, system):
         return _write(args, exported(args, system, built))
 
 
+def _no_plain_laws(system, folder):
+    """Refuse a plain law function (``--use controller=mylaw.py:law``): it has no variables of its own to describe."""
+    from crane_fmu import laws
+
+    for name, source in system.instances.items():
+        if laws.is_law(source) and (laws.is_plain(source) or folder is None):
+            raise UsageError(f"--use {name}={source}: a plain law function runs only in this toolkit's master; "
+                             f"write it as a Component (docs/reference/controller-interface.md) to export it")
+
+
 def _laws_built(system, folder):
     """The system with each law file's Component (``--use controller=mylaw.py[:NAME]``) built as an FMU into
-    ``folder`` and in its place; a plain law function is refused (it has no variables of its own to describe)."""
+    ``folder`` and in its place."""
     from crane_fmu import laws
 
     from .build import _build_component
@@ -92,12 +102,9 @@ def _laws_built(system, folder):
         if not laws.is_law(source):
             continue
         component = laws.component(source)
-        if laws.is_plain(source) or folder is None:
-            raise UsageError(f"--use {name}={source}: a plain law function runs only in this toolkit's master; "
-                             f"write it as a Component (docs/reference/controller-interface.md) to export it")
         _build_component(str(laws.law_file(source)), Path(folder) / name, log=lambda line: None)
         built[name] = str(Path(folder) / name / f"{component.model_identifier}.fmu")
-    return system.with_instances(built) if built else system
+    return replace(system, instances={**system.instances, **built})  # in the places the system was made for
 
 
 def _write(args, system):

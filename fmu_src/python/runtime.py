@@ -7,6 +7,7 @@ is bundled into every FMU with the model core.
 
 import functools
 import math
+import numbers
 import operator
 from math import isfinite
 
@@ -34,7 +35,7 @@ class Runtime:
         self.component = component
         self.values = {v.name: v.start for v in component.variables if v.causality == "parameter"}
         self.inputs = [v.start for v in component.variables if v.causality == "input"]
-        self._input_names = component.names("input")
+        self._input_names, self._output_names = component.names("input"), component.names("output")
         self._stateful, self._feedthrough = component.stateful, component.feedthrough
         self.initialised = False
         self.config = self.state = None  # set when initialisation ends
@@ -76,8 +77,22 @@ class Runtime:
             if not self.initialised:  # outputs follow the parameters
                 config = self.component.configure(dict(self.values))
                 state = self.component.initial_state(config) if self._stateful else None
-            self._outputs = self.component.output(config, state, tuple(self.inputs))
+            outputs = self.component.output(config, state, tuple(self.inputs))
+            if type(outputs) is not tuple or len(outputs) != len(self._output_names) or \
+                    not all(type(v) is float for v in outputs):
+                outputs = self._checked(outputs)
+            self._outputs = outputs
         return self._outputs
+
+    def _checked(self, outputs):
+        """The component's ``output`` value as the tuple of its outputs' numbers (a list or array of them is taken);
+        ValueError naming the function, what it must return and what it gave."""
+        names = self._output_names
+        if isinstance(outputs, (str, bytes)) or not hasattr(outputs, "__len__") or len(outputs) != len(names) or \
+                not all(isinstance(v, numbers.Real) and not isinstance(v, bool) for v in outputs):
+            raise ValueError(f"{getattr(self.component.output, '__name__', 'output')} must return a tuple of "
+                             f"{len(names)} number{'s' * (len(names) != 1)} ({', '.join(names)}), got {outputs!r}")
+        return tuple(outputs)
 
     def initialise(self, state=None):
         """End of initialisation (or a restored state): validate the parameters, set the state."""
