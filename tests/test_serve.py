@@ -1057,12 +1057,13 @@ def test_real_time_a_refused_step_holds_the_client_at_zero_and_the_run_goes_on(f
     assert np.all(np.abs(served["controller.u"]) < 1e20) and served["controller.u"][-1] == 0.0
 
 
-def _driven_at_u_max(server):
-    """A real-time run whose client writes u = 3 once and leaves it: ``(status, stdout, stderr)`` at its end."""
+def _driven_at_u_max(server, name="controller.u", value=3.0):
+    """A real-time run whose client writes ``name`` = ``value`` (u = 3) once and leaves it: ``(status, stdout,
+    stderr)`` at its end."""
     async def push(url):
         async with Client(url) as opc:
             ns, node = await _nodes(opc)
-            await node("controller.u").write_value(ua.Variant(3.0, ua.VariantType.Double))
+            await node(name).write_value(ua.Variant(value, ua.VariantType.Double))
 
     try:
         _run(push(server.opcua))
@@ -1320,16 +1321,7 @@ def test_real_time_a_reference_written_past_the_rail_end_leaves_the_run_going_to
     past x_max. On main the trolley reached the rail end and the run held there until Ctrl-C."""
     server = Server(fmu_dir, tmp_path, "--system", "transport", "--external", "planner", "--period", "0.01",
                     "--watchdog", "30", "--stop-time", "5", "--set", "plant.x_max=2.5", "--opcua", "127.0.0.1:0")
-
-    async def push(url):
-        async with Client(url) as opc:
-            ns, node = await _nodes(opc)
-            await node("planner.x_ref").write_value(ua.Variant(3.0, ua.VariantType.Double))
-
-    try:
-        _run(push(server.opcua))
-    finally:
-        status, out, err = server.wait(40)
+    status, out, err = _driven_at_u_max(server, "planner.x_ref", 3.0)
     assert status == 0 and "finished at t = 5 s" in out, err[-2000:]
     assert "could not stop before the rail end x_max = 2.5 m" in err and "held at zero" in err, err
     served = read_csv(server.out)
