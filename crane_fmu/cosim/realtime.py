@@ -204,14 +204,16 @@ class Runner:
     def check(self, name, value):
         """``value`` as a float if it may be written to the writable variable ``name``, else ValueError (one
         line naming the value and the rule)."""
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            self.refused(f"{name} must be a finite number, got {value!r}")
-            raise ValueError(f"{name} must be a finite number, got {value!r}")
+        why = None
         low, high = self.ranges.get(name, (-math.inf, math.inf))
-        if not low <= value <= high:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            why = f"{name} must be a finite number, got {value!r}"
+        elif not low <= value <= high:
             unit = next((v.unit for v in self.variables if v.name == name), "")
-            self.refused(f"{name} = {value!r} {unit} lies outside its range [{low:g}, {high:g}]")
-            raise ValueError(f"{name} = {value!r} {unit} lies outside its range [{low:g}, {high:g}]")
+            why = f"{name} = {value!r} {unit} lies outside its range [{low:g}, {high:g}]"
+        if why:
+            self.refused(why)
+            raise ValueError(why)
         return float(value)
 
     def refused(self, why):
