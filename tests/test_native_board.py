@@ -41,7 +41,8 @@ def test_the_native_fmus_give_the_python_board(builtin_quick_board, native, dask
         ours, other = ({k: v for k, v in r.items() if k not in ("case_id", "duration_s", "error", "fmus_sha256",
                                                                   "date")}
                        for r in (row, theirs[key(row)]))
-        assert _close(ours, other), key(row)
+        assert _close(ours, other), (key(row), {k: (ours.get(k), other.get(k)) for k in ours.keys() | other.keys()
+                                                if not _close({k: ours.get(k)}, {k: other.get(k)})})
     assert board_tables.render_summary(rows) == board_tables.render_summary(python_rows)
 
 
