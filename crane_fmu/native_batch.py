@@ -168,7 +168,7 @@ def sweep_chunk(item, system, settings, metric_names):
     for case in cases:
         start = time.perf_counter()
         columns, error = run(runs, settings["stop_time"], settings["step"],
-                             case_parameters(case, system["parameters"], system["binding"], system.get("told")), kept)
+                             case_parameters(case, system["parameters"], system["binding"], system["told"]), kept)
         row = case_row(case, settings, metric_names, columns, error, figures)
         row["duration_s"] = time.perf_counter() - start
         yield row

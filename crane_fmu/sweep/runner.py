@@ -68,13 +68,10 @@ def case_parameters(case, base=None, binding=None, told=None):
     value of their own; a value a controller was told (``told``: ``{"controller.x_d": "planner.x_d"}``) follows the
     case's value of its source, unless the case gives the controller's own."""
     values = {}
-    for key, value in case.items():
+    followed = {key: case[source] for key, source in (told or {}).items() if source in case}
+    for key, value in {**followed, **case}.items():
         instance, _, variable = key.partition(".")
         values.setdefault(instance, {})[variable] = value
-    for key, source in (told or {}).items():
-        if source in case and key not in case:
-            instance, _, variable = key.partition(".")
-            values.setdefault(instance, {})[variable] = case[source]
     crane = values.pop(crane_parameters.CRANE, {})
     parameters = {name: dict(v) for name, v in (base or {}).items()}
     for instance, own in crane_parameters.bind_values(values, crane, binding or {}).items():
@@ -98,7 +95,7 @@ def run_case(case, system, settings, metric_names):
     try:
         simulate(local_fmus(system["blobs"]), system["connections"], settings["stop_time"], settings["step"],
                  settings["algorithm"], case_parameters(case, system["parameters"], system["binding"],
-                                                        system.get("told")), recorder)
+                                                        system["told"]), recorder)
     except FmiError as exc:
         error = exc
     row = case_row(case, settings, metric_names, recorder.columns() if recorder.names else None, error)
@@ -229,7 +226,7 @@ def _used(system, use, fmu_dir, settings, told):
     system = _keep_known(system, fmus, list(system.replaced))
     system, notes = systems.tell_controllers(system, fmu_dir, sources=told)
     for note in notes:
-        print(f"crane-fmu: note: {note}" + (" (each case's where it sets it)" if told else ""), file=sys.stderr)
+        print(f"crane-fmu: note: {note}" + ("; each case's own where it sets it" if told else ""), file=sys.stderr)
     _, connections = systems.resolve(system, fmu_dir)  # as checked (a controller's optional inputs left out)
     system = replace(system, connections=tuple(connections), match_names=False, replaced={})
     digests = {name: hashlib.sha256(Path(laws.law_file(p) if laws.is_law(p) else p).read_bytes())
